@@ -1,0 +1,266 @@
+"""Batched bicubic tensor-product patches in Hermite, Bézier or uniform B-spline form.
+
+A patch set holds ``control[n, i, j, :]`` with i along u and j along v, and
+
+    p(u, v) = Σ_ij b_i(u) P_ij b_j(v) = u^T M^T P M v        (paper, eqs. 3 and 5)
+
+with ``b(t) = M t`` the basis of the form. In Hermite form the layout is the paper's eq. (4):
+i, j ∈ {0, 1} positions at u, v = 0, 1; i ∈ {2, 3} ∂/∂u at u = 0, 1; j ∈ {2, 3} ∂/∂v; and the
+block (2..3, 2..3) holds the twists ∂²p/∂u∂v.
+
+Patch edges follow the quad's counter-clockwise corners F0 = (0,0), F1 = (1,0), F2 = (1,1),
+F3 = (0,1): edge k runs from corner k to corner k+1 (edges 2 and 3 against the parameter).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .basis import FORMS, Form, basis_matrix, basis_values, conversion_matrix
+from .curves import CubicCurves
+from .errors import InputError, as_float_array, check_choice
+
+__all__ = [
+    "PatchSet",
+    "CORNER_PARAMETERS",
+    "hs_twists",
+    "closure",
+    "diagonal_polynomials",
+    "polynomial_degree",
+]
+
+#: (u, v) of the corners F0..F3.
+CORNER_PARAMETERS = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+
+
+def _check_parameters(name: str, values: ArrayLike) -> NDArray[np.float64]:
+    params = as_float_array(name, values, (None,), min_ndim=1)
+    if params.ndim != 1:
+        raise InputError(f"{name}: expected a 1-D array of parameters, got shape {params.shape}")
+    return params
+
+
+@dataclass(frozen=True)
+class PatchSet:
+    """``N`` bicubic patches: ``control`` of shape ``(N, 4, 4, 3)`` in ``form``."""
+
+    control: NDArray[np.float64]
+    form: Form = "bezier"
+
+    def __post_init__(self) -> None:
+        check_choice("form", self.form, FORMS)
+        control = as_float_array("control", self.control, (4, 4, 3))
+        if control.ndim != 4:
+            raise InputError(f"control: expected shape (N, 4, 4, 3), got {control.shape}")
+        object.__setattr__(self, "control", control)
+
+    def __len__(self) -> int:
+        return int(self.control.shape[0])
+
+    # ------------------------------------------------------------------ forms
+    def convert(self, form: Form) -> PatchSet:
+        """The same surfaces in another form: ``P' = C P C^T`` per coordinate."""
+        check_choice("form", form, FORMS)
+        if form == self.form:
+            return self
+        matrix = conversion_matrix(self.form, form)
+        return PatchSet(np.einsum("ik,nkld,jl->nijd", matrix, self.control, matrix, optimize=True), form)
+
+    def power_coefficients(self) -> NDArray[np.float64]:
+        """``A = M^T P M`` per coordinate, shape (N, 4, 4, 3): ``p = Σ A_ij u^(3-i) v^(3-j)``."""
+        matrix = basis_matrix(self.form)
+        return np.einsum("ip,nijd,jq->npqd", matrix, self.control, matrix, optimize=True)
+
+    # ------------------------------------------------------------- evaluation
+    def evaluate_grid(
+        self, u: ArrayLike, v: ArrayLike | None = None, du: int = 0, dv: int = 0
+    ) -> NDArray[np.float64]:
+        """``∂^(du+dv) p / ∂u^du ∂v^dv`` on the grid ``u × v``: shape ``(N, len(u), len(v), 3)``."""
+        u_params = _check_parameters("u", u)
+        v_params = u_params if v is None else _check_parameters("v", v)
+        weights_u = basis_values(self.form, u_params, du)
+        weights_v = basis_values(self.form, v_params, dv)
+        return _grid_contract(self.control, weights_u, weights_v)
+
+    def grid(self, resolution: int) -> NDArray[np.float64]:
+        """Positions on a uniform ``resolution × resolution`` grid including the borders."""
+        return self.evaluate_grid(np.linspace(0.0, 1.0, _check_resolution(resolution)))
+
+    def evaluate(self, uv: ArrayLike, du: int = 0, dv: int = 0) -> NDArray[np.float64]:
+        """Derivative ``(du, dv)`` at scattered parameters.
+
+        ``uv`` of shape ``(K, 2)`` is shared by all patches; ``(N, K, 2)`` gives each patch its own.
+        Returns ``(N, K, 3)``.
+        """
+        params = as_float_array("uv", uv, (2,))
+        if params.ndim == 2:
+            weights_u = basis_values(self.form, params[:, 0], du)
+            weights_v = basis_values(self.form, params[:, 1], dv)
+            return np.einsum("ki,nijd,kj->nkd", weights_u, self.control, weights_v, optimize=True)
+        if params.ndim == 3 and params.shape[0] == len(self):
+            weights_u = basis_values(self.form, params[..., 0], du)
+            weights_v = basis_values(self.form, params[..., 1], dv)
+            return np.einsum("nki,nijd,nkj->nkd", weights_u, self.control, weights_v, optimize=True)
+        raise InputError(f"uv: expected shape (K, 2) or ({len(self)}, K, 2), got {params.shape}")
+
+    def tangents(self, uv: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(p_u, p_v)`` at scattered parameters, each ``(N, K, 3)``."""
+        return self.evaluate(uv, 1, 0), self.evaluate(uv, 0, 1)
+
+    def twist(self, uv: ArrayLike) -> NDArray[np.float64]:
+        """``p_uv`` at scattered parameters, ``(N, K, 3)``."""
+        return self.evaluate(uv, 1, 1)
+
+    def normals(self, uv: ArrayLike) -> NDArray[np.float64]:
+        """Unit normals ``n = p_u × p_v / |p_u × p_v|`` (paper, eq. 10), ``(N, K, 3)``.
+
+        Where ``p_u × p_v = 0`` (a collapsed edge) the normal is the zero vector, never NaN.
+        """
+        p_u, p_v = self.tangents(uv)
+        return unit(np.cross(p_u, p_v))
+
+    def normals_grid(self, u: ArrayLike, v: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Unit normals on the grid ``u × v``, ``(N, len(u), len(v), 3)``; zero where degenerate."""
+        return unit(np.cross(self.evaluate_grid(u, v, 1, 0), self.evaluate_grid(u, v, 0, 1)))
+
+    def corners(self) -> NDArray[np.float64]:
+        """Corner positions F0..F3, shape (N, 4, 3)."""
+        return self.evaluate(CORNER_PARAMETERS)
+
+    # ------------------------------------------------------------------ curves
+    def boundary_curves(self) -> CubicCurves:
+        """The four boundary curves, batch shape (N, 4), counter-clockwise: edge k runs corner k → k+1.
+
+        Curve v = v0 in the u-form: ``c_i = Σ_j b_j(v0) P_ij`` (exact: b_j(0), b_j(1) are rational).
+        """
+        ends = basis_values(self.form, np.array([0.0, 1.0]))  # (2, 4)
+        bottom = np.einsum("j,nijd->nid", ends[0], self.control)  # v = 0, u: 0 -> 1
+        right = np.einsum("i,nijd->njd", ends[1], self.control)  # u = 1, v: 0 -> 1
+        top = np.einsum("j,nijd->nid", ends[1], self.control)  # v = 1, u: 0 -> 1 (reverse)
+        left = np.einsum("i,nijd->njd", ends[0], self.control)  # u = 0, v: 0 -> 1 (reverse)
+        forward = CubicCurves(np.stack([bottom, right, top, left], axis=1), self.form)
+        backward = forward.reversed()
+        control = np.where(np.array([False, False, True, True])[None, :, None, None], backward.control, forward.control)
+        return CubicCurves(control, self.form)
+
+    def diagonal_polynomials(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Power coefficients (ascending, degree 6) of ``D(t) = p(t, t)`` and ``E(t) = p(t, 1-t)``.
+
+        Each is shape (N, 7, 3). See :func:`diagonal_polynomials`.
+        """
+        return diagonal_polynomials(self.power_coefficients())
+
+    def with_coons_twists(self) -> PatchSet:
+        """The S-/HS-patch: the same boundary, twists from the 12 boundary vectors (:func:`hs_twists`)."""
+        hermite = self.convert("hermite").control.copy()
+        hermite[:, 2:, 2:] = hs_twists(hermite)
+        return PatchSet(hermite, "hermite").convert(self.form)
+
+    def closure(self) -> NDArray[np.float64]:
+        """The vector ``C`` of :func:`closure`, shape (N, 3): both diagonals cubic iff ``C = 0``."""
+        return closure(self.convert("hermite").control)
+
+
+def _check_resolution(resolution: int) -> int:
+    if not isinstance(resolution, (int, np.integer)) or resolution < 2:
+        raise InputError(f"resolution: expected an integer ≥ 2, got {resolution!r}")
+    return int(resolution)
+
+
+def _grid_contract(
+    control: NDArray[np.float64], weights_u: NDArray[np.float64], weights_v: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``out[n, a, b] = Σ_ij wu[a, i] P[n, i, j] wv[b, j]`` as a C-contiguous (N, Gu, Gv, 3) array."""
+    return np.ascontiguousarray(np.einsum("ai,nijd,bj->nabd", weights_u, control, weights_v, optimize=True))
+
+
+def unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``x / |x|`` along the last axis; the zero vector stays zero (no NaN)."""
+    length = np.linalg.norm(vectors, axis=-1, keepdims=True)
+    return np.divide(vectors, length, out=np.zeros_like(vectors), where=length > 0)
+
+
+def hs_twists(hermite: ArrayLike) -> NDArray[np.float64]:
+    """Twists of the S-/HS-patch from the 12 boundary vectors of Hermite patches ``(N, 4, 4, 3)``.
+
+    With ``δ = p(0,1) + p(1,0) − p(0,0) − p(1,1)``:
+
+        p_uv(a, b) = δ + [p_u(a, 1) − p_u(a, 0)] + [p_v(1, b) − p_v(0, b)]     a, b ∈ {0, 1}
+
+    which makes the patch the bilinearly blended Coons patch of its four boundary cubics
+    (the power coefficients of u^3 v^3, u^3 v^2, u^2 v^3 and u^2 v^2 vanish). Returns (N, 2, 2, 3).
+    """
+    control = as_float_array("hermite", hermite, (4, 4, 3))
+    delta = control[..., 0, 1, :] + control[..., 1, 0, :] - control[..., 0, 0, :] - control[..., 1, 1, :]
+    p_u = control[..., 2:4, 0:2, :]  # p_u[a, b] = ∂p/∂u at corner (a, b)
+    p_v = control[..., 0:2, 2:4, :]  # p_v[a, b] = ∂p/∂v at corner (a, b)
+    u_term = (p_u[..., :, 1, :] - p_u[..., :, 0, :])[..., :, None, :]  # depends on a
+    v_term = (p_v[..., 1, :, :] - p_v[..., 0, :, :])[..., None, :, :]  # depends on b
+    return delta[..., None, None, :] + u_term + v_term
+
+
+def closure(hermite: ArrayLike) -> NDArray[np.float64]:
+    """The closure vector of an S-/HS-patch with Hermite control ``(N, 4, 4, 3)``, shape (N, 3).
+
+        C = 4δ + [p_u(0,1) + p_u(1,1) − p_u(0,0) − p_u(1,0)] + [p_v(1,0) + p_v(1,1) − p_v(0,0) − p_v(0,1)]
+
+    With Coons twists the diagonal and anti-diagonal have t^4 coefficients +C and −C: both are
+    cubic iff ``C = 0``. C depends on the boundary only.
+    """
+    control = as_float_array("hermite", hermite, (4, 4, 3))
+    delta = control[..., 0, 1, :] + control[..., 1, 0, :] - control[..., 0, 0, :] - control[..., 1, 1, :]
+    p_u = control[..., 2:4, 0:2, :]
+    p_v = control[..., 0:2, 2:4, :]
+    u_sum = p_u[..., 0, 1, :] + p_u[..., 1, 1, :] - p_u[..., 0, 0, :] - p_u[..., 1, 0, :]
+    v_sum = p_v[..., 1, 0, :] + p_v[..., 1, 1, :] - p_v[..., 0, 0, :] - p_v[..., 0, 1, :]
+    return 4.0 * delta + u_sum + v_sum
+
+
+def _binomial_rows() -> NDArray[np.float64]:
+    """``rows[m, k]`` = coefficient of t^k in (1 − t)^m, m, k = 0..3."""
+    rows = np.zeros((4, 4))
+    rows[0, 0] = 1.0
+    for m in range(1, 4):
+        rows[m, : m + 1] = np.convolve(rows[m - 1, :m], [1.0, -1.0])
+    return rows
+
+
+_ONE_MINUS_T = _binomial_rows()
+
+
+def diagonal_polynomials(power: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Diagonal and anti-diagonal of patches given by power coefficients ``A`` (N, 4, 4, 3).
+
+    ``p(u, v) = Σ A_ij u^(3-i) v^(3-j)``; ``D(t) = p(t, t) = Σ A_ij t^(6-i-j)`` and
+    ``E(t) = p(t, 1-t) = Σ A_ij t^(3-i) (1-t)^(3-j)``. Both returned as ascending coefficients
+    (N, 7, 3); exact integer arithmetic on the coefficients, so no rounding beyond the sums.
+    """
+    coefficients = as_float_array("power", power, (4, 4, 3))
+    batch = coefficients.shape[:-3]
+    diagonal = np.zeros(batch + (7, 3))
+    anti = np.zeros(batch + (7, 3))
+    for i in range(4):
+        for j in range(4):
+            a_ij = coefficients[..., i, j, :]
+            diagonal[..., 6 - i - j, :] += a_ij
+            for k in range(4 - j):  # (1-t)^(3-j) = Σ_k rows[3-j, k] t^k
+                anti[..., 3 - i + k, :] += _ONE_MINUS_T[3 - j, k] * a_ij
+    return diagonal, anti
+
+
+def polynomial_degree(coefficients: ArrayLike, rtol: float = 64 * np.finfo(float).eps) -> NDArray[np.int64]:
+    """Degree of vector polynomials with ascending coefficients ``(..., K, dim)``.
+
+    A coefficient counts as zero when its norm is ≤ ``rtol`` × the largest coefficient norm of
+    that polynomial (the rounding level of the sums that produced it). The zero polynomial has
+    degree 0.
+    """
+    coeffs = as_float_array("coefficients", coefficients, (None, None))
+    norms = np.linalg.norm(coeffs, axis=-1)
+    scale = norms.max(axis=-1, keepdims=True)
+    significant = norms > rtol * scale
+    last = coeffs.shape[-2] - 1 - np.argmax(significant[..., ::-1], axis=-1)
+    return np.where(significant.any(axis=-1), last, 0).astype(np.int64)
