@@ -100,7 +100,7 @@ def as_float_array(
     ``finite``) a NaN/inf entry.
     """
     try:
-        array = np.ascontiguousarray(value, dtype=np.float64)
+        array = np.asarray(value, dtype=np.float64, order="C")
     except (TypeError, ValueError) as exc:
         raise InputError(f"{name}: expected an array of numbers, got {type(value).__name__} ({exc})") from None
     need = len(trailing) if min_ndim is None else min_ndim
@@ -125,7 +125,7 @@ def as_index_array(name: str, value: ArrayLike, trailing: Sequence[int | None] =
     if array.size and not np.issubdtype(array.dtype, np.integer):
         if not np.issubdtype(array.dtype, np.floating) or not np.all(np.isfinite(array)) or np.any(array != np.round(array)):
             raise InputError(f"{name}: expected integer indices, got dtype {array.dtype}")
-    array = np.ascontiguousarray(array, dtype=np.int64)
+    array = np.asarray(array, dtype=np.int64, order="C")
     shape_ok = array.ndim >= len(trailing) and all(
         want is None or got == want
         for got, want in zip(array.shape[array.ndim - len(trailing):], trailing)
