@@ -1,0 +1,1 @@
+"""Surface constructions: a QuadMesh in, a PatchNetwork out."""

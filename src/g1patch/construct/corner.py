@@ -1,0 +1,154 @@
+"""The paper's construction: one bicubic Hermite patch per quad, G1 at every corner.
+
+Skala's eq. (13): all patches sharing a corner get tangents orthogonal to one vertex normal n,
+
+    n^T p_u^i = 0,   n^T p_v^i = 0      for every patch i at the corner,
+
+so their tangent planes agree there. Corner tangents are the mesh edges projected onto the
+tangent plane, ``T_{A→w} = d − (n·d) n`` with ``d = x_w − x_A``, rescaled to a chosen length.
+Shared boundary curves are built from the same data on both sides, so they are identical.
+Along edges the cross-boundary tangents of the two patches differ: the surface creases there.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import ConstructionError, check_choice
+from ..mesh import QuadMesh
+from ..network import PatchNetwork, network_from_mesh
+from ..patches import PatchSet, hs_twists
+
+__all__ = ["NORMALS", "TANGENTS", "TWISTS", "fan_normals", "least_squares_normals", "corner_tangents", "build_corner_network"]
+
+NormalRule = Literal["fan", "paper"]
+TangentRule = Literal["chord", "arc"]
+TwistRule = Literal["zero", "bilinear", "coons"]
+NORMALS: tuple[NormalRule, ...] = ("fan", "paper")
+TANGENTS: tuple[TangentRule, ...] = ("chord", "arc")
+TWISTS: tuple[TwistRule, ...] = ("zero", "bilinear", "coons")
+
+
+def _unit_or_fail(vectors: NDArray[np.float64], what: str) -> NDArray[np.float64]:
+    length = np.linalg.norm(vectors, axis=-1, keepdims=True)
+    if not (length > 0).all():
+        bad = int(np.argmin(length[:, 0]))
+        raise ConstructionError(f"{what}: vertex {bad} has no defined normal (its faces are degenerate or cancel out)")
+    return vectors / length
+
+
+def fan_normals(mesh: QuadMesh) -> NDArray[np.float64]:
+    """Unit fan normals ``N_A = normalize(Σ (x_next − A) × (x_prev − A))`` over the faces at A.
+
+    In face f the corner A has a next and a previous vertex; the pair are consecutive ring
+    neighbours of A, so the sum runs over consecutive ring edges (non-cyclic on a boundary).
+    """
+    faces = mesh.faces
+    x = mesh.vertices
+    here = x[faces]
+    to_next = np.roll(here, -1, axis=1) - here
+    to_prev = np.roll(here, 1, axis=1) - here
+    corner_normals = np.cross(to_next, to_prev).reshape(-1, 3)
+    total = np.zeros_like(x)
+    np.add.at(total, faces.reshape(-1), corner_normals)
+    return _unit_or_fail(total, "fan normal")
+
+
+def least_squares_normals(mesh: QuadMesh) -> NDArray[np.float64]:
+    """The paper's normal: the n closest to orthogonal to every mesh edge at the vertex.
+
+    Eq. (11) stacked over all edges ``d_j`` at A is over-determined for valence > 2; its
+    least-squares solution is the eigenvector of ``Σ d_j d_j^T`` with the smallest eigenvalue
+    (exactly the generalized cross product ``d_0 × d_1`` when there are two edges). Oriented to
+    agree with the fan normal. Fragile on coarse curved meshes: where the edges do not lie near
+    a plane (a torus with few segments) it can pick a wrong axis.
+    """
+    edges = mesh.topology.edges
+    x = mesh.vertices
+    d = x[edges[:, 1]] - x[edges[:, 0]]
+    outer = d[:, :, None] * d[:, None, :]
+    scatter = np.zeros((len(x), 3, 3))
+    np.add.at(scatter, edges[:, 0], outer)
+    np.add.at(scatter, edges[:, 1], outer)
+    normals = np.linalg.eigh(scatter)[1][:, :, 0]
+    fan = fan_normals(mesh)
+    return normals * np.where(np.einsum("vd,vd->v", normals, fan) < 0, -1.0, 1.0)[:, None]
+
+
+def corner_tangents(
+    origin: NDArray[np.float64],
+    target: NDArray[np.float64],
+    normal: NDArray[np.float64],
+    rule: TangentRule,
+    labels: NDArray[np.int64] | None = None,
+) -> NDArray[np.float64]:
+    """Tangent at ``origin`` towards ``target`` in the plane ⊥ ``normal`` (unit), batched.
+
+    Direction: ``s = d − (n·d) n``. Length: ``chord`` → |d|; ``arc`` → |d| / cos²(φ/2) with φ
+    the angle between d and the plane: a circular arc through both ends tangent to the plane
+    spans θ = 2φ, and the cubic Hermite tangent that best reproduces it is |d| / cos²(θ/4).
+    ``labels[..., 2]`` (origin and target vertex ids) name the edge in an error.
+    """
+    check_choice("tangents", rule, TANGENTS)
+    d = target - origin
+    height = np.einsum("...d,...d->...", d, normal)
+    s = d - height[..., None] * normal
+    in_plane = np.linalg.norm(s, axis=-1)
+    chord = np.linalg.norm(d, axis=-1)
+    if not (in_plane > 0).all():
+        where = np.argwhere(~(in_plane > 0))[0]
+        edge = "" if labels is None else f" {labels[tuple(where)][0]}→{labels[tuple(where)][1]}"
+        raise ConstructionError(f"tangents: mesh edge{edge} is parallel to its vertex normal; its tangent is undefined")
+    length = chord
+    if rule == "arc":
+        half_angle = 0.5 * np.arctan2(np.abs(height), in_plane)
+        length = chord / np.cos(half_angle) ** 2
+    return s * (length / in_plane)[..., None]
+
+
+def build_corner_network(
+    mesh: QuadMesh,
+    *,
+    tangents: TangentRule = "arc",
+    twist: TwistRule = "bilinear",
+    normals: NormalRule = "fan",
+) -> PatchNetwork:
+    """One Hermite patch per quad with the corner conditions of eq. (13), as a PatchNetwork.
+
+    Face corners c0..c3 (CCW), ``T(i→j)`` the corner tangent from c_i towards c_j:
+
+        p_u(0,0) =  T(0→1)   p_v(0,0) =  T(0→3)
+        p_u(1,0) = −T(1→0)   p_v(1,0) =  T(1→2)
+        p_u(1,1) = −T(2→3)   p_v(1,1) = −T(2→1)
+        p_u(0,1) =  T(3→2)   p_v(0,1) = −T(3→0)
+
+    Twists: ``zero``; ``bilinear`` ``x0 − x1 + x2 − x3`` at every corner; ``coons`` the S-/HS rule.
+    """
+    check_choice("twist", twist, TWISTS)
+    check_choice("normals", normals, NORMALS)
+    vertex_normals = fan_normals(mesh) if normals == "fan" else least_squares_normals(mesh)
+    faces = mesh.faces
+    x = mesh.vertices[faces]  # (F, 4, 3)
+    n = vertex_normals[faces]
+    next_edges = np.stack([faces, np.roll(faces, -1, axis=1)], axis=-1)
+    prev_edges = np.stack([faces, np.roll(faces, 1, axis=1)], axis=-1)
+    to_next = corner_tangents(x, np.roll(x, -1, axis=1), n, tangents, next_edges)  # T(k → k+1)
+    to_prev = corner_tangents(x, np.roll(x, 1, axis=1), n, tangents, prev_edges)  # T(k → k−1)
+
+    control = np.zeros((len(faces), 4, 4, 3))
+    control[:, 0, 0], control[:, 1, 0], control[:, 1, 1], control[:, 0, 1] = x[:, 0], x[:, 1], x[:, 2], x[:, 3]
+    control[:, 2, 0], control[:, 0, 2] = to_next[:, 0], to_prev[:, 0]  # corner (0,0)
+    control[:, 3, 0], control[:, 1, 2] = -to_prev[:, 1], to_next[:, 1]  # corner (1,0)
+    control[:, 3, 1], control[:, 1, 3] = -to_next[:, 2], -to_prev[:, 2]  # corner (1,1)
+    control[:, 2, 1], control[:, 0, 3] = to_prev[:, 3], -to_next[:, 3]  # corner (0,1)
+    if twist == "bilinear":
+        control[:, 2:, 2:] = (x[:, 0] - x[:, 1] + x[:, 2] - x[:, 3])[:, None, None]
+    elif twist == "coons":
+        control[:, 2:, 2:] = hs_twists(control)
+    provenance = {"method": "corner", "tangents": tangents, "twist": twist, "normals": normals}
+    if mesh.source:
+        provenance["source"] = str(mesh.source)
+    return network_from_mesh(mesh.topology, PatchSet(control, "hermite"), mesh.vertices, fan_normals(mesh), provenance)

@@ -1,0 +1,72 @@
+"""Newell's Bézier patch format (``.bpt``): a patch count, then per patch ``3 3`` and 16 points.
+
+The 16 points of a patch are 4 rows of 4; row r, column c is control point ``P[r, c]`` (r along
+u, c along v).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import FormatError
+from ..patches import PatchSet
+from .atomic import atomic_path
+
+__all__ = ["read_bpt", "write_bpt"]
+
+
+def read_bpt(path: str | os.PathLike[str]) -> PatchSet:
+    """Read a ``.bpt`` file into Bézier patches; a malformed file raises FormatError naming the line."""
+    source = Path(path)
+    try:
+        text = source.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise FormatError(source, "not a text file") from None
+    except OSError as exc:
+        raise FormatError(source, f"cannot read: {exc.strerror}") from None
+    lines = [(number, line.split()) for number, line in enumerate(text.splitlines(), start=1)]
+    lines = [(number, words) for number, words in lines if words]
+    if not lines:
+        raise FormatError(source, "empty file; expected a patch count on the first line")
+    number, words = lines[0]
+    if len(words) != 1 or not words[0].isdigit() or int(words[0]) < 1:
+        raise FormatError(source, f"expected a positive patch count, got {' '.join(words)!r}", number)
+    count = int(words[0])
+    expected_lines = 1 + 17 * count
+    if len(lines) < expected_lines:
+        raise FormatError(
+            source,
+            f"truncated: {count} patches need {expected_lines} non-empty lines, the file has {len(lines)}",
+            lines[-1][0],
+        )
+    if len(lines) > expected_lines:
+        raise FormatError(source, f"unexpected content after {count} patches", lines[expected_lines][0])
+    control = np.empty((count, 16, 3))
+    for patch in range(count):
+        number, words = lines[1 + 17 * patch]
+        if words != ["3", "3"]:
+            raise FormatError(source, f"patch {patch + 1}: expected degrees '3 3', got {' '.join(words)!r}", number)
+        for point in range(16):
+            number, words = lines[2 + 17 * patch + point]
+            try:
+                values = [float(word) for word in words]
+            except ValueError:
+                values = []
+            if len(values) != 3 or not np.isfinite(values).all():
+                raise FormatError(source, f"patch {patch + 1}: expected three finite numbers 'x y z', got {' '.join(words)!r}", number)
+            control[patch, point] = values
+    return PatchSet(control.reshape(count, 4, 4, 3), "bezier")
+
+
+def write_bpt(path: str | os.PathLike[str], patches: PatchSet) -> None:
+    """Write patches (converted to Bézier form) as ``.bpt``, atomically, with round-trip precision."""
+    control = patches.convert("bezier").control.reshape(len(patches), 16, 3)
+    lines = [f"{len(patches)}"]
+    for points in control:
+        lines.append("3 3")
+        lines.extend(" ".join(repr(float(value)) for value in point) for point in points)
+    with atomic_path(path) as temporary:
+        temporary.write_text("\n".join(lines) + "\n", encoding="utf-8")

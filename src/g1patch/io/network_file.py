@@ -1,0 +1,72 @@
+"""The native network file: ``.npz`` with a format version, patches and their sharing arrays."""
+
+from __future__ import annotations
+
+import json
+import os
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import FormatError
+from ..network import PatchNetwork
+from ..patches import PatchSet
+from .atomic import atomic_path
+
+__all__ = ["FORMAT_VERSION", "save_network", "load_network"]
+
+FORMAT_VERSION = 1
+_ARRAYS = ("corner_ids", "edge_ids", "edge_reversed", "neighbor", "neighbor_edge", "same_direction", "edge_collapsed")
+
+
+def save_network(path: str | os.PathLike[str], network: PatchNetwork) -> None:
+    """Write ``network`` to ``path`` (``.npz``), atomically."""
+    if Path(path).suffix.lower() != ".npz":
+        raise FormatError(path, "a network file must end in .npz")
+    patches = network.patches
+    if not isinstance(patches, PatchSet):
+        raise FormatError(path, f"cannot store patches of type {type(patches).__name__}")
+    patch_arrays = {"patch_kind": np.array("bicubic"), "form": np.array(patches.form), "control": patches.control}
+    arrays = {name: getattr(network, name) for name in _ARRAYS}
+    for name in ("vertices", "vertex_normals"):
+        if getattr(network, name) is not None:
+            arrays[name] = getattr(network, name)
+    header = {"format": "g1patch-network", "version": FORMAT_VERSION, "provenance": network.provenance}
+    with atomic_path(path) as temporary:
+        with open(temporary, "wb") as handle:
+            np.savez_compressed(handle, header=np.array(json.dumps(header)), **patch_arrays, **arrays)
+
+
+def load_network(path: str | os.PathLike[str]) -> PatchNetwork:
+    """Read a network written by :func:`save_network`; anything else raises FormatError."""
+    source = Path(path)
+    try:
+        with np.load(source, allow_pickle=False) as data:
+            contents = {name: data[name] for name in data.files}
+    except FileNotFoundError:
+        raise FormatError(source, "no such file") from None
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
+        raise FormatError(source, f"not a g1patch network file ({exc})") from None
+    try:
+        header = json.loads(str(contents["header"]))
+    except (KeyError, json.JSONDecodeError):
+        raise FormatError(source, "not a g1patch network file (no header)") from None
+    if header.get("format") != "g1patch-network":
+        raise FormatError(source, "not a g1patch network file (wrong header)")
+    if header.get("version") != FORMAT_VERSION:
+        raise FormatError(source, f"network format version {header.get('version')} is not supported (this g1patch reads {FORMAT_VERSION})")
+    missing = [name for name in ("patch_kind", *_ARRAYS) if name not in contents]
+    if missing:
+        raise FormatError(source, f"network file lacks {', '.join(missing)}")
+    kind = str(contents["patch_kind"])
+    if kind != "bicubic":
+        raise FormatError(source, f"unknown patch kind {kind!r}")
+    patches = PatchSet(contents["control"], str(contents["form"]))  # type: ignore[arg-type]
+    return PatchNetwork(
+        patches=patches,
+        **{name: contents[name] for name in _ARRAYS},
+        vertices=contents.get("vertices"),
+        vertex_normals=contents.get("vertex_normals"),
+        provenance={str(k): str(v) for k, v in header.get("provenance", {}).items()},
+    )

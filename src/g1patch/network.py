@@ -1,0 +1,235 @@
+"""PatchNetwork: patches plus which patch edges and corners they share.
+
+A network knows, for every patch edge ``(p, k)`` (edge k runs from corner k to corner k+1,
+counter-clockwise, see :mod:`g1patch.patches`):
+
+* ``edge_ids[p, k]``: the id of the shared curve; ``edge_reversed[p, k]`` is True when the
+  patch runs along it against the curve's canonical direction;
+* ``neighbor[p, k]`` / ``neighbor_edge[p, k]``: the patch and edge across it, or -1 on an open
+  edge (and on a collapsed one);
+* ``corner_ids[p, k]``: the id of the point at corner k, shared by all patches meeting there.
+
+On a consistently oriented network two neighbours run along their shared edge in opposite
+directions; where they run the same way (a patch set with mixed orientation, e.g. a ``.bpt``
+file) ``same_direction[p, k]`` is True and the check compares normals with a flipped sign.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import G1PatchError, InputError, NonManifoldError, as_float_array, as_index_array
+from .mesh import QuadTopology
+from .patches import PatchSet
+
+__all__ = ["Patches", "PatchNetwork", "edge_parameters", "network_from_mesh", "network_from_patch_points"]
+
+
+class Patches(Protocol):
+    """What a network needs of its patches: a count and exact first derivatives anywhere."""
+
+    def __len__(self) -> int: ...
+
+    def evaluate(self, uv: ArrayLike, du: int = 0, dv: int = 0) -> NDArray[np.float64]: ...
+
+    def evaluate_grid(
+        self, u: ArrayLike, v: ArrayLike | None = None, du: int = 0, dv: int = 0
+    ) -> NDArray[np.float64]: ...
+
+
+def edge_parameters(edge: NDArray[np.int64], t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(u, v) of the point at fraction ``t`` along patch edge ``edge`` (counter-clockwise).
+
+    Edge 0: (t, 0); edge 1: (1, t); edge 2: (1 − t, 1); edge 3: (0, 1 − t). ``edge`` and ``t``
+    broadcast; returns ``broadcast shape + (2,)``.
+    """
+    edge, t = np.broadcast_arrays(np.asarray(edge), np.asarray(t, dtype=np.float64))
+    start = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    direction = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+    return start[edge] + t[..., None] * direction[edge]
+
+
+@dataclass(frozen=True)
+class PatchNetwork:
+    """Patches with their shared edges and corners (see the module docstring for the arrays)."""
+
+    patches: Patches
+    corner_ids: NDArray[np.int64]
+    edge_ids: NDArray[np.int64]
+    edge_reversed: NDArray[np.bool_]
+    neighbor: NDArray[np.int64]
+    neighbor_edge: NDArray[np.int64]
+    same_direction: NDArray[np.bool_]
+    edge_collapsed: NDArray[np.bool_]
+    #: mesh vertex positions the network interpolates at ``corner_ids`` (None for patch files)
+    vertices: NDArray[np.float64] | None = None
+    #: unit normals of those vertices (the mesh's fan normals), the reference for folds
+    vertex_normals: NDArray[np.float64] | None = None
+    #: how the network was made: method and options, for reports and the file header
+    provenance: dict[str, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        count = len(self.patches)
+        for name in ("corner_ids", "edge_ids", "neighbor", "neighbor_edge"):
+            value = as_index_array(name, getattr(self, name), (4,))
+            if value.shape != (count, 4):
+                raise InputError(f"{name}: expected shape ({count}, 4), got {value.shape}")
+            object.__setattr__(self, name, value)
+        for name in ("edge_reversed", "same_direction"):
+            value = np.ascontiguousarray(getattr(self, name), dtype=bool)
+            if value.shape != (count, 4):
+                raise InputError(f"{name}: expected shape ({count}, 4), got {value.shape}")
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "edge_collapsed", np.ascontiguousarray(self.edge_collapsed, dtype=bool))
+        for name in ("vertices", "vertex_normals"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, as_float_array(name, getattr(self, name), (3,)))
+
+    @property
+    def n_patches(self) -> int:
+        return len(self.patches)
+
+    @property
+    def n_corners(self) -> int:
+        return int(self.corner_ids.max()) + 1 if self.corner_ids.size else 0
+
+    @property
+    def n_edges(self) -> int:
+        return int(self.edge_collapsed.shape[0])
+
+    def shared_edges(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """Each interior edge once: ``(patch, edge)`` of its first side, arrays of shape (E,)."""
+        patch, edge = np.nonzero(self.neighbor >= 0)
+        first = (patch < self.neighbor[patch, edge]) | (
+            (patch == self.neighbor[patch, edge]) & (edge < self.neighbor_edge[patch, edge])
+        )
+        return patch[first], edge[first]
+
+    def open_edges(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """``(patch, edge)`` of every edge with no neighbour that is not collapsed."""
+        collapsed = self.edge_collapsed[self.edge_ids]
+        return np.nonzero((self.neighbor < 0) & ~collapsed)
+
+    def bounding_box_diagonal(self) -> float:
+        """Length of the diagonal of the box around the patch corners (the scale of G0 gaps)."""
+        corners = self.patches.evaluate(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])).reshape(-1, 3)
+        return float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0)))
+
+
+def _cluster_points(points: NDArray[np.float64], tolerance: float) -> NDArray[np.int64]:
+    """Ids that are equal for points closer than ``tolerance`` (connected components)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    pairs = cKDTree(points).query_pairs(tolerance, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)
+    _, labels = connected_components(graph, directed=False)
+    return labels.astype(np.int64)
+
+
+def network_from_patch_points(patches: PatchSet, *, source: str = "patches", rtol: float = 1e-9) -> PatchNetwork:
+    """Build a network from patches nobody here built, by matching their boundary control points.
+
+    Control points closer than ``rtol`` × the bounding-box diagonal are the same point. Two
+    boundary curves are the same edge when their four control points match, in either order;
+    a curve whose four points coincide is a collapsed edge (a triangular patch's pole). An edge
+    used by more than two patches raises :class:`NonManifoldError`.
+    """
+    bezier = patches.convert("bezier").control  # boundary rows are control points in Bézier form
+    count = len(patches)
+    rows = np.stack(
+        [bezier[:, :, 0], bezier[:, 3, :], bezier[:, ::-1, 3], bezier[:, 0, ::-1]], axis=1
+    )  # (N, 4 edges, 4 points, 3), counter-clockwise
+    flat = bezier.reshape(-1, 3)
+    scale = float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0))) or 1.0
+    labels = _cluster_points(rows.reshape(-1, 3), rtol * scale).reshape(count, 4, 4)
+    corner_ids = np.unique(labels[:, :, 0], return_inverse=True)[1].reshape(count, 4)
+
+    backward = labels[:, :, ::-1]
+    is_reversed = _lexicographically_greater(labels, backward)
+    canonical = np.where(is_reversed[..., None], backward, labels).reshape(-1, 4)
+    unique_keys, edge_of, multiplicity = np.unique(canonical, axis=0, return_inverse=True, return_counts=True)
+    edge_of = edge_of.reshape(-1)
+    collapsed = (unique_keys == unique_keys[:, :1]).all(axis=1)
+    overused = (multiplicity > 2) & ~collapsed
+    if overused.any():
+        bad = int(np.argmax(overused))
+        users = np.nonzero(edge_of == bad)[0]
+        raise NonManifoldError(
+            f"{source}: a boundary curve is shared by {multiplicity[bad]} patches "
+            f"(patches {', '.join(str(int(u) // 4) for u in users)}); at most 2 may share one"
+        )
+
+    neighbor = np.full(count * 4, -1, dtype=np.int64)
+    order = np.argsort(edge_of, kind="stable")
+    sorted_edges = edge_of[order]
+    pair_start = np.nonzero((sorted_edges[:-1] == sorted_edges[1:]) & ~collapsed[sorted_edges[:-1]])[0]
+    first, second = order[pair_start], order[pair_start + 1]
+    neighbor[first], neighbor[second] = second, first
+    slot = np.where(neighbor >= 0, neighbor, 0)
+    same_direction = (neighbor >= 0) & (is_reversed.reshape(-1) == is_reversed.reshape(-1)[slot])
+    return PatchNetwork(
+        patches=patches,
+        corner_ids=corner_ids,
+        edge_ids=edge_of.reshape(count, 4),
+        edge_reversed=is_reversed,
+        neighbor=np.where(neighbor >= 0, neighbor // 4, -1).reshape(count, 4),
+        neighbor_edge=np.where(neighbor >= 0, neighbor % 4, -1).reshape(count, 4),
+        same_direction=same_direction.reshape(count, 4),
+        edge_collapsed=collapsed,
+        provenance={"source": source, "method": "file"},
+    )
+
+
+def _lexicographically_greater(a: NDArray[np.int64], b: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """``a > b`` comparing the last axis lexicographically."""
+    differs = a != b
+    first = np.argmax(differs, axis=-1)
+    a_first = np.take_along_axis(a, first[..., None], axis=-1)[..., 0]
+    b_first = np.take_along_axis(b, first[..., None], axis=-1)[..., 0]
+    return differs.any(axis=-1) & (a_first > b_first)
+
+
+def check_consistent(network: PatchNetwork) -> None:
+    """Raise :class:`G1PatchError` if the neighbour arrays do not describe each other."""
+    patch, edge = np.nonzero(network.neighbor >= 0)
+    other, other_edge = network.neighbor[patch, edge], network.neighbor_edge[patch, edge]
+    back = (network.neighbor[other, other_edge] == patch) & (network.neighbor_edge[other, other_edge] == edge)
+    if not back.all():
+        bad = int(np.argmin(back))
+        raise G1PatchError(f"network: patch {patch[bad]} edge {edge[bad]} points to patch {other[bad]} edge {other_edge[bad]}, which does not point back")
+
+
+def network_from_mesh(
+    topology: QuadTopology,
+    patches: Patches,
+    vertices: ArrayLike,
+    vertex_normals: ArrayLike | None = None,
+    provenance: dict[str, str] | None = None,
+) -> PatchNetwork:
+    """The network of one patch per quad: patch f's edge k is the mesh half-edge ``4 f + k``.
+
+    Canonical edge direction is ``edges[e, 0] → edges[e, 1]``; every interior edge is run in
+    opposite directions by its two patches (the mesh is consistently oriented).
+    """
+    faces = topology.faces
+    twin = topology.twin.reshape(-1, 4)
+    edge_ids = topology.halfedge_edge.reshape(-1, 4)
+    return PatchNetwork(
+        patches=patches,
+        corner_ids=faces,
+        edge_ids=edge_ids,
+        edge_reversed=faces != topology.edges[edge_ids, 0],
+        neighbor=np.where(twin >= 0, twin // 4, -1),
+        neighbor_edge=np.where(twin >= 0, twin % 4, -1),
+        same_direction=np.zeros(faces.shape, dtype=bool),
+        edge_collapsed=np.zeros(topology.n_edges, dtype=bool),
+        vertices=np.asarray(vertices, dtype=np.float64),
+        vertex_normals=None if vertex_normals is None else np.asarray(vertex_normals, dtype=np.float64),
+        provenance=dict(provenance or {}),
+    )
