@@ -33,6 +33,7 @@ __all__ = [
     "basis_values",
     "exact_basis_matrix",
     "exact_conversion_matrix",
+    "check_order",
 ]
 
 Form = Literal["hermite", "bezier", "bspline"]
@@ -105,34 +106,53 @@ def exact_basis_matrix(form: Form) -> RationalMatrix:
     return _EXACT[check_choice("form", form, FORMS)]
 
 
+def check_order(name: str, order: object) -> int:
+    """``order`` as a non-negative derivative order, else :class:`InputError` naming ``name``."""
+    if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or order < 0:
+        raise InputError(f"{name}: expected a non-negative integer, got {order!r}")
+    return int(order)
+
+
 @cache
-def exact_conversion_matrix(source: Form, target: Form) -> RationalMatrix:
-    """Exact ``C = (M_source M_target^-1)^T``: control values ``y = C x`` describe the same cubic."""
-    check_choice("source", source, FORMS)
-    check_choice("target", target, FORMS)
+def _exact_conversion(source: Form, target: Form) -> RationalMatrix:
     return _transpose(_matmul(_EXACT[source], _inverse(_EXACT[target])))
 
 
 @cache
-def basis_matrix(form: Form) -> NDArray[np.float64]:
-    """``M_F`` (4×4, read-only): ``x(t) = x^T M_F [t^3, t^2, t, 1]^T``."""
-    return _to_array(exact_basis_matrix(form))
+def _basis(form: Form) -> NDArray[np.float64]:
+    return _to_array(_EXACT[form])
 
 
 @cache
-def derivative_matrix(form: Form, order: int = 1) -> NDArray[np.float64]:
-    """``M_F D^order``: the basis of the ``order``-th derivative, same monomial convention."""
-    if not isinstance(order, int) or order < 0:
-        raise InputError(f"order: expected a non-negative integer, got {order!r}")
-    result = basis_matrix(form) @ np.linalg.matrix_power(_DERIVATIVE, order)
+def _derivative_basis(form: Form, order: int) -> NDArray[np.float64]:
+    result = _basis(form) @ np.linalg.matrix_power(_DERIVATIVE, order)
     result.setflags(write=False)
     return result
 
 
 @cache
+def _conversion(source: Form, target: Form) -> NDArray[np.float64]:
+    return _to_array(_exact_conversion(source, target))
+
+
+def exact_conversion_matrix(source: Form, target: Form) -> RationalMatrix:
+    """Exact ``C = (M_source M_target^-1)^T``: control values ``y = C x`` describe the same cubic."""
+    return _exact_conversion(check_choice("source", source, FORMS), check_choice("target", target, FORMS))
+
+
+def basis_matrix(form: Form) -> NDArray[np.float64]:
+    """``M_F`` (4×4, read-only): ``x(t) = x^T M_F [t^3, t^2, t, 1]^T``."""
+    return _basis(check_choice("form", form, FORMS))
+
+
+def derivative_matrix(form: Form, order: int = 1) -> NDArray[np.float64]:
+    """``M_F D^order`` (read-only): the basis of the ``order``-th derivative, same convention."""
+    return _derivative_basis(check_choice("form", form, FORMS), check_order("order", order))
+
+
 def conversion_matrix(source: Form, target: Form) -> NDArray[np.float64]:
     """Float64 ``C`` with ``y = C x`` (see :func:`exact_conversion_matrix`)."""
-    return _to_array(exact_conversion_matrix(source, target))
+    return _conversion(check_choice("source", source, FORMS), check_choice("target", target, FORMS))
 
 
 def basis_values(form: Form, t: ArrayLike, order: int = 0) -> NDArray[np.float64]:

@@ -36,7 +36,8 @@ def power_coefficients(control: NDArray[np.float64], form: Form) -> NDArray[np.f
     ``x(t) = x^T M_F t`` with ``t = [t^3, t^2, t, 1]``, so the coefficient of ``t^(3-p)`` is
     ``Σ_i x_i M_F[i, p]``.
     """
-    return np.einsum("ip,...id->...pd", basis_matrix(form), control)[..., ::-1, :]
+    checked = as_float_array("control", control, (4, None))
+    return np.einsum("ip,...id->...pd", basis_matrix(form), checked)[..., ::-1, :]
 
 
 @dataclass(frozen=True)
@@ -69,9 +70,8 @@ class CubicCurves:
         if params.ndim not in (1, len(self.batch_shape) + 1) or (
             params.ndim > 1 and params.shape[:-1] != self.batch_shape
         ):
-            raise InputError(
-                f"t: expected shape (K,) or {self.batch_shape + ('K',)}, got {params.shape}"
-            )
+            expected = "(" + ", ".join([*map(str, self.batch_shape), "K"]) + ")"
+            raise InputError(f"t: expected shape (K,) or {expected}, got {params.shape}")
         weights = basis_values(self.form, params, order)  # (..., K, 4)
         if params.ndim == 1:
             return np.einsum("ki,...id->...kd", weights, self.control)

@@ -137,6 +137,6 @@ def as_index_array(name: str, value: ArrayLike, trailing: Sequence[int | None] =
 
 def check_choice(name: str, value: str, choices: Sequence[str]) -> str:
     """Return ``value`` if it is one of ``choices``, else raise :class:`InputError` listing them."""
-    if value not in choices:
+    if not isinstance(value, str) or value not in choices:
         raise InputError(f"{name}: unknown value {value!r}; expected one of {', '.join(map(repr, choices))}")
     return value

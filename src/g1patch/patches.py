@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .basis import FORMS, Form, basis_matrix, basis_values, conversion_matrix
+from .basis import FORMS, Form, basis_matrix, basis_values, check_order, conversion_matrix
 from .curves import CubicCurves
 from .errors import InputError, as_float_array, check_choice
 
@@ -79,6 +79,7 @@ class PatchSet:
         self, u: ArrayLike, v: ArrayLike | None = None, du: int = 0, dv: int = 0
     ) -> NDArray[np.float64]:
         """``∂^(du+dv) p / ∂u^du ∂v^dv`` on the grid ``u × v``: shape ``(N, len(u), len(v), 3)``."""
+        du, dv = check_order("du", du), check_order("dv", dv)
         u_params = _check_parameters("u", u)
         v_params = u_params if v is None else _check_parameters("v", v)
         weights_u = basis_values(self.form, u_params, du)
@@ -95,6 +96,7 @@ class PatchSet:
         ``uv`` of shape ``(K, 2)`` is shared by all patches; ``(N, K, 2)`` gives each patch its own.
         Returns ``(N, K, 3)``.
         """
+        du, dv = check_order("du", du), check_order("dv", dv)
         params = as_float_array("uv", uv, (2,))
         if params.ndim == 2:
             weights_u = basis_values(self.form, params[:, 0], du)
@@ -117,7 +119,9 @@ class PatchSet:
     def normals(self, uv: ArrayLike) -> NDArray[np.float64]:
         """Unit normals ``n = p_u × p_v / |p_u × p_v|`` (paper, eq. 10), ``(N, K, 3)``.
 
-        Where ``p_u × p_v = 0`` (a collapsed edge) the normal is the zero vector, never NaN.
+        Where ``p_u × p_v`` is exactly zero the normal is the zero vector, never NaN. On a collapsed
+        edge away from the origin the derivative is rounding noise and so is its direction: use
+        :func:`g1patch.continuity.check`, which counts such normals with a tolerance.
         """
         p_u, p_v = self.tangents(uv)
         return unit(np.cross(p_u, p_v))
@@ -134,7 +138,8 @@ class PatchSet:
     def boundary_curves(self) -> CubicCurves:
         """The four boundary curves, batch shape (N, 4), counter-clockwise: edge k runs corner k → k+1.
 
-        Curve v = v0 in the u-form: ``c_i = Σ_j b_j(v0) P_ij`` (exact: b_j(0), b_j(1) are rational).
+        Curve v = v0 in the u-form: ``c_i = Σ_j b_j(v0) P_ij``: exact in Hermite and Bézier form
+        (the weights are 0 and 1), rounded in B-spline form (weights 1/6, 4/6, 1/6).
         """
         ends = basis_values(self.form, np.array([0.0, 1.0]))  # (2, 4)
         bottom = np.einsum("j,nijd->nid", ends[0], self.control)  # v = 0, u: 0 -> 1
@@ -251,13 +256,16 @@ def diagonal_polynomials(power: ArrayLike) -> tuple[NDArray[np.float64], NDArray
     return diagonal, anti
 
 
-def polynomial_degree(coefficients: ArrayLike, rtol: float = 64 * np.finfo(float).eps) -> NDArray[np.int64]:
+def polynomial_degree(coefficients: ArrayLike, rtol: float = 1e-12) -> NDArray[np.int64]:
     """Degree of vector polynomials with ascending coefficients ``(..., K, dim)``.
 
     A coefficient counts as zero when its norm is ≤ ``rtol`` × the largest coefficient norm of
-    that polynomial (the rounding level of the sums that produced it). The zero polynomial has
-    degree 0.
+    that polynomial. The default, ~4500 ULP, sits above the rounding of the power-form sums for
+    control values spanning twelve orders of magnitude (measured: ≤ 70 ULP) and far below any
+    coefficient that shapes a curve. The zero polynomial has degree 0.
     """
+    if not (isinstance(rtol, (float, int)) and 0 <= rtol < 1):
+        raise InputError(f"rtol: expected a number in [0, 1), got {rtol!r}")
     coeffs = as_float_array("coefficients", coefficients, (None, None))
     norms = np.linalg.norm(coeffs, axis=-1)
     scale = norms.max(axis=-1, keepdims=True)

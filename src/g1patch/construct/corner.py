@@ -58,22 +58,30 @@ def fan_normals(mesh: QuadMesh) -> NDArray[np.float64]:
 
 
 def least_squares_normals(mesh: QuadMesh) -> NDArray[np.float64]:
-    """The paper's normal: the n closest to orthogonal to every mesh edge at the vertex.
+    """The paper's normal: the normal of the plane that best fits the vertex and its ring.
 
-    Eq. (11) stacked over all edges ``d_j`` at A is over-determined for valence > 2; its
-    least-squares solution is the eigenvector of ``Σ d_j d_j^T`` with the smallest eigenvalue
-    (exactly the generalized cross product ``d_0 × d_1`` when there are two edges). Oriented to
-    agree with the fan normal. Fragile on coarse curved meshes: where the edges do not lie near
-    a plane (a torus with few segments) it can pick a wrong axis.
+    For a vertex with two neighbours this is the plane through three points, the generalized
+    cross product ``ρ = x_1 × x_2 × x_3`` of eq. (9); with more neighbours the system is
+    over-determined and its least-squares solution is the eigenvector of the points' covariance
+    ``Σ d d^T / m − μ μ^T`` (``d = x_w − x_A`` over the vertex itself and its m − 1 neighbours)
+    with the smallest eigenvalue. Oriented to agree with the fan normal. Fragile on coarse
+    curved meshes: where the ring is far from planar (a torus with few segments) the best plane
+    can tilt away from the surface.
     """
     edges = mesh.topology.edges
     x = mesh.vertices
     d = x[edges[:, 1]] - x[edges[:, 0]]
     outer = d[:, :, None] * d[:, None, :]
-    scatter = np.zeros((len(x), 3, 3))
-    np.add.at(scatter, edges[:, 0], outer)
-    np.add.at(scatter, edges[:, 1], outer)
-    normals = np.linalg.eigh(scatter)[1][:, :, 0]
+    second_moment = np.zeros((len(x), 3, 3))
+    first_moment = np.zeros((len(x), 3))
+    np.add.at(second_moment, edges[:, 0], outer)
+    np.add.at(second_moment, edges[:, 1], outer)
+    np.add.at(first_moment, edges[:, 0], d)
+    np.add.at(first_moment, edges[:, 1], -d)
+    points = (mesh.topology.valence + 1.0)[:, None]
+    mean = first_moment / points
+    covariance = second_moment / points[:, :, None] - mean[:, :, None] * mean[:, None, :]
+    normals = np.linalg.eigh(covariance)[1][:, :, 0]
     fan = fan_normals(mesh)
     return normals * np.where(np.einsum("vd,vd->v", normals, fan) < 0, -1.0, 1.0)[:, None]
 
