@@ -1,0 +1,128 @@
+"""The continuity report: known angles and gaps, the teapot, folds, per-edge arrays."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from g1patch import shapes
+from g1patch.construct.corner import build_corner_network
+from g1patch.continuity import angle_between, check
+from g1patch.errors import InputError, NonManifoldError
+from g1patch.io.bpt import read_bpt
+from g1patch.network import PatchNetwork, network_from_patch_points
+from g1patch.patches import PatchSet
+
+EPS = np.finfo(float).eps
+REPORT_KEYS = {
+    "max_edge_angle_deg", "mean_edge_angle_deg", "max_corner_angle_deg", "max_g0_gap",
+    "degenerate_normals", "folds", "patches", "shared_edges",
+}
+
+
+def bilinear_bezier(corners: np.ndarray) -> np.ndarray:
+    """Bézier control net (4, 4, 3) of the bilinear patch through corners c0..c3 (CCW)."""
+    s = np.arange(4) / 3.0
+    u, v = s[:, None, None], s[None, :, None]
+    c0, c1, c2, c3 = corners
+    return (1 - u) * (1 - v) * c0 + u * (1 - v) * c1 + u * v * c2 + (1 - u) * v * c3
+
+
+def hinge(angle_deg: float, lift: float = 0.0) -> PatchNetwork:
+    """Two flat patches sharing the edge x = 1, the second turned up by ``angle_deg`` and lifted."""
+    a = np.radians(angle_deg)
+    first = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    far = np.array([1 + np.cos(a), 0.0, np.sin(a)])
+    second = np.array([[1, 0, 0], far, far + [0, 1, 0], [1, 1, 0]], dtype=float) + [0, 0, lift]
+    patches = PatchSet(np.stack([bilinear_bezier(first), bilinear_bezier(second)]), "bezier")
+    return network_from_patch_points(patches, rtol=1e-9 if lift == 0 else 1e-2)
+
+
+@settings(max_examples=30, deadline=None)
+@given(angle=st.floats(1e-6, 170.0))
+def test_hinge_angle_is_measured_exactly(angle: float) -> None:
+    report = check(hinge(angle))
+    assert report.shared_edges == 1 and report.open_edges == 6
+    # atan2 of exactly computed vectors: relative error a few ULPs of the angle.
+    assert report.max_edge_angle_deg == pytest.approx(angle, rel=64 * EPS, abs=1e-13)
+    assert report.mean_edge_angle_deg == pytest.approx(angle, rel=64 * EPS, abs=1e-13)
+    assert report.max_corner_angle_deg == pytest.approx(angle, rel=64 * EPS, abs=1e-13)
+    assert report.max_g0_gap == 0.0
+    assert report.worst_edge is not None and report.worst_edge["patches"] == [0, 1]
+
+
+def test_g0_gap_is_relative_to_the_bounding_box() -> None:
+    lift = 1e-4
+    network = hinge(30.0, lift=lift)
+    report = check(network)
+    assert report.max_g0_gap == pytest.approx(lift / network.bounding_box_diagonal(), rel=1e-9)
+
+
+def test_angle_between_is_accurate_near_zero() -> None:
+    tiny = 1e-12
+    assert float(angle_between(np.array([1.0, 0, 0]), np.array([1.0, tiny, 0]))) == pytest.approx(np.degrees(tiny), rel=1e-12)
+
+
+def test_teapot_report(shared_data: Path) -> None:
+    report = check(network_from_patch_points(read_bpt(shared_data / "teapot.bpt")))
+    # The data README: 32 patches, boundary curves 52 shared / 16 open / 8 collapsed.
+    assert (report.patches, report.shared_edges, report.open_edges, report.collapsed_patch_edges) == (32, 52, 16, 8)
+    assert report.collapsed_edges == 2  # the lid's and the bottom's poles
+    assert report.max_g0_gap <= 1e-15  # shared curves have identical control points
+    assert report.max_edge_angle_deg <= 1e-9  # Newell's patches are tangent-continuous across shared curves
+    assert report.degenerate_normals > 0  # at the poles p_u × p_v = 0
+    assert report.folds == 0 and report.inconsistent_orientation_edges == 0
+    # The handle's ends meet the body's patches at one point at an angle: a real corner crease.
+    assert report.max_corner_angle_deg > 90.0
+
+
+def test_folds_against_the_mesh_normals() -> None:
+    network = build_corner_network(shapes.cube())
+    assert check(network).folds == 0
+    flipped = PatchNetwork(**{**network.__dict__, "vertex_normals": -network.vertex_normals})
+    assert check(flipped).folds == 6
+
+
+def test_per_edge_arrays_locate_the_worst_edge() -> None:
+    rng = np.random.default_rng(5)
+    mesh = shapes.torus(10, 6)
+    mesh = mesh.with_vertices(mesh.vertices + rng.normal(scale=0.01, size=mesh.vertices.shape))
+    report = check(build_corner_network(mesh))
+    assert report.edge_angle_deg.shape == (report.shared_edges,) == (mesh.topology.n_edges,)
+    assert report.edge_angle_deg.max() == report.max_edge_angle_deg
+    worst = report.worst_edge
+    assert worst is not None
+    index = int(np.argmax(report.edge_angle_deg))
+    assert list(report.edge_patches[index]) == worst["patches"]
+
+
+def test_report_serialises_to_json() -> None:
+    data = json.loads(json.dumps(check(build_corner_network(shapes.cube())).to_dict()))
+    assert REPORT_KEYS <= set(data)
+    assert data["patches"] == 6 and data["shared_edges"] == 12
+
+
+def test_summary_names_the_figures() -> None:
+    text = check(build_corner_network(shapes.cube())).summary()
+    for label in ("max G1 angle on edges", "max G1 angle at corners", "max G0 gap", "folds", "worst edge"):
+        assert label in text
+
+
+@pytest.mark.parametrize("argument", [{"samples": 1}, {"samples": 2.5}, {"fold_samples": 0}])
+def test_bad_sample_counts(argument: dict[str, float]) -> None:
+    (name, _), = argument.items()
+    with pytest.raises(InputError, match=name):
+        check(build_corner_network(shapes.cube()), **argument)  # type: ignore[arg-type]
+
+
+def test_a_curve_shared_by_more_than_two_patches_is_non_manifold() -> None:
+    first = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    fins = [np.array([[1, 0, 0], [1 + c, 0, s], [1 + c, 1, s], [1, 1, 0]]) for c, s in ((1, 0), (0, 1), (-0.5, 0.5))]
+    patches = PatchSet(np.stack([bilinear_bezier(first)] + [bilinear_bezier(f) for f in fins]), "bezier")
+    with pytest.raises(NonManifoldError, match="shared by 4 patches"):
+        network_from_patch_points(patches)
