@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import FormatError
+from ..errors import FormatError, InputError
 from ..network import PatchNetwork
 from ..patches import PatchSet
 from .atomic import atomic_path
@@ -62,11 +62,13 @@ def load_network(path: str | os.PathLike[str]) -> PatchNetwork:
     kind = str(contents["patch_kind"])
     if kind != "bicubic":
         raise FormatError(source, f"unknown patch kind {kind!r}")
-    patches = PatchSet(contents["control"], str(contents["form"]))  # type: ignore[arg-type]
-    return PatchNetwork(
-        patches=patches,
-        **{name: contents[name] for name in _ARRAYS},
-        vertices=contents.get("vertices"),
-        vertex_normals=contents.get("vertex_normals"),
-        provenance={str(k): str(v) for k, v in header.get("provenance", {}).items()},
-    )
+    try:
+        return PatchNetwork(
+            patches=PatchSet(contents["control"], str(contents["form"])),  # type: ignore[arg-type]
+            **{name: contents[name] for name in _ARRAYS},
+            vertices=contents.get("vertices"),
+            vertex_normals=contents.get("vertex_normals"),
+            provenance={str(k): str(v) for k, v in header.get("provenance", {}).items()},
+        )
+    except (InputError, KeyError) as exc:
+        raise FormatError(source, f"corrupt network file: {exc}") from None

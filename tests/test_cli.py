@@ -1,0 +1,133 @@
+"""The command line, run as a user runs it: subprocesses, exit codes, output files."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+MALFORMED = Path(__file__).parent / "data" / "malformed"
+MALFORMED_BPT = Path(__file__).parent / "data" / "malformed_bpt"
+REPORT_KEYS = {
+    "max_edge_angle_deg", "mean_edge_angle_deg", "max_corner_angle_deg", "max_g0_gap",
+    "degenerate_normals", "folds", "patches", "shared_edges",
+}
+
+
+def g1patch(*args: str | Path, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "g1patch.cli", *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=300
+    )
+
+
+@pytest.fixture(scope="module")
+def cube_obj(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from g1patch import shapes
+    from g1patch.io.meshfile import write_quads
+
+    path = tmp_path_factory.mktemp("mesh") / "cube.obj"
+    mesh = shapes.cube()
+    write_quads(path, mesh.vertices, mesh.faces)
+    return path
+
+
+@pytest.mark.parametrize("command", ["build", "check", "export", "demo"])
+def test_every_command_has_help_with_examples(command: str) -> None:
+    result = g1patch(command, "--help")
+    assert result.returncode == 0
+    assert "example" in result.stdout and f"g1patch {command}" in result.stdout
+
+
+def test_version_and_top_level_help() -> None:
+    from g1patch import __version__
+
+    assert g1patch("--version").stdout.strip() == f"g1patch {__version__}"
+    result = g1patch("--help")
+    assert result.returncode == 0 and all(c in result.stdout for c in ("build", "check", "export", "demo"))
+
+
+def test_build_check_export(tmp_path: Path, cube_obj: Path) -> None:
+    network = tmp_path / "cube.npz"
+    result = g1patch("build", cube_obj, "-o", network, "--tangents", "chord", "--twist", "coons")
+    assert result.returncode == 0, result.stderr
+    assert network.exists()
+
+    result = g1patch("check", network, "--json")
+    assert result.returncode == 0
+    report = json.loads(result.stdout)
+    assert REPORT_KEYS <= set(report)
+    assert report["patches"] == 6 and report["shared_edges"] == 12
+    assert report["max_corner_angle_deg"] <= 1e-9
+
+    assert g1patch("check", network).returncode == 0
+    failed = g1patch("check", network, "--max-angle", "1e-9")
+    assert failed.returncode == 1  # the corner construction creases along edges
+    assert g1patch("check", network, "--max-angle", "90").returncode == 0
+
+    for suffix in ("obj", "ply", "stl"):
+        output = tmp_path / f"surface.{suffix}"
+        result = g1patch("export", network, "-o", output, "--resolution", "5")
+        assert result.returncode == 0, result.stderr
+        assert output.stat().st_size > 0
+
+
+def test_check_reads_patch_files(shared_data: Path) -> None:
+    result = g1patch("check", shared_data / "teapot.bpt", "--json")
+    assert result.returncode == 0
+    report = json.loads(result.stdout)
+    assert (report["patches"], report["shared_edges"], report["collapsed_patch_edges"]) == (32, 52, 8)
+
+
+def test_demo_writes_its_files(tmp_path: Path) -> None:
+    result = g1patch("demo", "--out", tmp_path / "out")
+    assert result.returncode == 0, result.stderr
+    assert "max G1 angle at corners" in result.stdout
+    assert (tmp_path / "out" / "cube_corner.obj").stat().st_size > 0
+    assert (tmp_path / "out" / "cube_corner.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def assert_clean_failure(result: subprocess.CompletedProcess[str], output: Path) -> None:
+    assert result.returncode == 2, (result.stdout, result.stderr)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("g1patch: error: "), result.stderr
+    assert "Traceback" not in result.stderr
+    assert not output.exists()
+    assert not list(output.parent.glob(f".{output.name}*")), "a temporary file was left behind"
+
+
+@pytest.mark.parametrize("bad", sorted(p.name for p in MALFORMED.iterdir()))
+def test_malformed_meshes_fail_cleanly(tmp_path: Path, bad: str) -> None:
+    output = tmp_path / "out.npz"
+    result = g1patch("build", MALFORMED / bad, "-o", output, "--no-split")
+    assert_clean_failure(result, output)
+    assert bad in result.stderr  # the message names the file
+
+
+@pytest.mark.parametrize("bad", sorted(p.name for p in MALFORMED_BPT.iterdir()))
+def test_malformed_patch_files_fail_cleanly(tmp_path: Path, bad: str) -> None:
+    result = g1patch("check", MALFORMED_BPT / bad)
+    assert result.returncode == 2 and bad in result.stderr and "Traceback" not in result.stderr
+
+
+def test_user_mistakes_fail_cleanly(tmp_path: Path, cube_obj: Path) -> None:
+    network = tmp_path / "n.npz"
+    assert g1patch("build", cube_obj, "-o", network).returncode == 0
+    cases = [
+        (("build", tmp_path / "missing.obj", "-o", tmp_path / "a.npz"), tmp_path / "a.npz"),
+        (("build", cube_obj, "-o", tmp_path / "a.obj"), tmp_path / "a.obj"),
+        (("export", network, "-o", tmp_path / "s.xyz"), tmp_path / "s.xyz"),
+        (("export", network, "-o", tmp_path / "s.obj", "--resolution", "1"), tmp_path / "s.obj"),
+        (("export", tmp_path / "missing.npz", "-o", tmp_path / "s.obj"), tmp_path / "s.obj"),
+        (("check", cube_obj), tmp_path / "unused"),
+    ]
+    for args, output in cases:
+        assert_clean_failure(g1patch(*args), output)
+
+
+def test_usage_errors_exit_2() -> None:
+    assert g1patch().returncode == 2
+    assert g1patch("build").returncode == 2
+    assert g1patch("build", "x.obj", "-o", "y.npz", "--twist", "wobbly").returncode == 2
