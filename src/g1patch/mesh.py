@@ -1,0 +1,748 @@
+"""Quad mesh topology as flat half-edge arrays, and quad meshes that pair it with positions.
+
+Half-edge ``h = 4 f + k`` runs from corner ``k`` of face ``f`` to corner ``k + 1 (mod 4)``:
+
+    next(h) = 4 (h // 4) + (h % 4 + 1) % 4,     prev(h) = 4 (h // 4) + (h % 4 + 3) % 4,
+    next_ccw(h) = twin(prev(h))                 (the next outgoing half-edge counter-clockwise).
+
+Faces are counter-clockwise seen from outside, so the two half-edges of an interior edge run in
+opposite directions and a boundary half-edge has its face on the left. :class:`QuadTopology` is
+built from faces alone (it never looks at positions), so one topology serves many position sets;
+:class:`QuadMesh` adds the positions. Every step is vectorised: the only Python loops run over
+rotation steps around a vertex (at most the largest valence) or over ``log2`` of a loop length.
+
+Indices in error messages are 0-based.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from functools import cached_property
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from .errors import (
+    DegenerateFaceError,
+    InputError,
+    MeshError,
+    NonManifoldError,
+    OrientationError,
+    ValenceError,
+    as_float_array,
+    as_index_array,
+)
+
+__all__ = [
+    "Tag",
+    "QuadTopology",
+    "QuadMesh",
+    "refine_polygons",
+    "subdivide",
+    "DEGENERATE_AREA_TOLERANCE",
+]
+
+logger = logging.getLogger(__name__)
+
+#: A face is degenerate when ``|d1 × d2| <= tol · max(|d1|, |d2|)²`` for its diagonals d1, d2
+#: (twice its vector area against the square of its size).
+DEGENERATE_AREA_TOLERANCE = 1e-12
+
+#: OpenSubdiv tags whose integers are vertex indices, and those whose integers are face indices.
+VERTEX_TAGS = frozenset({"crease", "corner"})
+FACE_TAGS = frozenset({"hole"})
+
+IntArray = NDArray[np.int64]
+FloatArray = NDArray[np.float64]
+
+
+class Tag(NamedTuple):
+    """An OpenSubdiv tag line ``t name nints/nfloats/nstrings ints… floats… strings…``."""
+
+    name: str
+    ints: tuple[int, ...] = ()
+    floats: tuple[float, ...] = ()
+    strings: tuple[str, ...] = ()
+
+
+def _few(items: ArrayLike, limit: int = 5) -> str:
+    """``"3, 7, 9 and 12 more"``: the first ``limit`` items of a list for an error message."""
+    values = np.asarray(items).ravel().tolist()
+    text = ", ".join(map(str, values[:limit]))
+    return text + (f" and {len(values) - limit} more" if len(values) > limit else "")
+
+
+def _all_of(items: ArrayLike, noun: str) -> str:
+    """``" (3 such faces: 1, 4, 9)"``, or nothing when there is only one."""
+    count = np.asarray(items).size
+    return f" ({count} such {noun}: {_few(items)})" if count > 1 else ""
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    array.flags.writeable = False
+    return array
+
+
+def _next(h: ArrayLike) -> IntArray:
+    h = np.asarray(h, dtype=np.int64)
+    return (h & ~3) | ((h + 1) & 3)
+
+
+def _prev(h: ArrayLike) -> IntArray:
+    h = np.asarray(h, dtype=np.int64)
+    return (h & ~3) | ((h + 3) & 3)
+
+
+# ----------------------------------------------------------------------------------------------
+# Checks shared by quads and general polygons (flat ``corners`` with ``sizes`` per face)
+
+
+def _check_index_range(corners: IntArray, sizes: IntArray, n_vertices: int) -> None:
+    bad = np.flatnonzero((corners < 0) | (corners >= n_vertices))
+    if bad.size:
+        face = np.repeat(np.arange(sizes.size), sizes)[bad]
+        raise MeshError(
+            f"face {face[0]} has vertex index {corners[bad[0]]} outside 0..{n_vertices - 1}"
+            + _all_of(np.unique(face), "faces")
+        )
+
+
+def _check_repeated_vertices(corners: IntArray, sizes: IntArray, n_vertices: int) -> None:
+    """A face may not visit a vertex twice: compare corner pairs (equal sizes) or sort (face, vertex) keys."""
+    if (sizes == sizes[0]).all():
+        table = corners.reshape(-1, int(sizes[0]))
+        repeats = np.zeros(table.shape[0], dtype=bool)
+        for i, j in zip(*np.triu_indices(table.shape[1], 1)):
+            repeats |= table[:, i] == table[:, j]
+        faces = np.flatnonzero(repeats)
+    else:
+        face = np.repeat(np.arange(sizes.size, dtype=np.int64), sizes)
+        keys = np.sort(face * n_vertices + corners)
+        faces = np.unique(keys[1:][keys[1:] == keys[:-1]] // n_vertices)
+    if faces.size:
+        start = int(np.sum(sizes[:faces[0]]))
+        face_corners = corners[start:start + sizes[faces[0]]]
+        raise DegenerateFaceError(
+            f"face {faces[0]} repeats a vertex: corners {tuple(face_corners.tolist())}" + _all_of(faces, "faces")
+        )
+
+
+class _EdgePairing(NamedTuple):
+    edges: IntArray  # (ne, 2) sorted vertex pairs
+    halfedge_edge: IntArray  # (nh,)
+    edge_halfedges: IntArray  # (ne, 2), second -1 on the boundary
+
+
+def _face_of(halfedges: ArrayLike, face_ends: IntArray) -> IntArray:
+    """The face of each half-edge (corner), for faces ending at ``face_ends = cumsum(sizes)``."""
+    return np.searchsorted(face_ends, halfedges, side="right")
+
+
+def _pair_halfedges(origin: IntArray, target: IntArray, face_ends: IntArray, n_vertices: int) -> _EdgePairing:
+    """Group half-edges by undirected edge ``key = min·nv + max`` (one sort) and check each group.
+
+    An edge may have at most two half-edges (else :class:`NonManifoldError`), and two of them must
+    run in opposite directions (else :class:`OrientationError`).
+    """
+    key = np.minimum(origin, target) * n_vertices + np.maximum(origin, target)
+    order = np.argsort(key)
+    sorted_key = key[order]
+    is_first = np.empty(key.size, dtype=bool)
+    is_first[0] = True
+    np.not_equal(sorted_key[1:], sorted_key[:-1], out=is_first[1:])
+    first = np.flatnonzero(is_first)
+    count = np.diff(np.append(first, key.size))
+
+    crowded = np.flatnonzero(count > 2)
+    if crowded.size:
+        e = crowded[0]
+        h = order[first[e]:first[e] + count[e]]
+        raise NonManifoldError(
+            f"edge {divmod(int(key[h[0]]), n_vertices)} is used by {count[e]} faces "
+            f"({_few(_face_of(np.sort(h), face_ends))}); an edge may have at most 2" + _all_of(crowded, "edges")
+        )
+
+    a = order[first]
+    b = np.where(count == 2, order[np.minimum(first + 1, key.size - 1)], -1)
+    paired = b >= 0
+    same_direction = np.flatnonzero(paired & (origin[a] == origin[np.maximum(b, 0)]))
+    if same_direction.size:
+        e = same_direction[0]
+        raise OrientationError(
+            f"faces {_face_of(a[e], face_ends)} and {_face_of(b[e], face_ends)} both traverse edge "
+            f"{origin[a[e]]} -> {target[a[e]]} in the same direction; neighbouring faces must be "
+            f"oriented consistently" + _all_of(same_direction, "edges")
+        )
+
+    halfedge_edge = np.empty(key.size, dtype=np.int64)
+    halfedge_edge[order] = np.cumsum(is_first) - 1
+    edge_halfedges = np.stack([np.where(paired, np.minimum(a, b), a), np.where(paired, np.maximum(a, b), -1)], axis=1)
+    edge_keys = sorted_key[first]
+    edges = np.stack([edge_keys // n_vertices, edge_keys % n_vertices], axis=1)
+    return _EdgePairing(edges, halfedge_edge, edge_halfedges)
+
+
+# ----------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class QuadTopology:
+    """Half-edge connectivity of a manifold, consistently oriented quad mesh; build it with :meth:`from_faces`.
+
+    All arrays are int64 (or bool) and read-only. Edges are sorted vertex pairs in lexicographic
+    order; ``edge_halfedges`` lists an edge's half-edges by increasing id.
+
+    ``ring_halfedges[ring_offsets[v]:ring_offsets[v+1]]`` are the outgoing half-edges of ``v``
+    counter-clockwise, ``h_{i+1} = twin(prev(h_i))``. At a boundary vertex the list starts at the
+    outgoing boundary half-edge (``twin = -1``); it always has ``face_count[v]`` entries.
+    ``neighbors`` holds the targets of those half-edges and, at a boundary vertex, one more:
+    ``origin(prev(last))``, the far end of the incoming boundary edge. ``valence`` counts edges,
+    so it is ``face_count`` inside and ``face_count + 1`` on the boundary.
+    """
+
+    faces: IntArray
+    n_vertices: int
+    twin: IntArray
+    edges: IntArray
+    halfedge_edge: IntArray
+    edge_halfedges: IntArray
+    is_boundary_edge: NDArray[np.bool_]
+    valence: IntArray
+    face_count: IntArray
+    is_boundary_vertex: NDArray[np.bool_]
+    ring_offsets: IntArray
+    ring_halfedges: IntArray
+    neighbor_offsets: IntArray
+    neighbors: IntArray
+
+    @classmethod
+    def from_faces(cls, faces: ArrayLike, n_vertices: int | None = None) -> QuadTopology:
+        """Build and validate the topology of ``faces`` (nf, 4) over vertices ``0..n_vertices-1``.
+
+        Raises :class:`MeshError` (index out of range, unused vertex), :class:`DegenerateFaceError`
+        (repeated vertex), :class:`NonManifoldError` (edge with > 2 faces, vertex with > 1 fan),
+        :class:`OrientationError` or :class:`ValenceError` (interior valence < 3), naming the item.
+        """
+        quads = as_index_array("faces", faces, (4,))
+        if quads.ndim != 2:
+            raise InputError(f"faces: expected shape (nf, 4), got {quads.shape}")
+        if quads.shape[0] == 0:
+            raise MeshError("the mesh has no faces")
+        nv = int(quads.max()) + 1 if n_vertices is None else int(n_vertices)
+        quads = quads.copy()
+        connectivity = _connect(quads.ravel(), np.full(quads.shape[0], 4, dtype=np.int64), nv)
+        unused = np.flatnonzero(connectivity.face_count == 0)
+        if unused.size:
+            raise MeshError(f"vertices {_few(unused)} are used by no face; QuadMesh.from_arrays drops unused vertices")
+        is_boundary_edge = connectivity.edge_halfedges[:, 1] < 0
+        return cls(faces=quads, n_vertices=nv, is_boundary_edge=is_boundary_edge, **connectivity._asdict())
+
+    def __post_init__(self) -> None:
+        for value in vars(self).values():
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
+
+    # -- half-edge arithmetic ------------------------------------------------------------------
+
+    @staticmethod
+    def next(h: ArrayLike) -> IntArray:
+        """The following half-edge in the same face: ``4 (h // 4) + (h % 4 + 1) % 4``."""
+        return _next(h)
+
+    @staticmethod
+    def prev(h: ArrayLike) -> IntArray:
+        """The preceding half-edge in the same face: ``4 (h // 4) + (h % 4 + 3) % 4``."""
+        return _prev(h)
+
+    def origin(self, h: ArrayLike) -> IntArray:
+        """The vertex half-edge ``h`` starts from: ``faces.ravel()[h]``."""
+        return self.faces.ravel()[np.asarray(h, dtype=np.int64)]
+
+    def target(self, h: ArrayLike) -> IntArray:
+        """The vertex half-edge ``h`` points to: ``origin(next(h))``."""
+        return self.faces.ravel()[_next(h)]
+
+    def next_ccw(self, h: ArrayLike) -> IntArray:
+        """The next outgoing half-edge counter-clockwise about ``origin(h)``: ``twin(prev(h))`` (-1 past a boundary)."""
+        return self.twin[_prev(h)]
+
+    def ring(self, v: int) -> IntArray:
+        """Outgoing half-edges of vertex ``v``, counter-clockwise."""
+        return self.ring_halfedges[self.ring_offsets[v]:self.ring_offsets[v + 1]]
+
+    def one_ring(self, v: int) -> IntArray:
+        """Neighbour vertices of ``v``, counter-clockwise."""
+        return self.neighbors[self.neighbor_offsets[v]:self.neighbor_offsets[v + 1]]
+
+    # -- counts and global structure ------------------------------------------------------------
+
+    @property
+    def n_faces(self) -> int:
+        return int(self.faces.shape[0])
+
+    @property
+    def n_edges(self) -> int:
+        return int(self.edges.shape[0])
+
+    @property
+    def n_halfedges(self) -> int:
+        return 4 * self.n_faces
+
+    @property
+    def is_closed(self) -> bool:
+        return not bool(self.is_boundary_edge.any())
+
+    @property
+    def euler_characteristic(self) -> int:
+        """χ = V − E + F."""
+        return self.n_vertices - self.n_edges + self.n_faces
+
+    @cached_property
+    def n_components(self) -> int:
+        """Number of connected components (of the vertex–edge graph)."""
+        graph = coo_matrix(
+            (np.ones(self.n_edges, dtype=np.int8), (self.edges[:, 0], self.edges[:, 1])),
+            shape=(self.n_vertices, self.n_vertices),
+        )
+        return int(connected_components(graph, directed=False)[0])
+
+    def boundary_loops(self) -> list[IntArray]:
+        """The boundary loops as arrays of vertex indices, each following its boundary half-edges.
+
+        A boundary half-edge has its face on the left; its successor is the boundary half-edge
+        leaving its target, i.e. the first ring half-edge there. Each loop starts at its smallest
+        half-edge; loops are ordered by that half-edge. Labels and positions come from pointer
+        jumping (``log2`` of the longest loop rounds).
+        """
+        boundary = np.flatnonzero(self.twin < 0)
+        if boundary.size == 0:
+            return []
+        index = np.full(self.n_halfedges, -1, dtype=np.int64)
+        index[boundary] = np.arange(boundary.size)
+        successor = index[self.ring_halfedges[self.ring_offsets[self.target(boundary)]]]
+        predecessor = np.empty_like(successor)
+        predecessor[successor] = np.arange(boundary.size)
+
+        rounds = int(np.ceil(np.log2(boundary.size))) + 1
+        head, jump = np.arange(boundary.size), successor
+        for _ in range(rounds):  # head[i] = min over i … i + 2^r − 1 along the loop
+            head, jump = np.minimum(head, head[jump]), jump[jump]
+        is_head = head == np.arange(boundary.size)
+        back = np.where(is_head, np.arange(boundary.size), predecessor)
+        distance = (~is_head).astype(np.int64)
+        for _ in range(rounds):  # distance from the head, by doubling the backward links
+            distance, back = distance + distance[back], back[back]
+
+        order = np.lexsort((distance, head))
+        cuts = np.flatnonzero(np.diff(head[order])) + 1
+        return np.split(self.origin(boundary[order]), cuts)
+
+
+class _Connectivity(NamedTuple):
+    """The arrays of :class:`QuadTopology` that :func:`_connect` computes, under the same names."""
+
+    twin: IntArray
+    edges: IntArray
+    halfedge_edge: IntArray
+    edge_halfedges: IntArray
+    valence: IntArray
+    face_count: IntArray
+    is_boundary_vertex: NDArray[np.bool_]
+    ring_offsets: IntArray
+    ring_halfedges: IntArray
+    neighbor_offsets: IntArray
+    neighbors: IntArray
+
+
+def _connect(corners: IntArray, sizes: IntArray, n_vertices: int) -> _Connectivity:
+    """Half-edge connectivity of polygons given as flat ``corners`` with ``sizes``, validated.
+
+    Half-edge ``h`` is corner ``h``, running to the next corner of its face; unused vertices get
+    empty rings. Checks, in order: index range, repeated vertex, edges (at most two faces,
+    opposite directions), one fan per vertex, interior valence ≥ 3.
+    """
+    _check_index_range(corners, sizes, n_vertices)
+    _check_repeated_vertices(corners, sizes, n_vertices)
+    halfedges = np.arange(corners.size, dtype=np.int64)
+    following = _following_corner(sizes)
+    preceding = np.empty_like(following)
+    preceding[following] = halfedges
+    face_ends = np.cumsum(sizes)
+    target = corners[following]
+    pairing = _pair_halfedges(corners, target, face_ends, n_vertices)
+    twin = np.full(corners.size, -1, dtype=np.int64)
+    paired = pairing.edge_halfedges[pairing.edge_halfedges[:, 1] >= 0]
+    twin[paired[:, 0]] = paired[:, 1]
+    twin[paired[:, 1]] = paired[:, 0]
+
+    face_count = np.bincount(corners, minlength=n_vertices)
+    boundary_out = np.flatnonzero(twin < 0)
+    open_fans = np.bincount(corners[boundary_out], minlength=n_vertices)
+    if (open_fans > 1).any():
+        _raise_fans(np.flatnonzero(open_fans > 1), corners, face_ends, face_count)
+    is_boundary_vertex = open_fans == 1
+
+    # each ring starts at the outgoing boundary half-edge, or else at the smallest outgoing one
+    start = np.full(n_vertices, corners.size, dtype=np.int64)
+    np.minimum.at(start, corners, halfedges)
+    start[corners[boundary_out]] = boundary_out
+    ring_offsets = np.concatenate([[0], np.cumsum(face_count)])
+    ring = _walk_rings(start, face_count, ring_offsets, twin, preceding, corners, face_ends)
+    visited = np.zeros(corners.size, dtype=bool)
+    visited[ring] = True
+    if not visited.all():  # a closed fan came round before visiting all faces of its vertex
+        _raise_fans(np.unique(corners[~visited]), corners, face_ends, face_count)
+
+    valence = np.bincount(pairing.edges.ravel(), minlength=n_vertices)
+    low = np.flatnonzero(~is_boundary_vertex & (face_count > 0) & (valence < 3))
+    if low.size:
+        raise ValenceError(
+            f"interior vertex {low[0]} has valence {valence[low[0]]}; an interior vertex needs at least 3 edges"
+            + _all_of(low, "vertices")
+        )
+
+    # neighbours: the ring's targets, then at a boundary vertex the origin of prev(last)
+    neighbor_offsets = np.concatenate([[0], np.cumsum(face_count + is_boundary_vertex)])
+    neighbors = np.empty(neighbor_offsets[-1], dtype=np.int64)
+    boundary_before = np.repeat(neighbor_offsets[:-1] - ring_offsets[:-1], face_count)
+    neighbors[halfedges + boundary_before] = target[ring]
+    boundary = np.flatnonzero(is_boundary_vertex)
+    neighbors[neighbor_offsets[boundary + 1] - 1] = corners[preceding[ring[ring_offsets[boundary + 1] - 1]]]
+    return _Connectivity(
+        twin, pairing.edges, pairing.halfedge_edge, pairing.edge_halfedges, valence, face_count,
+        is_boundary_vertex, ring_offsets, ring, neighbor_offsets, neighbors,
+    )
+
+
+def _walk_rings(
+    start: IntArray,
+    face_count: IntArray,
+    ring_offsets: IntArray,
+    twin: IntArray,
+    preceding: IntArray,
+    corners: IntArray,
+    face_ends: IntArray,
+) -> IntArray:
+    """Write ``h_{i+1} = twin(prev(h_i))`` from ``start`` for every vertex at once, one rotation step at a time.
+
+    Vertices are sorted by decreasing face count, so the vertices still walking at step ``i`` are
+    a prefix of that order. Running into the boundary early means a second fan.
+    """
+    order = np.argsort(-face_count, kind="stable")
+    walking = np.searchsorted(-face_count[order], -np.arange(int(face_count.max())), side="left")
+    ring = np.empty(int(ring_offsets[-1]), dtype=np.int64)
+    current = start[order]
+    for step, count in enumerate(walking):
+        h = current[:count]
+        stuck = h < 0
+        if stuck.any():
+            _raise_fans(order[:count][stuck], corners, face_ends, face_count)
+        ring[ring_offsets[order[:count]] + step] = h
+        current[:count] = twin[preceding[h]]
+    return ring
+
+
+def _raise_fans(vertices: IntArray, corners: IntArray, face_ends: IntArray, face_count: IntArray) -> None:
+    v = int(vertices[0])
+    faces = _face_of(np.flatnonzero(corners == v), face_ends)
+    raise NonManifoldError(
+        f"the {face_count[v]} faces around vertex {v} ({_few(faces, 8)}) form more than one fan; "
+        f"the faces at a vertex must form a single fan" + _all_of(vertices, "vertices")
+    )
+
+
+# ----------------------------------------------------------------------------------------------
+
+
+def _check_finite(vertices: FloatArray) -> None:
+    bad = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
+    if bad.size:
+        raise InputError(
+            f"vertex {bad[0]} has a non-finite coordinate {tuple(vertices[bad[0]].tolist())}"
+            + _all_of(bad, "vertices")
+        )
+
+
+def _check_face_areas(vertices: FloatArray, faces: IntArray) -> None:
+    """Zero area: ``|d1 × d2| <= tol · max(|d1|, |d2|)²`` for the diagonals d1 = p2 − p0, d2 = p3 − p1."""
+    corners = vertices[faces]
+    d1 = corners[:, 2] - corners[:, 0]
+    d2 = corners[:, 3] - corners[:, 1]
+    double_area = np.linalg.norm(np.cross(d1, d2), axis=1)
+    size = np.maximum(np.einsum("ij,ij->i", d1, d1), np.einsum("ij,ij->i", d2, d2))
+    bad = np.flatnonzero(double_area <= DEGENERATE_AREA_TOLERANCE * size)
+    if bad.size:
+        f = bad[0]
+        raise DegenerateFaceError(
+            f"face {f} {tuple(faces[f].tolist())} has zero area (|d1 x d2| = {double_area[f]:.3g})"
+            + _all_of(bad, "faces")
+        )
+
+
+def _as_polygons(faces: ArrayLike | Sequence[Sequence[int]]) -> tuple[IntArray, IntArray]:
+    """Faces as flat ``corners`` and ``sizes``, from an (nf, n) array or a list of index lists."""
+    try:
+        table = np.asarray(faces)
+    except ValueError:  # ragged: a list of lists of different lengths
+        table = None
+    if table is not None and table.dtype != object:
+        table = as_index_array("faces", table, (None,))
+        if table.ndim != 2:
+            raise InputError(f"faces: expected shape (nf, n) or a list of index lists, got shape {table.shape}")
+        return table.ravel(), np.full(table.shape[0], table.shape[1], dtype=np.int64)
+    try:
+        sizes = np.fromiter(map(len, faces), dtype=np.int64)
+        corners = np.fromiter((int(v) for face in faces for v in face), dtype=np.int64, count=int(sizes.sum()))
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"faces: expected a list of lists of vertex indices ({exc})") from None
+    return corners, sizes
+
+
+def _following_corner(sizes: IntArray) -> IntArray:
+    """Index of the next corner in the same face, for flat corners with ``sizes`` per face."""
+    offsets = np.cumsum(sizes)
+    following = np.arange(1, int(offsets[-1]) + 1)
+    following[offsets - 1] = offsets - sizes
+    return following
+
+
+def _edge_keys(corners: IntArray, sizes: IntArray, n_vertices: int) -> IntArray:
+    """Undirected edge key ``min·nv + max`` of each corner's edge to the next corner."""
+    target = corners[_following_corner(sizes)]
+    return np.minimum(corners, target) * n_vertices + np.maximum(corners, target)
+
+
+def refine_polygons(vertices: FloatArray, corners: IntArray, sizes: IntArray) -> tuple[FloatArray, IntArray, IntArray]:
+    """One Catmull–Clark topology step with linear positions: every n-gon becomes n quads.
+
+    New vertices: the old ones (same indices), then one per edge at its midpoint (``nv + e``, edges
+    sorted by vertex pair), then one per face at its centroid (``nv + ne + f``). Corner ``i`` of face
+    ``f`` becomes quad ``offsets[f] + i = (v_i, E(v_i v_{i+1}), F(f), E(v_{i-1} v_i))``,
+    counter-clockwise like its face. Returns ``(vertices, quads, parent_face)``.
+    """
+    nv = vertices.shape[0]
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    corner_face = np.repeat(np.arange(sizes.size), sizes)
+    preceding = np.empty(corners.size, dtype=np.int64)
+    preceding[_following_corner(sizes)] = np.arange(corners.size)
+
+    edge_keys, corner_edge = np.unique(_edge_keys(corners, sizes, nv), return_inverse=True)
+    midpoints = 0.5 * (vertices[edge_keys // nv] + vertices[edge_keys % nv])
+    centroids = np.add.reduceat(vertices[corners], offsets[:-1], axis=0) / sizes[:, None]
+    quads = np.stack(
+        [corners, nv + corner_edge, nv + edge_keys.size + corner_face, nv + corner_edge[preceding]], axis=1
+    )
+    return np.concatenate([vertices, midpoints, centroids]), quads, corner_face
+
+
+def _check_tags(tags: Sequence[Tag], n_vertices: int, n_faces: int) -> None:
+    """Vertex tags (crease pairs, corners) and face tags (holes) must name existing items."""
+    for tag in tags:
+        limit = n_vertices if tag.name in VERTEX_TAGS else n_faces if tag.name in FACE_TAGS else None
+        if limit is None:
+            continue
+        ints = np.asarray(tag.ints, dtype=np.int64)
+        if tag.name == "crease" and ints.size % 2:
+            raise MeshError(f"tag 'crease' needs pairs of vertex indices, got {ints.size} integers")
+        bad = ints[(ints < 0) | (ints >= limit)]
+        if bad.size:
+            item = "vertex" if tag.name in VERTEX_TAGS else "face"
+            raise MeshError(f"tag {tag.name!r} names {item} {bad[0]}, outside 0..{limit - 1}")
+
+
+def _renumber_tags(tags: Sequence[Tag], new_index: IntArray) -> tuple[Tag, ...]:
+    """Carry vertex tags through dropping unused vertices: ``new_index[old]``, -1 where dropped."""
+    renumbered = []
+    for tag in tags:
+        if tag.name in VERTEX_TAGS:
+            ints = new_index[np.asarray(tag.ints, dtype=np.int64)]
+            if (ints < 0).any():
+                raise MeshError(f"tag {tag.name!r} names a vertex that no face uses")
+            tag = tag._replace(ints=tuple(ints.tolist()))
+        renumbered.append(tag)
+    return tuple(renumbered)
+
+
+def _refine_tags(tags: Sequence[Tag], corners: IntArray, sizes: IntArray, n_vertices: int) -> tuple[Tag, ...]:
+    """Carry tags through :func:`refine_polygons`: crease (a, b) becomes (a, m), (m, b); a hole its quads."""
+    edge_keys = np.unique(_edge_keys(corners, sizes, n_vertices))
+    refined = []
+    for tag in tags:
+        ints = np.asarray(tag.ints, dtype=np.int64)
+        if tag.name == "crease":
+            a, b = ints[0::2], ints[1::2]
+            keys = np.minimum(a, b) * n_vertices + np.maximum(a, b)
+            m = np.minimum(np.searchsorted(edge_keys, keys), edge_keys.size - 1)
+            missing = np.flatnonzero(edge_keys[m] != keys)
+            if missing.size:
+                raise MeshError(f"tag 'crease' names ({a[missing[0]]}, {b[missing[0]]}), which is not an edge")
+            m += n_vertices
+            tag = tag._replace(ints=tuple(np.stack([a, m, m, b], axis=1).ravel().tolist()))
+            if len(tag.floats) == a.size > 1:  # one sharpness per edge
+                tag = tag._replace(floats=tuple(np.repeat(tag.floats, 2).tolist()))
+        elif tag.name in FACE_TAGS:
+            quads_of_holes = np.isin(np.repeat(np.arange(sizes.size), sizes), ints)
+            tag = tag._replace(ints=tuple(np.flatnonzero(quads_of_holes).tolist()))
+        refined.append(tag)
+    return tuple(refined)
+
+
+def _quads_from_polygons(
+    vertices: ArrayLike,
+    faces: ArrayLike | Sequence[Sequence[int]],
+    split: bool,
+    source: str | None,
+    tags: tuple[Tag, ...],
+) -> tuple[FloatArray, IntArray, tuple[Tag, ...]]:
+    """Check positions and faces; drop unused vertices and split non-quads (see :meth:`QuadMesh.from_arrays`).
+
+    When anything is dropped or split, the polygon topology is validated first, so that errors
+    name the input's faces and vertices.
+    """
+    points = as_float_array("vertices", vertices, (3,), finite=False)
+    if points.ndim != 2:
+        raise InputError(f"vertices: expected shape (nv, 3), got {points.shape}")
+    _check_finite(points)
+    corners, sizes = _as_polygons(faces)
+    if sizes.size == 0:
+        raise MeshError("the mesh has no faces")
+    short = np.flatnonzero(sizes < 3)
+    if short.size:
+        raise DegenerateFaceError(
+            f"face {short[0]} has {sizes[short[0]]} corners; a face needs at least 3" + _all_of(short, "faces")
+        )
+    _check_tags(tags, points.shape[0], sizes.size)
+    used = np.bincount(corners[(corners >= 0) & (corners < points.shape[0])], minlength=points.shape[0]) > 0
+    non_quads = np.flatnonzero(sizes != 4)
+    if used.all() and non_quads.size == 0:
+        return points, corners.reshape(-1, 4), tags
+    if non_quads.size and not split:
+        raise MeshError(
+            f"{non_quads.size} faces are not quads (face {non_quads[0]} has {sizes[non_quads[0]]} corners; "
+            f"faces {_few(non_quads)}) and splitting is off (--no-split)"
+        )
+    _connect(corners, sizes, points.shape[0])
+
+    if not used.all():
+        unused = np.flatnonzero(~used)
+        logger.info("%s: dropped %d unused vertices (%s)", source or "mesh", unused.size, _few(unused))
+        new_index = np.cumsum(used) - 1
+        new_index[~used] = -1
+        points, corners = points[used], new_index[corners]
+        tags = _renumber_tags(tags, new_index)
+    if non_quads.size == 0:
+        return points, corners.reshape(-1, 4), tags
+    tags = _refine_tags(tags, corners, sizes, points.shape[0])
+    points, quads, _ = refine_polygons(points, corners, sizes)
+    logger.info(
+        "%s: %d of %d faces are not quads; refined the whole mesh once (every n-gon into n quads)",
+        source or "mesh", non_quads.size, sizes.size,
+    )
+    return points, quads, tags
+
+
+@contextmanager
+def _named_errors(source: str | None) -> Iterator[None]:
+    """Prefix mesh and input errors with the source file name, keeping their class."""
+    try:
+        yield
+    except (MeshError, InputError) as error:
+        if source is None:
+            raise
+        raise type(error)(f"{source}: {error}") from None
+
+
+@dataclass(frozen=True, eq=False)
+class QuadMesh:
+    """Positions ``vertices`` (nv, 3) on a :class:`QuadTopology`, with the OpenSubdiv tags of its file.
+
+    Validated on construction: finite coordinates, and no face of zero area
+    (:data:`DEGENERATE_AREA_TOLERANCE`).
+    """
+
+    vertices: FloatArray
+    topology: QuadTopology
+    tags: tuple[Tag, ...] = ()
+    source: str | None = None
+
+    def __post_init__(self) -> None:
+        with _named_errors(self.source):
+            vertices = as_float_array("vertices", self.vertices, (3,), finite=False)
+            if vertices.shape != (self.topology.n_vertices, 3):
+                raise InputError(
+                    f"vertices: expected shape ({self.topology.n_vertices}, 3) for this topology, got {vertices.shape}"
+                )
+            _check_finite(vertices)
+            _check_face_areas(vertices, self.topology.faces)
+        object.__setattr__(self, "vertices", _read_only(vertices.copy()))
+        object.__setattr__(self, "tags", tuple(Tag(*tag) for tag in self.tags))
+
+    @classmethod
+    def from_arrays(
+        cls,
+        vertices: ArrayLike,
+        faces: ArrayLike | Sequence[Sequence[int]],
+        *,
+        split: bool = True,
+        source: str | None = None,
+        tags: Sequence[Tag] = (),
+    ) -> QuadMesh:
+        """Validate and build a quad mesh from positions and faces ((nf, 4) array or lists of indices).
+
+        Unused vertices are dropped (one ``logging`` info line). If any face has 3 or ≥ 5 corners
+        the whole mesh is refined once (:func:`refine_polygons`) with ``split``, else a
+        :class:`MeshError` is raised. Errors name ``source`` (a file name) when given.
+        """
+        with _named_errors(source):
+            points, quads, tags = _quads_from_polygons(vertices, faces, split, source, tuple(Tag(*tag) for tag in tags))
+            topology = QuadTopology.from_faces(quads, points.shape[0])
+        return cls(points, topology, tags, source)
+
+    def with_vertices(self, new_vertices: ArrayLike) -> QuadMesh:
+        """The same topology and tags with new positions (validated the same way)."""
+        return QuadMesh(np.asarray(new_vertices), self.topology, self.tags, self.source)
+
+    @property
+    def faces(self) -> IntArray:
+        return self.topology.faces
+
+    @property
+    def n_vertices(self) -> int:
+        return self.topology.n_vertices
+
+    @property
+    def n_faces(self) -> int:
+        return self.topology.n_faces
+
+    @property
+    def n_edges(self) -> int:
+        return self.topology.n_edges
+
+    @property
+    def bounding_box(self) -> tuple[FloatArray, FloatArray]:
+        """(lowest, highest) corner of the axis-aligned box around the vertices."""
+        return self.vertices.min(axis=0), self.vertices.max(axis=0)
+
+    @property
+    def bounding_box_diagonal(self) -> float:
+        low, high = self.bounding_box
+        return float(np.linalg.norm(high - low))
+
+
+def subdivide(mesh: QuadMesh) -> QuadMesh:
+    """One Catmull–Clark topology step with linear positions: 4 F quads on V + E + F vertices.
+
+    Old vertices keep their indices, edge midpoints follow (in edge order), then face centroids
+    (:func:`refine_polygons`). Crease and hole tags are carried over.
+    """
+    corners = mesh.faces.ravel()
+    sizes = np.full(mesh.n_faces, 4, dtype=np.int64)
+    vertices, quads, _ = refine_polygons(mesh.vertices, corners, sizes)
+    tags = _refine_tags(mesh.tags, corners, sizes, mesh.n_vertices)
+    return QuadMesh(vertices, QuadTopology.from_faces(quads, vertices.shape[0]), tags, mesh.source)
