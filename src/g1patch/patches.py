@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import _grid
 from .basis import FORMS, Form, basis_matrix, basis_values, check_order, conversion_matrix
 from .curves import CubicCurves
 from .errors import InputError, as_float_array, check_choice
@@ -60,6 +61,10 @@ class PatchSet:
     def __len__(self) -> int:
         return int(self.control.shape[0])
 
+    def take(self, indices: ArrayLike) -> PatchSet:
+        """The patches at ``indices`` (any integer array, repeats allowed), in that order."""
+        return PatchSet(self.control[np.asarray(indices, dtype=np.int64)], self.form)
+
     # ------------------------------------------------------------------ forms
     def convert(self, form: Form) -> PatchSet:
         """The same surfaces in another form: ``P' = C P C^T`` per coordinate."""
@@ -98,14 +103,20 @@ class PatchSet:
         """
         du, dv = check_order("du", du), check_order("dv", dv)
         params = as_float_array("uv", uv, (2,))
+        count = len(self)
         if params.ndim == 2:
+            # p[n, k] = Σ_(i,j) (wu[k, i] wv[k, j]) P[n, i, j]: one (K × 16) @ (16 × 3) product per patch
             weights_u = basis_values(self.form, params[:, 0], du)
             weights_v = basis_values(self.form, params[:, 1], dv)
-            return np.einsum("ki,nijd,kj->nkd", weights_u, self.control, weights_v, optimize=True)
-        if params.ndim == 3 and params.shape[0] == len(self):
+            tensor = (weights_u[:, :, None] * weights_v[:, None, :]).reshape(-1, 16)
+            return np.matmul(tensor, self.control.reshape(count, 16, 3))
+        if params.ndim == 3 and params.shape[0] == count:
+            # contract v first: q[n, k, i] = Σ_j wv[n, k, j] P[n, i, j], then u
             weights_u = basis_values(self.form, params[..., 0], du)
             weights_v = basis_values(self.form, params[..., 1], dv)
-            return np.einsum("nki,nijd,nkj->nkd", weights_u, self.control, weights_v, optimize=True)
+            by_v = self.control.transpose(0, 2, 1, 3).reshape(count, 4, 12)
+            partial = np.matmul(weights_v, by_v).reshape(count, -1, 4, 3)
+            return np.einsum("nki,nkid->nkd", weights_u, partial)
         raise InputError(f"uv: expected shape (K, 2) or ({len(self)}, K, 2), got {params.shape}")
 
     def tangents(self, uv: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -128,7 +139,20 @@ class PatchSet:
 
     def normals_grid(self, u: ArrayLike, v: ArrayLike | None = None) -> NDArray[np.float64]:
         """Unit normals on the grid ``u × v``, ``(N, len(u), len(v), 3)``; zero where degenerate."""
-        return unit(np.cross(self.evaluate_grid(u, v, 1, 0), self.evaluate_grid(u, v, 0, 1)))
+        u_params = _check_parameters("u", u)
+        v_params = u_params if v is None else _check_parameters("v", v)
+        return _grid.normals(self.control, self.form, u_params, v_params)
+
+    def evaluate_grid_with_normals(
+        self, u: ArrayLike, v: ArrayLike | None = None
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Positions and unit normals on the grid ``u × v``, each ``(N, len(u), len(v), 3)``, in one pass.
+
+        Equal to ``(evaluate_grid(u, v), normals_grid(u, v))``; the normal is zero where degenerate.
+        """
+        u_params = _check_parameters("u", u)
+        v_params = u_params if v is None else _check_parameters("v", v)
+        return _grid.positions_and_normals(self.control, self.form, u_params, v_params)
 
     def corners(self) -> NDArray[np.float64]:
         """Corner positions F0..F3, shape (N, 4, 3)."""
@@ -179,7 +203,9 @@ def _grid_contract(
     control: NDArray[np.float64], weights_u: NDArray[np.float64], weights_v: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """``out[n, a, b] = Σ_ij wu[a, i] P[n, i, j] wv[b, j]`` as a C-contiguous (N, Gu, Gv, 3) array."""
-    return np.ascontiguousarray(np.einsum("ai,nijd,bj->nabd", weights_u, control, weights_v, optimize=True))
+    from . import _grid  # the fast kernels (separable contraction, blocked normals)
+
+    return _grid.contract(control, weights_u, weights_v)
 
 
 def unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:
