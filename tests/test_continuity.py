@@ -126,3 +126,13 @@ def test_a_curve_shared_by_more_than_two_patches_is_non_manifold() -> None:
     patches = PatchSet(np.stack([bilinear_bezier(first)] + [bilinear_bezier(f) for f in fins]), "bezier")
     with pytest.raises(NonManifoldError, match="shared by 4 patches"):
         network_from_patch_points(patches)
+
+
+def test_blocks_do_not_change_the_report() -> None:
+    rng = np.random.default_rng(9)
+    mesh = shapes.genus2()
+    mesh = mesh.with_vertices(mesh.vertices + rng.normal(scale=0.01, size=mesh.vertices.shape))
+    network = build_corner_network(mesh)
+    whole, blocked = check(network), check(network, chunk=7)
+    assert whole.to_dict() == blocked.to_dict()
+    np.testing.assert_array_equal(whole.edge_angle_deg, blocked.edge_angle_deg)
