@@ -89,3 +89,14 @@ def test_a_newer_format_version_is_refused(tmp_path: Path) -> None:
     np.savez(tmp_path / "v99.npz", **contents)
     with pytest.raises(FormatError, match="version 99 is not supported"):
         load_network(tmp_path / "v99.npz")
+
+
+def test_gregory_network_round_trip(tmp_path: Path) -> None:
+    from g1patch.construct.gregory import build_gregory_network
+
+    network = build_gregory_network(shapes.torus(6, 4))
+    save_network(tmp_path / "g.npz", network)
+    loaded = load_network(tmp_path / "g.npz")
+    assert type(loaded.patches) is type(network.patches)
+    np.testing.assert_array_equal(loaded.patches.points, network.patches.points)
+    assert check(loaded).to_dict() == check(network).to_dict()

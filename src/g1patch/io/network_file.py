@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import FormatError, InputError
 from ..network import PatchNetwork
+from ..gregory import GregoryPatchSet
 from ..patches import PatchSet
 from .atomic import atomic_path
 
@@ -25,9 +26,12 @@ def save_network(path: str | os.PathLike[str], network: PatchNetwork) -> None:
     if Path(path).suffix.lower() != ".npz":
         raise FormatError(path, "a network file must end in .npz")
     patches = network.patches
-    if not isinstance(patches, PatchSet):
+    if isinstance(patches, PatchSet):
+        patch_arrays = {"patch_kind": np.array("bicubic"), "form": np.array(patches.form), "control": patches.control}
+    elif isinstance(patches, GregoryPatchSet):
+        patch_arrays = {"patch_kind": np.array(GregoryPatchSet.kind), **patches.to_arrays()}
+    else:
         raise FormatError(path, f"cannot store patches of type {type(patches).__name__}")
-    patch_arrays = {"patch_kind": np.array("bicubic"), "form": np.array(patches.form), "control": patches.control}
     arrays = {name: getattr(network, name) for name in _ARRAYS}
     for name in ("vertices", "vertex_normals"):
         if getattr(network, name) is not None:
@@ -60,11 +64,16 @@ def load_network(path: str | os.PathLike[str]) -> PatchNetwork:
     if missing:
         raise FormatError(source, f"network file lacks {', '.join(missing)}")
     kind = str(contents["patch_kind"])
-    if kind != "bicubic":
+    if kind not in ("bicubic", GregoryPatchSet.kind):
         raise FormatError(source, f"unknown patch kind {kind!r}")
     try:
+        patches = (
+            PatchSet(contents["control"], str(contents["form"]))  # type: ignore[arg-type]
+            if kind == "bicubic"
+            else GregoryPatchSet.from_arrays(contents)
+        )
         return PatchNetwork(
-            patches=PatchSet(contents["control"], str(contents["form"])),  # type: ignore[arg-type]
+            patches=patches,
             **{name: contents[name] for name in _ARRAYS},
             vertices=contents.get("vertices"),
             vertex_normals=contents.get("vertex_normals"),
