@@ -34,7 +34,7 @@ def cube_obj(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-@pytest.mark.parametrize("command", ["build", "check", "export", "demo"])
+@pytest.mark.parametrize("command", ["build", "check", "export", "render", "demo"])
 def test_every_command_has_help_with_examples(command: str) -> None:
     result = g1patch(command, "--help")
     assert result.returncode == 0
@@ -46,12 +46,20 @@ def test_version_and_top_level_help() -> None:
 
     assert g1patch("--version").stdout.strip() == f"g1patch {__version__}"
     result = g1patch("--help")
-    assert result.returncode == 0 and all(c in result.stdout for c in ("build", "check", "export", "demo"))
+    assert result.returncode == 0 and all(c in result.stdout for c in ("build", "check", "export", "render", "demo"))
+
+
+def test_default_build_is_exactly_g1(tmp_path: Path, cube_obj: Path) -> None:
+    network = tmp_path / "cube.npz"
+    assert g1patch("build", cube_obj, "-o", network, "--quiet").returncode == 0
+    result = g1patch("check", network, "--max-angle", "1e-9", "--json")
+    assert result.returncode == 0
+    assert json.loads(result.stdout)["max_edge_angle_deg"] <= 1e-9
 
 
 def test_build_check_export(tmp_path: Path, cube_obj: Path) -> None:
     network = tmp_path / "cube.npz"
-    result = g1patch("build", cube_obj, "-o", network, "--tangents", "chord", "--twist", "coons")
+    result = g1patch("build", cube_obj, "-o", network, "--method", "corner", "--tangents", "chord", "--twist", "coons")
     assert result.returncode == 0, result.stderr
     assert network.exists()
 
@@ -67,11 +75,35 @@ def test_build_check_export(tmp_path: Path, cube_obj: Path) -> None:
     assert failed.returncode == 1  # the corner construction creases along edges
     assert g1patch("check", network, "--max-angle", "90").returncode == 0
 
-    for suffix in ("obj", "ply", "stl"):
+    for suffix in ("obj", "ply", "stl", "bpt"):
         output = tmp_path / f"surface.{suffix}"
         result = g1patch("export", network, "-o", output, "--resolution", "5")
         assert result.returncode == 0, result.stderr
         assert output.stat().st_size > 0
+    assert g1patch("check", tmp_path / "surface.bpt", "--max-angle", "1e-9").returncode == 1
+
+
+def test_step_export_reports_its_accuracy(tmp_path: Path, cube_obj: Path) -> None:
+    pytest.importorskip("OCP", reason="STEP export needs the 'cad' extra (cadquery-ocp-novtk)")
+    for method, exact in (("corner", True), ("gregory", False)):
+        network = tmp_path / f"{method}.npz"
+        assert g1patch("build", cube_obj, "-o", network, "--method", method).returncode == 0
+        result = g1patch("export", network, "-o", tmp_path / f"{method}.step")
+        assert result.returncode == 0, result.stderr
+        assert ("exact B-spline faces" in result.stdout) == exact
+        assert "closed solid" in result.stdout and "measured by OpenCASCADE" in result.stdout
+
+
+@pytest.mark.parametrize("mode", [(), ("--zebra",), ("--deviation",)])
+def test_render_writes_a_png_of_the_requested_size(tmp_path: Path, cube_obj: Path, mode: tuple[str, ...]) -> None:
+    import matplotlib.image
+
+    network = tmp_path / "cube.npz"
+    assert g1patch("build", cube_obj, "-o", network).returncode == 0
+    picture = tmp_path / "cube.png"
+    result = g1patch("render", network, "-o", picture, "--size", "320", "200", *mode)
+    assert result.returncode == 0, result.stderr
+    assert matplotlib.image.imread(picture).shape[:2] == (200, 320)
 
 
 def test_check_reads_patch_files(shared_data: Path) -> None:
@@ -84,9 +116,11 @@ def test_check_reads_patch_files(shared_data: Path) -> None:
 def test_demo_writes_its_files(tmp_path: Path) -> None:
     result = g1patch("demo", "--out", tmp_path / "out")
     assert result.returncode == 0, result.stderr
-    assert "max G1 angle at corners" in result.stdout
-    assert (tmp_path / "out" / "cube_corner.obj").stat().st_size > 0
-    assert (tmp_path / "out" / "cube_corner.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "max G1 angle at corners" in result.stdout and "Gregory" in result.stdout
+    for name in ("cube_corner.obj", "cube_gregory.obj"):
+        assert (tmp_path / "out" / name).stat().st_size > 0
+    for name in ("cube_zebra.png", "cube_deviation.png"):
+        assert (tmp_path / "out" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def assert_clean_failure(result: subprocess.CompletedProcess[str], output: Path) -> None:
@@ -122,6 +156,8 @@ def test_user_mistakes_fail_cleanly(tmp_path: Path, cube_obj: Path) -> None:
         (("export", network, "-o", tmp_path / "s.obj", "--resolution", "1"), tmp_path / "s.obj"),
         (("export", tmp_path / "missing.npz", "-o", tmp_path / "s.obj"), tmp_path / "s.obj"),
         (("check", cube_obj), tmp_path / "unused"),
+        (("render", network, "-o", tmp_path / "p.jpg"), tmp_path / "p.jpg"),
+        (("render", network, "-o", tmp_path / "p.png", "--size", "0", "10"), tmp_path / "p.png"),
     ]
     for args, output in cases:
         assert_clean_failure(g1patch(*args), output)

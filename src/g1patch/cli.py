@@ -1,4 +1,4 @@
-"""The ``g1patch`` command line: a thin shell over build, check, export and demo.
+"""The ``g1patch`` command line: a thin shell over build, check, export, render and demo.
 
 Exit codes: 0 success; 1 a check failed (``check --max-angle``); 2 bad input or any other
 error g1patch reports (one line on stderr, no partial output file).
@@ -9,9 +9,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -19,12 +21,29 @@ from . import __version__
 from .errors import FormatError, G1PatchError
 
 EXIT_OK, EXIT_CHECK_FAILED, EXIT_ERROR = 0, 1, 2
+METHODS = ("gregory", "corner")
+MESH_SUFFIXES = (".obj", ".ply", ".stl")
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
 
 _EXAMPLES = {
-    "build": "examples:\n  g1patch build mesh.obj -o surface.npz\n  g1patch build cube.obj -o cube.npz --tangents chord --twist coons",
-    "check": "examples:\n  g1patch check surface.npz\n  g1patch check teapot.bpt --json\n  g1patch check surface.npz --max-angle 1e-9   # exit 1 if not G1",
-    "export": "examples:\n  g1patch export surface.npz -o surface.obj --resolution 33",
-    "demo": "example:\n  g1patch demo --out out",
+    "build": """examples:
+  g1patch build mesh.obj -o surface.npz                  # exact G1 (Gregory), the default
+  g1patch build cube.obj -o cube.npz --method corner     # the paper's corner-G1 patches
+  g1patch build mesh.off -o surface.npz --tangents chord""",
+    "check": """examples:
+  g1patch check surface.npz
+  g1patch check teapot.bpt --json
+  g1patch check surface.npz --max-angle 1e-9     # exit 1 unless exactly G1""",
+    "export": """examples:
+  g1patch export surface.npz -o surface.obj --resolution 33
+  g1patch export surface.npz -o surface.step            # exact B-splines, or a fit within --tolerance
+  g1patch export surface.npz -o patches.bpt             # Bezier patches (polynomial networks)""",
+    "render": """examples:
+  g1patch render surface.npz -o surface.png
+  g1patch render surface.npz -o zebra.png --zebra
+  g1patch render surface.npz -o kinks.png --deviation --size 1200 900""",
+    "demo": """example:
+  g1patch demo --out out""",
 }
 
 
@@ -33,7 +52,7 @@ def _parser() -> argparse.ArgumentParser:
 
     parser = argparse.ArgumentParser(
         prog="g1patch",
-        description="Quad meshes to smooth bicubic patch networks, with a continuity report.",
+        description="Quad meshes to smooth bicubic patch networks, with a continuity report that proves it.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog="run 'g1patch COMMAND --help' for a command's options and examples",
     )
@@ -41,17 +60,20 @@ def _parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     def command(name: str, text: str) -> argparse.ArgumentParser:
-        return commands.add_parser(
+        sub = commands.add_parser(
             name, help=text, description=text, epilog=_EXAMPLES[name], formatter_class=argparse.RawDescriptionHelpFormatter
         )
+        sub.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+        return sub
 
     build = command("build", "build a patch network from a quad mesh (OBJ, PLY, OFF)")
     build.add_argument("mesh", type=Path, help="input quad mesh")
     build.add_argument("-o", "--output", type=Path, required=True, help="network file to write (.npz)")
-    build.add_argument("--method", choices=("corner",), default="corner", help="construction (default: corner, the paper's)")
+    build.add_argument("--method", choices=METHODS, default="gregory",
+                       help="gregory: exact G1 everywhere (default); corner: the paper's, G1 at corners only")
     build.add_argument("--tangents", choices=TANGENTS, default="arc", help="corner tangent lengths (default: arc)")
-    build.add_argument("--twist", choices=TWISTS, default="bilinear", help="twist vectors (default: bilinear)")
-    build.add_argument("--normals", choices=NORMALS, default="fan", help="vertex normals (default: fan)")
+    build.add_argument("--twist", choices=TWISTS, default="bilinear", help="corner method: twist vectors (default: bilinear)")
+    build.add_argument("--normals", choices=NORMALS, default="fan", help="corner method: vertex normals (default: fan)")
     build.add_argument("--no-split", action="store_true", help="reject faces that are not quads instead of splitting them")
 
     check = command("check", "measure G0/G1 continuity of a network (.npz) or a Bézier patch file (.bpt)")
@@ -60,17 +82,50 @@ def _parser() -> argparse.ArgumentParser:
     check.add_argument("--samples", type=int, default=33, help="samples per edge, both ends included (default: 33)")
     check.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
 
-    export = command("export", "tessellate a network into a watertight triangle mesh (OBJ, PLY, STL)")
+    export = command("export", "write a network as a triangle mesh (OBJ, PLY, STL), CAD file (STEP, IGES) or .bpt")
     export.add_argument("network", type=Path, help="network file (.npz)")
-    export.add_argument("-o", "--output", type=Path, required=True, help="mesh file to write")
-    export.add_argument("--resolution", type=int, default=17, help="samples per patch side (default: 17)")
+    export.add_argument("-o", "--output", type=Path, required=True, help="file to write; the extension picks the format")
+    export.add_argument("--resolution", type=int, default=17, help="meshes: samples per patch side (default: 17)")
+    export.add_argument("--tolerance", type=float, metavar="REL",
+                        help="CAD: fit tolerance for rational patches, relative to the bbox diagonal (default: 1e-6)")
 
-    demo = command("demo", "the paper's example: the cube smoothed into a sphere-like surface")
-    demo.add_argument("--out", type=Path, default=Path("out"), help="folder for the OBJ and PNG (default: out)")
+    render = command("render", "draw a network as a PNG: shaded, zebra stripes or a map of G1 angles")
+    render.add_argument("network", type=Path, help="network (.npz) or patches (.bpt)")
+    render.add_argument("-o", "--output", type=Path, required=True, help="PNG to write")
+    mode = render.add_mutually_exclusive_group()
+    mode.add_argument("--zebra", action="store_true", help="reflection lines: they break where the surface creases")
+    mode.add_argument("--deviation", action="store_true", help="colour every patch edge by its G1 angle")
+    render.add_argument("--size", type=int, nargs=2, default=(900, 900), metavar=("W", "H"), help="pixels (default: 900 900)")
+    render.add_argument("--view", type=float, nargs=2, default=(25.0, -60.0), metavar=("ELEV", "AZIM"), help="camera angles in degrees")
+    render.add_argument("--up", choices=("x", "y", "z"), default="z", help="the model's up axis (default: z)")
+    render.add_argument("--zoom", type=float, default=1.0, help="magnification (default: 1)")
+
+    demo = command("demo", "the paper's example: the cube smoothed by the paper's patches and by exact G1")
+    demo.add_argument("--out", type=Path, default=Path("out"), help="folder for the OBJ and PNG files (default: out)")
     return parser
 
 
-def _load_surface(path: Path):  # type: ignore[no-untyped-def]
+@contextmanager
+def _progress(label: str, quiet: bool) -> Iterator[Callable[[int, int], None]]:
+    """A ``progress(done, total)`` callback drawing a bar on stderr; silent when quiet or not a terminal."""
+    if quiet or not sys.stderr.isatty():
+        yield lambda done, total: None
+        return
+    from tqdm import tqdm
+
+    bar = tqdm(total=None, desc=label, unit="", leave=False, file=sys.stderr)
+    try:
+        def update(done: int, total: int) -> None:
+            bar.total = total
+            bar.n = done
+            bar.refresh()
+
+        yield update
+    finally:
+        bar.close()
+
+
+def _load_surface(path: Path) -> Any:
     from .io.bpt import read_bpt
     from .io.network_file import load_network
     from .network import network_from_patch_points
@@ -83,16 +138,31 @@ def _load_surface(path: Path):  # type: ignore[no-untyped-def]
     raise FormatError(path, f"unsupported extension {suffix or '(none)'!r}; expected .npz or .bpt")
 
 
+def build_network(mesh: Any, method: str, *, tangents: str = "arc", twist: str = "bilinear", normals: str = "fan") -> Any:
+    """The network of ``mesh`` by ``method`` (``gregory`` or ``corner``)."""
+    if method == "corner":
+        from .construct.corner import build_corner_network
+
+        return build_corner_network(mesh, tangents=tangents, twist=twist, normals=normals)  # type: ignore[arg-type]
+    from .construct.gregory import build_gregory_network
+
+    return build_gregory_network(mesh, tangents=tangents)  # type: ignore[arg-type]
+
+
 def _build(args: argparse.Namespace) -> int:
-    from .construct.corner import build_corner_network
     from .io.meshfile import read_mesh
     from .io.network_file import save_network
 
     if args.output.suffix.lower() != ".npz":
         raise FormatError(args.output, "a network file must end in .npz")
-    mesh = read_mesh(args.mesh, split=not args.no_split)
-    network = build_corner_network(mesh, tangents=args.tangents, twist=args.twist, normals=args.normals)
-    save_network(args.output, network)
+    with _progress("build", args.quiet) as progress:
+        progress(0, 3)
+        mesh = read_mesh(args.mesh, split=not args.no_split)
+        progress(1, 3)
+        network = build_network(mesh, args.method, tangents=args.tangents, twist=args.twist, normals=args.normals)
+        progress(2, 3)
+        save_network(args.output, network)
+        progress(3, 3)
     print(f"built {network.n_patches} {args.method} patches from {args.mesh} -> {args.output}")
     return EXIT_OK
 
@@ -100,11 +170,13 @@ def _build(args: argparse.Namespace) -> int:
 def _check(args: argparse.Namespace) -> int:
     from .continuity import check
 
-    report = check(_load_surface(args.surface), samples=args.samples)
+    network = _load_surface(args.surface)
+    with _progress("check", args.quiet) as progress:
+        report = check(network, samples=args.samples, progress=progress)
     if args.json:
         print(json.dumps(report.to_dict()))
     else:
-        print(f"{args.surface}")
+        print(f"{args.surface} ({network.provenance.get('method', 'file')})")
         print(report.summary())
     if args.max_angle is not None and not report.is_g1(args.max_angle):
         if not args.json:
@@ -114,56 +186,110 @@ def _check(args: argparse.Namespace) -> int:
 
 
 def _export(args: argparse.Namespace) -> int:
-    from .io.meshfile import write_triangles
+    suffix = args.output.suffix.lower()
+    if suffix not in (*MESH_SUFFIXES, *CAD_SUFFIXES, ".bpt"):
+        raise FormatError(args.output, f"unsupported extension {suffix or '(none)'!r}; expected one of "
+                                       f"{', '.join((*MESH_SUFFIXES, *CAD_SUFFIXES, '.bpt'))}")
     from .io.network_file import load_network
-    from .tessellate import tessellate
 
     network = load_network(args.network)
+    if suffix in CAD_SUFFIXES:
+        from .io.cad import export_cad
+
+        with _progress("export", args.quiet) as progress:
+            tolerance = None if args.tolerance is None else args.tolerance * network.bounding_box_diagonal()
+            result = export_cad(args.output, network, tolerance=tolerance,
+                                progress=lambda stage, done, total: progress(done, total))
+        kind = "exact B-spline faces" if result.exact else f"B-spline faces fitted within {result.fit_deviation:.2e} (model units)"
+        print(f"wrote {result.faces} {kind}{', a closed solid' if result.solid else ''} -> {args.output}")
+        print(f"G1 angle of the exported surfaces (measured by OpenCASCADE): max {result.max_g1_angle_deg:.3e}°")
+        return EXIT_OK
+    if suffix == ".bpt":
+        from .io.bpt import write_bpt
+        from .patches import PatchSet
+
+        if not isinstance(network.patches, PatchSet):
+            raise FormatError(args.output, ".bpt holds polynomial Bézier patches; this network's patches are rational "
+                                           "(export to .step instead)")
+        write_bpt(args.output, network.patches)
+        print(f"wrote {network.n_patches} Bézier patches -> {args.output}")
+        return EXIT_OK
+    from .io.meshfile import write_triangles
+    from .tessellate import tessellate
+
     mesh = tessellate(network, args.resolution)
     write_triangles(args.output, mesh.points, mesh.triangles)
     print(f"wrote {len(mesh.triangles)} triangles, {len(mesh.points)} points -> {args.output}")
     return EXIT_OK
 
 
+def _render(args: argparse.Namespace) -> int:
+    from .render import render
+
+    if args.output.suffix.lower() != ".png":
+        raise FormatError(args.output, "pictures are written as .png")
+    mode = "zebra" if args.zebra else "deviation" if args.deviation else "shaded"
+    network = _load_surface(args.network)
+    render(args.output, network, mode=mode, size=tuple(args.size), view=tuple(args.view), up=args.up, zoom=args.zoom,
+           title=f"{args.network.name}: {mode}")
+    print(f"wrote {args.output}")
+    return EXIT_OK
+
+
 def _demo(args: argparse.Namespace) -> int:
     from .construct.corner import build_corner_network
-    from .continuity import check
+    from .construct.gregory import build_gregory_network
+    from .continuity import check, format_reports
     from .io.meshfile import read_mesh, write_triangles
     from .patches import CORNER_PARAMETERS, polynomial_degree, unit
-    from .render import render_surfaces
+    from .render import render_side_by_side
     from .tessellate import tessellate
 
     with resources.as_file(resources.files("g1patch") / "data" / "cube.obj") as cube_path:
         mesh = read_mesh(cube_path)
-    network = build_corner_network(mesh, tangents="arc", twist="coons")
-    patches = network.patches
-    print("The paper's example: the cube [-1, 1]^3 (valence 3 at every corner) smoothed by")
-    print("bicubic Hermite patches with Skala's corner conditions n^T p_u = n^T p_v = 0 (eq. 13)")
-    print("and S-/HS-patch (Coons) twists.\n")
-    first = patches.convert("hermite")
-    normals = unit(np.cross(*first.tangents(CORNER_PARAMETERS)))[0]
-    print("Patch 0 (face 0), corner normals p_u x p_v / |p_u x p_v|:")
-    for corner, normal in zip(mesh.faces[0], normals):
-        print(f"  vertex {corner}: ({normal[0]:+.6f}, {normal[1]:+.6f}, {normal[2]:+.6f})")
-    diagonal, anti = first.diagonal_polynomials()
-    print(f"Degrees of its diagonal and anti-diagonal: {int(polynomial_degree(diagonal)[0])}, "
-          f"{int(polynomial_degree(anti)[0])} (S-/HS closure |C| = {np.linalg.norm(first.closure()[0]):.1e})\n")
-    report = check(network)
-    print(report.summary())
-    print("\nThe corner angle is zero: the paper's conditions hold. The edge angle is not: the paper's")
-    print("patches meet with a crease along every edge.")
-    surface = tessellate(network, 33)
+    corner = build_corner_network(mesh, tangents="arc", twist="coons")
+    gregory = build_gregory_network(mesh, tangents="arc")
+    print("The paper's example: the cube [-1, 1]^3, valence 3 at every corner, smoothed into a")
+    print("sphere-like surface.\n")
+    print("1. The paper's construction: bicubic Hermite patches whose corner tangents satisfy")
+    print("   n^T p_u = n^T p_v = 0 (eq. 13), with S-/HS-patch (Coons) twists.")
+    hermite = corner.patches
+    normals = unit(np.cross(*hermite.tangents(CORNER_PARAMETERS)))[0]
+    print("   Patch 0 (face 0), unit corner normals p_u x p_v:")
+    for vertex, normal in zip(mesh.faces[0], normals, strict=True):
+        print(f"     vertex {vertex}: ({normal[0]:+.6f}, {normal[1]:+.6f}, {normal[2]:+.6f})")
+    diagonal, anti = hermite.diagonal_polynomials()
+    print(f"   Degrees of its diagonal and anti-diagonal: {int(polynomial_degree(diagonal)[0])} and "
+          f"{int(polynomial_degree(anti)[0])} (S-/HS closure |C| = {np.linalg.norm(hermite.closure()[0]):.1e}).")
+    print("2. g1patch's default: the interpolating Gregory network, G1 along every edge.\n")
+    corner_report, gregory_report = check(corner), check(gregory)
+    print(format_reports([corner_report, gregory_report], ["paper (corner G1)", "g1patch (Gregory, exact G1)"]))
+    radius = np.linalg.norm(gregory.patches.evaluate_grid(np.linspace(0, 1, 17)), axis=-1)
+    print("\nThe paper's conditions hold at the corners (angle ~1e-14°) but its patches crease along every")
+    print(f"edge by {corner_report.max_edge_angle_deg:.1f}°; the Gregory surface is G1 everywhere "
+          f"(max {max(gregory_report.max_edge_angle_deg, gregory_report.max_corner_angle_deg):.1e}°), "
+          f"radius {radius.min():.4f}..{radius.max():.4f} (√3 = 1.7321).")
+
     args.out.mkdir(parents=True, exist_ok=True)
-    write_triangles(args.out / "cube_corner.obj", surface.points, surface.triangles)
-    render_surfaces(args.out / "cube_corner.png", [surface], ["corner G1 (Skala)"], size=(700, 700))
-    print(f"\nwrote {args.out / 'cube_corner.obj'} and {args.out / 'cube_corner.png'}")
+    written = []
+    for name, network in (("cube_corner", corner), ("cube_gregory", gregory)):
+        surface = tessellate(network, 33)
+        write_triangles(args.out / f"{name}.obj", surface.points, surface.triangles)
+        written.append(args.out / f"{name}.obj")
+    titles = ["paper: corner G1 (creased)", "g1patch: Gregory (exact G1)"]
+    for mode in ("zebra", "deviation"):
+        path = args.out / f"cube_{mode}.png"
+        render_side_by_side(path, [corner, gregory], titles, mode=mode, size=(1400, 700),
+                            reports=[corner_report, gregory_report] if mode == "deviation" else None)
+        written.append(path)
+    print("\nwrote " + ", ".join(str(path) for path in written))
     return EXIT_OK
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     args = _parser().parse_args(argv)
-    handlers = {"build": _build, "check": _check, "export": _export, "demo": _demo}
+    handlers = {"build": _build, "check": _check, "export": _export, "render": _render, "demo": _demo}
     try:
         return handlers[args.command](args)
     except G1PatchError as error:

@@ -12,6 +12,7 @@ regular grid of samples per patch.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -22,7 +23,7 @@ from .errors import InputError
 from .network import PatchNetwork, Patches, edge_parameters
 from .patches import CORNER_PARAMETERS
 
-__all__ = ["ContinuityReport", "check", "angle_between"]
+__all__ = ["ContinuityReport", "check", "angle_between", "format_reports"]
 
 DEGENERATE_RTOL = 1e-13
 """|p_u × p_v| ≤ DEGENERATE_RTOL · diag² is a degenerate normal. At a collapsed edge the
@@ -101,12 +102,11 @@ class ContinuityReport:
             "worst_edge": self.worst_edge,
         }
 
-    def summary(self) -> str:
-        """A short human-readable table."""
+    def rows(self) -> list[tuple[str, str]]:
+        """(label, value) pairs of the figures, as :meth:`summary` prints them."""
         rows = [
             ("patches", f"{self.patches}"),
-            ("shared edges", f"{self.shared_edges}  (open {self.open_edges}, collapsed {self.collapsed_edges} "
-             f"= {self.collapsed_patch_edges} patch edges)"),
+            ("shared / open edges", f"{self.shared_edges} / {self.open_edges}"),
             ("max G1 angle on edges", f"{self.max_edge_angle_deg:.3e}°"),
             ("mean G1 angle on edges", f"{self.mean_edge_angle_deg:.3e}°"),
             ("max G1 angle at corners", f"{self.max_corner_angle_deg:.3e}°"),
@@ -114,6 +114,8 @@ class ContinuityReport:
             ("degenerate normals", f"{self.degenerate_normals}"),
             ("folds", f"{self.folds}"),
         ]
+        if self.collapsed_edges:
+            rows.insert(2, ("collapsed edges", f"{self.collapsed_edges} ({self.collapsed_patch_edges} patch edges)"))
         if self.inconsistent_orientation_edges:
             rows.append(("edges with flipped orientation", f"{self.inconsistent_orientation_edges}"))
         if self.max_vertex_deviation is not None:
@@ -122,10 +124,24 @@ class ContinuityReport:
         if worst is not None:
             rows.append(
                 ("worst edge", f"patch {worst['patches'][0]} edge {worst['edges'][0]} / "
-                 f"patch {worst['patches'][1]} edge {worst['edges'][1]}: {worst['angle_deg']:.3e}°")
+                 f"patch {worst['patches'][1]} edge {worst['edges'][1]}")
             )
-        width = max(len(name) for name, _ in rows)
-        return "\n".join(f"{name:<{width}}  {value}" for name, value in rows)
+        return rows
+
+    def summary(self) -> str:
+        """A short human-readable table."""
+        return format_reports([self])
+
+
+def format_reports(reports: list[ContinuityReport], titles: list[str] | None = None) -> str:
+    """The reports' figures as a table, one column per report (rows missing from one are blank)."""
+    columns = [dict(report.rows()) for report in reports]
+    labels = list(dict.fromkeys(label for report in reports for label, _ in report.rows()))
+    table = [[label, *(column.get(label, "") for column in columns)] for label in labels]
+    if titles is not None:
+        table = [["", *titles], ["", *("-" * len(title) for title in titles)], *table]
+    widths = [max(len(row[i]) for row in table) for i in range(len(table[0]))]
+    return "\n".join("  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True)).rstrip() for row in table)
 
 
 def check(
@@ -134,11 +150,13 @@ def check(
     fold_samples: int = 9,
     degenerate_rtol: float = DEGENERATE_RTOL,
     chunk: int = 16384,
+    progress: Callable[[int, int], None] | None = None,
 ) -> ContinuityReport:
     """Measure G0 and G1 continuity of ``network`` (see the module docstring for the measures).
 
     Work is done in blocks of ``chunk`` edges or patches, so memory stays bounded on networks of
-    millions of patches. Degenerate normals are counted on the ``fold_samples²`` grid of every patch.
+    millions of patches; ``progress(done, total)`` is called after each block. Degenerate normals
+    are counted on the ``fold_samples²`` grid of every patch.
     """
     for name, value, least in (("samples", samples, 2), ("fold_samples", fold_samples, 2), ("chunk", chunk, 1)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
@@ -153,19 +171,25 @@ def check(
     same = network.same_direction[left_patch, left_edge]
     edge_angle = np.zeros(len(left_patch))
     edge_gap = np.zeros(len(left_patch))
-    for block in _blocks(len(left_patch), chunk):
+    edge_blocks, patch_blocks = _blocks(len(left_patch), chunk), _blocks(len(patches), chunk)
+    total = len(left_patch) + len(patches)
+    for block in edge_blocks:
         edge_angle[block], edge_gap[block] = _edge_measures(
             patches, left_patch[block], left_edge[block], right_patch[block], right_edge[block], same[block],
             samples, degenerate_level,
         )
+        if progress is not None:
+            progress(block.stop, total)
     edge_gap /= diagonal
 
     corner_angle = _max_corner_angle(network, patches, degenerate_level, oriented=not same.any())
     folds = degenerate = 0
-    for block in _blocks(len(patches), chunk):
+    for block in patch_blocks:
         block_folds, block_degenerate = _folds(network, np.arange(block.start, block.stop), fold_samples, degenerate_level)
         folds += block_folds
         degenerate += block_degenerate
+        if progress is not None:
+            progress(len(left_patch) + block.stop, total)
 
     max_vertex_deviation = None
     if network.vertices is not None:
