@@ -369,6 +369,29 @@ def test_step_export_of_fitted_non_polynomial_patches(tmp_path: Path) -> None:
 
 
 @requires_ocp
+@pytest.mark.parametrize("name", ["cube", "torus_8_6", "catmark_torus"])
+def test_step_round_trip_of_gregory_networks(name: str, request: pytest.FixtureRequest, tmp_path: Path) -> None:
+    """Rational Gregory patches are fitted: a valid closed solid within the export tolerance."""
+    from g1patch.construct.gregory import build_gregory_network
+
+    data = request.getfixturevalue("shared_data") if name in SHARED else None
+    network = build_gregory_network(CLOSED[name](data))
+    result = export_step(tmp_path / f"{name}.step", network)
+    assert not result.exact and result.fit_deviation <= result.fit_tolerance
+    assert result.solid and result.valid and result.free_edges == 0
+    model = read_step_faces(result.path)
+    valid, volume, kind = occ_solid_figures(model.shape)
+    assert valid and kind == "TopAbs_SOLID"
+    # The fit moves the surface by ≤ tolerance = 1e-6 diag, so the volume by ≤ area · 1e-6 diag:
+    # ~1e-6 relative for these shapes.
+    assert volume == pytest.approx(network_volume(network), rel=1e-6)
+    uv = np.random.default_rng(4).random((16, 2))
+    expected = network.patches.evaluate(uv)
+    for patch, face in enumerate(matched_faces(model, network)):
+        assert np.linalg.norm(model.faces[face].evaluate(uv) - expected[patch], axis=-1).max() <= 1.5 * result.fit_tolerance
+
+
+@requires_ocp
 def test_open_networks_export_as_shells(shared_data: Path, tmp_path: Path) -> None:
     disks = build_corner_network(read_mesh(shared_data / "catmark_xord_interior.obj"))
     result = export_step(tmp_path / "disks.step", disks)
