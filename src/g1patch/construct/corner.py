@@ -52,8 +52,8 @@ def fan_normals(mesh: QuadMesh) -> NDArray[np.float64]:
     to_next = np.roll(here, -1, axis=1) - here
     to_prev = np.roll(here, 1, axis=1) - here
     corner_normals = np.cross(to_next, to_prev).reshape(-1, 3)
-    total = np.zeros_like(x)
-    np.add.at(total, faces.reshape(-1), corner_normals)
+    corners = faces.reshape(-1)
+    total = np.stack([np.bincount(corners, corner_normals[:, d], minlength=len(x)) for d in range(3)], axis=1)
     return _unit_or_fail(total, "fan normal")
 
 
@@ -98,6 +98,7 @@ def corner_tangents(
     Direction: ``s = d − (n·d) n``. Length: ``chord`` → |d|; ``arc`` → |d| / cos²(φ/2) with φ
     the angle between d and the plane: a circular arc through both ends tangent to the plane
     spans θ = 2φ, and the cubic Hermite tangent that best reproduces it is |d| / cos²(θ/4).
+    As cos φ = |s|/|d|, that is ``2|d|² / (|d| + |s|)``, with no trigonometry.
     ``labels[..., 2]`` (origin and target vertex ids) name the edge in an error.
     """
     check_choice("tangents", rule, TANGENTS)
@@ -110,10 +111,7 @@ def corner_tangents(
         where = np.argwhere(~(in_plane > 0))[0]
         edge = "" if labels is None else f" {labels[tuple(where)][0]}→{labels[tuple(where)][1]}"
         raise ConstructionError(f"tangents: mesh edge{edge} is parallel to its vertex normal; its tangent is undefined")
-    length = chord
-    if rule == "arc":
-        half_angle = 0.5 * np.arctan2(np.abs(height), in_plane)
-        length = chord / np.cos(half_angle) ** 2
+    length = 2.0 * chord**2 / (chord + in_plane) if rule == "arc" else chord
     return s * (length / in_plane)[..., None]
 
 
