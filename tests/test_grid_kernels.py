@@ -206,3 +206,18 @@ def test_patchset_methods_use_the_kernels():
     np.testing.assert_array_equal(square_positions, patches.evaluate_grid(u, u))
     np.testing.assert_array_equal(square_normals, patches.normals_grid(u))
     assert positions.flags.c_contiguous and normals.flags.c_contiguous
+
+
+def test_public_methods_write_into_given_arrays() -> None:
+    rng = np.random.default_rng(11)
+    patches = PatchSet(rng.normal(size=(5, 4, 4, 3)), "bezier")
+    u = np.linspace(0.0, 1.0, 7)
+    positions, normals = np.empty((5, 7, 7, 3)), np.empty((5, 7, 7, 3))
+    returned = patches.evaluate_grid_with_normals(u, out=positions, normals_out=normals)
+    assert returned[0] is positions and returned[1] is normals
+    expected = patches.evaluate_grid_with_normals(u)
+    np.testing.assert_array_equal(positions, expected[0])
+    np.testing.assert_array_equal(normals, expected[1])
+    assert patches.evaluate_grid(u, out=positions) is positions
+    with pytest.raises(InputError, match="out"):
+        patches.evaluate_grid(u, out=np.empty((5, 7, 6, 3)))

@@ -81,15 +81,24 @@ class PatchSet:
 
     # ------------------------------------------------------------- evaluation
     def evaluate_grid(
-        self, u: ArrayLike, v: ArrayLike | None = None, du: int = 0, dv: int = 0
+        self,
+        u: ArrayLike,
+        v: ArrayLike | None = None,
+        du: int = 0,
+        dv: int = 0,
+        out: NDArray[np.float64] | None = None,
     ) -> NDArray[np.float64]:
-        """``∂^(du+dv) p / ∂u^du ∂v^dv`` on the grid ``u × v``: shape ``(N, len(u), len(v), 3)``."""
+        """``∂^(du+dv) p / ∂u^du ∂v^dv`` on the grid ``u × v``: shape ``(N, len(u), len(v), 3)``.
+
+        ``out``: a C-contiguous float64 array of that shape to write into (saves the page faults
+        of a fresh allocation when a grid is evaluated repeatedly).
+        """
         du, dv = check_order("du", du), check_order("dv", dv)
         u_params = _check_parameters("u", u)
         v_params = u_params if v is None else _check_parameters("v", v)
         weights_u = basis_values(self.form, u_params, du)
         weights_v = basis_values(self.form, v_params, dv)
-        return _grid_contract(self.control, weights_u, weights_v)
+        return _grid.contract(self.control, weights_u, weights_v, out=out)
 
     def grid(self, resolution: int) -> NDArray[np.float64]:
         """Positions on a uniform ``resolution × resolution`` grid including the borders."""
@@ -144,15 +153,20 @@ class PatchSet:
         return _grid.normals(self.control, self.form, u_params, v_params)
 
     def evaluate_grid_with_normals(
-        self, u: ArrayLike, v: ArrayLike | None = None
+        self,
+        u: ArrayLike,
+        v: ArrayLike | None = None,
+        out: NDArray[np.float64] | None = None,
+        normals_out: NDArray[np.float64] | None = None,
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Positions and unit normals on the grid ``u × v``, each ``(N, len(u), len(v), 3)``, in one pass.
 
         Equal to ``(evaluate_grid(u, v), normals_grid(u, v))``; the normal is zero where degenerate.
+        ``out`` / ``normals_out``: arrays to write into, as in :meth:`evaluate_grid`.
         """
         u_params = _check_parameters("u", u)
         v_params = u_params if v is None else _check_parameters("v", v)
-        return _grid.positions_and_normals(self.control, self.form, u_params, v_params)
+        return _grid.positions_and_normals(self.control, self.form, u_params, v_params, out, normals_out)
 
     def corners(self) -> NDArray[np.float64]:
         """Corner positions F0..F3, shape (N, 4, 3)."""
@@ -197,15 +211,6 @@ def _check_resolution(resolution: int) -> int:
     if not isinstance(resolution, (int, np.integer)) or resolution < 2:
         raise InputError(f"resolution: expected an integer ≥ 2, got {resolution!r}")
     return int(resolution)
-
-
-def _grid_contract(
-    control: NDArray[np.float64], weights_u: NDArray[np.float64], weights_v: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    """``out[n, a, b] = Σ_ij wu[a, i] P[n, i, j] wv[b, j]`` as a C-contiguous (N, Gu, Gv, 3) array."""
-    from . import _grid  # the fast kernels (separable contraction, blocked normals)
-
-    return _grid.contract(control, weights_u, weights_v)
 
 
 def unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:
