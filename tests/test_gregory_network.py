@@ -19,55 +19,36 @@ corner construction alike (300 noisy fans and boundary fans: 3 vs 3 meshes with 
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
+from exactness import (
+    GENERATED,
+    NOISE,
+    SHARED_MESHES,
+    assert_exact_g1,
+    height,
+    perturbed,
+)
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from g1patch import shapes
 from g1patch.construct.corner import build_corner_network, corner_tangents, fan_normals
 from g1patch.construct.gregory import build_gregory_network, tangent_stars
-from g1patch.continuity import ContinuityReport, angle_between, check
+from g1patch.continuity import angle_between, check
 from g1patch.errors import ConstructionError, InputError
 from g1patch.gregory import GregoryPatchSet
 from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh
 from g1patch.network import PatchNetwork, edge_parameters
 
-SHARED_MESHES = [
-    "catmark_cube.obj",
-    "catmark_torus.obj",
-    "catmark_xord_boundary.obj",
-    "catmark_xord_interior.obj",
-    "spot_quadrangulated.obj",
-]
-MAX_ANGLE_DEG = 1e-9
-MAX_GAP = 1e-12
-MAX_VERTEX_DEVIATION = 1e-12
-NOISE = 0.05
 EDGE_DIRECTION = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
 INWARD = np.array([[0.0, 1.0], [-1.0, 0.0], [0.0, -1.0], [1.0, 0.0]])  # EDGE_DIRECTION turned by +90°
 
 
-def perturbed(mesh: QuadMesh, amplitude: float, seed: int) -> QuadMesh:
-    """Uniform vertex noise of ``amplitude`` × the shortest edge in each coordinate."""
-    edges = mesh.topology.edges
-    shortest = np.linalg.norm(mesh.vertices[edges[:, 0]] - mesh.vertices[edges[:, 1]], axis=1).min()
-    noise = np.random.default_rng(seed).uniform(-1.0, 1.0, mesh.vertices.shape)
-    return mesh.with_vertices(mesh.vertices + amplitude * shortest * noise)
 
-
-def assert_exact_g1(report: ContinuityReport, folds: bool = True) -> None:
-    assert report.max_edge_angle_deg <= MAX_ANGLE_DEG, report.worst_edge
-    assert report.max_corner_angle_deg <= MAX_ANGLE_DEG
-    assert report.max_g0_gap <= MAX_GAP
-    assert report.max_vertex_deviation is not None and report.max_vertex_deviation <= MAX_VERTEX_DEVIATION
-    assert report.degenerate_normals == 0
-    if folds:
-        assert report.folds == 0
 
 
 # ------------------------------------------------------------------------------ shared meshes
@@ -104,19 +85,6 @@ def test_perturbed_spot_is_exactly_g1(shared_data: Path) -> None:
 
 
 # ------------------------------------------------------------------------------ generated meshes
-def height(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    return 0.3 * np.sin(3.0 * x) * y + 0.2 * x * x
-
-
-GENERATED: dict[str, Callable[[int], QuadMesh]] = {
-    "fan": lambda n: shapes.fan(3 + n % 10, 1 + n % 3),  # interior valence 3..12, 1..3 rings
-    "boundary_fan": lambda n: shapes.boundary_fan(1 + n % 7),  # boundary vertex with 1..7 faces
-    "strip": lambda n: shapes.strip(1 + n % 5),
-    "grid": lambda n: shapes.grid(2 + n % 3, 1 + n % 4, height=height),
-    "torus": lambda n: shapes.torus(3 + n % 6, 3 + n % 4),
-    "genus2": lambda n: shapes.genus2(),
-    "cube_sphere": lambda n: shapes.cube_sphere(n % 3),
-}
 
 
 @settings(deadline=None, max_examples=150)

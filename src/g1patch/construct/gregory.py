@@ -44,7 +44,7 @@ from ..mesh import QuadMesh, QuadTopology
 from ..network import PatchNetwork, network_from_mesh
 from .corner import TANGENTS, TangentRule, corner_tangents, fan_normals
 
-__all__ = ["build_gregory_network", "gregory_patches", "tangent_stars"]
+__all__ = ["build_gregory_network", "gregory_patches", "halfedge_slots", "tangent_stars"]
 
 _NEXT = np.array([1, 2, 3, 0])
 
@@ -147,7 +147,7 @@ def gregory_patches(mesh: QuadMesh, normals: NDArray[np.float64], tangents: Tang
     x = mesh.vertices
     star, cosine = tangent_stars(mesh, normals, tangents)
     star /= 3.0  # edge point offsets t_j / 3
-    slot_out, slot_in = _halfedge_slots(topology)
+    slot_out, slot_in = halfedge_slots(topology)
     following = faces[:, _NEXT]
 
     points = np.empty((count, 20, 3))
@@ -196,7 +196,7 @@ def gregory_patches(mesh: QuadMesh, normals: NDArray[np.float64], tangents: Tang
     return GregoryPatchSet(points)
 
 
-def _halfedge_slots(topology: QuadTopology) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+def halfedge_slots(topology: QuadTopology) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Ring slot (see :func:`tangent_stars`) of each half-edge A → B at A, and of B → A at B.
 
     The reverse of a boundary half-edge is the last slot of its target: the virtual ring edge k.

@@ -1,0 +1,444 @@
+"""Exact G1 with polynomial patches only: the 2×2-split bicubic network (polynomial-g1.md).
+
+Every quad f is split at its edge midpoints M and its centre C into four bicubic Bézier
+sub-patches; sub-patch ``4 f + k`` sits at corner k. Inside the quad the four pieces join C1,
+so each quad is one bicubic B-spline patch with knots ``[0,0,0,0,½,½,1,1,1,1]`` in u and v
+(:func:`bspline_nets`). On every refined edge (half mesh edge V–M or seam M–C) from S to E with
+sub-patches P, Q on either side the symmetric G1 form
+
+    D_P(t) + D_Q(t) = Φ(t) c'(t),   Φ(0) = λ_S,  Φ(1) = −λ_E                          (G1)
+
+holds, λ being the star coefficient of the end vertex for that edge (``t_left + t_right = λ t``).
+In Bézier coefficients (``δ_k`` cross row − curve point, ``d_k`` curve differences) it is
+
+    δP_0 + δQ_0 = λ_S d_0,   δP_1 + δQ_1 = (2 Φ0 d_1 + Φ1 d_0)/3,   and the mirror at E,
+
+so G1 is a star plus a twist system at every refined vertex:
+
+* original vertex v: the regular star of :func:`~g1patch.construct.gregory.tangent_stars`
+  (λ_v = 2 c_v), half-edge points ``P1 = v + T/6``; twists ``F_{j−1} + F_j = R_j`` with
+  ``R_j = 2 P1_j + (2 λ_v (P2_j − P1_j) − m_j (P1_j − v))/3``, ``m_j = λ(M_j → v)``;
+* midpoint M of edge X → Y: sheared star ``t_L + t_R = μ t_X`` (μ = λ(M → X), λ(M → Y) = −μ),
+  compatible iff ``D (5 μ + c_X − c_Y) = 2 μ (P1 − P5)`` for ``D = P2 − P4`` (:func:`_edge_curves`);
+* centre C: a plain cross (λ = 0), so every seam is C1.
+
+Even-valence twist cycles are singular: at valence 4 they need equal λ from opposite ring
+edges, so μ is carried along grid lines (:func:`_chain_shears`); at even valence ≥ 6 they need
+``Σ_j (−1)^j P2_j = Σ_j (−1)^j m_j t_j / (6 λ_v)``, met by moving whole midpoints
+(:func:`_even_vertex_shifts`). Every twist is the minimum-norm change of a bilinear target
+that solves its vertex system (a pseudo-inverse per system size). Work is done in centred,
+unit-scaled coordinates and mapped back.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.sparse import coo_matrix, csc_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.sparse.linalg import spsolve
+
+from ..errors import ConstructionError, InputError, check_choice
+from ..mesh import QuadMesh, QuadTopology
+from ..network import PatchNetwork
+from ..patches import PatchSet
+from .corner import TANGENTS, TangentRule, fan_normals
+from .gregory import halfedge_slots, tangent_stars
+
+__all__ = ["BSPLINE_KNOTS", "bspline_nets", "build_split4_network", "macro_nets", "split4_patches"]
+
+#: knots of each quad's B-spline patch, in u and in v
+BSPLINE_KNOTS = np.array([0.0, 0.0, 0.0, 0.0, 0.5, 0.5, 1.0, 1.0, 1.0, 1.0])
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+# Frame of corner k: point (p, q) of the 7×7 macro net, p along edge k, q back along edge k − 1.
+# _LOCAL[k, p, q] = (i, j) in sub-patch k's own 4×4 Bézier net, for p, q ∈ 0..3.
+_P, _Q = np.meshgrid(np.arange(4), np.arange(4), indexing="ij")
+_LOCAL = np.stack(
+    [np.stack([_P, _Q], -1), np.stack([3 - _Q, _P], -1), np.stack([3 - _P, 3 - _Q], -1), np.stack([_Q, 3 - _P], -1)]
+)
+_SUB_ORIGIN = np.array([[0, 0], [3, 0], [3, 3], [0, 3]])  # (s, t)·3: where sub-patch k sits in the 7×7 net
+_SAFEGUARD = 0.577  # seams stay ≳ 30° off the edge tangent at a midpoint (polynomial-g1.md §3.6)
+
+
+def _unit(v: FloatArray) -> FloatArray:
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
+    return np.einsum("...d,...d->...", a, b)
+
+
+def _chain_shears(topology: QuadTopology, cosine: FloatArray, x_of: IntArray, y_of: IntArray) -> FloatArray:
+    """μ_e = λ(M_e → X_e) per edge, constant in size and alternating in sign along grid lines.
+
+    Nodes ``2e + s`` are the ends of interior edge e (s = 0 at X, 1 at Y) and carry
+    λ(M_e → that end). A node pair inside an edge has opposite λ; the two nodes of a grid line at
+    an interior valence-4 vertex (ring edges j and j + 2) have equal λ. Signs come from the
+    connected components of the signed double cover (copy n carries +, copy n + 2E carries −; an
+    equal link joins like copies, an opposite link unlike ones), which also labels the lines in
+    linear time. The size is set at a line's dominant end, the end with the largest
+    ``|c_end − c_next|``, to λ = −(c_end − c_next), making δ = ½ there and δ ∈ [⅓, ½] everywhere.
+    Closed lines (all valence 4) get μ = 0.
+    """
+    n_edges = topology.n_edges
+    nodes = 2 * n_edges
+    interior = ~topology.is_boundary_edge
+    through = ~topology.is_boundary_vertex & (topology.valence == 4)
+    ring = topology.ring_halfedges
+    ring_edge = topology.halfedge_edge[ring]
+    ring_node = 2 * ring_edge + (topology.edge_halfedges[ring_edge, 0] != ring)
+    at_through = ring_node.reshape(-1)[np.repeat(through, topology.face_count)].reshape(-1, 4)
+    same = np.concatenate([at_through[:, [0, 2]], at_through[:, [1, 3]]])
+    inner = np.flatnonzero(interior)
+    flip = np.stack([2 * inner, 2 * inner + 1], axis=1)
+    rows = np.concatenate([same[:, 0], same[:, 0] + nodes, flip[:, 0], flip[:, 0] + nodes])
+    cols = np.concatenate([same[:, 1], same[:, 1] + nodes, flip[:, 1] + nodes, flip[:, 1]])
+    graph = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(2 * nodes, 2 * nodes))
+    _, cover = connected_components(graph, directed=False)
+    chain = np.minimum(cover[:nodes], cover[nodes:])
+
+    vertex = np.stack([x_of, y_of], axis=1).reshape(-1)  # vertex of node 2e + s
+    other = np.stack([y_of, x_of], axis=1).reshape(-1)
+    ends = np.flatnonzero(np.repeat(interior, 2) & ~through[vertex])
+    gap = cosine[vertex[ends]] - cosine[other[ends]]
+    order = np.lexsort((ends, -np.abs(gap), chain[ends]))
+    _, first = np.unique(chain[ends[order]], return_index=True)
+    dominant = ends[order[first]]
+    value = np.zeros(nodes)
+    head_of_chain = np.full(nodes, -1, dtype=np.int64)
+    head_of_chain[chain[dominant]] = dominant
+    value[dominant] = -gap[order[first]]
+    head = head_of_chain[chain]
+    on_path = head >= 0
+    anchor = np.where(on_path, head, 0)
+    sign = np.where(cover[:nodes] == cover[anchor], 1.0, -1.0)
+    lam = np.where(on_path, sign * value[anchor], 0.0)
+    return lam[0::2]
+
+
+def _edge_curves(
+    x: FloatArray, y: FloatArray, t_xy: FloatArray, t_yx: FloatArray, mu: FloatArray, c_x: FloatArray, c_y: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Edge points ``(P1, P2, M, P4, P5)`` of each edge X → Y.
+
+    The full cubic ``X, X + T_XY/3, Y + T_YX/3, Y`` is halved at its de Casteljau midpoint M,
+    ``P1 = X + T_XY/6``, ``P5 = Y + T_YX/6``; then ``P2 = M + D/2``, ``P4 = M − D/2`` with
+    ``D = δ (P1 − P5)``, ``δ = 2 μ / (5 μ + c_X − c_Y)`` (½ where μ = 0, the plain halving).
+    """
+    p1 = x + t_xy / 6.0
+    p5 = y + t_yx / 6.0
+    m = 0.5 * (x + y) + (t_xy + t_yx) / 8.0
+    sheared = mu != 0.0
+    delta = np.full(len(mu), 0.5)
+    delta[sheared] = 2.0 * mu[sheared] / (5.0 * mu[sheared] + c_x[sheared] - c_y[sheared])
+    half = 0.5 * delta[:, None] * (p1 - p5)
+    return p1, m + half, m, m - half, p5
+
+
+def _even_vertex_shifts(
+    topology: QuadTopology, lam: FloatArray, points: FloatArray, slope: FloatArray, v_pos: FloatArray
+) -> tuple[IntArray, FloatArray]:
+    """Midpoint shifts s_e (min-norm) so that every interior vertex of even valence n ≥ 6 satisfies
+    ``Σ_j (−1)^j (P2_j + s_{e_j}) = Σ_j (−1)^j m_j t_j / (6 λ_v)``, ``t_j = 3 (P1_j − v)``.
+
+    ``points[h]`` = (P1, P2) of ring half-edge h from its origin, ``slope[h]`` = m. With the
+    sign matrix A (vertices × edges), ``s = Aᵀ (A Aᵀ)⁻¹ r``: one sparse solve, block-diagonal over
+    clusters of adjacent even vertices. Returns the moved edges and their shifts.
+    """
+    even = ~topology.is_boundary_vertex & (topology.valence >= 6) & (topology.valence % 2 == 0)
+    vs = np.flatnonzero(even)
+    if not vs.size:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 3))
+    counts = topology.face_count[vs]
+    starts = topology.ring_offsets[vs]
+    slot = np.repeat(starts - np.cumsum(np.r_[0, counts[:-1]]), counts) + np.arange(counts.sum())
+    ring = topology.ring_halfedges[slot]
+    row = np.repeat(np.arange(vs.size), counts)
+    alternating = 1.0 - 2.0 * ((slot - topology.ring_offsets[vs][row]) % 2)
+    origin = v_pos[vs][row]
+    p1, p2 = points[ring, 0], points[ring, 1]
+    terms = alternating[:, None] * (slope[ring, None] * 3.0 * (p1 - origin) / (6.0 * lam[vs][row, None]) - p2)
+    residual = np.add.reduceat(terms, np.r_[0, np.cumsum(counts[:-1])])
+    edge = topology.halfedge_edge[ring]
+    moved, column = np.unique(edge, return_inverse=True)
+    a = csc_matrix((alternating, (row, column)), shape=(vs.size, moved.size))
+    normal = (a @ a.T).tocsc()
+    y = np.asarray(spsolve(normal, residual)).reshape(vs.size, 3)
+    shift = np.asarray(a.T @ y)
+    if not np.isfinite(shift).all() or np.abs(a @ shift - residual).max() > 1e-9 * (1.0 + np.abs(residual).max()):
+        raise ConstructionError(
+            f"split4: the even-valence midpoint system of {vs.size} vertices (valence ≥ 6) is singular: "
+            "a cluster of adjacent even-valence vertices has no neighbour outside it"
+        )
+    return moved, shift
+
+
+def _min_norm(matrix: FloatArray, rhs: FloatArray, target: FloatArray) -> FloatArray:
+    """``τ + B⁺ (b − B τ) = [I − B⁺B, B⁺] [τ; b]`` for batches: target (g, n, 3), rhs (g, m, 3),
+    B (m, n); one matrix product over all coordinates of the batch."""
+    inverse = np.linalg.pinv(matrix)
+    operator = np.concatenate([np.eye(matrix.shape[1]) - inverse @ matrix, inverse], axis=1)
+    stacked = np.concatenate([target, rhs], axis=1).transpose(0, 2, 1)  # (g, 3, n + m)
+    return (stacked @ operator.T).transpose(0, 2, 1)
+
+
+def _cycle(n: int, closed: bool) -> FloatArray:
+    """Equations ``F_{j−1} + F_j`` (rows j = 0..n−1 closed; j = 1..n−1 open) over n unknowns."""
+    rows = np.arange(n) if closed else np.arange(1, n)
+    matrix = np.zeros((len(rows), n))
+    matrix[np.arange(len(rows)), rows] = 1.0
+    matrix[np.arange(len(rows)), (rows - 1) % n] += 1.0
+    return matrix
+
+
+_MIDPOINT = np.array([[1.0, 1, 0, 0], [0, 0, 1, 1], [1, 0, 1, 0], [0, 1, 0, 1]])  # (LX, RX, LY, RY)
+
+
+def split4_patches(
+    mesh: QuadMesh, normals: FloatArray, tangents: TangentRule = "arc"
+) -> tuple[PatchSet, FloatArray, FloatArray]:
+    """The 4 F Bézier sub-patches (sub-patch ``4 f + k`` at corner k of face f), and the positions
+    and unit surface normals of the edge midpoints and face centres, each stacked as (E + F, 3).
+    The normal at M is N_M (the seam and curve tangents there are ⊥ N_M); at C it is
+    ``(M_0 − M_2) × (M_1 − M_3)``, the cross of the centre's star.
+
+    Built in coordinates ``(x − centre) / scale`` (bounding box) and mapped back; the sub-patch
+    corners at mesh vertices are set to the input positions exactly.
+    """
+    topology = mesh.topology
+    n_faces = topology.n_faces
+    low, high = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
+    centre, scale = 0.5 * (low + high), float(np.linalg.norm(high - low)) or 1.0
+    pos = (mesh.vertices - centre) / scale
+    star, cosine = tangent_stars(mesh.with_vertices(pos), normals, tangents)
+    slot_out, slot_in = halfedge_slots(topology)
+    lam = 2.0 * cosine
+
+    # -- edges: canonical half-edge X → Y (face L), twin Y → X (face R)
+    h_l = topology.edge_halfedges[:, 0]
+    h_r = topology.edge_halfedges[:, 1]
+    interior = h_r >= 0
+    x_of, y_of = topology.origin(h_l), topology.target(h_l)
+    mu = _chain_shears(topology, cosine, x_of, y_of)
+    curve = np.stack(
+        _edge_curves(pos[x_of], pos[y_of], star[slot_out[h_l]], star[slot_in[h_l]], mu, cosine[x_of], cosine[y_of]), axis=1
+    )  # (E, 5, 3): P1, P2, M, P4, P5
+    p1, p2, m, p4, p5 = (curve[:, i] for i in range(5))
+    del star
+
+    halfedges = np.arange(4 * n_faces)
+    edge_of = topology.halfedge_edge
+    canonical = h_l[edge_of] == halfedges
+    slope = np.where(canonical, mu[edge_of], -mu[edge_of])  # m = λ(M → origin(h))
+
+    flat_curve = curve.reshape(-1, 3)
+
+    def on_side(at_x: int, at_y: int, origin_side: NDArray[np.bool_]) -> FloatArray:
+        """Per half-edge, curve point ``at_x`` of its edge when ``origin_side`` is the X side, else ``at_y``."""
+        return flat_curve[5 * edge_of + np.where(origin_side, at_x, at_y)]
+
+    near = np.stack([on_side(0, 4, canonical), on_side(1, 3, canonical)], axis=1)
+    moved, shift = _even_vertex_shifts(topology, lam, near, slope, pos)
+    curve[moved, 1:4] += shift[:, None]
+    o1, o2 = on_side(0, 4, canonical), on_side(1, 3, canonical)  # from the origin of h
+    d1, d2 = on_side(0, 4, ~canonical), on_side(1, 3, ~canonical)  # from the target of h
+    del near
+
+    # -- centres and their plain cross: C = Σ M / 2 − Σ V / 4, b_k = C + (M_k − M_{k+2}) / 6
+    mids = m[edge_of].reshape(n_faces, 4, 3)
+    centres = 0.5 * mids.sum(axis=1) - 0.25 * pos[topology.faces].sum(axis=1)
+    b = centres[:, None] + (mids - np.roll(mids, -2, axis=1)) / 6.0
+
+    # -- midpoint stars: t_L + t_R = μ t_X, seam points e = M + t/3
+    t_x = 3.0 * (p2 - m)
+    n_m = normals[x_of] + normals[y_of]
+    n_m -= (_dot(n_m, t_x) / _dot(t_x, t_x))[:, None] * t_x
+    across = _unit(np.cross(t_x, n_m))  # towards face L
+    length_x = np.linalg.norm(t_x, axis=1)
+    floor = _SAFEGUARD * np.maximum(0.5 * np.abs(mu) * length_x, 0.25 * length_x)
+    c_l = centres[h_l >> 2]
+    c_r = centres[np.where(interior, h_r, h_l) >> 2]
+    spread = np.where(interior, 0.5 * _dot(c_l - c_r, across), _dot(c_l - m, across))
+    a = np.maximum(spread, floor)[:, None] * across
+    shear = 0.5 * mu[:, None] * t_x
+    e_l = m + (a + shear) / 3.0
+    e_r = m + (shear - a) / 3.0
+    seam = np.where(canonical[:, None], e_l[edge_of], e_r[edge_of])  # into the face of h
+    del t_x, across, c_l, c_r, spread, floor, a, shear
+
+    # -- assemble everything but the twists, sub-patch k in the frame of corner k
+    prev = QuadTopology.prev(halfedges)
+    m_h = m[edge_of]
+    control = np.empty((n_faces, 4, 4, 4, 3))
+
+    def put(p: int, q: int, values: FloatArray) -> None:
+        """Point (p, q) of the corner frames of half-edges 4f+k, values (4F, 3), into sub-patches k."""
+        by_corner = values.reshape(n_faces, 4, 3)
+        for k in range(4):
+            control[:, k, _LOCAL[k, p, q, 0], _LOCAL[k, p, q, 1]] = by_corner[:, k]
+
+    b_flat = b.reshape(-1, 3)
+    corner_points = pos[topology.faces.reshape(-1)]
+    centre_points = np.repeat(centres, 4, axis=0)
+    m_prev, d1_prev, d2_prev, seam_prev, b_prev = m_h[prev], d1[prev], d2[prev], seam[prev], b_flat[prev]
+    del d1, d2
+    for (p, q), values in (
+        ((0, 0), corner_points), ((1, 0), o1), ((2, 0), o2), ((3, 0), m_h),
+        ((0, 1), d1_prev), ((0, 2), d2_prev), ((0, 3), m_prev),
+        ((3, 1), seam), ((3, 2), b_flat), ((3, 3), centre_points),
+        ((1, 3), seam_prev), ((2, 3), b_prev),
+    ):
+        put(p, q, values)
+
+    # twist targets τ = e1 + e2 − c ± w at the corners V, MID[k], MID[k−1], C of each sub-patch,
+    # w = (V − M_k + C − M_{k−1}) / 9 (the bilinear term, + at V and C, − at the midpoints)
+    w = (corner_points - m_h + centre_points - m_prev) / 9.0
+    twist = np.empty((4 * n_faces, 4, 3))  # targets, replaced in place by the solved twists
+    twist[:, 0] = o1 + d1_prev - corner_points + w
+    twist[:, 1] = o2 + seam - m_h - w
+    twist[:, 2] = d2_prev + seam_prev - m_prev - w
+    twist[:, 3] = b_flat + b_prev - centre_points + w
+    del w, m_h, m_prev, d1_prev, d2_prev, seam_prev, b_prev, centre_points
+
+    # -- original vertices: F_{j−1} + F_j = R_j over the interior ring edges
+    origin = topology.faces.reshape(-1)
+    rhs = 2.0 * o1 + (2.0 * lam[origin, None] * (o2 - o1) - slope[:, None] * (o1 - pos[origin])) / 3.0
+    del o1, o2, seam
+    boundary = topology.is_boundary_vertex
+    groups = np.unique(np.stack([boundary, topology.face_count], axis=1), axis=0)
+    for is_open, n in groups:
+        vs = np.flatnonzero((boundary == is_open) & (topology.face_count == n))
+        ring = topology.ring_halfedges[topology.ring_offsets[vs][:, None] + np.arange(n)]
+        equations = _cycle(int(n), closed=not is_open)
+        if equations.size:
+            rows = ring if not is_open else ring[:, 1:]
+            twist[ring, 0] = _min_norm(equations, rhs[rows], twist[ring, 0])
+
+    # -- midpoints: G_LX + G_RX = A_X, G_LY + G_RY = A_Y, G_LX + G_LY = 2 e_L, G_RX + G_RY = 2 e_R
+    inner = np.flatnonzero(interior)
+    a_x = 2.0 * p2 + (lam[x_of, None] * (m - p2) - 2.0 * mu[:, None] * (p2 - p1)) / 3.0
+    a_y = 2.0 * p4 + (lam[y_of, None] * (m - p4) + 2.0 * mu[:, None] * (p4 - p5)) / 3.0
+    hl, hr = h_l[inner], h_r[inner]
+    sides_h = (hl, QuadTopology.next(hr), QuadTopology.next(hl), hr)
+    kinds = (1, 2, 2, 1)
+    unknowns = np.stack([twist[h, kind] for h, kind in zip(sides_h, kinds)], axis=1)
+    sides = np.stack([a_x[inner], a_y[inner], 2.0 * e_l[inner], 2.0 * e_r[inner]], axis=1)
+    solved = _min_norm(_MIDPOINT, sides, unknowns)
+    for column, (h, kind) in enumerate(zip(sides_h, kinds)):
+        twist[h, kind] = solved[:, column]
+    outer = np.flatnonzero(~interior)
+    pair = (h_l[outer], QuadTopology.next(h_l[outer]))
+    unknowns = np.stack([twist[pair[0], 1], twist[pair[1], 2]], axis=1)
+    solved = _min_norm(np.ones((1, 2)), 2.0 * e_l[outer, None], unknowns)
+    twist[pair[0], 1], twist[pair[1], 2] = solved[:, 0], solved[:, 1]
+
+    # -- centres: K_k + K_{k+1} = 2 b_k (the C1 parallelogram rule)
+    twist[:, 3] = _min_norm(_cycle(4, closed=True), 2.0 * np.roll(b, 1, axis=1), twist[:, 3].reshape(-1, 4, 3)).reshape(-1, 3)
+    for kind, (p, q) in enumerate(((1, 1), (2, 1), (1, 2), (2, 2))):
+        put(p, q, twist[:, kind])
+    del twist, rhs
+
+    # -- back to the input coordinates; corners at mesh vertices exact
+    control *= scale
+    control += centre
+    corner = _LOCAL[:, 0, 0]
+    control[:, np.arange(4), corner[:, 0], corner[:, 1]] = mesh.vertices[topology.faces]
+    extra = np.concatenate([m, centres]) * scale + centre
+    extra_normals = np.concatenate([_unit(n_m), _unit(np.cross(mids[:, 0] - mids[:, 2], mids[:, 1] - mids[:, 3]))])
+    return PatchSet(control.reshape(-1, 4, 4, 3)), extra, extra_normals
+
+
+def macro_nets(control: FloatArray) -> FloatArray:
+    """The (F, 7, 7, 3) macro nets of sub-patch controls (4F, 4, 4, 3) (sub-patch 4f+k at corner k)."""
+    sub = control.reshape(-1, 4, 4, 4, 3)
+    nets = np.empty((sub.shape[0], 7, 7, 3))
+    for k, (a, b) in enumerate(_SUB_ORIGIN):
+        nets[:, a:a + 4, b:b + 4] = sub[:, k]
+    return nets
+
+
+def bspline_nets(source: PatchNetwork | PatchSet) -> FloatArray:
+    """Per-quad bicubic B-spline nets (F, 6, 6, 3), knots :data:`BSPLINE_KNOTS` in u and v.
+
+    The macro net minus its row and column 3: those hold exact midpoints of their neighbours
+    (the pieces join C1), which is what a double knot at ½ encodes.
+    """
+    patches = source.patches if isinstance(source, PatchNetwork) else source
+    if not isinstance(patches, PatchSet) or patches.form != "bezier" or len(patches) % 4:
+        raise InputError("bspline_nets: expected the Bézier sub-patches of a split4 network (4 per quad)")
+    keep = np.array([0, 1, 2, 4, 5, 6])
+    return np.ascontiguousarray(macro_nets(patches.control)[:, keep][:, :, keep])
+
+
+def _split4_network(
+    topology: QuadTopology, patches: PatchSet, points: FloatArray, point_normals: FloatArray, provenance: dict[str, str]
+) -> PatchNetwork:
+    """Connectivity of the 4 F sub-patches. Sub-patch k of face f has local corner k at V_k,
+    k+1 at MID[k], k+2 at C, k+3 at MID[k−1]; its local edge k is the first half of half-edge
+    h = 4f+k, edge k+1 seam k (M_k → C), edge k+2 seam k−1 reversed, edge k+3 the second half of
+    prev(h). Edge ids: 2e (X half), 2e+1 (Y half) of mesh edge e, then 2E + 4f + k for seams.
+    """
+    n_faces, n_edges, nv = topology.n_faces, topology.n_edges, topology.n_vertices
+    h = np.arange(4 * n_faces).reshape(n_faces, 4)  # half-edge k = sub-patch k of face f
+    k = np.arange(4)
+    prev = QuadTopology.prev(h)
+    role = (k[None, :] - k[:, None]) % 4  # [sub-patch k, local edge l] → role (l − k) % 4
+    twin = topology.twin
+    canonical = topology.edge_halfedges[topology.halfedge_edge, 0] == np.arange(4 * n_faces)
+    edge = topology.halfedge_edge
+
+    corner = np.empty((n_faces, 4, 4), dtype=np.int64)  # [f, sub-patch, local corner]
+    by_role = [topology.faces, nv + edge[h], np.broadcast_to(nv + n_edges + np.arange(n_faces)[:, None], h.shape), nv + edge[prev]]
+    edge_id = np.empty_like(corner)
+    reversed_ = np.empty(corner.shape, dtype=bool)
+    neighbor = np.empty_like(corner)
+    neighbor_edge = np.empty_like(corner)
+    seam = 2 * n_edges + h
+    for r in range(4):
+        rows = np.nonzero(role == r)  # (sub-patch, local edge) pairs with this role
+        corner[:, rows[0], rows[1]] = by_role[r][:, rows[0]]
+    first_half = 2 * edge[h] + ~canonical[h]
+    second_half = 2 * edge[prev] + canonical[prev]
+    twin_h, twin_prev = twin[h], twin[prev]
+    cases = [
+        (first_half, ~canonical[h], np.where(twin_h >= 0, QuadTopology.next(twin_h), -1), twin_h & 3),
+        (seam, np.zeros(h.shape, bool), 4 * (h >> 2) + (k + 1) % 4, np.broadcast_to((k + 3) % 4, h.shape)),
+        (seam[:, (k - 1) % 4], np.ones(h.shape, bool), 4 * (h >> 2) + (k - 1) % 4, np.broadcast_to(k, h.shape)),
+        (second_half, ~canonical[prev], twin_prev, twin_prev & 3),
+    ]
+    for r, (ids, rev, other, other_edge) in enumerate(cases):
+        rows = np.nonzero(role == r)
+        edge_id[:, rows[0], rows[1]] = ids[:, rows[0]]
+        reversed_[:, rows[0], rows[1]] = rev[:, rows[0]]
+        neighbor[:, rows[0], rows[1]] = np.where(other >= 0, other, -1)[:, rows[0]]
+        neighbor_edge[:, rows[0], rows[1]] = np.where(other >= 0, other_edge, -1)[:, rows[0]]
+    shape = (4 * n_faces, 4)
+    return PatchNetwork(
+        patches=patches,
+        corner_ids=corner.reshape(shape),
+        edge_ids=edge_id.reshape(shape),
+        edge_reversed=reversed_.reshape(shape),
+        neighbor=neighbor.reshape(shape),
+        neighbor_edge=neighbor_edge.reshape(shape),
+        same_direction=np.zeros(shape, dtype=bool),
+        edge_collapsed=np.zeros(2 * n_edges + 4 * n_faces, dtype=bool),
+        vertices=points,
+        vertex_normals=point_normals,
+        provenance=provenance,
+    )
+
+
+def build_split4_network(mesh: QuadMesh, *, tangents: TangentRule = "arc") -> PatchNetwork:
+    """The 2×2-split bicubic network of ``mesh``: polynomial, exactly G1 on mesh edges and seams,
+    C1 inside each quad, interpolating the mesh vertices (module docstring)."""
+    check_choice("tangents", tangents, TANGENTS)
+    normals = fan_normals(mesh)
+    patches, extra, extra_normals = split4_patches(mesh, normals, tangents)
+    provenance = {"method": "split4", "tangents": tangents}
+    if mesh.source:
+        provenance["source"] = str(mesh.source)
+    points, point_normals = np.concatenate([mesh.vertices, extra]), np.concatenate([normals, extra_normals])
+    return _split4_network(mesh.topology, patches, points, point_normals, provenance)
