@@ -21,7 +21,7 @@ from . import __version__
 from .errors import FormatError, G1PatchError
 
 EXIT_OK, EXIT_CHECK_FAILED, EXIT_ERROR = 0, 1, 2
-METHODS = ("gregory", "corner")
+METHODS = ("gregory", "split4", "corner")
 MESH_SUFFIXES = (".obj", ".ply", ".stl")
 CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
 
@@ -29,6 +29,7 @@ _EXAMPLES = {
     "build": """examples:
   g1patch build mesh.obj -o surface.npz                  # exact G1 (Gregory), the default
   g1patch build cube.obj -o cube.npz --method corner     # the paper's corner-G1 patches
+  g1patch build mesh.obj -o cad.npz --method split4      # exact G1, polynomial: exact in STEP
   g1patch build mesh.off -o surface.npz --tangents chord""",
     "check": """examples:
   g1patch check surface.npz
@@ -70,7 +71,8 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("mesh", type=Path, help="input quad mesh")
     build.add_argument("-o", "--output", type=Path, required=True, help="network file to write (.npz)")
     build.add_argument("--method", choices=METHODS, default="gregory",
-                       help="gregory: exact G1 everywhere (default); corner: the paper's, G1 at corners only")
+                       help="gregory: exact G1, rational interiors (default); split4: exact G1 with polynomial "
+                            "bicubics, exact in STEP; corner: the paper's, G1 at corners only")
     build.add_argument("--tangents", choices=TANGENTS, default="arc", help="corner tangent lengths (default: arc)")
     build.add_argument("--twist", choices=TWISTS, default="bilinear", help="corner method: twist vectors (default: bilinear)")
     build.add_argument("--normals", choices=NORMALS, default="fan", help="corner method: vertex normals (default: fan)")
@@ -139,11 +141,15 @@ def _load_surface(path: Path) -> Any:
 
 
 def build_network(mesh: Any, method: str, *, tangents: str = "arc", twist: str = "bilinear", normals: str = "fan") -> Any:
-    """The network of ``mesh`` by ``method`` (``gregory`` or ``corner``)."""
+    """The network of ``mesh`` by ``method`` (``gregory``, ``split4`` or ``corner``)."""
     if method == "corner":
         from .construct.corner import build_corner_network
 
         return build_corner_network(mesh, tangents=tangents, twist=twist, normals=normals)  # type: ignore[arg-type]
+    if method == "split4":
+        from .construct.split4 import build_split4_network
+
+        return build_split4_network(mesh, tangents=tangents)  # type: ignore[arg-type]
     from .construct.gregory import build_gregory_network
 
     return build_gregory_network(mesh, tangents=tangents)  # type: ignore[arg-type]
@@ -239,6 +245,7 @@ def _render(args: argparse.Namespace) -> int:
 def _demo(args: argparse.Namespace) -> int:
     from .construct.corner import build_corner_network
     from .construct.gregory import build_gregory_network
+    from .construct.split4 import build_split4_network
     from .continuity import check, format_reports
     from .io.meshfile import read_mesh, write_triangles
     from .patches import CORNER_PARAMETERS, polynomial_degree, unit
@@ -249,6 +256,7 @@ def _demo(args: argparse.Namespace) -> int:
         mesh = read_mesh(cube_path)
     corner = build_corner_network(mesh, tangents="arc", twist="coons")
     gregory = build_gregory_network(mesh, tangents="arc")
+    split4 = build_split4_network(mesh, tangents="arc")
     print("The paper's example: the cube [-1, 1]^3, valence 3 at every corner, smoothed into a")
     print("sphere-like surface.\n")
     print("1. The paper's construction: bicubic Hermite patches whose corner tangents satisfy")
@@ -261,26 +269,28 @@ def _demo(args: argparse.Namespace) -> int:
     diagonal, anti = hermite.diagonal_polynomials()
     print(f"   Degrees of its diagonal and anti-diagonal: {int(polynomial_degree(diagonal)[0])} and "
           f"{int(polynomial_degree(anti)[0])} (S-/HS closure |C| = {np.linalg.norm(hermite.closure()[0]):.1e}).")
-    print("2. g1patch's default: the interpolating Gregory network, G1 along every edge.\n")
-    corner_report, gregory_report = check(corner), check(gregory)
-    print(format_reports([corner_report, gregory_report], ["paper (corner G1)", "g1patch (Gregory, exact G1)"]))
+    print("2. g1patch's default: the interpolating Gregory network, G1 along every edge.")
+    print("3. g1patch's polynomial option: 2x2 bicubic pieces per quad, G1 everywhere, exact in CAD.\n")
+    corner_report, gregory_report, split4_report = check(corner), check(gregory), check(split4)
+    print(format_reports([corner_report, gregory_report, split4_report],
+                         ["1. paper (corner G1)", "2. Gregory (exact G1)", "3. split4 (exact G1)"]))
     radius = np.linalg.norm(gregory.patches.evaluate_grid(np.linspace(0, 1, 17)), axis=-1)
     print("\nThe paper's conditions hold at the corners (angle ~1e-14°) but its patches crease along every")
-    print(f"edge by {corner_report.max_edge_angle_deg:.1f}°; the Gregory surface is G1 everywhere "
-          f"(max {max(gregory_report.max_edge_angle_deg, gregory_report.max_corner_angle_deg):.1e}°), "
-          f"radius {radius.min():.4f}..{radius.max():.4f} (√3 = 1.7321).")
+    print(f"edge by {corner_report.max_edge_angle_deg:.1f}°; the Gregory and split4 surfaces are G1 everywhere "
+          f"(max {max(gregory_report.max_edge_angle_deg, split4_report.max_edge_angle_deg):.1e}°);")
+    print(f"Gregory radius {radius.min():.4f}..{radius.max():.4f} (√3 = 1.7321).")
 
     args.out.mkdir(parents=True, exist_ok=True)
     written = []
-    for name, network in (("cube_corner", corner), ("cube_gregory", gregory)):
+    for name, network in (("cube_corner", corner), ("cube_gregory", gregory), ("cube_split4", split4)):
         surface = tessellate(network, 33)
         write_triangles(args.out / f"{name}.obj", surface.points, surface.triangles)
         written.append(args.out / f"{name}.obj")
-    titles = ["paper: corner G1 (creased)", "g1patch: Gregory (exact G1)"]
+    titles = ["paper: corner G1 (creased)", "Gregory (exact G1)", "split4 (exact G1, polynomial)"]
     for mode in ("zebra", "deviation"):
         path = args.out / f"cube_{mode}.png"
-        render_side_by_side(path, [corner, gregory], titles, mode=mode, size=(1400, 700),
-                            reports=[corner_report, gregory_report] if mode == "deviation" else None)
+        render_side_by_side(path, [corner, gregory, split4], titles, mode=mode, size=(1800, 640),
+                            reports=[corner_report, gregory_report, split4_report] if mode == "deviation" else None)
         written.append(path)
     print("\nwrote " + ", ".join(str(path) for path in written))
     return EXIT_OK
