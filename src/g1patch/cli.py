@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -234,7 +234,7 @@ def _render(args: argparse.Namespace) -> int:
 
     if args.output.suffix.lower() != ".png":
         raise FormatError(args.output, "pictures are written as .png")
-    mode = "zebra" if args.zebra else "deviation" if args.deviation else "shaded"
+    mode: Literal["shaded", "zebra", "deviation"] = "zebra" if args.zebra else "deviation" if args.deviation else "shaded"
     network = _load_surface(args.network)
     render(args.output, network, mode=mode, size=tuple(args.size), view=tuple(args.view), up=args.up, zoom=args.zoom,
            title=f"{args.network.name}: {mode}")
@@ -248,7 +248,7 @@ def _demo(args: argparse.Namespace) -> int:
     from .construct.split4 import build_split4_network
     from .continuity import check, format_reports
     from .io.meshfile import read_mesh, write_triangles
-    from .patches import CORNER_PARAMETERS, polynomial_degree, unit
+    from .patches import CORNER_PARAMETERS, PatchSet, polynomial_degree, unit
     from .render import render_side_by_side
     from .tessellate import tessellate
 
@@ -262,6 +262,7 @@ def _demo(args: argparse.Namespace) -> int:
     print("1. The paper's construction: bicubic Hermite patches whose corner tangents satisfy")
     print("   n^T p_u = n^T p_v = 0 (eq. 13), with S-/HS-patch (Coons) twists.")
     hermite = corner.patches
+    assert isinstance(hermite, PatchSet)  # the corner construction makes Hermite bicubics
     normals = unit(np.cross(*hermite.tangents(CORNER_PARAMETERS)))[0]
     print("   Patch 0 (face 0), unit corner normals p_u x p_v:")
     for vertex, normal in zip(mesh.faces[0], normals, strict=True):
