@@ -371,3 +371,15 @@ def test_unknown_tangent_rule() -> None:
 def test_bspline_nets_needs_split4_pieces() -> None:
     with pytest.raises(InputError, match="bspline_nets"):
         bspline_nets(PatchSet(np.zeros((3, 4, 4, 3))))
+
+
+def test_blocked_assembly_does_not_depend_on_the_block_size(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The sub-patch controls are assembled in blocks of faces: any block size (one face, a
+    partial last block, all faces at once) gives bit-identical controls."""
+    from g1patch.construct import split4
+
+    mesh = perturbed(shapes.fan(5, 2), NOISE, 9)  # open, with boundary vertices
+    reference = build_split4_network(mesh).patches.control
+    for block in (1, 7, 4 * mesh.topology.n_faces):
+        monkeypatch.setattr(split4, "_BLOCK", block)
+        np.testing.assert_array_equal(build_split4_network(mesh).patches.control, reference)

@@ -176,13 +176,20 @@ def _even_vertex_shifts(
     return moved, shift
 
 
+_GROUPS = 32768  # systems per block in _min_norm
+
+
 def _min_norm(matrix: FloatArray, rhs: FloatArray, target: FloatArray) -> FloatArray:
     """``τ + B⁺ (b − B τ) = [I − B⁺B, B⁺] [τ; b]`` for batches: target (g, n, 3), rhs (g, m, 3),
     B (m, n); one matrix product over all coordinates of the batch."""
     inverse = np.linalg.pinv(matrix)
     operator = np.concatenate([np.eye(matrix.shape[1]) - inverse @ matrix, inverse], axis=1)
-    stacked = np.concatenate([target, rhs], axis=1).transpose(0, 2, 1)  # (g, 3, n + m)
-    return (stacked @ operator.T).transpose(0, 2, 1)
+    out = np.empty(target.shape)
+    for g0 in range(0, len(target), _GROUPS):  # in blocks of groups: the temporaries stay in cache
+        g1 = g0 + _GROUPS
+        stacked = np.concatenate([target[g0:g1], rhs[g0:g1]], axis=1).transpose(0, 2, 1)  # (g, 3, n + m)
+        out[g0:g1] = (stacked @ operator.T).transpose(0, 2, 1)
+    return out
 
 
 def _cycle(n: int, closed: bool) -> FloatArray:
@@ -195,6 +202,49 @@ def _cycle(n: int, closed: bool) -> FloatArray:
 
 
 _MIDPOINT = np.array([[1.0, 1, 0, 0], [0, 0, 1, 1], [1, 0, 1, 0], [0, 1, 0, 1]])  # (LX, RX, LY, RY)
+
+
+# Sources of the assembly, per half-edge h = 4f + k: 0 V, 1..7 the points of _assemble's
+# ``points`` (P1, P2 and M from the origin, P1 and P2 from the target, the seam point into f, b),
+# 8 C, 9..12 the twists at V, MID[k], MID[k−1], C. _FRAME[p, q] = (source, from prev(h)).
+_FRAME = {
+    (0, 0): (0, False), (1, 0): (1, False), (2, 0): (2, False), (3, 0): (3, False),
+    (0, 1): (4, True), (0, 2): (5, True), (0, 3): (3, True),
+    (3, 1): (6, False), (3, 2): (7, False), (3, 3): (8, False), (1, 3): (6, True), (2, 3): (7, True),
+    (1, 1): (9, False), (2, 1): (10, False), (1, 2): (11, False), (2, 2): (12, False),
+}
+_N_SOURCES = 13
+_PICK = np.empty((4, 4, 4), dtype=np.int64)  # [k, i, j] → row (corner kk) · 13 + source
+for (_p, _q), (_s, _from_prev) in _FRAME.items():
+    for _k in range(4):
+        _PICK[_k, _LOCAL[_k, _p, _q, 0], _LOCAL[_k, _p, _q, 1]] = ((_k - _from_prev) % 4) * _N_SOURCES + _s
+_GATHER = (3 * _PICK.reshape(-1, 1) + np.arange(3)).reshape(-1)  # per coordinate: 8-byte copies
+_BLOCK = 1024  # faces per assembly block: sources and output stay in cache
+
+
+def _assemble(
+    points: tuple[FloatArray, ...], centres: FloatArray, twist: FloatArray, corners: FloatArray, scale: float, centre: FloatArray
+) -> FloatArray:
+    """The (F, 4, 4, 4, 3) sub-patch controls from per-half-edge sources, in blocks of faces:
+    every point ``x · scale + centre`` except the corners at mesh vertices, which are ``corners``."""
+    n_faces = len(centres)
+    control = np.empty((n_faces, 4, 4, 4, 3))
+    flat = control.reshape(n_faces, 192)
+    sources = np.empty((_BLOCK, 4, _N_SOURCES, 3))
+    for f0 in range(0, n_faces, _BLOCK):
+        f1 = min(f0 + _BLOCK, n_faces)
+        nb, h0, h1 = f1 - f0, 4 * f0, 4 * f1
+        block = sources[:nb]
+        for s, values in enumerate(points, start=1):
+            block[:, :, s] = values[h0:h1].reshape(nb, 4, 3)
+        block[:, :, 8] = centres[f0:f1, None]
+        block[:, :, 9:] = twist[h0:h1].reshape(nb, 4, 4, 3)
+        block[:, :, 1:] *= scale
+        block[:, :, 1:] += centre
+        block[:, :, 0] = corners[f0:f1]
+        # mode "wrap": indices are in range; the default "raise" buffers ``out`` on every call
+        np.take(block.reshape(nb, 12 * _N_SOURCES), _GATHER, axis=1, out=flat[f0:f1], mode="wrap")
+    return control
 
 
 def split4_patches(
@@ -269,47 +319,30 @@ def split4_patches(
     seam = np.where(canonical[:, None], e_l[edge_of], e_r[edge_of])  # into the face of h
     del t_x, across, c_l, c_r, spread, floor, a, shear
 
-    # -- assemble everything but the twists, sub-patch k in the frame of corner k
+    # -- twist targets τ = e1 + e2 − c ± w at the corners V, MID[k], MID[k−1], C of each sub-patch,
+    # w = (V − M_k + C − M_{k−1}) / 9 (the bilinear term, + at V and C, − at the midpoints)
     prev = QuadTopology.prev(halfedges)
     m_h = m[edge_of]
-    control = np.empty((n_faces, 4, 4, 4, 3))
-
-    def put(p: int, q: int, values: FloatArray) -> None:
-        """Point (p, q) of the corner frames of half-edges 4f+k, values (4F, 3), into sub-patches k."""
-        by_corner = values.reshape(n_faces, 4, 3)
-        for k in range(4):
-            control[:, k, _LOCAL[k, p, q, 0], _LOCAL[k, p, q, 1]] = by_corner[:, k]
-
     b_flat = b.reshape(-1, 3)
     corner_points = pos[topology.faces.reshape(-1)]
     centre_points = np.repeat(centres, 4, axis=0)
-    m_prev, d1_prev, d2_prev, seam_prev, b_prev = m_h[prev], d1[prev], d2[prev], seam[prev], b_flat[prev]
-    del d1, d2
-    for (p, q), values in (
-        ((0, 0), corner_points), ((1, 0), o1), ((2, 0), o2), ((3, 0), m_h),
-        ((0, 1), d1_prev), ((0, 2), d2_prev), ((0, 3), m_prev),
-        ((3, 1), seam), ((3, 2), b_flat), ((3, 3), centre_points),
-        ((1, 3), seam_prev), ((2, 3), b_prev),
-    ):
-        put(p, q, values)
-
-    # twist targets τ = e1 + e2 − c ± w at the corners V, MID[k], MID[k−1], C of each sub-patch,
-    # w = (V − M_k + C − M_{k−1}) / 9 (the bilinear term, + at V and C, − at the midpoints)
+    m_prev = m_h[prev]
     w = (corner_points - m_h + centre_points - m_prev) / 9.0
     twist = np.empty((4 * n_faces, 4, 3))  # targets, replaced in place by the solved twists
-    twist[:, 0] = o1 + d1_prev - corner_points + w
+    twist[:, 0] = o1 + d1[prev] - corner_points + w
     twist[:, 1] = o2 + seam - m_h - w
-    twist[:, 2] = d2_prev + seam_prev - m_prev - w
-    twist[:, 3] = b_flat + b_prev - centre_points + w
-    del w, m_h, m_prev, d1_prev, d2_prev, seam_prev, b_prev, centre_points
+    twist[:, 2] = d2[prev] + seam[prev] - m_prev - w
+    twist[:, 3] = b_flat + b_flat[prev] - centre_points + w
+    del w, m_prev, centre_points
 
     # -- original vertices: F_{j−1} + F_j = R_j over the interior ring edges
     origin = topology.faces.reshape(-1)
     rhs = 2.0 * o1 + (2.0 * lam[origin, None] * (o2 - o1) - slope[:, None] * (o1 - pos[origin])) / 3.0
-    del o1, o2, seam
+    del corner_points
     boundary = topology.is_boundary_vertex
-    groups = np.unique(np.stack([boundary, topology.face_count], axis=1), axis=0)
-    for is_open, n in groups:
+    base = int(topology.face_count.max()) + 1
+    keys = np.unique(boundary.astype(np.int64) * base + topology.face_count)
+    for is_open, n in zip(keys // base, keys % base):
         vs = np.flatnonzero((boundary == is_open) & (topology.face_count == n))
         ring = topology.ring_halfedges[topology.ring_offsets[vs][:, None] + np.arange(n)]
         equations = _cycle(int(n), closed=not is_open)
@@ -337,15 +370,13 @@ def split4_patches(
 
     # -- centres: K_k + K_{k+1} = 2 b_k (the C1 parallelogram rule)
     twist[:, 3] = _min_norm(_cycle(4, closed=True), 2.0 * np.roll(b, 1, axis=1), twist[:, 3].reshape(-1, 4, 3)).reshape(-1, 3)
-    for kind, (p, q) in enumerate(((1, 1), (2, 1), (1, 2), (2, 2))):
-        put(p, q, twist[:, kind])
-    del twist, rhs
+    del rhs
 
-    # -- back to the input coordinates; corners at mesh vertices exact
-    control *= scale
-    control += centre
-    corner = _LOCAL[:, 0, 0]
-    control[:, np.arange(4), corner[:, 0], corner[:, 1]] = mesh.vertices[topology.faces]
+    # -- sub-patch k in the frame of corner k, back to the input coordinates, corners exact
+    control = _assemble(
+        (o1, o2, m_h, d1, d2, seam, b_flat), centres, twist, mesh.vertices[topology.faces], scale, centre
+    )
+    del o1, o2, m_h, d1, d2, seam, twist
     extra = np.concatenate([m, centres]) * scale + centre
     extra_normals = np.concatenate([_unit(n_m), _unit(np.cross(mids[:, 0] - mids[:, 2], mids[:, 1] - mids[:, 3]))])
     return PatchSet(control.reshape(-1, 4, 4, 3)), extra, extra_normals
