@@ -136,3 +136,34 @@ def test_blocks_do_not_change_the_report() -> None:
     whole, blocked = check(network), check(network, chunk=7)
     assert whole.to_dict() == blocked.to_dict()
     np.testing.assert_array_equal(whole.edge_angle_deg, blocked.edge_angle_deg)
+
+
+def test_planar_vector_algebra_equals_the_interleaved_numpy_formulas() -> None:
+    # The measures run on planar (3, ...) arrays; they must give the numbers of np.cross,
+    # np.linalg.norm and np.einsum on interleaved (..., 3) arrays (today bit for bit; allowed:
+    # a different summation order, 4 eps of |a||b| for 3-term sums).
+    from g1patch.continuity import _angle3, _cross3, _dot3, _norm3, _planar
+
+    rng = np.random.default_rng(4)
+    a = rng.normal(size=(50, 33, 3)) * 10.0 ** rng.integers(-8, 9, size=(50, 33, 3))
+    b = rng.normal(size=(50, 33, 3)) * 10.0 ** rng.integers(-8, 9, size=(50, 33, 3))
+    pa, pb = _planar(a), _planar(b)
+    scale = np.linalg.norm(a, axis=-1) * np.linalg.norm(b, axis=-1)
+    tolerance = 4 * EPS * scale
+    assert (np.abs(np.moveaxis(_cross3(pa, pb), 0, -1) - np.cross(a, b)).max(axis=-1) <= tolerance).all()
+    np.testing.assert_allclose(_norm3(pa), np.linalg.norm(a, axis=-1), rtol=4 * EPS, atol=0)
+    assert (np.abs(_dot3(pa, pb) - np.einsum("...d,...d->...", a, b)) <= tolerance).all()
+    reference = np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.einsum("...d,...d->...", a, b)))
+    # an angle moves by at most (error of cross or dot) / (|a||b|) radians
+    np.testing.assert_allclose(_angle3(pa, pb), reference, rtol=0, atol=np.degrees(16 * EPS))
+    np.testing.assert_allclose(angle_between(a, b), reference, rtol=0, atol=np.degrees(16 * EPS))
+
+
+def test_angle_between_broadcasts_and_keeps_the_batch_shape() -> None:
+    rng = np.random.default_rng(5)
+    a, b = rng.normal(size=(4, 7, 3)), rng.normal(size=(7, 3))
+    angles = angle_between(a, b)
+    assert angles.shape == (4, 7)
+    np.testing.assert_array_equal(angles[2], angle_between(a[2], b))
+    assert angle_between(np.array([1.0, 0, 0]), np.array([0, 2.0, 0])).shape == ()
+    assert float(angle_between(np.array([1.0, 0, 0]), np.array([0, 2.0, 0]))) == 90.0
