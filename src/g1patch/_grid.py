@@ -101,20 +101,9 @@ def positions_and_normals(
     normals_out: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Positions and unit normals ``p_u × p_v / |p_u × p_v|`` on the grid ``u × v`` (zero where degenerate)."""
-    n, gu, gv = control.shape[0], u.shape[0], v.shape[0]
-    out = _check_out("out", out, (n, gu, gv, 3))
-    normals_out = _check_out("normals_out", normals_out, (n, gu, gv, 3))
-    if out.size:
-        _run(
-            control,
-            basis_values(form, u),
-            basis_values(form, u, 1),
-            basis_values(form, v),
-            basis_values(form, v, 1),
-            out,
-            normals_out,
-        )
-    return out, normals_out
+    shape = (control.shape[0], u.shape[0], v.shape[0], 3)
+    out = _check_out("out", out, shape)
+    return out, _normals_into(control, form, u, v, out, normals_out)
 
 
 def normals(
@@ -125,19 +114,25 @@ def normals(
     out: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """Unit normals on the grid ``u × v``, ``(N, Gu, Gv, 3)``; zero where ``p_u × p_v = 0``."""
-    n, gu, gv = control.shape[0], u.shape[0], v.shape[0]
-    out = _check_out("out", out, (n, gu, gv, 3))
-    if out.size:
-        _run(
-            control,
-            basis_values(form, u),
-            basis_values(form, u, 1),
-            basis_values(form, v),
-            basis_values(form, v, 1),
-            None,
-            out,
-        )
-    return out
+    return _normals_into(control, form, u, v, None, out)
+
+
+def _normals_into(
+    control: NDArray[np.float64],
+    form: Form,
+    u: NDArray[np.float64],
+    v: NDArray[np.float64],
+    positions: NDArray[np.float64] | None,
+    normals_out: NDArray[np.float64] | None,
+) -> NDArray[np.float64]:
+    """Unit normals into ``normals_out`` (allocated when None), and positions too when given."""
+    normals_out = _check_out("normals_out" if positions is not None else "out", normals_out,
+                             (control.shape[0], u.shape[0], v.shape[0], 3))
+    if normals_out.size:
+        wu, dwu = basis_values(form, u), basis_values(form, u, 1)
+        wv, dwv = basis_values(form, v), basis_values(form, v, 1)
+        _run(control, wu, dwu, wv, dwv, positions, normals_out)
+    return normals_out
 
 
 def _run(
