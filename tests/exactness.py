@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from hypothesis import strategies as st
 
 from g1patch import shapes
 from g1patch.continuity import ContinuityReport
@@ -57,3 +58,12 @@ def assert_exact_g1(report: ContinuityReport, folds: bool = True) -> None:
     assert report.degenerate_normals == 0
     if folds:
         assert report.folds == 0
+
+
+@st.composite
+def noisy_generated_meshes(draw: st.DrawFn) -> tuple[QuadMesh, str]:
+    """A generated shape of a drawn kind and size, with drawn vertex noise, and a tangent rule."""
+    shape = draw(st.sampled_from(sorted(GENERATED)))
+    mesh = GENERATED[shape](draw(st.integers(0, 59)))
+    noisy = perturbed(mesh, draw(st.floats(0.0, NOISE)), draw(st.integers(0, 2**32 - 1)))
+    return noisy, draw(st.sampled_from(["chord", "arc"]))

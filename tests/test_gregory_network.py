@@ -24,11 +24,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 from exactness import (
-    GENERATED,
     NOISE,
     SHARED_MESHES,
     assert_exact_g1,
     height,
+    noisy_generated_meshes,
     perturbed,
 )
 from hypothesis import given, settings
@@ -88,15 +88,9 @@ def test_perturbed_spot_is_exactly_g1(shared_data: Path) -> None:
 
 
 @settings(deadline=None, max_examples=150)
-@given(
-    st.sampled_from(sorted(GENERATED)),
-    st.integers(0, 59),
-    st.floats(0.0, NOISE),
-    st.integers(0, 2**32 - 1),
-    st.sampled_from(["chord", "arc"]),
-)
-def test_generated_meshes_are_exactly_g1(shape: str, size: int, amplitude: float, seed: int, tangents: str) -> None:
-    mesh = perturbed(GENERATED[shape](size), amplitude, seed)
+@given(noisy_generated_meshes())
+def test_generated_meshes_are_exactly_g1(drawn: tuple[QuadMesh, str]) -> None:
+    mesh, tangents = drawn
     assert_exact_g1(check(build_gregory_network(mesh, tangents=tangents)))  # type: ignore[arg-type]
 
 
