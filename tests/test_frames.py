@@ -1,0 +1,156 @@
+"""Vertex frames: exact on spheres, O(h³)-type normals on smooth meshes, fan normal where the fit is not trusted."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from g1patch import shapes
+from g1patch.construct.corner import fan_normals
+from g1patch.mesh import QuadMesh
+from g1patch.targets.frames import MAX_TILT, VertexFrames, vertex_frames
+
+AXES = np.array([1.0, 0.7, 0.5])
+
+
+def angle_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("vd,vd->v", a, b)))
+
+
+def tangent_projector(n: np.ndarray) -> np.ndarray:
+    return np.eye(3) - n[:, :, None] * n[:, None, :]
+
+
+def ellipsoid(level: int) -> tuple[QuadMesh, np.ndarray]:
+    mesh = shapes.cube_sphere(level)
+    x = mesh.vertices * AXES
+    n = x / AXES**2
+    return mesh.with_vertices(x), n / np.linalg.norm(n, axis=1, keepdims=True)
+
+
+def torus(n_major: int, n_minor: int, R: float = 2.0, r: float = 0.7) -> tuple[QuadMesh, np.ndarray, np.ndarray]:
+    """The mesh, exact normals and exact shape operators (principal curvatures 1/r and cos φ/(R + r cos φ))."""
+    mesh = shapes.torus(n_major, n_minor, R, r)
+    u = np.repeat(np.linspace(0.0, 2.0 * np.pi, n_major, endpoint=False), n_minor)
+    phi = np.tile(np.linspace(0.0, 2.0 * np.pi, n_minor, endpoint=False), n_major)
+    n = np.stack([np.cos(phi) * np.cos(u), np.cos(phi) * np.sin(u), np.sin(phi)], axis=1)
+    t_u = np.stack([-np.sin(u), np.cos(u), 0.0 * u], axis=1)
+    t_phi = np.stack([-np.sin(phi) * np.cos(u), -np.sin(phi) * np.sin(u), np.cos(phi)], axis=1)
+    s = (t_phi[:, :, None] * t_phi[:, None, :] / r
+         + (np.cos(phi) / (R + r * np.cos(phi)))[:, None, None] * t_u[:, :, None] * t_u[:, None, :])
+    return mesh, n, s
+
+
+def goes_once_around(mesh: QuadMesh, v: int, n: np.ndarray) -> bool:
+    """The ring edges of interior vertex ``v`` projected on the plane ⊥ n turn CCW and once around."""
+    d = mesh.vertices[mesh.topology.one_ring(v)] - mesh.vertices[v]
+    e1 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(n, e1)
+    angles = np.arctan2(d @ e2, d @ e1)
+    turns = (np.diff(np.append(angles, angles[0])) + np.pi) % (2.0 * np.pi) - np.pi
+    return bool((turns > 0).all() and abs(turns.sum() - 2.0 * np.pi) < 1e-9)
+
+
+def check_invariants(frames: VertexFrames) -> None:
+    n, s = frames.normals, frames.shape_operator
+    assert np.isfinite(n).all() and np.isfinite(s).all()
+    np.testing.assert_allclose(np.linalg.norm(n, axis=1), 1.0, atol=1e-14)
+    np.testing.assert_allclose(s, s.transpose(0, 2, 1), atol=1e-14)
+    np.testing.assert_allclose(np.einsum("vij,vj->vi", s, n), 0.0, atol=1e-12 * max(1.0, np.abs(s).max()))
+
+
+@pytest.mark.parametrize("level", range(5))
+def test_sphere_is_exact(level: int) -> None:
+    mesh = shapes.cube_sphere(level)  # level 0: the cube's 8 valence-3 vertices on the sphere
+    frames = vertex_frames(mesh)
+    check_invariants(frames)
+    assert frames.fitted.all() and not frames.repaired.any()
+    np.testing.assert_allclose(frames.normals, mesh.vertices, atol=1e-12)
+    np.testing.assert_allclose(frames.shape_operator, tangent_projector(mesh.vertices), atol=1e-12)
+
+
+def test_cube_on_a_moved_sphere_of_radius_3() -> None:
+    unit = shapes.cube_sphere(0).vertices
+    frames = vertex_frames(shapes.cube_sphere(0).with_vertices(3.0 * unit + [5.0, -2.0, 1.0]))
+    assert frames.fitted.all()
+    np.testing.assert_allclose(frames.normals, unit, atol=1e-12)
+    np.testing.assert_allclose(frames.shape_operator, tangent_projector(unit) / 3.0, atol=1e-12)
+
+
+def test_ellipsoid_normals_converge_at_order_two_or_more_and_beat_the_fan() -> None:
+    error, fan_error = [], []
+    for level in (2, 3, 4):
+        mesh, exact = ellipsoid(level)
+        frames = vertex_frames(mesh)
+        check_invariants(frames)
+        error.append(angle_deg(frames.normals, exact).max())
+        fan_error.append(angle_deg(fan_normals(mesh), exact).max())
+    order = np.log2(np.array(error[:-1]) / np.array(error[1:]))
+    assert (order >= 2.0).all(), (error, order)
+    assert error[1] < fan_error[1] / 5 and error[2] < fan_error[2] / 20, (error, fan_error)
+
+
+def test_torus_normals_and_shape_operator_converge() -> None:
+    normal_error, shape_error = [], []
+    for n_major, n_minor in ((24, 12), (48, 24), (96, 48)):
+        mesh, exact_n, exact_s = torus(n_major, n_minor)
+        frames = vertex_frames(mesh)
+        check_invariants(frames)
+        normal_error.append(angle_deg(frames.normals, exact_n).max())
+        shape_error.append(np.abs(frames.shape_operator - exact_s).max())
+    assert normal_error[0] > normal_error[1] > normal_error[2] and normal_error[2] < 0.01, normal_error
+    assert shape_error[0] > shape_error[1] > shape_error[2] and shape_error[2] < 0.02, shape_error
+
+
+def test_coarse_torus_keeps_the_fan_normal() -> None:
+    """12 × 6 quads on r = 0.25: the 2-ring fit is off by up to 4°, the (symmetric) fan normal exact."""
+    mesh, exact_n, _ = torus(12, 6, 1.0, 0.25)
+    frames = vertex_frames(mesh)
+    assert not frames.fitted.any()
+    np.testing.assert_array_equal(frames.normals, fan_normals(mesh))
+    assert angle_deg(frames.normals, exact_n).max() < 1e-10
+
+
+@pytest.mark.parametrize("mesh", [shapes.grid(5, 4), shapes.fan(5, 2), shapes.boundary_fan(3), shapes.strip(4)],
+                         ids=["grid", "fan", "boundary_fan", "strip"])
+def test_flat_meshes_have_normal_z_and_no_curvature(mesh: QuadMesh) -> None:
+    frames = vertex_frames(mesh)
+    np.testing.assert_array_equal(frames.normals, np.broadcast_to([0.0, 0.0, 1.0], frames.normals.shape))
+    np.testing.assert_array_equal(frames.shape_operator, 0.0)
+
+
+def test_curved_open_grid() -> None:
+    mesh = shapes.grid(8, 8, height=lambda x, y: 0.3 * x * x - 0.2 * y * y + 0.1 * x * y)
+    frames = vertex_frames(mesh)
+    check_invariants(frames)
+    assert frames.fitted[~mesh.topology.is_boundary_vertex].all()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_noisy_coarse_sphere(seed: int) -> None:
+    mesh = shapes.cube_sphere(1)
+    shortest = np.linalg.norm(np.diff(mesh.vertices[mesh.topology.edges], axis=1), axis=-1).min()
+    noise = np.random.default_rng(seed).uniform(-1.0, 1.0, mesh.vertices.shape) * 0.08 * shortest
+    mesh = mesh.with_vertices(mesh.vertices + noise)
+    frames = vertex_frames(mesh)
+    check_invariants(frames)
+    fan = fan_normals(mesh)
+    kept = ~frames.fitted & ~frames.repaired
+    np.testing.assert_array_equal(frames.normals[kept], fan[kept])
+    assert (angle_deg(frames.normals[frames.fitted], fan[frames.fitted]) <= MAX_TILT).all()
+    for v in range(mesh.n_vertices):
+        assert goes_once_around(mesh, v, frames.normals[v])
+
+
+def test_folded_ring_is_repaired() -> None:
+    """One long, steep edge (towards −y) tilts the fan normal until the short ring edges fold over."""
+    mesh = shapes.grid(2, 2, size=(2.0, 2.0))
+    x = mesh.vertices - [1.0, 1.0, 0.0]
+    x[[1, 3, 5, 7]] = [[0.0, -1.73, 2.167], [-0.398, 0.0, 0.657], [0.159, 0.0, 0.068], [0.0, 0.145, 0.133]]
+    mesh = mesh.with_vertices(x)
+    assert not goes_once_around(mesh, 4, fan_normals(mesh)[4])
+    frames = vertex_frames(mesh)
+    check_invariants(frames)
+    assert frames.repaired[4] and not frames.repaired[np.arange(9) != 4].any()
+    assert goes_once_around(mesh, 4, frames.normals[4])
