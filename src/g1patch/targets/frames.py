@@ -80,7 +80,7 @@ MIN_PIVOT = 1e-3  #: smallest relative Cholesky pivot of the g, h unknowns
 DROP_PIVOT = 1e-10  #: relative pivot below which a column is dropped from the fit
 ITERATIONS = 3
 CUBIC_POINTS = 12  #: fewest 2-ring points for the cubic term
-BLOCK = 8192  #: vertices per padded block
+BLOCK = 2048  #: vertices per padded block
 GILBERT_STEPS = 64
 
 
@@ -279,31 +279,40 @@ class _Fit:
 
 def _circle_fit(q: FloatArray, mask: BoolArray, edges: FloatArray, edge_mask: BoolArray,
                 n: FloatArray, cubic: bool, tilt: bool) -> _Fit:
-    """The circle-aware fit (module doc) of points ``q`` (3, b, m) relative to their vertex, padding ``mask`` (b, m).
+    """The circle-aware fit (module doc) of points ``q`` (b, 3, m) relative to their vertex, padding ``mask`` (b, m).
 
-    ``edges`` (3, b, k) are the ring edges for h̄. With ``tilt`` the normal ``n`` (b, 3) is refitted
+    ``edges`` (b, 3, k) are the ring edges for h̄. With ``tilt`` the normal ``n`` (b, 3) is refitted
     :data:`ITERATIONS` times, else held (g1, g2 left out, one pass). Columns: [x, y,] a x², 2a xy,
     a y² [, x³/6, x²y/2, xy²/2, y³/6] with a = ½(1 + z²/r²), coordinates in units of h̄.
     """
-    edge_length2 = np.einsum("dbk,dbk->bk", edges, edges)
+    edge_length2 = np.einsum("bdk,bdk->bk", edges, edges)
     count = edge_mask.sum(axis=1)
+    k = 3 + 2 * tilt + 4 * cubic
+    design = np.empty((q.shape[0], k, q.shape[2]))
     for _ in range(ITERATIONS if tilt else 1):
         e1, e2 = _frame(n)
-        height = np.einsum("dbk,bd->bk", edges, n)
+        height = np.matmul(n[:, None, :], edges)[:, 0]
         hbar = np.sqrt(np.sum(np.where(edge_mask, edge_length2 - height**2, 0.0), axis=1) / count)[:, None]
-        x, y, z = (np.einsum("dbm,bd->bm", q, e) / hbar for e in (e1, e2, n))
+        x, y, z = np.matmul(np.stack([e1, e2, n], axis=1) / hbar[:, :, None], q).transpose(1, 0, 2)
         xx, xy, yy = x * x, x * y, y * y
         r2 = xx + yy
         away = mask & (r2 > 1e-24)
         a = 0.5 + 0.5 * z * z / np.where(away, r2, 1.0)
         w = np.where(away, np.exp(-0.5 * r2), 0.0)
-        columns = ([x, y] if tilt else []) + [a * xx, 2.0 * a * xy, a * yy]
+        if tilt:
+            design[:, 0], design[:, 1] = x, y
+        h = 2 * tilt
+        np.multiply(a, xx, out=design[:, h])
+        np.multiply(2.0 * a, xy, out=design[:, h + 1])
+        np.multiply(a, yy, out=design[:, h + 2])
         if cubic:
-            columns += [xx * x / 6.0, xx * y / 2.0, x * yy / 2.0, yy * y / 6.0]
-        design = np.stack(columns, axis=1)  # (b, k, m)
+            np.multiply(xx, x / 6.0, out=design[:, h + 3])
+            np.multiply(xx, y / 2.0, out=design[:, h + 4])
+            np.multiply(yy, x / 2.0, out=design[:, h + 5])
+            np.multiply(yy, y / 6.0, out=design[:, h + 6])
         weighted = design * w[:, None, :]
         gram = np.ascontiguousarray(np.matmul(weighted, design.transpose(0, 2, 1)).transpose(1, 2, 0))
-        rhs = np.einsum("bkm,bm->kb", weighted, z)
+        rhs = np.matmul(weighted, z[:, :, None])[:, :, 0].T
         c, pivot = _solve(gram, rhs)
         residual = np.sqrt(np.maximum(np.sum(w * z * z, axis=1) - np.einsum("kb,kb->b", c, rhs), 0.0) / np.sum(w, axis=1))
         h11, h12, h22 = c[2 * tilt:2 * tilt + 3] / hbar[:, 0]
@@ -319,13 +328,12 @@ def _circle_fit(q: FloatArray, mask: BoolArray, edges: FloatArray, edge_mask: Bo
 def _fit_all(mesh: QuadMesh, ring: _Ring, hood: _Hood, vertices: IntArray, n: FloatArray,
              cubic: bool, tilt: bool, store: Callable[[IntArray, _Fit], None]) -> None:
     """:func:`_circle_fit` over ``vertices`` with neighbourhoods ``hood``, block by block, handing each to ``store``."""
-    x = np.ascontiguousarray(mesh.vertices.T)
-    d = np.ascontiguousarray(ring.d.T)
+    x = mesh.vertices
     for block in _blocks(vertices, hood.sizes):
         where, mask = _padded(block, hood.offsets)
-        q = x[:, hood.points[where]] - x[:, block, None]
+        q = (x[hood.points[where]] - x[block, None, :]).transpose(0, 2, 1)
         edge_where, edge_mask = _padded(block, ring.offsets)
-        store(block, _circle_fit(q, mask, d[:, edge_where], edge_mask, n[block], cubic, tilt))
+        store(block, _circle_fit(q, mask, ring.d[edge_where].transpose(0, 2, 1), edge_mask, n[block], cubic, tilt))
 
 
 def vertex_frames(mesh: QuadMesh) -> VertexFrames:
