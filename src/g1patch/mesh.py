@@ -518,13 +518,85 @@ def _edge_keys(corners: IntArray, sizes: IntArray, n_vertices: int) -> IntArray:
     return np.minimum(corners, target) * n_vertices + np.maximum(corners, target)
 
 
-def refine_polygons(vertices: FloatArray, corners: IntArray, sizes: IntArray) -> tuple[FloatArray, IntArray, IntArray]:
-    """One Catmull–Clark topology step with linear positions: every n-gon becomes n quads.
+#: an edge end whose tangent-plane projection is shorter than this fraction of the edge
+#: (the edge runs along the vertex normal) gets no smooth tangent: the edge keeps its midpoint
+_SPLIT_PARALLEL_TOLERANCE = 1e-6
+#: a fan normal shorter than this fraction of its corners' summed |cross products| counts as zero
+_SPLIT_NORMAL_TOLERANCE = 1e-12
 
-    New vertices: the old ones (same indices), then one per edge at its midpoint (``nv + e``, edges
-    sorted by vertex pair), then one per face at its centroid (``nv + ne + f``). Corner ``i`` of face
-    ``f`` becomes quad ``offsets[f] + i = (v_i, E(v_i v_{i+1}), F(f), E(v_{i-1} v_i))``,
+
+def _corner_normals(vertices: FloatArray, corners: IntArray, sizes: IntArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """Area-weighted fan normals ``N_v = Σ (v_next − v) × (v_prev − v)`` over v's corners, unit.
+
+    Vertices at the boundary take the same sum over their faces. Returns ``(normals, valid)``;
+    where ``|N_v| <= _SPLIT_NORMAL_TOLERANCE · Σ |cross|`` (or v has no corner) the normal is
+    zero and ``valid`` is False.
+    """
+    nv = vertices.shape[0]
+    following = _following_corner(sizes)
+    preceding = np.empty_like(following)
+    preceding[following] = np.arange(corners.size)
+    here = vertices[corners]
+    cross = np.cross(vertices[corners[following]] - here, vertices[corners[preceding]] - here)
+    summed = np.stack([np.bincount(corners, weights=cross[:, k], minlength=nv) for k in range(3)], axis=1)
+    scale = np.bincount(corners, weights=np.linalg.norm(cross, axis=1), minlength=nv)
+    length = np.linalg.norm(summed, axis=1)
+    valid = (length > _SPLIT_NORMAL_TOLERANCE * scale) & np.isfinite(length)
+    normals = np.zeros_like(summed)
+    normals[valid] = summed[valid] / length[valid, None]
+    return normals, valid
+
+
+def _edge_tangents(
+    d: FloatArray, normal: FloatArray, valid_normal: NDArray[np.bool_]
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """Circle-aware Hermite tangents of chords ``d`` at an end with unit ``normal``, batched.
+
+    Direction ``s = d − (N·d) N``, length ``L = |d| / cos²(θ/4)`` with ``sin(θ/2) = |N·d| / |d|``,
+    i.e. ``L = 2|d|² / (|d| + |s|)`` (the tangent of a circular arc through both ends, tangent
+    to the plane). Returns ``(tangents, ok)``; not ok (tangent zero) where the normal is invalid
+    or ``|s| <= _SPLIT_PARALLEL_TOLERANCE · |d|``.
+    """
+    s = d - np.einsum("ij,ij->i", d, normal)[:, None] * normal
+    in_plane = np.linalg.norm(s, axis=1)
+    chord = np.linalg.norm(d, axis=1)
+    ok = valid_normal & (in_plane > _SPLIT_PARALLEL_TOLERANCE * chord)
+    scale = np.zeros_like(chord)
+    scale[ok] = 2.0 * chord[ok] ** 2 / ((chord[ok] + in_plane[ok]) * in_plane[ok])
+    return s * scale[:, None], ok
+
+
+def _smooth_edge_points(
+    vertices: FloatArray, a: IntArray, b: IntArray, normals: FloatArray, valid: NDArray[np.bool_]
+) -> FloatArray:
+    """Midpoints of the cubic Hermite curves of edges a–b: ``(A + B)/2 + (t_AB + t_BA)/8``.
+
+    ``t_AB`` is A's tangent towards B, ``t_BA`` B's towards A (:func:`_edge_tangents`); an edge
+    that lacks a tangent at one of its ends keeps its chord midpoint.
+    """
+    d = vertices[b] - vertices[a]
+    t_ab, ok_a = _edge_tangents(d, normals[a], valid[a])
+    t_ba, ok_b = _edge_tangents(-d, normals[b], valid[b])
+    bend = np.where((ok_a & ok_b)[:, None], t_ab + t_ba, 0.0)
+    return 0.5 * (vertices[a] + vertices[b]) + 0.125 * bend
+
+
+def refine_polygons(
+    vertices: FloatArray, corners: IntArray, sizes: IntArray, *, smooth: bool = False
+) -> tuple[FloatArray, IntArray, IntArray]:
+    """One Catmull–Clark topology step: every n-gon becomes n quads.
+
+    New vertices: the old ones (same indices and positions), then one per edge (``nv + e``, edges
+    sorted by vertex pair), then one per face (``nv + ne + f``). Corner ``i`` of face ``f``
+    becomes quad ``offsets[f] + i = (v_i, E(v_i v_{i+1}), F(f), E(v_{i-1} v_i))``,
     counter-clockwise like its face. Returns ``(vertices, quads, parent_face)``.
+
+    Positions, linear (default): edge midpoints and face centroids. ``smooth``: on a surface
+    through the old vertices — edge points at the middle of the edges' circle-aware cubic
+    Hermite curves on area-weighted fan normals (:func:`_smooth_edge_points`), face points at the
+    Coons centre ``C = (2/n) Σ M_i − (1/n) Σ V_i`` of the face's corners ``V_i`` and edge points
+    ``M_i``. Both give midpoints and centroids on flat input. ``smooth`` expects a validated,
+    oriented manifold topology (:func:`_connect`).
     """
     nv = vertices.shape[0]
     offsets = np.concatenate([[0], np.cumsum(sizes)])
@@ -533,12 +605,20 @@ def refine_polygons(vertices: FloatArray, corners: IntArray, sizes: IntArray) ->
     preceding[_following_corner(sizes)] = np.arange(corners.size)
 
     edge_keys, corner_edge = np.unique(_edge_keys(corners, sizes, nv), return_inverse=True)
-    midpoints = 0.5 * (vertices[edge_keys // nv] + vertices[edge_keys % nv])
-    centroids = np.add.reduceat(vertices[corners], offsets[:-1], axis=0) / sizes[:, None]
+    a, b = edge_keys // nv, edge_keys % nv
+    corner_sums = np.add.reduceat(vertices[corners], offsets[:-1], axis=0)
+    if smooth:
+        normals, valid = _corner_normals(vertices, corners, sizes)
+        edge_points = _smooth_edge_points(vertices, a, b, normals, valid)
+        edge_sums = np.add.reduceat(edge_points[corner_edge], offsets[:-1], axis=0)
+        face_points = (2.0 * edge_sums - corner_sums) / sizes[:, None]
+    else:
+        edge_points = 0.5 * (vertices[a] + vertices[b])
+        face_points = corner_sums / sizes[:, None]
     quads = np.stack(
         [corners, nv + corner_edge, nv + edge_keys.size + corner_face, nv + corner_edge[preceding]], axis=1
     )
-    return np.concatenate([vertices, midpoints, centroids]), quads, corner_face
+    return np.concatenate([vertices, edge_points, face_points]), quads, corner_face
 
 
 def _check_tags(tags: Sequence[Tag], n_vertices: int, n_faces: int) -> None:
@@ -639,9 +719,10 @@ def _quads_from_polygons(
     if non_quads.size == 0:
         return points, corners.reshape(-1, 4), tags
     tags = _refine_tags(tags, corners, sizes, points.shape[0])
-    points, quads, _ = refine_polygons(points, corners, sizes)
+    points, quads, _ = refine_polygons(points, corners, sizes, smooth=True)
     logger.info(
-        "%s: %d of %d faces are not quads; refined the whole mesh once (every n-gon into n quads)",
+        "%s: %d of %d faces are not quads; refined the whole mesh once (every n-gon into n quads, "
+        "new points on a smooth surface through the vertices)",
         source or "mesh", non_quads.size, sizes.size,
     )
     return points, quads, tags
@@ -696,7 +777,8 @@ class QuadMesh:
         """Validate and build a quad mesh from positions and faces ((nf, 4) array or lists of indices).
 
         Unused vertices are dropped (one ``logging`` info line). If any face has 3 or ≥ 5 corners
-        the whole mesh is refined once (:func:`refine_polygons`) with ``split``, else a
+        the whole mesh is refined once (:func:`refine_polygons`, new points on a smooth surface
+        through the vertices) with ``split``, else a
         :class:`MeshError` is raised. Errors name ``source`` (a file name) when given.
         """
         with _named_errors(source):
