@@ -31,7 +31,7 @@ from typing import TypeVar
 
 from g1patch import shapes
 from g1patch.construct.corner import build_corner_network
-from g1patch.construct.gregory import build_gregory_network
+from g1patch.build import build_gregory_network
 from g1patch.continuity import check
 from g1patch.mesh import QuadMesh
 from g1patch.network import PatchNetwork

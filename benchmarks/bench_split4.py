@@ -28,8 +28,8 @@ import numpy as np
 from bench_build import timed, traced  # the same timing and tracing helpers, from beside this file
 
 from g1patch import shapes
-from g1patch.construct.gregory import build_gregory_network
-from g1patch.construct.split4 import build_split4_network
+from g1patch.build import build_gregory_network
+from g1patch.build import build_split4_network
 from g1patch.continuity import check
 from g1patch.mesh import QuadMesh, subdivide
 from g1patch.network import PatchNetwork

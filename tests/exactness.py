@@ -62,8 +62,8 @@ def assert_exact_g1(report: ContinuityReport, folds: bool = True) -> None:
 
 @st.composite
 def noisy_generated_meshes(draw: st.DrawFn) -> tuple[QuadMesh, str]:
-    """A generated shape of a drawn kind and size, with drawn vertex noise, and a tangent rule."""
+    """A generated shape of a drawn kind and size, with drawn vertex noise, and a shape rule."""
     shape = draw(st.sampled_from(sorted(GENERATED)))
     mesh = GENERATED[shape](draw(st.integers(0, 59)))
     noisy = perturbed(mesh, draw(st.floats(0.0, NOISE)), draw(st.integers(0, 2**32 - 1)))
-    return noisy, draw(st.sampled_from(["chord", "arc"]))
+    return noisy, draw(st.sampled_from(["interpolate", "legacy"]))

@@ -372,7 +372,7 @@ def test_step_export_of_fitted_non_polynomial_patches(tmp_path: Path) -> None:
 @pytest.mark.parametrize("name", ["cube", "torus_8_6", "catmark_torus"])
 def test_step_round_trip_of_gregory_networks(name: str, request: pytest.FixtureRequest, tmp_path: Path) -> None:
     """Rational Gregory patches are fitted: a valid closed solid within the export tolerance."""
-    from g1patch.construct.gregory import build_gregory_network
+    from g1patch.build import build_gregory_network
 
     data = request.getfixturevalue("shared_data") if name in SHARED else None
     network = build_gregory_network(CLOSED[name](data))
@@ -395,7 +395,7 @@ def test_step_round_trip_of_gregory_networks(name: str, request: pytest.FixtureR
 @pytest.mark.parametrize("name", ["catmark_cube", "spot"])
 def test_split4_step_export_is_the_surface_itself(name: str, request: pytest.FixtureRequest, tmp_path: Path) -> None:
     """Polynomial exact G1 (split4) survives STEP exactly: OCC's own normals agree across faces."""
-    from g1patch.construct.split4 import build_split4_network
+    from g1patch.build import build_split4_network
 
     network = build_split4_network(CLOSED[name](request.getfixturevalue("shared_data")))
     diagonal = network.bounding_box_diagonal()

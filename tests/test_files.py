@@ -92,7 +92,7 @@ def test_a_newer_format_version_is_refused(tmp_path: Path) -> None:
 
 
 def test_gregory_network_round_trip(tmp_path: Path) -> None:
-    from g1patch.construct.gregory import build_gregory_network
+    from g1patch.build import build_gregory_network
 
     network = build_gregory_network(shapes.torus(6, 4))
     save_network(tmp_path / "g.npz", network)

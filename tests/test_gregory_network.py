@@ -36,7 +36,8 @@ from hypothesis import strategies as st
 
 from g1patch import shapes
 from g1patch.construct.corner import build_corner_network, corner_tangents, fan_normals
-from g1patch.construct.gregory import build_gregory_network, tangent_stars
+from g1patch.build import build_gregory_network
+from g1patch.targets.interpolate import SHAPES, tangent_stars
 from g1patch.continuity import angle_between, check
 from g1patch.errors import ConstructionError, InputError
 from g1patch.gregory import GregoryPatchSet
@@ -53,12 +54,12 @@ INWARD = np.array([[0.0, 1.0], [-1.0, 0.0], [0.0, -1.0], [1.0, 0.0]])  # EDGE_DI
 
 # ------------------------------------------------------------------------------ shared meshes
 @pytest.mark.parametrize("name", SHARED_MESHES)
-@pytest.mark.parametrize("tangents", ["chord", "arc"])
-def test_shared_meshes_are_exactly_g1(shared_data: Path, name: str, tangents: str) -> None:
+@pytest.mark.parametrize("shape", SHAPES)
+def test_shared_meshes_are_exactly_g1(shared_data: Path, name: str, shape: str) -> None:
     mesh = read_mesh(shared_data / name)
-    network = build_gregory_network(mesh, tangents=tangents)  # type: ignore[arg-type]
+    network = build_gregory_network(mesh, shape=shape)  # type: ignore[arg-type]
     assert isinstance(network.patches, GregoryPatchSet)
-    assert network.provenance["method"] == "gregory" and network.provenance["tangents"] == tangents
+    assert network.provenance["method"] == "gregory" and network.provenance["shape"] == shape
     np.testing.assert_array_equal(network.patches.corners(), mesh.vertices[mesh.faces])
     assert_exact_g1(check(network))
 
@@ -68,15 +69,15 @@ def test_shared_meshes_are_exactly_g1(shared_data: Path, name: str, tangents: st
     st.sampled_from(SHARED_MESHES[:4]),
     st.floats(0.0, NOISE),
     st.integers(0, 2**32 - 1),
-    st.sampled_from(["chord", "arc"]),
+    st.sampled_from(SHAPES),
 )
-def test_perturbed_shared_meshes_are_exactly_g1(name: str, amplitude: float, seed: int, tangents: str) -> None:
+def test_perturbed_shared_meshes_are_exactly_g1(name: str, amplitude: float, seed: int, shape: str) -> None:
     from conftest import SHARED_DATA
 
     if not SHARED_DATA.is_dir():
         pytest.skip(f"external test data not found: {SHARED_DATA}")
     mesh = perturbed(read_mesh(SHARED_DATA / name), amplitude, seed)
-    assert_exact_g1(check(build_gregory_network(mesh, tangents=tangents)))  # type: ignore[arg-type]
+    assert_exact_g1(check(build_gregory_network(mesh, shape=shape)))  # type: ignore[arg-type]
 
 
 def test_perturbed_spot_is_exactly_g1(shared_data: Path) -> None:
@@ -90,8 +91,8 @@ def test_perturbed_spot_is_exactly_g1(shared_data: Path) -> None:
 @settings(deadline=None, max_examples=150)
 @given(noisy_generated_meshes())
 def test_generated_meshes_are_exactly_g1(drawn: tuple[QuadMesh, str]) -> None:
-    mesh, tangents = drawn
-    assert_exact_g1(check(build_gregory_network(mesh, tangents=tangents)))  # type: ignore[arg-type]
+    mesh, shape = drawn
+    assert_exact_g1(check(build_gregory_network(mesh, shape=shape)))  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("valence", range(3, 13))

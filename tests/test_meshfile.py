@@ -179,7 +179,7 @@ def test_obj_with_polygons_is_refined_once(tmp_path: Path, caplog) -> None:
     with caplog.at_level(logging.INFO, logger="g1patch"):
         mesh = read_mesh(path)
     assert [r.getMessage() for r in caplog.records] == [
-        f"{path}: 2 of 3 faces are not quads; refined the whole mesh once (every n-gon into n quads)"
+        f"{path}: 2 of 3 faces are not quads; refined the whole mesh once (every n-gon into n quads, new points on a smooth surface through the vertices)"
     ]
     assert (mesh.n_faces, mesh.n_vertices) == (12, 8 + 10 + 3)
     with pytest.raises(MeshError, match=r"mixed\.obj: 2 faces are not quads .* \(--no-split\)"):

@@ -173,7 +173,7 @@ def test_stripes_jump_across_creases_and_flow_across_g1_edges(corner_cube: Patch
 
 def test_gregory_cube_zebra_differs_from_the_corner_cube_along_the_edges(corner_cube: PatchNetwork, tmp_path: Path) -> None:
     """Same cube, same camera: the corner cube's stripes jump at every edge, Gregory's do not."""
-    from g1patch.construct.gregory import build_gregory_network
+    from g1patch.build import build_gregory_network
 
     gregory = build_gregory_network(shapes.cube())
     assert stripe_jumps(corner_cube).min() > 0.5

@@ -33,14 +33,10 @@ from scipy.interpolate import NdBSpline
 
 from g1patch import shapes
 from g1patch.construct.corner import fan_normals
-from g1patch.construct.gregory import build_gregory_network, tangent_stars
-from g1patch.construct.split4 import (
-    BSPLINE_KNOTS,
-    _chain_shears,
-    bspline_nets,
-    build_split4_network,
-    macro_nets,
-)
+from g1patch.build import build_gregory_network
+from g1patch.targets.interpolate import SHAPES, tangent_stars
+from g1patch.build import build_split4_network
+from g1patch.construct.split4 import BSPLINE_KNOTS, _chain_shears, bspline_nets, macro_nets
 from g1patch.continuity import ContinuityReport, check
 from g1patch.errors import G1PatchError, InputError
 from g1patch.io.meshfile import read_mesh
@@ -77,7 +73,7 @@ def collapsed(base: QuadMesh, picks: Sequence[int]) -> QuadMesh | None:
 
 
 def build_and_check(mesh: QuadMesh, tangents: str = "arc") -> ContinuityReport:
-    network = build_split4_network(mesh, tangents=tangents)  # type: ignore[arg-type]
+    network = build_split4_network(mesh, shape=shape)  # type: ignore[arg-type]
     check_consistent(network)
     topology = mesh.topology
     assert network.n_patches == 4 * topology.n_faces
@@ -89,26 +85,26 @@ def build_and_check(mesh: QuadMesh, tangents: str = "arc") -> ContinuityReport:
 
 # ------------------------------------------------------------------------------ shared meshes
 @pytest.mark.parametrize("name", SHARED_MESHES)
-@pytest.mark.parametrize("tangents", ["chord", "arc"])
-def test_shared_meshes_are_exactly_g1(shared_data: Path, name: str, tangents: str) -> None:
+@pytest.mark.parametrize("shape", SHAPES)
+def test_shared_meshes_are_exactly_g1(shared_data: Path, name: str, shape: str) -> None:
     mesh = read_mesh(shared_data / name)
-    network = build_split4_network(mesh, tangents=tangents)  # type: ignore[arg-type]
-    assert network.provenance["method"] == "split4" and network.provenance["tangents"] == tangents
+    network = build_split4_network(mesh, shape=shape)  # type: ignore[arg-type]
+    assert network.provenance["method"] == "split4" and network.provenance["shape"] == shape
     assert isinstance(network.patches, PatchSet) and network.patches.form == "bezier"
     corners = network.patches.control[:, [0, 3, 3, 0], [0, 0, 3, 3]].reshape(-1, 4, 4, 3)
     np.testing.assert_array_equal(corners[:, np.arange(4), np.arange(4)], mesh.vertices[mesh.faces])
-    assert_exact_g1(build_and_check(mesh, tangents))
+    assert_exact_g1(build_and_check(mesh, shape))
 
 
 @settings(deadline=None, max_examples=20)
-@given(st.sampled_from(SHARED_MESHES), st.floats(0.0, NOISE), st.integers(0, 2**32 - 1), st.sampled_from(["chord", "arc"]))
-def test_perturbed_shared_meshes_are_exactly_g1(name: str, amplitude: float, seed: int, tangents: str) -> None:
+@given(st.sampled_from(SHARED_MESHES), st.floats(0.0, NOISE), st.integers(0, 2**32 - 1), st.sampled_from(SHAPES))
+def test_perturbed_shared_meshes_are_exactly_g1(name: str, amplitude: float, seed: int, shape: str) -> None:
     from conftest import SHARED_DATA
 
     if not SHARED_DATA.is_dir():
         pytest.skip(f"external test data not found: {SHARED_DATA}")
     mesh = perturbed(read_mesh(SHARED_DATA / name), amplitude, seed)
-    assert_exact_g1(build_and_check(mesh, tangents))
+    assert_exact_g1(build_and_check(mesh, shape))
 
 
 # ------------------------------------------------------------------------------ generated meshes
@@ -117,8 +113,8 @@ def test_perturbed_shared_meshes_are_exactly_g1(name: str, amplitude: float, see
 @settings(deadline=None, max_examples=120)
 @given(noisy_generated_meshes())
 def test_generated_meshes_are_exactly_g1(drawn: tuple[QuadMesh, str]) -> None:
-    mesh, tangents = drawn
-    assert_exact_g1(build_and_check(mesh, tangents))
+    mesh, shape = drawn
+    assert_exact_g1(build_and_check(mesh, shape))
 
 
 @pytest.mark.parametrize("valence", range(3, 13))

@@ -50,6 +50,7 @@ _EXAMPLES = {
 
 def _parser() -> argparse.ArgumentParser:
     from .construct.corner import NORMALS, TANGENTS, TWISTS
+    from .targets.interpolate import SHAPES
 
     parser = argparse.ArgumentParser(
         prog="g1patch",
@@ -73,9 +74,13 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--method", choices=METHODS, default="gregory",
                        help="gregory: exact G1, rational interiors (default); split4: exact G1 with polynomial "
                             "bicubics, exact in STEP; corner: the paper's, G1 at corners only")
-    build.add_argument("--tangents", choices=TANGENTS, default="arc", help="corner tangent lengths (default: arc)")
-    build.add_argument("--twist", choices=TWISTS, default="bilinear", help="corner method: twist vectors (default: bilinear)")
-    build.add_argument("--normals", choices=NORMALS, default="fan", help="corner method: vertex normals (default: fan)")
+    build.add_argument("--shape", choices=SHAPES, default="interpolate",
+                       help="interpolate: fitted normals, flexible tangent fans, curvature-carrying twists (default); "
+                            "legacy: the first release's rules (fan normal, regular star, bilinear twist)")
+    build.add_argument("--tangents", choices=TANGENTS, default="arc", help="legacy shape: tangent lengths (default: arc)")
+    build.add_argument("--twist", choices=TWISTS, default="bilinear",
+                       help="corner method, legacy shape: twist vectors (default: bilinear)")
+    build.add_argument("--normals", choices=NORMALS, default="fan", help="corner method, legacy shape: vertex normals (default: fan)")
     build.add_argument("--no-split", action="store_true", help="reject faces that are not quads instead of splitting them")
 
     check = command("check", "measure G0/G1 continuity of a network (.npz) or a Bézier patch file (.bpt)")
@@ -140,19 +145,20 @@ def _load_surface(path: Path) -> Any:
     raise FormatError(path, f"unsupported extension {suffix or '(none)'!r}; expected .npz or .bpt")
 
 
-def build_network(mesh: Any, method: str, *, tangents: str = "arc", twist: str = "bilinear", normals: str = "fan") -> Any:
-    """The network of ``mesh`` by ``method`` (``gregory``, ``split4`` or ``corner``)."""
-    if method == "corner":
+def build_network(mesh: Any, method: str, *, shape: str = "interpolate", tangents: str = "arc", twist: str = "bilinear",
+                  normals: str = "fan") -> Any:
+    """The network of ``mesh`` by ``method`` and ``shape`` (:func:`g1patch.build.build_network`).
+
+    ``--method corner --shape legacy`` is the paper's construction as the first release built it,
+    with its ``--twist`` and ``--normals`` options.
+    """
+    if method == "corner" and shape == "legacy":
         from .construct.corner import build_corner_network
 
         return build_corner_network(mesh, tangents=tangents, twist=twist, normals=normals)  # type: ignore[arg-type]
-    if method == "split4":
-        from .construct.split4 import build_split4_network
+    from .build import build_network as build
 
-        return build_split4_network(mesh, tangents=tangents)  # type: ignore[arg-type]
-    from .construct.gregory import build_gregory_network
-
-    return build_gregory_network(mesh, tangents=tangents)  # type: ignore[arg-type]
+    return build(mesh, method, shape, tangents=tangents)  # type: ignore[arg-type]
 
 
 def _build(args: argparse.Namespace) -> int:
@@ -165,11 +171,14 @@ def _build(args: argparse.Namespace) -> int:
         progress(0, 3)
         mesh = read_mesh(args.mesh, split=not args.no_split)
         progress(1, 3)
-        network = build_network(mesh, args.method, tangents=args.tangents, twist=args.twist, normals=args.normals)
+        network = build_network(mesh, args.method, shape=args.shape, tangents=args.tangents, twist=args.twist,
+                                normals=args.normals)
         progress(2, 3)
         save_network(args.output, network)
         progress(3, 3)
-    print(f"built {network.n_patches} {args.method} patches from {args.mesh} -> {args.output}")
+    fallback = int(network.provenance.get("fallback_vertices", "0"))
+    note = f"; {fallback} vertices needed a fallback (degenerate or folded fans)" if fallback else ""
+    print(f"built {network.n_patches} {args.method} patches from {args.mesh} -> {args.output}{note}")
     return EXIT_OK
 
 
@@ -243,9 +252,8 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _demo(args: argparse.Namespace) -> int:
+    from .build import build_gregory_network, build_split4_network
     from .construct.corner import build_corner_network
-    from .construct.gregory import build_gregory_network
-    from .construct.split4 import build_split4_network
     from .continuity import check, format_reports
     from .io.meshfile import read_mesh, write_triangles
     from .patches import CORNER_PARAMETERS, PatchSet, polynomial_degree, unit
@@ -255,8 +263,8 @@ def _demo(args: argparse.Namespace) -> int:
     with resources.as_file(resources.files("g1patch") / "data" / "cube.obj") as cube_path:
         mesh = read_mesh(cube_path)
     corner = build_corner_network(mesh, tangents="arc", twist="coons")
-    gregory = build_gregory_network(mesh, tangents="arc")
-    split4 = build_split4_network(mesh, tangents="arc")
+    gregory = build_gregory_network(mesh)
+    split4 = build_split4_network(mesh)
     print("The paper's example: the cube [-1, 1]^3, valence 3 at every corner, smoothed into a")
     print("sphere-like surface.\n")
     print("1. The paper's construction: bicubic Hermite patches whose corner tangents satisfy")

@@ -12,7 +12,7 @@ Along edges the cross-boundary tangents of the two patches differ: the surface c
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,7 +22,13 @@ from ..mesh import QuadMesh
 from ..network import PatchNetwork, network_from_mesh
 from ..patches import PatchSet, hs_twists
 
-__all__ = ["NORMALS", "TANGENTS", "TWISTS", "fan_normals", "least_squares_normals", "corner_tangents", "build_corner_network"]
+if TYPE_CHECKING:
+    from ..targets import Targets
+
+__all__ = [
+    "NORMALS", "TANGENTS", "TWISTS", "fan_normals", "least_squares_normals", "corner_tangents", "build_corner_network",
+    "assemble_corner",
+]
 
 NormalRule = Literal["fan", "paper"]
 TangentRule = Literal["chord", "arc"]
@@ -158,3 +164,33 @@ def build_corner_network(
     if mesh.source:
         provenance["source"] = str(mesh.source)
     return network_from_mesh(mesh.topology, PatchSet(control, "hermite"), mesh.vertices, fan_normals(mesh), provenance)
+
+
+def assemble_corner(targets: Targets) -> PatchSet:
+    """The paper's patches from any targets: one Hermite patch per quad, G1 at corners only.
+
+    Corner tangents are the target tangents (⊥ the target normal, eq. 13); the twist at corner k
+    is read off the interior target ``Ft = A + (t_AB + t_AD)/3 + w/9`` as ``w = 9 (Ft − A) − 3 (t_AB + t_AD)``,
+    in the corner's own frame (u along A → B, v along A → D), which is ``±p_uv`` (+ at corners 0
+    and 2, − at 1 and 3, where one axis runs backwards).
+    """
+    from ..targets import halfedge_slots
+    from .gregory import tangent_plane_tangents
+
+    topology = targets.topology
+    count = topology.n_faces
+    t = tangent_plane_tangents(targets)
+    slot_out, slot_in = halfedge_slots(topology)
+    prev = topology.prev(np.arange(4 * count))
+    to_next = t[slot_out].reshape(count, 4, 3)  # T(k → k+1)
+    to_prev = t[slot_in[prev]].reshape(count, 4, 3)  # T(k → k−1)
+    x = targets.positions[topology.faces]
+    w = 9.0 * (targets.corner_interior - x) - 3.0 * (to_next + to_prev)
+    control = np.zeros((count, 4, 4, 3))
+    control[:, 0, 0], control[:, 1, 0], control[:, 1, 1], control[:, 0, 1] = x[:, 0], x[:, 1], x[:, 2], x[:, 3]
+    control[:, 2, 0], control[:, 0, 2] = to_next[:, 0], to_prev[:, 0]  # corner (0,0)
+    control[:, 3, 0], control[:, 1, 2] = -to_prev[:, 1], to_next[:, 1]  # corner (1,0)
+    control[:, 3, 1], control[:, 1, 3] = -to_next[:, 2], -to_prev[:, 2]  # corner (1,1)
+    control[:, 2, 1], control[:, 0, 3] = to_prev[:, 3], -to_next[:, 3]  # corner (0,1)
+    control[:, 2, 2], control[:, 3, 2], control[:, 3, 3], control[:, 2, 3] = w[:, 0], -w[:, 1], w[:, 2], -w[:, 3]
+    return PatchSet(control, "hermite")

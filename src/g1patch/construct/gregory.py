@@ -1,36 +1,38 @@
-"""Exact G1 everywhere: the interpolating Gregory network (g1-constructions.md §2, §4.4).
+"""Exact G1 from any valid targets: the Gregory assembly with flexible fans (shape-quality.md §3.4).
 
-One Gregory patch per quad (:mod:`g1patch.gregory`), interpolating the mesh vertices. For an
-interior edge A → B with boundary cubic ``(A, e_AB, e_BA, B)``, shared by face L (holding A → B)
-and face R (holding B → A), and cross-boundary derivatives D_L, D_R pointing into each patch,
+One Gregory patch per quad (:mod:`g1patch.gregory`): corners at the target positions, edge points
+``A + t/3`` from the target tangents (projected onto the tangent plane of their vertex, which is
+all G1 asks at corners), and per corner two interior points, one per edge, so every edge is
+solved on its own. For an interior edge A → B with boundary cubic ``c = (A, b1, b2, B)``, face L
+holding A → B and face R holding B → A, cross-boundary derivatives D_L, D_R (cubic, pointing into
+each face) are made to satisfy the general G1 identity
 
-    D_L(t) + D_R(t) = Φ(t) c'(t),     Φ(t) = 2 c_A (1 − t) − 2 c_B t                    (G1)
+    α(t) D_L(t) + β(t) D_R(t) = Φ(t) c'(t),     α, β > 0 linear, Φ quadratic,              (G1)
 
-makes the normals of both sides equal: with ``n_L = c' × D_L`` and ``n_R = D_R × c'``,
-``n_R = (Φ c' − D_L) × c' = n_L``. In Bézier coefficients (G1) is four equations along the edge:
+which makes ``c' × D_L`` and ``D_R × c'`` parallel for every t: the tangent planes agree.
 
-* ends (rows 0 and 3): ``t_{j−1} + t_{j+1} = 2 c_A t_j`` for the edge points ``e_j = A + t_j/3``
-  around A. The regular star ``t_j = cos θ_j a + sin θ_j b`` satisfies it with
-  ``c_A = cos(θ_{j+1} − θ_j)``: θ_j = 2πj/n at an interior vertex of valence n, θ_j = πj/k over
-  the k + 1 edges of a boundary vertex with k ≥ 2 faces (its two boundary edges take part in the
-  fit only). A boundary corner (k = 1) has no interior edge and keeps ``t_j = s_j``. The vectors
-  a, b fit the corner tangents s_j (:func:`~g1patch.construct.corner.corner_tangents`, chord or
-  arc length, in the plane ⊥ the fan normal) by least squares,
-  ``[a b] = (Σ_j s_j [cos θ_j, sin θ_j]) G⁻¹`` with the Gram matrix
-  ``G = Σ_j [cos θ_j, sin θ_j]ᵀ [cos θ_j, sin θ_j]``, which is diagonal (:func:`tangent_stars`).
-* interior (rows 1 and 2): the two interior points next to A, Fn of L and Fp of R, must average
-  to the face point
+* **Corner split.** At A, with ``[x, y] = (x × y)·N_A``, ``q = c'(0) = t_AB`` and the fan's other
+  tangents of L and R there, d_L (counter-clockwise next) and d_R (clockwise previous):
+  ``α = 2[d_R, q]/Δ``, ``β = 2[q, d_L]/Δ``, ``φ = −2[d_L, d_R]/Δ``, ``Δ = [q, d_L] + [d_R, q]``, so
+  ``α d_L + β d_R = φ q`` and α + β = 2; at B the same with ``q = c'(1) = −t_BA``. α, β > 0 iff
+  the fan turns counter-clockwise there (the targets' job). A regular star gives α = β = 1 and
+  φ = 2 cos(2π/n), the symmetric form.
+* **All solutions** (the "k-h form"): ``D_L = β G + h_L c'``, ``D_R = −α G + h_R c'`` with G
+  quadratic and h_L, h_R linear satisfy (G1) identically, ``α D_L + β D_R = (α h_L + β h_R) c'``.
+  The end values fix ``G0 = (d_L(A) − h_L0 q0)/β0``, ``G2 = (d_L(B) − h_L1 q2)/β1``,
+  ``h_R0 = (φ0 − α0 h_L0)/β0``, ``h_R1 = (φ2 − α1 h_L1)/β1``; ``h_L0 = 0`` fixes the gauge
+  (``G → G + σ c'`` with ``h_L → h_L − σ β``, ``h_R → h_R + σ α`` changes nothing), which leaves
+  G1 (a vector) and h_L1 free: fitted to the four interior targets by ridge least squares.
+  Interior Bézier coefficients of the product forms:
+  ``d1 = (2β0 G1 + β1 G0)/3 + (2 h0 q1 + h1 q0)/3``, ``d2 = (β0 G2 + 2β1 G1)/3 + (h0 q2 + 2 h1 q1)/3``
+  (L; R with −α for β and h_R), ``q1 = 3(b2 − b1)``; interior points ``b1 + d1/3``, ``b2 + d2/3``.
+* **Symmetric edges** (α ≡ β ≡ 1 at both ends, as on any C1 data): there the k-h family is a
+  4-dimensional part of the 6-dimensional solution set ``D_L + D_R = Φ c'`` with Φ linear, so
+  those edges take the minimum-norm correction of their targets onto it instead: both sides
+  move by the same vector, and targets that are already G1 (a bicubic B-spline) come back unchanged.
 
-      avg_A = (c_B A + (3 − 2 c_A − c_B) e_AB + 2 c_A e_BA) / 3                          (FP)
-
-  Each face corner gets a target ``Ft = e_AB + e_AD − A + (A − B + C − D)/9`` (bilinear twist;
-  corners A, B, C, D counter-clockwise) and the pair is moved onto (FP) by the minimum-norm
-  correction: ``Fn_L = avg_A + (Ft_L − Ft_R)/2``, ``Fp_R = avg_A + (Ft_R − Ft_L)/2``. Boundary
-  edges keep their targets.
-
-Every step is a gather, a scatter or a segmented sum (``np.add.reduceat``) over the flat
-half-edge and ring arrays, so vertices of every valence are handled at once: there is no Python
-loop over vertices, edges, faces or valences.
+Boundary edges keep their targets. Every step is a gather, a scatter or a batched 4 × 4 solve
+over edges: no Python loop over vertices, edges or faces.
 """
 
 from __future__ import annotations
@@ -38,185 +40,179 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import ConstructionError, check_choice
+from ..errors import ConstructionError
 from ..gregory import GregoryPatchSet
-from ..mesh import QuadMesh, QuadTopology
-from ..network import PatchNetwork, network_from_mesh
-from .corner import TANGENTS, TangentRule, corner_tangents, fan_normals
+from ..mesh import QuadTopology
+from ..targets import Targets, halfedge_slots
 
-__all__ = ["build_gregory_network", "gregory_patches", "halfedge_slots", "tangent_stars"]
+__all__ = ["assemble_gregory", "corner_split", "tangent_plane_tangents"]
 
-_NEXT = np.array([1, 2, 3, 0])
+FloatArray = NDArray[np.float64]
+
+#: edges whose corner splits are within this of α = β = 1 at both ends take the symmetric form
+SYMMETRIC_TOLERANCE = 1e-12
+#: ridge of the k-h fit, relative to the largest diagonal entry of its normal equations: keeps
+#: the free values bounded where G1 and h_L1 are nearly dependent (edge cubic nearly quadratic,
+#: α nearly constant), which would otherwise inflate round-off (shape-quality.md §3.4)
+RIDGE = 1e-6
 
 
-def tangent_stars(
-    mesh: QuadMesh, normals: NDArray[np.float64], tangents: TangentRule = "arc"
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The regular tangent star of every vertex and its G1 coefficient.
+def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
+    return np.einsum("...d,...d->...", a, b)
 
-    Returns ``star`` (S, 3), one tangent per ring slot in the order of ``topology.neighbors``
-    (slot ``neighbor_offsets[v] + j`` points towards neighbour j of v, counter-clockwise), and
-    ``cosine`` (nv,): ``c_v = cos(2π/n)`` inside, ``cos(π/k)`` on the boundary (see the module
-    docstring). The Gram matrix of the fit is diagonal: ``G = diag(n/2, n/2)`` at an interior
-    vertex and ``diag((k + 2)/2, k/2)`` at a boundary vertex with k ≥ 2 faces (Σ_{j=0..k} cos 2πj/k
-    = 1, Σ sin 2πj/k = 0), so ``a = Σ cos θ_j s_j / G_11`` and ``b = Σ sin θ_j s_j / G_22``, one
-    segmented sum per vertex. Raises :class:`ConstructionError` where a fitted star is degenerate
-    or turns clockwise about the normal.
+
+def _bracket(a: FloatArray, b: FloatArray, n: FloatArray) -> FloatArray:
+    """``[a, b] = (a × b)·n``."""
+    return _dot(np.cross(a, b), n)
+
+
+def corner_split(
+    q: FloatArray, d_left: FloatArray, d_right: FloatArray, normal: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """``(α, β, φ, Δ-sign check)`` with ``α d_L + β d_R = φ q`` and ``α + β = 2`` (module docstring).
+
+    The last value is ``min([q, d_L], [d_R, q])`` relative to the vectors' sizes: positive iff
+    d_L and d_R lie on opposite sides of q, counter-clockwise and clockwise from it.
     """
-    topology = mesh.topology
-    offsets = topology.neighbor_offsets
-    boundary = topology.is_boundary_vertex
-    slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(offsets))
-    step = np.where(boundary, np.pi / topology.face_count, 2.0 * np.pi / topology.valence)
-    theta = (np.arange(len(slot_vertex)) - offsets[slot_vertex]) * step[slot_vertex]
-    cos, sin = np.cos(theta), np.sin(theta)
-    del theta
-
-    s = _slot_tangents(mesh, normals, tangents, slot_vertex)
-    corner = boundary & (topology.face_count == 1)
-    free = np.flatnonzero(corner[slot_vertex])
-    free_tangents = s[free]
-    moments = np.empty((len(slot_vertex), 6))
-    np.multiply(cos[:, None], s, out=moments[:, :3])
-    np.multiply(sin[:, None], s, out=moments[:, 3:])
-    del s
-    moments = np.add.reduceat(moments, offsets[:-1])
-    half = 0.5 * np.where(boundary, topology.face_count, topology.valence)
-    a = moments[:, :3] / np.where(boundary, half + 1.0, half)[:, None]
-    b = moments[:, 3:] / np.where(corner, 1.0, half)[:, None]
-    _check_stars(topology, a, b, normals, corner)
-
-    star = a[slot_vertex]
-    star *= cos[:, None]
-    turned = b[slot_vertex]
-    turned *= sin[:, None]
-    star += turned
-    star[free] = free_tangents
-    return star, np.cos(step)
+    left = _bracket(q, d_left, normal)
+    right = _bracket(d_right, q, normal)
+    total = left + right
+    safe = np.where(total != 0.0, total, 1.0)
+    alpha = 2.0 * right / safe
+    beta = 2.0 * left / safe
+    phi = -2.0 * _bracket(d_left, d_right, normal) / safe
+    size = np.linalg.norm(q, axis=-1) * np.maximum(np.linalg.norm(d_left, axis=-1), np.linalg.norm(d_right, axis=-1))
+    margin = np.minimum(left, right) / np.where(size > 0, size, 1.0)
+    return alpha, beta, phi, margin
 
 
-_CHUNK = 1 << 16
+def tangent_plane_tangents(targets: Targets) -> FloatArray:
+    """The target tangents with their normal component removed: ``t − (N·t) N`` per slot."""
+    topology = targets.topology
+    slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
+    n = targets.normals[slot_vertex]
+    return targets.tangents - _dot(targets.tangents, n)[:, None] * n
 
 
-def _slot_tangents(
-    mesh: QuadMesh, normals: NDArray[np.float64], tangents: TangentRule, slot_vertex: NDArray[np.int64]
-) -> NDArray[np.float64]:
-    """``corner_tangents`` from each slot's vertex towards its neighbour, (S, 3), in fixed-size
-    chunks of slots so that its temporaries stay small."""
-    x = mesh.vertices
-    neighbors = mesh.topology.neighbors
-    s = np.empty((len(slot_vertex), 3))
-    for low in range(0, len(slot_vertex), _CHUNK):
-        chunk = slice(low, low + _CHUNK)
-        origin, target = slot_vertex[chunk], neighbors[chunk]
-        s[chunk] = corner_tangents(x[origin], x[target], normals[origin], tangents, np.stack([origin, target], axis=1))
-    return s
-
-
-def _check_stars(
-    topology: QuadTopology,
-    a: NDArray[np.float64],
-    b: NDArray[np.float64],
-    normals: NDArray[np.float64],
-    corner: NDArray[np.bool_],
-) -> None:
-    """Every fitted star must turn counter-clockwise about its normal: ``(a × b)·n > 0``."""
-    area = np.einsum("vd,vd->v", np.cross(a, b), normals)
-    scale = np.einsum("vd,vd->v", a, a) + np.einsum("vd,vd->v", b, b)
-    bad = np.flatnonzero(~corner & ~(area > 1e-12 * scale))
+def _raise_invalid(topology: QuadTopology, vertex: NDArray[np.int64], margin: FloatArray) -> None:
+    bad = np.flatnonzero(~(margin > 0))
     if bad.size:
-        v = int(bad[0])
+        v = int(vertex[bad[0]])
         raise ConstructionError(
-            f"tangent star: the regular star fitted to the ring of vertex {v} "
-            f"({'boundary' if topology.is_boundary_vertex[v] else 'interior'}, valence {topology.valence[v]}) "
-            f"is degenerate or folded ((a × b)·n = {area[v]:.3g}); its ring edges do not turn once around the normal"
-            + (f" ({bad.size} such vertices)" if bad.size > 1 else "")
+            f"gregory: the target tangents at vertex {v} (valence {topology.valence[v]}) do not turn "
+            f"counter-clockwise about its normal (margin {margin[bad[0]]:.3g}); the targets rule must "
+            f"supply a valid fan ({bad.size} edge ends affected)"
         )
 
 
-def gregory_patches(mesh: QuadMesh, normals: NDArray[np.float64], tangents: TangentRule = "arc") -> GregoryPatchSet:
-    """The patches of the interpolating Gregory network (module docstring), one per face.
+def assemble_gregory(targets: Targets) -> GregoryPatchSet:
+    """The Gregory patches of ``targets``, one per face, exactly G1 on every interior edge (module docstring).
 
-    Face corner k of face f is half-edge ``h = 4 f + k`` (A → B); arrays shaped (F, 4, 3) are
-    indexed by it. Everything is written into the (F, 20, 3) output in place, so the build's
-    temporaries stay a few (F, 4, 3) arrays.
+    Raises :class:`ConstructionError` when the targets' fan is invalid at some vertex.
     """
-    topology = mesh.topology
+    topology = targets.topology
     faces = topology.faces
     count = topology.n_faces
-    x = mesh.vertices
-    star, cosine = tangent_stars(mesh, normals, tangents)
-    star /= 3.0  # edge point offsets t_j / 3
+    x = targets.positions
+    normals = targets.normals
+    t = tangent_plane_tangents(targets)
     slot_out, slot_in = halfedge_slots(topology)
-    following = faces[:, _NEXT]
+    halfedges = np.arange(4 * count)
+    prev, nxt = QuadTopology.prev(halfedges), QuadTopology.next(halfedges)
 
     points = np.empty((count, 20, 3))
-    corner_points, e_next, e_prev = points[:, :4], points[:, 4:12:2], points[:, 5:12:2]
-    near, far = points[:, 12::2], points[:, 13::2]
-    corner_points[...] = x[faces]
-    np.add(corner_points, star[slot_out].reshape(count, 4, 3), out=e_next)  # E+_k = e(A → B)
-    back = x[following]
-    back += star[slot_in].reshape(count, 4, 3)  # e(B → A): the same bits as the twin's e(A → B)
-    e_prev[:, 1:], e_prev[:, 0] = back[:, :3], back[:, 3]  # E-_k = e(A → D)
-    del star, slot_out, slot_in, back
+    corners = x[faces]
+    points[:, :4] = corners
+    points[:, 4:12:2] = corners + t[slot_out].reshape(count, 4, 3) / 3.0  # E+_k = A + t_AB/3
+    points[:, 5:12:2] = corners + t[slot_in[prev]].reshape(count, 4, 3) / 3.0  # E-_k = A + t_AD/3
+    near = targets.interior[:, :, 0].copy()  # Fn_k, seen by edge k
+    far = targets.interior[:, :, 1].copy()  # Fp_k, seen by edge k − 1
 
-    # Targets Ft = E+ + E- − A + (A − B + C − D)/9, with A − B + C − D = ±(x0 − x1 + x2 − x3); kept in Fp.
-    np.add(e_next, e_prev, out=far)
-    far -= corner_points
-    bilinear = (corner_points[:, 0] - corner_points[:, 1] + corner_points[:, 2] - corner_points[:, 3]) / 9.0
-    far[:, 0::2] += bilinear[:, None]
-    far[:, 1::2] -= bilinear[:, None]
+    pairs = topology.edge_halfedges[topology.edge_halfedges[:, 1] >= 0]
+    h, g = pairs[:, 0], pairs[:, 1]
+    a_vertex, b_vertex = topology.origin(h), topology.target(h)
+    a, b = x[a_vertex], x[b_vertex]
+    q0 = t[slot_out[h]]
+    t_ba = t[slot_in[h]]
+    q2 = -t_ba
+    b1 = a + q0 / 3.0
+    b2 = b + t_ba / 3.0
+    q1 = 3.0 * (b2 - b1)
+    d0_left, d0_right = t[slot_in[prev[h]]], t[slot_out[nxt[g]]]
+    d3_left, d3_right = t[slot_out[nxt[h]]], t[slot_in[prev[g]]]
+    alpha0, beta0, phi0, margin0 = corner_split(q0, d0_left, d0_right, normals[a_vertex])
+    alpha1, beta1, phi2, margin1 = corner_split(q2, d3_left, d3_right, normals[b_vertex])
+    _raise_invalid(topology, np.concatenate([a_vertex, b_vertex]), np.concatenate([margin0, margin1]))
 
-    # avg_A (FP) for every half-edge h = A → B, with e(B → A) = E-_{k+1}.
-    c_a, c_b = cosine[faces][..., None], cosine[following][..., None]
-    correction = (3.0 - 2.0 * c_a - c_b) * e_next
-    scratch = c_b * corner_points
-    correction += scratch
-    scratch[:, :3], scratch[:, 3] = e_prev[:, 1:], e_prev[:, 0]
-    scratch *= 2.0 * c_a
-    correction += scratch
-    correction /= 3.0
-    del scratch
+    left, right = h >> 2, g >> 2
+    k_left, k_right = h & 3, g & 3
+    # targets of the four cross-boundary coefficients: 3 (F − b)
+    r1_left = 3.0 * (near[left, k_left] - b1)
+    r2_left = 3.0 * (far[left, (k_left + 1) & 3] - b2)
+    r1_right = 3.0 * (far[right, (k_right + 1) & 3] - b1)
+    r2_right = 3.0 * (near[right, k_right] - b2)
 
-    # d = avg_A − (Ft_L + Ft_R)/2, R's point at next(twin(h)); d = 0 on boundary half-edges.
-    twin = topology.twin
-    halfedges = np.arange(4 * count)
-    partner = np.where(twin >= 0, QuadTopology.next(twin), halfedges)
-    mean = far[partner >> 2, partner & 3].reshape(count, 4, 3)
-    mean += far
-    mean *= 0.5
-    correction -= mean
-    del mean
-    flat_correction = correction.reshape(-1, 3)
-    flat_correction[twin < 0] = 0.0
-    np.add(far, correction, out=near)  # Fn_k = Ft + d of h, the edge-k point
-    previous = QuadTopology.prev(halfedges)
-    incoming = twin[previous]  # A → D leaves A along edge k − 1: Fp_k = Ft + its d
-    far += flat_correction[np.where(incoming >= 0, incoming, previous)].reshape(count, 4, 3)
+    d1_left, d2_left, d1_right, d2_right = _kh_fit(
+        q0, q1, q2, d0_left, d3_left, alpha0, beta0, phi0, alpha1, beta1, phi2, (r1_left, r2_left, r1_right, r2_right)
+    )
+    symmetric = (np.abs(alpha0 - 1.0) <= SYMMETRIC_TOLERANCE) & (np.abs(alpha1 - 1.0) <= SYMMETRIC_TOLERANCE)
+    if symmetric.any():
+        s = symmetric
+        sum1 = (2.0 * phi0[s, None] * q1[s] + phi2[s, None] * q0[s]) / 3.0
+        sum2 = (phi0[s, None] * q2[s] + 2.0 * phi2[s, None] * q1[s]) / 3.0
+        shift1 = 0.5 * (sum1 - r1_left[s] - r1_right[s])
+        shift2 = 0.5 * (sum2 - r2_left[s] - r2_right[s])
+        d1_left[s], d1_right[s] = r1_left[s] + shift1, r1_right[s] + shift1
+        d2_left[s], d2_right[s] = r2_left[s] + shift2, r2_right[s] + shift2
+
+    near[left, k_left] = b1 + d1_left / 3.0
+    far[left, (k_left + 1) & 3] = b2 + d2_left / 3.0
+    far[right, (k_right + 1) & 3] = b1 + d1_right / 3.0
+    near[right, k_right] = b2 + d2_right / 3.0
+    points[:, 12::2] = near
+    points[:, 13::2] = far
     return GregoryPatchSet(points)
 
 
-def halfedge_slots(topology: QuadTopology) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Ring slot (see :func:`tangent_stars`) of each half-edge A → B at A, and of B → A at B.
-
-    The reverse of a boundary half-edge is the last slot of its target: the virtual ring edge k.
-    """
-    ring_vertex = np.repeat(np.arange(topology.n_vertices), topology.face_count)
-    slot_out = np.empty(topology.n_halfedges, dtype=np.int64)
-    slot_out[topology.ring_halfedges] = (
-        np.arange(len(ring_vertex)) - topology.ring_offsets[ring_vertex] + topology.neighbor_offsets[ring_vertex]
+def _kh_fit(
+    q0: FloatArray, q1: FloatArray, q2: FloatArray, d0_left: FloatArray, d3_left: FloatArray,
+    alpha0: FloatArray, beta0: FloatArray, phi0: FloatArray, alpha1: FloatArray, beta1: FloatArray, phi2: FloatArray,
+    wanted: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Interior coefficients ``d1_L, d2_L, d1_R, d2_R`` of the k-h form (h_L0 = 0) whose free values
+    p = (G1, h_L1) fit ``wanted`` best: each coefficient is ``k_i + c_i G1 + v_i h_L1``, and
+    ``min Σ_i |k_i + c_i G1 + v_i h − r_i|² + λ |p|²`` is one 4 × 4 solve per edge."""
+    b0, b1_, a0, a1 = beta0[:, None], beta1[:, None], alpha0[:, None], alpha1[:, None]
+    g0 = d0_left / b0
+    h_r0 = phi0[:, None] / b0
+    h_r1 = phi2[:, None] / b1_  # at h_L1 = 0
+    g2 = d3_left / b1_  # at h_L1 = 0
+    constant = (
+        b1_ * g0 / 3.0,
+        b0 * g2 / 3.0,
+        -a1 * g0 / 3.0 + (2.0 * h_r0 * q1 + h_r1 * q0) / 3.0,
+        -a0 * g2 / 3.0 + (h_r0 * q2 + 2.0 * h_r1 * q1) / 3.0,
     )
-    twin = topology.twin
-    target = topology.target(np.arange(topology.n_halfedges))
-    slot_in = np.where(twin >= 0, slot_out[twin], topology.neighbor_offsets[target + 1] - 1)
-    return slot_out, slot_in
-
-
-def build_gregory_network(mesh: QuadMesh, *, tangents: TangentRule = "arc") -> PatchNetwork:
-    """The interpolating Gregory network of ``mesh``: exact G1 on every interior edge and corner."""
-    check_choice("tangents", tangents, TANGENTS)
-    normals = fan_normals(mesh)
-    provenance = {"method": "gregory", "tangents": tangents}
-    if mesh.source:
-        provenance["source"] = str(mesh.source)
-    return network_from_mesh(mesh.topology, gregory_patches(mesh, normals, tangents), mesh.vertices, normals, provenance)
+    along = (  # ∂/∂h_L1
+        q0 / 3.0,
+        -b0 * q2 / (3.0 * b1_) + 2.0 * q1 / 3.0,
+        -a1 * q0 / (3.0 * b1_),
+        a0 * q2 / (3.0 * b1_) - 2.0 * a1 * q1 / (3.0 * b1_),
+    )
+    scalar = (2.0 * b0 / 3.0, 2.0 * b1_ / 3.0, -2.0 * a0 / 3.0, -2.0 * a1 / 3.0)  # ∂/∂G1 = c_i I
+    count = len(q0)
+    normal = np.zeros((count, 4, 4))
+    rhs = np.zeros((count, 4))
+    for k_i, v_i, c_i, r_i in zip(constant, along, scalar, wanted, strict=True):
+        y = r_i - k_i
+        normal[:, :3, :3] += (c_i[:, 0] ** 2)[:, None, None] * np.eye(3)
+        normal[:, :3, 3] += c_i * v_i
+        normal[:, 3, 3] += _dot(v_i, v_i)
+        rhs[:, :3] += c_i * y
+        rhs[:, 3] += _dot(v_i, y)
+    normal[:, 3, :3] = normal[:, :3, 3]
+    diagonal = np.einsum("eii->ei", normal)
+    diagonal += RIDGE * diagonal.max(axis=1, keepdims=True)
+    p = np.linalg.solve(normal, rhs[..., None])[..., 0]
+    g1, h1 = p[:, :3], p[:, 3:]
+    return tuple(k_i + c_i * g1 + v_i * h1 for k_i, v_i, c_i in zip(constant, along, scalar, strict=True))  # type: ignore[return-value]

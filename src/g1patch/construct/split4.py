@@ -38,14 +38,13 @@ from scipy.sparse import coo_matrix, csc_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import spsolve
 
-from ..errors import ConstructionError, InputError, check_choice
+from ..errors import ConstructionError, InputError
 from ..mesh import QuadMesh, QuadTopology
 from ..network import PatchNetwork
 from ..patches import PatchSet
-from .corner import TANGENTS, TangentRule, fan_normals
-from .gregory import halfedge_slots, tangent_stars
+from ..targets import Targets, halfedge_slots
 
-__all__ = ["BSPLINE_KNOTS", "bspline_nets", "build_split4_network", "macro_nets", "split4_patches"]
+__all__ = ["BSPLINE_KNOTS", "STAR_LENGTH_LIMIT", "bspline_nets", "macro_nets", "split4_network_from_targets", "split4_patches", "split4_star"]
 
 #: knots of each quad's B-spline patch, in u and in v
 BSPLINE_KNOTS = np.array([0.0, 0.0, 0.0, 0.0, 0.5, 0.5, 1.0, 1.0, 1.0, 1.0])
@@ -247,23 +246,56 @@ def _assemble(
     return control
 
 
+#: no star tangent may exceed this multiple of its own target tangent's length: a regular star
+#: fitted to an irregular fan gives a short edge opposite a long one a tangent several times its
+#: length, and its boundary cubic then overshoots the neighbour (shape-diagnosis.md cause 1)
+STAR_LENGTH_LIMIT = 1.5
+
+
+def split4_star(targets: Targets) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """The regular star split4 needs (its twist systems are solvable only for affine-regular
+    stars), fitted to the target fan: ``t_j = a cos θ_j + b sin θ_j``, ``c_v = cos`` of the angle
+    step. Safeguard: each vertex's star is scaled down uniformly (it stays regular) until no
+    tangent is longer than :data:`STAR_LENGTH_LIMIT` × its target's; a star that does not turn
+    counter-clockwise is refitted to evenly spread target directions. Returns the star, the
+    cosines and the vertices the safeguard changed.
+    """
+    from ..targets.interpolate import fit_regular_star, slot_vertices, spread_fan
+
+    topology = targets.topology
+    wanted = targets.tangents
+    star, cosine, valid = fit_regular_star(topology, targets.normals, wanted)
+    if not valid.all():
+        chord = np.linalg.norm(wanted, axis=1)
+        wanted = spread_fan(topology, targets.normals, wanted, chord, np.flatnonzero(~valid))
+        star, cosine, _ = fit_regular_star(topology, targets.normals, wanted)
+    slot_vertex = slot_vertices(topology)
+    own = np.linalg.norm(wanted, axis=1)
+    ratio = np.linalg.norm(star, axis=1) / np.where(own > 0, own, np.inf)
+    worst = np.zeros(topology.n_vertices)
+    np.maximum.at(worst, slot_vertex, ratio)
+    shrink = np.minimum(1.0, STAR_LENGTH_LIMIT / np.where(worst > 0, worst, 1.0))
+    star *= shrink[slot_vertex, None]
+    return star, cosine, ~valid | (shrink < 1.0)
+
+
 def split4_patches(
-    mesh: QuadMesh, normals: FloatArray, tangents: TangentRule = "arc"
-) -> tuple[PatchSet, FloatArray, FloatArray]:
+    targets: Targets, corners: FloatArray, centre: FloatArray, scale: float
+) -> tuple[PatchSet, FloatArray, FloatArray, NDArray[np.bool_]]:
     """The 4 F Bézier sub-patches (sub-patch ``4 f + k`` at corner k of face f), and the positions
     and unit surface normals of the edge midpoints and face centres, each stacked as (E + F, 3).
     The normal at M is N_M (the seam and curve tangents there are ⊥ N_M); at C it is
-    ``(M_0 − M_2) × (M_1 − M_3)``, the cross of the centre's star.
+    ``(M_0 − M_2) × (M_1 − M_3)``, the cross of the centre's star. Also returns the vertices
+    whose star needed the safeguard (:func:`split4_star`).
 
-    Built in coordinates ``(x − centre) / scale`` (bounding box) and mapped back; the sub-patch
-    corners at mesh vertices are set to the input positions exactly.
+    ``targets`` are in local coordinates ``(x − centre) / scale``; the sub-patches are mapped
+    back and their corners at mesh vertices set to ``corners`` (the input positions, (V, 3)) exactly.
     """
-    topology = mesh.topology
+    topology = targets.topology
     n_faces = topology.n_faces
-    low, high = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
-    centre, scale = 0.5 * (low + high), float(np.linalg.norm(high - low)) or 1.0
-    pos = (mesh.vertices - centre) / scale
-    star, cosine = tangent_stars(mesh.with_vertices(pos), normals, tangents)
+    pos = targets.positions
+    normals = targets.normals
+    star, cosine, guarded = split4_star(targets)
     slot_out, slot_in = halfedge_slots(topology)
     lam = 2.0 * cosine
 
@@ -297,9 +329,18 @@ def split4_patches(
     d1, d2 = on_side(0, 4, ~canonical), on_side(1, 3, ~canonical)  # from the target of h
     del near
 
-    # -- centres and their plain cross: C = Σ M / 2 − Σ V / 4, b_k = C + (M_k − M_{k+2}) / 6
+    # -- centres: the middle of the targets' bicubic, C = (Σ corners + 3 Σ edge points + 9 Σ interior) / 64
+    # = (7 Σ V + Σ (t_next + t_prev) + 9 Σ Ft) / 64
+    # (any C keeps G1: its star is a plain cross), and its cross b_k = C + (M_k − M_{k+2}) / 6
     mids = m[edge_of].reshape(n_faces, 4, 3)
-    centres = 0.5 * mids.sum(axis=1) - 0.25 * pos[topology.faces].sum(axis=1)
+    prev = QuadTopology.prev(halfedges)
+    target_next = targets.tangents[slot_out].reshape(n_faces, 4, 3)  # t(V → next corner)
+    target_prev = targets.tangents[slot_in[prev]].reshape(n_faces, 4, 3)  # t(V → previous corner)
+    face_corners = pos[topology.faces]
+    interior_targets = targets.corner_interior
+    centres = (
+        7.0 * face_corners.sum(axis=1) + (target_next + target_prev).sum(axis=1) + 9.0 * interior_targets.sum(axis=1)
+    ) / 64.0
     b = centres[:, None] + (mids - np.roll(mids, -2, axis=1)) / 6.0
 
     # -- midpoint stars: t_L + t_R = μ t_X, seam points e = M + t/3
@@ -320,8 +361,9 @@ def split4_patches(
     del t_x, across, c_l, c_r, spread, floor, a, shear
 
     # -- twist targets τ = e1 + e2 − c ± w at the corners V, MID[k], MID[k−1], C of each sub-patch,
-    # w = (V − M_k + C − M_{k−1}) / 9 (the bilinear term, + at V and C, − at the midpoints)
-    prev = QuadTopology.prev(halfedges)
+    # w = (V − M_k + C − M_{k−1}) / 9 (the bilinear term, + at V and C, − at the midpoints); at V the
+    # targets' own twist p_uv = 9 (Ft − V) − 3 (t_next + t_prev), a quarter of it on the half-size
+    # sub-patch: w_V = p_uv / 36
     m_h = m[edge_of]
     b_flat = b.reshape(-1, 3)
     corner_points = pos[topology.faces.reshape(-1)]
@@ -329,7 +371,9 @@ def split4_patches(
     m_prev = m_h[prev]
     w = (corner_points - m_h + centre_points - m_prev) / 9.0
     twist = np.empty((4 * n_faces, 4, 3))  # targets, replaced in place by the solved twists
-    twist[:, 0] = o1 + d1[prev] - corner_points + w
+    vertex_twist = (9.0 * (interior_targets - face_corners) - 3.0 * (target_next + target_prev)).reshape(-1, 3) / 36.0
+    twist[:, 0] = o1 + d1[prev] - corner_points + vertex_twist
+    del vertex_twist, target_next, target_prev
     twist[:, 1] = o2 + seam - m_h - w
     twist[:, 2] = d2[prev] + seam[prev] - m_prev - w
     twist[:, 3] = b_flat + b_flat[prev] - centre_points + w
@@ -373,13 +417,11 @@ def split4_patches(
     del rhs
 
     # -- sub-patch k in the frame of corner k, back to the input coordinates, corners exact
-    control = _assemble(
-        (o1, o2, m_h, d1, d2, seam, b_flat), centres, twist, mesh.vertices[topology.faces], scale, centre
-    )
+    control = _assemble((o1, o2, m_h, d1, d2, seam, b_flat), centres, twist, corners[topology.faces], scale, centre)
     del o1, o2, m_h, d1, d2, seam, twist
     extra = np.concatenate([m, centres]) * scale + centre
     extra_normals = np.concatenate([_unit(n_m), _unit(np.cross(mids[:, 0] - mids[:, 2], mids[:, 1] - mids[:, 3]))])
-    return PatchSet(control.reshape(-1, 4, 4, 3)), extra, extra_normals
+    return PatchSet(control.reshape(-1, 4, 4, 3)), extra, extra_normals, guarded
 
 
 def macro_nets(control: FloatArray) -> FloatArray:
@@ -462,14 +504,14 @@ def _split4_network(
     )
 
 
-def build_split4_network(mesh: QuadMesh, *, tangents: TangentRule = "arc") -> PatchNetwork:
-    """The 2×2-split bicubic network of ``mesh``: polynomial, exactly G1 on mesh edges and seams,
-    C1 inside each quad, interpolating the mesh vertices (module docstring)."""
-    check_choice("tangents", tangents, TANGENTS)
-    normals = fan_normals(mesh)
-    patches, extra, extra_normals = split4_patches(mesh, normals, tangents)
-    provenance = {"method": "split4", "tangents": tangents}
-    if mesh.source:
-        provenance["source"] = str(mesh.source)
-    points, point_normals = np.concatenate([mesh.vertices, extra]), np.concatenate([normals, extra_normals])
+def split4_network_from_targets(
+    mesh: QuadMesh, targets: Targets, centre: FloatArray, scale: float, provenance: dict[str, str]
+) -> PatchNetwork:
+    """The 2×2-split bicubic network of ``targets`` (local coordinates, see :func:`split4_patches`):
+    polynomial, exactly G1 on mesh edges and seams, C1 inside each quad, interpolating the mesh
+    vertices (module docstring). Vertices whose star needed the safeguard join the fallback count."""
+    patches, extra, extra_normals, guarded = split4_patches(targets, mesh.vertices, centre, scale)
+    provenance = dict(provenance, fallback_vertices=str(int((targets.fallback | guarded).sum())))
+    points = np.concatenate([mesh.vertices, extra])
+    point_normals = np.concatenate([targets.normals, extra_normals])
     return _split4_network(mesh.topology, patches, points, point_normals, provenance)

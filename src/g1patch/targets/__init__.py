@@ -1,0 +1,103 @@
+"""Shape targets: what the surface should look like, before anything is made exactly G1.
+
+A *targets rule* (:mod:`~g1patch.targets.interpolate`, later the Catmull–Clark limit) decides the
+shape; an *assembly* (:mod:`g1patch.construct`) turns any valid :class:`Targets` into patches that
+are exactly G1, moving the targets only as far as G1 requires (DESIGN §1). The value passed between
+them is one :class:`Targets`: flat arrays over the topology's vertices, ring slots, face corners and
+edges, in the coordinates the assembly works in.
+
+Ring slots follow :class:`~g1patch.mesh.QuadTopology`: slot ``neighbor_offsets[v] + j`` of vertex v
+points towards its neighbour ``neighbors[...]`` j, counter-clockwise; a boundary vertex with k faces
+has k + 1 slots, the last one along its incoming boundary edge. So every directed mesh edge A → B,
+boundary edges in both directions included, has exactly one slot at A.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InputError, as_float_array
+from ..mesh import QuadTopology
+
+__all__ = ["Targets", "halfedge_slots"]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+def halfedge_slots(topology: QuadTopology) -> tuple[IntArray, IntArray]:
+    """Ring slot of each half-edge A → B at A (``slot_out``), and of B → A at B (``slot_in``).
+
+    The reverse of a boundary half-edge is the last slot of its target: the virtual ring edge k.
+    """
+    ring_vertex = np.repeat(np.arange(topology.n_vertices), topology.face_count)
+    slot_out = np.empty(topology.n_halfedges, dtype=np.int64)
+    slot_out[topology.ring_halfedges] = (
+        np.arange(len(ring_vertex)) - topology.ring_offsets[ring_vertex] + topology.neighbor_offsets[ring_vertex]
+    )
+    twin = topology.twin
+    target = topology.target(np.arange(topology.n_halfedges))
+    slot_in = np.where(twin >= 0, slot_out[twin], topology.neighbor_offsets[target + 1] - 1)
+    return slot_out, slot_in
+
+
+@dataclass(frozen=True, eq=False)
+class Targets:
+    """What the surface should interpolate and how it should bend, per mesh element.
+
+    * ``positions`` (V, 3): the surface point at each vertex;
+    * ``normals`` (V, 3): unit surface normal there;
+    * ``tangents`` (S, 3): per ring slot, the full Hermite tangent of the boundary curve leaving
+      the vertex along that edge (its Bézier edge point is ``x + t/3``); any fan, not only a
+      regular star, as long as the slots turn counter-clockwise about the normal;
+    * ``interior`` (F, 4, 2, 3): per face corner k, the targets of the interior Bézier point next
+      to that corner (``b11`` at corner 0), i.e. ``x + (t_next + t_prev)/3 + twist/9``, as seen by
+      edge k (``[..., 0, :]``) and by edge k − 1 (``[..., 1, :]``): a Gregory patch has one per edge,
+      a tensor-product patch takes their mean (:attr:`corner_interior`);
+    * ``sharpness`` (E,): per edge, 0 for smooth (creases come later);
+    * ``fallback`` (V,): vertices where the rule could not use its normal recipe and fell back.
+    """
+
+    topology: QuadTopology
+    positions: FloatArray
+    normals: FloatArray
+    tangents: FloatArray
+    interior: FloatArray
+    sharpness: FloatArray = field(default=None)  # type: ignore[assignment]
+    fallback: NDArray[np.bool_] = field(default=None)  # type: ignore[assignment]
+    rule: str = "custom"
+
+    def __post_init__(self) -> None:
+        topology = self.topology
+        shapes = {
+            "positions": (topology.n_vertices, 3),
+            "normals": (topology.n_vertices, 3),
+            "tangents": (int(topology.neighbor_offsets[-1]), 3),
+            "interior": (topology.n_faces, 4, 2, 3),
+        }
+        for name, shape in shapes.items():
+            value = as_float_array(name, getattr(self, name), shape[1:])
+            if value.shape != shape:
+                raise InputError(f"targets.{name}: expected shape {shape}, got {value.shape}")
+            object.__setattr__(self, name, value)
+        sharpness = np.zeros(topology.n_edges) if self.sharpness is None else as_float_array("sharpness", self.sharpness)
+        if sharpness.shape != (topology.n_edges,):
+            raise InputError(f"targets.sharpness: expected shape ({topology.n_edges},), got {sharpness.shape}")
+        fallback = np.zeros(topology.n_vertices, dtype=bool) if self.fallback is None else np.asarray(self.fallback, dtype=bool)
+        if fallback.shape != (topology.n_vertices,):
+            raise InputError(f"targets.fallback: expected shape ({topology.n_vertices},), got {fallback.shape}")
+        object.__setattr__(self, "sharpness", sharpness)
+        object.__setattr__(self, "fallback", fallback)
+
+    @property
+    def corner_interior(self) -> FloatArray:
+        """One interior target per face corner, (F, 4, 3): the mean of the two edges' targets."""
+        return 0.5 * (self.interior[:, :, 0] + self.interior[:, :, 1])
+
+    @property
+    def n_fallback(self) -> int:
+        """How many vertices needed a fallback."""
+        return int(self.fallback.sum())

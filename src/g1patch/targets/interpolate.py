@@ -1,0 +1,451 @@
+"""Interpolating targets: a surface through the mesh vertices, shaped by local rules.
+
+Two rules, both returning :class:`~g1patch.targets.Targets` on the mesh's own positions:
+
+``interpolate`` (the default; shape-quality.md §3.1–3.3)
+    * normal: :func:`~g1patch.targets.frames.vertex_frames` where its local fit is trusted, the
+      area-weighted fan normal elsewhere;
+    * tangents: every mesh edge projected onto the tangent plane, ``s = P_A (B − A)``, with the
+      circle-aware length ``L = |B − A| / cos²(θ/4)``, ``sin(θ/2) = |N·(B − A)|/|B − A|``: the
+      Hermite tangent that reproduces the circular arc through B tangent to the plane at A
+      (``= 2|d|²/(|d| + |s|)``, :func:`~g1patch.construct.corner.corner_tangents`). A flexible fan:
+      no regular-star fit, so a short edge opposite a long one keeps its own length;
+    * fan safeguard: in A's tangent plane consecutive slots must turn counter-clockwise by more
+      than ``ε = min(15°, ¼ · 360°/n)`` and less than ``180° − ε``, and go once around (interior)
+      or less than once (boundary). Where they do not, ``t = (1 − μ) t_raw + μ t_star`` with the
+      smallest ``μ ∈ {1/8, …, 1}`` that passes, t_star the regular star fitted to the raw fan; if
+      even the star fails, evenly spread directions with the raw lengths. Such vertices are
+      counted in ``Targets.fallback``;
+    * interior points: at corner A of face (A, B, C, D) with B next and D previous,
+      ``Ft = A + (t_AB + t_AD)/3 + [P_A w + II_A(t_AB, t_AD) N_A]/9``, ``w = A − B + C − D``: the
+      bilinear twist with its normal part replaced by the estimated second fundamental form,
+      ``N·p_uv = II(p_u, p_v)`` for any parameterisation.
+
+``legacy`` (the release before this one, kept as the benchmarks' baseline)
+    fan normal, the affine-regular star ``t_j = a cos θ_j + b sin θ_j`` fitted to the projected
+    edges (θ_j = 2πj/n inside, πj/k over the k + 1 edges of a boundary vertex), bilinear twist.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..construct.corner import TANGENTS, TangentRule, corner_tangents, fan_normals
+from ..errors import ConstructionError, check_choice
+from ..mesh import QuadMesh, QuadTopology
+from . import Targets
+
+__all__ = [
+    "SHAPES", "ShapeRule", "fit_regular_star", "interpolate_targets", "legacy_targets", "safeguarded_fans", "shape_targets",
+    "slot_vertices", "spread_fan", "tangent_stars",
+]
+
+ShapeRule = Literal["interpolate", "legacy"]
+SHAPES: tuple[ShapeRule, ...] = ("interpolate", "legacy")
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+_NEXT = np.array([1, 2, 3, 0])
+_PREV = np.array([3, 0, 1, 2])
+#: the safeguard's largest minimum turn between consecutive slots, and its share of 360°/n
+_MIN_GAP = np.radians(15.0)
+_MIN_GAP_SHARE = 0.25
+#: blend weights towards the regular star tried by the safeguard, smallest first
+_BLENDS = np.arange(1, 9) / 8.0
+#: an edge whose projection onto the tangent plane is shorter than this share of its length is
+#: treated as parallel to the normal: its direction is undefined and the safeguard replaces it
+_PARALLEL = 1e-6
+
+
+def slot_vertices(topology: QuadTopology) -> IntArray:
+    """The vertex of every ring slot, (S,)."""
+    return np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
+
+
+def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
+    return np.einsum("...d,...d->...", a, b)
+
+
+def _star_angles(topology: QuadTopology, slot_vertex: IntArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """θ_j of every slot (2πj/n inside, πj/k at a boundary vertex with k faces) and the
+    per-vertex angle step."""
+    offsets = topology.neighbor_offsets
+    boundary = topology.is_boundary_vertex
+    step = np.where(boundary, np.pi / topology.face_count, 2.0 * np.pi / topology.valence)
+    theta = (np.arange(len(slot_vertex)) - offsets[slot_vertex]) * step[slot_vertex]
+    return np.cos(theta), np.sin(theta), step
+
+
+def fit_regular_star(
+    topology: QuadTopology, normals: FloatArray, s: FloatArray
+) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """The affine-regular star ``t_j = a cos θ_j + b sin θ_j`` closest to the slot tangents ``s``.
+
+    Least squares ``[a b] = (Σ_j s_j [cos θ_j, sin θ_j]) G⁻¹``; the Gram matrix is diagonal:
+    ``diag(n/2, n/2)`` inside, ``diag((k + 2)/2, k/2)`` at a boundary vertex with k ≥ 2 faces. A
+    boundary corner (k = 1) keeps ``s``. Returns the star (S, 3), ``c_v`` = cos of the angle step
+    (V,), and per vertex whether the star turns counter-clockwise about its normal.
+    """
+    offsets = topology.neighbor_offsets
+    slot_vertex = slot_vertices(topology)
+    cos, sin, step = _star_angles(topology, slot_vertex)
+    boundary = topology.is_boundary_vertex
+    corner = boundary & (topology.face_count == 1)
+    moments = np.add.reduceat(np.concatenate([cos[:, None] * s, sin[:, None] * s], axis=1), offsets[:-1])
+    half = 0.5 * np.where(boundary, topology.face_count, topology.valence)
+    a = moments[:, :3] / np.where(boundary, half + 1.0, half)[:, None]
+    b = moments[:, 3:] / np.where(corner, 1.0, half)[:, None]
+    area = _dot(np.cross(a, b), normals)
+    valid = corner | (area > 1e-12 * (_dot(a, a) + _dot(b, b)))
+    star = a[slot_vertex] * cos[:, None] + b[slot_vertex] * sin[:, None]
+    free = corner[slot_vertex]
+    star[free] = s[free]
+    return star, np.cos(step), valid
+
+
+def tangent_stars(mesh: QuadMesh, normals: FloatArray, tangents: TangentRule = "arc") -> tuple[FloatArray, FloatArray]:
+    """The previous release's star: the regular star fitted to the projected edge tangents
+    (:func:`~g1patch.construct.corner.corner_tangents`, ``tangents`` lengths), and ``c_v``.
+
+    Raises :class:`ConstructionError` where a fitted star is degenerate or folded, as that release did.
+    """
+    check_choice("tangents", tangents, TANGENTS)
+    topology = mesh.topology
+    slot_vertex = slot_vertices(topology)
+    s = corner_tangents(
+        mesh.vertices[slot_vertex], mesh.vertices[topology.neighbors], normals[slot_vertex], tangents,
+        np.stack([slot_vertex, topology.neighbors], axis=1),
+    )
+    star, cosine, valid = fit_regular_star(topology, normals, s)
+    if not valid.all():
+        v = int(np.flatnonzero(~valid)[0])
+        raise ConstructionError(
+            f"tangent star: the regular star fitted to the ring of vertex {v} "
+            f"({'boundary' if topology.is_boundary_vertex[v] else 'interior'}, valence {topology.valence[v]}) "
+            "is degenerate or folded; its ring edges do not turn once around the normal"
+        )
+    return star, cosine
+
+
+def legacy_targets(mesh: QuadMesh, tangents: TangentRule = "arc") -> Targets:
+    """The previous release's rule: fan normal, fitted regular star, bilinear twist (module docstring)."""
+    topology = mesh.topology
+    normals = fan_normals(mesh)
+    star, _ = tangent_stars(mesh, normals, tangents)
+    interior = _interior_targets(mesh, star, normals, None)
+    return Targets(topology, mesh.vertices, normals, star, np.stack([interior, interior], axis=2), rule="legacy")
+
+
+def _projected_tangents(
+    mesh: QuadMesh, normals: FloatArray, slot_vertex: IntArray
+) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """Circle-aware projected edge tangents per slot, the chord lengths, and which slots are
+    (near) parallel to the normal (their tangent is set to 0)."""
+    x = mesh.vertices
+    d = x[mesh.topology.neighbors] - x[slot_vertex]
+    n = normals[slot_vertex]
+    s = d - _dot(d, n)[:, None] * n
+    in_plane = np.linalg.norm(s, axis=1)
+    chord = np.linalg.norm(d, axis=1)
+    parallel = ~(in_plane > _PARALLEL * chord)
+    length = 2.0 * chord**2 / (chord + in_plane)
+    scale = np.where(parallel, 0.0, length / np.where(parallel, 1.0, in_plane))
+    return s * scale[:, None], chord, parallel
+
+
+def _fan_gaps(topology: QuadTopology, normals: FloatArray, t: FloatArray) -> tuple[FloatArray, IntArray, IntArray]:
+    """Signed turn from every face's first slot to its second about the normal, (G,), with the
+    vertex of each gap. Gap j of vertex v runs from slot j to slot j + 1 (cyclically inside);
+    a boundary vertex with k faces has k gaps, an interior one n."""
+    offsets = topology.neighbor_offsets
+    counts = topology.face_count
+    gap_vertex = np.repeat(np.arange(topology.n_vertices), counts)
+    local = np.arange(len(gap_vertex)) - np.repeat(np.cumsum(counts) - counts, counts)
+    first = offsets[gap_vertex] + local
+    size = np.diff(offsets)[gap_vertex]
+    second = offsets[gap_vertex] + (local + 1) % size
+    n = normals[gap_vertex]
+    a, b = t[first], t[second]
+    gaps = np.arctan2(_dot(np.cross(a, b), n), _dot(a, b))
+    return gaps, gap_vertex, first
+
+
+def _valid_fans(topology: QuadTopology, normals: FloatArray, t: FloatArray) -> NDArray[np.bool_]:
+    """Per vertex: every consecutive turn in (ε, 180° − ε), once around inside, less than once at a boundary."""
+    gaps, gap_vertex, first = _fan_gaps(topology, normals, t)
+    n = np.maximum(topology.valence, 3)
+    eps = np.minimum(_MIN_GAP, _MIN_GAP_SHARE * 2.0 * np.pi / n)[gap_vertex]
+    length = np.linalg.norm(t, axis=1)
+    ok_gap = (gaps > eps) & (gaps < np.pi - eps) & (length[first] > 0)
+    valid = np.bincount(gap_vertex, weights=~ok_gap, minlength=topology.n_vertices) == 0
+    total = np.bincount(gap_vertex, weights=gaps, minlength=topology.n_vertices)
+    once = np.where(topology.is_boundary_vertex, total < 2.0 * np.pi - _MIN_GAP, np.abs(total - 2.0 * np.pi) < 1e-6)
+    last = topology.neighbor_offsets[1:] - 1  # a boundary vertex's last slot ends no gap: check its length too
+    return valid & once & (length[last] > 0)
+
+
+def spread_fan(topology: QuadTopology, normals: FloatArray, t: FloatArray, chord: FloatArray, vertices: IntArray) -> FloatArray:
+    """Evenly spread slot directions at ``vertices`` (2π/n apart inside, π/max(k, 2) at a
+    boundary), starting from the first slot's direction, with the slots' own lengths (their
+    chords where a slot has none)."""
+    offsets = topology.neighbor_offsets
+    counts = np.diff(offsets)[vertices]
+    slots = np.repeat(offsets[vertices] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+    owner = np.repeat(vertices, counts)
+    local = slots - offsets[owner]
+    n = normals[owner]
+    first = t[offsets[owner]]
+    first = first - _dot(first, n)[:, None] * n
+    reference = np.where(np.linalg.norm(first, axis=1, keepdims=True) > 0, first, _any_perpendicular(n))
+    e1 = reference / np.linalg.norm(reference, axis=1, keepdims=True)
+    e2 = np.cross(n, e1)
+    boundary = topology.is_boundary_vertex[owner]
+    step = np.where(boundary, np.pi / np.maximum(topology.face_count[owner], 2), 2.0 * np.pi / topology.valence[owner])
+    angle = local * step
+    length = np.linalg.norm(t[slots], axis=1)
+    length = np.where(length > 0, length, chord[slots])
+    out = t.copy()
+    out[slots] = (np.cos(angle)[:, None] * e1 + np.sin(angle)[:, None] * e2) * length[:, None]
+    return out
+
+
+def _any_perpendicular(n: FloatArray) -> FloatArray:
+    """A vector ⊥ each unit ``n``: n × (the coordinate axis least aligned with n)."""
+    axis = np.eye(3)[np.argmin(np.abs(n), axis=1)]
+    return np.cross(n, axis)
+
+
+def safeguarded_fans(
+    topology: QuadTopology, normals: FloatArray, raw: FloatArray, chord: FloatArray
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """The raw slot tangents where their fan is valid, else the smallest blend towards the
+    regular star that is, else evenly spread directions (module docstring). Returns the tangents
+    and the vertices that needed the safeguard."""
+    valid = _valid_fans(topology, normals, raw)
+    needs = ~valid
+    if not needs.any():
+        return raw, needs
+    star, _, _ = fit_regular_star(topology, normals, raw)
+    slot_vertex = slot_vertices(topology)
+    t = raw.copy()
+    pending = needs.copy()
+    for mu in _BLENDS:
+        rows = pending[slot_vertex]
+        trial = t.copy()
+        trial[rows] = (1.0 - mu) * raw[rows] + mu * star[rows]
+        passed = pending & _valid_fans(topology, normals, trial)
+        accept = passed[slot_vertex]
+        t[accept] = trial[accept]
+        pending &= ~passed
+        if not pending.any():
+            break
+    if pending.any():
+        t = spread_fan(topology, normals, t, chord, np.flatnonzero(pending))
+    return t, needs
+
+
+def _interior_targets(mesh: QuadMesh, tangents: FloatArray, normals: FloatArray, shape_operator: FloatArray | None) -> FloatArray:
+    """``Ft = A + (t_AB + t_AD)/3 + w/9`` per face corner, ``w = A − B + C − D``; with a shape
+    operator S = dN (:class:`~g1patch.targets.frames.VertexFrames`) the normal part of w is replaced by
+    the second fundamental form, ``N·p_uv = −t_ABᵀ S t_AD``: ``w ← P_A w − (t_ABᵀ S t_AD) N_A``."""
+    from . import halfedge_slots
+
+    topology = mesh.topology
+    faces = topology.faces
+    x = mesh.vertices[faces]  # (F, 4, 3): A at corner k
+    slot_out, slot_in = halfedge_slots(topology)
+    count = topology.n_faces
+    t_next = tangents[slot_out].reshape(count, 4, 3)  # A → B
+    prev = QuadTopology.prev(np.arange(4 * count))
+    t_prev = tangents[slot_in[prev]].reshape(count, 4, 3)  # A → D (the reverse of D → A)
+    w = x - x[:, _NEXT] + x[:, [2, 3, 0, 1]] - x[:, _PREV]
+    if shape_operator is not None:
+        n = normals[faces]
+        s = shape_operator[faces]
+        w = w - (_dot(w, n) + np.einsum("fki,fkij,fkj->fk", t_next, s, t_prev))[..., None] * n
+    return x + (t_next + t_prev) / 3.0 + w / 9.0
+
+
+#: faces whose corner normals turn by less than this keep the local twist targets; from here to
+#: ``_ROUND_FULL`` the cross-section fit is blended in (smoothstep), beyond it used alone
+_ROUND_START = np.radians(10.0)
+_ROUND_FULL = np.radians(40.0)
+#: interior samples per direction of the cross-section fit, and its pull towards the twist targets
+#: (relative to the mean diagonal of its normal equations: fixes the tangential freedom that
+#: point-to-plane distances leave, small enough not to bias the normal direction)
+_ROUND_SAMPLES = 5
+_ROUND_PULL = 1e-3
+_ROUND_BLOCK = 4096
+#: the largest turn of a blended patch's normal away from its corners' that the fit may cause
+_ROUND_MAX_TURN = np.radians(60.0)
+
+
+def _bernstein(t: FloatArray, derivative: bool = False) -> FloatArray:
+    """Cubic Bernstein values (or derivatives) at ``t``, shape ``t.shape + (4,)``."""
+    s = 1.0 - t
+    if derivative:
+        return np.stack([-3 * s * s, 3 * s * s - 6 * t * s, 6 * t * s - 3 * t * t, 3 * t * t], axis=-1)
+    return np.stack([s**3, 3 * t * s * s, 3 * t * t * s, t**3], axis=-1)
+
+
+def _unit_rows(v: FloatArray) -> FloatArray:
+    length = np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / np.where(length > 0, length, 1.0)
+
+
+def _normal_along(tangent: FloatArray, n0: FloatArray, n1: FloatArray, t: FloatArray) -> FloatArray:
+    """The normal ``(1 − t) n0 + t n1`` made ⊥ the unit ``tangent`` and unit."""
+    n = (1.0 - t)[..., None] * n0 + t[..., None] * n1
+    tangent = _unit_rows(tangent)
+    return _unit_rows(n - _dot(n, tangent)[..., None] * tangent)
+
+
+def _circle_section(p: FloatArray, q: FloatArray, n_p: FloatArray, n_q: FloatArray, s: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Point and normal at ``s`` of the circle-aware Hermite cubic from p to q (tangents: q − p
+    projected onto each end's plane, length ``2|d|²/(|d| + |s|)``), the normal blended along it."""
+    d = q - p
+    chord = np.linalg.norm(d, axis=-1)
+
+    def tangent(direction: FloatArray, n: FloatArray) -> FloatArray:
+        projected = direction - _dot(direction, n)[..., None] * n
+        length = np.linalg.norm(projected, axis=-1)
+        return projected * (2.0 * chord**2 / (chord + length) / np.where(length > 0, length, 1.0))[..., None]
+
+    net = (p, p + tangent(d, n_p) / 3.0, q + tangent(-d, n_q) / 3.0, q)
+    b, db = _bernstein(s), _bernstein(s, True)
+    point = sum(b[..., i, None] * net[i] for i in range(4))
+    along = sum(db[..., i, None] * net[i] for i in range(4))
+    return point, _normal_along(along, n_p, n_q, s)
+
+
+def _round_interior(boundary: FloatArray, corner_normals: FloatArray, start: FloatArray) -> FloatArray:
+    """Interior Bézier points (b11, b21, b22, b12) per face that best fit the circle sections.
+
+    ``boundary`` (F, 4, 4, 3): the four boundary cubics, edge k from corner k to k + 1;
+    ``corner_normals`` (F, 4, 3); ``start`` (F, 4, 3) the twist targets. On a grid of interior
+    samples (u, v) the target is the circle-aware cubic across the face from the bottom to the
+    top curve at u (and from the left to the right curve at v), both with normals blended from the
+    corners; the four points minimise ``Σ (n·(p(u, v) − X))² + λ |b − start|²`` (point-to-plane:
+    the sections fix the surface, not its parameterisation). On a sphere the sections are great
+    circles, so the cube comes out round.
+    """
+    count = len(start)
+    g = (np.arange(_ROUND_SAMPLES) + 1.0) / (_ROUND_SAMPLES + 1.0)
+    u, v = (a.ravel() for a in np.meshgrid(g, g, indexing="ij"))
+
+    def curve(k: int, t: FloatArray) -> tuple[FloatArray, FloatArray]:
+        pos = np.einsum("sk,fkd->fsd", _bernstein(t), boundary[:, k])
+        along = np.einsum("sk,fkd->fsd", _bernstein(t, True), boundary[:, k])
+        return pos, _normal_along(along, corner_normals[:, k, None], corner_normals[:, (k + 1) % 4, None], t[None, :])
+
+    (bottom, n_bottom), (top, n_top) = curve(0, u), curve(2, 1.0 - u)
+    (left, n_left), (right, n_right) = curve(3, 1.0 - v), curve(1, v)
+    across_v = _circle_section(bottom, top, n_bottom, n_top, np.broadcast_to(v, bottom.shape[:2]))
+    across_u = _circle_section(left, right, n_left, n_right, np.broadcast_to(u, left.shape[:2]))
+    targets = np.concatenate([across_v[0], across_u[0]], axis=1)
+    normals = np.concatenate([across_v[1], across_u[1]], axis=1)
+
+    weights = _bernstein(u)[:, :, None] * _bernstein(v)[:, None, :]  # (S, 4, 4) tensor Bernstein
+    net = np.zeros((count, 4, 4, 3))
+    net[:, :, 0], net[:, 3, :] = boundary[:, 0], boundary[:, 1]
+    net[:, ::-1, 3], net[:, 0, ::-1] = boundary[:, 2], boundary[:, 3]
+    inner = np.array([[1, 1], [2, 1], [2, 2], [1, 2]])
+    net[:, inner[:, 0], inner[:, 1]] = 0.0
+    known = np.einsum("sij,fijd->fsd", weights, net)
+    inner_weights = np.tile(weights[:, inner[:, 0], inner[:, 1]], (2, 1))  # (2S, 4)
+    rows = (inner_weights[None, :, :, None] * normals[:, :, None, :]).reshape(count, -1, 12)
+    rhs = _dot(normals, targets - np.concatenate([known, known], axis=1))
+    system = np.einsum("fri,frj->fij", rows, rows)
+    right_side = np.einsum("fri,fr->fi", rows, rhs)
+    pull = _ROUND_PULL * np.einsum("fii->f", system) / 12.0
+    system += pull[:, None, None] * np.eye(12)
+    right_side += pull[:, None] * start.reshape(count, 12)
+    return np.linalg.solve(system, right_side[..., None])[..., 0].reshape(count, 4, 3)
+
+
+def _turns_within(boundary: FloatArray, interior: FloatArray, corner_normals: FloatArray) -> NDArray[np.bool_]:
+    """Per face: does the bicubic with this boundary and interior keep its normal within
+    ``_ROUND_MAX_TURN`` of the bilinear blend of its corner normals on a 5 × 5 grid?"""
+    count = len(interior)
+    net = np.empty((count, 4, 4, 3))
+    net[:, :, 0], net[:, 3, :] = boundary[:, 0], boundary[:, 1]
+    net[:, ::-1, 3], net[:, 0, ::-1] = boundary[:, 2], boundary[:, 3]
+    net[:, [1, 2, 2, 1], [1, 1, 2, 2]] = interior
+    g = np.linspace(0.0, 1.0, 5)
+    b, db = _bernstein(g), _bernstein(g, True)
+    p_u = np.einsum("ai,bj,fijd->fabd", db, b, net)
+    p_v = np.einsum("ai,bj,fijd->fabd", b, db, net)
+    normal = _unit_rows(np.cross(p_u, p_v))
+    u, v = g[:, None, None], g[None, :, None]
+    n = corner_normals[:, :, None, None, :]
+    blend = _unit_rows((1 - u) * (1 - v) * n[:, 0] + u * (1 - v) * n[:, 1] + u * v * n[:, 2] + (1 - u) * v * n[:, 3])
+    return (_dot(normal, blend) >= np.cos(_ROUND_MAX_TURN)).all(axis=(1, 2))
+
+
+def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, normals: FloatArray, interior: FloatArray) -> FloatArray:
+    """Blend the circle-section fit (:func:`_round_interior`) into the twist targets of coarse
+    faces: weight ``smoothstep((θ − 10°)/30°)`` of the largest angle θ between the normals at
+    the ends of the face's edges, so fine meshes keep the local targets (and their order) and
+    faces that turn the normal by 40° or more (the cube: 70.5°) take the fit alone. A face whose
+    blended patch would turn its normal more than 60° away from its corners' (a thin wedge of a
+    high-valence fan, where the sections are poorly posed) halves the weight, up to three times,
+    then keeps its twist targets."""
+    from . import halfedge_slots
+
+    topology = mesh.topology
+    faces = topology.faces
+    n = normals[faces]
+    turn = np.arccos(np.clip(_dot(n, n[:, _NEXT]), -1.0, 1.0)).max(axis=1)
+    weight = np.clip((turn - _ROUND_START) / (_ROUND_FULL - _ROUND_START), 0.0, 1.0)
+    weight = weight * weight * (3.0 - 2.0 * weight)
+    chosen = np.flatnonzero(weight > 0)
+    if not chosen.size:
+        return interior
+    slot_out, slot_in = halfedge_slots(topology)
+    x = mesh.vertices
+    out = interior.copy()
+    for low in range(0, chosen.size, _ROUND_BLOCK):
+        block = chosen[low:low + _ROUND_BLOCK]
+        h = (4 * block[:, None] + np.arange(4)).ravel()
+        a, b = x[topology.origin(h)], x[topology.target(h)]
+        boundary = np.stack([a, a + tangents[slot_out[h]] / 3.0, b + tangents[slot_in[h]] / 3.0, b], axis=1).reshape(-1, 4, 4, 3)
+        change = _round_interior(boundary, n[block], interior[block]) - interior[block]
+        scale = weight[block]
+        pending = np.ones(len(block), dtype=bool)
+        for _ in range(4):
+            trial = interior[block] + scale[:, None, None] * change
+            pending &= ~_turns_within(boundary, trial, n[block])
+            if not pending.any():
+                break
+            scale = np.where(pending, 0.5 * scale, scale)
+        scale[pending] = 0.0
+        out[block] += scale[:, None, None] * change
+    return out
+
+
+def interpolate_targets(mesh: QuadMesh) -> Targets:
+    """The default interpolating rule (module docstring)."""
+    from .frames import vertex_frames
+
+    frames = vertex_frames(mesh)
+    topology = mesh.topology
+    normals = frames.normals
+    slot_vertex = slot_vertices(topology)
+    raw, chord, parallel = _projected_tangents(mesh, normals, slot_vertex)
+    tangents, guarded = safeguarded_fans(topology, normals, raw, chord)
+    tangents -= _dot(tangents, normals[slot_vertex])[:, None] * normals[slot_vertex]
+    fallback = guarded | frames.repaired | (np.bincount(slot_vertex, parallel, minlength=topology.n_vertices) > 0)
+    interior = _round_coarse_faces(mesh, tangents, normals, _interior_targets(mesh, tangents, normals, frames.shape_operator))
+    return Targets(topology, mesh.vertices, normals, tangents, np.stack([interior, interior], axis=2), fallback=fallback, rule="interpolate")
+
+
+def shape_targets(mesh: QuadMesh, shape: ShapeRule = "interpolate", *, tangents: TangentRule = "arc") -> Targets:
+    """The targets of ``mesh`` by the named rule."""
+    check_choice("shape", shape, SHAPES)
+    if shape == "legacy":
+        return legacy_targets(mesh, tangents)
+    return interpolate_targets(mesh)
