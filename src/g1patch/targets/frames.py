@@ -31,7 +31,10 @@ resolution (the cube's corners included). Elsewhere N is O(h³) and H O(h²).
 unit sphere with outward normals has S = I − N Nᵀ and principal curvatures are positive on convex
 parts. Note the sign: a parametric surface has ``N·X_ab = −aᵀ S b``.
 
-**Reliability switch.** The fit is used (``fitted``) only where all of these hold; elsewhere the
+**Reliability switch.** The fit is used (``fitted``) only at interior vertices (a boundary
+vertex sees its surface from one side only, and its fitted normal tilted 10–20° off the fan
+normal on OpenSubdiv's boundary fans and folded the surface there) and only where all of these
+hold; elsewhere the
 (repaired) fan normal stays and S comes from the same circle fit with N fixed (3 unknowns h, face
 1-ring), which is exact for spheres too when N is exact:
 
@@ -363,7 +366,8 @@ def vertex_frames(mesh: QuadMesh) -> VertexFrames:
         _fit_all(mesh, ring, two, np.flatnonzero(large), start, True, True, keep_fit)
         _fit_all(mesh, ring, one, np.flatnonzero(~large), start, False, True, keep_fit)
         fitted = (
-            np.isfinite(normals).all(axis=1)
+            ~mesh.topology.is_boundary_vertex  # a one-sided neighbourhood extrapolates the normal
+            & np.isfinite(normals).all(axis=1)
             & np.isfinite(shape_operator).all(axis=(1, 2))
             & (residual <= RESIDUAL)
             & (pivot >= MIN_PIVOT)
