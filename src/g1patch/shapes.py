@@ -7,13 +7,14 @@ linear positions) lives in :mod:`g1patch.mesh`, beside the splitting of non-quad
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from itertools import combinations
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
-from .errors import InputError
-from .mesh import QuadMesh, subdivide
+from .errors import InputError, as_float_array
+from .mesh import QuadMesh, refine_polygons, subdivide
 
 __all__ = [
     "cube",
@@ -27,9 +28,22 @@ __all__ = [
     "genus2",
     "voxel_surface",
     "subdivide",
+    "sphere_quads",
+    "ellipsoid_quads",
+    "torus_quads",
+    "icosa_ellipsoid",
+    "box_cage",
+    "thin_slab",
+    "noisy_sphere",
+    "flat_fan",
+    "sphere_project",
+    "ellipsoid_project",
+    "torus_project",
 ]
 
 HeightFunction = Callable[[NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]]
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 
 def _check_count(name: str, value: int, least: int) -> int:
@@ -180,3 +194,241 @@ def genus2() -> QuadMesh:
     filled[1, 1, 0] = filled[3, 1, 0] = False
     mesh = voxel_surface(filled)
     return mesh.with_vertices(mesh.vertices - np.array([2.5, 1.5, 0.5]))
+
+
+# -- refinement families sampled from smooth surfaces ----------------------------------------------
+
+
+def _unit_rows(points: FloatArray) -> FloatArray:
+    return points / np.linalg.norm(points, axis=-1, keepdims=True)
+
+
+def _check_axes(axes: Sequence[float]) -> FloatArray:
+    values = as_float_array("axes", axes, (3,))
+    if values.shape != (3,) or not (values > 0).all():
+        raise InputError(f"axes: expected three positive semi-axis lengths, got {axes!r}")
+    return values
+
+
+def _split_projected(vertices: FloatArray, faces: IntArray, level: int) -> QuadMesh:
+    """``vertices`` projected onto the unit sphere, then ``level`` times: every quad split 2×2
+    (edge midpoints, face centroids) and every vertex projected onto the unit sphere again."""
+    points = _unit_rows(vertices)
+    for _ in range(_check_count("level", level, 0)):
+        points, faces, _ = refine_polygons(points, faces.ravel(), np.full(len(faces), 4, dtype=np.int64))
+        points = _unit_rows(points)
+    return QuadMesh.from_arrays(points, faces)
+
+
+def sphere_quads(level: int) -> QuadMesh:
+    """The unit sphere from the cube: 6·4^level quads, projected onto the sphere after *each* 2×2 split.
+
+    Level 0 is the cube scaled by 1/√3. Unlike :func:`cube_sphere` (which projects only once,
+    at the end) every split is made on the sphere, so the quads stay close to equal in size:
+    this is the refinement sequence of ``research/shape-quality.md`` §4. The 8 cube corners
+    have valence 3, every other vertex valence 4.
+    """
+    mesh = cube()
+    return _split_projected(mesh.vertices, mesh.faces, level)
+
+
+def ellipsoid_quads(level: int, axes: Sequence[float] = (1.0, 0.7, 0.5)) -> QuadMesh:
+    """:func:`sphere_quads` scaled by the semi-axes ``axes`` along x, y, z (6·4^level quads).
+
+    The vertices lie on the ellipsoid ``Σ (x_k / a_k)² = 1``; :func:`ellipsoid_project` gives
+    its exact closest points and normals.
+    """
+    mesh = sphere_quads(level)
+    return mesh.with_vertices(mesh.vertices * _check_axes(axes))
+
+
+def torus_quads(n_major: int, n_minor: int, R: float = 2.0, r: float = 0.7) -> QuadMesh:
+    """:func:`torus` with the proportions of the refinement study (R = 2, r = 0.7), all valences 4.
+
+    Sequence 12×6, 24×12, 48×24, 96×48 halves the grid step at each level;
+    :func:`torus_project` gives exact closest points and normals.
+    """
+    return torus(n_major, n_minor, R, r)
+
+
+def _icosahedron() -> tuple[FloatArray, IntArray]:
+    """The 12 vertices (0, ±1, ±φ) and cyclic permutations, and its 20 outward triangles.
+
+    The triangles are the vertex triples with all three sides of the edge length 2.
+    """
+    phi = (1.0 + np.sqrt(5.0)) / 2.0
+    signs = np.array([[1.0, 1.0], [1.0, -1.0], [-1.0, 1.0], [-1.0, -1.0]])
+    block = np.column_stack([np.zeros(4), signs[:, 0], phi * signs[:, 1]])
+    vertices = np.concatenate([block, np.roll(block, 1, axis=1), np.roll(block, 2, axis=1)])
+    triples = np.array(list(combinations(range(len(vertices)), 3)))
+    p = vertices[triples]
+    sides = np.linalg.norm(p - np.roll(p, 1, axis=1), axis=-1)
+    triangles = triples[np.isclose(sides, 2.0).all(axis=1)]
+    p = vertices[triangles]
+    inward = np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), p.sum(axis=1)) < 0
+    triangles[inward] = triangles[inward][:, ::-1]
+    return vertices, triangles
+
+
+def icosa_ellipsoid(level: int, axes: Sequence[float] = (1.0, 0.7, 0.5)) -> QuadMesh:
+    """An ellipsoid from the icosahedron: 60·4^level quads with vertex valences 3, 4 and 5.
+
+    Each of the 20 triangles is split into 3 quads (its centroid and edge midpoints), the
+    points are projected onto the unit sphere, then ``level`` 2×2 splits follow, each projected
+    again (as :func:`sphere_quads`), and the result is scaled by ``axes``. The 12 icosahedron
+    vertices keep valence 5, the 20 triangle centroids have valence 3, all others valence 4.
+    """
+    vertices, triangles = _icosahedron()
+    points, quads, _ = refine_polygons(vertices, triangles.ravel(), np.full(len(triangles), 3, dtype=np.int64))
+    mesh = _split_projected(points, quads, level)
+    return mesh.with_vertices(mesh.vertices * _check_axes(axes))
+
+
+# -- cages that provoke folds -----------------------------------------------------------------------
+
+
+def _box_surface(coordinates: Sequence[FloatArray]) -> QuadMesh:
+    """The outward surface of the box grid with increasing grid coordinates along x, y and z."""
+    lattice = voxel_surface(np.ones(tuple(len(c) - 1 for c in coordinates), dtype=bool))
+    index = lattice.vertices.astype(np.int64)  # lattice points 0..n along each axis
+    return lattice.with_vertices(np.stack([c[index[:, k]] for k, c in enumerate(coordinates)], axis=1))
+
+
+def _shortest_edge(mesh: QuadMesh) -> float:
+    ends = mesh.vertices[mesh.topology.edges]
+    return float(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1).min())
+
+
+def _jittered(mesh: QuadMesh, amplitude: float, seed: int) -> QuadMesh:
+    """Every coordinate moved by a uniform random amount in ±``amplitude`` (NumPy generator ``seed``)."""
+    noise = np.random.default_rng(seed).uniform(-amplitude, amplitude, mesh.vertices.shape)
+    return mesh.with_vertices(mesh.vertices + noise)
+
+
+def box_cage(
+    lengths: Sequence[float] = (4.0, 1.0, 0.3),
+    divisions: Sequence[int] = (8, 4, 2),
+    *,
+    jitter_seed: int | None = None,
+    jitter: float = 0.1,
+) -> QuadMesh:
+    """The surface of a centred box of side ``lengths``, gridded with alternating short and long edges.
+
+    Along each axis the grid steps alternate 1 : 4 (short, long, short, …), so every vertex
+    inside a grid line has one short and one long edge along it: the case where a tangent fan
+    that treats opposite edges alike overshoots the short one. With ``jitter_seed`` every
+    coordinate is moved by a uniform random amount in ±``jitter`` × the shortest edge.
+    """
+    size = as_float_array("lengths", lengths, (3,))
+    if size.shape != (3,) or not (size > 0).all():
+        raise InputError(f"lengths: expected three positive box sides, got {lengths!r}")
+    if len(divisions) != 3:
+        raise InputError(f"divisions: expected three counts (x, y, z), got {divisions!r}")
+    coordinates = []
+    for axis, (length, count) in enumerate(zip(size, divisions, strict=True)):
+        steps = np.where(np.arange(_check_count(f"divisions[{axis}]", count, 1)) % 2 == 0, 1.0, 4.0)
+        ends = np.concatenate([[0.0], np.cumsum(steps)])
+        coordinates.append(length * (ends / ends[-1] - 0.5))
+    mesh = _box_surface(coordinates)
+    return mesh if jitter_seed is None else _jittered(mesh, jitter * _shortest_edge(mesh), jitter_seed)
+
+
+def thin_slab(
+    size: tuple[float, float] = (2.0, 1.0), thickness: float = 0.05, divisions: tuple[int, int] = (8, 4), rim: int = 2
+) -> QuadMesh:
+    """A thin centred box ``size`` × ``thickness`` on a uniform grid: flat faces meeting at 90° rims.
+
+    The top and bottom have ``divisions`` quads; ``rim`` quads run across the thickness of each
+    side wall, so every rim vertex sees one long edge across the face and short edges down the wall.
+    """
+    if not thickness > 0 or not all(side > 0 for side in size):
+        raise InputError(f"thin_slab: expected positive size and thickness, got {size!r}, {thickness!r}")
+    nx, ny = _check_count("divisions[0]", divisions[0], 1), _check_count("divisions[1]", divisions[1], 1)
+    nz = _check_count("rim", rim, 1)
+    return _box_surface([
+        np.linspace(-size[0] / 2, size[0] / 2, nx + 1),
+        np.linspace(-size[1] / 2, size[1] / 2, ny + 1),
+        np.linspace(-thickness / 2, thickness / 2, nz + 1),
+    ])
+
+
+def noisy_sphere(level: int, noise: float = 0.08, seed: int = 0) -> QuadMesh:
+    """:func:`sphere_quads` with each coordinate of each vertex moved by a uniform random amount
+    in ±``noise`` × its shortest edge (NumPy generator ``seed``)."""
+    if not 0 <= noise < 0.5:
+        raise InputError(f"noise: expected a fraction of the shortest edge in [0, 0.5), got {noise!r}")
+    mesh = sphere_quads(level)
+    return _jittered(mesh, noise * _shortest_edge(mesh), seed)
+
+
+def flat_fan(valence: int) -> QuadMesh:
+    """A planar disk of ``valence`` convex quads around vertex 0, an interior vertex of that valence.
+
+    Spoke ends (vertices 1..n) sit at radius 0.9 at angles 2πi/n, rim points (n+1..2n) at radius
+    1 halfway between them, and quad i is (0, spoke i, rim i, spoke i+1): a kite, convex and of
+    area ≈ 0.9 sin(π/n) even at n = 360 (rim points inside the chord would make darts, whose
+    bilinear parameterisation folds by itself). Spoke ends have valence 3, rim points 2.
+    """
+    n = _check_count("valence", valence, 3)
+    angles = 2.0 * np.pi * np.arange(n) / n
+    spokes = 0.9 * _spokes(angles)
+    rim = _spokes(angles + np.pi / n)
+    i = np.arange(n)
+    faces = np.stack([np.zeros_like(i), 1 + i, 1 + n + i, 1 + (i + 1) % n], axis=1)
+    return QuadMesh.from_arrays(np.concatenate([np.zeros((1, 3)), spokes, rim]), faces)
+
+
+# -- exact closest points and normals of the sampled surfaces ---------------------------------------
+
+#: Newton steps of :func:`ellipsoid_project` at most; it converges in 3–6 near the surface
+_ELLIPSOID_NEWTON_STEPS = 100
+
+
+def sphere_project(points: ArrayLike, radius: float = 1.0) -> tuple[FloatArray, FloatArray]:
+    """Closest points on the sphere of ``radius`` about the origin, and the outward unit normals there.
+
+    ``points`` (..., 3), not at the centre; returns two arrays of the same shape.
+    """
+    normals = _unit_rows(as_float_array("points", points, (3,)))
+    return radius * normals, normals
+
+
+def ellipsoid_project(points: ArrayLike, axes: Sequence[float] = (1.0, 0.7, 0.5)) -> tuple[FloatArray, FloatArray]:
+    """Closest points on the ellipsoid ``Σ (x_k / a_k)² = 1`` and the outward unit normals there.
+
+    The closest point to p is ``q_k = a_k² p_k / (a_k² + t)`` where t (> −min a_k²) is the root of
+    ``f(t) = Σ (a_k p_k / (a_k² + t))² − 1``, decreasing and convex. Newton's method starts at
+    ``t₀ = max_k (a_k |p_k| − a_k²)``, where the largest term is 1 so f(t₀) ≥ 0: from there
+    every step stays left of the root and the iteration converges monotonically. The normal is
+    ``p / (a² + t)`` normalised. ``points`` (..., 3), not at the centre.
+    """
+    a = _check_axes(axes)
+    p = as_float_array("points", points, (3,))
+    a2 = a * a
+    t = np.max(a * np.abs(p) - a2, axis=-1, keepdims=True)
+    for _ in range(_ELLIPSOID_NEWTON_STEPS):
+        scaled = a * p / (a2 + t)
+        f = (scaled * scaled).sum(axis=-1, keepdims=True) - 1.0
+        slope = -2.0 * (scaled * scaled / (a2 + t)).sum(axis=-1, keepdims=True)
+        step = -f / slope
+        t = t + step
+        if (np.abs(step) <= 4.0 * np.finfo(float).eps * (np.abs(t) + a2.max())).all():
+            break
+    denominator = a2 + t
+    return a2 * p / denominator, _unit_rows(p / denominator)
+
+
+def torus_project(points: ArrayLike, R: float = 2.0, r: float = 0.7) -> tuple[FloatArray, FloatArray]:
+    """Closest points on the torus of :func:`torus` (axis z, radii ``R`` > ``r``) and the outward normals.
+
+    The closest point lies on the tube circle in the half-plane through p: ``c + r n`` with
+    ``c`` the nearest point of the core circle and ``n = (p − c) / |p − c|``. ``points`` (..., 3),
+    off the z axis and off the core circle.
+    """
+    p = as_float_array("points", points, (3,))
+    if not 0 < r < R:
+        raise InputError(f"torus_project: expected radii 0 < r < R, got R={R!r}, r={r!r}")
+    planar = p * np.array([1.0, 1.0, 0.0])
+    core = R * _unit_rows(planar)
+    normals = _unit_rows(p - core)
+    return core + r * normals, normals
