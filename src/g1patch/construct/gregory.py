@@ -152,18 +152,22 @@ def assemble_gregory(targets: Targets) -> GregoryPatchSet:
     r1_right = 3.0 * (far[right, (k_right + 1) & 3] - b1)
     r2_right = 3.0 * (near[right, k_right] - b2)
 
-    d1_left, d2_left, d1_right, d2_right = _kh_fit(
-        q0, q1, q2, d0_left, d3_left, alpha0, beta0, phi0, alpha1, beta1, phi2, (r1_left, r2_left, r1_right, r2_right)
-    )
     symmetric = (np.abs(alpha0 - 1.0) <= SYMMETRIC_TOLERANCE) & (np.abs(alpha1 - 1.0) <= SYMMETRIC_TOLERANCE)
-    if symmetric.any():
-        s = symmetric
+    d1_left, d2_left, d1_right, d2_right = (np.empty_like(q0) for _ in range(4))
+    s = symmetric
+    if s.any():  # D_L + D_R = Φ c', Φ linear: both sides move by the same vector
         sum1 = (2.0 * phi0[s, None] * q1[s] + phi2[s, None] * q0[s]) / 3.0
         sum2 = (phi0[s, None] * q2[s] + 2.0 * phi2[s, None] * q1[s]) / 3.0
         shift1 = 0.5 * (sum1 - r1_left[s] - r1_right[s])
         shift2 = 0.5 * (sum2 - r2_left[s] - r2_right[s])
         d1_left[s], d1_right[s] = r1_left[s] + shift1, r1_right[s] + shift1
         d2_left[s], d2_right[s] = r2_left[s] + shift2, r2_right[s] + shift2
+    k = ~symmetric
+    if k.any():
+        d1_left[k], d2_left[k], d1_right[k], d2_right[k] = _kh_fit(
+            q0[k], q1[k], q2[k], d0_left[k], d3_left[k], alpha0[k], beta0[k], phi0[k], alpha1[k], beta1[k], phi2[k],
+            (r1_left[k], r2_left[k], r1_right[k], r2_right[k]),
+        )
 
     near[left, k_left] = b1 + d1_left / 3.0
     far[left, (k_left + 1) & 3] = b2 + d2_left / 3.0
@@ -181,7 +185,8 @@ def _kh_fit(
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Interior coefficients ``d1_L, d2_L, d1_R, d2_R`` of the k-h form (h_L0 = 0) whose free values
     p = (G1, h_L1) fit ``wanted`` best: each coefficient is ``k_i + c_i G1 + v_i h_L1``, and
-    ``min Σ_i |k_i + c_i G1 + v_i h − r_i|² + λ |p|²`` is one 4 × 4 solve per edge."""
+    ``min Σ_i |k_i + c_i G1 + v_i h − r_i|² + λ |p|²`` is a 4 × 4 system per edge whose G1 block
+    is a multiple of I, solved in closed form."""
     b0, b1_, a0, a1 = beta0[:, None], beta1[:, None], alpha0[:, None], alpha1[:, None]
     g0 = d0_left / b0
     h_r0 = phi0[:, None] / b0
@@ -200,19 +205,18 @@ def _kh_fit(
         a0 * q2 / (3.0 * b1_) - 2.0 * a1 * q1 / (3.0 * b1_),
     )
     scalar = (2.0 * b0 / 3.0, 2.0 * b1_ / 3.0, -2.0 * a0 / 3.0, -2.0 * a1 / 3.0)  # ∂/∂G1 = c_i I
-    count = len(q0)
-    normal = np.zeros((count, 4, 4))
-    rhs = np.zeros((count, 4))
-    for k_i, v_i, c_i, r_i in zip(constant, along, scalar, wanted, strict=True):
-        y = r_i - k_i
-        normal[:, :3, :3] += (c_i[:, 0] ** 2)[:, None, None] * np.eye(3)
-        normal[:, :3, 3] += c_i * v_i
-        normal[:, 3, 3] += _dot(v_i, v_i)
-        rhs[:, :3] += c_i * y
-        rhs[:, 3] += _dot(v_i, y)
-    normal[:, 3, :3] = normal[:, :3, 3]
-    diagonal = np.einsum("eii->ei", normal)
-    diagonal += RIDGE * diagonal.max(axis=1, keepdims=True)
-    p = np.linalg.solve(normal, rhs[..., None])[..., 0]
-    g1, h1 = p[:, :3], p[:, 3:]
+    # normal equations [[a I, c], [cᵀ, d]] p = [r_G; r_h]: a = Σ c_i², c = Σ c_i v_i, d = Σ |v_i|²
+    a = sum(c_i[:, 0] ** 2 for c_i in scalar)
+    c = sum(c_i * v_i for c_i, v_i in zip(scalar, along, strict=True))
+    d = sum(_dot(v_i, v_i) for v_i in along)
+    residuals = [r_i - k_i for r_i, k_i in zip(wanted, constant, strict=True)]
+    r_g = sum(c_i * y for c_i, y in zip(scalar, residuals, strict=True))
+    r_h = sum(_dot(v_i, y) for v_i, y in zip(along, residuals, strict=True))
+    ridge = RIDGE * np.maximum(a, d)
+    a = a + ridge
+    d = d + ridge
+    # Schur complement: h = (r_h − c·r_G/a) / (d − |c|²/a), G1 = (r_G − c h)/a
+    h1 = (r_h - _dot(c, r_g) / a) / (d - _dot(c, c) / a)
+    g1 = (r_g - c * h1[:, None]) / a[:, None]
+    h1 = h1[:, None]
     return tuple(k_i + c_i * g1 + v_i * h1 for k_i, v_i, c_i in zip(constant, along, scalar, strict=True))  # type: ignore[return-value]

@@ -79,7 +79,7 @@ class Targets:
             "interior": (topology.n_faces, 4, 2, 3),
         }
         for name, shape in shapes.items():
-            value = as_float_array(name, getattr(self, name), shape[1:])
+            value = as_float_array(f"targets.{name}", getattr(self, name), shape[1:])
             if value.shape != shape:
                 raise InputError(f"targets.{name}: expected shape {shape}, got {value.shape}")
             object.__setattr__(self, name, value)
