@@ -11,7 +11,7 @@ Two rules, both returning :class:`~g1patch.targets.Targets` on the mesh's own po
       (``= 2|d|²/(|d| + |s|)``, :func:`~g1patch.construct.corner.corner_tangents`). A flexible fan:
       no regular-star fit, so a short edge opposite a long one keeps its own length;
     * fan safeguard: in A's tangent plane consecutive slots must turn counter-clockwise by more
-      than ``ε = min(15°, ¼ · 360°/n)`` and less than ``180° − ε``, and go once around (interior)
+      than ``ε = min(2°, ¼ · 360°/n)`` and less than ``180° − ε``, and go once around (interior)
       or less than once (boundary). Where they do not, ``t = (1 − μ) t_raw + μ t_star`` with the
       smallest ``μ ∈ {1/8, …, 1}`` that passes, t_star the regular star fitted to the raw fan; if
       even the star fails, evenly spread directions with the raw lengths. Such vertices are
@@ -51,8 +51,11 @@ IntArray = NDArray[np.int64]
 
 _NEXT = np.array([1, 2, 3, 0])
 _PREV = np.array([3, 0, 1, 2])
-#: the safeguard's largest minimum turn between consecutive slots, and its share of 360°/n
-_MIN_GAP = np.radians(15.0)
+#: the safeguard's largest minimum turn between consecutive slots, and its share of 360°/n: small,
+#: because a thin wedge of the mesh is a thin wedge of its fan (the flat 360-valent disk turns 1°
+#: per face, the boundary vertices of its zigzag rim 4.5°); only fans the mesh does not have
+#: (turned over by the normal, or collapsed) are replaced
+_MIN_GAP = np.radians(2.0)
 _MIN_GAP_SHARE = 0.25
 #: blend weights towards the regular star tried by the safeguard, smallest first
 _BLENDS = np.arange(1, 9) / 8.0
