@@ -9,7 +9,9 @@ Two rules, both returning :class:`~g1patch.targets.Targets` on the mesh's own po
       circle-aware length ``L = |B − A| / cos²(θ/4)``, ``sin(θ/2) = |N·(B − A)|/|B − A|``: the
       Hermite tangent that reproduces the circular arc through B tangent to the plane at A
       (``= 2|d|²/(|d| + |s|)``, :func:`~g1patch.construct.corner.corner_tangents`). A flexible fan:
-      no regular-star fit, so a short edge opposite a long one keeps its own length;
+      no regular-star fit, so a short edge opposite a long one keeps its own length. At a boundary
+      vertex with two or more faces the two rim slots point along ±the rim's central difference,
+      so the boundary curve does not kink there (a corner with one face keeps its edges);
     * fan safeguard: in A's tangent plane consecutive slots must turn counter-clockwise by more
       than ``ε = min(2°, ¼ · 360°/n)`` and less than ``180° − ε``, and go once around (interior)
       or less than once (boundary). Where they do not, ``t = (1 − μ) t_raw + μ t_star`` with the
@@ -160,6 +162,35 @@ def _projected_tangents(
     return s * scale[:, None], chord, parallel
 
 
+def _smooth_boundary_tangents(mesh: QuadMesh, normals: FloatArray, raw: FloatArray) -> FloatArray:
+    """At every boundary vertex with k ≥ 2 faces the two boundary slots get opposite directions,
+    so the boundary curve is tangent-continuous there: ``T = P_A(x_next − x_prev)/|…|`` (the
+    central difference along the rim, in the tangent plane) and ``±T`` times the circle-aware
+    length ``2|d|²/(|d| + |d·T|)`` of each rim edge (the circular arc through its far end tangent
+    to T). A corner (k = 1) keeps its two edges' own directions."""
+    topology = mesh.topology
+    smooth = np.flatnonzero(topology.is_boundary_vertex & (topology.face_count >= 2))
+    if not smooth.size:
+        return raw
+    offsets = topology.neighbor_offsets
+    first, last = offsets[smooth], offsets[smooth + 1] - 1
+    x = mesh.vertices
+    d_next = x[topology.neighbors[first]] - x[smooth]
+    d_prev = x[topology.neighbors[last]] - x[smooth]
+    n = normals[smooth]
+    along = d_next - d_prev
+    along -= _dot(along, n)[:, None] * n
+    length = np.linalg.norm(along, axis=1)
+    usable = length > _PARALLEL * (np.linalg.norm(d_next, axis=1) + np.linalg.norm(d_prev, axis=1))
+    direction = along / np.where(usable, length, 1.0)[:, None]
+    out = raw.copy()
+    for slot, d, sign in ((first, d_next, 1.0), (last, d_prev, -1.0)):
+        chord = np.linalg.norm(d, axis=1)
+        arc = 2.0 * chord**2 / (chord + np.abs(_dot(d, direction)))
+        out[slot[usable]] = (sign * arc[:, None] * direction)[usable]
+    return out
+
+
 def _fan_gaps(topology: QuadTopology, normals: FloatArray, t: FloatArray) -> tuple[FloatArray, IntArray, IntArray]:
     """Signed turn from every face's first slot to its second about the normal, (G,), with the
     vertex of each gap. Gap j of vertex v runs from slot j to slot j + 1 (cyclically inside);
@@ -282,6 +313,8 @@ _ROUND_FULL = np.radians(40.0)
 #: point-to-plane distances leave, small enough not to bias the normal direction)
 _ROUND_SAMPLES = 5
 _ROUND_PULL = 1e-3
+#: sphere misfit (:func:`_sphere_misfit`) at which the circle-section fit is off
+_ROUND_MISFIT = 0.15
 _ROUND_BLOCK = 4096
 #: the largest turn of a blended patch's normal away from its corners' that the fit may cause
 _ROUND_MAX_TURN = np.radians(60.0)
@@ -389,11 +422,29 @@ def _turns_within(boundary: FloatArray, interior: FloatArray, corner_normals: Fl
     return (_dot(normal, blend) >= np.cos(_ROUND_MAX_TURN)).all(axis=(1, 2))
 
 
+def _sphere_misfit(x: FloatArray, n: FloatArray) -> FloatArray:
+    """How far a face's corners (F, 4, 3) and normals are from one sphere: ``x_i ≈ c + R n_i`` by
+    least squares (``R = Σ (x_i − x̄)·(n_i − n̄) / Σ |n_i − n̄|²``), the RMS residual over the mean
+    edge length. 0 on any sphere; 0.05–0.1 with 8 % noise; 0.2–0.4 on a coarse ellipsoid, 0.4–0.8
+    on coarse tori, one-ring disks and Spot's legs."""
+    xc = x - x.mean(axis=1, keepdims=True)
+    nc = n - n.mean(axis=1, keepdims=True)
+    spread = _dot(nc, nc).sum(axis=1)
+    radius = _dot(xc, nc).sum(axis=1) / np.where(spread > 0, spread, 1.0)
+    residual = xc - radius[:, None, None] * nc
+    size = np.linalg.norm(x - x[:, _NEXT], axis=2).mean(axis=1)
+    return np.sqrt(_dot(residual, residual).mean(axis=1)) / np.where(size > 0, size, 1.0)
+
+
 def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, normals: FloatArray, interior: FloatArray) -> FloatArray:
     """Blend the circle-section fit (:func:`_round_interior`) into the twist targets of coarse
     faces: weight ``smoothstep((θ − 10°)/30°)`` of the largest angle θ between the normals at
     the ends of the face's edges, so fine meshes keep the local targets (and their order) and
-    faces that turn the normal by 40° or more (the cube: 70.5°) take the fit alone. A face whose
+    faces that turn the normal by 40° or more (the cube: 70.5°) take the fit alone; the weight
+    falls linearly to 0 as the face's corners depart from one sphere (:func:`_sphere_misfit` up
+    to ``_ROUND_MISFIT``): the sections are circles, so only where a sphere models the face's own
+    data are they a better guess than the local targets (elsewhere they made coarse tori and
+    one-ring disks lumpy). A face whose
     blended patch would turn its normal more than 60° away from its corners' (a thin wedge of a
     high-valence fan, where the sections are poorly posed) halves the weight, up to three times,
     then keeps its twist targets."""
@@ -405,6 +456,7 @@ def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, normals: FloatArra
     turn = np.arccos(np.clip(_dot(n, n[:, _NEXT]), -1.0, 1.0)).max(axis=1)
     weight = np.clip((turn - _ROUND_START) / (_ROUND_FULL - _ROUND_START), 0.0, 1.0)
     weight = weight * weight * (3.0 - 2.0 * weight)
+    weight *= np.clip(1.0 - _sphere_misfit(mesh.vertices[faces], n) / _ROUND_MISFIT, 0.0, 1.0)
     chosen = np.flatnonzero(weight > 0)
     if not chosen.size:
         return interior
@@ -439,6 +491,7 @@ def interpolate_targets(mesh: QuadMesh) -> Targets:
     normals = frames.normals
     slot_vertex = slot_vertices(topology)
     raw, chord, parallel = _projected_tangents(mesh, normals, slot_vertex)
+    raw = _smooth_boundary_tangents(mesh, normals, raw)
     tangents, guarded = safeguarded_fans(topology, normals, raw, chord)
     tangents -= _dot(tangents, normals[slot_vertex])[:, None] * normals[slot_vertex]
     fallback = guarded | frames.repaired | (np.bincount(slot_vertex, parallel, minlength=topology.n_vertices) > 0)
