@@ -61,6 +61,9 @@ _MIN_GAP = np.radians(2.0)
 _MIN_GAP_SHARE = 0.25
 #: blend weights towards the regular star tried by the safeguard, smallest first
 _BLENDS = np.arange(1, 9) / 8.0
+#: a boundary vertex's rim turn up to which its rim is made smooth, and from which it is a corner
+_RIM_SMOOTH = np.radians(45.0)
+_RIM_CORNER = np.radians(90.0)
 #: an edge whose projection onto the tangent plane is shorter than this share of its length is
 #: treated as parallel to the normal: its direction is undefined and the safeguard replaces it
 _PARALLEL = 1e-6
@@ -163,11 +166,13 @@ def _projected_tangents(
 
 
 def _smooth_boundary_tangents(mesh: QuadMesh, normals: FloatArray, raw: FloatArray) -> FloatArray:
-    """At every boundary vertex with k ≥ 2 faces the two boundary slots get opposite directions,
-    so the boundary curve is tangent-continuous there: ``T = P_A(x_next − x_prev)/|…|`` (the
-    central difference along the rim, in the tangent plane) and ``±T`` times the circle-aware
-    length ``2|d|²/(|d| + |d·T|)`` of each rim edge (the circular arc through its far end tangent
-    to T). A corner (k = 1) keeps its two edges' own directions."""
+    """At a boundary vertex with k ≥ 2 faces the two rim slots turn towards opposite directions,
+    so the boundary curve does not kink there: ``T = P_A(x_next − x_prev)/|…|`` (the central
+    difference along the rim, in the tangent plane), lengths the circle-aware
+    ``2|d|²/(|d| + |d·T|)`` of each rim edge (the circular arc through its far end tangent to T).
+    Where the rim itself turns sharply it is a corner of the boundary, not a sampled smooth curve:
+    the directions blend from ``±T`` (rim turn ≤ 45°) to the edges' own (≥ 90°). A corner with
+    one face keeps its edges."""
     topology = mesh.topology
     smooth = np.flatnonzero(topology.is_boundary_vertex & (topology.face_count >= 2))
     if not smooth.size:
@@ -183,11 +188,17 @@ def _smooth_boundary_tangents(mesh: QuadMesh, normals: FloatArray, raw: FloatArr
     length = np.linalg.norm(along, axis=1)
     usable = length > _PARALLEL * (np.linalg.norm(d_next, axis=1) + np.linalg.norm(d_prev, axis=1))
     direction = along / np.where(usable, length, 1.0)[:, None]
+    unit_next, unit_prev = _unit_rows(d_next), _unit_rows(d_prev)
+    rim_turn = np.arccos(np.clip(-_dot(unit_next, unit_prev), -1.0, 1.0))
+    weight = np.clip((_RIM_CORNER - rim_turn) / (_RIM_CORNER - _RIM_SMOOTH), 0.0, 1.0)[:, None]
     out = raw.copy()
     for slot, d, sign in ((first, d_next, 1.0), (last, d_prev, -1.0)):
+        own = _unit_rows(raw[slot])
+        blended = _unit_rows((1.0 - weight) * own + weight * sign * direction)
         chord = np.linalg.norm(d, axis=1)
-        arc = 2.0 * chord**2 / (chord + np.abs(_dot(d, direction)))
-        out[slot[usable]] = (sign * arc[:, None] * direction)[usable]
+        arc = 2.0 * chord**2 / (chord + np.abs(_dot(d, blended)))
+        keep = usable & (np.linalg.norm(raw[slot], axis=1) > 0)
+        out[slot[keep]] = (arc[:, None] * blended)[keep]
     return out
 
 
