@@ -22,6 +22,7 @@ EPS = np.finfo(float).eps
 REPORT_KEYS = {
     "max_edge_angle_deg", "mean_edge_angle_deg", "max_corner_angle_deg", "max_g0_gap",
     "degenerate_normals", "folds", "patches", "shared_edges",
+    "fold_samples", "fold_locations", "turn_median_deg", "turn_p99_deg", "turn_max_deg", "thin_plate",
 }
 
 
@@ -81,13 +82,6 @@ def test_teapot_report(shared_data: Path) -> None:
     assert report.max_corner_angle_deg > 90.0
 
 
-def test_folds_against_the_mesh_normals() -> None:
-    network = build_corner_network(shapes.cube())
-    assert check(network).folds == 0
-    flipped = PatchNetwork(**{**network.__dict__, "vertex_normals": -network.vertex_normals})
-    assert check(flipped).folds == 6
-
-
 def test_per_edge_arrays_locate_the_worst_edge() -> None:
     rng = np.random.default_rng(5)
     mesh = shapes.torus(10, 6)
@@ -109,7 +103,8 @@ def test_report_serialises_to_json() -> None:
 
 def test_summary_names_the_figures() -> None:
     text = check(build_corner_network(shapes.cube())).summary()
-    for label in ("max G1 angle on edges", "max G1 angle at corners", "max G0 gap", "folds", "worst edge"):
+    for label in ("max G1 angle on edges", "max G1 angle at corners", "max G0 gap", "folds", "worst edge",
+                  "normal turn median / p99 / max", "thin-plate energy"):
         assert label in text
 
 

@@ -85,7 +85,7 @@ def _parser() -> argparse.ArgumentParser:
 
     check = command("check", "measure G0/G1 continuity of a network (.npz) or a Bézier patch file (.bpt)")
     check.add_argument("surface", type=Path, help="network (.npz) or patches (.bpt)")
-    check.add_argument("--max-angle", type=float, metavar="DEG", help="exit 1 if a G1 angle exceeds DEG degrees")
+    check.add_argument("--max-angle", type=float, metavar="DEG", help="exit 1 if a G1 angle exceeds DEG degrees or the surface folds")
     check.add_argument("--samples", type=int, default=33, help="samples per edge, both ends included (default: 33)")
     check.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
 
@@ -193,11 +193,21 @@ def _check(args: argparse.Namespace) -> int:
     else:
         print(f"{args.surface} ({network.provenance.get('method', 'file')})")
         print(report.summary())
-    if args.max_angle is not None and not report.is_g1(args.max_angle):
-        if not args.json:
-            print(f"FAILED: G1 angle above {args.max_angle}°", file=sys.stderr)
-        return EXIT_CHECK_FAILED
-    return EXIT_OK
+    if args.max_angle is None:
+        return EXIT_OK
+    failures = []
+    if not report.is_g1(args.max_angle):
+        angle = max(report.max_edge_angle_deg, report.max_corner_angle_deg)
+        failures.append(f"G1 angle {angle:.3e}° above {args.max_angle}°")
+    if report.folds:
+        patch, u, v = report.fold_locations[0]
+        failures.append(f"{report.folds} folded patches (first: patch {patch} at (u, v) = ({u:.4g}, {v:.4g}))")
+    if not args.json:
+        if failures:
+            print("FAILED: " + "; ".join(failures), file=sys.stderr)
+        else:
+            print(f"passed: G1 angles within {args.max_angle}°, no folds")
+    return EXIT_CHECK_FAILED if failures else EXIT_OK
 
 
 def _export(args: argparse.Namespace) -> int:

@@ -1,13 +1,27 @@
-"""How smooth is a patch network? G0 gaps and G1 angles on every shared edge and corner.
+"""How smooth is a patch network? G0 gaps and G1 angles on every shared edge and corner, folds, fairness.
 
 For every interior edge shared by patches L and R the edge is sampled at K ≥ 33 parameters,
 both ends included, from both sides; exact first derivatives give the normals
 ``n = p_u × p_v`` and the G1 angle is ``atan2(|n_L × n_R|, n_L · n_R)`` (accurate near 0, where
 arccos floors at ~1e-6°). The G0 gap is ``|p_L − p_R|``, reported relative to the bounding-box
 diagonal. Corners: the angle between the normals of every pair of patches meeting at a point.
-Folds: a patch normal pointing against the mesh's fan normals (blended over the quad), or, for
-patch files without a mesh, a normal that flips between neighbouring samples. Degenerate normals: ``|p_u × p_v| ≤ degenerate_rtol · diag²`` (collapsed edges), counted on a
-regular grid of samples per patch.
+
+On a ``G × G`` grid of every patch (``G = fold_samples``, both borders included):
+
+* degenerate normals: ``|p_u × p_v| ≤ degenerate_rtol · diag²`` (collapsed edges);
+* folds (intrinsic, DESIGN §4): a patch is folded where two neighbouring samples (along u or v)
+  have normals more than 90° apart (``n_a · n_b < 0``), or where a sample of a corner's grid cell
+  has its normal against the normal at that corner; both patches of a shared edge are folded
+  where their normals at one point of the edge are more than 90° apart (G1 angle > 90°: the
+  surface turns back across the edge). Degenerate normals are skipped;
+* fairness: the normal turn ``θ = 2 asin(|n̂_a − n̂_b| / 2)`` between neighbouring samples (median,
+  p99, max over all pairs of all patches) and the thin-plate energy
+  ``∫∫ |p_uu|² + 2|p_uv|² + |p_vv|² du dv = ∫∫ |∇p_u|² + |∇p_v|² du dv`` (``p_uv = p_vu``), summed
+  over the patches and divided by diag².
+
+Everything is measured in the patches' local coordinates (``patches.local()`` when the patch set
+has a frame): angles do not depend on the frame, gaps and deviations are relative to the diagonal,
+so the figures are the same wherever the model sits and whatever its size.
 """
 
 from __future__ import annotations
@@ -19,19 +33,45 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ._grid import BLOCK_POINTS
 from .errors import InputError
+from .gregory import GregoryPatchSet, gregory_weights
 from .network import PatchNetwork, Patches, edge_parameters
 from .patches import CORNER_PARAMETERS
 
-__all__ = ["ContinuityReport", "check", "angle_between", "format_reports"]
+__all__ = ["ContinuityReport", "check", "fairness", "angle_between", "format_reports"]
 
 DEGENERATE_RTOL = 1e-13
 """|p_u × p_v| ≤ DEGENERATE_RTOL · diag² is a degenerate normal. At a collapsed edge the
 derivative is a sum of equal points with weights summing to zero, ~1e-16 · diag, so the cross
 product there is ~1e-16 · diag²; a real patch of a 1 M-quad mesh has |p_u × p_v| ~ 1e-6 · diag²."""
 
+FOLD_SAMPLES = 17
+"""Grid samples per patch side for folds, degenerate normals and fairness. Newell's teapot, the
+tightest legitimate curls in the shared data, turns its normal by 115° between neighbouring
+samples of a 9 × 9 grid (at the spout, patch 18), which the 90° rule would call a fold;
+on the 17 × 17 grid its largest turn between neighbours is 69°."""
 
-_FOLD_COSINE = np.cos(np.radians(150.0))
+MAX_FOLD_LOCATIONS = 10
+"""The report locates the first this many folded patches."""
+
+# Histogram of the turns, in bounded memory: the squared chord ``s = |n̂_a − n̂_b|² = 4 sin²(θ/2)``
+# (monotone in θ) as float32, whose bit pattern read as an integer is monotone too; its top
+# 8 exponent + 8 mantissa bits make 256 bins per octave of s (bins 0.27 % wide in s, 0.14 % in θ
+# for small θ), from θ = 1e-12° to 180°, and a bin 0 for smaller turns.
+_SHIFT = 23 - 8
+_MIN_TURN_DEG = 1e-12
+
+
+def _chord_codes(chord2: NDArray[np.floating[Any]]) -> NDArray[np.int32]:
+    return np.asarray(chord2, dtype=np.float32).view(np.int32) >> _SHIFT
+
+
+_CODE_MIN = int(_chord_codes(np.array([4.0 * np.sin(np.radians(_MIN_TURN_DEG) / 2.0) ** 2]))[0])
+_CODE_MAX = int(_chord_codes(np.array([4.0]))[0])
+_BINS = _CODE_MAX - _CODE_MIN + 2
+#: bin b holds squared chords in [_EDGES[b], _EDGES[b + 1])
+_EDGES = np.r_[0.0, (np.arange(_CODE_MIN, _CODE_MAX + 2, dtype=np.int32) << _SHIFT).view(np.float32)].astype(np.float64)
 
 
 def angle_between(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -60,6 +100,14 @@ class ContinuityReport:
     inconsistent_orientation_edges: int
     bounding_box_diagonal: float
     max_vertex_deviation: float | None
+    #: grid samples per patch side of the fold, degenerate-normal and fairness measures
+    fold_samples: int
+    #: (patch, u, v) of the first offending sample of the first folded patches (at most 10)
+    fold_locations: tuple[tuple[int, float, float], ...]
+    turn_median_deg: float
+    turn_p99_deg: float
+    turn_max_deg: float
+    thin_plate: float
     #: per shared edge: (patch, edge) of both sides, max G1 angle (deg), max G0 gap (relative)
     edge_patches: NDArray[np.int64] = field(repr=False)
     edge_sides: NDArray[np.int64] = field(repr=False)
@@ -80,8 +128,27 @@ class ContinuityReport:
         }
 
     def is_g1(self, max_angle_deg: float = 1e-9) -> bool:
-        """True when every edge and corner angle is within ``max_angle_deg``."""
+        """True when every edge and corner angle is within ``max_angle_deg`` (folds aside)."""
         return max(self.max_edge_angle_deg, self.max_corner_angle_deg) <= max_angle_deg
+
+    def passes(self, max_angle_deg: float = 1e-9) -> bool:
+        """The check verdict: :meth:`is_g1` and no patch folds."""
+        return self.is_g1(max_angle_deg) and self.folds == 0
+
+    @property
+    def fold_location_dicts(self) -> list[dict[str, Any]]:
+        """:attr:`fold_locations` as ``{"patch", "u", "v"}`` dicts."""
+        return [{"patch": patch, "u": u, "v": v} for patch, u, v in self.fold_locations]
+
+    @property
+    def fairness(self) -> dict[str, float]:
+        """The fairness figures, keyed as :func:`fairness` returns them."""
+        return {
+            "turn_median_deg": self.turn_median_deg,
+            "turn_p99_deg": self.turn_p99_deg,
+            "turn_max_deg": self.turn_max_deg,
+            "thin_plate": self.thin_plate,
+        }
 
     def to_dict(self) -> dict[str, Any]:
         """The scalar figures and the worst edge, JSON-ready."""
@@ -102,6 +169,9 @@ class ContinuityReport:
             "bounding_box_diagonal": self.bounding_box_diagonal,
             "max_vertex_deviation": self.max_vertex_deviation,
             "worst_edge": self.worst_edge,
+            "fold_samples": self.fold_samples,
+            "fold_locations": self.fold_location_dicts,
+            **self.fairness,
         }
 
     def rows(self) -> list[tuple[str, str]]:
@@ -115,7 +185,13 @@ class ContinuityReport:
             ("max G0 gap (of bbox diag)", f"{self.max_g0_gap:.3e}"),
             ("degenerate normals", f"{self.degenerate_normals}"),
             ("folds", f"{self.folds}"),
+            ("normal turn median / p99 / max",
+             f"{self.turn_median_deg:.3g}° / {self.turn_p99_deg:.3g}° / {self.turn_max_deg:.3g}°"),
+            ("thin-plate energy (of diag²)", f"{self.thin_plate:.4g}"),
         ]
+        if self.fold_locations:
+            patch, u, v = self.fold_locations[0]
+            rows.insert(rows.index(("folds", f"{self.folds}")) + 1, ("first fold", f"patch {patch} at (u, v) = ({u:.4g}, {v:.4g})"))
         if self.collapsed_edges:
             rows.insert(2, ("collapsed edges", f"{self.collapsed_edges} ({self.collapsed_patch_edges} patch edges)"))
         if self.inconsistent_orientation_edges:
@@ -149,23 +225,25 @@ def format_reports(reports: list[ContinuityReport], titles: list[str] | None = N
 def check(
     network: PatchNetwork,
     samples: int = 33,
-    fold_samples: int = 9,
+    fold_samples: int = FOLD_SAMPLES,
     degenerate_rtol: float = DEGENERATE_RTOL,
     chunk: int = 4096,
     progress: Callable[[int, int], None] | None = None,
 ) -> ContinuityReport:
-    """Measure G0 and G1 continuity of ``network`` (see the module docstring for the measures).
+    """Measure G0 and G1 continuity, folds and fairness of ``network`` (see the module docstring).
 
-    Work is done in blocks of ``chunk`` edges or patches, so memory stays bounded on networks of
-    millions of patches (the default keeps a block's sample arrays near the size of a core's L2
-    cache, the fastest setting measured); ``progress(done, total)`` is called after each block.
-    Degenerate normals are counted on the ``fold_samples²`` grid of every patch.
+    Work is done in blocks of ``chunk`` edges, and of at most ``chunk`` patches, so memory stays
+    bounded on networks of millions of patches (the default keeps a block's sample arrays near
+    the size of a core's L2 cache, the fastest setting measured); ``progress(done, total)`` is
+    called after each block. Degenerate normals, folds and fairness share the
+    ``fold_samples²`` grid of every patch.
     """
     for name, value, least in (("samples", samples, 2), ("fold_samples", fold_samples, 2), ("chunk", chunk, 1)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
-            raise InputError(f"{name}: expected an integer ≥ {least}, got {value!r}")
+        _check_count(name, value, least)
     patches = network.patches
-    diagonal = network.bounding_box_diagonal() or 1.0
+    local = _local(patches)
+    corners = local.evaluate(CORNER_PARAMETERS)
+    diagonal = _diagonal(corners) or 1.0
     degenerate_level = degenerate_rtol * diagonal**2
 
     left_patch, left_edge = network.shared_edges()
@@ -174,35 +252,42 @@ def check(
     same = network.same_direction[left_patch, left_edge]
     edge_angle = np.zeros(len(left_patch))
     edge_gap = np.zeros(len(left_patch))
-    edge_blocks, patch_blocks = _blocks(len(left_patch), chunk), _blocks(len(patches), chunk)
-    total = len(left_patch) + len(patches)
+    edge_worst = np.zeros(len(left_patch), dtype=np.int64)
+    edge_blocks = _blocks(len(left_patch), chunk)
+    patch_blocks = _blocks(len(local), min(chunk, _patch_block(fold_samples)))
+    total = len(left_patch) + len(local)
     for block in edge_blocks:
-        edge_angle[block], edge_gap[block] = _edge_measures(
-            patches, left_patch[block], left_edge[block], right_patch[block], right_edge[block], same[block],
+        edge_angle[block], edge_worst[block], edge_gap[block] = _edge_measures(
+            local, left_patch[block], left_edge[block], right_patch[block], right_edge[block], same[block],
             samples, degenerate_level,
         )
         if progress is not None:
             progress(block.stop, total)
     edge_gap /= diagonal
 
-    corner_angle = _max_corner_angle(network, patches, degenerate_level, oriented=not same.any())
-    folds = degenerate = 0
+    corner_angle = _max_corner_angle(network, local, degenerate_level, oriented=not same.any())
+    grid = _GridMeasures(len(local), fold_samples, degenerate_level)
     for block in patch_blocks:
-        block_folds, block_degenerate = _folds(network, np.arange(block.start, block.stop), fold_samples, degenerate_level)
-        folds += block_folds
-        degenerate += block_degenerate
+        grid.add(local, block)
         if progress is not None:
             progress(len(left_patch) + block.stop, total)
+    figures = grid.fairness(diagonal)
+    folded_edges = np.flatnonzero(edge_angle > 90.0)
+    folded = grid.folded.copy()
+    folded[left_patch[folded_edges]] = folded[right_patch[folded_edges]] = True
+    edge_sides = (left_patch, left_edge, right_patch, right_edge, same)
+    locations = _first_per_patch(grid.locations + _edge_fold_locations(edge_sides, folded_edges, edge_worst, samples))
 
     max_vertex_deviation = None
     if network.vertices is not None:
-        corners = patches.evaluate(CORNER_PARAMETERS)
-        deviation = np.linalg.norm(corners - network.vertices[network.corner_ids], axis=-1)
+        frame = getattr(patches, "frame", None)
+        vertices = network.vertices if frame is None else frame.to_local(network.vertices)
+        deviation = np.linalg.norm(corners - vertices[network.corner_ids], axis=-1)
         max_vertex_deviation = float(deviation.max() / diagonal) if deviation.size else 0.0
 
     open_patch, _ = network.open_edges()
     return ContinuityReport(
-        patches=len(patches),
+        patches=len(local),
         shared_edges=int(len(left_patch)),
         open_edges=int(len(open_patch)),
         collapsed_edges=int(network.edge_collapsed.sum()),
@@ -212,16 +297,90 @@ def check(
         mean_edge_angle_deg=float(edge_angle.mean()) if len(edge_angle) else 0.0,
         max_corner_angle_deg=corner_angle,
         max_g0_gap=float(edge_gap.max(initial=0.0)),
-        degenerate_normals=degenerate,
-        folds=folds,
+        degenerate_normals=grid.degenerate,
+        folds=int(folded.sum()),
         inconsistent_orientation_edges=int(same.sum()),
-        bounding_box_diagonal=float(diagonal),
+        bounding_box_diagonal=float(diagonal if local is patches else network.bounding_box_diagonal()),
         max_vertex_deviation=max_vertex_deviation,
+        fold_samples=fold_samples,
+        fold_locations=tuple(locations),
+        turn_median_deg=figures["turn_median_deg"],
+        turn_p99_deg=figures["turn_p99_deg"],
+        turn_max_deg=figures["turn_max_deg"],
+        thin_plate=figures["thin_plate"],
         edge_patches=np.stack([left_patch, right_patch], axis=1),
         edge_sides=np.stack([left_edge, right_edge], axis=1),
         edge_angle_deg=edge_angle,
         edge_gap=edge_gap,
     )
+
+
+def fairness(network: PatchNetwork, samples: int = FOLD_SAMPLES, degenerate_rtol: float = DEGENERATE_RTOL) -> dict[str, float]:
+    """The fairness figures of :func:`check` on a ``samples²`` grid per patch.
+
+    Keys: ``turn_median_deg``, ``turn_p99_deg``, ``turn_max_deg`` (the normal turn between
+    neighbouring grid samples along u and v, over all pairs of all patches) and ``thin_plate``
+    (``Σ ∫∫ |p_uu|² + 2|p_uv|² + |p_vv|² du dv / diag²``).
+    """
+    _check_count("samples", samples, 2)
+    local = _local(network.patches)
+    diagonal = _diagonal(local.evaluate(CORNER_PARAMETERS)) or 1.0
+    grid = _GridMeasures(len(local), samples, degenerate_rtol * diagonal**2)
+    for block in _blocks(len(local), _patch_block(samples)):
+        grid.add(local, block)
+    return grid.fairness(diagonal)
+
+
+def _patch_block(resolution: int) -> int:
+    """Patches per block of the grid measures: about :data:`g1patch._grid.BLOCK_POINTS` grid samples,
+    so the block's arrays stay in the L2 cache and its GEMMs below the size at which OpenBLAS
+    splits them over threads (measured: 33 µs per patch at 17² samples in blocks of 64 patches,
+    83 µs in blocks of 467)."""
+    return max(1, BLOCK_POINTS // resolution**2)
+
+
+def _edge_fold_locations(
+    sides: tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.bool_]],
+    folded_edges: NDArray[np.int64],
+    worst: NDArray[np.int64],
+    samples: int,
+) -> list[tuple[int, float, float]]:
+    """(patch, u, v) of the worst sample of the given folded edges on both sides, for the first
+    :data:`MAX_FOLD_LOCATIONS` patches (side R is sampled at ``t[::-1]`` unless ``same``)."""
+    left_patch, left_edge, right_patch, right_edge, same = (side[folded_edges] for side in sides)
+    index = worst[folded_edges]
+    t = np.linspace(0.0, 1.0, samples)
+    patch = np.concatenate([left_patch, right_patch])
+    edge = np.concatenate([left_edge, right_edge])
+    parameter = np.concatenate([t[index], t[np.where(same, index, samples - 1 - index)]])
+    _, first = np.unique(patch, return_index=True)
+    first = first[:MAX_FOLD_LOCATIONS]
+    uv = edge_parameters(edge[first], parameter[first])
+    return [(int(p), float(u), float(v)) for p, (u, v) in zip(patch[first], uv, strict=True)]
+
+
+def _first_per_patch(locations: list[tuple[int, float, float]]) -> list[tuple[int, float, float]]:
+    """The lowest location of each patch, for the first :data:`MAX_FOLD_LOCATIONS` patches."""
+    first: dict[int, tuple[int, float, float]] = {}
+    for location in sorted(locations):
+        first.setdefault(location[0], location)
+    return list(first.values())[:MAX_FOLD_LOCATIONS]
+
+
+def _check_count(name: str, value: object, least: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+        raise InputError(f"{name}: expected an integer ≥ {least}, got {value!r}")
+
+
+def _local(patches: Patches) -> Patches:
+    """The patches in their local coordinates (frame-free), or the patches when they have no frame."""
+    return patches.local() if hasattr(patches, "local") else patches  # type: ignore[no-any-return]
+
+
+def _diagonal(points: NDArray[np.float64]) -> float:
+    """Length of the diagonal of the bounding box of ``points`` (..., 3)."""
+    flat = points.reshape(-1, 3)
+    return float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0))) if len(flat) else 0.0
 
 
 def _blocks(count: int, size: int) -> list[slice]:
@@ -310,8 +469,9 @@ def _edge_measures(
     same: NDArray[np.bool_],
     samples: int,
     degenerate_level: float,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Max G1 angle (deg) and max G0 gap (absolute) along each given shared edge.
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
+    """Max G1 angle (deg), the sample index where it is reached, and max G0 gap (absolute) along
+    each given shared edge.
 
     Side R runs along the edge in its own counter-clockwise direction, so it is sampled at the
     reversed parameters (exactly ``t[::-1]``) unless both sides run the same way; then its
@@ -326,7 +486,8 @@ def _edge_measures(
     angles = np.where(usable, _angle3(normal_left, normal_right), 0.0)
     point_left -= point_right
     gaps = _norm3(point_left)
-    return angles.max(axis=1, initial=0.0), gaps.max(axis=1, initial=0.0)
+    worst = angles.argmax(axis=1)
+    return np.take_along_axis(angles, worst[:, None], axis=1)[:, 0], worst, gaps.max(axis=1, initial=0.0)
 
 
 def _max_corner_angle(network: PatchNetwork, patches: Patches, degenerate_level: float, oriented: bool) -> float:
@@ -358,37 +519,125 @@ def _max_corner_angle(network: PatchNetwork, patches: Patches, degenerate_level:
     return worst
 
 
-def _folds(network: PatchNetwork, patch_ids: NDArray[np.int64], resolution: int, degenerate_level: float) -> tuple[int, int]:
-    """Patches (of ``patch_ids``) that fold somewhere on a ``resolution²`` grid, and degenerate samples.
+def _turn_deg(chord2: float) -> float:
+    """The angle θ of unit vectors a chord ``√chord2 = |a − b| = 2 sin(θ/2)`` apart, in degrees."""
+    return float(np.degrees(2.0 * np.arcsin(min(1.0, np.sqrt(chord2) / 2.0))))
 
-    With mesh vertex normals: a fold is a patch normal against the bilinear blend of the fan
-    normals at its four corners. Without (patch files): a normal that turns by more than 150°
-    between neighbouring grid samples: a fold reverses the normal, while a smooth patch turns
-    far less over one sample step (Newell's teapot rim, the tightest curl in the shared data,
-    turns 115° over 1/8 of its patch).
+
+class _GridMeasures:
+    """Degenerate normals, folds and fairness on a ``resolution²`` grid per patch, accumulated block by block.
+
+    Folds are flagged per patch, located at the first offending sample (row-major, u first). The
+    turns go into a histogram (see ``_EDGES``), their maximum is exact (``atan2`` of the worst
+    pair), and the thin-plate energy is summed once over per-patch energies, so the figures do not
+    depend on the blocks.
     """
-    patches = network.patches.take(patch_ids)
-    grid = np.linspace(0.0, 1.0, resolution)
-    normals = _cross3(_planar(patches.evaluate_grid(grid, grid, 1, 0)), _planar(patches.evaluate_grid(grid, grid, 0, 1)))
-    length = _norm3(normals)  # (N, G, G)
-    usable = length > degenerate_level
-    if network.vertex_normals is not None:
-        n0, n1, n2, n3 = np.moveaxis(network.vertex_normals[network.corner_ids[patch_ids]], 1, 0)
-        u = grid[:, None]
-        v = grid[None, :]
-        # the bilinear blend of the corner normals, summed term by term in place
-        weights = ((1 - u) * (1 - v), u * (1 - v), u * v, (1 - u) * v)
-        reference = weights[0] * _planar(n0)[:, :, None, None]
-        term = np.empty_like(reference)
-        for corner, weight in zip((n1, n2, n3), weights[1:], strict=True):
-            reference += np.multiply(weight, _planar(corner)[:, :, None, None], out=term)
-        folded = ((_dot3(normals, reference) < 0) & usable).any(axis=(1, 2))
-    else:
-        folded = np.zeros(len(patch_ids), dtype=bool)
-        tiny = np.finfo(float).tiny
-        for ahead, behind in ((np.s_[:, 1:], np.s_[:, :-1]), (np.s_[:, :, 1:], np.s_[:, :, :-1])):  # along u, along v
-            cosine = _dot3(normals[(slice(None), *ahead)], normals[(slice(None), *behind)]) / np.maximum(
-                length[ahead] * length[behind], tiny
-            )
-            folded |= ((cosine < _FOLD_COSINE) & usable[ahead] & usable[behind]).any(axis=(1, 2))
-    return int(folded.sum()), int((~usable).sum())
+
+    def __init__(self, count: int, resolution: int, degenerate_level: float) -> None:
+        self.grid = np.linspace(0.0, 1.0, resolution)
+        self.degenerate_level = degenerate_level
+        self.degenerate = 0
+        self.folded = np.zeros(count, dtype=bool)
+        self.locations: list[tuple[int, float, float]] = []
+        self.histogram = np.zeros(_BINS, dtype=np.int64)
+        self.max_turn_deg = 0.0
+        self.energy = np.zeros(count)
+        # trapezoid weights across the differences: ∫∫|∂_u f|² ≈ Σ_ij w_j |f_(i+1)j − f_ij|² (midpoint rule
+        # along u, the h = 1/(G − 1) of the difference quotient and of both rules cancel)
+        self.weights = np.ones(resolution)
+        self.weights[[0, -1]] = 0.5
+        self.gregory_weights: list[NDArray[np.float64]] | None = None
+
+    def add(self, patches: Patches, block: slice) -> None:
+        """Measure the patches ``block`` of ``patches``."""
+        p_u, p_v = self._tangents(patches.take(np.arange(block.start, block.stop)))  # (3, B, G, G) each
+        normal = _cross3(p_u, p_v)
+        length = _norm3(normal)  # (B, G, G)
+        usable = length > self.degenerate_level
+        self.degenerate += int(usable.size - np.count_nonzero(usable))
+        unit = normal * (1.0 / np.maximum(length, np.finfo(float).tiny))
+
+        offending = np.zeros(length.shape, dtype=bool)
+        last = len(self.grid) - 1
+        for corner_u, corner_v in ((0, 0), (last, 0), (last, last), (0, last)):
+            # the corner's grid cell: a patch turned over at its corner
+            step_u, step_v = (1 if corner_u == 0 else -1), (1 if corner_v == 0 else -1)
+            corner = normal[:, :, corner_u, corner_v]
+            for i, j in ((corner_u + step_u, corner_v), (corner_u, corner_v + step_v), (corner_u + step_u, corner_v + step_v)):
+                against = _dot3(normal[:, :, i, j], corner) < 0
+                offending[:, i, j] |= against & usable[:, i, j] & usable[:, corner_u, corner_v]
+        worst_chord2, worst_pair = -1.0, None
+        for axis in (1, 2):  # neighbours along u, along v
+            ahead = tuple(slice(1, None) if a == axis else slice(None) for a in range(3))
+            behind = tuple(slice(None, -1) if a == axis else slice(None) for a in range(3))
+            chord = unit[(slice(None), *ahead)] - unit[(slice(None), *behind)]
+            chord2 = _dot3(chord, chord)  # |n̂_a − n̂_b|² = 4 sin²(θ/2): > 2 where θ > 90°
+            paired = usable[ahead] & usable[behind]
+            offending[behind] |= (chord2 > 2.0) & paired
+            bins = _chord_codes(chord2) - (_CODE_MIN - 1)
+            np.clip(bins, 0, _BINS - 1, out=bins)
+            if paired.all():
+                self.histogram += np.bincount(bins.reshape(-1), minlength=_BINS)
+            else:
+                self.histogram += np.bincount(bins[paired], minlength=_BINS)
+                chord2[~paired] = -1.0
+            index = int(np.argmax(chord2))
+            if chord2.reshape(-1)[index] > worst_chord2:
+                worst_chord2 = float(chord2.reshape(-1)[index])
+                position = np.unravel_index(index, chord2.shape)
+                following = tuple(p + (a == axis) for a, p in enumerate(position))
+                worst_pair = (normal[(slice(None), *position)][:, None], normal[(slice(None), *following)][:, None])
+        if worst_pair is not None:
+            self.max_turn_deg = max(self.max_turn_deg, float(_angle3(*worst_pair)[0]))
+
+        folded = offending.any(axis=(1, 2))
+        self.folded[block] = folded
+        for patch in np.flatnonzero(folded)[: MAX_FOLD_LOCATIONS - len(self.locations)]:
+            i, j = np.unravel_index(int(np.argmax(offending[patch])), offending.shape[1:])
+            self.locations.append((block.start + int(patch), float(self.grid[i]), float(self.grid[j])))
+
+        energy = self.energy[block]
+        for derivative in (p_u, p_v):
+            along_u = derivative[:, :, 1:] - derivative[:, :, :-1]
+            along_v = derivative[:, :, :, 1:] - derivative[:, :, :, :-1]
+            energy += _dot3(along_u, along_u).sum(axis=1) @ self.weights
+            energy += _dot3(along_v, along_v).sum(axis=2) @ self.weights
+
+    def _tangents(self, group: Patches) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``p_u`` and ``p_v`` of ``group`` on the grid, planar ``(3, B, G, G)``.
+
+        Gregory patches without a frame: ``p[d, n] = P[d, n] @ W``, the points ``(20,)`` of every
+        coordinate and patch times the weights ``W`` ``(20, G²)``, a planar result (their
+        ``evaluate_grid`` multiplies interleaved values by a Kronecker factor of two thirds zeros).
+        """
+        if not (isinstance(group, GregoryPatchSet) and getattr(group, "frame", None) is None):
+            return _planar(group.evaluate_grid(self.grid, self.grid, 1, 0)), _planar(group.evaluate_grid(self.grid, self.grid, 0, 1))
+        if self.gregory_weights is None:
+            u, v = self.grid[:, None], self.grid[None, :]
+            self.gregory_weights = [gregory_weights(u, v, du, dv).reshape(-1, 20).T.copy() for du, dv in ((1, 0), (0, 1))]
+        points = np.ascontiguousarray(np.moveaxis(group.points, -1, 0))  # (3, B, 20)
+        shape = (3, len(group), len(self.grid), len(self.grid))
+        p_u, p_v = (np.matmul(points, weights).reshape(shape) for weights in self.gregory_weights)
+        return p_u, p_v
+
+    def fairness(self, diagonal: float) -> dict[str, float]:
+        """Median, p99 and max turn (degrees) and the thin-plate energy divided by ``diagonal²``."""
+        return {
+            "turn_median_deg": self._percentile(0.5),
+            "turn_p99_deg": self._percentile(0.99),
+            "turn_max_deg": self.max_turn_deg,
+            "thin_plate": float(self.energy.sum() / diagonal**2),
+        }
+
+    def _percentile(self, q: float) -> float:
+        """The turn of rank ``q (M − 1)`` of the M pairs, interpolated linearly in s inside its bin
+        (capped by the exact maximum); 0 without pairs."""
+        total = int(self.histogram.sum())
+        if not total:
+            return 0.0
+        rank = q * (total - 1)
+        cumulative = np.cumsum(self.histogram)
+        b = int(np.searchsorted(cumulative, rank, side="right"))
+        fraction = (rank - (cumulative[b] - self.histogram[b]) + 0.5) / self.histogram[b]
+        chord2 = _EDGES[b] + fraction * (_EDGES[b + 1] - _EDGES[b])
+        return min(_turn_deg(chord2), self.max_turn_deg)
