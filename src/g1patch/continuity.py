@@ -331,6 +331,20 @@ def fairness(network: PatchNetwork, samples: int = FOLD_SAMPLES, degenerate_rtol
     return grid.fairness(diagonal)
 
 
+def folded_patches(patches: Patches, samples: int = 9, degenerate_rtol: float = DEGENERATE_RTOL) -> NDArray[np.bool_]:
+    """Which patches fold (the intrinsic test of :func:`check`) on a ``samples²`` grid, (N,) bool.
+
+    For a builder's fold guard: no network needed, patches in any coordinates.
+    """
+    _check_count("samples", samples, 2)
+    local = _local(patches)
+    diagonal = _diagonal(local.evaluate(CORNER_PARAMETERS)) or 1.0
+    grid = _GridMeasures(len(local), samples, degenerate_rtol * diagonal**2)
+    for block in _blocks(len(local), _patch_block(samples)):
+        grid.add(local, block)
+    return grid.folded
+
+
 def _patch_block(resolution: int) -> int:
     """Patches per block of the grid measures: about :data:`g1patch._grid.BLOCK_POINTS` grid samples,
     so the block's arrays stay in the L2 cache and its GEMMs below the size at which OpenBLAS

@@ -42,7 +42,7 @@ from . import Targets
 
 __all__ = [
     "SHAPES", "ShapeRule", "fit_regular_star", "interpolate_targets", "legacy_targets", "safeguarded_fans", "shape_targets",
-    "slot_vertices", "spread_fan", "tangent_stars",
+    "retreat", "slot_vertices", "spread_fan", "tangent_stars",
 ]
 
 ShapeRule = Literal["interpolate", "legacy"]
@@ -144,7 +144,7 @@ def legacy_targets(mesh: QuadMesh, tangents: TangentRule = "arc") -> Targets:
     topology = mesh.topology
     normals = fan_normals(mesh)
     star, _ = tangent_stars(mesh, normals, tangents)
-    interior = _interior_targets(mesh, star, normals, None)
+    interior = _interior_targets(topology, mesh.vertices, star, normals, None)
     return Targets(topology, mesh.vertices, normals, star, np.stack([interior, interior], axis=2), rule="legacy")
 
 
@@ -293,15 +293,16 @@ def safeguarded_fans(
     return t, needs
 
 
-def _interior_targets(mesh: QuadMesh, tangents: FloatArray, normals: FloatArray, shape_operator: FloatArray | None) -> FloatArray:
+def _interior_targets(
+    topology: QuadTopology, positions: FloatArray, tangents: FloatArray, normals: FloatArray, shape_operator: FloatArray | None
+) -> FloatArray:
     """``Ft = A + (t_AB + t_AD)/3 + w/9`` per face corner, ``w = A − B + C − D``; with a shape
     operator S = dN (:class:`~g1patch.targets.frames.VertexFrames`) the normal part of w is replaced by
     the second fundamental form, ``N·p_uv = −t_ABᵀ S t_AD``: ``w ← P_A w − (t_ABᵀ S t_AD) N_A``."""
     from . import halfedge_slots
 
-    topology = mesh.topology
     faces = topology.faces
-    x = mesh.vertices[faces]  # (F, 4, 3): A at corner k
+    x = positions[faces]  # (F, 4, 3): A at corner k
     slot_out, slot_in = halfedge_slots(topology)
     count = topology.n_faces
     t_next = tangents[slot_out].reshape(count, 4, 3)  # A → B
@@ -506,8 +507,35 @@ def interpolate_targets(mesh: QuadMesh) -> Targets:
     tangents, guarded = safeguarded_fans(topology, normals, raw, chord)
     tangents -= _dot(tangents, normals[slot_vertex])[:, None] * normals[slot_vertex]
     fallback = guarded | frames.repaired | (np.bincount(slot_vertex, parallel, minlength=topology.n_vertices) > 0)
-    interior = _round_coarse_faces(mesh, tangents, normals, _interior_targets(mesh, tangents, normals, frames.shape_operator))
+    interior = _round_coarse_faces(mesh, tangents, normals, _interior_targets(topology, mesh.vertices, tangents, normals, frames.shape_operator))
     return Targets(topology, mesh.vertices, normals, tangents, np.stack([interior, interior], axis=2), fallback=fallback, rule="interpolate")
+
+
+def retreat(targets: Targets, vertices: IntArray, weight: float) -> Targets:
+    """``targets`` moved by ``weight`` ∈ [0, 1] towards the previous release's rule at ``vertices``:
+    their normals towards the fan normal, their slot tangents (re-projected) towards the regular
+    star fitted to that fan, and the interior targets of every face corner at them towards the
+    bilinear twist (no curvature term, no section fit). The build's fold guard uses it where a
+    patch turns back on itself; those vertices join ``fallback``."""
+    topology = targets.topology
+    chosen = np.zeros(topology.n_vertices, dtype=bool)
+    chosen[vertices] = True
+    fan = fan_normals(QuadMesh(targets.positions, topology))
+    normals = targets.normals.copy()
+    normals[chosen] = _unit_rows((1.0 - weight) * normals[chosen] + weight * fan[chosen])
+    slot_vertex = slot_vertices(topology)
+    n = normals[slot_vertex]
+    projected = targets.tangents - _dot(targets.tangents, n)[:, None] * n
+    star, _, valid = fit_regular_star(topology, normals, projected)
+    chosen &= valid
+    rows = chosen[slot_vertex]
+    tangents = targets.tangents.copy()
+    tangents[rows] = (1.0 - weight) * projected[rows] + weight * star[rows]
+    bilinear = _interior_targets(topology, targets.positions, tangents, normals, None)
+    corners = chosen[topology.faces]
+    interior = targets.interior.copy()
+    interior[corners] = (1.0 - weight) * interior[corners] + weight * bilinear[corners][:, None, :]
+    return Targets(topology, targets.positions, normals, tangents, interior, targets.sharpness, targets.fallback | chosen, targets.rule)
 
 
 def shape_targets(mesh: QuadMesh, shape: ShapeRule = "interpolate", *, tangents: TangentRule = "arc") -> Targets:
