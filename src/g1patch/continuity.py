@@ -141,7 +141,181 @@ class ContinuityReport:
         return [{"patch": patch, "u": u, "v": v} for patch, u, v in self.fold_locations]
 
     @property
-    def fairness(network: PatchNetwork, samples: int = FOLD_SAMPLES, degenerate_rtol: float = DEGENERATE_RTOL) -> dict[str, float]:
+    def fairness(self) -> dict[str, float]:
+        """The fairness figures, keyed as :func:`fairness` returns them."""
+        return {
+            "turn_median_deg": self.turn_median_deg,
+            "turn_p99_deg": self.turn_p99_deg,
+            "turn_max_deg": self.turn_max_deg,
+            "thin_plate": self.thin_plate,
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """The scalar figures and the worst edge, JSON-ready."""
+        return {
+            "patches": self.patches,
+            "shared_edges": self.shared_edges,
+            "open_edges": self.open_edges,
+            "collapsed_edges": self.collapsed_edges,
+            "collapsed_patch_edges": self.collapsed_patch_edges,
+            "samples_per_edge": self.samples_per_edge,
+            "max_edge_angle_deg": self.max_edge_angle_deg,
+            "mean_edge_angle_deg": self.mean_edge_angle_deg,
+            "max_corner_angle_deg": self.max_corner_angle_deg,
+            "max_g0_gap": self.max_g0_gap,
+            "degenerate_normals": self.degenerate_normals,
+            "folds": self.folds,
+            "inconsistent_orientation_edges": self.inconsistent_orientation_edges,
+            "bounding_box_diagonal": self.bounding_box_diagonal,
+            "max_vertex_deviation": self.max_vertex_deviation,
+            "worst_edge": self.worst_edge,
+            "fold_samples": self.fold_samples,
+            "fold_locations": self.fold_location_dicts,
+            **self.fairness,
+        }
+
+    def rows(self) -> list[tuple[str, str]]:
+        """(label, value) pairs of the figures, as :meth:`summary` prints them."""
+        rows = [
+            ("patches", f"{self.patches}"),
+            ("shared / open edges", f"{self.shared_edges} / {self.open_edges}"),
+            ("max G1 angle on edges", f"{self.max_edge_angle_deg:.3e}°"),
+            ("mean G1 angle on edges", f"{self.mean_edge_angle_deg:.3e}°"),
+            ("max G1 angle at corners", f"{self.max_corner_angle_deg:.3e}°"),
+            ("max G0 gap (of bbox diag)", f"{self.max_g0_gap:.3e}"),
+            ("degenerate normals", f"{self.degenerate_normals}"),
+            ("folds", f"{self.folds}"),
+            ("normal turn median / p99 / max",
+             f"{self.turn_median_deg:.3g}° / {self.turn_p99_deg:.3g}° / {self.turn_max_deg:.3g}°"),
+            ("thin-plate energy (of diag²)", f"{self.thin_plate:.4g}"),
+        ]
+        if self.fold_locations:
+            patch, u, v = self.fold_locations[0]
+            rows.insert(rows.index(("folds", f"{self.folds}")) + 1, ("first fold", f"patch {patch} at (u, v) = ({u:.4g}, {v:.4g})"))
+        if self.collapsed_edges:
+            rows.insert(2, ("collapsed edges", f"{self.collapsed_edges} ({self.collapsed_patch_edges} patch edges)"))
+        if self.inconsistent_orientation_edges:
+            rows.append(("edges with flipped orientation", f"{self.inconsistent_orientation_edges}"))
+        if self.max_vertex_deviation is not None:
+            rows.append(("max vertex deviation (of diag)", f"{self.max_vertex_deviation:.3e}"))
+        worst = self.worst_edge
+        if worst is not None:
+            rows.append(
+                ("worst edge", f"patch {worst['patches'][0]} edge {worst['edges'][0]} / "
+                 f"patch {worst['patches'][1]} edge {worst['edges'][1]}")
+            )
+        return rows
+
+    def summary(self) -> str:
+        """A short human-readable table."""
+        return format_reports([self])
+
+
+def format_reports(reports: list[ContinuityReport], titles: list[str] | None = None) -> str:
+    """The reports' figures as a table, one column per report (rows missing from one are blank)."""
+    columns = [dict(report.rows()) for report in reports]
+    labels = list(dict.fromkeys(label for report in reports for label, _ in report.rows()))
+    table = [[label, *(column.get(label, "") for column in columns)] for label in labels]
+    if titles is not None:
+        table = [["", *titles], ["", *("-" * len(title) for title in titles)], *table]
+    widths = [max(len(row[i]) for row in table) for i in range(len(table[0]))]
+    return "\n".join("  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True)).rstrip() for row in table)
+
+
+def check(
+    network: PatchNetwork,
+    samples: int = 33,
+    fold_samples: int = FOLD_SAMPLES,
+    degenerate_rtol: float = DEGENERATE_RTOL,
+    chunk: int = 4096,
+    progress: Callable[[int, int], None] | None = None,
+) -> ContinuityReport:
+    """Measure G0 and G1 continuity, folds and fairness of ``network`` (see the module docstring).
+
+    Work is done in blocks of ``chunk`` edges, and of at most ``chunk`` patches, so memory stays
+    bounded on networks of millions of patches (the default keeps a block's sample arrays near
+    the size of a core's L2 cache, the fastest setting measured); ``progress(done, total)`` is
+    called after each block. Degenerate normals, folds and fairness share the
+    ``fold_samples²`` grid of every patch.
+    """
+    for name, value, least in (("samples", samples, 2), ("fold_samples", fold_samples, 2), ("chunk", chunk, 1)):
+        _check_count(name, value, least)
+    patches = network.patches
+    local = _local(patches)
+    corners = local.evaluate(CORNER_PARAMETERS)
+    diagonal = _diagonal(corners) or 1.0
+    degenerate_level = degenerate_rtol * diagonal**2
+
+    left_patch, left_edge = network.shared_edges()
+    right_patch = network.neighbor[left_patch, left_edge]
+    right_edge = network.neighbor_edge[left_patch, left_edge]
+    same = network.same_direction[left_patch, left_edge]
+    edge_angle = np.zeros(len(left_patch))
+    edge_gap = np.zeros(len(left_patch))
+    edge_worst = np.zeros(len(left_patch), dtype=np.int64)
+    edge_blocks = _blocks(len(left_patch), chunk)
+    patch_blocks = _blocks(len(local), min(chunk, _patch_block(fold_samples)))
+    total = len(left_patch) + len(local)
+    for block in edge_blocks:
+        edge_angle[block], edge_worst[block], edge_gap[block] = _edge_measures(
+            local, left_patch[block], left_edge[block], right_patch[block], right_edge[block], same[block],
+            samples, degenerate_level,
+        )
+        if progress is not None:
+            progress(block.stop, total)
+    edge_gap /= diagonal
+
+    corner_angle = _max_corner_angle(network, local, degenerate_level, oriented=not same.any())
+    grid = _GridMeasures(len(local), fold_samples, degenerate_level)
+    for block in patch_blocks:
+        grid.add(local, block)
+        if progress is not None:
+            progress(len(left_patch) + block.stop, total)
+    figures = grid.fairness(diagonal)
+    folded_edges = np.flatnonzero(edge_angle > 90.0)
+    folded = grid.folded.copy()
+    folded[left_patch[folded_edges]] = folded[right_patch[folded_edges]] = True
+    edge_sides = (left_patch, left_edge, right_patch, right_edge, same)
+    locations = _first_per_patch(grid.locations + _edge_fold_locations(edge_sides, folded_edges, edge_worst, samples))
+
+    max_vertex_deviation = None
+    if network.vertices is not None:
+        frame = getattr(patches, "frame", None)
+        vertices = network.vertices if frame is None else frame.to_local(network.vertices)
+        deviation = np.linalg.norm(corners - vertices[network.corner_ids], axis=-1)
+        max_vertex_deviation = float(deviation.max() / diagonal) if deviation.size else 0.0
+
+    open_patch, _ = network.open_edges()
+    return ContinuityReport(
+        patches=len(local),
+        shared_edges=int(len(left_patch)),
+        open_edges=int(len(open_patch)),
+        collapsed_edges=int(network.edge_collapsed.sum()),
+        collapsed_patch_edges=int(network.edge_collapsed[network.edge_ids].sum()),
+        samples_per_edge=samples,
+        max_edge_angle_deg=float(edge_angle.max(initial=0.0)),
+        mean_edge_angle_deg=float(edge_angle.mean()) if len(edge_angle) else 0.0,
+        max_corner_angle_deg=corner_angle,
+        max_g0_gap=float(edge_gap.max(initial=0.0)),
+        degenerate_normals=grid.degenerate,
+        folds=int(folded.sum()),
+        inconsistent_orientation_edges=int(same.sum()),
+        bounding_box_diagonal=float(diagonal if local is patches else network.bounding_box_diagonal()),
+        max_vertex_deviation=max_vertex_deviation,
+        fold_samples=fold_samples,
+        fold_locations=tuple(locations),
+        turn_median_deg=figures["turn_median_deg"],
+        turn_p99_deg=figures["turn_p99_deg"],
+        turn_max_deg=figures["turn_max_deg"],
+        thin_plate=figures["thin_plate"],
+        edge_patches=np.stack([left_patch, right_patch], axis=1),
+        edge_sides=np.stack([left_edge, right_edge], axis=1),
+        edge_angle_deg=edge_angle,
+        edge_gap=edge_gap,
+    )
+
+
+def fairness(network: PatchNetwork, samples: int = FOLD_SAMPLES, degenerate_rtol: float = DEGENERATE_RTOL) -> dict[str, float]:
     """The fairness figures of :func:`check` on a ``samples²`` grid per patch.
 
     Keys: ``turn_median_deg``, ``turn_p99_deg``, ``turn_max_deg`` (the normal turn between
