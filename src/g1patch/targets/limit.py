@@ -1,0 +1,243 @@
+"""Catmull–Clark limit targets: the mesh taken as a subdivision cage, not as points to interpolate.
+
+:func:`limit_targets` returns :class:`~g1patch.targets.Targets` on the mesh's own positions
+(:mod:`g1patch.subdivision` for the stencils):
+
+* positions: the limit points; normals: ``a × b`` of the limit stars (unit);
+* tangents: the limit tangent of every slot, :func:`~g1patch.subdivision.limit_tangents`. Where
+  that is the uniform bicubic B-spline's Hermite tangent exactly (valence 4 inside, two faces on a
+  boundary, the boundary slots, corners) it is kept. At the other vertices the limit surface has
+  no finite cubic tangent (its parameterisation is singular there), so the slot tangent
+  ``t = α e1 + β e2`` in the vertex's exact tangent plane is fitted to the exact limit curve
+  ``c(i/m)`` of the edge, ``m = 2^L`` (limit points and normals ``n_i`` of the cage refined L
+  times, :func:`~g1patch.subdivision.refine_grids`): ``min Σ_i rᵀ (n_i n_iᵀ + ρ I) r``,
+  ``r = H(i/m) − c(i/m)``, a 4 × 4 solve per edge. The normal part is the geometric error; the
+  small parametric share ρ (:data:`_PARAMETRIC`) fixes the tangential freedom. Matching the
+  singular parameterisation point for point (ρ = ∞) left 5–8e-3 of the diagonal on the cube;
+  ρ = 0.05 leaves 0.8e-3;
+* interior points: on a face whose four corners are regular the uniform B-spline's Bézier points,
+  ``b11 = (4A + 2B + 2D + C)/9`` at corner A of face (A, B, C, D) of the cage (the tensor product
+  of the curve rule ``(2P_0 + P_1)/3``), exactly; elsewhere the four interior points of the
+  bicubic with those boundary curves that fit the exact limit samples inside the face in the
+  same weighted sense (a 12 × 12 solve per face). The Gregory assembly then moves them as far as
+  G1 requires.
+
+Every manifold quad mesh gets valid targets: a fitted fan that does not turn counter-clockwise
+falls back to the limit star, and where the two limit tangents of a vertex are parallel (a
+degenerate cage) the fan normal and the safeguard of
+:func:`~g1patch.targets.interpolate.safeguarded_fans` take over, counted in ``Targets.fallback``.
+A boundary vertex with one face keeps its exact boundary tangents (in ``edge-only`` mode they
+are opposite: the boundary curve is smooth there, as on the limit surface); it has no interior
+edge, so the assembly has nothing to split there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..construct.corner import fan_normals
+from ..gregory import INTERIOR_INDEX
+from ..mesh import QuadMesh, QuadTopology
+from ..subdivision import boundary_mode, corner_vertices, limit_normals, limit_points, limit_stars, limit_tangents, refine_grids
+from . import Targets, halfedge_slots
+from .interpolate import safeguarded_fans, slot_vertices
+
+__all__ = ["FIT_LEVELS", "bspline_slots", "limit_targets", "regular_faces"]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
+
+#: refinement levels of the exact limit samples the free tangents and interior points are fitted to
+FIT_LEVELS = 3
+#: weight of the parametric residual against the normal one in the fits: the limit surface's
+#: parameterisation is singular at extraordinary vertices (speed ~ (2λ)^m), so matching it
+#: point for point would bend the cubics; the normal distance is the geometric error, and this
+#: small share fixes the tangential freedom it leaves
+_PARAMETRIC = 0.05
+#: a vertex whose limit tangents span less than this (|a × b| / (|a|² + |b|²)) has no usable plane
+_DEGENERATE = 1e-9
+#: edge k of a face as grid positions (i, j) at parameter t = s/m, from corner k to corner k + 1
+_EDGE_GRID = (
+    lambda s, m: (s, 0 * s), lambda s, m: (m + 0 * s, s), lambda s, m: (m - s, m + 0 * s), lambda s, m: (0 * s, m - s),
+)
+
+
+def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
+    return np.einsum("...d,...d->...", a, b)
+
+
+def _bernstein(t: FloatArray) -> FloatArray:
+    s = 1.0 - t
+    return np.stack([s**3, 3 * t * s * s, 3 * t * t * s, t**3], axis=-1)
+
+
+def bspline_slots(mesh: QuadMesh) -> BoolArray:
+    """Slots whose limit tangent is exactly the B-spline Hermite tangent: all slots of a regular
+    vertex (4 faces inside, 2 on a boundary), the two boundary slots of every boundary vertex, and
+    the slots of an ``edge-and-corner`` corner."""
+    topology = mesh.topology
+    offsets = topology.neighbor_offsets
+    boundary = topology.is_boundary_vertex
+    regular = np.where(boundary, topology.face_count == 2, topology.face_count == 4)
+    regular |= corner_vertices(topology, boundary_mode(mesh))
+    exact = regular[slot_vertices(topology)]
+    rims = np.flatnonzero(boundary)
+    exact[offsets[rims]] = exact[offsets[rims + 1] - 1] = True
+    return exact
+
+
+def regular_faces(topology: QuadTopology) -> BoolArray:
+    """Faces whose four corners are interior vertices of valence 4: their limit is the uniform bicubic B-spline."""
+    regular = ~topology.is_boundary_vertex & (topology.face_count == 4)
+    return regular[topology.faces].all(axis=1)
+
+
+def _weigh(r: FloatArray, n: FloatArray) -> FloatArray:
+    """``W r`` with ``W = n nᵀ + ρ I``: the residual's normal part, plus :data:`_PARAMETRIC` of all of it."""
+    return _dot(r, n)[..., None] * n + _PARAMETRIC * r
+
+
+def _plane_bases(normals: FloatArray, a: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Orthonormal ``(e1, e2)`` of each tangent plane, e1 along ``a`` projected."""
+    e1 = a - _dot(a, normals)[:, None] * normals
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    return e1, np.cross(normals, e1)
+
+
+def _fit_tangents(
+    mesh: QuadMesh, x: FloatArray, t: FloatArray, free: BoolArray, bases: tuple[FloatArray, FloatArray],
+    samples: FloatArray, sample_normals: FloatArray, m: int,
+) -> FloatArray:
+    """The free slot tangents fitted in their tangent planes: per interior edge A → B with a free end
+    the least-squares fit of ``H(s) = B0 A + B1 (A + t_A/3) + B2 (B + t_B/3) + B3 B`` to the limit
+    curve samples, ``t = α e1 + β e2`` at a free end (a 4 × 4 solve per edge), the other end fixed."""
+    topology = mesh.topology
+    slot_out, slot_in = halfedge_slots(topology)
+    h = topology.edge_halfedges[:, 0]
+    sa, sb = slot_out[h], slot_in[h]
+    fit = np.flatnonzero(~topology.is_boundary_edge & (free[sa] | free[sb]))
+    out = t.copy()
+    if not fit.size:
+        return out
+    h, sa, sb = h[fit], sa[fit], sb[fit]
+    face, k = h >> 2, h & 3
+    s = np.arange(m + 1)
+    positions = np.stack([np.stack(edge(s, m), axis=0) for edge in _EDGE_GRID])  # (4, 2, m + 1)
+    curve = samples[face[:, None], positions[k, 0], positions[k, 1]]  # (E, m + 1, 3)
+    normal = sample_normals[face[:, None], positions[k, 0], positions[k, 1]]
+    w = _bernstein(s / m)
+    va, vb = topology.origin(h), topology.target(h)
+    base = (w[:, 0] + w[:, 1])[None, :, None] * x[va][:, None] + (w[:, 2] + w[:, 3])[None, :, None] * x[vb][:, None] - curve
+    e1, e2 = bases
+    columns = np.stack([  # ∂H/∂(α_A, β_A, α_B, β_B): (E, 4, m + 1, 3)
+        w[None, :, 1, None] * e1[va][:, None] / 3.0, w[None, :, 1, None] * e2[va][:, None] / 3.0,
+        w[None, :, 2, None] * e1[vb][:, None] / 3.0, w[None, :, 2, None] * e2[vb][:, None] / 3.0,
+    ], axis=1)
+    known = np.stack([_dot(t[sa], e1[va]), _dot(t[sa], e2[va]), _dot(t[sb], e1[vb]), _dot(t[sb], e2[vb])], axis=1)
+    unknown = np.repeat(np.stack([free[sa], free[sb]], axis=1), 2, axis=1)  # (E, 4)
+    fixed_part = np.einsum("ec,ecsd->esd", np.where(unknown, 0.0, known), columns)
+    weighted = _weigh(columns, normal[:, None])
+    gram = np.einsum("eisd,ejsd->eij", weighted, columns)
+    rhs = -np.einsum("eisd,esd->ei", weighted, base + fixed_part)
+    both = unknown[:, :, None] & unknown[:, None, :]
+    eye = np.eye(4, dtype=bool)[None]
+    gram = np.where(both, gram, np.where(eye, 1.0, 0.0))
+    rhs = np.where(unknown, rhs, known)
+    p = np.linalg.solve(gram, rhs[..., None])[..., 0]
+    fitted_a = p[:, 0, None] * e1[va] + p[:, 1, None] * e2[va]
+    fitted_b = p[:, 2, None] * e1[vb] + p[:, 3, None] * e2[vb]
+    out[sa[free[sa]]] = fitted_a[free[sa]]
+    out[sb[free[sb]]] = fitted_b[free[sb]]
+    return out
+
+
+def _boundary_nets(mesh: QuadMesh, x: FloatArray, t: FloatArray, faces: IntArray) -> FloatArray:
+    """The 4 × 4 Bézier nets ``b[f, i, j]`` of ``faces`` with corners and edge points set, interior zero."""
+    topology = mesh.topology
+    slot_out, slot_in = halfedge_slots(topology)
+    h = 4 * faces[:, None] + np.arange(4)
+    corner = x[topology.faces[faces]]  # (F, 4, 3)
+    near = corner + t[slot_out[h]] / 3.0  # edge k's point next to corner k
+    far = corner[:, [1, 2, 3, 0]] + t[slot_in[h]] / 3.0  # edge k's point next to corner k + 1
+    net = np.zeros((len(faces), 4, 4, 3))
+    net[:, [0, 3, 3, 0], [0, 0, 3, 3]] = corner
+    net[:, [1, 3, 2, 0], [0, 1, 3, 2]] = near
+    net[:, [2, 3, 1, 0], [0, 2, 3, 1]] = far
+    return net
+
+
+def _fit_interior(net: FloatArray, samples: FloatArray, sample_normals: FloatArray, m: int) -> FloatArray:
+    """Interior points (F, 4, 3) at corners 0..3 (b11, b21, b22, b12) minimising
+    ``Σ rᵀ (n nᵀ + ρ I) r``, ``r = p(i/m, j/m) − S_ij``, over the interior samples with the boundary
+    of ``net`` fixed: a 12 × 12 solve per face."""
+    g = np.arange(1, m) / m
+    w = _bernstein(g)
+    basis = (w[:, None, :, None] * w[None, :, None, :]).reshape(-1, 4, 4)  # (K, 4, 4): B_i(u) B_j(v)
+    inner = basis[:, INTERIOR_INDEX[:, 0], INTERIOR_INDEX[:, 1]]  # (K, 4)
+    count = len(net)
+    known = np.einsum("kij,fijd->fkd", basis, net)
+    residual = known - samples[:, 1:m, 1:m].reshape(count, -1, 3)
+    n = sample_normals[:, 1:m, 1:m].reshape(count, -1, 3)
+    weight = n[..., :, None] * n[..., None, :] + _PARAMETRIC * np.eye(3)  # (F, K, 3, 3)
+    gram = np.einsum("kc,kg,fkde->fcdge", inner, inner, weight).reshape(count, 12, 12)
+    rhs = -np.einsum("kc,fkde,fke->fcd", inner, weight, residual).reshape(count, 12)
+    return np.linalg.solve(gram, rhs[..., None]).reshape(count, 4, 3)
+
+
+def _limit_normals(mesh: QuadMesh) -> tuple[FloatArray, BoolArray]:
+    """Unit ``a × b`` of the limit stars; the fan normal where the plane is degenerate
+    (:data:`_DEGENERATE`), flagged."""
+    a, b = limit_stars(mesh)
+    a_cross_b = np.cross(a, b)
+    length = np.linalg.norm(a_cross_b, axis=1)
+    degenerate = ~(length > _DEGENERATE * (_dot(a, a) + _dot(b, b)))
+    normals = np.where(degenerate[:, None], fan_normals(mesh), a_cross_b / np.where(degenerate, 1.0, length)[:, None])
+    return normals, degenerate
+
+
+def _guarded(mesh: QuadMesh, normals: FloatArray, fitted: FloatArray, star: FloatArray) -> tuple[FloatArray, BoolArray]:
+    """Per vertex the fitted fan where it is valid, else the star where that is, else the
+    safeguarded star (:func:`~g1patch.targets.interpolate.safeguarded_fans`, flagged). A boundary
+    vertex with one face keeps its tangents."""
+    topology = mesh.topology
+    slot_vertex = slot_vertices(topology)
+    chord = np.linalg.norm(mesh.vertices[topology.neighbors] - mesh.vertices[slot_vertex], axis=1)
+    _, fitted_bad = safeguarded_fans(topology, normals, fitted, chord)
+    guarded_star, star_bad = safeguarded_fans(topology, normals, star, chord)
+    lone = topology.is_boundary_vertex & (topology.face_count == 1)
+    fitted_bad &= ~lone
+    out = np.where(fitted_bad[slot_vertex, None], np.where(star_bad[slot_vertex, None], guarded_star, star), fitted)
+    return out, fitted_bad & star_bad
+
+
+def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
+    """The Catmull–Clark limit targets of ``mesh`` (module docstring); ``levels`` of refinement for the fits."""
+    topology = mesh.topology
+    slot_vertex = slot_vertices(topology)
+    x = limit_points(mesh)
+    normals, degenerate = _limit_normals(mesh)
+    n = normals[slot_vertex]
+    star = limit_tangents(mesh)
+    star -= _dot(star, n)[:, None] * n
+    free = ~bspline_slots(mesh) & ~degenerate[slot_vertex]
+    regular = regular_faces(topology)
+    fitted = star
+    if free.any() or not regular.all():
+        fine, grid = refine_grids(mesh, levels)
+        samples, sample_normals = limit_points(fine)[grid], limit_normals(fine)[grid]
+        m = 2**levels
+        bases = _plane_bases(normals, star[topology.neighbor_offsets[:-1]])
+        fitted = _fit_tangents(mesh, x, star, free, bases, samples, sample_normals, m)
+    t, guarded = _guarded(mesh, normals, fitted, star)
+
+    corner = mesh.vertices[topology.faces]
+    interior = (4.0 * corner + 2.0 * corner[:, [1, 2, 3, 0]] + 2.0 * corner[:, [3, 0, 1, 2]] + corner[:, [2, 3, 0, 1]]) / 9.0
+    irregular = np.flatnonzero(~regular)
+    if irregular.size:
+        net = _boundary_nets(mesh, x, t, irregular)
+        interior[irregular] = _fit_interior(net, samples[irregular], sample_normals[irregular], m)
+    return Targets(
+        topology, x, normals, t, np.stack([interior, interior], axis=2), fallback=guarded | degenerate, rule="limit"
+    )
