@@ -10,7 +10,9 @@ network the value is the signed volume of the cone from ``c`` over the surface.
 
 The integral is Gauss–Legendre quadrature, G points per direction, exact for degree 2G − 1.
 For a bicubic patch p has degree 3 and p_u × p_v degree 5 in each direction, so the integrand
-has degree 8 ≤ 9 and G = 5 is exact. Other patches (rational Gregory patches, any object with
+has degree 8 ≤ 9 and G = 5 is exact. Patches with a frame ``(c_f, s)`` (:mod:`g1patch.frame`) are
+integrated in their local coordinates and the volume scaled by ``s³`` (the world volume, without
+the cancellation of world coordinates far from the origin). Other patches (rational Gregory patches, any object with
 ``evaluate_grid`` and ``__len__``) double G from 8 until two estimates agree to ``rtol``.
 """
 
@@ -23,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import InputError
+from .frame import Frame
 from .network import Patches, PatchNetwork
 from .patches import CORNER_PARAMETERS, PatchSet
 
@@ -96,9 +99,13 @@ def volume_estimate(
         raise InputError(f"rtol: expected a positive number, got {rtol!r}")
     if len(patches) == 0:
         return VolumeEstimate(0.0, 0, 0.0, True)
+    frame: Frame | None = getattr(patches, "frame", None)
+    cube = 1.0
+    if frame is not None:
+        patches, cube = patches.local(), frame.scale**3  # type: ignore[attr-defined]
     centre = _centre(patches)
     if isinstance(patches, PatchSet):
-        return VolumeEstimate(_quadrature(patches, BICUBIC_POINTS, centre), BICUBIC_POINTS, 0.0, True)
+        return VolumeEstimate(_quadrature(patches, BICUBIC_POINTS, centre) * cube, BICUBIC_POINTS, 0.0, True)
     points = 8
     previous = _quadrature(patches, points, centre)
     while True:
@@ -106,7 +113,7 @@ def volume_estimate(
         volume = _quadrature(patches, points, centre)
         change = abs(volume - previous)
         if change <= rtol * abs(volume) or 2 * points > max_points:
-            return VolumeEstimate(volume, points, change, False)
+            return VolumeEstimate(volume * cube, points, change * cube, False)
         previous = volume
 
 

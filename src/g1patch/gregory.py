@@ -32,6 +32,10 @@ so on edge k (β = 0) the patch sees only Fn_k and on edge k − 1 (α = 0) only
 and likewise for v. Every factor is bounded, so positions and first derivatives are evaluated
 without dividing by a vanishing ``α + β``; at corner k (α = β = 0) both B_k and its gradient
 vanish, so the blend's 0/0 takes no part and the limit is exact (w_α = w_β = ½ is used there).
+
+The weights sum to one (the derivative weights to zero), so a :class:`~g1patch.frame.Frame`
+``(c, s)`` applies after evaluation: with a frame the points are local and the surface is
+``c + s p(u, v)``; evaluations return world values (derivatives ``s ∂p``, normals unchanged).
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 from .basis import basis_values
 from .curves import CubicCurves
 from .errors import InputError, as_float_array
+from .frame import Frame, check_frame
 from .patches import CORNER_PARAMETERS, unit
 
 __all__ = ["BEZIER_INDEX", "INTERIOR_INDEX", "GregoryPatchSet", "gregory_weights"]
@@ -132,9 +137,12 @@ def _contract(weights: NDArray[np.float64], points: NDArray[np.float64]) -> NDAr
 
 @dataclass(frozen=True)
 class GregoryPatchSet:
-    """``N`` Gregory patches: ``points`` of shape ``(N, 20, 3)`` in the layout of the module docstring."""
+    """``N`` Gregory patches: ``points`` of shape ``(N, 20, 3)`` in the layout of the module docstring,
+    local to ``frame`` if set."""
 
     points: NDArray[np.float64]
+    #: the surface is ``frame.to_world(p)``; None: points in world coordinates
+    frame: Frame | None = None
     kind: ClassVar[str] = "gregory"
 
     def __post_init__(self) -> None:
@@ -142,63 +150,85 @@ class GregoryPatchSet:
         if points.ndim != 3:
             raise InputError(f"points: expected shape (N, 20, 3), got {points.shape}")
         object.__setattr__(self, "points", points)
+        check_frame(self.frame)
 
     def __len__(self) -> int:
         return int(self.points.shape[0])
 
     def take(self, indices: ArrayLike) -> GregoryPatchSet:
         """The patches at ``indices`` (any integer array, repeats allowed), in that order."""
-        return GregoryPatchSet(self.points[np.asarray(indices, dtype=np.int64)])
+        return GregoryPatchSet(self.points[np.asarray(indices, dtype=np.int64)], self.frame)
+
+    # ----------------------------------------------------------------- frame
+    def local(self) -> GregoryPatchSet:
+        """The same points without the frame: the patches in local coordinates (``self`` if no frame)."""
+        return self if self.frame is None else GregoryPatchSet(self.points)
+
+    def with_frame(self, frame: Frame | None) -> GregoryPatchSet:
+        """The same points read in ``frame`` (None: as world coordinates)."""
+        return GregoryPatchSet(self.points, check_frame(frame))
+
+    def world_points(self) -> NDArray[np.float64]:
+        """Points in world coordinates, ``c + s P`` (``points`` itself without a frame), (N, 20, 3)."""
+        return self.points if self.frame is None else self.frame.to_world(self.points)
+
+    def _to_world(self, values: NDArray[np.float64], du: int, dv: int) -> NDArray[np.float64]:
+        """Local values of ``∂^(du+dv) p`` mapped to world in place (:meth:`Frame.derivative_to_world`)."""
+        return values if self.frame is None else self.frame.derivative_to_world(values, du + dv, out=values)
 
     # ------------------------------------------------------------- evaluation
     def evaluate(self, uv: ArrayLike, du: int = 0, dv: int = 0) -> NDArray[np.float64]:
         """Position (du = dv = 0) or first derivative at scattered parameters in [0, 1]².
 
         ``uv`` of shape ``(K, 2)`` is shared by all patches; ``(N, K, 2)`` gives each patch its own.
-        Returns ``(N, K, 3)``.
+        Returns ``(N, K, 3)``, world values.
         """
         params = _check_domain("uv", as_float_array("uv", uv, (2,)))
         if params.ndim == 2:
-            return _contract(gregory_weights(params[:, 0], params[:, 1], du, dv), self.points)
+            return self._to_world(_contract(gregory_weights(params[:, 0], params[:, 1], du, dv), self.points), du, dv)
         if params.ndim == 3 and params.shape[0] == len(self):
             # Per-patch parameters usually repeat (edge samples, grids): weigh each distinct (u, v) once.
             keys, inverse = np.unique(params.view(np.complex128)[..., 0], return_inverse=True)  # u + iv
             weights = gregory_weights(keys.real, keys.imag, du, dv)
-            return _contract(weights[inverse.reshape(params.shape[:2])], self.points)
+            return self._to_world(_contract(weights[inverse.reshape(params.shape[:2])], self.points), du, dv)
         raise InputError(f"uv: expected shape (K, 2) or ({len(self)}, K, 2), got {params.shape}")
 
     def evaluate_grid(
         self, u: ArrayLike, v: ArrayLike | None = None, du: int = 0, dv: int = 0
     ) -> NDArray[np.float64]:
-        """Position or first derivative on the grid ``u × v``: shape ``(N, len(u), len(v), 3)``."""
+        """Position or first derivative on the grid ``u × v``: shape ``(N, len(u), len(v), 3)``, world values."""
         u_params = _check_parameters("u", u)
         v_params = u_params if v is None else _check_parameters("v", v)
         weights = gregory_weights(u_params[:, None], v_params[None, :], du, dv)
         values = _contract(weights.reshape(-1, 20), self.points)
-        return values.reshape(len(self), len(u_params), len(v_params), 3)
+        return self._to_world(values, du, dv).reshape(len(self), len(u_params), len(v_params), 3)
 
     def normals(self, uv: ArrayLike) -> NDArray[np.float64]:
-        """Unit normals ``p_u × p_v / |p_u × p_v|``, ``(N, K, 3)``; the zero vector where degenerate."""
-        return unit(np.cross(self.evaluate(uv, 1, 0), self.evaluate(uv, 0, 1)))
+        """Unit normals ``p_u × p_v / |p_u × p_v|``, ``(N, K, 3)``; the zero vector where degenerate.
+
+        Computed from the local tangents (the frame does not turn normals)."""
+        local = self.local()
+        return unit(np.cross(local.evaluate(uv, 1, 0), local.evaluate(uv, 0, 1)))
 
     def corners(self) -> NDArray[np.float64]:
-        """Corner positions F0..F3, shape (N, 4, 3) (exactly ``points[:, :4]``)."""
+        """Corner positions F0..F3 (world), shape (N, 4, 3) (exactly ``world_points()[:, :4]``)."""
         return self.evaluate(CORNER_PARAMETERS)
 
     # ----------------------------------------------------------- conversions
     def boundary_curves(self) -> CubicCurves:
-        """The four boundary curves in Bézier form, batch (N, 4), counter-clockwise: edge k is
+        """The four boundary curves in Bézier form (world), batch (N, 4), counter-clockwise: edge k is
         ``(P_k, E+_k, E-_{k+1}, P_{k+1})``."""
         k = np.arange(4)
         following = (k + 1) % 4
         index = np.stack([k, 4 + 2 * k, 5 + 2 * following, following], axis=1)  # (4 edges, 4 points)
-        return CubicCurves(self.points[:, index], "bezier")
+        return CubicCurves(self.world_points()[:, index], "bezier")
 
     def to_bezier_control(self) -> NDArray[np.float64]:
         """The bicubic Bézier net (N, 4, 4, 3) with each interior pair replaced by its mean.
 
-        Same boundary curves and corner tangent planes; the surface equals the Gregory patch
-        exactly when every pair coincides, and is not G1 across edges in general.
+        In the coordinates of ``points`` (local when framed: ``PatchSet(net, frame=self.frame)`` is
+        the surface). Same boundary curves and corner tangent planes; the surface equals the Gregory
+        patch exactly when every pair coincides, and is not G1 across edges in general.
         """
         net = np.empty((len(self), 4, 4, 3))
         net[:, BEZIER_INDEX[:, 0], BEZIER_INDEX[:, 1]] = self.points[:, :12]
@@ -206,15 +236,16 @@ class GregoryPatchSet:
         return net
 
     def to_arrays(self) -> dict[str, NDArray[np.float64]]:
-        """The arrays a network file stores: ``{"points": (N, 20, 3)}``."""
-        return {"points": self.points}
+        """The arrays a network file stores: ``{"points": (N, 20, 3)}``, and the frame's
+        (:meth:`Frame.to_arrays`) when set."""
+        return {"points": self.points, **({} if self.frame is None else self.frame.to_arrays())}
 
     @classmethod
     def from_arrays(cls, arrays: Mapping[str, ArrayLike]) -> GregoryPatchSet:
         """Inverse of :meth:`to_arrays`."""
         if "points" not in arrays:
             raise InputError(f"arrays: Gregory patches need the array 'points', got {sorted(arrays)}")
-        return cls(np.asarray(arrays["points"]))
+        return cls(np.asarray(arrays["points"]), Frame.from_arrays(arrays))
 
 
 def _check_parameters(name: str, values: ArrayLike) -> NDArray[np.float64]:

@@ -10,11 +10,19 @@ block (2..3, 2..3) holds the twists ∂²p/∂u∂v.
 
 Patch edges follow the quad's counter-clockwise corners F0 = (0,0), F1 = (1,0), F2 = (1,1),
 F3 = (0,1): edge k runs from corner k to corner k+1 (edges 2 and 3 against the parameter).
+
+With a :class:`~g1patch.frame.Frame` ``(c, s)`` the control is in local coordinates and the surface
+is ``c + s p(u, v)``: every evaluation returns world values (positions ``c + s p``, derivatives
+``s ∂p``, unit normals unchanged), computed from the local control and mapped afterwards, so the
+stored surface keeps the exactness its construction gave it. :meth:`PatchSet.local` is the same
+patches in local coordinates, :meth:`PatchSet.world_control` the control in world coordinates.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -23,6 +31,7 @@ from . import _grid
 from .basis import FORMS, Form, basis_matrix, basis_values, check_order, conversion_matrix
 from .curves import CubicCurves
 from .errors import InputError, as_float_array, check_choice
+from .frame import Frame, check_frame
 
 __all__ = [
     "PatchSet",
@@ -44,12 +53,24 @@ def _check_parameters(name: str, values: ArrayLike) -> NDArray[np.float64]:
     return params
 
 
+def _curve_control_to_world(control: NDArray[np.float64], form: Form, frame: Frame | None) -> NDArray[np.float64]:
+    """Curve control (..., 4, 3) in world coordinates: ``c + s x`` for points, ``s x`` for Hermite's
+    derivative entries 2, 3."""
+    if frame is None:
+        return control
+    world = frame.vectors_to_world(control)
+    world[..., : 2 if form == "hermite" else 4, :] += frame.centre
+    return world
+
+
 @dataclass(frozen=True)
 class PatchSet:
-    """``N`` bicubic patches: ``control`` of shape ``(N, 4, 4, 3)`` in ``form``."""
+    """``N`` bicubic patches: ``control`` of shape ``(N, 4, 4, 3)`` in ``form``, local to ``frame`` if set."""
 
     control: NDArray[np.float64]
     form: Form = "bezier"
+    #: the surface is ``frame.to_world(p)``; None: control in world coordinates
+    frame: Frame | None = None
 
     def __post_init__(self) -> None:
         check_choice("form", self.form, FORMS)
@@ -57,27 +78,76 @@ class PatchSet:
         if control.ndim != 4:
             raise InputError(f"control: expected shape (N, 4, 4, 3), got {control.shape}")
         object.__setattr__(self, "control", control)
+        check_frame(self.frame)
 
     def __len__(self) -> int:
         return int(self.control.shape[0])
 
     def take(self, indices: ArrayLike) -> PatchSet:
         """The patches at ``indices`` (any integer array, repeats allowed), in that order."""
-        return PatchSet(self.control[np.asarray(indices, dtype=np.int64)], self.form)
+        return PatchSet(self.control[np.asarray(indices, dtype=np.int64)], self.form, self.frame)
+
+    # ----------------------------------------------------------------- frame
+    def local(self) -> PatchSet:
+        """The same control without the frame: the patches in local coordinates (``self`` if no frame)."""
+        return self if self.frame is None else PatchSet(self.control, self.form)
+
+    def with_frame(self, frame: Frame | None) -> PatchSet:
+        """The same control read in ``frame`` (None: as world coordinates)."""
+        return PatchSet(self.control, self.form, check_frame(frame))
+
+    def world_control(self) -> NDArray[np.float64]:
+        """Control in world coordinates (``control`` itself without a frame), (N, 4, 4, 3).
+
+        Bézier and B-spline control points map as positions, ``c + s P``; in Hermite form only the
+        corner positions ``P[:, :2, :2]`` do, the derivative and twist entries map as vectors, ``s P``.
+        """
+        if self.frame is None:
+            return self.control
+        world = self.frame.vectors_to_world(self.control)
+        if self.form == "hermite":
+            world[:, :2, :2] += self.frame.centre
+        else:
+            world += self.frame.centre
+        return world
+
+    def to_arrays(self) -> dict[str, NDArray[Any]]:
+        """The arrays a network file stores: ``control`` (N, 4, 4, 3), ``form`` (a 0-d string) and
+        the frame's (:meth:`Frame.to_arrays`) when set."""
+        frame = {} if self.frame is None else self.frame.to_arrays()
+        return {"control": self.control, "form": np.array(self.form), **frame}
+
+    @classmethod
+    def from_arrays(cls, arrays: Mapping[str, ArrayLike]) -> PatchSet:
+        """Inverse of :meth:`to_arrays`."""
+        if "control" not in arrays or "form" not in arrays:
+            raise InputError(f"arrays: bicubic patches need the arrays 'control' and 'form', got {sorted(arrays)}")
+        form = str(np.asarray(arrays["form"]))
+        return cls(np.asarray(arrays["control"]), form, Frame.from_arrays(arrays))  # type: ignore[arg-type]
 
     # ------------------------------------------------------------------ forms
     def convert(self, form: Form) -> PatchSet:
-        """The same surfaces in another form: ``P' = C P C^T`` per coordinate."""
+        """The same surfaces in another form: ``P' = C P C^T`` per coordinate, on the local control
+        (the frame is kept: conversion is linear and the frame applies after evaluation)."""
         check_choice("form", form, FORMS)
         if form == self.form:
             return self
         matrix = conversion_matrix(self.form, form)
-        return PatchSet(np.einsum("ik,nkld,jl->nijd", matrix, self.control, matrix, optimize=True), form)
+        return PatchSet(np.einsum("ik,nkld,jl->nijd", matrix, self.control, matrix, optimize=True), form, self.frame)
 
     def power_coefficients(self) -> NDArray[np.float64]:
-        """``A = M^T P M`` per coordinate, shape (N, 4, 4, 3): ``p = Σ A_ij u^(3-i) v^(3-j)``."""
+        """``A = M^T P M`` per coordinate, shape (N, 4, 4, 3): ``p = Σ A_ij u^(3-i) v^(3-j)``, in world
+        coordinates (with a frame: ``s A``, plus ``c`` on the constant term ``A_33``)."""
         matrix = basis_matrix(self.form)
-        return np.einsum("ip,nijd,jq->npqd", matrix, self.control, matrix, optimize=True)
+        power = np.einsum("ip,nijd,jq->npqd", matrix, self.control, matrix, optimize=True)
+        if self.frame is not None:
+            self.frame.vectors_to_world(power, out=power)
+            power[:, 3, 3] += self.frame.centre
+        return power
+
+    def _to_world(self, values: NDArray[np.float64], du: int, dv: int) -> NDArray[np.float64]:
+        """Local values of ``∂^(du+dv) p`` mapped to world in place (:meth:`Frame.derivative_to_world`)."""
+        return values if self.frame is None else self.frame.derivative_to_world(values, du + dv, out=values)
 
     # ------------------------------------------------------------- evaluation
     def evaluate_grid(
@@ -88,7 +158,7 @@ class PatchSet:
         dv: int = 0,
         out: NDArray[np.float64] | None = None,
     ) -> NDArray[np.float64]:
-        """``∂^(du+dv) p / ∂u^du ∂v^dv`` on the grid ``u × v``: shape ``(N, len(u), len(v), 3)``.
+        """``∂^(du+dv) p / ∂u^du ∂v^dv`` on the grid ``u × v``: shape ``(N, len(u), len(v), 3)``, world values.
 
         ``out``: a C-contiguous float64 array of that shape to write into (saves the page faults
         of a fresh allocation when a grid is evaluated repeatedly).
@@ -98,7 +168,7 @@ class PatchSet:
         v_params = u_params if v is None else _check_parameters("v", v)
         weights_u = basis_values(self.form, u_params, du)
         weights_v = basis_values(self.form, v_params, dv)
-        return _grid.contract(self.control, weights_u, weights_v, out=out)
+        return self._to_world(_grid.contract(self.control, weights_u, weights_v, out=out), du, dv)
 
     def grid(self, resolution: int) -> NDArray[np.float64]:
         """Positions on a uniform ``resolution × resolution`` grid including the borders."""
@@ -108,7 +178,7 @@ class PatchSet:
         """Derivative ``(du, dv)`` at scattered parameters.
 
         ``uv`` of shape ``(K, 2)`` is shared by all patches; ``(N, K, 2)`` gives each patch its own.
-        Returns ``(N, K, 3)``.
+        Returns ``(N, K, 3)``, world values.
         """
         du, dv = check_order("du", du), check_order("dv", dv)
         params = as_float_array("uv", uv, (2,))
@@ -118,14 +188,14 @@ class PatchSet:
             weights_u = basis_values(self.form, params[:, 0], du)
             weights_v = basis_values(self.form, params[:, 1], dv)
             tensor = (weights_u[:, :, None] * weights_v[:, None, :]).reshape(-1, 16)
-            return np.matmul(tensor, self.control.reshape(count, 16, 3))
+            return self._to_world(np.matmul(tensor, self.control.reshape(count, 16, 3)), du, dv)
         if params.ndim == 3 and params.shape[0] == count:
             # contract v first: q[n, k, i] = Σ_j wv[n, k, j] P[n, i, j], then u
             weights_u = basis_values(self.form, params[..., 0], du)
             weights_v = basis_values(self.form, params[..., 1], dv)
             by_v = self.control.transpose(0, 2, 1, 3).reshape(count, 4, 12)
             partial = np.matmul(weights_v, by_v).reshape(count, -1, 4, 3)
-            return np.einsum("nki,nkid->nkd", weights_u, partial)
+            return self._to_world(np.einsum("nki,nkid->nkd", weights_u, partial), du, dv)
         raise InputError(f"uv: expected shape (K, 2) or ({len(self)}, K, 2), got {params.shape}")
 
     def tangents(self, uv: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -141,10 +211,11 @@ class PatchSet:
 
         Where ``p_u × p_v`` is exactly zero the normal is the zero vector, never NaN. On a collapsed
         edge away from the origin the derivative is rounding noise and so is its direction: use
-        :func:`g1patch.continuity.check`, which counts such normals with a tolerance.
+        :func:`g1patch.continuity.check`, which counts such normals with a tolerance. Computed from
+        the local tangents (the frame does not turn normals).
         """
-        p_u, p_v = self.tangents(uv)
-        return unit(np.cross(p_u, p_v))
+        local = self.local()
+        return unit(np.cross(local.evaluate(uv, 1, 0), local.evaluate(uv, 0, 1)))
 
     def normals_grid(self, u: ArrayLike, v: ArrayLike | None = None) -> NDArray[np.float64]:
         """Unit normals on the grid ``u × v``, ``(N, len(u), len(v), 3)``; zero where degenerate."""
@@ -166,18 +237,20 @@ class PatchSet:
         """
         u_params = _check_parameters("u", u)
         v_params = u_params if v is None else _check_parameters("v", v)
-        return _grid.positions_and_normals(self.control, self.form, u_params, v_params, out, normals_out)
+        positions, normals = _grid.positions_and_normals(self.control, self.form, u_params, v_params, out, normals_out)
+        return self._to_world(positions, 0, 0), normals
 
     def corners(self) -> NDArray[np.float64]:
-        """Corner positions F0..F3, shape (N, 4, 3)."""
+        """Corner positions F0..F3 (world), shape (N, 4, 3)."""
         return self.evaluate(CORNER_PARAMETERS)
 
     # ------------------------------------------------------------------ curves
     def boundary_curves(self) -> CubicCurves:
-        """The four boundary curves, batch shape (N, 4), counter-clockwise: edge k runs corner k → k+1.
+        """The four boundary curves (world), batch shape (N, 4), counter-clockwise: edge k runs corner k → k+1.
 
         Curve v = v0 in the u-form: ``c_i = Σ_j b_j(v0) P_ij``: exact in Hermite and Bézier form
-        (the weights are 0 and 1), rounded in B-spline form (weights 1/6, 4/6, 1/6).
+        (the weights are 0 and 1), rounded in B-spline form (weights 1/6, 4/6, 1/6); then mapped
+        to world (:meth:`world_control`'s rule for curves).
         """
         ends = basis_values(self.form, np.array([0.0, 1.0]))  # (2, 4)
         bottom = np.einsum("j,nijd->nid", ends[0], self.control)  # v = 0, u: 0 -> 1
@@ -187,24 +260,27 @@ class PatchSet:
         forward = CubicCurves(np.stack([bottom, right, top, left], axis=1), self.form)
         backward = forward.reversed()
         control = np.where(np.array([False, False, True, True])[None, :, None, None], backward.control, forward.control)
-        return CubicCurves(control, self.form)
+        return CubicCurves(_curve_control_to_world(control, self.form, self.frame), self.form)
 
     def diagonal_polynomials(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Power coefficients (ascending, degree 6) of ``D(t) = p(t, t)`` and ``E(t) = p(t, 1-t)``.
 
-        Each is shape (N, 7, 3). See :func:`diagonal_polynomials`.
+        Each is shape (N, 7, 3), world coordinates. See :func:`diagonal_polynomials`.
         """
         return diagonal_polynomials(self.power_coefficients())
 
     def with_coons_twists(self) -> PatchSet:
-        """The S-/HS-patch: the same boundary, twists from the 12 boundary vectors (:func:`hs_twists`)."""
+        """The S-/HS-patch: the same boundary, twists from the 12 boundary vectors (:func:`hs_twists`).
+
+        Computed on the local control; the frame is kept."""
         hermite = self.convert("hermite").control.copy()
         hermite[:, 2:, 2:] = hs_twists(hermite)
-        return PatchSet(hermite, "hermite").convert(self.form)
+        return PatchSet(hermite, "hermite", self.frame).convert(self.form)
 
     def closure(self) -> NDArray[np.float64]:
-        """The vector ``C`` of :func:`closure`, shape (N, 3): both diagonals cubic iff ``C = 0``."""
-        return closure(self.convert("hermite").control)
+        """The vector ``C`` of :func:`closure` (world: ``s C_local``), shape (N, 3): both diagonals cubic iff ``C = 0``."""
+        value = closure(self.convert("hermite").control)
+        return value if self.frame is None else self.frame.vectors_to_world(value, out=value)
 
 
 def _check_resolution(resolution: int) -> int:

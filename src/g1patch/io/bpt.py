@@ -62,8 +62,11 @@ def read_bpt(path: str | os.PathLike[str]) -> PatchSet:
 
 
 def write_bpt(path: str | os.PathLike[str], patches: PatchSet) -> None:
-    """Write patches (converted to Bézier form) as ``.bpt``, atomically, with round-trip precision."""
-    control = patches.convert("bezier").control.reshape(len(patches), 16, 3)
+    """Write patches (converted to Bézier form) as ``.bpt``, atomically, with round-trip precision.
+
+    The points are world coordinates (:meth:`PatchSet.world_control`): a framed set is written as
+    the surface it describes, its frame is not stored."""
+    control = patches.convert("bezier").world_control().reshape(len(patches), 16, 3)
     lines = [f"{len(patches)}"]
     for points in control:
         lines.append("3 3")

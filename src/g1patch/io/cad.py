@@ -3,7 +3,7 @@
 Every patch becomes one face on a bicubic B-spline surface (``Geom_BSplineSurface``):
 
 * polynomial patches (:class:`PatchSet` in any form) exactly, as their Bézier control net with
-  the knots ``[0, 0, 0, 0, 1, 1, 1, 1]`` (``PatchSet.convert("bezier")``);
+  the knots ``[0, 0, 0, 0, 1, 1, 1, 1]`` (``PatchSet.convert("bezier").world_control()``);
 * any other patches (rational Gregory patches, …) by :func:`fit_bspline_surfaces`, a least-squares
   fit on dyadic knots, refined until the deviation is below the tolerance.
 
@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ConstructionError, FormatError, G1PatchError, InputError, MissingDependencyError, check_choice
+from ..frame import Frame
 from ..geometry import grid_row_chunks
 from ..network import Patches, PatchNetwork, edge_parameters, network_from_patch_points
 from ..patches import CORNER_PARAMETERS, PatchSet
@@ -231,6 +232,10 @@ def fit_bspline_surfaces(
     neighbouring faces get bit-identical boundary control points. Bare patches are fitted each on its
     own (neighbours then agree to rounding). The arithmetic is batched over patches and chunked over
     grid rows. Raises :class:`ConstructionError` when ``max_spans`` spans do not reach the tolerance.
+
+    Patches with a frame (:mod:`g1patch.frame`) are fitted in their local coordinates, with the
+    tolerance ``tolerance / s``; the poles are then mapped to world, ``c + s X`` (identical local
+    numbers stay identical), and the deviation reported in world units.
     """
     network = patches if isinstance(patches, PatchNetwork) else None
     surfaces = network.patches if network is not None else patches
@@ -239,22 +244,27 @@ def fit_bspline_surfaces(
     check_choice("refine", refine, ("adaptive", "uniform"))
     if not (isinstance(max_spans, (int, np.integer)) and max_spans >= 1):
         raise InputError(f"max_spans: expected a positive integer, got {max_spans!r}")
+    frame: Frame | None = getattr(surfaces, "frame", None)
+    unit = 1.0
+    if frame is not None:
+        surfaces, unit = surfaces.local(), frame.scale  # type: ignore[attr-defined]
     share = _sharing(network, len(surfaces))
     corner_points = _corner_points(surfaces, share.corner_ids)
-    tolerance = _tolerance(tolerance, _diagonal(corner_points))
+    local_tolerance = _tolerance(tolerance, _diagonal(corner_points) * unit) / unit
     breaks = np.array([0.0, 1.0])
     while True:
         control, knots, deviation, per_span = _fit_level(surfaces, breaks, corner_points, share)
-        if deviation <= tolerance:
-            return BSplineFit(control, knots, knots.copy(), deviation)
+        if deviation <= local_tolerance:
+            poles = control if frame is None else frame.to_world(control, out=control)
+            return BSplineFit(poles, knots, knots.copy(), deviation * unit)
         # split symmetrically: a reversed edge curve is its reversed control points only on knots
         # symmetric under t → 1 − t (dyadic breaks keep that exact)
-        split = np.maximum(per_span, per_span[::-1]) > tolerance if refine == "adaptive" else np.ones(len(per_span), bool)
+        split = np.maximum(per_span, per_span[::-1]) > local_tolerance if refine == "adaptive" else np.ones(len(per_span), bool)
         split |= not split.any()  # the deviation may sit only on span ends: split all
         if len(breaks) - 1 + int(split.sum()) > max_spans:
             raise ConstructionError(
                 f"fit_bspline_surfaces: {len(breaks) - 1} knot spans per direction leave a deviation of "
-                f"{deviation:.3e}, above the tolerance {tolerance:.3e}; raise max_spans (now {max_spans}) or the tolerance"
+                f"{deviation * unit:.3e}, above the tolerance {local_tolerance * unit:.3e}; raise max_spans (now {max_spans}) or the tolerance"
             )
         breaks = np.sort(np.concatenate([breaks, 0.5 * (breaks[:-1] + breaks[1:])[split]]))
 
@@ -543,7 +553,7 @@ def export_cad(
     fit_tolerance = _tolerance(tolerance, diagonal)
     if exact:
         knots = bezier_knots(1)
-        fit = BSplineFit(network.patches.convert("bezier").control, knots, knots, 0.0)
+        fit = BSplineFit(network.patches.convert("bezier").world_control(), knots, knots, 0.0)
     else:
         fit = fit_bspline_surfaces(network, fit_tolerance)
     lap("fit")

@@ -1,4 +1,9 @@
-"""The native network file: ``.npz`` with a format version, patches and their sharing arrays."""
+"""The native network file: ``.npz`` with a format version, patches and their sharing arrays.
+
+Version 2 stores the patches in their local coordinates and, when they have one, their frame as
+the arrays ``frame_centre`` (3,) and ``frame_scale`` () (see :mod:`g1patch.frame`): the file holds
+exactly the numbers the construction made. Version 1 files (no frame) are read as before.
+"""
 
 from __future__ import annotations
 
@@ -15,9 +20,12 @@ from ..gregory import GregoryPatchSet
 from ..patches import PatchSet
 from .atomic import atomic_path
 
-__all__ = ["FORMAT_VERSION", "save_network", "load_network"]
+__all__ = ["FORMAT_VERSION", "READABLE_VERSIONS", "save_network", "load_network"]
 
-FORMAT_VERSION = 1
+#: the version :func:`save_network` writes
+FORMAT_VERSION = 2
+#: the versions :func:`load_network` reads (1: no frame)
+READABLE_VERSIONS = (1, 2)
 _ARRAYS = ("corner_ids", "edge_ids", "edge_reversed", "neighbor", "neighbor_edge", "same_direction", "edge_collapsed")
 
 
@@ -27,7 +35,7 @@ def save_network(path: str | os.PathLike[str], network: PatchNetwork) -> None:
         raise FormatError(path, "a network file must end in .npz")
     patches = network.patches
     if isinstance(patches, PatchSet):
-        patch_arrays = {"patch_kind": np.array("bicubic"), "form": np.array(patches.form), "control": patches.control}
+        patch_arrays = {"patch_kind": np.array("bicubic"), **patches.to_arrays()}
     elif isinstance(patches, GregoryPatchSet):
         patch_arrays = {"patch_kind": np.array(GregoryPatchSet.kind), **patches.to_arrays()}
     else:
@@ -58,8 +66,11 @@ def load_network(path: str | os.PathLike[str]) -> PatchNetwork:
         raise FormatError(source, "not a g1patch network file (no header)") from None
     if header.get("format") != "g1patch-network":
         raise FormatError(source, "not a g1patch network file (wrong header)")
-    if header.get("version") != FORMAT_VERSION:
-        raise FormatError(source, f"network format version {header.get('version')} is not supported (this g1patch reads {FORMAT_VERSION})")
+    if header.get("version") not in READABLE_VERSIONS:
+        readable = ", ".join(map(str, READABLE_VERSIONS))
+        raise FormatError(source, f"network format version {header.get('version')} is not supported (this g1patch reads {readable})")
+    if header["version"] == 1:  # version 1 has no frame: arrays of that name are not part of it
+        contents = {name: value for name, value in contents.items() if not name.startswith("frame_")}
     missing = [name for name in ("patch_kind", *_ARRAYS) if name not in contents]
     if missing:
         raise FormatError(source, f"network file lacks {', '.join(missing)}")
@@ -67,11 +78,7 @@ def load_network(path: str | os.PathLike[str]) -> PatchNetwork:
     if kind not in ("bicubic", GregoryPatchSet.kind):
         raise FormatError(source, f"unknown patch kind {kind!r}")
     try:
-        patches = (
-            PatchSet(contents["control"], str(contents["form"]))  # type: ignore[arg-type]
-            if kind == "bicubic"
-            else GregoryPatchSet.from_arrays(contents)
-        )
+        patches = PatchSet.from_arrays(contents) if kind == "bicubic" else GregoryPatchSet.from_arrays(contents)
         return PatchNetwork(
             patches=patches,
             **{name: contents[name] for name in _ARRAYS},
