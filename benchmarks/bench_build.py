@@ -3,8 +3,11 @@
 Workload: ``shapes.large_torus(--quads)`` (default 1,000,000 quads, a 2000 × 500 torus; its
 topology is built before anything is timed). For each construction, in the same run:
 
-* build: ``build_gregory_network(mesh)`` / ``build_corner_network(mesh)`` (tangents "arc",
-  everything from the fan normals to the PatchNetwork); median of ``--repeats`` runs;
+* build: ``build_network(mesh, method, shape)`` for the default Gregory network, the same with the
+  previous release's rules (``shape="legacy"``) and the paper's corner network; median of
+  ``--repeats`` runs. The release before this one is also timed from git (``--baseline``, default
+  the commit before the targets/assembly split; its ``build_gregory_network`` in a subprocess on
+  the same mesh): the issue asks the default build to stay within 1.5× of it;
 * build peak: the tracemalloc peak of one more build (traced separately, as tracing slows the
   allocations it records), over the memory held before it; per quad against the 1 KB bar;
 * ratio: Gregory / corner (DESIGN §6: absolute times drift, ratios hold);
@@ -30,17 +33,48 @@ from collections.abc import Callable
 from typing import TypeVar
 
 from g1patch import shapes
-from g1patch.construct.corner import build_corner_network
-from g1patch.build import build_gregory_network
+from g1patch.build import build_network
 from g1patch.continuity import check
 from g1patch.mesh import QuadMesh
 from g1patch.network import PatchNetwork
 
 T = TypeVar("T")
 BUILDERS: dict[str, Callable[[QuadMesh], PatchNetwork]] = {
-    "gregory": build_gregory_network,
-    "corner": build_corner_network,
+    "gregory": lambda mesh: build_network(mesh, "gregory"),
+    "gregory·legacy": lambda mesh: build_network(mesh, "gregory", "legacy"),
+    "corner": lambda mesh: build_network(mesh, "corner"),
 }
+#: the commit before shape targets and the assembly were split (issue 9)
+BASELINE = "439cb54"
+_BASELINE_SCRIPT = """
+import sys, time, statistics
+sys.path.insert(0, sys.argv[1])
+from g1patch import shapes
+from g1patch.construct.gregory import build_gregory_network
+mesh = shapes.large_torus(int(sys.argv[2]))
+times = []
+for _ in range(int(sys.argv[3])):
+    start = time.perf_counter(); build_gregory_network(mesh); times.append(time.perf_counter() - start)
+print(statistics.median(times))
+"""
+
+
+def baseline_build(commit: str, quads: int, repeats: int) -> float | None:
+    """Median build time of ``commit``'s Gregory network on the same mesh (a subprocess on its sources), or None."""
+    import subprocess
+    import sys
+    import tempfile
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    with tempfile.TemporaryDirectory() as folder:
+        archive = subprocess.run(["git", "-C", str(root), "archive", commit, "src"], capture_output=True)
+        if archive.returncode:
+            return None
+        subprocess.run(["tar", "-x", "-C", folder], input=archive.stdout, check=True)
+        result = subprocess.run([sys.executable, "-c", _BASELINE_SCRIPT, str(Path(folder) / "src"), str(quads), str(repeats)],
+                                capture_output=True, text=True)
+        return float(result.stdout.strip()) if result.returncode == 0 else None
 
 
 def timed(function: Callable[[], T]) -> tuple[float, T]:
@@ -69,6 +103,7 @@ def main() -> None:
     parser.add_argument("--quads", type=int, default=1_000_000, help="quads of the generated torus (default 1,000,000)")
     parser.add_argument("--repeats", type=int, default=3, help="timed builds per construction, median reported (default 3)")
     parser.add_argument("--no-check", action="store_true", help="skip the checks")
+    parser.add_argument("--baseline", default=BASELINE, help=f"git commit of the previous release (default {BASELINE}); '' skips it")
     args = parser.parse_args()
 
     seconds, mesh = timed(lambda: shapes.large_torus(args.quads))
@@ -82,6 +117,11 @@ def main() -> None:
         print(f"{name:<16}{row['build_s']:>9.2f}{row['build_peak'] / 1e6:>9.0f}{row['build_peak'] / quads:>8.0f}")
     gregory, corner = rows["gregory"], rows["corner"]
     print(f"{'gregory / corner':<16}{gregory['build_s'] / corner['build_s']:>9.2f}{gregory['build_peak'] / corner['build_peak']:>9.2f}")
+    legacy = rows["gregory·legacy"]
+    print(f"{'gregory / legacy':<16}{gregory['build_s'] / legacy['build_s']:>9.2f}{gregory['build_peak'] / legacy['build_peak']:>9.2f}")
+    before = baseline_build(args.baseline, args.quads, args.repeats) if args.baseline else None
+    if before is not None:
+        print(f"{'release ' + args.baseline:<16}{before:>9.2f}      (gregory / it: {gregory['build_s'] / before:.2f}, bar 1.5)")
     if not args.no_check:
         print()
         for name, build in BUILDERS.items():

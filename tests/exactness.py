@@ -22,6 +22,8 @@ SHARED_MESHES = [
 MAX_ANGLE_DEG = 1e-9
 MAX_GAP = 1e-12
 MAX_VERTEX_DEVIATION = 1e-12
+#: the shape rules whose surfaces pass through the mesh vertices (``limit`` has its own tests)
+INTERPOLATING = ("interpolate", "legacy")
 #: vertex noise, in units of the shortest edge: beyond ~5 % thin quads fold (G1 stays exact)
 NOISE = 0.05
 

@@ -3,40 +3,54 @@
 ``build_network(mesh, method, shape)`` picks a targets rule (``shape``: what the surface should
 look like) and an assembly (``method``: how it is made exactly G1, or G1 at corners only) and runs
 them in centred, unit-scaled coordinates ``x_local = (x − centre)/scale`` (bounding-box centre and
-diagonal), so the result does not depend on where the model sits; the patches are mapped back to
-the mesh's coordinates at the end and their corners set to the mesh vertices exactly.
+diagonal, :class:`~g1patch.frame.Frame`). The patches keep those local coordinates and carry the
+frame, so what is stored is exactly G1 wherever the model sits (translated by 1e6, world
+coordinates would round neighbouring control points apart by 1e-10 of a unit patch).
+
+**Fold guard.** Any valid targets assemble exactly G1, but a local shape rule can still make a
+patch turn back on itself on a very coarse or irregular cage. After assembling, the patches are
+tested for folds (:func:`~g1patch.continuity.folded_patches`); at the vertices of folded faces the
+targets retreat halfway, then fully, towards the previous release's rule
+(:func:`~g1patch.targets.interpolate.retreat`: regular star, bilinear twist), and are assembled
+again. Those vertices are counted in the provenance's ``fallback_vertices``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
 
 from .construct.corner import TANGENTS, TangentRule, assemble_corner
 from .construct.gregory import assemble_gregory
-from .errors import check_choice
+from .continuity import folded_patches
+from .errors import InputError, check_choice
+from .frame import Frame
 from .gregory import GregoryPatchSet
 from .mesh import QuadMesh
-from .network import PatchNetwork, network_from_mesh
+from .network import PatchNetwork, Patches, network_from_mesh
 from .patches import PatchSet
 from .targets import Targets
-from .targets.interpolate import SHAPES, ShapeRule, shape_targets
+from .targets.interpolate import SHAPES, ShapeRule, retreat, shape_targets
 
-__all__ = ["METHODS", "Method", "build_gregory_network", "build_network", "build_split4_network", "local_frame"]
+__all__ = ["METHODS", "Method", "build_gregory_network", "build_network", "build_split4_network"]
 
 Method = Literal["gregory", "split4", "corner"]
 METHODS: tuple[Method, ...] = ("gregory", "split4", "corner")
 
+#: how far the fold guard moves the targets of folded faces' vertices, in turn
+GUARD_STEPS = (0.5, 1.0, 1.0)
+#: grid per patch of the fold guard's test
+GUARD_SAMPLES = 9
+#: what puts a face at risk of folding (:func:`_faces_at_risk`)
+RISK_TURN = np.radians(15.0)
+RISK_TANGENT = np.radians(30.0)
+RISK_LENGTH = (0.5, 1.6)
 
-def local_frame(points: np.ndarray) -> tuple[np.ndarray, float]:
-    """``(centre, scale)`` of the working coordinates: the bounding-box centre and diagonal (1 if 0)."""
-    low, high = points.min(axis=0), points.max(axis=0)
-    return 0.5 * (low + high), float(np.linalg.norm(high - low)) or 1.0
 
-
-def _provenance(mesh: QuadMesh, method: str, shape: str, tangents: str, targets: Targets) -> dict[str, str]:
-    provenance = {"method": method, "shape": shape, "fallback_vertices": str(targets.n_fallback)}
+def _provenance(mesh: QuadMesh, method: str, shape: str, tangents: str, targets: Targets, refine: int) -> dict[str, str]:
+    provenance = {"method": method, "shape": shape, "refine": str(refine), "fallback_vertices": str(targets.n_fallback)}
     if shape == "legacy":
         provenance["tangents"] = tangents
     if mesh.source:
@@ -44,39 +58,113 @@ def _provenance(mesh: QuadMesh, method: str, shape: str, tangents: str, targets:
     return provenance
 
 
+def _faces_at_risk(targets: Targets) -> np.ndarray:
+    """Faces whose targets are far from a smooth regular patch, where a fold is possible: a corner
+    that needed a fallback, corner normals more than :data:`RISK_TURN` apart across an edge, or an
+    edge tangent off its chord by more than :data:`RISK_TANGENT` in angle or outside
+    :data:`RISK_LENGTH` × its length. On a fine smooth mesh no face is, and the guard costs nothing."""
+    from .targets import halfedge_slots
+
+    topology = targets.topology
+    faces = topology.faces
+    n = targets.normals[faces]
+    risky = targets.fallback[faces].any(axis=1)
+    risky |= (np.einsum("fkd,fkd->fk", n, np.roll(n, -1, axis=1)) < np.cos(RISK_TURN)).any(axis=1)
+    slot_out, _ = halfedge_slots(topology)
+    x = targets.positions
+    chord = x[topology.target(np.arange(topology.n_halfedges))] - x[faces.reshape(-1)]
+    tangent = targets.tangents[slot_out]
+    chord_length, tangent_length = np.linalg.norm(chord, axis=1), np.linalg.norm(tangent, axis=1)
+    ratio = tangent_length / np.where(chord_length > 0, chord_length, 1.0)
+    cosine = np.einsum("hd,hd->h", chord, tangent) / np.maximum(chord_length * tangent_length, np.finfo(float).tiny)
+    off = (cosine < np.cos(RISK_TANGENT)) | (ratio < RISK_LENGTH[0]) | (ratio > RISK_LENGTH[1])
+    risky |= off.reshape(-1, 4).any(axis=1)
+    return np.flatnonzero(risky)
+
+
+def _guarded(
+    targets: Targets, assemble: Callable[[Targets], Patches], patches_per_face: int
+) -> tuple[Patches, Targets]:
+    """Assemble, and where faces fold retreat their vertices' targets (module docstring). Only the
+    faces at risk (:func:`_faces_at_risk`) are tested; the retreated set only grows, each step
+    starts again from the rule's own targets, and from the second step on it takes in the faces'
+    1-rings too (a face depends on its corners' targets only, but a fully retreated corner next to
+    an untouched one can fold the face between)."""
+    topology = targets.topology
+    patches = assemble(targets)
+    retreated = np.zeros(topology.n_vertices, dtype=bool)
+    guarded = targets
+    slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
+    for step, weight in enumerate(GUARD_STEPS):
+        tested = _faces_at_risk(guarded)
+        if not tested.size:
+            break
+        rows = (patches_per_face * tested[:, None] + np.arange(patches_per_face)).ravel()
+        folded = rows[folded_patches(patches.take(rows), GUARD_SAMPLES)]
+        if not folded.size:
+            break
+        corners = np.zeros(topology.n_vertices, dtype=bool)
+        corners[topology.faces[np.unique(folded // patches_per_face)]] = True
+        if step:
+            corners[topology.neighbors[corners[slot_vertex]]] = True
+        retreated |= corners
+        guarded = retreat(targets, np.flatnonzero(retreated), weight)
+        patches = assemble(guarded)
+    return patches, guarded
+
+
 def build_network(
-    mesh: QuadMesh, method: Method = "gregory", shape: ShapeRule = "interpolate", *, tangents: TangentRule = "arc"
+    mesh: QuadMesh, method: Method = "gregory", shape: ShapeRule = "interpolate", *, tangents: TangentRule = "arc", refine: int = 0
 ) -> PatchNetwork:
     """The patch network of ``mesh``: targets by ``shape``, assembled by ``method``.
 
     ``method``: ``gregory`` (exact G1, rational interiors), ``split4`` (exact G1, 2×2 polynomial
     bicubics per quad), ``corner`` (the paper: G1 at corners only). ``shape``: ``interpolate``
-    (the default rules of :mod:`g1patch.targets.interpolate`) or ``legacy`` (the previous
-    release's, for comparison). ``tangents`` (``arc`` or ``chord``) applies to ``legacy`` only.
-    The network's provenance records both choices and how many vertices needed a fallback.
+    (the default rules of :mod:`g1patch.targets.interpolate`: through the mesh vertices),
+    ``limit`` (the Catmull–Clark limit of the mesh as a control cage, :mod:`g1patch.targets.limit`:
+    through the limit points, without the fold guard, which would pull it off the limit) or
+    ``legacy`` (the previous release's, for comparison, without the fold guard). ``tangents``
+    (``arc`` or ``chord``) applies to ``legacy`` only. ``refine``: Catmull–Clark steps applied to
+    the mesh first (:func:`g1patch.subdivision.refine`). The network's provenance records the
+    choices and how many vertices needed a fallback.
     """
     check_choice("method", method, METHODS)
     check_choice("shape", shape, SHAPES)
     check_choice("tangents", tangents, TANGENTS)
-    centre, scale = local_frame(mesh.vertices)
-    local = mesh.with_vertices((mesh.vertices - centre) / scale)
+    if isinstance(refine, bool) or not isinstance(refine, (int, np.integer)) or refine < 0:
+        raise InputError(f"refine: expected a number of Catmull–Clark steps ≥ 0, got {refine!r}")
+    if refine:
+        from .subdivision import refine as subdivide
+
+        mesh = subdivide(mesh, int(refine))
+    frame = Frame.of_points(mesh.vertices)
+    local = mesh.with_vertices(frame.to_local(mesh.vertices))
     targets = shape_targets(local, shape, tangents=tangents)
-    provenance = _provenance(mesh, method, shape, tangents, targets)
+    guard = shape == "interpolate"
+    surface = mesh if shape != "limit" else mesh.with_vertices(frame.to_world(targets.positions))  # the points passed through
+    provenance = _provenance(mesh, method, shape, tangents, targets, refine)
     if method == "split4":
         from .construct.split4 import split4_network_from_targets
 
-        return split4_network_from_targets(mesh, targets, centre, scale, provenance)
-    if method == "corner":
-        hermite = assemble_corner(targets).control
-        hermite[:, :2, :2] = mesh.vertices[mesh.faces][:, [[0, 3], [1, 2]]]
-        hermite[:, 2:] *= scale
-        hermite[:, :2, 2:] *= scale
-        patches: PatchSet | GregoryPatchSet = PatchSet(hermite, "hermite")
+        if guard:
+            targets = _guarded(targets, lambda t: _split4_local(local, t), 4)[1]
+            provenance["fallback_vertices"] = str(targets.n_fallback)
+        return split4_network_from_targets(surface, targets, frame.centre, frame.scale, provenance)
+    assemble: Callable[[Targets], Patches] = assemble_corner if method == "corner" else assemble_gregory
+    if guard:
+        patches, targets = _guarded(targets, assemble, 1)
+        provenance["fallback_vertices"] = str(targets.n_fallback)
     else:
-        points = assemble_gregory(targets).points * scale + centre
-        points[:, :4] = mesh.vertices[mesh.faces]
-        patches = GregoryPatchSet(points)
-    return network_from_mesh(mesh.topology, patches, mesh.vertices, targets.normals, provenance)
+        patches = assemble(targets)
+    framed: PatchSet | GregoryPatchSet = patches.with_frame(frame)  # type: ignore[attr-defined]
+    return network_from_mesh(mesh.topology, framed, surface.vertices, targets.normals, provenance)
+
+
+def _split4_local(local: QuadMesh, targets: Targets) -> PatchSet:
+    """split4's sub-patches in the working coordinates, for the fold guard."""
+    from .construct.split4 import split4_patches
+
+    return split4_patches(targets, local.vertices, np.zeros(3), 1.0)[0]
 
 
 def build_gregory_network(mesh: QuadMesh, *, shape: ShapeRule = "interpolate", tangents: TangentRule = "arc") -> PatchNetwork:

@@ -331,15 +331,16 @@ def folded_patches(patches: Patches, samples: int = 9, degenerate_rtol: float = 
 
     For a builder's fold guard: no network needed, patches in any coordinates.
     """
-    return _grid_measures(patches, samples, degenerate_rtol)[0].folded
+    return _grid_measures(patches, samples, degenerate_rtol, fairness=False)[0].folded
 
 
-def _grid_measures(patches: Patches, samples: int, degenerate_rtol: float) -> tuple[_GridMeasures, float]:
-    """The grid measures of every patch, in local coordinates, and the bounding-box diagonal."""
+def _grid_measures(patches: Patches, samples: int, degenerate_rtol: float, fairness: bool = True) -> tuple[_GridMeasures, float]:
+    """The grid measures of every patch (``fairness`` False: folds and degenerate normals only),
+    in local coordinates, and the bounding-box diagonal."""
     _check_count("samples", samples, 2)
     local = _local(patches)
     diagonal = _diagonal(local.evaluate(CORNER_PARAMETERS)) or 1.0
-    grid = _GridMeasures(len(local), samples, degenerate_rtol * diagonal**2)
+    grid = _GridMeasures(len(local), samples, degenerate_rtol * diagonal**2, fairness)
     for block in _blocks(len(local), _patch_block(samples)):
         grid.add(local, block)
     return grid, diagonal
@@ -547,8 +548,9 @@ class _GridMeasures:
     depend on the blocks.
     """
 
-    def __init__(self, count: int, resolution: int, degenerate_level: float) -> None:
+    def __init__(self, count: int, resolution: int, degenerate_level: float, fairness: bool = True) -> None:
         self.grid = np.linspace(0.0, 1.0, resolution)
+        self.fairness_wanted = fairness
         self.degenerate_level = degenerate_level
         self.degenerate = 0
         self.folded = np.zeros(count, dtype=bool)
@@ -588,6 +590,8 @@ class _GridMeasures:
             chord2 = _dot3(chord, chord)  # |n̂_a − n̂_b|² = 4 sin²(θ/2): > 2 where θ > 90°
             paired = usable[ahead] & usable[behind]
             offending[behind] |= (chord2 > 2.0) & paired
+            if not self.fairness_wanted:
+                continue
             bins = _chord_codes(chord2) - (_CODE_MIN - 1)
             np.clip(bins, 0, _BINS - 1, out=bins)
             if paired.all():
@@ -610,6 +614,8 @@ class _GridMeasures:
             i, j = np.unravel_index(int(np.argmax(offending[patch])), offending.shape[1:])
             self.locations.append((block.start + int(patch), float(self.grid[i]), float(self.grid[j])))
 
+        if not self.fairness_wanted:
+            return
         energy = self.energy[block]
         for derivative in (p_u, p_v):
             along_u = derivative[:, :, 1:] - derivative[:, :, :-1]

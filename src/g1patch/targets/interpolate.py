@@ -45,8 +45,8 @@ __all__ = [
     "retreat", "slot_vertices", "spread_fan", "tangent_stars",
 ]
 
-ShapeRule = Literal["interpolate", "legacy"]
-SHAPES: tuple[ShapeRule, ...] = ("interpolate", "legacy")
+ShapeRule = Literal["interpolate", "limit", "legacy"]
+SHAPES: tuple[ShapeRule, ...] = ("interpolate", "limit", "legacy")
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -539,8 +539,13 @@ def retreat(targets: Targets, vertices: IntArray, weight: float) -> Targets:
 
 
 def shape_targets(mesh: QuadMesh, shape: ShapeRule = "interpolate", *, tangents: TangentRule = "arc") -> Targets:
-    """The targets of ``mesh`` by the named rule."""
+    """The targets of ``mesh`` by the named rule: ``interpolate`` (this module), ``limit`` (the
+    Catmull–Clark limit of the mesh as a control cage, :mod:`g1patch.targets.limit`) or ``legacy``."""
     check_choice("shape", shape, SHAPES)
     if shape == "legacy":
         return legacy_targets(mesh, tangents)
+    if shape == "limit":
+        from .limit import limit_targets
+
+        return limit_targets(mesh)
     return interpolate_targets(mesh)
