@@ -30,11 +30,13 @@ _EXAMPLES = {
   g1patch build mesh.obj -o surface.npz                  # exact G1 (Gregory), the default
   g1patch build cube.obj -o cube.npz --method corner     # the paper's corner-G1 patches
   g1patch build mesh.obj -o cad.npz --method split4      # exact G1, polynomial: exact in STEP
-  g1patch build mesh.off -o surface.npz --tangents chord""",
+  g1patch build cage.obj -o limit.npz --shape limit      # the Catmull–Clark limit of a control cage, exactly G1
+  g1patch build cage.obj -o fine.npz --shape limit --refine 1
+  g1patch build mesh.off -o old.npz --shape legacy --tangents chord   # the first release's rules""",
     "check": """examples:
   g1patch check surface.npz
   g1patch check teapot.bpt --json
-  g1patch check surface.npz --max-angle 1e-9     # exit 1 unless exactly G1""",
+  g1patch check surface.npz --max-angle 1e-9     # exit 1 unless exactly G1 and free of folds""",
     "export": """examples:
   g1patch export surface.npz -o surface.obj --resolution 33
   g1patch export surface.npz -o surface.step            # exact B-splines, or a fit within --tolerance
@@ -75,8 +77,10 @@ def _parser() -> argparse.ArgumentParser:
                        help="gregory: exact G1, rational interiors (default); split4: exact G1 with polynomial "
                             "bicubics, exact in STEP; corner: the paper's, G1 at corners only")
     build.add_argument("--shape", choices=SHAPES, default="interpolate",
-                       help="interpolate: fitted normals, flexible tangent fans, curvature-carrying twists (default); "
+                       help="interpolate: through the vertices, fitted normals, flexible tangent fans, curvature-carrying "
+                            "twists (default); limit: the Catmull–Clark limit of the mesh as a control cage; "
                             "legacy: the first release's rules (fan normal, regular star, bilinear twist)")
+    build.add_argument("--refine", type=int, default=0, metavar="N", help="Catmull–Clark steps before building (default: 0)")
     build.add_argument("--tangents", choices=TANGENTS, default="arc", help="legacy shape: tangent lengths (default: arc)")
     build.add_argument("--twist", choices=TWISTS, default="bilinear",
                        help="corner method, legacy shape: twist vectors (default: bilinear)")
@@ -146,19 +150,19 @@ def _load_surface(path: Path) -> Any:
 
 
 def build_network(mesh: Any, method: str, *, shape: str = "interpolate", tangents: str = "arc", twist: str = "bilinear",
-                  normals: str = "fan") -> Any:
+                  normals: str = "fan", refine: int = 0) -> Any:
     """The network of ``mesh`` by ``method`` and ``shape`` (:func:`g1patch.build.build_network`).
 
     ``--method corner --shape legacy`` is the paper's construction as the first release built it,
     with its ``--twist`` and ``--normals`` options.
     """
-    if method == "corner" and shape == "legacy":
+    if method == "corner" and shape == "legacy" and not refine:
         from .construct.corner import build_corner_network
 
         return build_corner_network(mesh, tangents=tangents, twist=twist, normals=normals)  # type: ignore[arg-type]
     from .build import build_network as build
 
-    return build(mesh, method, shape, tangents=tangents)  # type: ignore[arg-type]
+    return build(mesh, method, shape, tangents=tangents, refine=refine)  # type: ignore[arg-type]
 
 
 def _build(args: argparse.Namespace) -> int:
@@ -172,7 +176,7 @@ def _build(args: argparse.Namespace) -> int:
         mesh = read_mesh(args.mesh, split=not args.no_split)
         progress(1, 3)
         network = build_network(mesh, args.method, shape=args.shape, tangents=args.tangents, twist=args.twist,
-                                normals=args.normals)
+                                normals=args.normals, refine=args.refine)
         progress(2, 3)
         save_network(args.output, network)
         progress(3, 3)
