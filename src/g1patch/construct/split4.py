@@ -28,9 +28,18 @@ edges, so μ is carried along grid lines (:func:`_chain_shears`); at even valenc
 (:func:`_even_vertex_shifts`). Every twist is the minimum-norm change of a bilinear target
 that solves its vertex system (a pseudo-inverse per system size). Work is done in centred,
 unit-scaled coordinates and mapped back.
+
+The free parameters that keep G1 exact are chosen so the sub-patches stay regular on thin or
+skewed faces (a 1° wedge of a 360-valent disk, 1 : 4 neighbouring edges): the centre sits at the
+bilinear Coons point of the split curves in the tangent directions (its height from the targets),
+the seam tangents at a midpoint take the two faces' own width across the edge and their own lean
+along it (:func:`_seam_tangents`), and the star is shrunk where it is much longer than its target
+or its chord (:func:`split4_star`).
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -44,7 +53,10 @@ from ..network import PatchNetwork
 from ..patches import PatchSet
 from ..targets import Targets, halfedge_slots
 
-__all__ = ["BSPLINE_KNOTS", "STAR_LENGTH_LIMIT", "bspline_nets", "macro_nets", "split4_network_from_targets", "split4_patches", "split4_star"]
+__all__ = [
+    "BSPLINE_KNOTS", "STAR_LENGTH_LIMIT", "SplitStar", "bspline_nets", "macro_nets",
+    "split4_network_from_targets", "split4_patches", "split4_star",
+]
 
 #: knots of each quad's B-spline patch, in u and in v
 BSPLINE_KNOTS = np.array([0.0, 0.0, 0.0, 0.0, 0.5, 0.5, 1.0, 1.0, 1.0, 1.0])
@@ -59,7 +71,6 @@ _LOCAL = np.stack(
     [np.stack([_P, _Q], -1), np.stack([3 - _Q, _P], -1), np.stack([3 - _P, 3 - _Q], -1), np.stack([_Q, 3 - _P], -1)]
 )
 _SUB_ORIGIN = np.array([[0, 0], [3, 0], [3, 3], [0, 3]])  # (s, t)·3: where sub-patch k sits in the 7×7 net
-_SAFEGUARD = 0.577  # seams stay ≳ 30° off the edge tangent at a midpoint (polynomial-g1.md §3.6)
 
 
 def _unit(v: FloatArray) -> FloatArray:
@@ -175,6 +186,53 @@ def _even_vertex_shifts(
     return moved, shift
 
 
+#: the seam tangents' shared width across the edge is at least this share of the narrower face's
+#: extent across it, and at least :data:`_MIN_WIDTH` × the curve tangent (a seam never lies along the edge)
+_WIDTH_FLOOR = 0.25
+_MIN_WIDTH = 1e-3
+
+
+def _seam_tangents(
+    m: FloatArray, t_x: FloatArray, n_m: FloatArray, mu: FloatArray, c_l: FloatArray, c_r: FloatArray,
+    far_l: FloatArray, far_r: FloatArray, interior: NDArray[np.bool_],
+) -> tuple[FloatArray, FloatArray]:
+    """Seam tangents ``t_L, t_R`` at each edge midpoint M (into faces L and R), with ``t_L + t_R = μ t_X``.
+
+    Each face's natural seam tangent is ``C − M`` in the tangent plane at M: its component across
+    the edge is the face's own width there, its component along t_X its own lean. The star leaves
+    one width α (shared: the across parts must cancel) and how the sum μ t_X of the along parts is
+    split: both faces keep their lean and share the mismatch ``μ |t_X| − lean_L − lean_R`` equally,
+    and α is the mean of the two widths. So on a thin wedge the seams stay inside it, however large
+    μ is, and seams follow the faces' own skew. α is kept ≥ :data:`_WIDTH_FLOOR` × the narrower
+    face's extent across the edge (the largest across distance of its centre, far midpoint and far
+    corners, ``far_*`` (E, 3, 3)) and ≥ :data:`_MIN_WIDTH` |t_X|. A boundary edge has no star there:
+    ``t_L = C_L − M`` in the plane, its width floored the same way.
+    """
+    unit_n = _unit(n_m)
+    across = _unit(np.cross(t_x, unit_n))  # towards face L
+    along = _unit(t_x)
+
+    def planar(v: FloatArray) -> FloatArray:
+        return v - _dot(v, unit_n)[:, None] * unit_n
+
+    def extent(points: FloatArray, direction: FloatArray) -> FloatArray:
+        return _dot(points - m[:, None], direction[:, None]).max(axis=1)  # direction ⊥ N_M: in-plane distance
+
+    nat_l, nat_r = planar(c_l - m), planar(c_r - m)
+    w_l, w_r = _dot(nat_l, across), -_dot(nat_r, across)
+    lean_l, lean_r = _dot(nat_l, along), _dot(nat_r, along)
+    ext_l = extent(np.concatenate([c_l[:, None], far_l], axis=1), across)
+    ext_r = extent(np.concatenate([c_r[:, None], far_r], axis=1), -across)
+    length_x = np.linalg.norm(t_x, axis=1)
+    narrow = np.where(interior, np.minimum(ext_l, ext_r), ext_l)
+    floor = np.maximum(_WIDTH_FLOOR * narrow, _MIN_WIDTH * length_x)
+    width = np.maximum(np.where(interior, 0.5 * (w_l + w_r), w_l), floor)
+    share = np.where(interior, 0.5 * (mu * length_x - lean_l - lean_r), 0.0)
+    t_l = width[:, None] * across + (lean_l + share)[:, None] * along
+    t_r = -width[:, None] * across + (lean_r + share)[:, None] * along
+    return t_l, t_r
+
+
 _GROUPS = 32768  # systems per block in _min_norm
 
 
@@ -248,17 +306,32 @@ def _assemble(
 
 #: no star tangent may exceed this multiple of its own target tangent's length: a regular star
 #: fitted to an irregular fan gives a short edge opposite a long one a tangent several times its
-#: length, and its boundary cubic then overshoots the neighbour (shape-diagnosis.md cause 1)
+#: length, and its boundary cubic then overshoots the neighbour (shape-diagnosis.md cause 1); nor
+#: of the circle-aware length of its edge: a target fan that is itself a regular star (the legacy
+#: rule) gives the short edge at a box corner a tangent several chords long, and the cubic loops
 STAR_LENGTH_LIMIT = 1.5
 
 
-def split4_star(targets: Targets) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+class SplitStar(NamedTuple):
+    """The regular star of :func:`split4_star`: tangents per ring slot (S, 3), ``c_v`` per vertex,
+    the vertices whose fan was refitted to spread directions (``refitted``: a real fallback),
+    those whose star the length safeguard scaled down (``shrunk``) and the scale factor (≤ 1) per vertex."""
+
+    star: FloatArray
+    cosine: FloatArray
+    refitted: NDArray[np.bool_]
+    shrunk: NDArray[np.bool_]
+    factor: FloatArray
+
+
+def split4_star(targets: Targets) -> SplitStar:
     """The regular star split4 needs (its twist systems are solvable only for affine-regular
     stars), fitted to the target fan: ``t_j = a cos θ_j + b sin θ_j``, ``c_v = cos`` of the angle
-    step. Safeguard: each vertex's star is scaled down uniformly (it stays regular) until no
-    tangent is longer than :data:`STAR_LENGTH_LIMIT` × its target's; a star that does not turn
-    counter-clockwise is refitted to evenly spread target directions. Returns the star, the
-    cosines and the vertices the safeguard changed.
+    step. A star that does not turn counter-clockwise is refitted to evenly spread target
+    directions (a fallback). Length safeguard: each vertex's star is scaled down uniformly (it stays
+    regular) until no tangent is longer than :data:`STAR_LENGTH_LIMIT` × the shorter of its target's
+    and the circle-aware Hermite length of its edge (``2|d|²/(|d| + |P d|)``, P the projection onto
+    the tangent plane: what the interpolate rule's tangents are).
     """
     from ..targets.interpolate import fit_regular_star, slot_vertices, spread_fan
 
@@ -270,23 +343,28 @@ def split4_star(targets: Targets) -> tuple[FloatArray, FloatArray, NDArray[np.bo
         wanted = spread_fan(topology, targets.normals, wanted, chord, np.flatnonzero(~valid))
         star, cosine, _ = fit_regular_star(topology, targets.normals, wanted)
     slot_vertex = slot_vertices(topology)
-    own = np.linalg.norm(wanted, axis=1)
-    ratio = np.linalg.norm(star, axis=1) / np.where(own > 0, own, np.inf)
+    edge = targets.positions[topology.neighbors] - targets.positions[slot_vertex]
+    normal = targets.normals[slot_vertex]
+    chord = np.linalg.norm(edge, axis=1)
+    in_plane = np.linalg.norm(edge - _dot(edge, normal)[:, None] * normal, axis=1)
+    arc = 2.0 * chord**2 / np.where(chord > 0, chord + in_plane, 1.0)  # the circle-aware Hermite length
+    allowed = STAR_LENGTH_LIMIT * np.minimum(np.linalg.norm(wanted, axis=1), arc)
+    ratio = np.linalg.norm(star, axis=1) / np.where(allowed > 0, allowed, np.inf)
     worst = np.zeros(topology.n_vertices)
     np.maximum.at(worst, slot_vertex, ratio)
-    shrink = np.minimum(1.0, STAR_LENGTH_LIMIT / np.where(worst > 0, worst, 1.0))
+    shrink = np.minimum(1.0, 1.0 / np.where(worst > 0, worst, 1.0))
     star *= shrink[slot_vertex, None]
-    return star, cosine, ~valid | (shrink < 1.0)
+    return SplitStar(star, cosine, ~valid, shrink < 1.0, shrink)
 
 
 def split4_patches(
     targets: Targets, corners: FloatArray, centre: FloatArray, scale: float
-) -> tuple[PatchSet, FloatArray, FloatArray, NDArray[np.bool_]]:
+) -> tuple[PatchSet, FloatArray, FloatArray, SplitStar]:
     """The 4 F Bézier sub-patches (sub-patch ``4 f + k`` at corner k of face f), and the positions
     and unit surface normals of the edge midpoints and face centres, each stacked as (E + F, 3).
     The normal at M is N_M (the seam and curve tangents there are ⊥ N_M); at C it is
-    ``(M_0 − M_2) × (M_1 − M_3)``, the cross of the centre's star. Also returns the vertices
-    whose star needed the safeguard (:func:`split4_star`).
+    ``(M_0 − M_2) × (M_1 − M_3)``, the cross of the centre's star. Also returns the star
+    (:func:`split4_star`: which vertices were refitted or shrunk).
 
     ``targets`` are in local coordinates ``(x − centre) / scale``; the sub-patches are mapped
     back and their corners at mesh vertices set to ``corners`` (the input positions, (V, 3)) exactly.
@@ -295,7 +373,8 @@ def split4_patches(
     n_faces = topology.n_faces
     pos = targets.positions
     normals = targets.normals
-    star, cosine, guarded = split4_star(targets)
+    stars = split4_star(targets)
+    star, cosine = stars.star, stars.cosine
     slot_out, slot_in = halfedge_slots(topology)
     lam = 2.0 * cosine
 
@@ -329,9 +408,9 @@ def split4_patches(
     d1, d2 = on_side(0, 4, ~canonical), on_side(1, 3, ~canonical)  # from the target of h
     del near
 
-    # -- centres: the middle of the targets' bicubic, C = (Σ corners + 3 Σ edge points + 9 Σ interior) / 64
+    # -- centres (any C keeps G1: its star is a plain cross), and its cross b_k = C + (M_k − M_{k+2}) / 6;
+    # the middle of the targets' bicubic is (Σ corners + 3 Σ edge points + 9 Σ interior) / 64
     # = (7 Σ V + Σ (t_next + t_prev) + 9 Σ Ft) / 64
-    # (any C keeps G1: its star is a plain cross), and its cross b_k = C + (M_k − M_{k+2}) / 6
     mids = m[edge_of].reshape(n_faces, 4, 3)
     prev = QuadTopology.prev(halfedges)
     target_next = targets.tangents[slot_out].reshape(n_faces, 4, 3)  # t(V → next corner)
@@ -341,24 +420,29 @@ def split4_patches(
     centres = (
         7.0 * face_corners.sum(axis=1) + (target_next + target_prev).sum(axis=1) + 9.0 * interior_targets.sum(axis=1)
     ) / 64.0
+    # in-plane position from the split4 curves (the bilinear Coons centre ΣM/2 − ΣV/4, inside the
+    # face whatever its shape), height along the centre's normal from the targets' bicubic
+    coons = 0.5 * mids.sum(axis=1) - 0.25 * face_corners.sum(axis=1)
+    cross = np.cross(mids[:, 0] - mids[:, 2], mids[:, 1] - mids[:, 3])
+    size = np.linalg.norm(cross, axis=1, keepdims=True)
+    n_c = cross / np.where(size > 0, size, 1.0)
+    centres = coons + _dot(centres - coons, n_c)[:, None] * n_c
     b = centres[:, None] + (mids - np.roll(mids, -2, axis=1)) / 6.0
 
     # -- midpoint stars: t_L + t_R = μ t_X, seam points e = M + t/3
     t_x = 3.0 * (p2 - m)
     n_m = normals[x_of] + normals[y_of]
     n_m -= (_dot(n_m, t_x) / _dot(t_x, t_x))[:, None] * t_x
-    across = _unit(np.cross(t_x, n_m))  # towards face L
-    length_x = np.linalg.norm(t_x, axis=1)
-    floor = _SAFEGUARD * np.maximum(0.5 * np.abs(mu) * length_x, 0.25 * length_x)
-    c_l = centres[h_l >> 2]
-    c_r = centres[np.where(interior, h_r, h_l) >> 2]
-    spread = np.where(interior, 0.5 * _dot(c_l - c_r, across), _dot(c_l - m, across))
-    a = np.maximum(spread, floor)[:, None] * across
-    shear = 0.5 * mu[:, None] * t_x
-    e_l = m + (a + shear) / 3.0
-    e_r = m + (shear - a) / 3.0
+    h_other = np.where(interior, h_r, h_l)
+    corner_of = halfedges & 3
+    far = np.concatenate(  # per half-edge: its face's far corners and far midpoint
+        [face_corners[halfedges >> 2, (corner_of + 2) & 3, None], face_corners[halfedges >> 2, (corner_of + 3) & 3, None],
+         mids[halfedges >> 2, (corner_of + 2) & 3, None]], axis=1)
+    t_l, t_r = _seam_tangents(m, t_x, n_m, mu, centres[h_l >> 2], centres[h_other >> 2], far[h_l], far[h_other], interior)
+    e_l = m + t_l / 3.0
+    e_r = m + t_r / 3.0
     seam = np.where(canonical[:, None], e_l[edge_of], e_r[edge_of])  # into the face of h
-    del t_x, across, c_l, c_r, spread, floor, a, shear
+    del t_x, far, t_l, t_r
 
     # -- twist targets τ = e1 + e2 − c ± w at the corners V, MID[k], MID[k−1], C of each sub-patch,
     # w = (V − M_k + C − M_{k−1}) / 9 (the bilinear term, + at V and C, − at the midpoints); at V the
@@ -372,6 +456,7 @@ def split4_patches(
     w = (corner_points - m_h + centre_points - m_prev) / 9.0
     twist = np.empty((4 * n_faces, 4, 3))  # targets, replaced in place by the solved twists
     vertex_twist = (9.0 * (interior_targets - face_corners) - 3.0 * (target_next + target_prev)).reshape(-1, 3) / 36.0
+    vertex_twist *= stars.factor[topology.faces.reshape(-1), None]  # a shrunk star: the twist shrinks with it
     twist[:, 0] = o1 + d1[prev] - corner_points + vertex_twist
     del vertex_twist, target_next, target_prev
     twist[:, 1] = o2 + seam - m_h - w
@@ -421,7 +506,7 @@ def split4_patches(
     del o1, o2, m_h, d1, d2, seam, twist
     extra = np.concatenate([m, centres]) * scale + centre
     extra_normals = np.concatenate([_unit(n_m), _unit(np.cross(mids[:, 0] - mids[:, 2], mids[:, 1] - mids[:, 3]))])
-    return PatchSet(control.reshape(-1, 4, 4, 3)), extra, extra_normals, guarded
+    return PatchSet(control.reshape(-1, 4, 4, 3)), extra, extra_normals, stars
 
 
 def macro_nets(control: FloatArray) -> FloatArray:
@@ -509,9 +594,15 @@ def split4_network_from_targets(
 ) -> PatchNetwork:
     """The 2×2-split bicubic network of ``targets`` (local coordinates, see :func:`split4_patches`):
     polynomial, exactly G1 on mesh edges and seams, C1 inside each quad, interpolating the mesh
-    vertices (module docstring). Vertices whose star needed the safeguard join the fallback count."""
-    patches, extra, extra_normals, guarded = split4_patches(targets, mesh.vertices, centre, scale)
-    provenance = dict(provenance, fallback_vertices=str(int((targets.fallback | guarded).sum())))
+    vertices (module docstring). Provenance: vertices whose fan was refitted to spread directions
+    join ``fallback_vertices``; those whose star the length safeguard scaled down are counted in
+    ``star_safeguard_vertices``."""
+    patches, extra, extra_normals, stars = split4_patches(targets, mesh.vertices, centre, scale)
+    provenance = dict(
+        provenance,
+        fallback_vertices=str(int((targets.fallback | stars.refitted).sum())),
+        star_safeguard_vertices=str(int(stars.shrunk.sum())),
+    )
     points = np.concatenate([mesh.vertices, extra])
     point_normals = np.concatenate([targets.normals, extra_normals])
     return _split4_network(mesh.topology, patches, points, point_normals, provenance)
