@@ -121,7 +121,7 @@ def boundary_rows(control: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def test_fit_reproduces_bicubic_patches_with_the_bezier_knots() -> None:
     network = build_corner_network(shapes.torus(8, 6))
-    bezier = network.patches.convert("bezier").control
+    bezier = network.patches.convert("bezier").world_control()
     diagonal = network.bounding_box_diagonal()
     for patches in (network, network.patches.convert("bspline")):
         fit = fit_bspline_surfaces(patches)
@@ -235,7 +235,7 @@ def test_volume_is_exact_for_bicubic_patches_in_every_form() -> None:
     for form in ("hermite", "bezier", "bspline"):
         assert network_volume(network.patches.convert(form)) == pytest.approx(reference, rel=1e-14)
     # translation changes nothing, scaling by 2 multiplies by 8
-    moved = PatchSet(network.patches.convert("bezier").control * 2.0 + [10.0, -5.0, 3.0], "bezier")
+    moved = PatchSet(network.patches.convert("bezier").world_control() * 2.0 + [10.0, -5.0, 3.0], "bezier")
     assert network_volume(moved) == pytest.approx(8.0 * reference, rel=1e-13)
 
 
@@ -304,7 +304,7 @@ def test_step_round_trip_of_closed_meshes(name: str, request: pytest.FixtureRequ
     assert len(model.faces) == len(network.patches)
     # surfaces: exactly the Bézier control nets (to the file's decimals), evaluated on a grid
     order = matched_faces(model, network)
-    bezier = network.patches.convert("bezier").control
+    bezier = network.patches.convert("bezier").world_control()
     t = np.linspace(0.0, 1.0, 3)
     uv = np.stack(np.meshgrid(t, t, indexing="ij"), axis=-1).reshape(-1, 2)
     expected = network.patches.evaluate(uv)
@@ -338,7 +338,7 @@ def test_iges_round_trip_of_the_cube(tmp_path: Path) -> None:
     assert valid and kind == "TopAbs_SOLID"
     assert volume == pytest.approx(network_volume(network), rel=1e-6)
     # IGES writes reals with fewer digits than STEP: the poles come back to ~1e-10
-    bezier = network.patches.convert("bezier").control
+    bezier = network.patches.convert("bezier").world_control()
     for patch, face in enumerate(matched_faces(model, network)):
         assert np.abs(model.faces[face].poles() - bezier[patch]).max() <= 1e-9 * diagonal
 

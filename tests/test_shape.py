@@ -100,3 +100,19 @@ def test_fairness_against_the_catmull_clark_limit(shared_data: Path, name: str) 
     reference = load_reference(reference_path(shared_data / name))
     network = build_network(read_mesh(shared_data / name), "gregory")
     assert compare_fairness(network, reference).p99_ratio <= P99_RATIO[name]
+
+
+@pytest.mark.parametrize("method", ["gregory", "split4"])
+def test_translation_and_scale_do_not_change_the_angles(method: str) -> None:
+    """Built in centred, unit-scaled coordinates and stored with the frame: moved by 1e6 or scaled
+    by 1e±6, every reported angle stays ≤ 1e-9° and within 10× (plus a 1e-12° floor) of the
+    untransformed mesh's."""
+    mesh = perturbed(shapes.sphere_quads(2), 0.05, 11)
+    base = check(build_network(mesh, method))  # type: ignore[arg-type]
+    for transform in (lambda x: x + 1e6, lambda x: 1e6 * x, lambda x: 1e-6 * x, lambda x: 1e-6 * x - 3e5):
+        report = check(build_network(mesh.with_vertices(transform(mesh.vertices)), method))  # type: ignore[arg-type]
+        for name in ("max_edge_angle_deg", "max_corner_angle_deg"):
+            value = getattr(report, name)
+            assert value <= MAX_ANGLE_DEG
+            assert value <= 10 * getattr(base, name) + 1e-12
+        assert report.folds == 0

@@ -92,8 +92,9 @@ def test_shared_meshes_are_exactly_g1(shared_data: Path, name: str, shape: str) 
     network = build_split4_network(mesh, shape=shape)  # type: ignore[arg-type]
     assert network.provenance["method"] == "split4" and network.provenance["shape"] == shape
     assert isinstance(network.patches, PatchSet) and network.patches.form == "bezier"
-    corners = network.patches.control[:, [0, 3, 3, 0], [0, 0, 3, 3]].reshape(-1, 4, 4, 3)
-    np.testing.assert_array_equal(corners[:, np.arange(4), np.arange(4)], mesh.vertices[mesh.faces])
+    corners = network.patches.world_control()[:, [0, 3, 3, 0], [0, 0, 3, 3]].reshape(-1, 4, 4, 3)
+    np.testing.assert_allclose(corners[:, np.arange(4), np.arange(4)], mesh.vertices[mesh.faces], rtol=0,
+                               atol=4 * np.finfo(float).eps * np.abs(mesh.vertices).max())  # stored in the working frame
     assert_exact_g1(build_and_check(mesh, shape))
 
 
@@ -315,7 +316,7 @@ def test_bspline_nets_evaluate_to_the_pieces(mesh: QuadMesh) -> None:
 
 def test_macro_net_rows_three_are_midpoints() -> None:
     """Row and column 3 of every 7×7 macro net are the midpoints of their neighbours (C1 ⇔ double knot)."""
-    nets = macro_nets(build_split4_network(perturbed(shapes.cube_sphere(1), NOISE, 8)).patches.control)
+    nets = macro_nets(build_split4_network(perturbed(shapes.cube_sphere(1), NOISE, 8)).patches.world_control())
     scale = np.abs(nets).max()
     np.testing.assert_allclose(nets[:, 3], 0.5 * (nets[:, 2] + nets[:, 4]), rtol=0, atol=1e-14 * scale)
     np.testing.assert_allclose(nets[:, :, 3], 0.5 * (nets[:, :, 2] + nets[:, :, 4]), rtol=0, atol=1e-14 * scale)
@@ -338,8 +339,8 @@ def test_similarity_invariance() -> None:
     """Built in centred, unit-scaled coordinates: a moved and scaled mesh gives the moved and scaled surface."""
     mesh = perturbed(shapes.cube_sphere(1), NOISE, 10)
     moved = mesh.with_vertices(1000.0 + 250.0 * mesh.vertices)
-    a = build_split4_network(mesh).patches.control
-    b = build_split4_network(moved).patches.control
+    a = build_split4_network(mesh).patches.world_control()
+    b = build_split4_network(moved).patches.world_control()
     np.testing.assert_allclose(b, 1000.0 + 250.0 * a, rtol=0, atol=1e-10 * 250.0)
     assert_exact_g1(check(build_split4_network(moved)))
 
@@ -370,7 +371,7 @@ def test_blocked_assembly_does_not_depend_on_the_block_size(monkeypatch: pytest.
     from g1patch.construct import split4
 
     mesh = perturbed(shapes.fan(5, 2), NOISE, 9)  # open, with boundary vertices
-    reference = build_split4_network(mesh).patches.control
+    reference = build_split4_network(mesh).patches.world_control()
     for block in (1, 7, 4 * mesh.topology.n_faces):
         monkeypatch.setattr(split4, "_BLOCK", block)
-        np.testing.assert_array_equal(build_split4_network(mesh).patches.control, reference)
+        np.testing.assert_array_equal(build_split4_network(mesh).patches.world_control(), reference)

@@ -12,14 +12,14 @@ from collections.abc import Callable
 
 import numpy as np
 import pytest
-from exactness import assert_exact_g1
+from exactness import INTERPOLATING, assert_exact_g1
 
 from g1patch import shapes
 from g1patch.build import build_split4_network
 from g1patch.construct.split4 import STAR_LENGTH_LIMIT, split4_star
 from g1patch.continuity import check
 from g1patch.mesh import QuadMesh
-from g1patch.targets.interpolate import SHAPES, shape_targets, slot_vertices
+from g1patch.targets.interpolate import shape_targets, slot_vertices
 
 FAN_VALENCES = [3, 4, 5, 6, 8, 12, 16, 32, 64, 128, 360]
 
@@ -36,7 +36,7 @@ CAGES: dict[str, Callable[[], QuadMesh]] = {
 }
 
 
-@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("shape", INTERPOLATING)
 @pytest.mark.parametrize("valence", FAN_VALENCES)
 def test_flat_fans_do_not_fold(valence: int, shape: str) -> None:
     """A flat disk of n kites around one vertex (1° wedges at n = 360): flat, unfolded, exact."""
@@ -46,11 +46,11 @@ def test_flat_fans_do_not_fold(valence: int, shape: str) -> None:
     assert report.folds == 0, report.fold_locations
     assert_exact_g1(report)
     # the disk is planar: every control point stays in z = 0, and the normals all point one way
-    assert np.abs(network.patches.control[..., 2]).max() <= 1e-12
+    assert np.abs(network.patches.world_control()[..., 2]).max() <= 1e-12
     assert report.turn_max_deg <= 1e-6
 
 
-@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("shape", INTERPOLATING)
 @pytest.mark.parametrize("name", sorted(CAGES))
 def test_cages_do_not_fold(name: str, shape: str) -> None:
     report = check(build_split4_network(CAGES[name](), shape=shape))  # type: ignore[arg-type]
@@ -58,7 +58,7 @@ def test_cages_do_not_fold(name: str, shape: str) -> None:
     assert_exact_g1(report)
 
 
-@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("shape", INTERPOLATING)
 @pytest.mark.parametrize("name", ["box_cage", "thin_slab", "noisy_sphere1_seed0"])
 def test_star_length_safeguard(name: str, shape: str) -> None:
     """No star tangent is longer than STAR_LENGTH_LIMIT × its target nor × the circle-aware length
@@ -102,7 +102,7 @@ def test_seams_stay_inside_thin_wedges(valence: int) -> None:
     """On the flat fan every sub-patch control point lies in its own kite's angular wedge (up to
     rounding): the seam tangents at the midpoints are sized from the face's width, not the edge length."""
     mesh = shapes.flat_fan(valence)
-    control = build_split4_network(mesh).patches.control.reshape(valence, -1, 3)
+    control = build_split4_network(mesh).patches.world_control().reshape(valence, -1, 3)
     angle = np.arctan2(control[..., 1], control[..., 0])
     start = 2.0 * np.pi * np.arange(valence) / valence
     offset = np.mod(angle - start[:, None] + 1e-12, 2.0 * np.pi) - 1e-12

@@ -149,7 +149,7 @@ def build_network(
         if guard:
             targets = _guarded(targets, lambda t: _split4_local(local, t), 4)[1]
             provenance["fallback_vertices"] = str(targets.n_fallback)
-        return split4_network_from_targets(surface, targets, frame.centre, frame.scale, provenance)
+        return split4_network_from_targets(surface, targets, frame, provenance)
     assemble: Callable[[Targets], Patches] = assemble_corner if method == "corner" else assemble_gregory
     if guard:
         patches, targets = _guarded(targets, assemble, 1)

@@ -48,6 +48,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import spsolve
 
 from ..errors import ConstructionError, InputError
+from ..frame import Frame
 from ..mesh import QuadMesh, QuadTopology
 from ..network import PatchNetwork
 from ..patches import PatchSet
@@ -528,7 +529,7 @@ def bspline_nets(source: PatchNetwork | PatchSet) -> FloatArray:
     if not isinstance(patches, PatchSet) or patches.form != "bezier" or len(patches) % 4:
         raise InputError("bspline_nets: expected the Bézier sub-patches of a split4 network (4 per quad)")
     keep = np.array([0, 1, 2, 4, 5, 6])
-    return np.ascontiguousarray(macro_nets(patches.control)[:, keep][:, :, keep])
+    return np.ascontiguousarray(macro_nets(patches.world_control())[:, keep][:, :, keep])
 
 
 def _split4_network(
@@ -590,14 +591,16 @@ def _split4_network(
 
 
 def split4_network_from_targets(
-    mesh: QuadMesh, targets: Targets, centre: FloatArray, scale: float, provenance: dict[str, str]
+    mesh: QuadMesh, targets: Targets, frame: Frame, provenance: dict[str, str]
 ) -> PatchNetwork:
-    """The 2×2-split bicubic network of ``targets`` (local coordinates, see :func:`split4_patches`):
+    """The 2×2-split bicubic network of ``targets`` (in the local coordinates of ``frame``):
     polynomial, exactly G1 on mesh edges and seams, C1 inside each quad, interpolating the mesh
-    vertices (module docstring). Provenance: vertices whose fan was refitted to spread directions
-    join ``fallback_vertices``; those whose star the length safeguard scaled down are counted in
-    ``star_safeguard_vertices``."""
-    patches, extra, extra_normals, stars = split4_patches(targets, mesh.vertices, centre, scale)
+    vertices (module docstring). The sub-patches stay in local coordinates and carry the frame.
+    Provenance: vertices whose fan was refitted to spread directions join ``fallback_vertices``;
+    those whose star the length safeguard scaled down are counted in ``star_safeguard_vertices``."""
+    patches, extra, extra_normals, stars = split4_patches(targets, targets.positions, np.zeros(3), 1.0)
+    patches = patches.with_frame(frame)
+    extra = frame.to_world(extra)
     provenance = dict(
         provenance,
         fallback_vertices=str(int((targets.fallback | stars.refitted).sum())),
