@@ -24,6 +24,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_evaluate.py
 	$(BIN)/python benchmarks/bench_build.py
 	$(BIN)/python benchmarks/bench_split4.py
+	$(BIN)/python benchmarks/bench_shape.py
 
 clean:
 	rm -rf $(VENV) out
