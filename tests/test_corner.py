@@ -10,7 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from g1patch import shapes
-from g1patch.construct.corner import build_corner_network, corner_tangents, fan_normals, least_squares_normals
+from g1patch.construct.corner import build_corner_network
+from g1patch.targets.local import corner_tangents, fan_normals, least_squares_normals
 from g1patch.continuity import check
 from g1patch.errors import ConstructionError, InputError
 from g1patch.io.meshfile import read_mesh

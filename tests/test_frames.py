@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from g1patch import shapes
-from g1patch.construct.corner import fan_normals
+from g1patch.targets.local import fan_normals
 from g1patch.mesh import QuadMesh
 from g1patch.targets.frames import MAX_TILT, VertexFrames, vertex_frames
 

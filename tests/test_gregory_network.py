@@ -36,7 +36,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from g1patch import shapes
-from g1patch.construct.corner import build_corner_network, corner_tangents, fan_normals
+from g1patch.construct.corner import build_corner_network
+from g1patch.targets.local import corner_tangents, fan_normals
 from g1patch.build import build_gregory_network
 from g1patch.targets.interpolate import tangent_stars
 from g1patch.continuity import angle_between, check

@@ -33,7 +33,7 @@ from hypothesis import strategies as st
 from scipy.interpolate import NdBSpline
 
 from g1patch import shapes
-from g1patch.construct.corner import fan_normals
+from g1patch.targets.local import fan_normals
 from g1patch.build import build_gregory_network
 from g1patch.targets.interpolate import tangent_stars
 from g1patch.build import build_split4_network

@@ -22,7 +22,7 @@ from typing import Literal
 
 import numpy as np
 
-from .construct.corner import TANGENTS, TangentRule, assemble_corner
+from .construct.corner import assemble_corner
 from .construct.gregory import assemble_gregory
 from .continuity import folded_patches
 from .errors import InputError, check_choice
@@ -33,6 +33,7 @@ from .network import PatchNetwork, Patches, network_from_mesh
 from .patches import PatchSet
 from .targets import Targets
 from .targets.interpolate import SHAPES, ShapeRule, retreat, shape_targets
+from .targets.local import TANGENTS, TangentRule
 
 __all__ = ["METHODS", "Method", "build_gregory_network", "build_network", "build_split4_network"]
 

@@ -51,7 +51,8 @@ _EXAMPLES = {
 
 
 def _parser() -> argparse.ArgumentParser:
-    from .construct.corner import NORMALS, TANGENTS, TWISTS
+    from .construct.corner import TWISTS
+    from .targets.local import NORMALS, TANGENTS
     from .targets.interpolate import SHAPES
 
     parser = argparse.ArgumentParser(

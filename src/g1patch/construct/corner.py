@@ -15,110 +15,20 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
-from ..errors import ConstructionError, check_choice
+from ..errors import check_choice
 from ..mesh import QuadMesh
+from ..targets.local import NORMALS, NormalRule, TangentRule, corner_tangents, fan_normals, least_squares_normals
 from ..network import PatchNetwork, network_from_mesh
 from ..patches import PatchSet, hs_twists
 
 if TYPE_CHECKING:
     from ..targets import Targets
 
-__all__ = [
-    "NORMALS", "TANGENTS", "TWISTS", "fan_normals", "least_squares_normals", "corner_tangents", "build_corner_network",
-    "assemble_corner",
-]
+__all__ = ["TWISTS", "TwistRule", "assemble_corner", "build_corner_network"]
 
-NormalRule = Literal["fan", "paper"]
-TangentRule = Literal["chord", "arc"]
 TwistRule = Literal["zero", "bilinear", "coons"]
-NORMALS: tuple[NormalRule, ...] = ("fan", "paper")
-TANGENTS: tuple[TangentRule, ...] = ("chord", "arc")
 TWISTS: tuple[TwistRule, ...] = ("zero", "bilinear", "coons")
-
-
-def _unit_or_fail(vectors: NDArray[np.float64], what: str) -> NDArray[np.float64]:
-    length = np.linalg.norm(vectors, axis=-1, keepdims=True)
-    if not (length > 0).all():
-        bad = int(np.argmin(length[:, 0]))
-        raise ConstructionError(f"{what}: vertex {bad} has no defined normal (its faces are degenerate or cancel out)")
-    return vectors / length
-
-
-def fan_normals(mesh: QuadMesh) -> NDArray[np.float64]:
-    """Unit fan normals ``N_A = normalize(Σ (x_next − A) × (x_prev − A))`` over the faces at A.
-
-    In face f the corner A has a next and a previous vertex; the pair are consecutive ring
-    neighbours of A, so the sum runs over consecutive ring edges (non-cyclic on a boundary).
-    """
-    faces = mesh.faces
-    x = mesh.vertices
-    here = x[faces]
-    to_next = np.roll(here, -1, axis=1) - here
-    to_prev = np.roll(here, 1, axis=1) - here
-    corner_normals = np.cross(to_next, to_prev).reshape(-1, 3)
-    corners = faces.reshape(-1)
-    total = np.stack([np.bincount(corners, corner_normals[:, d], minlength=len(x)) for d in range(3)], axis=1)
-    return _unit_or_fail(total, "fan normal")
-
-
-def least_squares_normals(mesh: QuadMesh) -> NDArray[np.float64]:
-    """The paper's normal: the normal of the plane that best fits the vertex and its ring.
-
-    For a vertex with two neighbours this is the plane through three points, the generalized
-    cross product ``ρ = x_1 × x_2 × x_3`` of eq. (9); with more neighbours the system is
-    over-determined and its least-squares solution is the eigenvector of the points' covariance
-    ``Σ d d^T / m − μ μ^T`` (``d = x_w − x_A`` over the vertex itself and its m − 1 neighbours)
-    with the smallest eigenvalue. Oriented to agree with the fan normal. Fragile on coarse
-    curved meshes: where the ring is far from planar (a torus with few segments) the best plane
-    can tilt away from the surface.
-    """
-    edges = mesh.topology.edges
-    x = mesh.vertices
-    d = x[edges[:, 1]] - x[edges[:, 0]]
-    outer = d[:, :, None] * d[:, None, :]
-    second_moment = np.zeros((len(x), 3, 3))
-    first_moment = np.zeros((len(x), 3))
-    np.add.at(second_moment, edges[:, 0], outer)
-    np.add.at(second_moment, edges[:, 1], outer)
-    np.add.at(first_moment, edges[:, 0], d)
-    np.add.at(first_moment, edges[:, 1], -d)
-    points = (mesh.topology.valence + 1.0)[:, None]
-    mean = first_moment / points
-    covariance = second_moment / points[:, :, None] - mean[:, :, None] * mean[:, None, :]
-    normals = np.linalg.eigh(covariance)[1][:, :, 0]
-    fan = fan_normals(mesh)
-    return normals * np.where(np.einsum("vd,vd->v", normals, fan) < 0, -1.0, 1.0)[:, None]
-
-
-def corner_tangents(
-    origin: NDArray[np.float64],
-    target: NDArray[np.float64],
-    normal: NDArray[np.float64],
-    rule: TangentRule,
-    labels: NDArray[np.int64] | None = None,
-) -> NDArray[np.float64]:
-    """Tangent at ``origin`` towards ``target`` in the plane ⊥ ``normal`` (unit), batched.
-
-    Direction: ``s = d − (n·d) n``. Length: ``chord`` → |d|; ``arc`` → |d| / cos²(φ/2) with φ
-    the angle between d and the plane: a circular arc through both ends tangent to the plane
-    spans θ = 2φ, and the cubic Hermite tangent that best reproduces it is |d| / cos²(θ/4).
-    As cos φ = |s|/|d|, that is ``2|d|² / (|d| + |s|)``, with no trigonometry.
-    ``labels[..., 2]`` (origin and target vertex ids) name the edge in an error.
-    """
-    check_choice("tangents", rule, TANGENTS)
-    d = target - origin
-    height = np.einsum("...d,...d->...", d, normal)
-    s = d - height[..., None] * normal
-    in_plane = np.linalg.norm(s, axis=-1)
-    chord = np.linalg.norm(d, axis=-1)
-    if not (in_plane > 0).all():
-        where = np.argwhere(~(in_plane > 0))[0]
-        edge = "" if labels is None else f" {labels[tuple(where)][0]}→{labels[tuple(where)][1]}"
-        raise ConstructionError(f"tangents: mesh edge{edge} is parallel to its vertex normal; its tangent is undefined")
-    length = 2.0 * chord**2 / (chord + in_plane) if rule == "arc" else chord
-    return s * (length / in_plane)[..., None]
 
 
 def build_corner_network(

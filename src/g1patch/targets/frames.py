@@ -1,7 +1,7 @@
 """Vertex normals and second fundamental forms for surfaces that interpolate a quad mesh's vertices.
 
 **Start.** The area-weighted fan normal ``N_A = normalize(Σ d_i × d_{i+1})`` over consecutive
-ring edges ``d_i = x_i − A`` (:func:`g1patch.construct.corner.fan_normals`).
+ring edges ``d_i = x_i − A`` (:func:`g1patch.targets.local.fan_normals`).
 
 **Ring repair.** ``N`` is *valid* at A when the ring edges projected on its plane go once around
 it counter-clockwise: every ``N·(d_i × d_{i+1}) > 0`` (the sign of the projected pair's 2-D cross
@@ -74,7 +74,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from ..construct.corner import fan_normals
+from .local import fan_normals
 from ..mesh import QuadMesh
 
 __all__ = ["VertexFrames", "vertex_frames", "RESIDUAL", "MAX_TILT", "MAX_STEEPNESS", "MIN_PIVOT"]

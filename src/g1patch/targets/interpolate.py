@@ -8,7 +8,7 @@ Two rules, both returning :class:`~g1patch.targets.Targets` on the mesh's own po
     * tangents: every mesh edge projected onto the tangent plane, ``s = P_A (B − A)``, with the
       circle-aware length ``L = |B − A| / cos²(θ/4)``, ``sin(θ/2) = |N·(B − A)|/|B − A|``: the
       Hermite tangent that reproduces the circular arc through B tangent to the plane at A
-      (``= 2|d|²/(|d| + |s|)``, :func:`~g1patch.construct.corner.corner_tangents`). A flexible fan:
+      (``= 2|d|²/(|d| + |s|)``, :func:`~g1patch.targets.local.corner_tangents`). A flexible fan:
       no regular-star fit, so a short edge opposite a long one keeps its own length. At a boundary
       vertex with two or more faces the two rim slots point along ±the rim's central difference,
       so the boundary curve does not kink there (a corner with one face keeps its edges);
@@ -35,7 +35,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from ..construct.corner import TANGENTS, TangentRule, corner_tangents, fan_normals
+from .local import TANGENTS, TangentRule, corner_tangents, fan_normals
 from ..errors import ConstructionError, check_choice
 from ..mesh import QuadMesh, QuadTopology
 from . import Targets
@@ -45,8 +45,8 @@ __all__ = [
     "retreat", "slot_vertices", "spread_fan", "tangent_stars",
 ]
 
-ShapeRule = Literal["interpolate", "limit", "legacy"]
-SHAPES: tuple[ShapeRule, ...] = ("interpolate", "limit", "legacy")
+ShapeRule = Literal["interpolate", "limit", "limit-interpolate", "legacy"]
+SHAPES: tuple[ShapeRule, ...] = ("interpolate", "limit", "limit-interpolate", "legacy")
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -117,7 +117,7 @@ def fit_regular_star(
 
 def tangent_stars(mesh: QuadMesh, normals: FloatArray, tangents: TangentRule = "arc") -> tuple[FloatArray, FloatArray]:
     """The previous release's star: the regular star fitted to the projected edge tangents
-    (:func:`~g1patch.construct.corner.corner_tangents`, ``tangents`` lengths), and ``c_v``.
+    (:func:`~g1patch.targets.local.corner_tangents`, ``tangents`` lengths), and ``c_v``.
 
     Raises :class:`ConstructionError` where a fitted star is degenerate or folded, as that release did.
     """
@@ -548,4 +548,8 @@ def shape_targets(mesh: QuadMesh, shape: ShapeRule = "interpolate", *, tangents:
         from .limit import limit_targets
 
         return limit_targets(mesh)
+    if shape == "limit-interpolate":
+        from .limit_interpolate import limit_interpolate_targets
+
+        return limit_interpolate_targets(mesh)
     return interpolate_targets(mesh)

@@ -36,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..construct.corner import fan_normals
+from .local import fan_normals
 from ..gregory import INTERIOR_INDEX
 from ..mesh import QuadMesh, QuadTopology
 from ..subdivision import boundary_mode, corner_vertices, limit_normals, limit_points, limit_stars, limit_tangents, refine_grids
