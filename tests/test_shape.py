@@ -116,3 +116,50 @@ def test_translation_and_scale_do_not_change_the_angles(method: str) -> None:
             assert value <= MAX_ANGLE_DEG
             assert value <= 10 * getattr(base, name) + 1e-12
         assert report.folds == 0
+
+
+def _edge_along_its_normal() -> QuadMesh:
+    """A valence-6 fan whose first spoke is moved onto the centre's own fan normal (fixed point)."""
+    from g1patch.targets.local import fan_normals
+
+    mesh = shapes.fan(6, 1)
+    centre = int(np.flatnonzero(~mesh.topology.is_boundary_vertex)[0])
+    spoke = int(mesh.topology.one_ring(centre)[0])
+    vertices = mesh.vertices.copy()
+    for _ in range(60):
+        vertices[spoke] = vertices[centre] + fan_normals(mesh.with_vertices(vertices))[centre]
+    return mesh.with_vertices(vertices)
+
+
+@pytest.mark.parametrize("method", ["gregory", "split4"])
+def test_an_edge_along_its_vertex_normal_falls_back(method: str) -> None:
+    """The first release refused this (split4: 'parallel to its vertex normal'); now the vertex
+    falls back, is counted, and the surface stays exact and unfolded."""
+    network = build_network(_edge_along_its_normal(), method)  # type: ignore[arg-type]
+    assert int(network.provenance["fallback_vertices"]) >= 1
+    _exact_and_unfolded(network)
+
+
+def test_the_fold_guard_retreats_a_three_segment_torus() -> None:
+    """A 3 × 5 torus with 5 % noise: the local rules fold it; the guard retreats its vertices
+    towards the previous rules, counts them, and leaves no fold."""
+    mesh = perturbed(shapes.torus(3, 5), 0.05, 0)
+    network = build_network(mesh, "gregory")
+    assert int(network.provenance["fallback_vertices"]) >= 1
+    _exact_and_unfolded(network)
+
+
+@pytest.mark.parametrize("method", ["gregory", "split4"])
+def test_high_valence_and_folded_rings_build(method: str) -> None:
+    """A ring that winds twice (its fitted star folds: the first release refused it) and a
+    valence-360 flat fan both build exactly G1, unfolded."""
+    theta = 2 * np.pi * np.arange(6) / 6
+    z = np.exp(2j * theta) + 0.3 * np.exp(-1j * theta)
+    ring = np.stack([z.real, z.imag, np.zeros(6)], axis=1)
+    vertices = np.vstack([[0.0, 0.0, 0.0], ring, 0.8 * (ring + np.roll(ring, -1, axis=0))])
+    folded = QuadMesh.from_arrays(vertices, [[0, 1 + j, 7 + j, 1 + (j + 1) % 6] for j in range(6)])
+    network = build_network(folded, method)  # type: ignore[arg-type]
+    assert int(network.provenance["fallback_vertices"]) >= 1
+    report = check(network)
+    assert max(report.max_edge_angle_deg, report.max_corner_angle_deg) <= MAX_ANGLE_DEG
+    _exact_and_unfolded(build_network(shapes.flat_fan(360), method))  # type: ignore[arg-type]
