@@ -62,8 +62,10 @@ def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
 
 
 def _bracket(a: FloatArray, b: FloatArray, n: FloatArray) -> FloatArray:
-    """``[a, b] = (a × b)·n``."""
-    return _dot(np.cross(a, b), n)
+    """``[a, b] = (a × b)·n``, by components (rows of 3-vectors)."""
+    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
+    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
+    return (a1 * b2 - a2 * b1) * n[:, 0] + (a2 * b0 - a0 * b2) * n[:, 1] + (a0 * b1 - a1 * b0) * n[:, 2]
 
 
 def corner_split(

@@ -468,8 +468,11 @@ def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, normals: FloatArra
     turn = np.arccos(np.clip(_dot(n, n[:, _NEXT]), -1.0, 1.0)).max(axis=1)
     weight = np.clip((turn - _ROUND_START) / (_ROUND_FULL - _ROUND_START), 0.0, 1.0)
     weight = weight * weight * (3.0 - 2.0 * weight)
-    weight *= np.clip(1.0 - _sphere_misfit(mesh.vertices[faces], n) / _ROUND_MISFIT, 0.0, 1.0)
     chosen = np.flatnonzero(weight > 0)
+    if not chosen.size:
+        return interior
+    weight[chosen] *= np.clip(1.0 - _sphere_misfit(mesh.vertices[faces[chosen]], n[chosen]) / _ROUND_MISFIT, 0.0, 1.0)
+    chosen = chosen[weight[chosen] > 0]
     if not chosen.size:
         return interior
     slot_out, slot_in = halfedge_slots(topology)
