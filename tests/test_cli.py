@@ -117,7 +117,7 @@ def test_demo_writes_its_files(tmp_path: Path) -> None:
     result = g1patch("demo", "--out", tmp_path / "out")
     assert result.returncode == 0, result.stderr
     assert "max G1 angle at corners" in result.stdout and "Gregory" in result.stdout and "split4" in result.stdout
-    for name in ("cube_corner.obj", "cube_gregory.obj", "cube_split4.obj"):
+    for name in ("cube_corner.obj", "cube_gregory.obj", "cube_split4.obj", "cube_limit.obj"):
         assert (tmp_path / "out" / name).stat().st_size > 0
     for name in ("cube_zebra.png", "cube_deviation.png"):
         assert (tmp_path / "out" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

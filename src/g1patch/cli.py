@@ -267,7 +267,7 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from .build import build_gregory_network, build_split4_network
+    from .build import build_gregory_network, build_network, build_split4_network
     from .construct.corner import build_corner_network
     from .continuity import check, format_reports
     from .io.meshfile import read_mesh, write_triangles
@@ -280,6 +280,7 @@ def _demo(args: argparse.Namespace) -> int:
     corner = build_corner_network(mesh, tangents="arc", twist="coons")
     gregory = build_gregory_network(mesh)
     split4 = build_split4_network(mesh)
+    limit = build_network(mesh, "gregory", shape="limit")
     print("The paper's example: the cube [-1, 1]^3, valence 3 at every corner, smoothed into a")
     print("sphere-like surface.\n")
     print("1. The paper's construction: bicubic Hermite patches whose corner tangents satisfy")
@@ -294,27 +295,30 @@ def _demo(args: argparse.Namespace) -> int:
     print(f"   Degrees of its diagonal and anti-diagonal: {int(polynomial_degree(diagonal)[0])} and "
           f"{int(polynomial_degree(anti)[0])} (S-/HS closure |C| = {np.linalg.norm(hermite.closure()[0]):.1e}).")
     print("2. g1patch's default: the interpolating Gregory network, G1 along every edge.")
-    print("3. g1patch's polynomial option: 2x2 bicubic pieces per quad, G1 everywhere, exact in CAD.\n")
-    corner_report, gregory_report, split4_report = check(corner), check(gregory), check(split4)
-    print(format_reports([corner_report, gregory_report, split4_report],
-                         ["1. paper (corner G1)", "2. Gregory (exact G1)", "3. split4 (exact G1)"]))
+    print("3. g1patch's polynomial option: 2x2 bicubic pieces per quad, G1 everywhere, exact in CAD.")
+    print("4. The cube as a subdivision cage: the Catmull–Clark limit (what a SubD modeller shows), exactly G1.\n")
+    reports = [check(network) for network in (corner, gregory, split4, limit)]
+    corner_report, gregory_report, split4_report, limit_report = reports
+    print(format_reports(reports, ["1. paper (corner G1)", "2. Gregory (exact G1)", "3. split4 (exact G1)", "4. limit (exact G1)"]))
     radius = np.linalg.norm(gregory.patches.evaluate_grid(np.linspace(0, 1, 17)), axis=-1)
+    limit_radius = np.linalg.norm(limit.patches.evaluate_grid(np.linspace(0, 1, 17)), axis=-1)
+    exact = max(report.max_edge_angle_deg for report in reports[1:])
     print("\nThe paper's conditions hold at the corners (angle ~1e-14°) but its patches crease along every")
-    print(f"edge by {corner_report.max_edge_angle_deg:.1f}°; the Gregory and split4 surfaces are G1 everywhere "
-          f"(max {max(gregory_report.max_edge_angle_deg, split4_report.max_edge_angle_deg):.1e}°);")
-    print(f"Gregory radius {radius.min():.4f}..{radius.max():.4f} (√3 = 1.7321).")
+    print(f"edge by {corner_report.max_edge_angle_deg:.1f}°; the other three are G1 everywhere (max {exact:.1e}°).")
+    print(f"The interpolating Gregory cube is a sphere: radius {radius.min():.4f}..{radius.max():.4f} (√3 = 1.7321);")
+    print(f"the limit surface lies inside the cage: radius {limit_radius.min():.4f}..{limit_radius.max():.4f}.")
 
     args.out.mkdir(parents=True, exist_ok=True)
     written = []
-    for name, network in (("cube_corner", corner), ("cube_gregory", gregory), ("cube_split4", split4)):
+    for name, network in (("cube_corner", corner), ("cube_gregory", gregory), ("cube_split4", split4), ("cube_limit", limit)):
         surface = tessellate(network, 33)
         write_triangles(args.out / f"{name}.obj", surface.points, surface.triangles)
         written.append(args.out / f"{name}.obj")
-    titles = ["paper: corner G1 (creased)", "Gregory (exact G1)", "split4 (exact G1, polynomial)"]
+    titles = ["paper: corner G1 (creased)", "Gregory (exact G1)", "split4 (exact G1, polynomial)", "Catmull–Clark limit (exact G1)"]
     for mode in ("zebra", "deviation"):
         path = args.out / f"cube_{mode}.png"
-        render_side_by_side(path, [corner, gregory, split4], titles, mode=mode, size=(1800, 640),
-                            reports=[corner_report, gregory_report, split4_report] if mode == "deviation" else None)
+        render_side_by_side(path, [corner, gregory, split4, limit], titles, mode=mode, size=(2400, 640),
+                            reports=reports if mode == "deviation" else None)
         written.append(path)
     print("\nwrote " + ", ".join(str(path) for path in written))
     return EXIT_OK
