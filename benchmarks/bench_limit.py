@@ -1,0 +1,220 @@
+"""Catmull–Clark limit mode: distance to OpenSubdiv's limit, G1, folds, fairness, build cost; and at scale.
+
+Table 1, per shared mesh with a reference (``../shared/data/reference/NAME.limit.npz``, OpenSubdiv's
+limit: cage refined ``levels`` times, points on the limit; skipped when absent), rows
+``build_network(mesh, method, shape, refine=r)`` for shape ``limit`` with r = 0, 1, 2 and
+``limit-interpolate`` with r = 0, methods gregory and split4. Columns, distances relative to the
+reference's bounding-box diagonal:
+
+* ``S→R max / mean``: our surface's samples (:data:`SAMPLE_STEPS` grid steps per cage face, 8 on
+  Spot) to the reference's triangles, exact point–triangle distances (``compare.mesh_distance``).
+  It includes the reference's own faceting where samples fall between its vertices (Spot's level 3
+  reference: ~2e-4 at 16 steps; at 8 the samples sit at its vertices' parameters);
+* ``R→S max / mean``: the reference's points (on the limit surface) to our surface, approximately:
+  point-to-plane at the nearest of dense samples (:data:`DENSE_STEPS` steps per cage face, 32 on
+  Spot; :func:`distance_to_samples`);
+* ``G1 °``: the largest G1 angle on edges and at corners, and ``folds`` (``continuity.check``, its
+  samples per patch edge 33, 17, 9 for refine 0, 1, 2: the same spacing along a cage edge);
+* ``p99×``: our p99 normal turn over the reference's on grids of the reference's step
+  (``compare.compare_fairness``; for refine r the reference is read as ``levels − r`` steps per
+  face of the refined network, so the step is the same). DESIGN §5 bars: ≤ 1.1 limit, ≤ 1.5 interpolating;
+* ``corner``: the largest distance of a patch corner from the point the network passes through
+  (the limit point for ``limit``, the mesh vertex for ``limit-interpolate``), of the diagonal;
+* ``build s``: one ``build_network`` call (the first build of a run also compiles numba kernels:
+  a warm-up build precedes the table).
+
+``limit-interpolate`` passes through the mesh's vertices, so its distance to the limit of the mesh
+as a cage is the difference between the two surfaces, not an error. Its cage solve is reported below
+the table (solver, condition estimate, residual).
+
+Table 2, at scale (``--quick`` skips it): ``build_network(cage, "gregory", shape)`` for ``limit``
+and for ``interpolate`` on the same cage in the same run, time (one untraced build) and tracemalloc
+peak (a second, traced build), and their ratio: on ``shapes.large_torus(--quads)`` (all regular: the
+limit targets are the B-spline's, no fit), and on ``shapes.genus2()`` refined ``--xv-levels`` times
+(interior valences 3, 4, 5: 50 · 4^L quads). The limit fit refines the whole cage
+``FIT_LEVELS = 3`` more times (64 × its quads), so a cage with extraordinary vertices is built at
+the largest size that fits this machine's memory, and its bytes per quad are extrapolated to 1 M.
+
+Run:  .venv/bin/python benchmarks/bench_limit.py [--quick] [--quads N] [--xv-levels L]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import logging
+import os
+import platform
+import resource
+import time
+import tracemalloc
+from collections.abc import Callable
+from pathlib import Path
+from typing import TypeVar
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from g1patch import compare, shapes
+from g1patch.build import build_network
+from g1patch.continuity import check
+from g1patch.io.meshfile import read_mesh
+from g1patch.mesh import QuadMesh
+from g1patch.network import PatchNetwork
+from g1patch.subdivision import refine
+from g1patch.targets.limit_interpolate import interpolating_cage
+
+T = TypeVar("T")
+FloatArray = NDArray[np.float64]
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+SHARED_MESHES = ("catmark_cube", "catmark_torus", "catmark_xord_interior", "catmark_xord_boundary", "spot_quadrangulated")
+#: (shape, refine) rows of table 1, each built by both methods
+ROWS = (("limit", 0), ("limit", 1), ("limit", 2), ("limit-interpolate", 0))
+METHODS = ("gregory", "split4")
+#: grid steps per cage face of the samples measured against the reference, and at most this
+#: many samples per mesh (the step is halved until they fit; exact distances cost ~40 µs each)
+SAMPLE_STEPS = 16
+SAMPLE_BUDGET = 250_000
+#: the same for the dense samples the reference points are measured against
+DENSE_STEPS = 64
+DENSE_BUDGET = 4_000_000
+
+
+def timed(function: Callable[[], T]) -> tuple[float, T]:
+    start = time.perf_counter()
+    result = function()
+    return time.perf_counter() - start, result
+
+
+def traced(function: Callable[[], T]) -> int:
+    """Bytes allocated at the peak of ``function()`` above what was held when it started (tracemalloc)."""
+    tracemalloc.start()
+    try:
+        function()
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+def network_steps(cage_faces: int, cage_steps: int, refinements: int, split4: bool, budget: int) -> int:
+    """Grid steps per network face for ``cage_steps`` per cage face after ``refinements`` steps,
+    halved until ``cage_faces · (steps + 1)² ≤ budget``; at least 1, or 2 for split4 (even)."""
+    steps = cage_steps
+    while steps > 2 and cage_faces * (steps + 1) ** 2 > budget:
+        steps //= 2
+    return max(steps >> refinements, 2 if split4 else 1)
+
+
+def distance_to_samples(points: FloatArray, samples: FloatArray, normals: FloatArray) -> FloatArray:
+    """Approximate distance from ``points`` to a surface sampled on grids ``(N, S, S, 3)`` with unit normals.
+
+    With q the nearest sample (k-d tree), ``δ = p − q``, n its normal and h half the largest grid
+    cell diagonal (the farthest a surface point lies, tangentially, from its nearest sample):
+    ``d = √((n·δ)² + max(0, |δ − (n·δ) n| − h)²)``: point-to-plane near the surface (error
+    ~ h²κ/2), the Euclidean excess beyond its reach (past an open boundary)."""
+    diagonals = np.concatenate([
+        np.linalg.norm(samples[:, 1:, 1:] - samples[:, :-1, :-1], axis=-1).ravel(),
+        np.linalg.norm(samples[:, 1:, :-1] - samples[:, :-1, 1:], axis=-1).ravel(),
+    ])
+    reach = 0.5 * float(diagonals.max())
+    flat, flat_normals = samples.reshape(-1, 3), normals.reshape(-1, 3)
+    nearest = cKDTree(flat).query(points, workers=-1)[1]
+    delta = points - flat[nearest]
+    normal_part = np.einsum("pd,pd->p", delta, flat_normals[nearest])
+    tangential = np.linalg.norm(delta - normal_part[:, None] * flat_normals[nearest], axis=1)
+    return np.sqrt(normal_part**2 + np.maximum(tangential - reach, 0.0) ** 2)
+
+
+def distances(network: PatchNetwork, reference: compare.Reference, cage_faces: int, refinements: int) -> tuple[float, float, float, float]:
+    """(max, mean) of samples → reference (exact, ``mesh_distance``) and of reference points → our
+    surface (:func:`distance_to_samples`), of the reference's diagonal."""
+    split4 = network.provenance.get("method") == "split4"
+    diagonal = reference.bounding_box_diagonal
+    steps = network_steps(cage_faces, SAMPLE_STEPS, refinements, split4, SAMPLE_BUDGET)
+    samples, _ = compare.surface_samples(network, compare.patch_samples(network, steps))
+    to_reference = compare.mesh_distance(samples.reshape(-1, 3), reference.points, reference.faces) / diagonal
+    steps = network_steps(cage_faces, DENSE_STEPS, refinements, split4, DENSE_BUDGET)
+    dense, normals = compare.surface_samples(network, compare.patch_samples(network, steps))
+    to_ours = distance_to_samples(reference.points, dense, normals) / diagonal
+    return float(to_reference.max()), float(to_reference.mean()), float(to_ours.max()), float(to_ours.mean())
+
+
+def table_shared() -> None:
+    """Table 1 (module docstring)."""
+    header = (f"{'mesh':<22}{'shape':<18}{'r':>2} {'method':<8}{'S→R max':>9}{'mean':>9}{'R→S max':>9}{'mean':>9}"
+              f"{'G1 °':>9}{'folds':>6}{'p99×':>7}{'corner':>9}{'build s':>8}")
+    print(header)
+    print("-" * len(header))
+    solves = []
+    for name in SHARED_MESHES:
+        obj = SHARED / f"{name}.obj"
+        mesh = read_mesh(obj)
+        reference = compare.load_reference(compare.reference_path(obj))
+        for shape, refinements in ROWS:
+            for method in METHODS:
+                seconds, network = timed(lambda: build_network(mesh, method, shape, refine=refinements))  # type: ignore[arg-type]  # noqa: B023
+                report = check(network, samples=max(9, 33 >> refinements))  # the same spacing along a cage edge
+                ratio = compare.compare_fairness(network, dataclasses.replace(reference, levels=reference.levels - refinements)).p99_ratio
+                s_max, s_mean, r_max, r_mean = distances(network, reference, mesh.n_faces, refinements)
+                g1 = max(report.max_edge_angle_deg, report.max_corner_angle_deg)
+                print(f"{name:<22}{shape:<18}{refinements:>2} {method:<8}{s_max:>9.2e}{s_mean:>9.2e}{r_max:>9.2e}{r_mean:>9.2e}"
+                      f"{g1:>9.1e}{report.folds:>6}{ratio:>7.3f}{report.max_vertex_deviation:>9.1e}{seconds:>8.2f}")
+        solution = interpolating_cage(mesh)
+        solves.append(f"{name}: {solution.solver}, condition ≈ {solution.condition:.1e}, relative residual {solution.residual:.1e}")
+        print()
+    print("limit-interpolate cage solves (L C = V):")
+    for line in solves:
+        print(f"  {line}")
+
+
+def scale_row(label: str, mesh: QuadMesh) -> dict[str, tuple[float, int]]:
+    """Table 2 rows for one cage: limit and interpolate, time and peak, and limit / interpolate.
+    Returns ``{shape: (seconds, peak bytes)}``."""
+    figures = {}
+    for shape in ("limit", "interpolate"):
+        seconds, _ = timed(lambda: build_network(mesh, "gregory", shape))  # type: ignore[arg-type]  # noqa: B023
+        peak = traced(lambda: build_network(mesh, "gregory", shape))  # type: ignore[arg-type]  # noqa: B023
+        figures[shape] = (seconds, peak)
+        print(f"{label:<34}{mesh.n_faces:>10,}  {shape:<12}{seconds:>8.2f}{peak / 1e6:>9.0f}{peak / mesh.n_faces:>8.0f}")
+    (limit_s, limit_peak), (base_s, base_peak) = figures["limit"], figures["interpolate"]
+    print(f"{'':<34}{'':>10}  {'ratio':<12}{limit_s / base_s:>8.2f}{limit_peak / base_peak:>9.2f}")
+    return figures
+
+
+def table_scale(quads: int, xv_levels: int) -> None:
+    """Table 2 (module docstring)."""
+    header = f"{'cage':<34}{'quads':>10}  {'shape':<12}{'build s':>8}{'peak MB':>9}{'B/quad':>8}"
+    print(header)
+    print("-" * len(header))
+    scale_row(f"large_torus({quads:,}) (regular)", shapes.large_torus(quads))
+    cage = refine(shapes.genus2(), xv_levels)
+    peak = scale_row(f"genus2 refined {xv_levels}× (valence 3/5)", cage)["limit"][1]
+    memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    print(f"\nlimit with extraordinary vertices at 1 M quads: ≈ {peak / cage.n_faces * 1e6 / 1e9:.0f} GB by its bytes per quad "
+          f"(this machine: {memory / 1e9:.0f} GB), so not run at that size")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="skip the large cages (table 2)")
+    parser.add_argument("--quads", type=int, default=1_000_000, help="quads of the regular torus in table 2 (default 1,000,000)")
+    parser.add_argument("--xv-levels", type=int, default=5, help="refinements of genus2 in table 2 (default 5: 51,200 quads)")
+    args = parser.parse_args()
+    logging.disable(logging.INFO)
+    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}\n")
+    build_network(shapes.genus2(), "gregory", "limit")  # warm-up: numba compiles its kernels once per process
+    build_network(shapes.genus2(), "split4", "limit")
+    if SHARED.is_dir():
+        table_shared()
+    else:
+        print(f"table 1 skipped: shared data not found at {SHARED}")
+    if not args.quick:
+        print()
+        table_scale(args.quads, args.xv_levels)
+    print(f"\nprocess peak (ru_maxrss) {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3:.0f} MB")
+
+
+if __name__ == "__main__":
+    main()
