@@ -25,6 +25,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_build.py
 	$(BIN)/python benchmarks/bench_split4.py
 	$(BIN)/python benchmarks/bench_shape.py
+	$(BIN)/python benchmarks/bench_limit.py
 
 clean:
 	rm -rf $(VENV) out
