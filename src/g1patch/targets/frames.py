@@ -74,7 +74,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from .local import fan_normals
+from .local import cross, fan_normals
 from ..mesh import QuadMesh
 
 __all__ = ["VertexFrames", "vertex_frames", "RESIDUAL", "MAX_TILT", "MAX_STEEPNESS", "MIN_PIVOT"]
@@ -109,21 +109,12 @@ def _unit(v: FloatArray) -> FloatArray:
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
-def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    """``np.cross`` of (n, 3) arrays by components (the same formulas and values, several times faster)."""
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
-    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
-    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    return out
-
-
 def _frame(n: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Unit e1, e2 with (e1, e2, n) right-handed: e1 ⊥ n and the coordinate axis least aligned with n."""
     axis = np.zeros_like(n)
     axis[np.arange(n.shape[0]), np.argmin(np.abs(n), axis=1)] = 1.0
-    e1 = _unit(_cross(n, axis))
-    return e1, _cross(n, e1)
+    e1 = _unit(cross(n, axis))
+    return e1, cross(n, e1)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -156,7 +147,7 @@ class _Ring:
         first = offsets[pair_owner] + step
         second = offsets[pair_owner] + (step + 1) % count[pair_owner]
         a, b = d[first], d[second]
-        return cls(offsets, owner, d, pair_owner, first, second, _cross(a, b), np.einsum("pd,pd->p", a, b),
+        return cls(offsets, owner, d, pair_owner, first, second, cross(a, b), np.einsum("pd,pd->p", a, b),
                    topo.is_boundary_vertex)
 
     def valid(self, n: FloatArray) -> BoolArray:
@@ -181,7 +172,7 @@ class _Ring:
         owner = np.searchsorted(bad, self.pair_owner[pick])
         u = _unit(self.d)
         unit_fan = np.zeros((bad.size, 3))
-        np.add.at(unit_fan, owner, _cross(u[self.first[pick]], u[self.second[pick]]))
+        np.add.at(unit_fan, owner, cross(u[self.first[pick]], u[self.second[pick]]))
         corner = _unit(self.cross[pick])
         candidates = [_unit(unit_fan), _unit(_gilbert(corner, owner, bad.size))]
         out = n.copy()

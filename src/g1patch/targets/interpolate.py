@@ -35,7 +35,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from .local import TANGENTS, TangentRule, corner_tangents, fan_normals
+from .local import TANGENTS, TangentRule, corner_tangents, cross, fan_normals
 from ..errors import ConstructionError, check_choice
 from ..mesh import QuadMesh, QuadTopology
 from . import Targets
@@ -107,7 +107,7 @@ def fit_regular_star(
     half = 0.5 * np.where(boundary, topology.face_count, topology.valence)
     a = moments[:, :3] / np.where(boundary, half + 1.0, half)[:, None]
     b = moments[:, 3:] / np.where(corner, 1.0, half)[:, None]
-    area = _dot(np.cross(a, b), normals)
+    area = _dot(cross(a, b), normals)
     valid = corner | (area > 1e-12 * (_dot(a, a) + _dot(b, b)))
     star = a[slot_vertex] * cos[:, None] + b[slot_vertex] * sin[:, None]
     free = corner[slot_vertex]
@@ -215,7 +215,7 @@ def _fan_gaps(topology: QuadTopology, normals: FloatArray, t: FloatArray) -> tup
     second = offsets[gap_vertex] + (local + 1) % size
     n = normals[gap_vertex]
     a, b = t[first], t[second]
-    gaps = np.arctan2(_dot(np.cross(a, b), n), _dot(a, b))
+    gaps = np.arctan2(_dot(cross(a, b), n), _dot(a, b))
     return gaps, gap_vertex, first
 
 

@@ -16,12 +16,22 @@ from numpy.typing import NDArray
 from ..errors import ConstructionError, check_choice
 from ..mesh import QuadMesh
 
-__all__ = ["NORMALS", "TANGENTS", "NormalRule", "TangentRule", "corner_tangents", "fan_normals", "least_squares_normals"]
+__all__ = ["NORMALS", "TANGENTS", "NormalRule", "TangentRule", "corner_tangents", "cross", "fan_normals", "least_squares_normals"]
 
 NormalRule = Literal["fan", "paper"]
 TangentRule = Literal["chord", "arc"]
 NORMALS: tuple[NormalRule, ...] = ("fan", "paper")
 TANGENTS: tuple[TangentRule, ...] = ("chord", "arc")
+
+
+def cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``a × b`` along the last axis by components: the formulas and values of ``np.cross``,
+    several times faster on large arrays of 3-vectors (no axis juggling)."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
 
 
 def _unit_or_fail(vectors: NDArray[np.float64], what: str) -> NDArray[np.float64]:
@@ -43,7 +53,7 @@ def fan_normals(mesh: QuadMesh) -> NDArray[np.float64]:
     here = x[faces]
     to_next = np.roll(here, -1, axis=1) - here
     to_prev = np.roll(here, 1, axis=1) - here
-    corner_normals = np.cross(to_next, to_prev).reshape(-1, 3)
+    corner_normals = cross(to_next, to_prev).reshape(-1, 3)
     corners = faces.reshape(-1)
     total = np.stack([np.bincount(corners, corner_normals[:, d], minlength=len(x)) for d in range(3)], axis=1)
     return _unit_or_fail(total, "fan normal")
