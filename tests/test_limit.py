@@ -84,3 +84,18 @@ def test_reference_meshes_are_exactly_g1_and_close(shared_data, name: str, refin
     assert distance.max() <= DISTANCE_BOUNDS[name, refinements]
     if refinements == 0:
         assert compare_fairness(network, reference).p99_ratio <= 1.3
+
+
+def test_limit_samples_of_a_neighbourhood_equal_the_whole_mesh_refined() -> None:
+    """The fits read limit samples refined on the faces' neighbourhood only; they equal the
+    samples of the whole mesh refined, bit for bit here (same operations per vertex)."""
+    from g1patch import shapes
+    from g1patch.subdivision import limit_normals, limit_points, refine, refine_grids
+    from g1patch.targets.limit import _limit_samples
+
+    mesh = refine(shapes.genus2(), 2)
+    faces = np.array([0, 7, 100, 301])
+    local_points, local_normals = _limit_samples(mesh, faces, 3)
+    fine, grid = refine_grids(mesh, 3)
+    np.testing.assert_allclose(local_points, limit_points(fine)[grid[faces]], rtol=0, atol=1e-14)
+    np.testing.assert_allclose(local_normals, limit_normals(fine)[grid[faces]], rtol=0, atol=1e-13)

@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 
 from .local import fan_normals
 from ..gregory import INTERIOR_INDEX
+from ..errors import MeshError
 from ..mesh import QuadMesh, QuadTopology
 from ..subdivision import boundary_mode, corner_vertices, limit_normals, limit_points, limit_stars, limit_tangents, refine_grids
 from . import Targets, halfedge_slots
@@ -51,6 +52,8 @@ BoolArray = NDArray[np.bool_]
 
 #: refinement levels of the exact limit samples the free tangents and interior points are fitted to
 FIT_LEVELS = 3
+#: vertex rings of faces around those whose limit samples are needed, refined with them
+_SAMPLE_MARGIN = 3
 #: weight of the parametric residual against the normal one in the fits: the limit surface's
 #: parameterisation is singular at extraordinary vertices (speed ~ (2λ)^m), so matching it
 #: point for point would bend the cubics; the normal distance is the geometric error, and this
@@ -106,23 +109,55 @@ def _plane_bases(normals: FloatArray, a: FloatArray) -> tuple[FloatArray, FloatA
     return e1, np.cross(normals, e1)
 
 
+def _fitted_edges(topology: QuadTopology, free: BoolArray) -> IntArray:
+    """Canonical half-edges of the interior edges with a free end (their tangents are fitted)."""
+    slot_out, slot_in = halfedge_slots(topology)
+    h = topology.edge_halfedges[:, 0]
+    return h[~topology.is_boundary_edge & (free[slot_out[h]] | free[slot_in[h]])]
+
+
+def _limit_samples(mesh: QuadMesh, faces: IntArray, levels: int) -> tuple[FloatArray, FloatArray]:
+    """Exact limit points and normals on the ``(m + 1)²`` grids of ``faces`` (``m = 2^levels``),
+    refining only their neighbourhood: the faces within :data:`_SAMPLE_MARGIN` vertex rings of them,
+    as a mesh of its own. A face's refined points read its 1-ring only, and the cut of the
+    neighbourhood is a boundary whose rules reach less than two rings inwards, so the samples equal
+    the whole mesh's. Where the neighbourhood is not a manifold mesh of its own, the whole mesh is refined."""
+    topology = mesh.topology
+    keep = np.zeros(topology.n_faces, dtype=bool)
+    keep[faces] = True
+    for _ in range(_SAMPLE_MARGIN):
+        touched = np.zeros(topology.n_vertices, dtype=bool)
+        touched[topology.faces[keep]] = True
+        keep = touched[topology.faces].any(axis=1)
+    rows, source = faces, mesh
+    if not keep.all():
+        inside = np.flatnonzero(keep)
+        tags = tuple(tag for tag in mesh.tags if tag.name == "interpolateboundary")
+        try:
+            source = QuadMesh.from_arrays(mesh.vertices, topology.faces[inside], tags=tags)
+            rows = np.searchsorted(inside, faces)
+        except MeshError:
+            source, rows = mesh, faces
+    fine, grid = refine_grids(source, levels)
+    return limit_points(fine)[grid[rows]], limit_normals(fine)[grid[rows]]
+
+
 def _fit_tangents(
     mesh: QuadMesh, x: FloatArray, t: FloatArray, free: BoolArray, bases: tuple[FloatArray, FloatArray],
-    samples: FloatArray, sample_normals: FloatArray, m: int,
+    samples: FloatArray, sample_normals: FloatArray, row: IntArray, m: int,
 ) -> FloatArray:
     """The free slot tangents fitted in their tangent planes: per interior edge A → B with a free end
     the least-squares fit of ``H(s) = B0 A + B1 (A + t_A/3) + B2 (B + t_B/3) + B3 B`` to the limit
-    curve samples, ``t = α e1 + β e2`` at a free end (a 4 × 4 solve per edge), the other end fixed."""
+    curve samples, ``t = α e1 + β e2`` at a free end (a 4 × 4 solve per edge), the other end fixed;
+    ``samples[row[f]]`` holds face f's grid of limit samples."""
     topology = mesh.topology
     slot_out, slot_in = halfedge_slots(topology)
-    h = topology.edge_halfedges[:, 0]
-    sa, sb = slot_out[h], slot_in[h]
-    fit = np.flatnonzero(~topology.is_boundary_edge & (free[sa] | free[sb]))
+    h = _fitted_edges(topology, free)
     out = t.copy()
-    if not fit.size:
+    if not h.size:
         return out
-    h, sa, sb = h[fit], sa[fit], sb[fit]
-    face, k = h >> 2, h & 3
+    sa, sb = slot_out[h], slot_in[h]
+    face, k = row[h >> 2], h & 3
     s = np.arange(m + 1)
     positions = np.stack([np.stack(edge(s, m), axis=0) for edge in _EDGE_GRID])  # (4, 2, m + 1)
     curve = samples[face[:, None], positions[k, 0], positions[k, 1]]  # (E, m + 1, 3)
@@ -224,20 +259,22 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
     free = ~bspline_slots(mesh) & ~degenerate[slot_vertex]
     regular = regular_faces(topology)
     fitted = star
-    if free.any() or not regular.all():
-        fine, grid = refine_grids(mesh, levels)
-        samples, sample_normals = limit_points(fine)[grid], limit_normals(fine)[grid]
+    irregular = np.flatnonzero(~regular)
+    if free.any() or irregular.size:
+        needed = np.unique(np.concatenate([_fitted_edges(topology, free) >> 2, irregular]))
+        row = np.full(topology.n_faces, -1, dtype=np.int64)
+        row[needed] = np.arange(needed.size)
+        samples, sample_normals = _limit_samples(mesh, needed, levels)
         m = 2**levels
         bases = _plane_bases(normals, star[topology.neighbor_offsets[:-1]])
-        fitted = _fit_tangents(mesh, x, star, free, bases, samples, sample_normals, m)
+        fitted = _fit_tangents(mesh, x, star, free, bases, samples, sample_normals, row, m)
     t, guarded = _guarded(mesh, normals, fitted, star)
 
     corner = mesh.vertices[topology.faces]
     interior = (4.0 * corner + 2.0 * corner[:, [1, 2, 3, 0]] + 2.0 * corner[:, [3, 0, 1, 2]] + corner[:, [2, 3, 0, 1]]) / 9.0
-    irregular = np.flatnonzero(~regular)
     if irregular.size:
         net = _boundary_nets(mesh, x, t, irregular)
-        interior[irregular] = _fit_interior(net, samples[irregular], sample_normals[irregular], m)
+        interior[irregular] = _fit_interior(net, samples[row[irregular]], sample_normals[row[irregular]], m)
     return Targets(
         topology, x, normals, t, np.stack([interior, interior], axis=2), fallback=guarded | degenerate, rule="limit"
     )
