@@ -328,6 +328,8 @@ _ROUND_PULL = 1e-3
 #: sphere misfit (:func:`_sphere_misfit`) at which the circle-section fit is off
 _ROUND_MISFIT = 0.15
 _ROUND_BLOCK = 4096
+#: Bézier indices of the interior points at corners 0..3
+_INNER = np.array([[1, 1], [2, 1], [2, 2], [1, 2]])
 #: the largest turn of a blended patch's normal away from its corners' that the fit may cause
 _ROUND_MAX_TURN = np.radians(60.0)
 
@@ -398,13 +400,8 @@ def _round_interior(boundary: FloatArray, corner_normals: FloatArray, start: Flo
     normals = np.concatenate([across_v[1], across_u[1]], axis=1)
 
     weights = _bernstein(u)[:, :, None] * _bernstein(v)[:, None, :]  # (S, 4, 4) tensor Bernstein
-    net = np.zeros((count, 4, 4, 3))
-    net[:, :, 0], net[:, 3, :] = boundary[:, 0], boundary[:, 1]
-    net[:, ::-1, 3], net[:, 0, ::-1] = boundary[:, 2], boundary[:, 3]
-    inner = np.array([[1, 1], [2, 1], [2, 2], [1, 2]])
-    net[:, inner[:, 0], inner[:, 1]] = 0.0
-    known = np.einsum("sij,fijd->fsd", weights, net)
-    inner_weights = np.tile(weights[:, inner[:, 0], inner[:, 1]], (2, 1))  # (2S, 4)
+    known = np.einsum("sij,fijd->fsd", weights, _bezier_net(boundary, np.zeros((count, 4, 3))))
+    inner_weights = np.tile(weights[:, _INNER[:, 0], _INNER[:, 1]], (2, 1))  # (2S, 4)
     rows = (inner_weights[None, :, :, None] * normals[:, :, None, :]).reshape(count, -1, 12)
     rhs = _dot(normals, targets - np.concatenate([known, known], axis=1))
     system = np.einsum("fri,frj->fij", rows, rows)
@@ -415,14 +412,20 @@ def _round_interior(boundary: FloatArray, corner_normals: FloatArray, start: Flo
     return np.linalg.solve(system, right_side[..., None])[..., 0].reshape(count, 4, 3)
 
 
+def _bezier_net(boundary: FloatArray, interior: FloatArray) -> FloatArray:
+    """The (F, 4, 4, 3) Bézier nets of four boundary cubics (F, 4, 4, 3), edge k from corner k to
+    k + 1, and interior points (F, 4, 3) at corners 0..3 (b11, b21, b22, b12)."""
+    net = np.empty((len(interior), 4, 4, 3))
+    net[:, :, 0], net[:, 3, :] = boundary[:, 0], boundary[:, 1]
+    net[:, ::-1, 3], net[:, 0, ::-1] = boundary[:, 2], boundary[:, 3]
+    net[:, _INNER[:, 0], _INNER[:, 1]] = interior
+    return net
+
+
 def _turns_within(boundary: FloatArray, interior: FloatArray, corner_normals: FloatArray) -> NDArray[np.bool_]:
     """Per face: does the bicubic with this boundary and interior keep its normal within
     ``_ROUND_MAX_TURN`` of the bilinear blend of its corner normals on a 5 × 5 grid?"""
-    count = len(interior)
-    net = np.empty((count, 4, 4, 3))
-    net[:, :, 0], net[:, 3, :] = boundary[:, 0], boundary[:, 1]
-    net[:, ::-1, 3], net[:, 0, ::-1] = boundary[:, 2], boundary[:, 3]
-    net[:, [1, 2, 2, 1], [1, 1, 2, 2]] = interior
+    net = _bezier_net(boundary, interior)
     g = np.linspace(0.0, 1.0, 5)
     b, db = _bernstein(g), _bernstein(g, True)
     p_u = np.einsum("ai,bj,fijd->fabd", db, b, net)
