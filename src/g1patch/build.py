@@ -17,6 +17,7 @@ again. Those vertices are counted in the provenance's ``fallback_vertices``.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from typing import Literal
 
@@ -37,6 +38,8 @@ from .targets.local import TANGENTS, TangentRule
 
 __all__ = ["METHODS", "Method", "build_gregory_network", "build_network", "build_split4_network"]
 
+logger = logging.getLogger(__name__)
+
 Method = Literal["gregory", "split4", "corner"]
 METHODS: tuple[Method, ...] = ("gregory", "split4", "corner")
 
@@ -54,6 +57,8 @@ def _provenance(mesh: QuadMesh, method: str, shape: str, tangents: str, targets:
     provenance = {"method": method, "shape": shape, "refine": str(refine), "fallback_vertices": str(targets.n_fallback)}
     if shape == "legacy":
         provenance["tangents"] = tangents
+    if targets.seams.any():
+        provenance["seams"] = str(int(targets.seams.sum()))
     if mesh.source:
         provenance["source"] = str(mesh.source)
     return provenance
@@ -68,7 +73,7 @@ def _faces_at_risk(targets: Targets) -> np.ndarray:
 
     topology = targets.topology
     faces = topology.faces
-    n = targets.normals[faces]
+    n = targets.corner_normals
     risky = targets.fallback[faces].any(axis=1)
     risky |= (np.einsum("fkd,fkd->fk", n, np.roll(n, -1, axis=1)) < np.cos(RISK_TURN)).any(axis=1)
     slot_out, _ = halfedge_slots(topology)
@@ -147,6 +152,12 @@ def build_network(
     if method == "split4":
         from .construct.split4 import split4_network_from_targets
 
+        if targets.seams.any():
+            logger.warning(
+                "split4 does not keep sharp edges yet: the %d tagged sharp edges come out smooth (use --method gregory)",
+                int(targets.seams.sum()),
+            )
+
         if guard:
             targets = _guarded(targets, lambda t: _split4_local(local, t), 4)[1]
             provenance["fallback_vertices"] = str(targets.n_fallback)
@@ -158,7 +169,7 @@ def build_network(
     else:
         patches = assemble(targets)
     framed: PatchSet | GregoryPatchSet = patches.with_frame(frame)  # type: ignore[attr-defined]
-    return network_from_mesh(mesh.topology, framed, surface.vertices, targets.normals, provenance)
+    return network_from_mesh(mesh.topology, framed, surface.vertices, targets.normals, provenance, seam_edges=targets.seams)
 
 
 def _split4_local(local: QuadMesh, targets: Targets) -> PatchSet:

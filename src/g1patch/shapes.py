@@ -188,6 +188,38 @@ def voxel_surface(filled: NDArray[np.bool_]) -> QuadMesh:
     return QuadMesh.from_arrays(vertices, quads.reshape(-1, 4))
 
 
+def filleted_box(cells: int = 8, radius: float = 0.375) -> QuadMesh:
+    """The unit cube's surface gridded ``cells`` per side, with its vertical edge at x = y = 1
+    rounded into a quarter cylinder of ``radius``: a CAD-like part with 11 sharp edges (90°)
+    and one fillet whose grid edges turn by ``90° / (2 · cells · radius)`` each. Grid points in
+    the corner square ``x, y > 1 − r`` move radially onto the cylinder (the top and bottom faces
+    stay flat)."""
+    _check_count("cells", cells, 2)
+    if not 0 < radius < 1:
+        raise InputError(f"radius: expected a fillet radius between 0 and 1, got {radius!r}")
+    box = voxel_surface(np.ones((cells, cells, cells), dtype=bool))
+    x = box.vertices / cells
+    centre = 1.0 - radius
+    offset = x[:, :2] - centre
+    inside = (offset > 0).all(axis=1)
+    # the corner square's two outer sides map onto the arc by angle: (1, y) and (x, 1) at even steps
+    s_side = np.where(offset[:, 0] >= offset[:, 1], offset[:, 1], 2 * radius - offset[:, 0])[inside] / (2 * radius)
+    depth = np.maximum(offset[:, 0], offset[:, 1])[inside] / radius  # 1 on the outer sides
+    angle = 0.5 * np.pi * s_side
+    arc = np.stack([np.cos(angle), np.sin(angle)], axis=1) * radius
+    x[inside, :2] = centre + depth[:, None] * arc
+    return box.with_vertices(x)
+
+
+def slotted_block(cells: tuple[int, int, int] = (6, 3, 3), slot: tuple[int, int] = (2, 4)) -> QuadMesh:
+    """A block of unit cubes ``cells`` with a slot through it along y: the cubes with
+    ``slot[0] ≤ x < slot[1]`` in the top layer removed. Every edge is a 90° edge (convex or
+    concave) or flat, the case ``--sharp-angle`` must separate exactly."""
+    filled = np.ones(cells, dtype=bool)
+    filled[slot[0]:slot[1], :, cells[2] - 1] = False
+    return voxel_surface(filled)
+
+
 def genus2() -> QuadMesh:
     """A closed genus-2 surface (Euler characteristic −2): a 5 × 3 × 1 slab of cubes with two holes, centred."""
     filled = np.ones((5, 3, 1), dtype=bool)

@@ -31,7 +31,11 @@ which makes ``c' × D_L`` and ``D_R × c'`` parallel for every t: the tangent pl
   those edges take the minimum-norm correction of their targets onto it instead: both sides
   move by the same vector, and targets that are already G1 (a bicubic B-spline) come back unchanged.
 
-Boundary edges keep their targets. Every step is a gather, a scatter or a batched 4 × 4 solve
+Boundary edges and seams (``Targets.seams``: creased on purpose) keep their targets: the two faces
+of a seam share its boundary cubic (C0) and each keeps its own cross-boundary derivative. At a
+vertex the corner split of an edge uses the normal of the edge's sector
+(``Targets.corner_normals``), and every slot tangent is moved into its sectors' planes
+(:func:`tangent_plane_tangents`), so each sector is G1 at the corner by itself. Every step is a gather, a scatter or a batched 4 × 4 solve
 over edges: no Python loop over vertices, edges or faces.
 """
 
@@ -45,7 +49,7 @@ from ..gregory import GregoryPatchSet
 from ..mesh import QuadTopology
 from ..targets import Targets, halfedge_slots
 
-__all__ = ["assemble_gregory", "corner_split", "tangent_plane_tangents"]
+__all__ = ["assemble_gregory", "corner_split", "slot_sector_normals", "tangent_plane_tangents"]
 
 FloatArray = NDArray[np.float64]
 
@@ -88,12 +92,57 @@ def corner_split(
     return alpha, beta, phi, margin
 
 
-def tangent_plane_tangents(targets: Targets) -> FloatArray:
-    """The target tangents with their normal component removed: ``t − (N·t) N`` per slot."""
+def slot_sector_normals(targets: Targets) -> tuple[FloatArray, FloatArray]:
+    """Per ring slot the corner normals of its two faces: ``(left, right)``, (S, 3) each.
+
+    Slot j of a vertex lies between ring faces j − 1 (left, clockwise of it) and j (right); a
+    boundary vertex's first slot has no left face and its last (virtual) slot no right face: the
+    other one stands in for it.
+    """
     topology = targets.topology
-    slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
-    n = targets.normals[slot_vertex]
-    return targets.tangents - _dot(targets.tangents, n)[:, None] * n
+    corner = targets.corner_normals.reshape(-1, 3)[topology.ring_halfedges]  # per ring position
+    face_count = topology.face_count
+    ring_vertex = np.repeat(np.arange(topology.n_vertices), face_count)
+    position = np.arange(ring_vertex.size) - topology.ring_offsets[ring_vertex]
+    slot = topology.neighbor_offsets[ring_vertex] + position
+    slot_count = int(topology.neighbor_offsets[-1])
+    right = np.empty((slot_count, 3))
+    left = np.empty((slot_count, 3))
+    right[slot] = corner
+    boundary = topology.is_boundary_vertex
+    last = topology.neighbor_offsets[1:] - 1  # the virtual slot of a boundary vertex
+    right[last[boundary]] = corner[topology.ring_offsets[1:][boundary] - 1]
+    # left of slot j is ring face j − 1: cyclic inside, the slot's own face at a boundary's first slot
+    shifted = np.where(position == 0, position + face_count[ring_vertex] - 1, position - 1)
+    left[slot] = np.where(
+        ((position == 0) & boundary[ring_vertex])[:, None], corner, corner[topology.ring_offsets[ring_vertex] + shifted]
+    )
+    left[last[boundary]] = right[last[boundary]]
+    return left, right
+
+
+def tangent_plane_tangents(targets: Targets) -> FloatArray:
+    """The target tangents moved into their sectors' tangent planes, which is all G1 asks at a corner.
+
+    A smooth slot: ``t − (N·t) N`` with its sector's normal N. A slot on a seam or on the
+    boundary between two different sector planes: onto their common line, ``(t·l) l`` with
+    ``l = N_L × N_R`` normalised (the crease curve's tangent lies in both planes); where the two
+    planes agree (to 1e-9) it is the plane's projection again. Without seams every slot of a
+    vertex takes the vertex normal.
+    """
+    topology = targets.topology
+    if not targets.has_sectors:
+        slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
+        n = targets.normals[slot_vertex]
+        return targets.tangents - _dot(targets.tangents, n)[:, None] * n
+    left, right = slot_sector_normals(targets)
+    t = targets.tangents - _dot(targets.tangents, right)[:, None] * right
+    line = np.cross(left, right)
+    length = np.linalg.norm(line, axis=1)
+    crease = length > 1e-9
+    unit = line[crease] / length[crease, None]
+    t[crease] = _dot(targets.tangents[crease], unit)[:, None] * unit
+    return t
 
 
 def _raise_invalid(topology: QuadTopology, vertex: NDArray[np.int64], margin: FloatArray) -> None:
@@ -116,7 +165,6 @@ def assemble_gregory(targets: Targets) -> GregoryPatchSet:
     faces = topology.faces
     count = topology.n_faces
     x = targets.positions
-    normals = targets.normals
     t = tangent_plane_tangents(targets)
     slot_out, slot_in = halfedge_slots(topology)
     halfedges = np.arange(4 * count)
@@ -130,7 +178,7 @@ def assemble_gregory(targets: Targets) -> GregoryPatchSet:
     near = targets.interior[:, :, 0].copy()  # Fn_k, seen by edge k
     far = targets.interior[:, :, 1].copy()  # Fp_k, seen by edge k − 1
 
-    pairs = topology.edge_halfedges[topology.edge_halfedges[:, 1] >= 0]
+    pairs = topology.edge_halfedges[(topology.edge_halfedges[:, 1] >= 0) & ~targets.seams]
     h, g = pairs[:, 0], pairs[:, 1]
     a_vertex, b_vertex = topology.origin(h), topology.target(h)
     a, b = x[a_vertex], x[b_vertex]
@@ -142,8 +190,9 @@ def assemble_gregory(targets: Targets) -> GregoryPatchSet:
     q1 = 3.0 * (b2 - b1)
     d0_left, d0_right = t[slot_in[prev[h]]], t[slot_out[nxt[g]]]
     d3_left, d3_right = t[slot_out[nxt[h]]], t[slot_in[prev[g]]]
-    alpha0, beta0, phi0, margin0 = corner_split(q0, d0_left, d0_right, normals[a_vertex])
-    alpha1, beta1, phi2, margin1 = corner_split(q2, d3_left, d3_right, normals[b_vertex])
+    corner_normals = targets.corner_normals.reshape(-1, 3)  # a smooth edge's two faces share A's sector, and B's
+    alpha0, beta0, phi0, margin0 = corner_split(q0, d0_left, d0_right, corner_normals[h])
+    alpha1, beta1, phi2, margin1 = corner_split(q2, d3_left, d3_right, corner_normals[nxt[h]])
     _raise_invalid(topology, np.concatenate([a_vertex, b_vertex]), np.concatenate([margin0, margin1]))
 
     left, right = h >> 2, g >> 2

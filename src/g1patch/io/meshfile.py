@@ -42,11 +42,14 @@ OBJ_SKIPPED = frozenset(
 PathLike = str | os.PathLike[str]
 
 
-def read_mesh(path: PathLike, *, split: bool = True) -> QuadMesh:
+def read_mesh(path: PathLike, *, split: bool = True, sharp_angle: float | None = None) -> QuadMesh:
     """Read an OBJ, PLY or OFF file into a validated :class:`QuadMesh` (tags from OBJ ``t`` lines).
 
     With ``split`` a mesh with non-quad faces is refined once into quads (see
     :meth:`QuadMesh.from_arrays`); without, such a mesh raises :class:`MeshError`.
+    ``sharp_angle`` (degrees): tag the edges whose faces' normals differ by more than that as
+    infinitely sharp, and vertices with three such edges as corners, before splitting
+    (:func:`g1patch.sharpen.sharp_angle_tags`); the file's own tags are kept.
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -60,7 +63,22 @@ def read_mesh(path: PathLike, *, split: bool = True) -> QuadMesh:
     if not data or data.isspace():
         raise FormatError(path, "the file is empty")
     parsed = readers[suffix](path, data)
-    return QuadMesh.from_arrays(parsed.vertices, parsed.faces, split=split, source=str(path), tags=parsed.tags)
+    tags = parsed.tags
+    if sharp_angle is not None:
+        tags = tags + _sharp_angle_tags(path, parsed, sharp_angle)
+    return QuadMesh.from_arrays(parsed.vertices, parsed.faces, split=split, source=str(path), tags=tags)
+
+
+def _sharp_angle_tags(path: Path, parsed: _Parsed, degrees: float) -> tuple[Tag, ...]:
+    """The ``--sharp-angle`` tags of a parsed file, on its own polygons (index errors are left to the mesh checks)."""
+    from ..mesh import _as_polygons
+    from ..sharpen import sharp_angle_tags
+
+    corners, sizes = _as_polygons(parsed.faces)
+    vertices = np.asarray(parsed.vertices, dtype=np.float64)
+    if sizes.size == 0 or corners.size == 0 or corners.min() < 0 or corners.max() >= len(vertices) or not np.isfinite(vertices).all():
+        return ()
+    return sharp_angle_tags(vertices, corners, sizes, degrees)
 
 
 class _Parsed(NamedTuple):

@@ -57,8 +57,13 @@ class Targets:
       to that corner (``b11`` at corner 0), i.e. ``x + (t_next + t_prev)/3 + twist/9``, as seen by
       edge k (``[..., 0, :]``) and by edge k − 1 (``[..., 1, :]``): a Gregory patch has one per edge,
       a tensor-product patch takes their mean (:attr:`corner_interior`);
-    * ``sharpness`` (E,): per edge, 0 for smooth (creases come later);
-    * ``fallback`` (V,): vertices where the rule could not use its normal recipe and fell back.
+    * ``seams`` (E,): edges the surface is meant to cross with a crease (only C0 there, on
+      purpose): the two faces share the boundary curve and nothing more;
+    * ``fallback`` (V,): vertices where the rule could not use its normal recipe and fell back;
+    * ``corner_normals`` (F, 4, 3): the unit normal of each face corner's *sector* (the faces
+      around its vertex reached without crossing a seam or the boundary); ``normals[faces]``
+      (the default) wherever a vertex has one sector. A seam slot's tangent lies in the planes of
+      both sectors it separates, a smooth slot's in its sector's plane.
     """
 
     topology: QuadTopology
@@ -66,9 +71,10 @@ class Targets:
     normals: FloatArray
     tangents: FloatArray
     interior: FloatArray
-    sharpness: FloatArray = field(default=None)  # type: ignore[assignment]
+    seams: NDArray[np.bool_] = field(default=None)  # type: ignore[assignment]
     fallback: NDArray[np.bool_] = field(default=None)  # type: ignore[assignment]
     rule: str = "custom"
+    corner_normals: FloatArray = field(default=None)  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         topology = self.topology
@@ -83,19 +89,35 @@ class Targets:
             if value.shape != shape:
                 raise InputError(f"targets.{name}: expected shape {shape}, got {value.shape}")
             object.__setattr__(self, name, value)
-        sharpness = np.zeros(topology.n_edges) if self.sharpness is None else as_float_array("sharpness", self.sharpness)
-        if sharpness.shape != (topology.n_edges,):
-            raise InputError(f"targets.sharpness: expected shape ({topology.n_edges},), got {sharpness.shape}")
-        fallback = np.zeros(topology.n_vertices, dtype=bool) if self.fallback is None else np.asarray(self.fallback, dtype=bool)
-        if fallback.shape != (topology.n_vertices,):
-            raise InputError(f"targets.fallback: expected shape ({topology.n_vertices},), got {fallback.shape}")
-        object.__setattr__(self, "sharpness", sharpness)
-        object.__setattr__(self, "fallback", fallback)
+        flags = {"seams": topology.n_edges, "fallback": topology.n_vertices}
+        for name, size in flags.items():
+            value = getattr(self, name)
+            value = np.zeros(size, dtype=bool) if value is None else np.asarray(value, dtype=bool)
+            if value.shape != (size,):
+                raise InputError(f"targets.{name}: expected shape ({size},), got {value.shape}")
+            object.__setattr__(self, name, value)
+        corner_normals = self.normals[topology.faces] if self.corner_normals is None else as_float_array(
+            "targets.corner_normals", self.corner_normals, (4, 3)
+        )
+        if corner_normals.shape != (topology.n_faces, 4, 3):
+            raise InputError(f"targets.corner_normals: expected shape ({topology.n_faces}, 4, 3), got {corner_normals.shape}")
+        object.__setattr__(self, "corner_normals", corner_normals)
 
     @property
     def corner_interior(self) -> FloatArray:
         """One interior target per face corner, (F, 4, 3): the mean of the two edges' targets."""
         return 0.5 * (self.interior[:, :, 0] + self.interior[:, :, 1])
+
+    @property
+    def has_sectors(self) -> bool:
+        """Whether any vertex has more than one sector (a seam or a creased boundary runs through it)."""
+        return bool(self.seams.any())
+
+    def with_changes(self, **changes: object) -> Targets:
+        """A copy with some fields replaced (validated again)."""
+        from dataclasses import replace
+
+        return replace(self, **changes)
 
     @property
     def n_fallback(self) -> int:

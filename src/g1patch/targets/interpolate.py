@@ -35,6 +35,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from .creases import INTERPOLATE_SHARPNESS, crease_tangents, seam_edges, sharp_vertices
 from .local import TANGENTS, TangentRule, corner_tangents, cross, fan_normals
 from ..errors import ConstructionError, check_choice
 from ..mesh import QuadMesh, QuadTopology
@@ -451,7 +452,7 @@ def _sphere_misfit(x: FloatArray, n: FloatArray) -> FloatArray:
     return np.sqrt(_dot(residual, residual).mean(axis=1)) / np.where(size > 0, size, 1.0)
 
 
-def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, normals: FloatArray, interior: FloatArray) -> FloatArray:
+def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, corner_normals: FloatArray, interior: FloatArray) -> FloatArray:
     """Blend the circle-section fit (:func:`_round_interior`) into the twist targets of coarse
     faces: weight ``smoothstep((θ − 10°)/30°)`` of the largest angle θ between the normals at
     the ends of the face's edges, so fine meshes keep the local targets (and their order) and
@@ -467,7 +468,7 @@ def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, normals: FloatArra
 
     topology = mesh.topology
     faces = topology.faces
-    n = normals[faces]
+    n = corner_normals
     turn = np.arccos(np.clip(_dot(n, n[:, _NEXT]), -1.0, 1.0)).max(axis=1)
     weight = np.clip((turn - _ROUND_START) / (_ROUND_FULL - _ROUND_START), 0.0, 1.0)
     weight = weight * weight * (3.0 - 2.0 * weight)
@@ -513,8 +514,23 @@ def interpolate_targets(mesh: QuadMesh) -> Targets:
     tangents, guarded = safeguarded_fans(topology, normals, raw, chord)
     tangents -= _dot(tangents, normals[slot_vertex])[:, None] * normals[slot_vertex]
     fallback = guarded | frames.repaired | (np.bincount(slot_vertex, parallel, minlength=topology.n_vertices) > 0)
-    interior = _round_coarse_faces(mesh, tangents, normals, _interior_targets(topology, mesh.vertices, tangents, normals, frames.shape_operator))
-    return Targets(topology, mesh.vertices, normals, tangents, np.stack([interior, interior], axis=2), fallback=fallback, rule="interpolate")
+    seams = seam_edges(mesh, INTERPOLATE_SHARPNESS)
+    corner_normals = normals[topology.faces]
+    interior = _interior_targets(topology, mesh.vertices, tangents, normals, frames.shape_operator)
+    if seams.any():
+        tangents, sector_normals, creased, spread = crease_tangents(
+            mesh, seams, tangents, sharp_vertices(mesh, INTERPOLATE_SHARPNESS)
+        )
+        at_crease = creased[topology.faces]
+        corner_normals = np.where(at_crease[..., None], sector_normals, corner_normals)
+        bilinear = _interior_targets(topology, mesh.vertices, tangents, normals, None)
+        interior = np.where(at_crease[..., None], bilinear, interior)
+        fallback = (fallback & ~creased) | spread
+    interior = _round_coarse_faces(mesh, tangents, corner_normals, interior)
+    return Targets(
+        topology, mesh.vertices, normals, tangents, np.stack([interior, interior], axis=2), seams, fallback, "interpolate",
+        corner_normals,
+    )
 
 
 def retreat(targets: Targets, vertices: IntArray, weight: float) -> Targets:
@@ -522,10 +538,14 @@ def retreat(targets: Targets, vertices: IntArray, weight: float) -> Targets:
     their normals towards the fan normal, their slot tangents (re-projected) towards the regular
     star fitted to that fan, and the interior targets of every face corner at them towards the
     bilinear twist (no curvature term, no section fit). The build's fold guard uses it where a
-    patch turns back on itself; those vertices join ``fallback``."""
+    patch turns back on itself; those vertices join ``fallback``. Creased vertices (more than one
+    sector) keep their targets."""
     topology = targets.topology
     chosen = np.zeros(topology.n_vertices, dtype=bool)
     chosen[vertices] = True
+    sectored = np.zeros(topology.n_vertices, dtype=bool)
+    sectored[topology.faces[(targets.corner_normals != targets.normals[topology.faces]).any(axis=2)]] = True
+    chosen &= ~sectored  # a creased vertex keeps its sectors' planes
     fan = fan_normals(QuadMesh(targets.positions, topology))
     normals = targets.normals.copy()
     normals[chosen] = _unit_rows((1.0 - weight) * normals[chosen] + weight * fan[chosen])
@@ -541,7 +561,10 @@ def retreat(targets: Targets, vertices: IntArray, weight: float) -> Targets:
     corners = chosen[topology.faces]
     interior = targets.interior.copy()
     interior[corners] = (1.0 - weight) * interior[corners] + weight * bilinear[corners][:, None, :]
-    return Targets(topology, targets.positions, normals, tangents, interior, targets.sharpness, targets.fallback | chosen, targets.rule)
+    corner_normals = np.where(sectored[topology.faces][..., None], targets.corner_normals, normals[topology.faces])
+    return targets.with_changes(
+        normals=normals, tangents=tangents, interior=interior, fallback=targets.fallback | chosen, corner_normals=corner_normals
+    )
 
 
 def shape_targets(mesh: QuadMesh, shape: ShapeRule = "interpolate", *, tangents: TangentRule = "arc") -> Targets:

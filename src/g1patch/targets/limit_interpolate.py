@@ -43,9 +43,9 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 from scipy.sparse.linalg import LinearOperator, SuperLU, lsmr, onenormest, splu
 
-from ..errors import ConstructionError, MeshError
+from ..errors import ConstructionError, InputError, MeshError
 from ..mesh import QuadMesh, QuadTopology
-from ..subdivision import boundary_mode, corner_vertices, limit_points, sharp_edges
+from ..subdivision import INFINITE_SHARPNESS, corner_vertices, limit_points, sharp_edges
 from . import Targets
 from .limit import limit_targets
 
@@ -76,15 +76,26 @@ def limit_matrix(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> sp.csr_m
     (module docstring for its rows), assembled directly from the half-edges: every half-edge h
     from v adds ``4/(n(n + 5))`` at its target and ``1/(n(n + 5))`` at the corner opposite v in
     its face to row v of a smooth vertex; a sharp edge (a, b) adds 1/6 at (a, b) where a is a
-    crease vertex, and at (b, a) where b is. Rules as in :mod:`g1patch.subdivision`: a vertex is a corner with
-    more than two sharp edges or where the boundary mode makes it one, a crease with two, smooth
-    otherwise."""
+    crease vertex, and at (b, a) where b is. Rules as in :mod:`g1patch.subdivision`, features from the
+    mesh's tags (edge sharpness from ``sharpness`` where given): a vertex is a corner with more than
+    two sharp edges, where it is tagged infinitely sharp or where the boundary mode makes it one, a
+    crease with two, smooth otherwise. A semi-sharp edge or vertex (0 < s < 10) raises
+    :class:`InputError`: its limit reads more than the 1-ring masks (refine past it first)."""
     topology = mesh.topology
     nv = topology.n_vertices
-    sharp = sharp_edges(topology, sharpness)
+    edge = mesh.features.edge_sharpness if sharpness is None else np.asarray(sharpness, dtype=np.float64)
+    for name, values in (("edge", edge), ("vertex", mesh.features.vertex_sharpness)):
+        semi = np.flatnonzero((values > 0) & (values < INFINITE_SHARPNESS))
+        if semi.size:
+            raise InputError(
+                f"limit_matrix: {name} {semi[0]} is semi-sharp ({values[semi[0]]:g}; {semi.size} such); the limit "
+                "stencil covers smooth and infinitely sharp (≥ 10) features only: refine the mesh past its semi-sharp "
+                "levels first (subdivision.refine)"
+            )
+    sharp = sharp_edges(mesh, sharpness)
     ends = topology.edges[sharp]
     count = np.bincount(ends.ravel(), minlength=nv)
-    corner = (count > 2) | corner_vertices(topology, boundary_mode(mesh))
+    corner = (count > 2) | corner_vertices(mesh)
     crease = (count == 2) & ~corner
     smooth = ~(corner | crease)
 
@@ -182,7 +193,4 @@ def limit_interpolate_targets(mesh: QuadMesh) -> Targets:
         solution.solver, solution.residual, solution.condition,
     )
     targets = limit_targets(mesh.with_vertices(solution.cage))
-    return Targets(
-        targets.topology, mesh.vertices, targets.normals, targets.tangents, targets.interior, targets.sharpness,
-        targets.fallback, "limit-interpolate",
-    )
+    return targets.with_changes(positions=mesh.vertices, rule="limit-interpolate")

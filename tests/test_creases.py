@@ -1,0 +1,144 @@
+"""Sharp features in the targets and the assembly: seams stay C0, each sector is exactly G1.
+
+Reference values are geometric facts independent of the construction: a box with all edges
+sharp has flat faces meeting at 90°; a crease curve through a crease vertex is tangent-continuous;
+the tagged edges of ``--sharp-angle`` are exactly those whose faces turn by more than the angle.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from g1patch.build import build_network
+from g1patch.construct.gregory import assemble_gregory
+from g1patch.continuity import check
+from g1patch.io.meshfile import read_mesh
+from g1patch.mesh import QuadMesh, Tag
+from g1patch.sharpen import sharp_angle_tags
+from g1patch.shapes import cube, filleted_box, slotted_block, torus
+from g1patch.targets.creases import sectors
+from g1patch.targets.interpolate import interpolate_targets
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+CREASE_SHAPES = ["catmark_cube_creases2", "catmark_tent_creases1", "catmark_dart_edgecorner", "catmark_torus_creases0"]
+#: exact G1 on smooth edges and corners, degrees (DESIGN §5)
+G1 = 1e-9
+#: a shared boundary cubic evaluated from both sides: rounding of a unit-scaled patch
+G0 = 1e-12
+
+
+def _tagged(mesh: QuadMesh, edges: np.ndarray) -> QuadMesh:
+    pairs = mesh.topology.edges[edges].ravel().tolist()
+    return QuadMesh(mesh.vertices, mesh.topology, (Tag("crease", tuple(pairs), (10.0,)),))
+
+
+def _unit_normals(patches, uv: np.ndarray) -> np.ndarray:
+    n = np.cross(patches.evaluate(uv, 1, 0), patches.evaluate(uv, 0, 1))
+    return n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+
+def test_a_box_with_every_edge_sharp_has_flat_faces_at_right_angles() -> None:
+    box = _tagged(cube(), np.arange(12))
+    network = build_network(box)
+    report = check(network)
+    assert report.passes(G1)
+    seams = report.to_dict()["seams"]
+    assert seams["count"] == 12 and seams["g0_max"] <= G0
+    assert abs(seams["angle_min_deg"] - 90.0) <= G1 and abs(seams["angle_max_deg"] - 90.0) <= G1
+    normals = _unit_normals(network.patches, np.random.default_rng(0).random((50, 2)))
+    assert np.abs(normals - normals[:, :1]).max() <= 1e-12  # flat: one normal per face
+    axes = np.abs(normals[:, 0]).round(12)
+    assert sorted(map(tuple, axes)) == sorted([(1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)] * 2)
+
+
+def test_the_crease_curve_is_tangent_continuous_through_crease_vertices() -> None:
+    ring = torus(12, 6)
+    # a loop of edges around the tube's outer equator: all of them sharp
+    loop = np.flatnonzero(np.isclose(np.linalg.norm(ring.vertices[ring.topology.edges][:, :, :2], axis=2), 1.25).all(axis=1))
+    targets = interpolate_targets(_tagged(ring, loop))
+    topology = targets.topology
+    found = sectors(topology, targets.seams)
+    creased = np.flatnonzero(found.creased)
+    assert creased.size == 12
+    for v in creased:
+        slots = np.flatnonzero(np.isin(topology.halfedge_edge[topology.ring(v)], loop)) + topology.neighbor_offsets[v]
+        t_in, t_out = targets.tangents[slots]
+        assert np.linalg.norm(np.cross(t_in, t_out)) <= 1e-12 * np.linalg.norm(t_in) * np.linalg.norm(t_out)
+        assert np.dot(t_in, t_out) < 0
+    report = check(build_network(_tagged(ring, loop)))
+    assert report.passes(G1) and report.folds == 0
+
+
+@pytest.mark.parametrize("name", CREASE_SHAPES)
+def test_shared_crease_shapes_interpolate_sharp_where_tagged_and_g1_elsewhere(name: str) -> None:
+    path = DATA / f"{name}.obj"
+    if not path.exists():
+        pytest.skip(f"shared data not present: {path}")
+    mesh = read_mesh(path)
+    network = build_network(mesh)
+    report = check(network)
+    expected = int(((mesh.features.edge_sharpness >= 1.0) & ~mesh.topology.is_boundary_edge).sum())
+    seams = report.to_dict()["seams"]
+    assert seams["count"] == expected > 0
+    assert seams["g0_max"] <= G0
+    assert report.passes(G1) and report.folds == 0
+
+
+def test_a_dart_end_is_exactly_g1() -> None:
+    path = DATA / "catmark_dart_edgecorner.obj"
+    if not path.exists():
+        pytest.skip(f"shared data not present: {path}")
+    mesh = read_mesh(path)
+    targets = interpolate_targets(mesh)
+    found = sectors(mesh.topology, targets.seams)
+    ends = np.flatnonzero(found.cuts == 1 & ~mesh.topology.is_boundary_vertex)
+    assert ends.size == 1  # the crease 8–17–20 ends inside, at 20
+    assert np.allclose(targets.corner_normals[mesh.faces == ends[0]], targets.normals[ends[0]])
+    assert check(build_network(mesh)).to_dict()["max_corner_angle_deg"] <= G1
+
+
+@pytest.mark.parametrize("part", [filleted_box, slotted_block])
+@pytest.mark.parametrize("degrees", [10.0, 30.0, 89.0, 91.0])
+def test_sharp_angle_tags_exactly_the_edges_that_turn_more(part, degrees: float) -> None:
+    mesh = part()
+    ends = mesh.vertices[mesh.faces]
+    n = np.cross(ends[:, 2] - ends[:, 0], ends[:, 3] - ends[:, 1])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    pairs = mesh.topology.edge_halfedges
+    turn = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", n[pairs[:, 0] >> 2], n[pairs[:, 1] >> 2]), -1, 1)))
+    tags = sharp_angle_tags(mesh.vertices, mesh.faces.ravel(), np.full(mesh.n_faces, 4), degrees)
+    tagged = _tagged(mesh, np.flatnonzero(turn > degrees)) if (turn > degrees).any() else mesh
+    found = QuadMesh(mesh.vertices, mesh.topology, tags)
+    np.testing.assert_array_equal(found.features.sharp_edges, tagged.features.sharp_edges)
+    if degrees == 30.0:  # the fillet's grid edges turn by 15°: smooth; the box edges (90°): sharp
+        report = check(build_network(found))
+        assert report.passes(G1) and report.folds == 0
+        seams = report.to_dict()["seams"]
+        assert seams["count"] == int(found.features.sharp_edges.sum())
+        assert abs(seams["angle_min_deg"] - 90.0) <= 1e-9 and abs(seams["angle_max_deg"] - 90.0) <= 1e-9
+
+
+def test_sharp_angle_from_the_command_line(tmp_path: Path) -> None:
+    from g1patch.cli import main
+    from g1patch.io.meshfile import write_quads
+    from g1patch.io.network_file import load_network
+
+    source = tmp_path / "slot.obj"
+    block = slotted_block()
+    write_quads(source, block.vertices, block.faces)
+    out = tmp_path / "slot.npz"
+    assert main(["build", str(source), "-o", str(out), "--sharp-angle", "30", "-q"]) == 0
+    assert load_network(out).seam.sum() == 2 * 64
+    assert main(["build", str(source), "-o", str(out), "-q"]) == 0
+    assert load_network(out).seam.sum() == 0
+
+
+def test_the_gregory_assembly_keeps_seam_targets_and_each_sector_planar() -> None:
+    box = _tagged(cube(), np.arange(12))
+    targets = interpolate_targets(box)
+    patches = assemble_gregory(targets)
+    corners = patches.evaluate(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]))
+    np.testing.assert_allclose(corners, box.vertices[box.faces], atol=1e-15)
