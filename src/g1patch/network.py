@@ -7,7 +7,10 @@ counter-clockwise, see :mod:`g1patch.patches`):
   patch runs along it against the curve's canonical direction;
 * ``neighbor[p, k]`` / ``neighbor_edge[p, k]``: the patch and edge across it, or -1 on an open
   edge (and on a collapsed one);
-* ``corner_ids[p, k]``: the id of the point at corner k, shared by all patches meeting there.
+* ``corner_ids[p, k]``: the id of the point at corner k, shared by all patches meeting there;
+* ``seam[p, k]``: the shared edge is sharp on purpose (an infinitely sharp crease of the mesh):
+  the two patches share the boundary curve (G0) but not the tangent plane. Both sides agree;
+  open and collapsed edges are never seams.
 
 On a consistently oriented network two neighbours run along their shared edge in opposite
 directions; where they run the same way (a patch set with mixed orientation, e.g. a ``.bpt``
@@ -16,7 +19,7 @@ file) ``same_direction[p, k]`` is True and the check compares normals with a fli
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 import numpy as np
@@ -73,6 +76,8 @@ class PatchNetwork:
     vertex_normals: NDArray[np.float64] | None = None
     #: how the network was made: method and options, for reports and the file header
     provenance: dict[str, str] = field(default_factory=dict)
+    #: (P, 4) patch edges that are sharp on purpose (None: none are); see the module docstring
+    seam: NDArray[np.bool_] = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         count = len(self.patches)
@@ -90,6 +95,75 @@ class PatchNetwork:
         for name in ("vertices", "vertex_normals"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, as_float_array(name, getattr(self, name), (3,)))
+        object.__setattr__(self, "seam", self._checked_seam())
+
+    def _checked_seam(self) -> NDArray[np.bool_]:
+        """``seam`` as a (P, 4) bool array: True only on shared edges, equal on both sides."""
+        count = len(self.patches)
+        if self.seam is None:
+            return np.zeros((count, 4), dtype=bool)
+        seam = _as_bool("seam", self.seam, (count, 4))
+        patch, edge = np.nonzero(seam)
+        other = self.neighbor[patch, edge]
+        lonely = np.flatnonzero(other < 0)
+        if lonely.size:
+            p, k = patch[lonely[0]], edge[lonely[0]]
+            raise InputError(f"seam: patch {p} edge {k} is marked a seam but has no neighbour (open or collapsed edge)")
+        back = seam[other, self.neighbor_edge[patch, edge]]
+        if not back.all():
+            bad = int(np.argmin(back))
+            raise InputError(
+                f"seam: patch {patch[bad]} edge {edge[bad]} is a seam but its other side, patch {other[bad]} "
+                f"edge {self.neighbor_edge[patch[bad], edge[bad]]}, is not"
+            )
+        return seam
+
+    def with_seams(self, seam_edges: ArrayLike) -> PatchNetwork:
+        """This network with ``seam = seam_edges[edge_ids] & (neighbor ≥ 0)``: ``seam_edges``
+        (n_edges,) bool marks curves by edge id; on open and collapsed edges it is ignored (they
+        are sharp anyway)."""
+        seam = _as_bool("seam_edges", seam_edges, (self.n_edges,))[self.edge_ids] & (self.neighbor >= 0)
+        return replace(self, seam=seam)
+
+    @property
+    def n_seams(self) -> int:
+        """Number of shared edges that are seams (each counted once)."""
+        return int(self.seam.sum()) // 2
+
+    def corner_sectors(self) -> NDArray[np.int64]:
+        """(P, 4) sector of every patch corner: the corners at one point that a walk around it
+        reaches without crossing a seam share one id (the tangent plane they must agree on).
+
+        Without seams, the corner ids. At a point where a seam ends, corners are joined across
+        every shared edge that is not a seam (corner k of p is corner j + 1 of its neighbour q
+        across edge (p, k) ↔ (q, j), corner j where both run the same way) and across collapsed
+        edges (both corners are one point of the patch); elsewhere all corners of the point are
+        one sector, as without seams. A dart (one seam ending at a point) leaves one sector there.
+        """
+        if not self.seam.any():
+            return self.corner_ids
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+
+        count = self.n_patches
+        node = np.arange(4 * count).reshape(count, 4)
+        patch, edge = np.nonzero((self.neighbor >= 0) & ~self.seam)
+        other, other_edge = self.neighbor[patch, edge], self.neighbor_edge[patch, edge]
+        same = self.same_direction[patch, edge]
+        following = (other_edge + 1) % 4
+        collapsed_patch, collapsed_edge = np.nonzero(self.edge_collapsed[self.edge_ids])
+        ends = np.zeros(self.n_corners, dtype=bool)
+        ends[self.corner_ids[self.seam | np.roll(self.seam, 1, axis=1)]] = True  # edges k and k − 1 meet at corner k
+        free = ~ends[self.corner_ids]
+        first = np.concatenate([node[patch, edge], node[patch, (edge + 1) % 4], node[collapsed_patch, collapsed_edge], node[free]])
+        second = np.concatenate([
+            node[other, np.where(same, other_edge, following)], node[other, np.where(same, following, other_edge)],
+            node[collapsed_patch, (collapsed_edge + 1) % 4], 4 * count + self.corner_ids[free],
+        ])
+        size = 4 * count + self.n_corners
+        graph = coo_matrix((np.ones(len(first)), (first, second)), shape=(size, size))
+        labels = connected_components(graph, directed=False)[1]
+        return labels[: 4 * count].reshape(count, 4).astype(np.int64)
 
     @property
     def n_patches(self) -> int:
@@ -120,6 +194,16 @@ class PatchNetwork:
         """Length of the diagonal of the box around the patch corners (the scale of G0 gaps)."""
         corners = self.patches.evaluate(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])).reshape(-1, 3)
         return float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0)))
+
+
+def _as_bool(name: str, value: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.bool_]:
+    """``value`` as a contiguous bool array of ``shape``: booleans, or integers 0 and 1."""
+    array = np.asarray(value)
+    if array.shape != shape:
+        raise InputError(f"{name}: expected shape {shape}, got {array.shape}")
+    if array.dtype != bool and not (np.issubdtype(array.dtype, np.integer) and np.isin(array, (0, 1)).all()):
+        raise InputError(f"{name}: expected booleans (or 0 and 1), got an array of {array.dtype}")
+    return np.ascontiguousarray(array, dtype=bool)
 
 
 def _cluster_points(points: NDArray[np.float64], tolerance: float) -> NDArray[np.int64]:
@@ -213,16 +297,19 @@ def network_from_mesh(
     vertices: ArrayLike,
     vertex_normals: ArrayLike | None = None,
     provenance: dict[str, str] | None = None,
+    seam_edges: ArrayLike | None = None,
 ) -> PatchNetwork:
     """The network of one patch per quad: patch f's edge k is the mesh half-edge ``4 f + k``.
 
     Canonical edge direction is ``edges[e, 0] → edges[e, 1]``; every interior edge is run in
-    opposite directions by its two patches (the mesh is consistently oriented).
+    opposite directions by its two patches (the mesh is consistently oriented). ``seam_edges``
+    (E,) bool, in ``topology.edges`` order, marks the mesh edges that are sharp on purpose; both
+    patch edges on each become seams (:meth:`PatchNetwork.with_seams`: boundary edges are ignored).
     """
     faces = topology.faces
     twin = topology.twin.reshape(-1, 4)
     edge_ids = topology.halfedge_edge.reshape(-1, 4)
-    return PatchNetwork(
+    network = PatchNetwork(
         patches=patches,
         corner_ids=faces,
         edge_ids=edge_ids,
@@ -235,3 +322,4 @@ def network_from_mesh(
         vertex_normals=None if vertex_normals is None else np.asarray(vertex_normals, dtype=np.float64),
         provenance=dict(provenance or {}),
     )
+    return network if seam_edges is None else network.with_seams(seam_edges)
