@@ -42,7 +42,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy.sparse import coo_matrix, csc_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import spsolve
@@ -591,13 +591,17 @@ def _split4_network(
 
 
 def split4_network_from_targets(
-    mesh: QuadMesh, targets: Targets, frame: Frame, provenance: dict[str, str]
+    mesh: QuadMesh, targets: Targets, frame: Frame, provenance: dict[str, str], seam_edges: ArrayLike | None = None
 ) -> PatchNetwork:
     """The 2×2-split bicubic network of ``targets`` (in the local coordinates of ``frame``):
     polynomial, exactly G1 on mesh edges and seams, C1 inside each quad, interpolating the mesh
     vertices (module docstring). The sub-patches stay in local coordinates and carry the frame.
     Provenance: vertices whose fan was refitted to spread directions join ``fallback_vertices``;
-    those whose star the length safeguard scaled down are counted in ``star_safeguard_vertices``."""
+    those whose star the length safeguard scaled down are counted in ``star_safeguard_vertices``.
+
+    ``seam_edges`` (E,) bool, in ``mesh.topology.edges`` order: mesh edges sharp on purpose; both
+    halves of each (edge ids 2e, 2e + 1) become :attr:`PatchNetwork.seam` edges on both sides (the
+    split's own inner seams M–C never are)."""
     patches, extra, extra_normals, stars = split4_patches(targets, targets.positions, np.zeros(3), 1.0)
     patches = patches.with_frame(frame)
     extra = frame.to_world(extra)
@@ -608,4 +612,10 @@ def split4_network_from_targets(
     )
     points = np.concatenate([mesh.vertices, extra])
     point_normals = np.concatenate([targets.normals, extra_normals])
-    return _split4_network(mesh.topology, patches, points, point_normals, provenance)
+    network = _split4_network(mesh.topology, patches, points, point_normals, provenance)
+    if seam_edges is None:
+        return network
+    sharp = np.asarray(seam_edges)
+    if sharp.shape != (mesh.topology.n_edges,):
+        raise InputError(f"seam_edges: expected shape ({mesh.topology.n_edges},), one per mesh edge, got {sharp.shape}")
+    return network.with_seams(np.concatenate([np.repeat(sharp, 2), np.zeros(4 * mesh.topology.n_faces, dtype=sharp.dtype)]))
