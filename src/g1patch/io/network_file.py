@@ -2,7 +2,9 @@
 
 Version 2 stores the patches in their local coordinates and, when they have one, their frame as
 the arrays ``frame_centre`` (3,) and ``frame_scale`` () (see :mod:`g1patch.frame`): the file holds
-exactly the numbers the construction made. Version 1 files (no frame) are read as before.
+exactly the numbers the construction made. Version 3 adds ``seam`` (P, 4) bool, the patch edges
+that are sharp on purpose (:attr:`PatchNetwork.seam`). Version 1 files (no frame) and version 2
+files (no seams) are read as before: seam-free.
 """
 
 from __future__ import annotations
@@ -23,10 +25,12 @@ from .atomic import atomic_path
 __all__ = ["FORMAT_VERSION", "READABLE_VERSIONS", "save_network", "load_network"]
 
 #: the version :func:`save_network` writes
-FORMAT_VERSION = 2
-#: the versions :func:`load_network` reads (1: no frame)
-READABLE_VERSIONS = (1, 2)
+FORMAT_VERSION = 3
+#: the versions :func:`load_network` reads (1: no frame, 2: no seams)
+READABLE_VERSIONS = (1, 2, 3)
 _ARRAYS = ("corner_ids", "edge_ids", "edge_reversed", "neighbor", "neighbor_edge", "same_direction", "edge_collapsed")
+#: the first version with seams
+SEAM_VERSION = 3
 
 
 def save_network(path: str | os.PathLike[str], network: PatchNetwork) -> None:
@@ -40,7 +44,7 @@ def save_network(path: str | os.PathLike[str], network: PatchNetwork) -> None:
         patch_arrays = {"patch_kind": np.array(GregoryPatchSet.kind), **patches.to_arrays()}
     else:
         raise FormatError(path, f"cannot store patches of type {type(patches).__name__}")
-    arrays = {name: getattr(network, name) for name in _ARRAYS}
+    arrays = {name: getattr(network, name) for name in (*_ARRAYS, "seam")}
     for name in ("vertices", "vertex_normals"):
         if getattr(network, name) is not None:
             arrays[name] = getattr(network, name)
@@ -69,9 +73,13 @@ def load_network(path: str | os.PathLike[str]) -> PatchNetwork:
     if header.get("version") not in READABLE_VERSIONS:
         readable = ", ".join(map(str, READABLE_VERSIONS))
         raise FormatError(source, f"network format version {header.get('version')} is not supported (this g1patch reads {readable})")
-    if header["version"] == 1:  # version 1 has no frame: arrays of that name are not part of it
+    version = header["version"]
+    if version == 1:  # version 1 has no frame: arrays of that name are not part of it
         contents = {name: value for name, value in contents.items() if not name.startswith("frame_")}
-    missing = [name for name in ("patch_kind", *_ARRAYS) if name not in contents]
+    if version < SEAM_VERSION:  # seam-free: an array of that name is not part of it
+        contents.pop("seam", None)
+    expected = ("patch_kind", *_ARRAYS, *(("seam",) if version >= SEAM_VERSION else ()))
+    missing = [name for name in expected if name not in contents]
     if missing:
         raise FormatError(source, f"network file lacks {', '.join(missing)}")
     kind = str(contents["patch_kind"])
@@ -84,6 +92,7 @@ def load_network(path: str | os.PathLike[str]) -> PatchNetwork:
             **{name: contents[name] for name in _ARRAYS},
             vertices=contents.get("vertices"),
             vertex_normals=contents.get("vertex_normals"),
+            seam=contents.get("seam"),
             provenance={str(k): str(v) for k, v in header.get("provenance", {}).items()},
         )
     except (InputError, KeyError) as exc:
