@@ -90,7 +90,8 @@ def _parser() -> argparse.ArgumentParser:
 
     check = command("check", "measure G0/G1 continuity of a network (.npz) or a Bézier patch file (.bpt)")
     check.add_argument("surface", type=Path, help="network (.npz) or patches (.bpt)")
-    check.add_argument("--max-angle", type=float, metavar="DEG", help="exit 1 if a G1 angle exceeds DEG degrees or the surface folds")
+    check.add_argument("--max-angle", type=float, metavar="DEG",
+                       help="exit 1 if a G1 angle (seams aside) exceeds DEG degrees, the surface folds or a seam is open (G0)")
     check.add_argument("--samples", type=int, default=33, help="samples per edge, both ends included (default: 33)")
     check.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
 
@@ -188,7 +189,7 @@ def _build(args: argparse.Namespace) -> int:
 
 
 def _check(args: argparse.Namespace) -> int:
-    from .continuity import check
+    from .continuity import SEAM_G0_RTOL, check
 
     network = _load_surface(args.surface)
     with _progress("check", args.quiet) as progress:
@@ -207,11 +208,14 @@ def _check(args: argparse.Namespace) -> int:
     if report.folds:
         patch, u, v = report.fold_locations[0]
         failures.append(f"{report.folds} folded patches (first: patch {patch} at (u, v) = ({u:.4g}, {v:.4g}))")
+    if not report.seams_closed():
+        failures.append(f"seam G0 gap {report.seam_g0_max:.3e} (of bbox diag) above {SEAM_G0_RTOL:g}")
     if not args.json:
         if failures:
             print("FAILED: " + "; ".join(failures), file=sys.stderr)
         else:
-            print(f"passed: G1 angles within {args.max_angle}°, no folds")
+            seams = f"; {report.seam_edges} seams (sharp on purpose) closed within {SEAM_G0_RTOL:g}" if report.seam_edges else ""
+            print(f"passed: G1 angles within {args.max_angle}°, no folds{seams}")
     return EXIT_CHECK_FAILED if failures else EXIT_OK
 
 

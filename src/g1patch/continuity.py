@@ -4,7 +4,14 @@ For every interior edge shared by patches L and R the edge is sampled at K ≥ 3
 both ends included, from both sides; exact first derivatives give the normals
 ``n = p_u × p_v`` and the G1 angle is ``atan2(|n_L × n_R|, n_L · n_R)`` (accurate near 0, where
 arccos floors at ~1e-6°). The G0 gap is ``|p_L − p_R|``, reported relative to the bounding-box
-diagonal. Corners: the angle between the normals of every pair of patches meeting at a point.
+diagonal. Corners: the angle between the normals of every pair of patches meeting at a point
+within one sector (:meth:`PatchNetwork.corner_sectors`: the patches a walk around the point
+reaches without crossing a seam).
+
+**Seams** (``network.seam``: edges sharp on purpose) are only meant to be G0. They are measured
+like every shared edge but reported apart: their number, their largest G0 gap and the range
+(min, max over all their samples) of the angle between the two sides' normals. They never count
+as G1 failures or folds; a G0 gap above :data:`SEAM_G0_RTOL` on a seam still fails the check.
 
 On a ``G × G`` grid of every patch (``G = fold_samples``, both borders included):
 
@@ -13,7 +20,7 @@ On a ``G × G`` grid of every patch (``G = fold_samples``, both borders included
   have normals more than 90° apart (``n_a · n_b < 0``), or where a sample of a corner's grid cell
   has its normal against the normal at that corner; both patches of a shared edge are folded
   where their normals at one point of the edge are more than 90° apart (G1 angle > 90°: the
-  surface turns back across the edge). Degenerate normals are skipped;
+  surface turns back across the edge), unless the edge is a seam. Degenerate normals are skipped;
 * fairness: the normal turn ``θ = 2 asin(|n̂_a − n̂_b| / 2)`` between neighbouring samples (median,
   p99, max over all pairs of all patches) and the thin-plate energy
   ``∫∫ |p_uu|² + 2|p_uv|² + |p_vv|² du dv = ∫∫ |∇p_u|² + |∇p_v|² du dv`` (``p_uv = p_vu``), summed
@@ -39,7 +46,7 @@ from .gregory import GregoryPatchSet, gregory_weights
 from .network import PatchNetwork, Patches, edge_parameters
 from .patches import CORNER_PARAMETERS
 
-__all__ = ["ContinuityReport", "check", "fairness", "folded_patches", "angle_between", "format_reports"]
+__all__ = ["SEAM_G0_RTOL", "ContinuityReport", "check", "fairness", "folded_patches", "angle_between", "format_reports"]
 
 DEGENERATE_RTOL = 1e-13
 """|p_u × p_v| ≤ DEGENERATE_RTOL · diag² is a degenerate normal. At a collapsed edge the
@@ -54,6 +61,10 @@ on the 17 × 17 grid its largest turn between neighbours is 69°."""
 
 MAX_FOLD_LOCATIONS = 10
 """The report locates the first this many folded patches."""
+
+SEAM_G0_RTOL = 1e-12
+"""The largest G0 gap (relative to the bounding-box diagonal) a seam may have and pass: its two
+sides share one boundary curve, equal up to rounding."""
 
 # Histogram of the turns, in bounded memory: the squared chord ``s = |n̂_a − n̂_b|² = 4 sin²(θ/2)``
 # (monotone in θ) as float32, whose bit pattern read as an integer is monotone too; its top
@@ -108,18 +119,26 @@ class ContinuityReport:
     turn_p99_deg: float
     turn_max_deg: float
     thin_plate: float
-    #: per shared edge: (patch, edge) of both sides, max G1 angle (deg), max G0 gap (relative)
+    #: shared edges that are seams (sharp on purpose, G0 only), their largest G0 gap (relative)
+    #: and the smallest and largest angle between the sides' normals on them (None without seams);
+    #: the edge and corner figures above leave them out
+    seam_edges: int
+    seam_g0_max: float
+    seam_angle_min_deg: float | None
+    seam_angle_max_deg: float | None
+    #: per shared edge: (patch, edge) of both sides, max G1 angle (deg), max G0 gap (relative), seam
     edge_patches: NDArray[np.int64] = field(repr=False)
     edge_sides: NDArray[np.int64] = field(repr=False)
     edge_angle_deg: NDArray[np.float64] = field(repr=False)
     edge_gap: NDArray[np.float64] = field(repr=False)
+    edge_seam: NDArray[np.bool_] = field(repr=False)
 
     @property
     def worst_edge(self) -> dict[str, Any] | None:
-        """The shared edge with the largest G1 angle: its patches, edges, angle and gap."""
-        if not self.shared_edges:
+        """The smooth (non-seam) shared edge with the largest G1 angle: its patches, edges, angle and gap."""
+        if self.shared_edges == self.seam_edges:
             return None
-        index = int(np.argmax(self.edge_angle_deg))
+        index = int(np.argmax(np.where(self.edge_seam, -np.inf, self.edge_angle_deg)))
         return {
             "patches": [int(p) for p in self.edge_patches[index]],
             "edges": [int(k) for k in self.edge_sides[index]],
@@ -128,12 +147,27 @@ class ContinuityReport:
         }
 
     def is_g1(self, max_angle_deg: float = 1e-9) -> bool:
-        """True when every edge and corner angle is within ``max_angle_deg`` (folds aside)."""
+        """True when every smooth edge and every corner sector's angle is within ``max_angle_deg``
+        (folds and seams aside)."""
         return max(self.max_edge_angle_deg, self.max_corner_angle_deg) <= max_angle_deg
 
-    def passes(self, max_angle_deg: float = 1e-9) -> bool:
-        """The check verdict: :meth:`is_g1` and no patch folds."""
-        return self.is_g1(max_angle_deg) and self.folds == 0
+    def seams_closed(self, max_gap: float = SEAM_G0_RTOL) -> bool:
+        """True when every seam's G0 gap (relative to the bbox diagonal) is within ``max_gap``."""
+        return self.seam_g0_max <= max_gap
+
+    def passes(self, max_angle_deg: float = 1e-9, max_seam_gap: float = SEAM_G0_RTOL) -> bool:
+        """The check verdict: :meth:`is_g1`, no patch folds and :meth:`seams_closed`."""
+        return self.is_g1(max_angle_deg) and self.folds == 0 and self.seams_closed(max_seam_gap)
+
+    @property
+    def seams(self) -> dict[str, Any]:
+        """The seam figures: ``count``, ``g0_max``, ``angle_min_deg``, ``angle_max_deg``."""
+        return {
+            "count": self.seam_edges,
+            "g0_max": self.seam_g0_max,
+            "angle_min_deg": self.seam_angle_min_deg,
+            "angle_max_deg": self.seam_angle_max_deg,
+        }
 
     @property
     def fold_location_dicts(self) -> list[dict[str, Any]]:
@@ -169,6 +203,7 @@ class ContinuityReport:
             "bounding_box_diagonal": self.bounding_box_diagonal,
             "max_vertex_deviation": self.max_vertex_deviation,
             "worst_edge": self.worst_edge,
+            "seams": self.seams,
             "fold_samples": self.fold_samples,
             "fold_locations": self.fold_location_dicts,
             **self.fairness,
@@ -192,6 +227,12 @@ class ContinuityReport:
         if self.fold_locations:
             patch, u, v = self.fold_locations[0]
             rows.insert(rows.index(("folds", f"{self.folds}")) + 1, ("first fold", f"patch {patch} at (u, v) = ({u:.4g}, {v:.4g})"))
+        if self.seam_edges:
+            rows[2:2] = [
+                ("seams (sharp on purpose)", f"{self.seam_edges}"),
+                ("seam angle min / max", f"{self.seam_angle_min_deg:.4g}° / {self.seam_angle_max_deg:.4g}°"),
+                ("seam max G0 gap (of bbox diag)", f"{self.seam_g0_max:.3e}"),
+            ]
         if self.collapsed_edges:
             rows.insert(2, ("collapsed edges", f"{self.collapsed_edges} ({self.collapsed_patch_edges} patch edges)"))
         if self.inconsistent_orientation_edges:
@@ -250,14 +291,16 @@ def check(
     right_patch = network.neighbor[left_patch, left_edge]
     right_edge = network.neighbor_edge[left_patch, left_edge]
     same = network.same_direction[left_patch, left_edge]
+    seam = network.seam[left_patch, left_edge]
     edge_angle = np.zeros(len(left_patch))
+    edge_angle_min = np.zeros(len(left_patch))
     edge_gap = np.zeros(len(left_patch))
     edge_worst = np.zeros(len(left_patch), dtype=np.int64)
     edge_blocks = _blocks(len(left_patch), chunk)
     patch_blocks = _blocks(len(local), min(chunk, _patch_block(fold_samples)))
     total = len(left_patch) + len(local)
     for block in edge_blocks:
-        edge_angle[block], edge_worst[block], edge_gap[block] = _edge_measures(
+        edge_angle[block], edge_angle_min[block], edge_worst[block], edge_gap[block] = _edge_measures(
             local, left_patch[block], left_edge[block], right_patch[block], right_edge[block], same[block],
             samples, degenerate_level,
         )
@@ -272,7 +315,7 @@ def check(
         if progress is not None:
             progress(len(left_patch) + block.stop, total)
     figures = grid.fairness(diagonal)
-    folded_edges = np.flatnonzero(edge_angle > 90.0)
+    folded_edges = np.flatnonzero((edge_angle > 90.0) & ~seam)
     folded = grid.folded.copy()
     folded[left_patch[folded_edges]] = folded[right_patch[folded_edges]] = True
     edge_sides = (left_patch, left_edge, right_patch, right_edge, same)
@@ -286,6 +329,11 @@ def check(
         max_vertex_deviation = float(deviation.max() / diagonal) if deviation.size else 0.0
 
     open_patch, _ = network.open_edges()
+    smooth_angle = edge_angle[~seam]
+    seam_range: tuple[float, float] | tuple[None, None] = (None, None)
+    if seam.any():  # degenerate samples count as 0°, as in the maxima
+        least = float(edge_angle_min[seam].min())
+        seam_range = (least if np.isfinite(least) else 0.0, float(edge_angle[seam].max()))
     return ContinuityReport(
         patches=len(local),
         shared_edges=int(len(left_patch)),
@@ -293,8 +341,8 @@ def check(
         collapsed_edges=int(network.edge_collapsed.sum()),
         collapsed_patch_edges=int(network.edge_collapsed[network.edge_ids].sum()),
         samples_per_edge=samples,
-        max_edge_angle_deg=float(edge_angle.max(initial=0.0)),
-        mean_edge_angle_deg=float(edge_angle.mean()) if len(edge_angle) else 0.0,
+        max_edge_angle_deg=float(smooth_angle.max(initial=0.0)),
+        mean_edge_angle_deg=float(smooth_angle.mean()) if len(smooth_angle) else 0.0,
         max_corner_angle_deg=corner_angle,
         max_g0_gap=float(edge_gap.max(initial=0.0)),
         degenerate_normals=grid.degenerate,
@@ -308,10 +356,15 @@ def check(
         turn_p99_deg=figures["turn_p99_deg"],
         turn_max_deg=figures["turn_max_deg"],
         thin_plate=figures["thin_plate"],
+        seam_edges=int(seam.sum()),
+        seam_g0_max=float(edge_gap[seam].max(initial=0.0)),
+        seam_angle_min_deg=seam_range[0],
+        seam_angle_max_deg=seam_range[1],
         edge_patches=np.stack([left_patch, right_patch], axis=1),
         edge_sides=np.stack([left_edge, right_edge], axis=1),
         edge_angle_deg=edge_angle,
         edge_gap=edge_gap,
+        edge_seam=seam,
     )
 
 
@@ -484,9 +537,9 @@ def _edge_measures(
     same: NDArray[np.bool_],
     samples: int,
     degenerate_level: float,
-) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
-    """Max G1 angle (deg), the sample index where it is reached, and max G0 gap (absolute) along
-    each given shared edge.
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
+    """Max and min G1 angle (deg; the min over non-degenerate samples, inf without any), the
+    sample index where the max is reached, and max G0 gap (absolute) along each given shared edge.
 
     Side R runs along the edge in its own counter-clockwise direction, so it is sampled at the
     reversed parameters (exactly ``t[::-1]``) unless both sides run the same way; then its
@@ -502,19 +555,21 @@ def _edge_measures(
     point_left -= point_right
     gaps = _norm3(point_left)
     worst = angles.argmax(axis=1)
-    return np.take_along_axis(angles, worst[:, None], axis=1)[:, 0], worst, gaps.max(axis=1, initial=0.0)
+    least = np.where(usable, angles, np.inf).min(axis=1, initial=np.inf)
+    return np.take_along_axis(angles, worst[:, None], axis=1)[:, 0], least, worst, gaps.max(axis=1, initial=0.0)
 
 
 def _max_corner_angle(network: PatchNetwork, patches: Patches, degenerate_level: float, oriented: bool) -> float:
-    """Largest angle between the corner normals of any two patches meeting at one point.
+    """Largest angle between the corner normals of any two patches meeting at one point in one
+    sector (:meth:`PatchNetwork.corner_sectors`: patches across a seam may differ).
 
-    Corners are grouped by their point id and the groups by size, so the pairwise angles of all
-    points with m corners form one (groups, m, m) array.
+    Corners are grouped by their sector and the groups by size, so the pairwise angles of all
+    sectors with m corners form one (groups, m, m) array.
     """
     normals = _cross3(_planar(patches.evaluate(CORNER_PARAMETERS, 1, 0)), _planar(patches.evaluate(CORNER_PARAMETERS, 0, 1)))
     normals = normals.reshape(3, -1)
     usable = _norm3(normals) > degenerate_level
-    ids = network.corner_ids.reshape(-1)[usable]
+    ids = network.corner_sectors().reshape(-1)[usable]
     normals = normals[:, usable].T
     if not len(ids):
         return 0.0
