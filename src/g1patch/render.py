@@ -12,7 +12,9 @@ Three modes, one camera:
   the normal's angle, a 1° crease moves them by about ``stripes · 2° / 360°`` of a period.
 * ``deviation``: the patch boundary curves, drawn as thin bands along every patch edge and
   coloured by the G1 angle of their edge (from :func:`g1patch.continuity.check`), over a light
-  grey surface, with a colour bar in degrees (logarithmic when the angles span decades).
+  grey surface, with a colour bar in degrees (logarithmic when the angles span decades). Seams
+  (edges sharp on purpose, ``network.seam``) are drawn in a colour of their own, outside the
+  colour map, named in a legend; their angles do not enter the colour scale.
 
 Every patch is sampled on its own grid and its normals come from its own exact derivatives
 (``p_u × p_v``), so the two sides of a crease are not averaged into one normal: the picture shows
@@ -96,6 +98,9 @@ _BACKGROUND = (1.0, 1.0, 1.0)
 _SURFACE_COLOUR = np.array([0.60, 0.72, 0.88])
 _DEVIATION_SURFACE = np.array([0.86, 0.86, 0.86])
 _OPEN_EDGE_COLOUR = np.array([0.35, 0.35, 0.35])
+#: seams in the deviation mode: a green that plasma (blue, purple, orange, yellow) never reaches
+_SEAM_COLOUR = np.array([0.0, 0.62, 0.42])
+_SEAM_LABEL = "seam (sharp on purpose)"
 _STRIPE_DARK = 0.05
 _DEVIATION_CMAP = "plasma"
 _CMAP_RANGE = (0.0, 0.88)  # plasma without its palest yellow, which vanishes on light grey
@@ -473,12 +478,21 @@ def _angle_scale(angles: Sequence[NDArray[np.float64]], angle_range: tuple[float
     return _AngleScale(Normalize(0.0, high, clip=True), cmap, False)
 
 
-def _band_angles(network: PatchNetwork, report: ContinuityReport) -> NDArray[np.float64]:
-    """G1 angle of every patch side (N, 4); NaN on open and collapsed sides."""
+def _deviation_caption(report: ContinuityReport) -> str:
+    """The deviation panel's figure line: the largest G1 angle on the smooth edges, and the seams."""
+    caption = f"max G1 angle {report.max_edge_angle_deg:.3g}° on {report.shared_edges - report.seam_edges} edges"
+    return caption + (f", {report.seam_edges} seams" if report.seam_edges else "")
+
+
+def _band_angles(network: PatchNetwork, report: ContinuityReport) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """G1 angle of every patch side (N, 4), NaN on open, collapsed and seam sides; and the seam sides (N, 4)."""
     angles = np.full((network.n_patches, 4), np.nan)
+    seams = np.zeros((network.n_patches, 4), dtype=bool)
     for column in (0, 1):
-        angles[report.edge_patches[:, column], report.edge_sides[:, column]] = report.edge_angle_deg
-    return angles
+        sides = report.edge_patches[:, column], report.edge_sides[:, column]
+        angles[sides] = np.where(report.edge_seam, np.nan, report.edge_angle_deg)
+        seams[sides] = report.edge_seam
+    return angles, seams
 
 
 def _deviation_colours(
@@ -488,10 +502,12 @@ def _deviation_colours(
     vertex_normals: NDArray[np.float64],
     camera: _Camera,
     side_angles: NDArray[np.float64],
+    side_seams: NDArray[np.bool_],
     scale: _AngleScale,
 ) -> NDArray[np.float64]:
     """Per-corner colours (T, 3, 3): the lit grey surface, and the edge bands in one flat colour
-    each, the colour of their edge's G1 angle (a corner cell lies on two sides: the larger)."""
+    each, the colour of their edge's G1 angle (a corner cell lies on two sides: the larger), or
+    the seam colour where a side is a seam (it wins at corner cells: seams stay unbroken lines)."""
     assert surface.band_patch is not None and surface.band_mask is not None
     triangles = surface.triangles[keep]
     colours = vertex_colours[triangles]
@@ -505,10 +521,14 @@ def _deviation_colours(
     # open (boundary) sides: a neutral dark line; shared sides: the colour of their angle
     band = np.tile(_OPEN_EDGE_COLOUR, (int(in_band.sum()), 1))
     mapped = np.asarray(scale.cmap(scale.norm(angle)))[:, :3]
-    normal = vertex_normals[triangles[in_band][has_angle]].sum(axis=1)
+    on_seam = (touched & side_seams[patch[in_band]]).any(axis=1)
+    band[has_angle] = mapped
+    band[on_seam] = _SEAM_COLOUR
+    lit = has_angle | on_seam
+    normal = vertex_normals[triangles[in_band][lit]].sum(axis=1)
     normal /= np.maximum(np.linalg.norm(normal, axis=-1, keepdims=True), 1e-300)
     diffuse, _ = _diffuse(normal, camera)
-    band[has_angle] = mapped * (0.82 + 0.18 * diffuse)[:, None]
+    band[lit] *= (0.82 + 0.18 * diffuse)[:, None]
     colours[in_band] = band[:, None, :]
     return colours
 
@@ -551,12 +571,13 @@ def _panel(
     title: str | None,
     *,
     stripes: int = DEFAULT_STRIPES,
-    side_angles: NDArray[np.float64] | None = None,
+    sides: tuple[NDArray[np.float64], NDArray[np.bool_]] | None = None,
     scale: _AngleScale | None = None,
     zoom: float = 1.0,
     target: NDArray[np.float64] | None = None,
 ) -> _Panel:
     """Colour every point of ``surface`` for ``mode`` and sort the visible triangles back to front.
+    ``sides``: the deviation mode's G1 angle and seam flag of every patch side (:func:`_band_angles`).
 
     The picture shows the whole surface (with a 3 % margin) magnified ``zoom`` times about the
     point ``target`` (default: the middle of the surface's screen box)."""
@@ -572,9 +593,9 @@ def _panel(
         value = _STRIPE_DARK + white * (light - _STRIPE_DARK)
         colours = np.repeat(value[:, None], 3, axis=1)[surface.triangles[keep]]
     else:
-        assert side_angles is not None and scale is not None
+        assert sides is not None and scale is not None
         grey = _shaded_colours(facing, camera, _DEVIATION_SURFACE, 0.08)
-        colours = _deviation_colours(surface, keep, grey, facing, camera, side_angles, scale)
+        colours = _deviation_colours(surface, keep, grey, facing, camera, *sides, scale)
     order = np.argsort(depth[keep], kind="stable")
     screen, _ = camera.project(surface.points)
     lower, upper = screen.min(axis=0), screen.max(axis=0)
@@ -589,8 +610,10 @@ def _draw(
     size: tuple[int, int],
     scale: _AngleScale | None = None,
     colorbar_label: str = "",
+    legend: Sequence[tuple[str, NDArray[np.float64]]] = (),
 ) -> None:
-    """Lay the panels out side by side (with a colour bar at the right when ``scale``) and write the PNG."""
+    """Lay the panels out side by side (with a colour bar at the right when ``scale``, and the
+    ``legend`` entries (label, colour) in a band of their own below) and write the PNG."""
     Figure = _matplotlib()
 
     width, height = size
@@ -600,10 +623,12 @@ def _draw(
     title_size = float(np.clip(min(height, width * panel_width) / 30.0, 6.0, 15.0))
     lines = max((p.title.count("\n") + 1 for p in panels if p.title), default=0)
     title_band = min(0.4, (0.9 + 1.3 * lines) * title_size * (_DPI / 72.0) / height) if lines else 0.0
+    legend_size = max(6.0, title_size * 0.8)
+    legend_band = min(0.2, 2.2 * legend_size * (_DPI / 72.0) / height) if legend else 0.0
     for column, panel in enumerate(panels):
-        axes = figure.add_axes((column * panel_width, 0.0, panel_width, 1.0 - title_band))
+        axes = figure.add_axes((column * panel_width, legend_band, panel_width, 1.0 - title_band - legend_band))
         axes.set_axis_off()
-        box_w, box_h = width * panel_width, height * (1.0 - title_band)
+        box_w, box_h = width * panel_width, height * (1.0 - title_band - legend_band)
         units_per_pixel = max(panel.extent[0] / box_w, panel.extent[1] / box_h)
         half = units_per_pixel * np.array([box_w, box_h]) / 2.0
         low, high = panel.centre - half, panel.centre + half
@@ -626,6 +651,11 @@ def _draw(
             bar.axhline(EXACT_G1_DEG, color="white", linewidth=1.2)
             bar.text(-0.25, EXACT_G1_DEG, "exact\nG1", transform=bar.get_yaxis_transform(), ha="right",
                      va="center", fontsize=max(5.0, title_size * 0.6), color="0.25")
+    if legend:
+        from matplotlib.patches import Patch
+
+        figure.legend(handles=[Patch(facecolor=colour, label=text) for text, colour in legend], loc="lower left",
+                      frameon=False, fontsize=legend_size, ncols=len(legend))
     with atomic_path(path) as temporary:
         figure.savefig(temporary, format="png", dpi=_DPI, facecolor=_BACKGROUND)
 
@@ -758,26 +788,26 @@ def render_side_by_side(
     camera = _Camera.from_view(view, up)
     count = len(networks)
     scale = None
-    side_angles: list[NDArray[np.float64] | None] = [None] * count
+    sides: list[tuple[NDArray[np.float64], NDArray[np.bool_]] | None] = [None] * count
     shown_titles = list(titles)
+    legend: list[tuple[str, NDArray[np.float64]]] = []
     if mode == "deviation":
         full = [r if r is not None else check(n) for r, n in zip(checked, networks)]
-        side_angles = [_band_angles(n, r) for n, r in zip(networks, full)]
-        scale = _angle_scale([r.edge_angle_deg for r in full], angle_range)
-        shown_titles = [
-            "\n".join(filter(None, [t, f"max G1 angle {r.max_edge_angle_deg:.3g}° on {r.shared_edges} edges"]))
-            for t, r in zip(titles, full)
-        ]
+        sides = [_band_angles(n, r) for n, r in zip(networks, full)]
+        scale = _angle_scale([r.edge_angle_deg[~r.edge_seam] for r in full], angle_range)
+        shown_titles = ["\n".join(filter(None, [t, _deviation_caption(r)])) for t, r in zip(titles, full)]
+        if any(r.seam_edges for r in full):
+            legend.append((_SEAM_LABEL, _SEAM_COLOUR))
     panels = []
-    for network, title, angles in zip(networks, shown_titles, side_angles):
+    for network, title, network_sides in zip(networks, shown_titles, sides):
         closed = len(network.open_edges()[0]) == 0 and not network.same_direction.any()
         r = resolution or _zoomed_resolution(network.n_patches, count, closed, zoom)
         band = _band_width(network, camera, size, count, zoom) if mode == "deviation" else None
         surface = _sample(network, r, band)
-        panels.append(_panel(surface, camera, mode, title, stripes=stripes, side_angles=angles, scale=scale,
+        panels.append(_panel(surface, camera, mode, title, stripes=stripes, sides=network_sides, scale=scale,
                              zoom=zoom, target=target_point))
     label = "G1 angle across the edge (degrees" + (", log scale)" if scale is not None and scale.log else ")")
-    _draw(out_path, panels, size, scale, label)
+    _draw(out_path, panels, size, scale, label, legend)
 
 
 def render_surfaces(
