@@ -237,6 +237,10 @@ def _export(args: argparse.Namespace) -> int:
         kind = "exact B-spline faces" if result.exact else f"B-spline faces fitted within {result.fit_deviation:.2e} (model units)"
         print(f"wrote {result.faces} {kind}{', a closed solid' if result.solid else ''} -> {args.output}")
         print(f"G1 angle of the exported surfaces (measured by OpenCASCADE): max {result.max_g1_angle_deg:.3e}°")
+        if result.seam_edges:
+            angles = ("" if result.seam_angle_min_deg is None else
+                      f", their faces meet at {result.seam_angle_min_deg:.4g}° to {result.seam_angle_max_deg:.4g}°")
+            print(f"{result.seam_edges} seams kept as sharp edges{angles}")
         return EXIT_OK
     if suffix == ".bpt":
         from .io.bpt import write_bpt

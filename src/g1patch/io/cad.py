@@ -13,6 +13,10 @@ outwards by ``BRepLib::OrientClosedSolid``). The exported surfaces' G1 angles ar
 OCC itself: ``BRepAdaptor_Surface::D1`` on the sewn faces at K points of every shared edge,
 ``n = ±(S_u × S_v)`` with the sign of the face's orientation, angle ``atan2(|n_L × n_R|, n_L · n_R)``.
 
+Seams (``network.seam``: edges sharp on purpose) are sewn like every shared edge: one B-rep edge
+between two faces that meet at an angle, which is all a sharp edge is. Nothing here smooths or
+merges faces across any edge; the G1 figures leave seams out and report their angle range apart.
+
 OCP is imported only inside these functions; without it they raise
 :class:`MissingDependencyError` naming the extra, before anything is written. Writes go through
 :func:`atomic_path`: an error never leaves a partial file.
@@ -417,7 +421,7 @@ def _face_normals(occ: SimpleNamespace, face: Any, uv: NDArray[np.float64]) -> N
 def _occ_g1_angles(
     occ: SimpleNamespace, faces: Sequence[Any], network: PatchNetwork, samples: int, progress: Progress | None
 ) -> NDArray[np.float64]:
-    """Per shared edge, the max angle (degrees) between the two sewn faces' OCC normals."""
+    """(E, samples) angles (degrees) between the two sewn faces' OCC normals along every shared edge."""
     from ..continuity import angle_between
 
     patch, edge = network.shared_edges()
@@ -438,8 +442,7 @@ def _occ_g1_angles(
         if progress is not None and f % 256 == 0:
             progress("g1", int(f), len(faces))
     half = len(patch) * samples
-    angles = angle_between(normals[:half], normals[half:]).reshape(len(patch), samples)
-    return angles.max(axis=1) if len(patch) else np.zeros(0)
+    return angle_between(normals[:half], normals[half:]).reshape(len(patch), samples)
 
 
 # ----------------------------------------------------------------------------------- export
@@ -465,9 +468,14 @@ class ExportResult:
     fit_deviation: float
     fit_tolerance: float
     sewing_tolerance: float
-    #: G1 angles of the exported surfaces on shared edges, measured by OCC (max and mean of per-edge max)
+    #: G1 angles of the exported surfaces on shared edges but seams, measured by OCC (max and mean of per-edge max)
     max_g1_angle_deg: float
     mean_g1_angle_deg: float
+    #: seams (edges sharp on purpose), each one sharp B-rep edge, and the range of the angle
+    #: between their faces' OCC normals over all samples (None without seams or measurements)
+    seam_edges: int
+    seam_angle_min_deg: float | None
+    seam_angle_max_deg: float | None
     #: OCC's volume of the solid (BRepGProp::VolumeProperties), None when no solid was made
     volume: float | None
     #: seconds per stage: fit, faces, sew, solid, check, g1, write
@@ -527,8 +535,9 @@ def export_cad(
     """Write a network as a STEP or IGES B-rep, chosen by the extension (``.step .stp .iges .igs``).
 
     One B-spline face per patch (exact for polynomial patches, else fitted within ``tolerance``,
-    default 1e-6 × the bounding-box diagonal), sewn, a solid where the shells close. The G1 angles
-    of the written surfaces are measured by OCC on ``g1_samples`` points per shared edge (0: skip).
+    default 1e-6 × the bounding-box diagonal), sewn, a solid where the shells close; seams stay
+    sharp edges. The G1 angles of the written surfaces are measured by OCC on ``g1_samples`` points
+    per shared edge (0: skip), seams apart.
     The extension and OCP are checked before anything is computed or written.
     """
     target = Path(path)
@@ -567,8 +576,12 @@ def export_cad(
     valid = bool(occ.BRepCheck_Analyzer(shape).IsValid())
     volume = _volume(occ, shape) if solid else None
     lap("check")
-    angles = _occ_g1_angles(occ, sewn_faces, network, g1_samples, progress) if g1_samples else np.zeros(0)
+    angles = _occ_g1_angles(occ, sewn_faces, network, g1_samples, progress) if g1_samples else np.zeros((0, 0))
     lap("g1")
+    shared_patch, shared_edge = network.shared_edges()
+    seam = network.seam[shared_patch, shared_edge]
+    smooth = angles[~seam].max(axis=1) if angles.size else np.zeros(0)
+    seam_angles = angles[seam] if angles.size else np.zeros(0)
     with atomic_path(target) as temporary:
         _write(occ, shape, temporary, kind)
     lap("write")
@@ -584,8 +597,11 @@ def export_cad(
         fit_deviation=fit.deviation,
         fit_tolerance=0.0 if exact else fit_tolerance,
         sewing_tolerance=sewing_tolerance,
-        max_g1_angle_deg=float(angles.max()) if angles.size else 0.0,
-        mean_g1_angle_deg=float(angles.mean()) if angles.size else 0.0,
+        max_g1_angle_deg=float(smooth.max()) if smooth.size else 0.0,
+        mean_g1_angle_deg=float(smooth.mean()) if smooth.size else 0.0,
+        seam_edges=int(seam.sum()),
+        seam_angle_min_deg=float(seam_angles.min()) if seam_angles.size else None,
+        seam_angle_max_deg=float(seam_angles.max()) if seam_angles.size else None,
         volume=volume,
         seconds=seconds,
     )
