@@ -29,7 +29,7 @@ from .continuity import folded_patches
 from .errors import InputError, check_choice
 from .frame import Frame
 from .gregory import GregoryPatchSet
-from .mesh import QuadMesh
+from .mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology
 from .network import PatchNetwork, Patches, network_from_mesh
 from .patches import PatchSet
 from .targets import Targets
@@ -53,6 +53,21 @@ RISK_TANGENT = np.radians(30.0)
 RISK_LENGTH = (0.5, 1.6)
 
 
+def semi_sharp_levels(mesh: QuadMesh) -> int:
+    """Catmull–Clark steps after which no semi-sharp edge or vertex is left: ``⌈s⌉`` of the largest
+    sharpness below infinite (0 if none). A semi-sharp crease is sharp for that many levels and then
+    smooth (OpenSubdiv), a detail finer than one patch per cage face can follow, so the limit shapes
+    refine that far first."""
+    features = mesh.features
+    values = np.concatenate([features.edge_sharpness, features.vertex_sharpness])
+    semi = values[(values > 0) & (values < INFINITE_SHARPNESS)]
+    if not semi.size:
+        return 0
+    levels = int(np.ceil(semi.max()))
+    logger.info("semi-sharp features (sharpness up to %g): refining %d Catmull–Clark steps first", semi.max(), levels)
+    return levels
+
+
 def _provenance(mesh: QuadMesh, method: str, shape: str, tangents: str, targets: Targets, refine: int) -> dict[str, str]:
     provenance = {"method": method, "shape": shape, "refine": str(refine), "fallback_vertices": str(targets.n_fallback)}
     if shape == "legacy":
@@ -61,6 +76,8 @@ def _provenance(mesh: QuadMesh, method: str, shape: str, tangents: str, targets:
         provenance["seams"] = str(int(targets.seams.sum()))
     if mesh.source:
         provenance["source"] = str(mesh.source)
+    if mesh.repairs:
+        provenance["repairs"] = ", ".join(mesh.repairs)
     return provenance
 
 
@@ -131,18 +148,20 @@ def build_network(
     through the limit points, without the fold guard, which would pull it off the limit) or
     ``legacy`` (the previous release's, for comparison, without the fold guard). ``tangents``
     (``arc`` or ``chord``) applies to ``legacy`` only. ``refine``: Catmull–Clark steps applied to
-    the mesh first (:func:`g1patch.subdivision.refine`). The network's provenance records the
-    choices and how many vertices needed a fallback.
+    the mesh first (:func:`g1patch.subdivision.refine`); the limit shapes refine at least
+    :func:`semi_sharp_levels` steps, so semi-sharp creases follow OpenSubdiv's limit. The network's
+    provenance records the choices (the steps actually taken) and how many vertices needed a fallback.
     """
     check_choice("method", method, METHODS)
     check_choice("shape", shape, SHAPES)
     check_choice("tangents", tangents, TANGENTS)
     if isinstance(refine, bool) or not isinstance(refine, (int, np.integer)) or refine < 0:
         raise InputError(f"refine: expected a number of Catmull–Clark steps ≥ 0, got {refine!r}")
+    refine = max(int(refine), semi_sharp_levels(mesh) if shape in ("limit", "limit-interpolate") else 0)
     if refine:
         from .subdivision import refine as subdivide
 
-        mesh = subdivide(mesh, int(refine))
+        mesh = subdivide(mesh, refine)
     frame = Frame.of_points(mesh.vertices)
     local = mesh.with_vertices(frame.to_local(mesh.vertices))
     targets = shape_targets(local, shape, tangents=tangents)
@@ -158,6 +177,9 @@ def build_network(
                 int(targets.seams.sum()),
             )
 
+        if mesh.features.holes.any():
+            logger.warning("split4 does not leave holes open yet: the %d hole faces get patches (use --method gregory)",
+                           int(mesh.features.holes.sum()))
         if guard:
             targets = _guarded(targets, lambda t: _split4_local(local, t), 4)[1]
             provenance["fallback_vertices"] = str(targets.n_fallback)
@@ -169,7 +191,30 @@ def build_network(
     else:
         patches = assemble(targets)
     framed: PatchSet | GregoryPatchSet = patches.with_frame(frame)  # type: ignore[attr-defined]
+    holes = mesh.features.holes
+    if holes.any():
+        return _without_holes(mesh.topology, framed, surface.vertices, targets, provenance, ~holes)
     return network_from_mesh(mesh.topology, framed, surface.vertices, targets.normals, provenance, seam_edges=targets.seams)
+
+
+def _without_holes(
+    topology: QuadTopology, patches: Patches, vertices: np.ndarray, targets: Targets, provenance: dict[str, str], keep: np.ndarray
+) -> PatchNetwork:
+    """The network of the faces ``keep`` only: hole faces take part in every rule around them
+    (OpenSubdiv's semantics), but get no patch, so their edges become open boundaries."""
+    if not keep.any():
+        raise InputError("every face of the mesh is tagged as a hole: there is no surface to build")
+    faces = topology.faces[keep]
+    used = np.zeros(topology.n_vertices, dtype=bool)
+    used[faces] = True
+    index = np.cumsum(used) - 1
+    sub = QuadTopology.from_faces(index[faces], int(used.sum()))
+    # an edge of the sub-mesh is a seam where its parent edge was
+    parent = topology.halfedge_edge[(4 * np.flatnonzero(keep)[:, None] + np.arange(4)).ravel()]
+    seams = np.zeros(sub.n_edges, dtype=bool)
+    seams[sub.halfedge_edge] = targets.seams[parent]
+    provenance = {**provenance, "holes": str(int((~keep).sum()))}
+    return network_from_mesh(sub, patches.take(np.flatnonzero(keep)), vertices[used], targets.normals[used], provenance, seam_edges=seams)
 
 
 def _split4_local(local: QuadMesh, targets: Targets) -> PatchSet:

@@ -47,9 +47,9 @@ from numpy.typing import NDArray
 from ..errors import ConstructionError
 from ..gregory import GregoryPatchSet
 from ..mesh import QuadTopology
-from ..targets import Targets, halfedge_slots
+from ..targets import Targets, halfedge_slots, slot_sector_normals
 
-__all__ = ["assemble_gregory", "corner_split", "slot_sector_normals", "tangent_plane_tangents"]
+__all__ = ["assemble_gregory", "corner_split", "tangent_plane_tangents"]
 
 FloatArray = NDArray[np.float64]
 
@@ -90,35 +90,6 @@ def corner_split(
     size = np.linalg.norm(q, axis=-1) * np.maximum(np.linalg.norm(d_left, axis=-1), np.linalg.norm(d_right, axis=-1))
     margin = np.minimum(left, right) / np.where(size > 0, size, 1.0)
     return alpha, beta, phi, margin
-
-
-def slot_sector_normals(targets: Targets) -> tuple[FloatArray, FloatArray]:
-    """Per ring slot the corner normals of its two faces: ``(left, right)``, (S, 3) each.
-
-    Slot j of a vertex lies between ring faces j − 1 (left, clockwise of it) and j (right); a
-    boundary vertex's first slot has no left face and its last (virtual) slot no right face: the
-    other one stands in for it.
-    """
-    topology = targets.topology
-    corner = targets.corner_normals.reshape(-1, 3)[topology.ring_halfedges]  # per ring position
-    face_count = topology.face_count
-    ring_vertex = np.repeat(np.arange(topology.n_vertices), face_count)
-    position = np.arange(ring_vertex.size) - topology.ring_offsets[ring_vertex]
-    slot = topology.neighbor_offsets[ring_vertex] + position
-    slot_count = int(topology.neighbor_offsets[-1])
-    right = np.empty((slot_count, 3))
-    left = np.empty((slot_count, 3))
-    right[slot] = corner
-    boundary = topology.is_boundary_vertex
-    last = topology.neighbor_offsets[1:] - 1  # the virtual slot of a boundary vertex
-    right[last[boundary]] = corner[topology.ring_offsets[1:][boundary] - 1]
-    # left of slot j is ring face j − 1: cyclic inside, the slot's own face at a boundary's first slot
-    shifted = np.where(position == 0, position + face_count[ring_vertex] - 1, position - 1)
-    left[slot] = np.where(
-        ((position == 0) & boundary[ring_vertex])[:, None], corner, corner[topology.ring_offsets[ring_vertex] + shifted]
-    )
-    left[last[boundary]] = right[last[boundary]]
-    return left, right
 
 
 def tangent_plane_tangents(targets: Targets) -> FloatArray:

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from ..errors import InputError, as_float_array
 from ..mesh import QuadTopology
 
-__all__ = ["Targets", "halfedge_slots"]
+__all__ = ["Targets", "halfedge_slots", "slot_sector_normals"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -123,3 +123,32 @@ class Targets:
     def n_fallback(self) -> int:
         """How many vertices needed a fallback."""
         return int(self.fallback.sum())
+
+
+def slot_sector_normals(targets: Targets) -> tuple[FloatArray, FloatArray]:
+    """Per ring slot the corner normals of its two faces: ``(left, right)``, (S, 3) each.
+
+    Slot j of a vertex lies between ring faces j − 1 (left, clockwise of it) and j (right); a
+    boundary vertex's first slot has no left face and its last (virtual) slot no right face: the
+    other one stands in for it.
+    """
+    topology = targets.topology
+    corner = targets.corner_normals.reshape(-1, 3)[topology.ring_halfedges]  # per ring position
+    face_count = topology.face_count
+    ring_vertex = np.repeat(np.arange(topology.n_vertices), face_count)
+    position = np.arange(ring_vertex.size) - topology.ring_offsets[ring_vertex]
+    slot = topology.neighbor_offsets[ring_vertex] + position
+    slot_count = int(topology.neighbor_offsets[-1])
+    right = np.empty((slot_count, 3))
+    left = np.empty((slot_count, 3))
+    right[slot] = corner
+    boundary = topology.is_boundary_vertex
+    last = topology.neighbor_offsets[1:] - 1  # the virtual slot of a boundary vertex
+    right[last[boundary]] = corner[topology.ring_offsets[1:][boundary] - 1]
+    # left of slot j is ring face j − 1: cyclic inside, the slot's own face at a boundary's first slot
+    shifted = np.where(position == 0, position + face_count[ring_vertex] - 1, position - 1)
+    left[slot] = np.where(
+        ((position == 0) & boundary[ring_vertex])[:, None], corner, corner[topology.ring_offsets[ring_vertex] + shifted]
+    )
+    left[last[boundary]] = right[last[boundary]]
+    return left, right

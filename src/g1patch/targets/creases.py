@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from ..mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology
 from .local import cross
 
-__all__ = ["Sectors", "crease_tangents", "sector_fan_normals", "sectors", "seam_edges"]
+__all__ = ["INTERPOLATE_SHARPNESS", "Sectors", "crease_tangents", "sector_fan_normals", "sectors", "seam_edges", "sharp_vertices", "spread_sectors"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -230,7 +230,7 @@ def crease_tangents(
     length = np.linalg.norm(c, axis=1)
     scale = 2.0 * length**2 / ((length + in_plane) * np.where(in_plane > 0, in_plane, 1.0))
     out[inner_slot] = s * scale[:, None]
-    spread = _spread_sectors(topology, found, out, n_sector, creased, chord)
+    spread = spread_sectors(topology, found, out, n_sector, creased, chord)
 
     corner_normals = np.zeros((topology.n_faces * 4, 3))
     corner_positions = np.flatnonzero(creased[ring_vertex])
@@ -258,7 +258,7 @@ def _reverse_slots(topology: QuadTopology) -> IntArray:
     return out
 
 
-def _spread_sectors(
+def spread_sectors(
     topology: QuadTopology, found: Sectors, tangents: FloatArray, n_sector: FloatArray, creased: BoolArray, chord: FloatArray
 ) -> BoolArray:
     """Check that each creased sector's slots turn counter-clockwise from its start to its end

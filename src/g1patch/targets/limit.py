@@ -39,9 +39,12 @@ from numpy.typing import NDArray
 from .local import fan_normals
 from ..gregory import INTERIOR_INDEX
 from ..errors import MeshError
-from ..mesh import QuadMesh, QuadTopology
-from ..subdivision import boundary_mode, corner_vertices, limit_normals, limit_points, limit_stars, limit_tangents, refine_grids
-from . import Targets, halfedge_slots
+from ..mesh import QuadMesh, QuadTopology, Tag
+from ..subdivision import (
+    boundary_mode, corner_vertices, limit_corner_normals, limit_normals, limit_points, limit_stars, limit_tangents, refine_grids,
+)
+from . import Targets, halfedge_slots, slot_sector_normals
+from .creases import Sectors, spread_sectors, seam_edges, sectors
 from .interpolate import safeguarded_fans, slot_vertices
 
 __all__ = ["FIT_LEVELS", "bspline_slots", "limit_targets", "regular_faces"]
@@ -103,9 +106,11 @@ def _weigh(r: FloatArray, n: FloatArray) -> FloatArray:
 
 
 def _plane_bases(normals: FloatArray, a: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Orthonormal ``(e1, e2)`` of each tangent plane, e1 along ``a`` projected."""
+    """Orthonormal ``(e1, e2)`` of each tangent plane, e1 along ``a`` projected (any direction in the plane where that vanishes)."""
     e1 = a - _dot(a, normals)[:, None] * normals
-    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    length = np.linalg.norm(e1, axis=1, keepdims=True)
+    other = np.cross(normals, np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]]))
+    e1 = np.where(length > 1e-12, e1 / np.where(length > 0, length, 1.0), other / np.linalg.norm(other, axis=1, keepdims=True))
     return e1, np.cross(normals, e1)
 
 
@@ -114,6 +119,27 @@ def _fitted_edges(topology: QuadTopology, free: BoolArray) -> IntArray:
     slot_out, slot_in = halfedge_slots(topology)
     h = topology.edge_halfedges[:, 0]
     return h[~topology.is_boundary_edge & (free[slot_out[h]] | free[slot_in[h]])]
+
+
+def _subset_tags(mesh: QuadMesh, inside: IntArray) -> tuple[Tag, ...]:
+    """The tags of ``mesh`` that still apply to its faces ``inside``: the boundary rule, the crease
+    method, creases on edges of those faces (one sharpness each), corners on their vertices (holes
+    do not change the rules around them, so they are dropped)."""
+    topology = mesh.topology
+    features = mesh.features
+    used = np.zeros(topology.n_vertices, dtype=bool)
+    used[topology.faces[inside]] = True
+    h = (4 * inside[:, None] + np.arange(4)).ravel()
+    present = np.zeros(topology.n_edges, dtype=bool)
+    present[topology.halfedge_edge[h]] = True
+    tags = [tag for tag in mesh.tags if tag.name in ("interpolateboundary", "creasemethod")]
+    creased = np.flatnonzero(present & (features.edge_sharpness > 0))
+    if creased.size:
+        tags.append(Tag("crease", tuple(topology.edges[creased].ravel().tolist()), tuple(features.edge_sharpness[creased].tolist())))
+    cornered = np.flatnonzero(used & (features.vertex_sharpness > 0))
+    if cornered.size:
+        tags.append(Tag("corner", tuple(cornered.tolist()), tuple(features.vertex_sharpness[cornered].tolist())))
+    return tuple(tags)
 
 
 def _limit_samples(mesh: QuadMesh, faces: IntArray, levels: int) -> tuple[FloatArray, FloatArray]:
@@ -132,7 +158,7 @@ def _limit_samples(mesh: QuadMesh, faces: IntArray, levels: int) -> tuple[FloatA
     rows, source = faces, mesh
     if not keep.all():
         inside = np.flatnonzero(keep)
-        tags = tuple(tag for tag in mesh.tags if tag.name == "interpolateboundary")
+        tags = _subset_tags(mesh, inside)
         try:
             source = QuadMesh.from_arrays(mesh.vertices, topology.faces[inside], tags=tags)
             rows = np.searchsorted(inside, faces)
@@ -148,8 +174,9 @@ def _fit_tangents(
 ) -> FloatArray:
     """The free slot tangents fitted in their tangent planes: per interior edge A → B with a free end
     the least-squares fit of ``H(s) = B0 A + B1 (A + t_A/3) + B2 (B + t_B/3) + B3 B`` to the limit
-    curve samples, ``t = α e1 + β e2`` at a free end (a 4 × 4 solve per edge), the other end fixed;
-    ``samples[row[f]]`` holds face f's grid of limit samples."""
+    curve samples, ``t = α e1 + β e2`` at a free end (a 4 × 4 solve per edge; ``bases`` per slot,
+    the plane of the slot's sector), the other end fixed; ``samples[row[f]]`` holds face f's grid
+    of limit samples."""
     topology = mesh.topology
     slot_out, slot_in = halfedge_slots(topology)
     h = _fitted_edges(topology, free)
@@ -167,10 +194,10 @@ def _fit_tangents(
     base = (w[:, 0] + w[:, 1])[None, :, None] * x[va][:, None] + (w[:, 2] + w[:, 3])[None, :, None] * x[vb][:, None] - curve
     e1, e2 = bases
     columns = np.stack([  # ∂H/∂(α_A, β_A, α_B, β_B): (E, 4, m + 1, 3)
-        w[None, :, 1, None] * e1[va][:, None] / 3.0, w[None, :, 1, None] * e2[va][:, None] / 3.0,
-        w[None, :, 2, None] * e1[vb][:, None] / 3.0, w[None, :, 2, None] * e2[vb][:, None] / 3.0,
+        w[None, :, 1, None] * e1[sa][:, None] / 3.0, w[None, :, 1, None] * e2[sa][:, None] / 3.0,
+        w[None, :, 2, None] * e1[sb][:, None] / 3.0, w[None, :, 2, None] * e2[sb][:, None] / 3.0,
     ], axis=1)
-    known = np.stack([_dot(t[sa], e1[va]), _dot(t[sa], e2[va]), _dot(t[sb], e1[vb]), _dot(t[sb], e2[vb])], axis=1)
+    known = np.stack([_dot(t[sa], e1[sa]), _dot(t[sa], e2[sa]), _dot(t[sb], e1[sb]), _dot(t[sb], e2[sb])], axis=1)
     unknown = np.repeat(np.stack([free[sa], free[sb]], axis=1), 2, axis=1)  # (E, 4)
     fixed_part = np.einsum("ec,ecsd->esd", np.where(unknown, 0.0, known), columns)
     weighted = _weigh(columns, normal[:, None])
@@ -181,8 +208,8 @@ def _fit_tangents(
     gram = np.where(both, gram, np.where(eye, 1.0, 0.0))
     rhs = np.where(unknown, rhs, known)
     p = np.linalg.solve(gram, rhs[..., None])[..., 0]
-    fitted_a = p[:, 0, None] * e1[va] + p[:, 1, None] * e2[va]
-    fitted_b = p[:, 2, None] * e1[vb] + p[:, 3, None] * e2[vb]
+    fitted_a = p[:, 0, None] * e1[sa] + p[:, 1, None] * e2[sa]
+    fitted_b = p[:, 2, None] * e1[sb] + p[:, 3, None] * e2[sb]
     out[sa[free[sa]]] = fitted_a[free[sa]]
     out[sb[free[sb]]] = fitted_b[free[sb]]
     return out
@@ -232,19 +259,51 @@ def _limit_normals(mesh: QuadMesh) -> tuple[FloatArray, BoolArray]:
     return normals, degenerate
 
 
-def _guarded(mesh: QuadMesh, normals: FloatArray, fitted: FloatArray, star: FloatArray) -> tuple[FloatArray, BoolArray]:
+def _guarded(
+    mesh: QuadMesh, normals: FloatArray, fitted: FloatArray, star: FloatArray, keep: BoolArray
+) -> tuple[FloatArray, BoolArray]:
     """Per vertex the fitted fan where it is valid, else the star where that is, else the
     safeguarded star (:func:`~g1patch.targets.interpolate.safeguarded_fans`, flagged). A boundary
-    vertex with one face keeps its tangents."""
+    vertex with one face and the vertices in ``keep`` (creased: their sectors are checked on their
+    own) keep their fitted tangents."""
     topology = mesh.topology
     slot_vertex = slot_vertices(topology)
     chord = np.linalg.norm(mesh.vertices[topology.neighbors] - mesh.vertices[slot_vertex], axis=1)
     _, fitted_bad = safeguarded_fans(topology, normals, fitted, chord)
     guarded_star, star_bad = safeguarded_fans(topology, normals, star, chord)
-    lone = topology.is_boundary_vertex & (topology.face_count == 1)
-    fitted_bad &= ~lone
+    fitted_bad &= ~(topology.is_boundary_vertex & (topology.face_count == 1)) & ~keep
     out = np.where(fitted_bad[slot_vertex, None], np.where(star_bad[slot_vertex, None], guarded_star, star), fitted)
     return out, fitted_bad & star_bad
+
+
+def _touched(mesh: QuadMesh) -> BoolArray:
+    """Vertices with a sharpness of their own or on an edge of theirs: near them the limit is not
+    the uniform B-spline, whatever the valences."""
+    topology = mesh.topology
+    features = mesh.features
+    touched = features.vertex_sharpness > 0
+    touched[topology.edges[features.edge_sharpness > 0].ravel()] = True
+    return touched
+
+
+def _sector_slots(mesh: QuadMesh, seams: BoolArray) -> tuple[Sectors, BoolArray, BoolArray]:
+    """The sectors of the creased vertices, which slots bound one (their tangent is the crease
+    curve's, exact), and which inner slots are exact B-spline ones (a crease sector of two faces)."""
+    topology = mesh.topology
+    found = sectors(topology, seams)
+    slot_vertex = slot_vertices(topology)
+    bound = np.zeros(int(topology.neighbor_offsets[-1]), dtype=bool)
+    cut = found.creased[found.vertex]
+    bound[found.start[cut]] = True
+    bound[found.end[cut]] = True
+    corner = corner_vertices(mesh) | (found.cuts > 2)
+    size = np.bincount(found.label, minlength=found.vertex.size)
+    ring_vertex = np.repeat(np.arange(topology.n_vertices), topology.face_count)
+    slot = topology.neighbor_offsets[ring_vertex] + np.arange(ring_vertex.size) - topology.ring_offsets[ring_vertex]
+    two_face = np.zeros_like(bound)
+    two_face[slot] = (size[found.label] == 2) & ~corner[ring_vertex]
+    inner_exact = found.creased[slot_vertex] & ~bound & two_face
+    return found, bound & found.creased[slot_vertex], inner_exact
 
 
 def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
@@ -253,11 +312,22 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
     slot_vertex = slot_vertices(topology)
     x = limit_points(mesh)
     normals, degenerate = _limit_normals(mesh)
-    n = normals[slot_vertex]
+    seams = seam_edges(mesh)
+    found, bound, inner_exact = _sector_slots(mesh, seams)
+    creased = found.creased
+    corner_normals = normals[topology.faces]
+    if creased.any():
+        corner_normals = np.where(creased[topology.faces][..., None], limit_corner_normals(mesh), corner_normals)
+    plane = Targets(topology, x, normals, np.zeros((slot_vertex.size, 3)), np.zeros((topology.n_faces, 4, 2, 3)),
+                    seams, corner_normals=corner_normals)
+    n = slot_sector_normals(plane)[1]  # each slot's sector plane (the right-hand face's)
     star = limit_tangents(mesh)
-    star -= _dot(star, n)[:, None] * n
-    free = ~bspline_slots(mesh) & ~degenerate[slot_vertex]
-    regular = regular_faces(topology)
+    projected = star - _dot(star, n)[:, None] * n
+    star = np.where(bound[:, None], star, projected)  # crease tangents lie in both sectors' planes already
+    touched = _touched(mesh)
+    exact = np.where(creased[slot_vertex], bound | inner_exact, bspline_slots(mesh) & ~touched[slot_vertex])
+    free = ~exact & ~degenerate[slot_vertex]
+    regular = regular_faces(topology) & ~touched[topology.faces].any(axis=1)
     fitted = star
     irregular = np.flatnonzero(~regular)
     if free.any() or irregular.size:
@@ -266,9 +336,15 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
         row[needed] = np.arange(needed.size)
         samples, sample_normals = _limit_samples(mesh, needed, levels)
         m = 2**levels
-        bases = _plane_bases(normals, star[topology.neighbor_offsets[:-1]])
+        bases = _plane_bases(n, star)
         fitted = _fit_tangents(mesh, x, star, free, bases, samples, sample_normals, row, m)
-    t, guarded = _guarded(mesh, normals, fitted, star)
+    t, guarded = _guarded(mesh, normals, fitted, star, creased)
+    spread = np.zeros(topology.n_vertices, dtype=bool)
+    if creased.any():
+        n_sector = np.zeros((found.vertex.size, 3))
+        n_sector[found.label] = corner_normals.reshape(-1, 3)[topology.ring_halfedges]
+        chord = mesh.vertices[topology.neighbors] - mesh.vertices[slot_vertex]
+        spread = spread_sectors(topology, found, t, n_sector, creased, chord)
 
     corner = mesh.vertices[topology.faces]
     interior = (4.0 * corner + 2.0 * corner[:, [1, 2, 3, 0]] + 2.0 * corner[:, [3, 0, 1, 2]] + corner[:, [2, 3, 0, 1]]) / 9.0
@@ -276,5 +352,6 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
         net = _boundary_nets(mesh, x, t, irregular)
         interior[irregular] = _fit_interior(net, samples[row[irregular]], sample_normals[row[irregular]], m)
     return Targets(
-        topology, x, normals, t, np.stack([interior, interior], axis=2), fallback=guarded | degenerate, rule="limit"
+        topology, x, normals, t, np.stack([interior, interior], axis=2), seams, guarded | degenerate | spread, "limit",
+        corner_normals,
     )
