@@ -185,3 +185,19 @@ def test_shared_crease_shapes_follow_opensubdivs_limit(name: str) -> None:
     distance = compare.mesh_distance(points[chosen].reshape(-1, 3), reference.points, reference.faces)
     low, high = reference.points.min(axis=0), reference.points.max(axis=0)
     assert distance.max() <= LIMIT_DISTANCE * np.linalg.norm(high - low)
+
+
+@pytest.mark.parametrize("shape", ["interpolate", "limit"])
+def test_the_sharp_cube_is_flat_and_a_valid_step_solid_with_12_sharp_edges(shape: str, tmp_path: Path) -> None:
+    pytest.importorskip("OCP")
+    from g1patch.io.cad import export_cad
+
+    network = build_network(_tagged(cube(), np.arange(12)), "gregory", shape)
+    seams = check(network).to_dict()["seams"]
+    assert seams["count"] == 12
+    assert abs(seams["angle_min_deg"] - 90.0) <= G1 and abs(seams["angle_max_deg"] - 90.0) <= G1
+    result = export_cad(tmp_path / "cube.step", network)
+    assert result.solid and result.valid and result.free_edges == 0
+    assert result.seam_edges == 12
+    assert abs(result.seam_angle_min_deg - 90.0) <= 1e-7 and abs(result.seam_angle_max_deg - 90.0) <= 1e-7
+    assert result.max_g1_angle_deg <= 1e-7  # OpenCASCADE's own normals on the smooth edges (there are none here)
