@@ -132,5 +132,8 @@ def test_sharp_creases_follow_the_crease_rule() -> None:
     np.testing.assert_allclose(limit[v], (x[(v + 1) % 6] + 4 * x[v] + x[(v - 1) % 6]) / 6, atol=1e-14)
     fine = refine(mesh, 1, sharpness)
     np.testing.assert_allclose(fine.vertices[v], (x[(v + 1) % 6] + 6 * x[v] + x[(v - 1) % 6]) / 8, atol=1e-14)
-    with pytest.raises(InputError, match="semi-sharp"):
-        refine(mesh, 1, np.where(crease, 2.0, 0.0))
+    # semi-sharp (tests/test_subdivision_creases.py): s = 2 is two steps of the crease rule, then smooth
+    semi = np.where(crease, 2.0, 0.0)
+    np.testing.assert_allclose(refine(mesh, 2, semi).vertices, refine(mesh, 2, sharpness).vertices, atol=1e-14)
+    with pytest.raises(InputError, match="sharpness"):
+        refine(mesh, 1, np.where(crease, -1.0, 0.0))

@@ -8,73 +8,101 @@ ring neighbours ``E_i`` (counter-clockwise, ring order of :class:`~g1patch.mesh.
 * **refinement** (:func:`refine`): face point = centroid; smooth edge point
   ``(A + B + F_L + F_R)/4``, sharp edge point ``(A + B)/2``; smooth vertex
   ``((n − 2) V + ΣE_i/n + ΣF_i/n)/n``, crease vertex (two sharp edges to A, B)
-  ``(6V + A + B)/8``, corner vertex (more than two sharp edges, or a corner tagged by the
-  boundary mode) ``V``;
+  ``(6V + A + B)/8``, corner vertex ``V``;
 * **limit positions** (:func:`limit_points`): smooth ``(n² V + 4ΣE_i + ΣD_i)/(n(n + 5))``,
   crease ``(4V + A + B)/6``, corner ``V``;
 * **limit tangents** (:func:`limit_tangents`), per ring slot: at a smooth vertex the eigen
   tangents ``A = Σ 4 cos(iθ) E_i + c (cos iθ + cos(i+1)θ) D_i`` and the same ``B`` with sines,
   ``θ = 2π/n``, ``c = 1/(4λ − 1)``, ``λ = 5/16 + (cos θ + cos(θ/2) √(2(9 + cos θ)))/16`` (OpenSubdiv's
   mask; its rotation by one slot is ``cos θ A + sin θ B``), so slot j gets ``s_n (cos jθ A + sin jθ B)``;
-  at a boundary (crease) vertex with k faces the boundary slots get ``±(E_0 − E_k)/2`` and slot j
-  ``cos(jπ/k) a + sin(jπ/k) b`` with ``a = (E_0 − E_k)/2`` and b the cross eigen-mask of the
-  boundary ring (:func:`_cross_mask`; for k = 2 the B-spline's). Scale: every star is normalised
-  so that the planar fan of unit spokes at even angles with parallelogram faces gets unit
-  tangents, ``s_n = 1/(2n + c n (1 + cos θ))``. On a regular
-  region (valence 4 inside, two faces on a boundary) this is exactly the uniform bicubic
-  B-spline's Hermite tangent (``s_4 = 1/12``), i.e. 3 × (Bézier edge point − corner); at an
+  in a crease sector with k faces between the sharp slots ``E_0`` (leading, counter-clockwise
+  first) and ``E_k`` those two slots get ``±(E_0 − E_k)/2`` and slot j ``cos(jπ/k) a + sin(jπ/k) b``
+  with ``a = (E_0 − E_k)/2`` and b the cross eigen-mask of the sector (:func:`_cross_mask`; for
+  k = 2 the B-spline's). A boundary vertex is a crease vertex with one sector; an interior crease
+  vertex has two, each with its own b (the sectors do not see each other's faces). At a corner
+  every slot gets its chord ``E_j − V`` (OpenSubdiv's corner tangent mask; exact on the sharp
+  slots, whose limit curves are end-interpolating B-splines; a corner sector with ≥ 3 faces has a
+  subdominant eigenvalue above 1/2, so its inner slots have no exact tangent). Scale: every
+  smooth star is normalised so that the planar fan of unit spokes at even angles with
+  parallelogram faces gets unit tangents, ``s_n = 1/(2n + c n (1 + cos θ))``. On a regular
+  region (valence 4 inside, two faces on a boundary or crease) this is exactly the uniform
+  bicubic B-spline's Hermite tangent (``s_4 = 1/12``), i.e. 3 × (Bézier edge point − corner); at an
   extraordinary vertex the limit surface has no finite non-zero derivative along the edge
   (speed ``~ (2λ)^m`` after m steps), so any length is a choice: this one is the regular
   case's reading of the same fan; :mod:`g1patch.targets.limit` fits it to the limit curve.
 
-Boundary modes (``t interpolateboundary`` tag of the mesh, read by :func:`boundary_mode`):
-1 → ``edge-only`` (also the default, and for 0 = "none", which OpenSubdiv turns into holes: here
-treated as edge-only): boundary edges are sharp, so the boundary is the cubic B-spline of the
-boundary polygon and a boundary vertex with one face follows the crease rule;
-2 → ``edge-and-corner``: such vertices are corners (kept fixed). This follows the shared
-reference data's reading (``data/README.md``); OpenSubdiv's own regression loader maps 1 to
-edge-and-corner and 2 to edge-only.
+**Features** come from :attr:`QuadMesh.features <g1patch.mesh.QuadMesh.features>` (OpenSubdiv's
+``t crease``, ``t corner``, ``t hole``, ``t interpolateboundary``, ``t creasemethod`` tags); the
+``sharpness`` argument of the functions, per edge in ``QuadTopology.edges`` order, overrides the
+edge sharpness of the tags. OpenSubdiv's (Sdc) rules, per level:
 
-Creases: ``sharpness`` per edge (``QuadTopology.edges`` order), 0 smooth or ≥ 10 infinitely sharp
-(OpenSubdiv's ``SHARPNESS_INFINITE``); semi-sharp values are refused for now. Refinement and limit
-positions honour them; the tangents handle the boundary only.
+* boundary edges are infinitely sharp; the boundary rule ``edge-only`` keeps a boundary vertex
+  with one face a crease vertex, ``edge-and-corner`` makes it a corner (vertex sharpness ∞).
+  ``none`` (OpenSubdiv turns the boundary faces into holes) is treated as ``edge-only`` here;
+* a vertex's rule comes from its vertex sharpness and the count of incident edges with sharpness
+  > 0: corner if the vertex sharpness is > 0 or more than two edges are sharp, crease with two,
+  smooth with fewer (one: a dart, smooth rules);
+* an edge point blends: smooth mask for sharpness 0; the midpoint where both child edges stay
+  sharp; otherwise ``s·midpoint + (1 − s)·smooth`` (OpenSubdiv's crease-to-smooth transition,
+  s clamped to 1);
+* a vertex point: the smooth mask if the parent vertex is smooth; else the parent rule's mask,
+  and where the child's rule differs (some sharpness decayed to 0 this step) ``w·parent +
+  (1 − w)·child`` with w the mean of the decaying sharpness values (OpenSubdiv's
+  ``ComputeFractionalWeightAtVertex``: the vertex sharpness if it decays, every incident edge
+  with ``0 < s ≤ 1`` — or, with Chaikin, every edge whose child at this vertex decays — clamped to 1);
+* child sharpness: ``s − 1`` (0 once ≤ 0) for edges and vertices, ∞ (≥ 10) stays ∞; with
+  ``creasemethod chaikin`` each child edge takes ``0.75 s + 0.25 s̄ − 1`` where s̄ is the mean of
+  the other semi-sharp edges at the end vertex it touches (plain ``s − 1`` if there is none);
+* hole faces take part in every rule; their children are holes.
+
+:func:`refine` returns the refined mesh with tags rebuilt from the child sharpness (one ``crease``
+tag with a value per edge, one ``corner`` tag, one ``hole`` tag; zeros dropped), so refining twice
+by one level is refining once by two. Limits: the masks above hold once no sharpness is
+fractional; where the mesh is semi-sharp, :func:`limit_points`, :func:`limit_tangents`,
+:func:`limit_stars`, :func:`limit_normals` and :func:`limit_corner_normals` refine the faces around
+the affected vertices (those with a semi-sharp vertex sharpness or incident edge) until every
+sharpness has decayed (⌈max s⌉ levels) and take the masks there, the vertices keeping their
+indices. Tangents are then in the original face's parameter scale: the refined tangents times
+``2^levels`` (a refined edge spans half the parameter of its parent).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import lru_cache
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import InputError, as_float_array
-from .mesh import QuadMesh, QuadTopology, subdivide
+from .errors import InputError, MeshError, as_float_array
+from .mesh import QuadMesh, QuadTopology, Tag, refine_polygons
 
 __all__ = [
-    "BOUNDARY_MODES", "BoundaryMode", "INFINITE_SHARPNESS", "boundary_mode", "catmull_clark_points",
-    "corner_vertices", "limit_normals", "limit_points", "limit_stars", "limit_tangents", "refine", "refine_grids",
-    "sharp_edges",
+    "BOUNDARY_MODES", "BoundaryMode", "INFINITE_SHARPNESS", "RULE_CORNER", "RULE_CREASE", "RULE_SMOOTH", "boundary_mode",
+    "catmull_clark_points", "corner_vertices", "limit_corner_normals", "limit_normals", "limit_points", "limit_stars",
+    "limit_tangents", "refine", "refine_grids", "sharp_edges", "vertex_rules",
 ]
 
 BoundaryMode = Literal["edge-only", "edge-and-corner"]
 BOUNDARY_MODES: tuple[BoundaryMode, ...] = ("edge-only", "edge-and-corner")
 #: OpenSubdiv's infinitely sharp crease
 INFINITE_SHARPNESS = 10.0
+#: vertex rules (:func:`vertex_rules`)
+RULE_SMOOTH, RULE_CREASE, RULE_CORNER = 0, 1, 2
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 
-_SMOOTH, _CREASE, _CORNER = 0, 1, 2
+_SMOOTH, _CREASE, _CORNER = RULE_SMOOTH, RULE_CREASE, RULE_CORNER
+#: tags that :func:`refine` rebuilds from the child sharpness
+_FEATURE_TAGS = frozenset({"crease", "corner", "hole"})
 
 
 def boundary_mode(mesh: QuadMesh) -> BoundaryMode:
-    """The mesh's ``interpolateboundary`` tag: 2 → edge-and-corner, anything else (or none) → edge-only."""
-    for tag in mesh.tags:
-        if tag.name == "interpolateboundary" and tag.ints:
-            return "edge-and-corner" if tag.ints[0] == 2 else "edge-only"
-    return "edge-only"
+    """The mesh's boundary rule (``features.boundary``): ``edge-and-corner``, or ``edge-only`` (also for ``none``)."""
+    return "edge-and-corner" if mesh.features.boundary == "edge-and-corner" else "edge-only"
 
 
 def _segment_sum(index: IntArray, values: FloatArray, count: int) -> FloatArray:
@@ -82,99 +110,220 @@ def _segment_sum(index: IntArray, values: FloatArray, count: int) -> FloatArray:
     return np.stack([np.bincount(index, weights=values[:, d], minlength=count) for d in range(3)], axis=1)
 
 
-def sharp_edges(topology: QuadTopology, sharpness: ArrayLike | None = None) -> BoolArray:
-    """Per edge: boundary, or sharpness ≥ :data:`INFINITE_SHARPNESS`. Semi-sharp values raise :class:`InputError`."""
-    sharp = topology.is_boundary_edge.copy()
-    if sharpness is None:
-        return sharp
+def _edge_override(topology: QuadTopology, sharpness: ArrayLike) -> FloatArray:
     values = as_float_array("sharpness", sharpness)
     if values.shape != (topology.n_edges,):
         raise InputError(f"sharpness: expected shape ({topology.n_edges},), got {values.shape}")
-    semi = np.flatnonzero((values > 0) & (values < INFINITE_SHARPNESS))
-    if semi.size:
-        raise InputError(
-            f"sharpness: edge {semi[0]} has semi-sharp value {values[semi[0]]:g}; only 0 and ≥ {INFINITE_SHARPNESS:g} "
-            f"(infinitely sharp) are supported ({semi.size} such edges)"
-        )
-    return sharp | (values >= INFINITE_SHARPNESS)
+    negative = np.flatnonzero(values < 0)
+    if negative.size:
+        raise InputError(f"sharpness: edge {negative[0]} has sharpness {values[negative[0]]:g}; a sharpness is ≥ 0")
+    return values
 
 
-def corner_vertices(topology: QuadTopology, mode: BoundaryMode) -> BoolArray:
-    """Vertices the boundary mode keeps fixed: boundary vertices with one face in ``edge-and-corner``."""
+def sharp_edges(mesh: QuadMesh | QuadTopology, sharpness: ArrayLike | None = None) -> BoolArray:
+    """Per edge: infinitely sharp at every level, i.e. a boundary edge or sharpness ≥ :data:`INFINITE_SHARPNESS`.
+
+    The sharpness is ``sharpness`` where given, else the mesh's features (a bare topology has none).
+    Semi-sharp edges are not in it (they are sharp for a few levels only)."""
+    topology = mesh if isinstance(mesh, QuadTopology) else mesh.topology
+    if sharpness is not None:
+        values = _edge_override(topology, sharpness)
+    elif isinstance(mesh, QuadMesh):
+        values = mesh.features.edge_sharpness
+    else:
+        return topology.is_boundary_edge.copy()
+    return topology.is_boundary_edge | (values >= INFINITE_SHARPNESS)
+
+
+def corner_vertices(mesh: QuadMesh | QuadTopology, mode: BoundaryMode | None = None) -> BoolArray:
+    """Vertices kept fixed at every level by the boundary rule: boundary vertices with one face in
+    ``edge-and-corner`` mode. Given a mesh (and no mode), also the vertices tagged infinitely sharp
+    (``t corner`` ≥ 10), with the mesh's own boundary rule."""
+    topology = mesh if isinstance(mesh, QuadTopology) else mesh.topology
+    if mode is None:
+        mode = boundary_mode(mesh) if isinstance(mesh, QuadMesh) else "edge-only"
     corner = topology.is_boundary_vertex & (topology.face_count == 1)
-    return corner if mode == "edge-and-corner" else np.zeros_like(corner)
+    corner = corner if mode == "edge-and-corner" else np.zeros_like(corner)
+    if isinstance(mesh, QuadMesh):
+        corner = corner | mesh.features.corner_vertices
+    return corner
 
 
-def _vertex_rules(topology: QuadTopology, sharp: BoolArray, mode: BoundaryMode) -> tuple[IntArray, FloatArray, IntArray]:
-    """Per vertex its rule (smooth, crease, corner) by the count of sharp edges (0–1, 2, > 2), and
-    the (edge index, weight) pairs that sum the far ends of its sharp edges."""
-    ends = topology.edges[sharp]
-    count = np.bincount(ends.ravel(), minlength=topology.n_vertices)
-    rule = np.select([count > 2, count == 2], [_CORNER, _CREASE], _SMOOTH)
-    rule[corner_vertices(topology, mode)] = _CORNER
-    return rule, ends[:, 0], ends[:, 1]
+# ----------------------------------------------------------------------------------------------
+# One level: positions, topology and effective sharpness
 
 
-def _crease_sums(x: FloatArray, a: IntArray, b: IntArray) -> FloatArray:
-    """Per vertex the sum of the far ends of its sharp edges ``(a, b)``."""
-    n = len(x)
-    return _segment_sum(a, x[b], n) + _segment_sum(b, x[a], n)
+class _Level(NamedTuple):
+    """A mesh at one level of refinement with OpenSubdiv's effective sharpness: boundary edges ∞,
+    and in ``edge-and-corner`` mode the one-face boundary vertices ∞."""
+
+    x: FloatArray
+    topology: QuadTopology
+    edge: FloatArray
+    vertex: FloatArray
+    holes: BoolArray
+    mode: BoundaryMode
+    chaikin: bool
+
+    @property
+    def semi_sharp(self) -> bool:
+        values = np.concatenate([self.edge, self.vertex])
+        return bool(((values > 0) & (values < INFINITE_SHARPNESS)).any())
 
 
-def _ring_sums(topology: QuadTopology, x: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """``(ΣE_i, ΣD_i)`` per vertex over its face corners: the next corner and the opposite one."""
-    h = np.arange(topology.n_halfedges)
-    origin = topology.origin(h)
-    opposite = topology.origin(QuadTopology.next(QuadTopology.next(h)))
-    return _segment_sum(origin, x[topology.target(h)], topology.n_vertices), _segment_sum(origin, x[opposite], topology.n_vertices)
+def _effective(
+    topology: QuadTopology, edge: FloatArray, vertex: FloatArray, mode: BoundaryMode
+) -> tuple[FloatArray, FloatArray]:
+    edge = np.where(topology.is_boundary_edge, INFINITE_SHARPNESS, np.minimum(edge, INFINITE_SHARPNESS))
+    vertex = np.minimum(vertex, INFINITE_SHARPNESS)
+    if mode == "edge-and-corner":
+        vertex = np.where(topology.is_boundary_vertex & (topology.face_count == 1), INFINITE_SHARPNESS, vertex)
+    return edge, vertex
 
 
-def catmull_clark_points(vertices: FloatArray, topology: QuadTopology, sharp: BoolArray, mode: BoundaryMode) -> FloatArray:
-    """One Catmull–Clark step's positions (module docstring), numbered like :func:`~g1patch.mesh.refine_polygons`:
-    the V vertex points, then one point per edge (``topology.edges`` order), then one per face."""
-    x = np.asarray(vertices, dtype=np.float64)
-    n_vertices = topology.n_vertices
-    face_points = x[topology.faces].mean(axis=1)
+def _level_of(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> _Level:
+    features = mesh.features
+    topology = mesh.topology
+    edge = features.edge_sharpness if sharpness is None else _edge_override(topology, sharpness)
+    mode = boundary_mode(mesh)
+    edge, vertex = _effective(topology, edge, features.vertex_sharpness, mode)
+    return _Level(
+        np.asarray(mesh.vertices, dtype=np.float64), topology, edge, vertex, np.asarray(features.holes, dtype=bool),
+        mode, features.crease_method == "chaikin",
+    )
+
+
+def _decrement(s: FloatArray) -> FloatArray:
+    """OpenSubdiv's uniform sharpness subdivision: ∞ stays ∞, else ``s − 1``, 0 once ≤ 0."""
+    return np.where(s >= INFINITE_SHARPNESS, INFINITE_SHARPNESS, np.maximum(s - 1.0, 0.0))
+
+
+def _child_edge_halves(level: _Level) -> tuple[FloatArray, FloatArray]:
+    """Sharpness of each edge's two children, the one at ``edges[:, 0]`` and the one at ``edges[:, 1]``."""
+    s = level.edge
+    if not level.chaikin:
+        child = _decrement(s)
+        return child, child
+    topology = level.topology
+    nv = topology.n_vertices
     a, b = topology.edges[:, 0], topology.edges[:, 1]
+    semi = (s > 0) & (s < INFINITE_SHARPNESS)
+    count = np.bincount(a[semi], minlength=nv) + np.bincount(b[semi], minlength=nv)
+    total = np.bincount(a[semi], weights=s[semi], minlength=nv) + np.bincount(b[semi], weights=s[semi], minlength=nv)
+
+    def at(end: IntArray) -> FloatArray:
+        others = count[end] - 1
+        mean = np.divide(total[end] - s, others, out=np.zeros_like(s), where=others > 0)
+        blended = np.where(others > 0, 0.75 * s + 0.25 * mean, s)
+        return np.where(semi, np.maximum(blended - 1.0, 0.0), _decrement(s))
+
+    return at(a), at(b)
+
+
+def _rules(vertex_sharpness: FloatArray, sharp_count: IntArray) -> IntArray:
+    """OpenSubdiv's vertex rule: corner if the vertex is sharp or more than two edges are, crease with two."""
+    return np.select([(vertex_sharpness > 0) | (sharp_count > 2), sharp_count == 2], [_CORNER, _CREASE], _SMOOTH)
+
+
+def _end_sums(x: FloatArray, edges: IntArray, at_a: BoolArray, at_b: BoolArray, nv: int) -> FloatArray:
+    """Per vertex the sum of the far ends of the edges marked at that end."""
+    a, b = edges[:, 0], edges[:, 1]
+    return _segment_sum(a[at_a], x[b[at_a]], nv) + _segment_sum(b[at_b], x[a[at_b]], nv)
+
+
+def _step(level: _Level) -> _Level:
+    """One Catmull–Clark step with OpenSubdiv's creasing (module docstring), numbered like
+    :func:`~g1patch.mesh.refine_polygons`: the V vertex points, one per edge (``edges`` order), one per face."""
+    topology, x = level.topology, level.x
+    nv, ne = topology.n_vertices, topology.n_edges
+    edges = topology.edges
+    a, b = edges[:, 0], edges[:, 1]
+    s = level.edge
+    half_a, half_b = _child_edge_halves(level)
+    child_vertex = _decrement(level.vertex)
+
+    face_points = x[topology.faces].mean(axis=1)
     left = topology.edge_halfedges[:, 0] >> 2
     right = np.maximum(topology.edge_halfedges[:, 1], 0) >> 2
-    edge_points = np.where(
-        sharp[:, None], 0.5 * (x[a] + x[b]), 0.25 * (x[a] + x[b] + face_points[left] + face_points[right])
-    )
+    middle = 0.5 * (x[a] + x[b])
+    smooth_edge = 0.25 * (x[a] + x[b] + face_points[left] + face_points[right])
+    weight = np.where(s <= 0, 0.0, np.where((half_a > 0) & (half_b > 0), 1.0, np.minimum(s, 1.0)))[:, None]
+    edge_points = np.where(weight == 0, smooth_edge, np.where(weight == 1, middle, weight * middle + (1 - weight) * smooth_edge))
+
     h = np.arange(topology.n_halfedges)
     origin = topology.origin(h)
     n = topology.face_count[:, None].astype(np.float64)
-    neighbour_sum = _segment_sum(origin, x[topology.target(h)], n_vertices)
-    face_sum = _segment_sum(origin, face_points[h >> 2], n_vertices)
+    neighbour_sum = _segment_sum(origin, x[topology.target(h)], nv)
+    face_sum = _segment_sum(origin, face_points[h >> 2], nv)
     smooth = ((n - 2.0) * x + (neighbour_sum + face_sum) / n) / n
-    rule, ca, cb = _vertex_rules(topology, sharp, mode)
-    crease = (6.0 * x + _crease_sums(x, ca, cb)) / 8.0
-    vertex_points = np.select([rule[:, None] == _SMOOTH, rule[:, None] == _CREASE], [smooth, crease], x)
-    return np.concatenate([vertex_points, edge_points, face_points])
+
+    sharp = s > 0
+    parent_rule = _rules(level.vertex, np.bincount(edges[sharp].ravel(), minlength=nv))
+    child_count = np.bincount(a[half_a > 0], minlength=nv) + np.bincount(b[half_b > 0], minlength=nv)
+    child_rule = _rules(child_vertex, child_count)
+    vertex_points = smooth.copy()
+    creased = np.flatnonzero(parent_rule != _SMOOTH)
+    if creased.size:
+        parent_crease = (6.0 * x + _end_sums(x, edges, sharp, sharp, nv)) / 8.0
+        child_crease = (6.0 * x + _end_sums(x, edges, half_a > 0, half_b > 0, nv)) / 8.0
+        parent_mask = np.where((parent_rule == _CREASE)[:, None], parent_crease, x)
+        child_mask = np.select([child_rule[:, None] == _SMOOTH, child_rule[:, None] == _CREASE], [smooth, child_crease], x)
+        # the fractional weight of the transition: the mean of the sharpness values that decay to 0 here
+        if level.chaikin:
+            decay_a, decay_b = sharp & (half_a <= 0), sharp & (half_b <= 0)
+        else:
+            decay_a = decay_b = sharp & (s <= 1.0)
+        vertex_decays = (level.vertex > 0) & (child_vertex <= 0)
+        total = (np.bincount(a[decay_a], weights=s[decay_a], minlength=nv)
+                 + np.bincount(b[decay_b], weights=s[decay_b], minlength=nv) + np.where(vertex_decays, level.vertex, 0.0))
+        count = np.bincount(a[decay_a], minlength=nv) + np.bincount(b[decay_b], minlength=nv) + vertex_decays
+        w = np.minimum(np.divide(total, count, out=np.zeros(nv), where=count > 0), 1.0)[:, None]
+        blended = np.where(child_rule[:, None] == parent_rule[:, None], parent_mask, w * parent_mask + (1 - w) * child_mask)
+        vertex_points[creased] = blended[creased]
+    points = np.concatenate([vertex_points, edge_points, face_points])
+
+    _, quads, _ = refine_polygons(x, topology.faces.ravel(), np.full(topology.n_faces, 4, dtype=np.int64))
+    child = QuadTopology.from_faces(quads, len(points))
+    child_edge = np.zeros(child.n_edges)
+    keys = child.edges[:, 0] * len(points) + child.edges[:, 1]
+    m = nv + np.arange(ne)
+    for end, values in ((a, half_a), (b, half_b)):
+        positive = values > 0
+        half_keys = np.minimum(end, m) * len(points) + np.maximum(end, m)
+        child_edge[np.searchsorted(keys, half_keys[positive])] = values[positive]
+    child_vertices = np.concatenate([child_vertex, np.zeros(ne + topology.n_faces)])
+    child_edge, child_vertices = _effective(child, child_edge, child_vertices, level.mode)
+    return _Level(points, child, child_edge, child_vertices, np.repeat(level.holes, 4), level.mode, level.chaikin)
 
 
-def _child_sharpness(parent: QuadTopology, child: QuadTopology, sharp: BoolArray) -> BoolArray:
-    """Sharp edges after a step: both halves ``(a, m)``, ``(m, b)`` of a sharp edge, m its edge point."""
-    nv = child.n_vertices
-    keys = child.edges[:, 0] * nv + child.edges[:, 1]
-    e = np.flatnonzero(sharp)
-    m = parent.n_vertices + e
-    halves = (np.minimum(parent.edges[e], m[:, None]) * nv + np.maximum(parent.edges[e], m[:, None])).ravel()
-    out = np.zeros(child.n_edges, dtype=bool)
-    out[np.searchsorted(keys, halves)] = True
-    return out
+def _level_tags(tags: tuple[Tag, ...], level: _Level) -> tuple[Tag, ...]:
+    """The mesh's other tags, then ``crease``, ``corner`` and ``hole`` tags of the level's features
+    (boundary edges and the boundary rule's corners left implicit, zeros dropped)."""
+    topology = level.topology
+    out = [tag for tag in tags if tag.name not in _FEATURE_TAGS]
+    creases = np.flatnonzero((level.edge > 0) & ~topology.is_boundary_edge)
+    if creases.size:
+        out.append(Tag("crease", tuple(topology.edges[creases].ravel().tolist()), tuple(level.edge[creases].tolist())))
+    implicit = topology.is_boundary_vertex & (topology.face_count == 1) & (level.mode == "edge-and-corner")
+    corners = np.flatnonzero((level.vertex > 0) & ~implicit)
+    if corners.size:
+        out.append(Tag("corner", tuple(corners.tolist()), tuple(level.vertex[corners].tolist())))
+    if level.holes.any():
+        out.append(Tag("hole", tuple(np.flatnonzero(level.holes).tolist())))
+    return tuple(out)
 
 
-def _step(mesh: QuadMesh, sharp: BoolArray, mode: BoundaryMode) -> tuple[QuadMesh, BoolArray]:
-    linear = subdivide(mesh)
-    points = catmull_clark_points(mesh.vertices, mesh.topology, sharp, mode)
-    return linear.with_vertices(points), _child_sharpness(mesh.topology, linear.topology, sharp)
+def catmull_clark_points(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArray:
+    """One Catmull–Clark step's positions (module docstring), numbered like :func:`~g1patch.mesh.refine_polygons`:
+    the V vertex points, then one point per edge (``topology.edges`` order), then one per face."""
+    return _step(_level_of(mesh, sharpness)).x
 
 
 def refine(mesh: QuadMesh, levels: int = 1, sharpness: ArrayLike | None = None) -> QuadMesh:
     """``levels`` Catmull–Clark steps (module docstring) on the topology of :func:`~g1patch.mesh.subdivide`
-    (old vertices, then one per edge, then one per face; tags carried over). The boundary mode
-    comes from the mesh's tags; ``sharpness`` per edge, 0 or ≥ 10 (default: all 0)."""
+    (old vertices, then one per edge, then one per face). Features from the mesh's tags, edge
+    sharpness overridden by ``sharpness`` where given; the result's tags carry the child
+    features (the other tags are kept). ``levels = 0`` returns the mesh itself."""
     return refine_grids(mesh, levels, sharpness)[0]
 
 
@@ -185,11 +334,10 @@ def refine_grids(mesh: QuadMesh, levels: int, sharpness: ArrayLike | None = None
     ``grid[i, j] → grid[i + 1, j]`` (refinement keeps orientation), its face point the cell's centre."""
     if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or levels < 0:
         raise InputError(f"levels: expected a non-negative integer, got {levels!r}")
-    mode = boundary_mode(mesh)
-    sharp = sharp_edges(mesh.topology, sharpness)
+    level = _level_of(mesh, sharpness)
     grid = mesh.faces[:, [[0, 3], [1, 2]]]
     for _ in range(int(levels)):
-        topology = mesh.topology
+        topology = level.topology
         nv = topology.n_vertices
         edge_keys = topology.edges[:, 0] * nv + topology.edges[:, 1]
         h = np.arange(topology.n_halfedges)
@@ -206,21 +354,54 @@ def refine_grids(mesh: QuadMesh, levels: int, sharpness: ArrayLike | None = None
         fine[:, 1::2, ::2] = edge_point(grid[:, :-1], grid[:, 1:])
         fine[:, ::2, 1::2] = edge_point(grid[:, :, :-1], grid[:, :, 1:])
         fine[:, 1::2, 1::2] = nv + topology.n_edges + cell
-        mesh, sharp = _step(mesh, sharp, mode)
+        level = _step(level)
         grid = fine
-    return mesh, grid
+    if not levels:
+        return mesh, grid
+    return QuadMesh(level.x, level.topology, _level_tags(mesh.tags, level), mesh.source), grid
 
 
-def limit_points(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArray:
-    """The Catmull–Clark limit position of every vertex, (V, 3) (module docstring)."""
-    topology = mesh.topology
-    x = mesh.vertices
-    rule, ca, cb = _vertex_rules(topology, sharp_edges(topology, sharpness), boundary_mode(mesh))
-    neighbours, opposite = _ring_sums(topology, x)
+# ----------------------------------------------------------------------------------------------
+# Limit stencils
+
+
+def _limit_rules(level: _Level) -> IntArray:
+    """The rules of the limit masks (no fractional sharpness left): from the infinitely sharp features."""
+    sharp = level.edge >= INFINITE_SHARPNESS
+    count = np.bincount(level.topology.edges[sharp].ravel(), minlength=level.topology.n_vertices)
+    return _rules(np.where(level.vertex >= INFINITE_SHARPNESS, 1.0, 0.0), count)
+
+
+def vertex_rules(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> IntArray:
+    """Per vertex the rule of its limit masks, :data:`RULE_SMOOTH` / :data:`RULE_CREASE` /
+    :data:`RULE_CORNER`: that of the infinitely sharp features (semi-sharp ones decay before the limit)."""
+    return _limit_rules(_level_of(mesh, sharpness))
+
+
+def _limit_positions(level: _Level) -> FloatArray:
+    topology, x = level.topology, level.x
+    nv = topology.n_vertices
+    rule = _limit_rules(level)
+    h = np.arange(topology.n_halfedges)
+    origin = topology.origin(h)
+    neighbours = _segment_sum(origin, x[topology.target(h)], nv)
+    opposite = _segment_sum(origin, x[topology.origin(QuadTopology.next(QuadTopology.next(h)))], nv)
     n = topology.face_count[:, None].astype(np.float64)
     smooth = (n * n * x + 4.0 * neighbours + opposite) / (n * (n + 5.0))
-    crease = (4.0 * x + _crease_sums(x, ca, cb)) / 6.0
+    sharp = level.edge >= INFINITE_SHARPNESS
+    crease = (4.0 * x + _end_sums(x, topology.edges, sharp, sharp, nv)) / 6.0
     return np.select([rule[:, None] == _SMOOTH, rule[:, None] == _CREASE], [smooth, crease], x)
+
+
+def _by_valence(n: IntArray, i: IntArray, table: Callable[[IntArray, IntArray], tuple[FloatArray, ...]]) -> tuple[FloatArray, ...]:
+    """``table(n, i)`` for many entries, evaluated once per distinct ``(n, i)`` (valences repeat)."""
+    valences = np.unique(n)
+    if len(valences) * int(valences.max(initial=0)) > len(n):
+        return table(n, i)
+    starts = np.concatenate([[0], np.cumsum(valences)])
+    keys = np.repeat(valences, valences), np.arange(starts[-1]) - np.repeat(starts[:-1], valences)
+    rows = starts[np.searchsorted(valences, n)] + i
+    return tuple(column[rows] for column in table(*keys))
 
 
 def _interior_mask_weights(n: IntArray, i: IntArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
@@ -239,17 +420,17 @@ def _interior_mask_weights(n: IntArray, i: IntArray) -> tuple[FloatArray, FloatA
 
 @lru_cache(maxsize=None)
 def _cross_mask(k: int) -> tuple[float, FloatArray, FloatArray]:
-    """The across-boundary tangent mask at a boundary vertex with k faces: ``(w_V, w_E (k + 1), w_D (k))``.
+    """The across-crease tangent mask of a crease sector with k faces: ``(w_V, w_E (k + 1), w_D (k))``.
 
     k = 2: the B-spline's ``(−4V − E_0 + 4E_1 − E_2 + D_0 + D_1)/6``; k = 1 (its subdominant
     eigenvalue 1/4 is double): OpenSubdiv's ``3(E_0 + E_1) − 6V``. Otherwise the left eigenvector
-    of the ring's subdivision matrix (crease rule at V, midpoints on the boundary, smooth rules
+    of the sector's subdivision matrix (crease rule at V, midpoints on the sharp edges, smooth rules
     inside) that is symmetric under the reflection ``E_i ↔ E_{k−i}``, ``D_i ↔ D_{k−1−i}`` with the
     largest eigenvalue below 1, scaled to unit response on the planar half-fan (``E_i`` at angle
     ``πi/k``, ``D_i = E_i + E_{i+1}``) and signed to point into the faces. OpenSubdiv's Biermann et
     al. mask is derived for modified rules: on its own rules its plane is 7–17° off for k = 3–6.
     For k ≥ 5 the ring has a third eigenvalue above 1/2, so the limit surface is not tangent-plane
-    continuous there and this plane is the one through the boundary's own modes.
+    continuous there and this plane is the one through the crease's own modes.
     """
     if k == 1:
         return -6.0, np.array([3.0, 3.0]), np.zeros(1)
@@ -277,74 +458,295 @@ def _cross_mask(k: int) -> tuple[float, FloatArray, FloatArray]:
     return float(mask[0]), mask[1:k + 2], mask[k + 2:]
 
 
-def limit_stars(mesh: QuadMesh) -> tuple[FloatArray, FloatArray]:
-    """Per vertex the two scaled limit tangents ``(a, b)``, (V, 3) each, spanning the tangent plane
-    with ``a × b`` along the outward normal: inside A and B of the module docstring; at a boundary
-    vertex a along the boundary (towards ``E_0``) and b across it, into the faces; at an
-    ``edge-and-corner`` corner ``a = E_0 − V``, ``b = E_1 − V``."""
-    topology = mesh.topology
-    x = mesh.vertices
+class _Limit(NamedTuple):
+    """Limit data of a level: positions (V, 3); or slot tangents (S, 3), the stars ``a``, ``b`` (V, 3)
+    and where asked the unit normal of each ring entry's sector (``ring_halfedges`` order)."""
+
+    points: FloatArray | None
+    tangents: FloatArray | None = None
+    a: FloatArray | None = None
+    b: FloatArray | None = None
+    ring_normals: FloatArray | None = None
+
+
+def _where(mask: BoolArray) -> BoolArray | slice:
+    """``mask`` for indexing, or the whole axis (a view, no copy) where it is all true."""
+    return slice(None) if mask.all() else mask
+
+
+def _slot_rotation(n: IntArray, j: IntArray) -> tuple[FloatArray, FloatArray]:
+    phi = 2.0 * np.pi * j / n
+    return np.cos(phi), np.sin(phi)
+
+
+def _unit(v: FloatArray) -> FloatArray:
+    length = np.linalg.norm(v, axis=1, keepdims=True)
+    return np.divide(v, length, out=np.zeros_like(v), where=length > 0)
+
+
+def _limit_frames(level: _Level, corners: bool = False) -> _Limit:
+    """Slot tangents, stars and (``corners``) sector normals of a level without fractional sharpness
+    (module docstring)."""
+    topology, x = level.topology, level.x
     nv = topology.n_vertices
     offsets = topology.neighbor_offsets
-    ring_vertex = np.repeat(np.arange(nv), topology.face_count)
+    k = topology.face_count
+    boundary = topology.is_boundary_vertex
+    rule = _limit_rules(level)
+    slot_count = np.diff(offsets)
+    slot_vertex = np.repeat(np.arange(nv), slot_count)
+    slot = np.arange(len(slot_vertex)) - offsets[slot_vertex]
+    ring_vertex = np.repeat(np.arange(nv), k)
     h = topology.ring_halfedges
     i = np.arange(len(h)) - topology.ring_offsets[ring_vertex]
+    ring_slot = offsets[ring_vertex] + i
     e_i = x[topology.target(h)]
     d_i = x[topology.origin(QuadTopology.next(QuadTopology.next(h)))]
-    boundary = topology.is_boundary_vertex
-    k = topology.face_count
+    e_slot = x[topology.neighbors]
 
-    # interior: the eigen tangents
-    ea, da, eb, db = _interior_mask_weights(np.where(boundary, 4, k)[ring_vertex], i)
-    a = _segment_sum(ring_vertex, ea[:, None] * e_i + da[:, None] * d_i, nv)
-    b = _segment_sum(ring_vertex, eb[:, None] * e_i + db[:, None] * d_i, nv)
+    slot_edge = np.empty(len(slot_vertex), dtype=np.int64)
+    slot_edge[ring_slot] = topology.halfedge_edge[h]
+    rims = np.flatnonzero(boundary)
+    slot_edge[offsets[rims + 1] - 1] = topology.halfedge_edge[QuadTopology.prev(h[topology.ring_offsets[rims + 1] - 1])]
+    slot_sharp = level.edge[slot_edge] >= INFINITE_SHARPNESS
+    sharp_slots = np.flatnonzero(slot_sharp)
+    first = np.zeros(nv, dtype=np.int64)
+    last = np.zeros(nv, dtype=np.int64)
+    owners, at_first = np.unique(slot_vertex[sharp_slots], return_index=True)
+    first[owners] = slot[sharp_slots[at_first]]
+    owners, at_last = np.unique(slot_vertex[sharp_slots[::-1]], return_index=True)
+    last[owners] = slot[sharp_slots[::-1][at_last]]
 
-    # boundary: along (E_0 − E_k)/2, across by the cross eigen-mask of the k-face boundary ring
-    first, last = x[topology.neighbors[offsets[:-1]]], x[topology.neighbors[offsets[1:] - 1]]
-    across = np.zeros((nv, 3))
-    for count in np.unique(k[boundary]):
-        vertex_weight, spoke, face = _cross_mask(int(count))
-        at = boundary[ring_vertex] & (k[ring_vertex] == count)
-        rows = ring_vertex[at]
-        across += _segment_sum(rows, spoke[i[at], None] * e_i[at] + face[i[at], None] * d_i[at], nv)
-        here = boundary & (k == count)
-        across[here] += vertex_weight * x[here] + spoke[count] * last[here]
-    a = np.where(boundary[:, None], 0.5 * (first - last), a)
-    b = np.where(boundary[:, None], across, b)
+    tangents = np.zeros((len(slot_vertex), 3))
+    a = np.zeros((nv, 3))
+    b = np.zeros((nv, 3))
 
-    corner = corner_vertices(topology, boundary_mode(mesh))
-    a[corner] = first[corner] - x[corner]
-    b[corner] = last[corner] - x[corner]
-    return a, b
+    # smooth: the eigen tangents
+    smooth = rule == _SMOOTH
+    if smooth.any():
+        on_ring = _where(smooth[ring_vertex])
+        rv = ring_vertex[on_ring]
+        ea, da, eb, db = _by_valence(k[rv], i[on_ring], _interior_mask_weights)
+        a += _segment_sum(rv, ea[:, None] * e_i[on_ring] + da[:, None] * d_i[on_ring], nv)
+        b += _segment_sum(rv, eb[:, None] * e_i[on_ring] + db[:, None] * d_i[on_ring], nv)
+        at = _where(smooth[slot_vertex])
+        sv = slot_vertex[at]
+        cos_phi, sin_phi = _by_valence(k[sv], slot[at], _slot_rotation)
+        tangents[at] = cos_phi[:, None] * a[sv] + sin_phi[:, None] * b[sv]
+
+    # crease: sector 0 from the first sharp slot p to the second q, sector 1 from q round to p
+    crease = rule == _CREASE
+    if crease.any():
+        p, q = first, last
+        span = q - p  # faces in sector 0
+        along = 0.5 * (x[topology.neighbors[offsets[:-1] + p]] - x[topology.neighbors[offsets[:-1] + q]])
+        across = np.zeros((2 * nv, 3))
+        at = crease[ring_vertex]
+        rv, ri = ring_vertex[at], i[at]
+        second = (ri < p[rv]) | (ri >= q[rv])
+        sector = 2 * rv + second
+        start = np.where(second, q[rv], p[rv])
+        size = np.where(second, k[rv] - span[rv], span[rv])
+        offset = (ri - start) % k[rv]
+        ends = np.stack([q, p], axis=1).ravel()  # the closing slot of sectors 2v, 2v + 1
+        sector_size = np.stack([span, k - span], axis=1).ravel()
+        for count in np.unique(size):
+            vertex_weight, spoke, face = _cross_mask(int(count))
+            sel = size == count
+            o = offset[sel]
+            across += _segment_sum(sector[sel], spoke[o, None] * e_i[at][sel] + face[o, None] * d_i[at][sel], 2 * nv)
+            closing = np.flatnonzero(np.repeat(crease, 2) & (sector_size == count))
+            cv = closing // 2
+            across[closing] += vertex_weight * x[cv] + spoke[count] * x[topology.neighbors[offsets[cv] + ends[closing]]]
+        a[crease] = along[crease]
+        b[crease] = across[0::2][crease]
+        at = crease[slot_vertex]
+        sv, sj = slot_vertex[at], slot[at]
+        second = (sj < p[sv]) | (sj > q[sv])
+        sector_along = np.where(second[:, None], -along[sv], along[sv])
+        sector_across = across[2 * sv + second]
+        angle = np.pi * np.where(second, (sj - q[sv]) % k[sv] / np.maximum(k[sv] - span[sv], 1), (sj - p[sv]) / np.maximum(span[sv], 1))
+        t = np.cos(angle)[:, None] * sector_along + np.sin(angle)[:, None] * sector_across
+        t = np.where((sj == p[sv])[:, None], along[sv], np.where((sj == q[sv])[:, None], -along[sv], t))
+        tangents[at] = t
+
+    # corner: the chords, a and b on the first sharp slot and the next one
+    corner = rule == _CORNER
+    if corner.any():
+        at = corner[slot_vertex]
+        tangents[at] = e_slot[at] - x[slot_vertex[at]]
+        cv = np.flatnonzero(corner)
+        a[cv] = tangents[offsets[cv] + first[cv]]
+        b[cv] = tangents[offsets[cv] + (first[cv] + 1) % slot_count[cv]]
+
+    if not corners:
+        return _Limit(None, tangents, a, b)
+    # sector normals: Σ t_i × t_{i+1} over the ring entries of each sector (a × b for one star)
+    following = offsets[ring_vertex] + (i + 1) % slot_count[ring_vertex]
+    cross = np.cross(tangents[ring_slot], tangents[following])
+    shifted = (i - first[ring_vertex]) % slot_count[ring_vertex]
+    order = np.lexsort((shifted, ring_vertex))
+    starts = slot_sharp[ring_slot]
+    label = np.empty(len(h), dtype=np.int64)
+    label[order] = np.cumsum(starts[order] | (shifted[order] == 0)) - 1
+    ring_normals = _unit(_segment_sum(label, cross, int(label.max()) + 1 if len(label) else 0))[label]
+    star_normals = _unit(np.cross(a, b))
+    one_star = (rule == _SMOOTH)[ring_vertex]
+    ring_normals[one_star] = star_normals[ring_vertex[one_star]]
+    if crease.any():  # each sector's own star (a one-face sector has no second slot tangent off the crease)
+        at = crease[ring_vertex]
+        rv, ri = ring_vertex[at], i[at]
+        second = (ri < first[rv]) | (ri >= last[rv])
+        ring_normals[at] = _unit(np.cross(np.where(second[:, None], -along[rv], along[rv]), across[2 * rv + second]))
+    return _Limit(None, tangents, a, b, ring_normals)
 
 
-def _slot_angles(topology: QuadTopology) -> FloatArray:
-    """Angle of every slot in its star: ``2πj/n`` inside, ``πj/k`` over the k + 1 slots of a boundary vertex."""
-    offsets = topology.neighbor_offsets
-    slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(offsets))
-    step = np.where(topology.is_boundary_vertex, np.pi / topology.face_count, 2.0 * np.pi / topology.face_count)
-    return (np.arange(len(slot_vertex)) - offsets[slot_vertex]) * step[slot_vertex]
+def _affected(level: _Level) -> BoolArray:
+    """Vertices whose limit sees a semi-sharp feature: a semi-sharp vertex, or an incident semi-sharp edge."""
+    semi_edge = (level.edge > 0) & (level.edge < INFINITE_SHARPNESS)
+    out = (level.vertex > 0) & (level.vertex < INFINITE_SHARPNESS)
+    out[level.topology.edges[semi_edge].ravel()] = True
+    return out
 
 
-def limit_tangents(mesh: QuadMesh) -> FloatArray:
-    """Per ring slot the limit tangent along its edge, (S, 3): ``cos φ_j a + sin φ_j b`` over
-    :func:`limit_stars` (``φ_j = 2πj/n`` inside, ``πj/k`` at a boundary vertex with k faces); an
-    ``edge-and-corner`` corner keeps its two edges ``E − V`` (module docstring for the lengths)."""
+def _sublevel(level: _Level, faces: BoolArray) -> tuple[_Level, IntArray]:
+    """The faces as a level of their own (vertices renumbered in order), and the new index of every vertex (-1 outside)."""
+    topology = level.topology
+    kept = topology.faces[faces]
+    used = np.zeros(topology.n_vertices, dtype=bool)
+    used[kept] = True
+    index = np.cumsum(used) - 1
+    index[~used] = -1
+    sub = QuadTopology.from_faces(index[kept], int(used.sum()))
+    original = np.flatnonzero(used)
+    keys = topology.edges[:, 0] * topology.n_vertices + topology.edges[:, 1]
+    sub_keys = original[sub.edges[:, 0]] * topology.n_vertices + original[sub.edges[:, 1]]
+    edge, vertex = _effective(sub, level.edge[np.searchsorted(keys, sub_keys)], level.vertex[original], level.mode)
+    return _Level(level.x[original], sub, edge, vertex, level.holes[faces], level.mode, level.chaikin), index
+
+
+def _neighbourhood(level: _Level, vertices: BoolArray, rings: int) -> BoolArray:
+    """Faces within ``rings`` vertex rings of ``vertices`` (1: the faces at them)."""
+    faces = level.topology.faces
+    touched = vertices.copy()
+    keep = touched[faces].any(axis=1)
+    for _ in range(rings - 1):
+        touched = np.zeros_like(touched)
+        touched[faces[keep]] = True
+        keep = touched[faces].any(axis=1)
+    return keep
+
+
+def _decayed(level: _Level) -> tuple[_Level, int]:
+    """Refined until no fractional sharpness is left (at most ⌈max s⌉ ≤ 10 steps), and the steps taken."""
+    steps = 0
+    while level.semi_sharp:
+        level = _step(level)
+        steps += 1
+    return level, steps
+
+
+def _limit(mesh: QuadMesh, sharpness: ArrayLike | None, frames: bool, corners: bool = False) -> _Limit:
+    """Limit data of the mesh's own vertices (module docstring): the masks where no semi-sharp
+    feature reaches, the masks on the decayed refinement of a neighbourhood elsewhere."""
+    level = _level_of(mesh, sharpness)
+    if not level.semi_sharp:
+        return _limit_frames(level, corners) if frames else _Limit(_limit_positions(level))
+    affected = _affected(level)
+    # the limit of v reads its 1-ring and the sharpness at v; with Chaikin also that at its neighbours
+    rings = 2 if level.chaikin else 1
+    sub, index = level, np.arange(level.topology.n_vertices)
+    for extra in range(3):
+        faces = _neighbourhood(level, affected, rings + extra)
+        if faces.all():
+            break
+        try:
+            sub, index = _sublevel(level, faces)
+            break
+        except MeshError:  # the cut leaves a vertex with two fans: take a ring more, at last all
+            sub, index = level, np.arange(level.topology.n_vertices)
+    fine, steps = _decayed(sub)
+    near = np.flatnonzero(affected)
+    if not frames:
+        points = _limit_positions(level)
+        points[near] = _limit_positions(fine)[index[near]]
+        return _Limit(points)
+    coarse, refined = _limit_frames(level, corners), _limit_frames(fine, corners)
+    scale = 2.0**steps
+    rows = index[near]
+    a, b = coarse.a, coarse.b
+    a[near] = scale * refined.a[rows]
+    b[near] = scale * refined.b[rows]
+    counts = np.diff(level.topology.neighbor_offsets)[near]
+    within = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    tangents = coarse.tangents
+    tangents[np.repeat(level.topology.neighbor_offsets[near], counts) + within] = (
+        scale * refined.tangents[np.repeat(fine.topology.neighbor_offsets[rows], counts) + within]
+    )
+    ring_normals = coarse.ring_normals
+    if not corners:
+        return _Limit(None, tangents, a, b)
+    faces = level.topology.face_count[near]
+    within = np.arange(faces.sum()) - np.repeat(np.cumsum(faces) - faces, faces)
+    ring_normals[np.repeat(level.topology.ring_offsets[near], faces) + within] = (
+        refined.ring_normals[np.repeat(fine.topology.ring_offsets[rows], faces) + within]
+    )
+    return _Limit(None, tangents, a, b, ring_normals)
+
+
+def limit_points(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArray:
+    """The Catmull–Clark limit position of every vertex, (V, 3) (module docstring)."""
+    return _limit(mesh, sharpness, frames=False).points
+
+
+def limit_stars(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
+    """Per vertex the two scaled limit tangents ``(a, b)``, (V, 3) each, ``a × b`` along the outward
+    normal (OpenSubdiv's tangent pair): inside A and B of the module docstring; at a crease vertex
+    (boundary or interior) a along the crease towards the first sharp slot ``E_p`` of the ring,
+    ``(E_p − E_q)/2``, and b across the sector that follows it counter-clockwise, into its faces;
+    at a corner ``a = E_p − V``, ``b = E_{p+1} − V`` (p the first sharp slot, 0 if none)."""
+    data = _limit(mesh, sharpness, frames=True)
+    return data.a, data.b
+
+
+def limit_tangents(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArray:
+    """Per ring slot the limit tangent along its edge, (S, 3) (module docstring): ``cos φ_j a + sin φ_j b``
+    over the star of the slot's sector (``φ_j = 2πj/n`` at a smooth vertex, ``πj/k`` in a crease
+    sector with k faces), the crease tangent ``±(E_p − E_q)/2`` on the two sharp slots of a crease,
+    ``E_j − V`` at a corner. Along a sharp edge it is the tangent of the crease curve, the same for
+    the sectors on both sides."""
+    return _limit(mesh, sharpness, frames=True).tangents
+
+
+def limit_normals(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArray:
+    """``a × b`` of :func:`limit_stars`, unit; zero where the two tangents are parallel. At a crease
+    vertex this is the normal of the sector after the first sharp slot (:func:`limit_corner_normals`
+    gives every sector's)."""
+    data = _limit(mesh, sharpness, frames=True)
+    return _unit(np.cross(data.a, data.b))
+
+
+def limit_corner_normals(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArray:
+    """Per face corner ``[f, c]`` (F, 4, 3) the unit normal of the limit surface at vertex
+    ``faces[f, c]`` on the sector holding face f: the sectors of a vertex are the runs of faces
+    between its infinitely sharp edges (boundary edges included), one sector where there are fewer than two.
+
+    * smooth vertex (fewer than two sharp edges): the vertex normal of :func:`limit_normals`;
+    * crease vertex: ``a × b`` of the sector's own star, a the crease tangent ``(E_0 − E_k)/2``
+      (``E_0`` the sector's first sharp slot counter-clockwise, ``E_k`` its last), b the sector's
+      cross tangent: its tangent plane holds the crease curve's tangent on both sides;
+    * corner vertex: the normalised fan sum ``Σ t_i × t_{i+1}`` of the sector's slot chords
+      ``t_i = E_i − V``: ``(E_0 − V) × (E_1 − V)`` for one face, the exact plane of the two crease
+      tangents when a sector is one quad;
+
+    zero where that vanishes. Hole faces get theirs too. Where the mesh is semi-sharp, the normals
+    at the affected vertices come from the decayed refinement (module docstring), whose sectors
+    are those of the infinitely sharp features. The two limit tangents of a corner, along its
+    face's edges, are :func:`limit_tangents` at the slots of the half-edges ``4f + c`` (out along
+    edge c) and of the reverse of ``4f + (c + 3) % 4`` (towards corner c − 1); at smooth and crease
+    vertices they lie in this plane."""
     topology = mesh.topology
-    a, b = limit_stars(mesh)
-    slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
-    phi = _slot_angles(topology)
-    t = np.cos(phi)[:, None] * a[slot_vertex] + np.sin(phi)[:, None] * b[slot_vertex]
-    corner = np.flatnonzero(corner_vertices(topology, boundary_mode(mesh)))
-    offsets = topology.neighbor_offsets
-    t[offsets[corner]] = a[corner]
-    t[offsets[corner] + 1] = b[corner]
-    return t
-
-
-def limit_normals(mesh: QuadMesh) -> FloatArray:
-    """``a × b`` of :func:`limit_stars`, unit; zero where the two tangents are parallel."""
-    a, b = limit_stars(mesh)
-    n = np.cross(a, b)
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+    ring_normals = _limit(mesh, sharpness, frames=True, corners=True).ring_normals
+    position = np.empty(topology.n_halfedges, dtype=np.int64)
+    position[topology.ring_halfedges] = np.arange(topology.n_halfedges)
+    return ring_normals[position].reshape(topology.n_faces, 4, 3)
