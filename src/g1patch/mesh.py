@@ -123,9 +123,14 @@ def _check_index_range(corners: IntArray, sizes: IntArray, n_vertices: int) -> N
         )
 
 
+#: faces of at most this many corners are checked for a repeated vertex pair by pair (n (n - 1) / 2 pairs)
+_PAIRWISE_SIZE = 8
+
+
 def _check_repeated_vertices(corners: IntArray, sizes: IntArray, n_vertices: int) -> None:
-    """A face may not visit a vertex twice: compare corner pairs (equal sizes) or sort (face, vertex) keys."""
-    if (sizes == sizes[0]).all():
+    """A face may not visit a vertex twice: compare corner pairs (all faces of one small size, at
+    most :data:`_PAIRWISE_SIZE` corners) or sort (face, vertex) keys (linear in memory for any size)."""
+    if sizes[0] <= _PAIRWISE_SIZE and (sizes == sizes[0]).all():
         table = corners.reshape(-1, int(sizes[0]))
         repeats = np.zeros(table.shape[0], dtype=bool)
         for i, j in zip(*np.triu_indices(table.shape[1], 1)):
@@ -430,6 +435,12 @@ def _connect(corners: IntArray, sizes: IntArray, n_vertices: int) -> _Connectivi
     )
 
 
+#: ring positions written one rotation step at a time (for all vertices at once); the rest of the
+#: rings of vertices with more faces are ranked by pointer jumping, so a 100 000-valent vertex
+#: costs ``log2`` rounds instead of 100 000 steps
+_WALK_STEPS = 32
+
+
 def _walk_rings(
     start: IntArray,
     face_count: IntArray,
@@ -442,20 +453,68 @@ def _walk_rings(
     """Write ``h_{i+1} = twin(prev(h_i))`` from ``start`` for every vertex at once, one rotation step at a time.
 
     Vertices are sorted by decreasing face count, so the vertices still walking at step ``i`` are
-    a prefix of that order. Running into the boundary early means a second fan.
+    a prefix of that order. Running into the boundary early means a second fan. After
+    :data:`_WALK_STEPS` steps the remaining positions are ranked (:func:`_rank_ring_tails`).
     """
     order = np.argsort(-face_count, kind="stable")
     walking = np.searchsorted(-face_count[order], -np.arange(int(face_count.max())), side="left")
     ring = np.empty(int(ring_offsets[-1]), dtype=np.int64)
     current = start[order]
-    for step, count in enumerate(walking):
+    for step, count in enumerate(walking[:_WALK_STEPS]):
         h = current[:count]
         stuck = h < 0
         if stuck.any():
             _raise_fans(order[:count][stuck], corners, face_ends, face_count)
         ring[ring_offsets[order[:count]] + step] = h
         current[:count] = twin[preceding[h]]
+    if walking.size > _WALK_STEPS:
+        tail = order[:walking[_WALK_STEPS]]
+        _rank_ring_tails(ring, tail, current[:tail.size], face_count, ring_offsets, twin, preceding, corners, face_ends)
     return ring
+
+
+def _rank_ring_tails(
+    ring: IntArray,
+    tail: IntArray,
+    first: IntArray,
+    face_count: IntArray,
+    ring_offsets: IntArray,
+    twin: IntArray,
+    preceding: IntArray,
+    corners: IntArray,
+    face_ends: IntArray,
+) -> None:
+    """Ring positions ``_WALK_STEPS`` onwards of the vertices ``tail``, whose walk has reached ``first``.
+
+    The half-edges left are those of ``tail`` not yet written; each points to its successor
+    ``twin(prev(h))`` among them (the walk ends at the boundary or back at a written one).
+    Pointer jumping gives each its distance ``d`` to the end of its chain, so ``h`` sits at
+    ``_WALK_STEPS + d(first) - d(h)``. A chain from ``first`` shorter than the rest of the ring
+    means a second fan.
+    """
+    in_tail = np.zeros(face_count.size, dtype=bool)
+    in_tail[tail] = True
+    written = np.zeros(corners.size, dtype=bool)
+    written[ring[(ring_offsets[tail][:, None] + np.arange(_WALK_STEPS)).ravel()]] = True
+    left = np.flatnonzero(in_tail[corners] & ~written)
+    local = np.full(corners.size + 1, -1, dtype=np.int64)  # local[-1] = -1: past the boundary
+    local[left] = np.arange(left.size)
+    successor = local[twin[preceding[left]]]
+    distance = (successor >= 0).astype(np.int64)
+    for _ in range(int(face_count.max()).bit_length()):
+        live = np.flatnonzero(successor >= 0)
+        if not live.size:
+            break
+        distance[live] += distance[successor[live]]
+        successor[live] = successor[successor[live]]
+    head = local[first]
+    short = (head < 0) | (np.where(head >= 0, distance[head], 0) + 1 != face_count[tail] - _WALK_STEPS)
+    if short.any():
+        _raise_fans(tail[short], corners, face_ends, face_count)
+    rank = np.zeros(face_count.size, dtype=np.int64)
+    rank[tail] = distance[head]
+    v = corners[left]
+    ring[ring_offsets[v] + _WALK_STEPS + rank[v] - distance] = left
 
 
 def _raise_fans(vertices: IntArray, corners: IntArray, face_ends: IntArray, face_count: IntArray) -> None:
