@@ -19,6 +19,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from functools import cached_property
 from typing import NamedTuple
@@ -48,6 +49,8 @@ __all__ = [
     "QuadMesh",
     "refine_polygons",
     "subdivide",
+    "strict_meshes",
+    "REPAIRABLE",
     "DEGENERATE_AREA_TOLERANCE",
 ]
 
@@ -742,18 +745,11 @@ def _refine_tags(tags: Sequence[Tag], corners: IntArray, sizes: IntArray, n_vert
     return tuple(refined)
 
 
-def _quads_from_polygons(
-    vertices: ArrayLike,
-    faces: ArrayLike | Sequence[Sequence[int]],
-    split: bool,
-    source: str | None,
-    tags: tuple[Tag, ...],
-) -> tuple[FloatArray, IntArray, tuple[Tag, ...]]:
-    """Check positions and faces; drop unused vertices and split non-quads (see :meth:`QuadMesh.from_arrays`).
-
-    When anything is dropped or split, the polygon topology is validated first, so that errors
-    name the input's faces and vertices.
-    """
+def _checked_polygons(
+    vertices: ArrayLike, faces: ArrayLike | Sequence[Sequence[int]], tags: tuple[Tag, ...]
+) -> tuple[FloatArray, IntArray, IntArray]:
+    """Positions (finite), faces as flat ``corners`` and ``sizes`` (≥ 3 corners, indices in range)
+    and tags naming existing items: what no repair can mend."""
     points = as_float_array("vertices", vertices, (3,), finite=False)
     if points.ndim != 2:
         raise InputError(f"vertices: expected shape (nv, 3), got {points.shape}")
@@ -767,7 +763,19 @@ def _quads_from_polygons(
             f"face {short[0]} has {sizes[short[0]]} corners; a face needs at least 3" + _all_of(short, "faces")
         )
     _check_tags(tags, points.shape[0], sizes.size)
-    used = np.bincount(corners[(corners >= 0) & (corners < points.shape[0])], minlength=points.shape[0]) > 0
+    _check_index_range(corners, sizes, points.shape[0])
+    return points, corners, sizes
+
+
+def _quads_from_polygons(
+    points: FloatArray, corners: IntArray, sizes: IntArray, split: bool, source: str | None, tags: tuple[Tag, ...]
+) -> tuple[FloatArray, IntArray, tuple[Tag, ...]]:
+    """Drop unused vertices and split non-quads of checked polygons (see :meth:`QuadMesh.from_arrays`).
+
+    When anything is dropped or split, the polygon topology is validated first, so that errors
+    name the input's faces and vertices.
+    """
+    used = np.bincount(corners, minlength=points.shape[0]) > 0
     non_quads = np.flatnonzero(sizes != 4)
     if used.all() and non_quads.size == 0:
         return points, corners.reshape(-1, 4), tags
@@ -795,6 +803,23 @@ def _quads_from_polygons(
         source or "mesh", non_quads.size, sizes.size,
     )
     return points, quads, tags
+
+
+#: what :meth:`QuadMesh.from_arrays` repairs unless strict (:mod:`g1patch.repair`)
+REPAIRABLE = (DegenerateFaceError, NonManifoldError, OrientationError, ValenceError)
+
+_STRICT: ContextVar[bool] = ContextVar("g1patch_strict_meshes", default=False)
+
+
+@contextmanager
+def strict_meshes(strict: bool = True) -> Iterator[None]:
+    """Within the block, :meth:`QuadMesh.from_arrays` calls that do not pass ``strict`` use this
+    one: for callers that cannot pass it on, such as :func:`~g1patch.io.meshfile.read_mesh`."""
+    token = _STRICT.set(strict)
+    try:
+        yield
+    finally:
+        _STRICT.reset(token)
 
 
 @dataclass(frozen=True, eq=False)
@@ -914,13 +939,15 @@ class QuadMesh:
     """Positions ``vertices`` (nv, 3) on a :class:`QuadTopology`, with the OpenSubdiv tags of its file.
 
     Validated on construction: finite coordinates, and no face of zero area
-    (:data:`DEGENERATE_AREA_TOLERANCE`).
+    (:data:`DEGENERATE_AREA_TOLERANCE`). ``repairs`` names what :meth:`from_arrays` repaired
+    (short phrases, :attr:`repair_note` joins them), empty if nothing.
     """
 
     vertices: FloatArray
     topology: QuadTopology
     tags: tuple[Tag, ...] = ()
     source: str | None = None
+    repairs: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         with _named_errors(self.source):
@@ -933,6 +960,7 @@ class QuadMesh:
             _check_face_areas(vertices, self.topology.faces)
         object.__setattr__(self, "vertices", _read_only(vertices.copy()))
         object.__setattr__(self, "tags", tuple(Tag(*tag) for tag in self.tags))
+        object.__setattr__(self, "repairs", tuple(self.repairs))
 
     @classmethod
     def from_arrays(
@@ -943,22 +971,52 @@ class QuadMesh:
         split: bool = True,
         source: str | None = None,
         tags: Sequence[Tag] = (),
+        strict: bool | None = None,
     ) -> QuadMesh:
         """Validate and build a quad mesh from positions and faces ((nf, 4) array or lists of indices).
 
         Unused vertices are dropped (one ``logging`` info line). If any face has 3 or ≥ 5 corners
         the whole mesh is refined once (:func:`refine_polygons`, new points on a smooth surface
-        through the vertices) with ``split``, else a
-        :class:`MeshError` is raised. Errors name ``source`` (a file name) when given.
+        through the vertices) with ``split``, else a :class:`MeshError` is raised. A mesh the
+        checks refuse (:data:`REPAIRABLE`: repeated vertices, non-manifold edges or vertices,
+        inconsistent orientation, interior valence 2) is repaired (:func:`g1patch.repair.repair_polygons`,
+        one info line, the repairs kept in :attr:`repairs`), unless ``strict`` (default: the one
+        of :func:`strict_meshes`, else False), which raises the check's error. Non-finite
+        coordinates, out-of-range indices, faces of < 3 corners, zero area and non-orientable
+        components raise either way. Errors name ``source`` (a file name) when given.
         """
+        strict = _STRICT.get() if strict is None else strict
+        tags = tuple(Tag(*tag) for tag in tags)
+        repairs: tuple[str, ...] = ()
         with _named_errors(source):
-            points, quads, tags = _quads_from_polygons(vertices, faces, split, source, tuple(Tag(*tag) for tag in tags))
-            topology = QuadTopology.from_faces(quads, points.shape[0])
-        return cls(points, topology, tags, source)
+            points, corners, sizes = _checked_polygons(vertices, faces, tags)
+            try:
+                quad_points, quads, quad_tags = _quads_from_polygons(points, corners, sizes, split, source, tags)
+                topology = QuadTopology.from_faces(quads, quad_points.shape[0])
+            except REPAIRABLE as refusal:
+                if strict:
+                    raise
+                from .repair import repair_polygons  # repair builds on this module
+
+                repaired = repair_polygons(points, corners, sizes, tags)
+                if not repaired.repairs:
+                    raise refusal
+                repairs = repaired.repairs
+                logger.info("%s: repaired: %s", source or "mesh", ", ".join(repairs))
+                quad_points, quads, quad_tags = _quads_from_polygons(
+                    repaired.points, repaired.corners, repaired.sizes, split, source, repaired.tags
+                )
+                topology = QuadTopology.from_faces(quads, quad_points.shape[0])
+        return cls(quad_points, topology, quad_tags, source, repairs)
 
     def with_vertices(self, new_vertices: ArrayLike) -> QuadMesh:
-        """The same topology and tags with new positions (validated the same way)."""
-        return QuadMesh(np.asarray(new_vertices), self.topology, self.tags, self.source)
+        """The same topology, tags and repair record with new positions (validated the same way)."""
+        return QuadMesh(np.asarray(new_vertices), self.topology, self.tags, self.source, self.repairs)
+
+    @property
+    def repair_note(self) -> str:
+        """The repairs as one line, ``"repaired: 1 valence-2 vertex (137) dissolved, …"``; empty if none."""
+        return "repaired: " + ", ".join(self.repairs) if self.repairs else ""
 
     @cached_property
     def features(self) -> Features:
@@ -1003,4 +1061,4 @@ def subdivide(mesh: QuadMesh) -> QuadMesh:
     sizes = np.full(mesh.n_faces, 4, dtype=np.int64)
     vertices, quads, _ = refine_polygons(mesh.vertices, corners, sizes)
     tags = _refine_tags(mesh.tags, corners, sizes, mesh.n_vertices)
-    return QuadMesh(vertices, QuadTopology.from_faces(quads, vertices.shape[0]), tags, mesh.source)
+    return QuadMesh(vertices, QuadTopology.from_faces(quads, vertices.shape[0]), tags, mesh.source, mesh.repairs)
