@@ -87,6 +87,9 @@ def _parser() -> argparse.ArgumentParser:
                        help="corner method, legacy shape: twist vectors (default: bilinear)")
     build.add_argument("--normals", choices=NORMALS, default="fan", help="corner method, legacy shape: vertex normals (default: fan)")
     build.add_argument("--no-split", action="store_true", help="reject faces that are not quads instead of splitting them")
+    build.add_argument("--strict", action="store_true",
+                       help="refuse a mesh that needs repair (repeated vertices, non-manifold edges or vertices, "
+                            "inconsistent orientation, interior valence 2) instead of repairing it and saying how")
 
     check = command("check", "measure G0/G1 continuity of a network (.npz) or a Bézier patch file (.bpt)")
     check.add_argument("surface", type=Path, help="network (.npz) or patches (.bpt)")
@@ -170,18 +173,22 @@ def build_network(mesh: Any, method: str, *, shape: str = "interpolate", tangent
 def _build(args: argparse.Namespace) -> int:
     from .io.meshfile import read_mesh
     from .io.network_file import save_network
+    from .mesh import strict_meshes
 
     if args.output.suffix.lower() != ".npz":
         raise FormatError(args.output, "a network file must end in .npz")
     with _progress("build", args.quiet) as progress:
         progress(0, 3)
-        mesh = read_mesh(args.mesh, split=not args.no_split)
+        with strict_meshes(args.strict):
+            mesh = read_mesh(args.mesh, split=not args.no_split)
         progress(1, 3)
         network = build_network(mesh, args.method, shape=args.shape, tangents=args.tangents, twist=args.twist,
                                 normals=args.normals, refine=args.refine)
         progress(2, 3)
         save_network(args.output, network)
         progress(3, 3)
+    if mesh.repairs:
+        print(f"g1patch: {args.mesh}: {mesh.repair_note}", file=sys.stderr)
     fallback = int(network.provenance.get("fallback_vertices", "0"))
     note = f"; {fallback} vertices needed a fallback (degenerate or folded fans)" if fallback else ""
     print(f"built {network.n_patches} {args.method} patches from {args.mesh} -> {args.output}{note}")
