@@ -90,6 +90,9 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--strict", action="store_true",
                        help="refuse a mesh that needs repair (repeated vertices, non-manifold edges or vertices, "
                             "inconsistent orientation, interior valence 2) instead of repairing it and saying how")
+    build.add_argument("--sharp-angle", type=float, metavar="DEG",
+                       help="keep edges whose faces' normals differ by more than DEG degrees sharp (creases), and "
+                            "vertices with three such edges as corners (default: off; the file's own tags always count)")
 
     check = command("check", "measure G0/G1 continuity of a network (.npz) or a Bézier patch file (.bpt)")
     check.add_argument("surface", type=Path, help="network (.npz) or patches (.bpt)")
@@ -180,7 +183,7 @@ def _build(args: argparse.Namespace) -> int:
     with _progress("build", args.quiet) as progress:
         progress(0, 3)
         with strict_meshes(args.strict):
-            mesh = read_mesh(args.mesh, split=not args.no_split)
+            mesh = read_mesh(args.mesh, split=not args.no_split, sharp_angle=args.sharp_angle)
         progress(1, 3)
         network = build_network(mesh, args.method, shape=args.shape, tangents=args.tangents, twist=args.twist,
                                 normals=args.normals, refine=args.refine)
