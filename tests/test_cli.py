@@ -135,7 +135,7 @@ def assert_clean_failure(result: subprocess.CompletedProcess[str], output: Path)
 @pytest.mark.parametrize("bad", sorted(p.name for p in MALFORMED.iterdir()))
 def test_malformed_meshes_fail_cleanly(tmp_path: Path, bad: str) -> None:
     output = tmp_path / "out.npz"
-    result = g1patch("build", MALFORMED / bad, "-o", output, "--no-split")
+    result = g1patch("build", MALFORMED / bad, "-o", output, "--no-split", "--strict")
     assert_clean_failure(result, output)
     assert bad in result.stderr  # the message names the file
 

@@ -274,7 +274,7 @@ TWO_SQUARES = SQUARE + [[2, 0, 0], [2, 1, 0]]
 )
 def test_validation_errors(vertices, faces, error, pattern) -> None:
     with pytest.raises(error, match=pattern) as caught:
-        QuadMesh.from_arrays(vertices, faces, split=False, source="model.obj")
+        QuadMesh.from_arrays(vertices, faces, split=False, source="model.obj", strict=True)
     assert str(caught.value).startswith("model.obj: ")
 
 
@@ -284,15 +284,15 @@ def test_two_closed_fans_at_a_vertex() -> None:
     second = cube.faces + 7  # cube vertex 0 of the second cube is vertex 7 of the first
     vertices = np.concatenate([cube.vertices, cube.vertices[1:] + 2.0])
     with pytest.raises(NonManifoldError, match=r"faces around vertex 7 .* more than one fan"):
-        QuadMesh.from_arrays(vertices, np.concatenate([cube.faces, second]))
+        QuadMesh.from_arrays(vertices, np.concatenate([cube.faces, second]), strict=True)
 
 
 def test_polygon_errors_name_the_input_faces_before_splitting() -> None:
     vertices = TWO_SQUARES + [[1, -1, 0]]
     with pytest.raises(OrientationError, match=r"faces 0 and 1 both traverse edge 1 -> 2"):
-        QuadMesh.from_arrays(vertices, [[0, 1, 2, 3], [1, 2, 5, 4], [0, 6, 1]])
+        QuadMesh.from_arrays(vertices, [[0, 1, 2, 3], [1, 2, 5, 4], [0, 6, 1]], strict=True)
     with pytest.raises(DegenerateFaceError, match=r"face 1 repeats a vertex"):
-        QuadMesh.from_arrays(vertices, [[0, 1, 2, 3], [1, 4, 4], [0, 6, 1]])
+        QuadMesh.from_arrays(vertices, [[0, 1, 2, 3], [1, 4, 4], [0, 6, 1]], strict=True)
 
 
 def test_topology_rejects_unused_vertices() -> None:

@@ -111,7 +111,7 @@ def test_malformed_file(name: str) -> None:
     error, pattern, line = CORPUS[name]
     path = MALFORMED / name
     with pytest.raises(G1PatchError, match=pattern) as caught:
-        read_mesh(path)
+        read_mesh(path, strict=True)
     assert type(caught.value) is error
     where = f"{path}:{line}: " if line is not None else f"{path}: "
     assert str(caught.value).startswith(where)

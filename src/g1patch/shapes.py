@@ -63,7 +63,7 @@ def cube() -> QuadMesh:
         [0, 2, 6, 4],  # z = -1
         [1, 5, 7, 3],  # z = +1
     ]
-    return QuadMesh.from_arrays(2.0 * bits - 1.0, faces)
+    return QuadMesh.from_arrays(2.0 * bits - 1.0, faces, strict=True)
 
 
 def cube_sphere(level: int) -> QuadMesh:
@@ -91,7 +91,7 @@ def grid(
     i, j = np.meshgrid(np.arange(nx), np.arange(ny))
     corner = (j * (nx + 1) + i).ravel()
     faces = np.stack([corner, corner + 1, corner + nx + 2, corner + nx + 1], axis=1)
-    return QuadMesh.from_arrays(np.stack([x, y, z], axis=-1).reshape(-1, 3), faces)
+    return QuadMesh.from_arrays(np.stack([x, y, z], axis=-1).reshape(-1, 3), faces, strict=True)
 
 
 def strip(n: int) -> QuadMesh:
@@ -112,7 +112,7 @@ def torus(n_major: int, n_minor: int, R: float = 1.0, r: float = 0.25) -> QuadMe
     i, j = np.meshgrid(np.arange(n_major), np.arange(n_minor), indexing="ij")
     i1, j1 = (i + 1) % n_major, (j + 1) % n_minor
     faces = np.stack([i * n_minor + j, i1 * n_minor + j, i1 * n_minor + j1, i * n_minor + j1], axis=-1)
-    return QuadMesh.from_arrays(vertices.reshape(-1, 3), faces.reshape(-1, 4))
+    return QuadMesh.from_arrays(vertices.reshape(-1, 3), faces.reshape(-1, 4), strict=True)
 
 
 def large_torus(n_quads: int) -> QuadMesh:
@@ -145,7 +145,7 @@ def fan(valence: int, rings: int = 1) -> QuadMesh:
     bands = np.stack(
         [ring_start + j, ring_start + 2 * valence + j, ring_start + 2 * valence + step, ring_start + step], axis=-1
     )
-    return QuadMesh.from_arrays(vertices, np.concatenate([inner, bands.reshape(-1, 4)]))
+    return QuadMesh.from_arrays(vertices, np.concatenate([inner, bands.reshape(-1, 4)]), strict=True)
 
 
 def boundary_fan(k: int) -> QuadMesh:
@@ -156,7 +156,7 @@ def boundary_fan(k: int) -> QuadMesh:
     vertices = np.concatenate([np.zeros((1, 3)), spokes, spokes[:-1] + spokes[1:]])
     i = np.arange(k)
     faces = np.stack([np.zeros_like(i), 1 + i, k + 2 + i, 2 + i], axis=1)
-    return QuadMesh.from_arrays(vertices, faces)
+    return QuadMesh.from_arrays(vertices, faces, strict=True)
 
 
 def voxel_surface(filled: NDArray[np.bool_]) -> QuadMesh:
@@ -185,7 +185,7 @@ def voxel_surface(filled: NDArray[np.bool_]) -> QuadMesh:
     index = np.ravel_multi_index(points.reshape(-1, 3).T, lattice)
     used, quads = np.unique(index, return_inverse=True)
     vertices = np.stack(np.unravel_index(used, lattice), axis=1).astype(np.float64) - 1.0
-    return QuadMesh.from_arrays(vertices, quads.reshape(-1, 4))
+    return QuadMesh.from_arrays(vertices, quads.reshape(-1, 4), strict=True)
 
 
 def filleted_box(cells: int = 8, radius: float = 0.375) -> QuadMesh:
@@ -249,7 +249,7 @@ def _split_projected(vertices: FloatArray, faces: IntArray, level: int) -> QuadM
     for _ in range(_check_count("level", level, 0)):
         points, faces, _ = refine_polygons(points, faces.ravel(), np.full(len(faces), 4, dtype=np.int64))
         points = _unit_rows(points)
-    return QuadMesh.from_arrays(points, faces)
+    return QuadMesh.from_arrays(points, faces, strict=True)
 
 
 def sphere_quads(level: int) -> QuadMesh:
@@ -407,7 +407,7 @@ def flat_fan(valence: int) -> QuadMesh:
     rim = _spokes(angles + np.pi / n)
     i = np.arange(n)
     faces = np.stack([np.zeros_like(i), 1 + i, 1 + n + i, 1 + (i + 1) % n], axis=1)
-    return QuadMesh.from_arrays(np.concatenate([np.zeros((1, 3)), spokes, rim]), faces)
+    return QuadMesh.from_arrays(np.concatenate([np.zeros((1, 3)), spokes, rim]), faces, strict=True)
 
 
 # -- exact closest points and normals of the sampled surfaces ---------------------------------------

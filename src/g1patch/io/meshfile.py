@@ -42,14 +42,15 @@ OBJ_SKIPPED = frozenset(
 PathLike = str | os.PathLike[str]
 
 
-def read_mesh(path: PathLike, *, split: bool = True, sharp_angle: float | None = None) -> QuadMesh:
+def read_mesh(path: PathLike, *, split: bool = True, sharp_angle: float | None = None, strict: bool | None = None) -> QuadMesh:
     """Read an OBJ, PLY or OFF file into a validated :class:`QuadMesh` (tags from OBJ ``t`` lines).
 
     With ``split`` a mesh with non-quad faces is refined once into quads (see
     :meth:`QuadMesh.from_arrays`); without, such a mesh raises :class:`MeshError`.
     ``sharp_angle`` (degrees): tag the edges whose faces' normals differ by more than that as
     infinitely sharp, and vertices with three such edges as corners, before splitting
-    (:func:`g1patch.sharpen.sharp_angle_tags`); the file's own tags are kept.
+    (:func:`g1patch.sharpen.sharp_angle_tags`); the file's own tags are kept. ``strict``: refuse
+    a mesh that needs repair instead of repairing it (:meth:`QuadMesh.from_arrays`).
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -66,7 +67,7 @@ def read_mesh(path: PathLike, *, split: bool = True, sharp_angle: float | None =
     tags = parsed.tags
     if sharp_angle is not None:
         tags = tags + _sharp_angle_tags(path, parsed, sharp_angle)
-    return QuadMesh.from_arrays(parsed.vertices, parsed.faces, split=split, source=str(path), tags=tags)
+    return QuadMesh.from_arrays(parsed.vertices, parsed.faces, split=split, source=str(path), tags=tags, strict=strict)
 
 
 def _sharp_angle_tags(path: Path, parsed: _Parsed, degrees: float) -> tuple[Tag, ...]:

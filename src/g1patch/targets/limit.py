@@ -160,7 +160,7 @@ def _limit_samples(mesh: QuadMesh, faces: IntArray, levels: int) -> tuple[FloatA
         inside = np.flatnonzero(keep)
         tags = _subset_tags(mesh, inside)
         try:
-            source = QuadMesh.from_arrays(mesh.vertices, topology.faces[inside], tags=tags)
+            source = QuadMesh.from_arrays(mesh.vertices, topology.faces[inside], tags=tags, strict=True)
             rows = np.searchsorted(inside, faces)
         except MeshError:
             source, rows = mesh, faces
