@@ -68,7 +68,9 @@ def semi_sharp_levels(mesh: QuadMesh) -> int:
     return levels
 
 
-def _provenance(mesh: QuadMesh, method: str, shape: str, tangents: str, targets: Targets, refine: int) -> dict[str, str]:
+def _provenance(
+    mesh: QuadMesh, method: str, shape: str, tangents: str, targets: Targets, refine: int, repairs: tuple[str, ...]
+) -> dict[str, str]:
     provenance = {"method": method, "shape": shape, "refine": str(refine), "fallback_vertices": str(targets.n_fallback)}
     if shape == "legacy":
         provenance["tangents"] = tangents
@@ -76,8 +78,8 @@ def _provenance(mesh: QuadMesh, method: str, shape: str, tangents: str, targets:
         provenance["seams"] = str(int(targets.seams.sum()))
     if mesh.source:
         provenance["source"] = str(mesh.source)
-    if mesh.repairs:
-        provenance["repairs"] = ", ".join(mesh.repairs)
+    if repairs:
+        provenance["repairs"] = ", ".join(repairs)
     return provenance
 
 
@@ -158,6 +160,7 @@ def build_network(
     if isinstance(refine, bool) or not isinstance(refine, (int, np.integer)) or refine < 0:
         raise InputError(f"refine: expected a number of Catmull–Clark steps ≥ 0, got {refine!r}")
     refine = max(int(refine), semi_sharp_levels(mesh) if shape in ("limit", "limit-interpolate") else 0)
+    repairs = mesh.repairs
     if refine:
         from .subdivision import refine as subdivide
 
@@ -167,7 +170,7 @@ def build_network(
     targets = shape_targets(local, shape, tangents=tangents)
     guard = shape == "interpolate"
     surface = mesh if shape != "limit" else mesh.with_vertices(frame.to_world(targets.positions))  # the points passed through
-    provenance = _provenance(mesh, method, shape, tangents, targets, refine)
+    provenance = _provenance(mesh, method, shape, tangents, targets, refine, repairs)
     if method == "split4":
         from .construct.split4 import split4_network_from_targets
 
