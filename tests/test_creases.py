@@ -201,3 +201,36 @@ def test_the_sharp_cube_is_flat_and_a_valid_step_solid_with_12_sharp_edges(shape
     assert result.seam_edges == 12
     assert abs(result.seam_angle_min_deg - 90.0) <= 1e-7 and abs(result.seam_angle_max_deg - 90.0) <= 1e-7
     assert result.max_g1_angle_deg <= 1e-7  # OpenCASCADE's own normals on the smooth edges (there are none here)
+
+
+def _capped_cylinder(sides: int = 16, layers: int = 4) -> tuple[np.ndarray, list[list[int]]]:
+    angle = np.linspace(0, 2 * np.pi, sides, endpoint=False)
+    ring = np.stack([np.cos(angle), np.sin(angle)], axis=1)
+    vertices = np.concatenate([np.column_stack([ring, np.full(sides, z)]) for z in np.linspace(0, 2, layers + 1)])
+    faces = [[l * sides + i, l * sides + (i + 1) % sides, (l + 1) * sides + (i + 1) % sides, (l + 1) * sides + i]
+             for l in range(layers) for i in range(sides)]
+    faces += [list(range(sides))[::-1], [layers * sides + i for i in range(sides)]]
+    return vertices, faces
+
+
+def test_n_gon_caps_with_sharp_rims_split_flat_and_stay_round() -> None:
+    """The smooth split of non-quads follows the creases: a cap bounded by creases stays flat, its
+    rim points stay on the rim circle's arc, and the side stays a cylinder (radius 1 to 1e-3)."""
+    from g1patch import compare
+
+    vertices, faces = _capped_cylinder()
+    corners = np.concatenate([np.asarray(f) for f in faces])
+    tags = sharp_angle_tags(vertices, corners, np.array([len(f) for f in faces]), 30.0)
+    mesh = QuadMesh.from_arrays(vertices, faces, tags=tags)
+    top = mesh.vertices[:, 2] > 1.5
+    assert np.abs(mesh.vertices[top & (np.linalg.norm(mesh.vertices[:, :2], axis=1) < 0.999), 2] - 2.0).max() <= 1e-15
+    network = build_network(mesh)
+    report = check(network)
+    assert report.passes(G1) and report.folds == 0
+    seams = report.to_dict()["seams"]
+    assert seams["count"] == 2 * 2 * 16 and abs(seams["angle_min_deg"] - 90.0) <= 1e-9
+    points, normals = compare.surface_samples(network, 9)
+    side = np.abs(normals[..., 2]) < 0.5
+    assert np.abs(np.linalg.norm(points[side][:, :2], axis=1) - 1.0).max() <= 1e-3
+    cap = np.abs(normals[..., 2]) > 0.999
+    assert np.abs(np.abs(points[cap][:, 2] - 1.0) - 1.0).max() <= 1e-12

@@ -43,7 +43,9 @@ from .errors import (
 __all__ = [
     "Tag",
     "Features",
+    "Sectors",
     "features_from_tags",
+    "sectors",
     "INFINITE_SHARPNESS",
     "QuadTopology",
     "QuadMesh",
@@ -532,6 +534,62 @@ def _raise_fans(vertices: IntArray, corners: IntArray, face_ends: IntArray, face
 # ----------------------------------------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class Sectors:
+    """The sectors of every vertex, over the ring positions of :class:`~g1patch.mesh.QuadTopology`.
+
+    ``label[p]``: global sector of ring position p (face corner ``ring_halfedges[p]``);
+    ``count[v]``: sectors at v (≥ 1); ``cuts[v]``: seam and boundary slots at v;
+    per sector: ``vertex``, and the slots bounding it counter-clockwise, ``start`` and ``end``
+    (-1 for the single sector of a vertex without cuts). A boundary vertex's first and last
+    slots are cuts.
+    """
+
+    label: IntArray
+    count: IntArray
+    cuts: IntArray
+    vertex: IntArray
+    start: IntArray
+    end: IntArray
+
+    @property
+    def creased(self) -> NDArray[np.bool_]:
+        """Vertices with more than one sector."""
+        return self.count > 1
+
+
+def sectors(topology: QuadTopology | _Connectivity, seams: NDArray[np.bool_]) -> Sectors:
+    """Cut every ring at its seam slots and its boundary (:class:`Sectors`), by segmented sums; ``topology``
+    may be a quad topology or the connectivity of polygons (:func:`_connect`), ``seams`` per edge."""
+    face_count = topology.face_count
+    nv = face_count.size
+    ring_vertex = np.repeat(np.arange(nv), face_count)
+    position = np.arange(ring_vertex.size) - topology.ring_offsets[ring_vertex]
+    boundary = topology.is_boundary_vertex
+    cut = seams[topology.halfedge_edge[topology.ring_halfedges]] | ((position == 0) & boundary[ring_vertex])
+    cuts = np.bincount(ring_vertex, cut, minlength=nv).astype(np.int64)
+    total = np.cumsum(cut)
+    before = np.concatenate([[0], total])[topology.ring_offsets[:-1]]  # cuts before each vertex's ring
+    local = total - before[ring_vertex]  # cuts at positions ≤ p of its vertex
+    count = np.maximum(cuts, 1)
+    local_label = np.where(boundary[ring_vertex], local - 1, (local - 1) % count[ring_vertex])
+    sector_offsets = np.concatenate([[0], np.cumsum(count)])
+    label = sector_offsets[ring_vertex] + local_label
+    vertex = np.repeat(np.arange(nv), count)
+    start = np.full(vertex.size, -1, dtype=np.int64)
+    slot = topology.neighbor_offsets[ring_vertex] + position
+    start[label[cut]] = slot[cut]
+    # a sector ends where the next one (counter-clockwise) starts; a boundary's last at its virtual slot
+    following = sector_offsets[vertex] + (np.arange(vertex.size) - sector_offsets[vertex] + 1) % count[vertex]
+    end = np.where(start >= 0, start[following], -1)
+    last = sector_offsets[1:][boundary] - 1
+    end[last] = topology.neighbor_offsets[1:][boundary] - 1
+    return Sectors(label, count, cuts, vertex, start, end)
+
+
+# ----------------------------------------------------------------------------------------------
+
+
 def _check_finite(vertices: FloatArray) -> None:
     bad = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
     if bad.size:
@@ -639,22 +697,88 @@ def _edge_tangents(
 
 
 def _smooth_edge_points(
-    vertices: FloatArray, a: IntArray, b: IntArray, normals: FloatArray, valid: NDArray[np.bool_]
+    vertices: FloatArray, a: IntArray, b: IntArray, normals: tuple[FloatArray, FloatArray], valid: tuple[NDArray[np.bool_], NDArray[np.bool_]]
 ) -> FloatArray:
     """Midpoints of the cubic Hermite curves of edges a–b: ``(A + B)/2 + (t_AB + t_BA)/8``.
 
-    ``t_AB`` is A's tangent towards B, ``t_BA`` B's towards A (:func:`_edge_tangents`); an edge
-    that lacks a tangent at one of its ends keeps its chord midpoint.
+    ``t_AB`` is A's tangent towards B, ``t_BA`` B's towards A (:func:`_edge_tangents`), on the
+    per-edge end normals ``normals = (at A, at B)``; an edge that lacks a tangent at one of its
+    ends keeps its chord midpoint.
     """
     d = vertices[b] - vertices[a]
-    t_ab, ok_a = _edge_tangents(d, normals[a], valid[a])
-    t_ba, ok_b = _edge_tangents(-d, normals[b], valid[b])
+    t_ab, ok_a = _edge_tangents(d, normals[0], valid[0])
+    t_ba, ok_b = _edge_tangents(-d, normals[1], valid[1])
     bend = np.where((ok_a & ok_b)[:, None], t_ab + t_ba, 0.0)
     return 0.5 * (vertices[a] + vertices[b]) + 0.125 * bend
 
 
+def _creased_edge_points(
+    vertices: FloatArray, corners: IntArray, sizes: IntArray, a: IntArray, b: IntArray, sharp: NDArray[np.bool_]
+) -> FloatArray:
+    """Edge points of a polygon mesh with creases ``sharp`` (per edge a–b, sorted pairs).
+
+    Smooth edges: :func:`_smooth_edge_points` on each end's *sector* normal, the area-weighted
+    fan normal of the faces reached from the edge without crossing a crease or the boundary.
+    Creases: ``(A + B)/2 + (t_AB + t_BA)/8`` with t along the crease curve: at a vertex with
+    exactly two creases (inside) the tangent of the circle through it and its two crease
+    neighbours, ``d ∥ |c_P|² c_Q − |c_Q|² c_P``, of length ``2|c|/(1 + ĉ·d)``; elsewhere the chord
+    (a crease between two corners stays straight).
+    """
+    nv = vertices.shape[0]
+    connectivity = _connect(corners, sizes, nv)
+    cut = sharp & (connectivity.edge_halfedges[:, 1] >= 0)
+    found = sectors(connectivity, cut)
+    following = _following_corner(sizes)
+    preceding = np.empty_like(following)
+    preceding[following] = np.arange(corners.size)
+    here = vertices[corners]
+    cross = np.cross(vertices[corners[following]] - here, vertices[corners[preceding]] - here)
+    position = np.empty(corners.size, dtype=np.int64)
+    position[connectivity.ring_halfedges] = np.arange(corners.size)
+    label = found.label[position]  # sector of each corner
+    count = found.vertex.size
+    summed = np.stack([np.bincount(label, cross[:, k], minlength=count) for k in range(3)], axis=1)
+    scale = np.bincount(label, np.linalg.norm(cross, axis=1), minlength=count)
+    length = np.linalg.norm(summed, axis=1)
+    valid = (length > _SPLIT_NORMAL_TOLERANCE * scale) & np.isfinite(length)
+    normals = np.divide(summed, length[:, None], out=np.zeros_like(summed), where=valid[:, None])
+    start = connectivity.edge_halfedges[:, 0]  # corner at a (a → b or b → a), its face touches the edge
+    at_a = np.where(corners[start] == a, start, following[start])
+    at_b = np.where(corners[start] == b, start, following[start])
+    out = _smooth_edge_points(vertices, a, b, (normals[label[at_a]], normals[label[at_b]]), (valid[label[at_a]], valid[label[at_b]]))
+
+    # crease curves: the two crease neighbours of every vertex with exactly two creases inside
+    e = np.flatnonzero(sharp)
+    ends = np.concatenate([a[e], b[e]])
+    others = np.concatenate([b[e], a[e]])
+    creases = np.bincount(ends, minlength=nv)
+    order = np.argsort(ends, kind="stable")
+    ends, others = ends[order], others[order]
+    two = (creases[ends] == 2) & ~connectivity.is_boundary_vertex[ends]
+    pairs = others[two].reshape(-1, 2)
+    owner = ends[two][0::2]
+    c_p, c_q = vertices[pairs[:, 0]] - vertices[owner], vertices[pairs[:, 1]] - vertices[owner]
+    direction = np.zeros((nv, 3))
+    d = c_q * np.einsum("ij,ij->i", c_p, c_p)[:, None] - c_p * np.einsum("ij,ij->i", c_q, c_q)[:, None]
+    d_length = np.linalg.norm(d, axis=1, keepdims=True)
+    direction[owner] = np.divide(d, d_length, out=np.zeros_like(d), where=d_length > 0)
+
+    def crease_tangent(start_vertex: IntArray, end_vertex: IntArray) -> FloatArray:
+        chord = vertices[end_vertex] - vertices[start_vertex]
+        along = direction[start_vertex]
+        chord_length = np.linalg.norm(chord, axis=1)
+        cosine = np.einsum("ij,ij->i", chord, along) / np.where(chord_length > 0, chord_length, 1.0)
+        along = along * np.sign(cosine)[:, None]  # towards this end
+        curved = np.abs(cosine) > 0.1
+        length = 2.0 * chord_length / (1.0 + np.abs(cosine))
+        return np.where(curved[:, None], length[:, None] * along, chord)
+
+    out[e] = 0.5 * (vertices[a[e]] + vertices[b[e]]) + 0.125 * (crease_tangent(a[e], b[e]) + crease_tangent(b[e], a[e]))
+    return out
+
+
 def refine_polygons(
-    vertices: FloatArray, corners: IntArray, sizes: IntArray, *, smooth: bool = False
+    vertices: FloatArray, corners: IntArray, sizes: IntArray, *, smooth: bool = False, sharp: NDArray[np.bool_] | None = None
 ) -> tuple[FloatArray, IntArray, IntArray]:
     """One Catmull–Clark topology step: every n-gon becomes n quads.
 
@@ -668,7 +792,10 @@ def refine_polygons(
     Hermite curves on area-weighted fan normals (:func:`_smooth_edge_points`), face points at the
     Coons centre ``C = (2/n) Σ M_i − (1/n) Σ V_i`` of the face's corners ``V_i`` and edge points
     ``M_i``. Both give midpoints and centroids on flat input. ``smooth`` expects a validated,
-    oriented manifold topology (:func:`_connect`).
+    oriented manifold topology (:func:`_connect`). ``sharp`` (per edge, sorted vertex pairs) marks
+    creases for ``smooth``: the normals of an edge's ends are then those of its sector of faces
+    (:func:`sectors`), and a crease's point is the middle of its crease curve
+    (:func:`_creased_edge_points`), so a flat face bounded by creases stays flat.
     """
     nv = vertices.shape[0]
     offsets = np.concatenate([[0], np.cumsum(sizes)])
@@ -680,8 +807,11 @@ def refine_polygons(
     a, b = edge_keys // nv, edge_keys % nv
     corner_sums = np.add.reduceat(vertices[corners], offsets[:-1], axis=0)
     if smooth:
-        normals, valid = _corner_normals(vertices, corners, sizes)
-        edge_points = _smooth_edge_points(vertices, a, b, normals, valid)
+        if sharp is not None and sharp.any():
+            edge_points = _creased_edge_points(vertices, corners, sizes, a, b, sharp)
+        else:
+            normals, valid = _corner_normals(vertices, corners, sizes)
+            edge_points = _smooth_edge_points(vertices, a, b, (normals[a], normals[b]), (valid[a], valid[b]))
         edge_sums = np.add.reduceat(edge_points[corner_edge], offsets[:-1], axis=0)
         face_points = (2.0 * edge_sums - corner_sums) / sizes[:, None]
     else:
@@ -719,6 +849,29 @@ def _renumber_tags(tags: Sequence[Tag], new_index: IntArray) -> tuple[Tag, ...]:
             tag = tag._replace(ints=tuple(ints.tolist()))
         renumbered.append(tag)
     return tuple(renumbered)
+
+
+#: creases at least this sharp shape the smooth split (the interpolating rule's threshold)
+SPLIT_SHARPNESS = 1.0
+
+
+def _crease_edges(tags: Sequence[Tag], corners: IntArray, sizes: IntArray, n_vertices: int) -> NDArray[np.bool_] | None:
+    """Per edge of the polygons (sorted vertex pairs), whether a crease tag of sharpness ≥
+    :data:`SPLIT_SHARPNESS` names it; None without such tags."""
+    edge_keys = np.unique(_edge_keys(corners, sizes, n_vertices))
+    sharp = np.zeros(edge_keys.size, dtype=bool)
+    for tag in tags:
+        if tag.name != "crease" or not tag.ints:
+            continue
+        ints = np.asarray(tag.ints, dtype=np.int64)
+        pa, pb = ints[0::2], ints[1::2]
+        floats = np.asarray(tag.floats, dtype=np.float64)
+        values = floats if floats.size == pa.size else np.full(pa.size, floats[0] if floats.size else INFINITE_SHARPNESS)
+        keys = np.minimum(pa, pb) * n_vertices + np.maximum(pa, pb)
+        found = np.minimum(np.searchsorted(edge_keys, keys), edge_keys.size - 1)
+        hit = (edge_keys[found] == keys) & (values >= SPLIT_SHARPNESS)
+        sharp[found[hit]] = True
+    return sharp if sharp.any() else None
 
 
 def _refine_tags(tags: Sequence[Tag], corners: IntArray, sizes: IntArray, n_vertices: int) -> tuple[Tag, ...]:
@@ -795,8 +948,9 @@ def _quads_from_polygons(
         tags = _renumber_tags(tags, new_index)
     if non_quads.size == 0:
         return points, corners.reshape(-1, 4), tags
+    sharp = _crease_edges(tags, corners, sizes, points.shape[0])
     tags = _refine_tags(tags, corners, sizes, points.shape[0])
-    points, quads, _ = refine_polygons(points, corners, sizes, smooth=True)
+    points, quads, _ = refine_polygons(points, corners, sizes, smooth=True, sharp=sharp)
     logger.info(
         "%s: %d of %d faces are not quads; refined the whole mesh once (every n-gon into n quads, "
         "new points on a smooth surface through the vertices)",

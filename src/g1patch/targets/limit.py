@@ -39,12 +39,12 @@ from numpy.typing import NDArray
 from .local import fan_normals
 from ..gregory import INTERIOR_INDEX
 from ..errors import MeshError
-from ..mesh import QuadMesh, QuadTopology, Tag
+from ..mesh import QuadMesh, QuadTopology, Sectors, Tag, sectors
 from ..subdivision import (
     boundary_mode, corner_vertices, limit_corner_normals, limit_normals, limit_points, limit_stars, limit_tangents, refine_grids,
 )
 from . import Targets, halfedge_slots, slot_sector_normals
-from .creases import Sectors, spread_sectors, seam_edges, sectors
+from .creases import seam_edges, spread_sectors
 from .interpolate import safeguarded_fans, slot_vertices
 
 __all__ = ["FIT_LEVELS", "bspline_slots", "limit_targets", "regular_faces"]
