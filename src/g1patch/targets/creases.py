@@ -120,12 +120,10 @@ def crease_tangents(
     d = _unit(_dot(c_a, c_a)[:, None] * c_b - _dot(c_b, c_b)[:, None] * c_a)
     crease_direction = np.zeros((topology.n_vertices, 3))
     crease_direction[two_vertex] = d
-    one_face = np.zeros(topology.n_vertices, dtype=bool)
-    one_face[found.vertex[np.bincount(found.label, minlength=found.vertex.size) == 1]] = True
-    # a corner where tagged, where the crease turns by 90° or more, or where a sector has a single
-    # face (a tangent-continuous crease would give that face a straight corner)
+    # a corner where tagged or where the crease turns by 90° or more (a sector of one face between
+    # two creases then gets a straight corner: the crease curve runs through, as in OpenSubdiv)
     corner = creased.copy()
-    corner[two_vertex] = corner_vertices[two_vertex] | (_dot(_unit(c_a), _unit(c_b)) > 0.0) | one_face[two_vertex]
+    corner[two_vertex] = corner_vertices[two_vertex] | (_dot(_unit(c_a), _unit(c_b)) > 0.0)
     out[two[:, 1]] = _circle_lengths(c_b, d)[:, None] * d
     out[two[:, 0]] = -_circle_lengths(c_a, -d)[:, None] * d
 
@@ -151,7 +149,7 @@ def crease_tangents(
     # a two-seam corner whose tangents span a plane across its sectors (a ridge's apex) is a crease
     across = np.zeros(topology.n_vertices, dtype=bool)
     across[found.vertex[(found.start >= 0) & (np.abs(_dot(n_corner, m)) < _ACROSS)]] = True
-    corner[two_vertex] &= ~(across[two_vertex] & ~one_face[two_vertex])
+    corner[two_vertex] &= ~across[two_vertex]
     crease = creased & ~corner
     at_corner_slot = corner[slot_vertex]
     out[at_corner_slot] = corner_tangents[at_corner_slot]
