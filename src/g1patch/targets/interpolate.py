@@ -523,10 +523,15 @@ def interpolate_targets(mesh: QuadMesh) -> Targets:
         )
         at_crease = creased[topology.faces]
         corner_normals = np.where(at_crease[..., None], sector_normals, corner_normals)
+        # the bilinear twist: a shape operator fitted across the crease means nothing, and on an
+        # extruded side (a box's fillet) it keeps the cross derivative exactly along the extrusion
         bilinear = _interior_targets(topology, mesh.vertices, tangents, normals, None)
         interior = np.where(at_crease[..., None], bilinear, interior)
         fallback = (fallback & ~creased) | spread
-    interior = _round_coarse_faces(mesh, tangents, corner_normals, interior)
+    rounded = _round_coarse_faces(mesh, tangents, corner_normals, interior)
+    if seams.any():  # the circle sections model one sphere through a face's corners: not across a crease
+        rounded = np.where(at_crease.any(axis=1)[:, None, None], interior, rounded)
+    interior = rounded
     return Targets(
         topology, mesh.vertices, normals, tangents, np.stack([interior, interior], axis=2), seams, fallback, "interpolate",
         corner_normals,
