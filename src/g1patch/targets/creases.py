@@ -242,4 +242,3 @@ def spread_sectors(
     spread = np.zeros(topology.n_vertices, dtype=bool)
     spread[found.vertex[bad_sector]] = True
     return spread
-
