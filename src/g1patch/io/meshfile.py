@@ -9,7 +9,9 @@
 
 Every problem with a file raises :class:`FormatError` (file, line where known, what was expected);
 problems with the mesh it describes raise the :class:`MeshError` family, prefixed with the file
-name. Writes go through :func:`atomic_path`: an error never leaves a partial file.
+name. Writes go through :func:`atomic_path`: an error never leaves a partial file. OBJ and STL are
+written here, a block of rows at a time (several times faster than meshio and in bounded
+memory), binary PLY by meshio.
 """
 
 from __future__ import annotations
@@ -371,16 +373,57 @@ def _checked_cells(name: str, cells: ArrayLike, corners: int, n_points: int) -> 
     return table
 
 
+#: rows formatted per string in OBJ output (bounds the text held in memory to a few MB)
+_OBJ_ROWS = 1 << 15
+
+
+def _write_obj(path: Path, points: NDArray[np.float64], cells: NDArray[np.int64]) -> None:
+    """OBJ text as meshio writes it (``v x y z`` with the shortest round-trip digits, ``f`` with
+    1-based indices), formatted a block of rows at a time by one C-level ``%`` per block: several
+    times faster than meshio's line-by-line loop, and in bounded memory."""
+    vertex_row = "v %r %r %r\n"
+    face_row = "f" + " %d" * cells.shape[1] + "\n"
+    with open(path, "w", encoding="ascii", newline="\n") as handle:
+        handle.write("# written by g1patch\n")
+        for start in range(0, len(points), _OBJ_ROWS):
+            block = points[start:start + _OBJ_ROWS]
+            handle.write((vertex_row * len(block)) % tuple(block.ravel().tolist()))
+        for start in range(0, len(cells), _OBJ_ROWS):
+            block = cells[start:start + _OBJ_ROWS] + 1
+            handle.write((face_row * len(block)) % tuple(block.ravel().tolist()))
+
+
+_STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("points", "<f4", (3, 3)), ("attr", "<u2")])
+
+
+def _write_stl(path: Path, points: NDArray[np.float64], triangles: NDArray[np.int64]) -> None:
+    """Binary STL as meshio writes it (unit facet normals, float32), a block of triangles at a time
+    so that memory does not grow by the 100 bytes a triangle of meshio's whole-array records; a
+    triangle without area gets the normal 0 (meshio: NaN)."""
+    header = b"binary STL written by g1patch"
+    with open(path, "wb") as handle:
+        handle.write(header + b" " * (80 - len(header)))
+        handle.write(np.array(len(triangles), dtype="<u4").tobytes())
+        for start in range(0, len(triangles), _OBJ_ROWS):
+            corners = points[triangles[start:start + _OBJ_ROWS]]
+            normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+            length = np.sqrt(np.einsum("ij,ij->i", normals, normals))[:, None]
+            records = np.zeros(len(corners), dtype=_STL_RECORD)
+            records["normal"] = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+            records["points"] = corners
+            handle.write(records.tobytes())
+
+
 def _write(path: Path, suffix: str, points: NDArray[np.float64], cell_type: str, cells: NDArray[np.int64]) -> None:
+    if suffix in (".obj", ".stl"):
+        writer = _write_obj if suffix == ".obj" else _write_stl
+        with atomic_path(path) as temporary:
+            writer(temporary, points, cells)
+        return
     index_type = np.int32 if cells.size == 0 or cells.max() < 2**31 else np.int64  # PLY wants 32-bit indices
     mesh = meshio.Mesh(points, [(cell_type, cells.astype(index_type))])
     with atomic_path(path) as temporary:
-        if suffix == ".obj":
-            meshio.obj.write(str(temporary), mesh)
-        elif suffix == ".ply":
-            meshio.ply.write(str(temporary), mesh, binary=True)
-        else:
-            meshio.stl.write(str(temporary), mesh, binary=True)
+        meshio.ply.write(str(temporary), mesh, binary=True)
 
 
 def write_triangles(path: PathLike, points: ArrayLike, triangles: ArrayLike) -> None:
