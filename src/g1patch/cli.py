@@ -1,13 +1,23 @@
 """The ``g1patch`` command line: a thin shell over build, check, export, render and demo.
 
 Exit codes: 0 success; 1 a check failed (``check --max-angle``); 2 bad input or any other
-error g1patch reports (one line on stderr, no partial output file).
+error g1patch reports (one line on stderr naming the path given and the reason, no partial output
+file); 130 interrupted (Ctrl-C, SIGINT), 143 terminated (SIGTERM), 129 hung up (SIGHUP): one line
+on stderr, the output file not written and its temporary removed; 141 standard output is a closed
+pipe (``g1patch check x.npz | head -1``): quietly, as a Unix tool killed by SIGPIPE.
+
+Outputs are written like a Unix tool's: mode ``0o666 & ~umask`` (see :mod:`g1patch.io.atomic`),
+complete or not at all. Sizes are bounded by default: ``export`` to a mesh aims at about 2 M
+triangles (:data:`g1patch.tessellate.TRIANGLE_BUDGET`), and an explicit ``--resolution`` above
+:data:`g1patch.tessellate.MAX_TRIANGLES` triangles needs ``--force``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
+import signal
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -21,6 +31,9 @@ from . import __version__
 from .errors import FormatError, G1PatchError
 
 EXIT_OK, EXIT_CHECK_FAILED, EXIT_ERROR = 0, 1, 2
+#: 128 + the signal's number, as a shell reports a process the signal ended
+EXIT_SIGNAL_BASE = 128
+EXIT_BROKEN_PIPE = EXIT_SIGNAL_BASE + 13
 METHODS = ("gregory", "split4", "corner")
 MESH_SUFFIXES = (".obj", ".ply", ".stl")
 CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
@@ -38,6 +51,7 @@ _EXAMPLES = {
   g1patch check teapot.bpt --json
   g1patch check surface.npz --max-angle 1e-9     # exit 1 unless exactly G1 and free of folds""",
     "export": """examples:
+  g1patch export surface.npz -o surface.obj            # about 2 M triangles at most
   g1patch export surface.npz -o surface.obj --resolution 33
   g1patch export surface.npz -o surface.step            # exact B-splines, or a fit within --tolerance
   g1patch export surface.npz -o patches.bpt             # Bezier patches (polynomial networks)""",
@@ -104,7 +118,11 @@ def _parser() -> argparse.ArgumentParser:
     export = command("export", "write a network as a triangle mesh (OBJ, PLY, STL), CAD file (STEP, IGES) or .bpt")
     export.add_argument("network", type=Path, help="network file (.npz)")
     export.add_argument("-o", "--output", type=Path, required=True, help="file to write; the extension picks the format")
-    export.add_argument("--resolution", type=int, default=17, help="meshes: samples per patch side (default: 17)")
+    export.add_argument("--resolution", type=int, metavar="N",
+                        help="meshes: samples per patch side (default: 17, fewer for networks of more than "
+                             "~7 000 patches, so that the mesh has at most ~2 M triangles; at least 2)")
+    export.add_argument("--force", action="store_true",
+                        help="meshes: allow a --resolution making more than 20 M triangles")
     export.add_argument("--tolerance", type=float, metavar="REL",
                         help="CAD: fit tolerance for rational patches, relative to the bbox diagonal (default: 1e-6)")
 
@@ -263,12 +281,46 @@ def _export(args: argparse.Namespace) -> int:
         print(f"wrote {network.n_patches} Bézier patches -> {args.output}")
         return EXIT_OK
     from .io.meshfile import write_triangles
-    from .tessellate import tessellate
+    from .tessellate import choose_resolution, tessellate
 
-    mesh = tessellate(network, args.resolution)
+    resolution = choose_resolution(network.n_patches) if args.resolution is None else args.resolution
+    if args.resolution is not None:
+        _check_export_size(network.n_patches, resolution, suffix, args.force)
+    mesh = tessellate(network, resolution, force=True)
     write_triangles(args.output, mesh.points, mesh.triangles)
     print(f"wrote {len(mesh.triangles)} triangles, {len(mesh.points)} points -> {args.output}")
     return EXIT_OK
+
+
+def _estimated_file_size(suffix: str, n_points: int, n_triangles: int) -> int:
+    """Bytes of a triangle mesh file, about: OBJ ~60 bytes a point (shortest round-trip digits)
+    and 3 indices a triangle; binary PLY 24 bytes a point, 13 a triangle; binary STL 50 a triangle."""
+    if suffix == ".obj":
+        return 60 * n_points + (3 * (len(str(max(n_points, 1))) + 1) + 2) * n_triangles
+    if suffix == ".ply":
+        return 24 * n_points + 13 * n_triangles
+    return 84 + 50 * n_triangles
+
+
+def _check_export_size(n_patches: int, resolution: int, suffix: str, force: bool) -> None:
+    """Refuse (exit 2) an explicit ``--resolution`` above the triangle cap without ``--force``, with the sizes."""
+    from .errors import InputError
+    from .tessellate import MAX_TRIANGLES, _size_text, estimated_memory, triangle_count
+
+    if resolution < 2:
+        return  # tessellate names the bad resolution
+    triangles = triangle_count(n_patches, resolution)
+    if force or triangles <= MAX_TRIANGLES:
+        return
+    points = n_patches * (resolution - 1) ** 2
+    largest = 1 + int((MAX_TRIANGLES / (2 * max(n_patches, 1))) ** 0.5)
+    size = _size_text(_estimated_file_size(suffix, points, triangles), "B")
+    memory = _size_text(estimated_memory(n_patches, resolution), "B")
+    raise InputError(
+        f"--resolution {resolution} on {n_patches} patches would write {_size_text(triangles)} triangles "
+        f"(~{size}, ~{memory} of memory); use --force or a lower resolution "
+        f"(at most {largest} stays within {_size_text(MAX_TRIANGLES)} triangles)"
+    )
 
 
 def _render(args: argparse.Namespace) -> int:
@@ -342,18 +394,96 @@ def _demo(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit code."""
-    args = _parser().parse_args(argv)
-    handlers = {"build": _build, "check": _check, "export": _export, "render": _render, "demo": _demo}
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, raised in the main thread like Ctrl-C's KeyboardInterrupt, so that every
+    ``finally`` and atomic write cleans up on the way out."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+_SIGNAL_WORDS = {int(getattr(signal, name)): words for name, words in
+                 (("SIGINT", "interrupted"), ("SIGTERM", "terminated"), ("SIGHUP", "hung up")) if hasattr(signal, name)}
+
+
+def _raise_terminated(signum: int, frame: object) -> None:
+    raise Terminated(signum)
+
+
+@contextmanager
+def _signal_handlers() -> Iterator[None]:
+    """SIGTERM and SIGHUP raise :class:`Terminated` while the command runs (unless ignored, as under
+    ``nohup``); the previous handlers come back afterwards. SIGINT keeps Python's KeyboardInterrupt."""
+    installed: dict[int, Any] = {}
     try:
-        return handlers[args.command](args)
-    except G1PatchError as error:
-        print(f"g1patch: error: {error}", file=sys.stderr)
-        return EXIT_ERROR
-    except OSError as error:
-        print(f"g1patch: error: {error.filename or ''}: {error.strerror}", file=sys.stderr)
-        return EXIT_ERROR
+        for name in ("SIGTERM", "SIGHUP"):
+            number = getattr(signal, name, None)
+            if number is None:
+                continue
+            try:
+                previous = signal.getsignal(number)
+                if previous is signal.SIG_IGN:
+                    continue
+                signal.signal(number, _raise_terminated)
+                installed[number] = previous
+            except ValueError:  # not the main thread: leave the signals alone
+                break
+        yield
+    finally:
+        for number, previous in installed.items():
+            signal.signal(number, previous if previous is not None else signal.SIG_DFL)
+
+
+def _say(line: str) -> None:
+    """One line on stderr; nothing when stderr itself is gone."""
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
+
+
+def _os_error_text(error: OSError) -> str:
+    reason = error.strerror or (os.strerror(error.errno) if error.errno else None) or str(error) or type(error).__name__
+    return f"{os.fsdecode(error.filename)}: {reason}" if isinstance(error.filename, (str, bytes, os.PathLike)) else reason
+
+
+def _quiet_stdout() -> None:
+    """After EPIPE on stdout: point it at /dev/null, so that the interpreter's last flush is silent."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit code (see the module docstring)."""
+    handlers = {"build": _build, "check": _check, "export": _export, "render": _render, "demo": _demo}
+    with _signal_handlers():
+        try:
+            args = _parser().parse_args(argv)
+            code = handlers[args.command](args)
+            sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's exit
+            return code
+        except KeyboardInterrupt as interrupt:
+            signum = int(getattr(interrupt, "signum", signal.SIGINT))
+            _say(f"g1patch: {_SIGNAL_WORDS.get(signum, signal.Signals(signum).name)}")
+            return EXIT_SIGNAL_BASE + signum
+        except BrokenPipeError:
+            _quiet_stdout()
+            return EXIT_BROKEN_PIPE
+        except G1PatchError as error:
+            _say(f"g1patch: error: {error}")
+            return EXIT_ERROR
+        except OSError as error:
+            _say(f"g1patch: error: {_os_error_text(error)}")
+            return EXIT_ERROR
+        except MemoryError as error:
+            detail = f" ({error})" if str(error) else ""
+            _say(f"g1patch: error: out of memory{detail}; try a lower --resolution, --samples or --size")
+            return EXIT_ERROR
 
 
 if __name__ == "__main__":
