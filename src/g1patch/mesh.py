@@ -47,6 +47,7 @@ __all__ = [
     "features_from_tags",
     "sectors",
     "INFINITE_SHARPNESS",
+    "MAX_COORDINATE",
     "QuadTopology",
     "QuadMesh",
     "refine_polygons",
@@ -65,6 +66,10 @@ DEGENERATE_AREA_TOLERANCE = 1e-12
 #: OpenSubdiv's infinitely sharp crease (``Sdc::Crease::SHARPNESS_INFINITE``): at or above it an
 #: edge or vertex is sharp at every level of refinement
 INFINITE_SHARPNESS = 10.0
+#: the largest coordinate magnitude accepted (and stored in network files): products of two
+#: coordinates and sums of many of them stay far from overflow, and 1e30 of any unit is larger
+#: than anything a model describes
+MAX_COORDINATE = 1e30
 #: the boundary rules of the ``interpolateboundary`` tag, by its integer (OpenSubdiv's numbering)
 BOUNDARY_RULES = ("none", "edge-only", "edge-and-corner")
 CREASE_METHODS = ("normal", "chaikin")
@@ -591,11 +596,18 @@ def sectors(topology: QuadTopology | _Connectivity, seams: NDArray[np.bool_]) ->
 
 
 def _check_finite(vertices: FloatArray) -> None:
+    """Every coordinate finite and within :data:`MAX_COORDINATE`."""
     bad = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
     if bad.size:
         raise InputError(
             f"vertex {bad[0]} has a non-finite coordinate {tuple(vertices[bad[0]].tolist())}"
             + _all_of(bad, "vertices")
+        )
+    huge = np.flatnonzero((np.abs(vertices) > MAX_COORDINATE).any(axis=1))
+    if huge.size:
+        raise InputError(
+            f"vertex {huge[0]} has a coordinate beyond ±{MAX_COORDINATE:g}: {tuple(vertices[huge[0]].tolist())}"
+            + _all_of(huge, "vertices")
         )
 
 

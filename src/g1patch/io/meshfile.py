@@ -17,6 +17,7 @@ memory), binary PLY by meshio.
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import NamedTuple
@@ -320,9 +321,11 @@ def _read_ply(path: Path, data: bytes) -> _Parsed:
     if counts.get("face", 0) == 0:
         raise FormatError(path, "no faces: the header declares no 'element face'")
     try:
-        mesh = meshio.ply.read(str(path))
+        with warnings.catch_warnings():  # numbers beyond the declared type: the finite-coordinate check names them
+            warnings.simplefilter("ignore", RuntimeWarning)
+            mesh = meshio.ply.read(str(path))
     except (meshio.ReadError, ValueError, IndexError, KeyError, TypeError, AssertionError, EOFError) as exc:
-        reason = f"{type(exc).__name__}: {exc}"
+        reason = f"{type(exc).__name__}: {' '.join(str(exc).split())}"  # one line, whatever the library wrote
         raise FormatError(path, f"cannot read the PLY data, truncated or malformed ({reason})") from None
     points = np.asarray(mesh.points, dtype=np.float64)
     polygon_types = ("triangle", "quad", "polygon")
