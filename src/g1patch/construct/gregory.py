@@ -48,6 +48,7 @@ from ..errors import ConstructionError
 from ..gregory import GregoryPatchSet
 from ..mesh import QuadTopology
 from ..targets import Targets, halfedge_slots, slot_sector_normals
+from ..targets.local import in_vertex_planes, jit_kernel
 
 __all__ = ["assemble_gregory", "corner_split", "tangent_plane_tangents"]
 
@@ -92,17 +93,19 @@ def corner_split(
     return alpha, beta, phi, margin
 
 
-def tangent_plane_tangents(targets: Targets) -> FloatArray:
+def tangent_plane_tangents(targets: Targets, *, compiled: bool = True) -> FloatArray:
     """The target tangents moved into their sectors' tangent planes, which is all G1 asks at a corner.
 
     A smooth slot: ``t − (N·t) N`` with its sector's normal N. A slot on a seam or on the
     boundary between two different sector planes: onto their common line, ``(t·l) l`` with
     ``l = N_L × N_R`` normalised (the crease curve's tangent lies in both planes); where the two
     planes agree (to 1e-9) it is the plane's projection again. Without seams every slot of a
-    vertex takes the vertex normal.
+    vertex takes the vertex normal (``compiled``: vertex by vertex in a numba kernel).
     """
     topology = targets.topology
     if not targets.has_sectors:
+        if compiled:
+            return in_vertex_planes(targets.tangents, targets.normals, topology.neighbor_offsets)
         slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
         n = targets.normals[slot_vertex]
         return targets.tangents - _dot(targets.tangents, n)[:, None] * n
@@ -116,32 +119,55 @@ def tangent_plane_tangents(targets: Targets) -> FloatArray:
     return t
 
 
-def _raise_invalid(topology: QuadTopology, vertex: NDArray[np.int64], margin: FloatArray) -> None:
-    bad = np.flatnonzero(~(margin > 0))
+def _raise_invalid(topology: QuadTopology, margins: FloatArray) -> None:
+    """Raise where a corner split's margin (2, E) is not positive: row 0 at the origin of each
+    edge's first half-edge, row 1 at its target (+inf on edges that were not split)."""
+    bad = np.flatnonzero(~(margins.ravel() > 0))
     if bad.size:
-        v = int(vertex[bad[0]])
+        end, edge = divmod(int(bad[0]), topology.n_edges)
+        h = int(topology.edge_halfedges[edge, 0])
+        v = int(topology.origin(h) if end == 0 else topology.target(h))
         raise ConstructionError(
             f"gregory: the target tangents at vertex {v} (valence {topology.valence[v]}) do not turn "
-            f"counter-clockwise about its normal (margin {margin[bad[0]]:.3g}); the targets rule must "
+            f"counter-clockwise about its normal (margin {margins.ravel()[bad[0]]:.3g}); the targets rule must "
             f"supply a valid fan ({bad.size} edge ends affected)"
         )
 
 
-def assemble_gregory(targets: Targets) -> GregoryPatchSet:
+def assemble_gregory(targets: Targets, *, compiled: bool = True) -> GregoryPatchSet:
     """The Gregory patches of ``targets``, one per face, exactly G1 on every interior edge (module docstring).
 
-    Raises :class:`ConstructionError` when the targets' fan is invalid at some vertex.
+    ``compiled`` runs the per-edge solve in a numba kernel (:func:`_assemble_kernel`); ``False`` runs
+    the NumPy reference (the same to rounding, tests/test_kernels_match.py). Raises
+    :class:`ConstructionError` when the targets' fan is invalid at some vertex.
     """
+    topology = targets.topology
+    t = tangent_plane_tangents(targets, compiled=compiled)
+    slot_out, slot_in = halfedge_slots(topology)
+    points = np.empty((topology.n_faces, 20, 3))
+    margins = np.full((2, topology.n_edges), np.inf)
+    if compiled:
+        jit_kernel(_assemble_kernel)(
+            targets.positions, t, topology.faces.reshape(-1), slot_out, slot_in, targets.corner_normals.reshape(-1, 3),
+            targets.interior, topology.edge_halfedges, targets.seams, SYMMETRIC_TOLERANCE, RIDGE, points, margins,
+        )
+        _raise_invalid(topology, margins)
+    else:
+        _assemble_numpy(targets, t, slot_out, slot_in, points, margins)
+    return GregoryPatchSet(points)
+
+
+def _assemble_numpy(
+    targets: Targets, t: FloatArray, slot_out: NDArray[np.int64], slot_in: NDArray[np.int64], points: FloatArray, margins: FloatArray
+) -> None:
+    """The NumPy reference of :func:`_assemble_kernel`: gathers, scatters and batched closed-form solves over edges."""
     topology = targets.topology
     faces = topology.faces
     count = topology.n_faces
     x = targets.positions
-    t = tangent_plane_tangents(targets)
-    slot_out, slot_in = halfedge_slots(topology)
     halfedges = np.arange(4 * count)
     prev, nxt = QuadTopology.prev(halfedges), QuadTopology.next(halfedges)
 
-    points = np.empty((count, 20, 3))
     corners = x[faces]
     points[:, :4] = corners
     points[:, 4:12:2] = corners + t[slot_out].reshape(count, 4, 3) / 3.0  # E+_k = A + t_AB/3
@@ -149,10 +175,9 @@ def assemble_gregory(targets: Targets) -> GregoryPatchSet:
     near = targets.interior[:, :, 0].copy()  # Fn_k, seen by edge k
     far = targets.interior[:, :, 1].copy()  # Fp_k, seen by edge k − 1
 
-    pairs = topology.edge_halfedges[(topology.edge_halfedges[:, 1] >= 0) & ~targets.seams]
-    h, g = pairs[:, 0], pairs[:, 1]
-    a_vertex, b_vertex = topology.origin(h), topology.target(h)
-    a, b = x[a_vertex], x[b_vertex]
+    split = np.flatnonzero((topology.edge_halfedges[:, 1] >= 0) & ~targets.seams)
+    h, g = topology.edge_halfedges[split, 0], topology.edge_halfedges[split, 1]
+    a, b = x[topology.origin(h)], x[topology.target(h)]
     q0 = t[slot_out[h]]
     t_ba = t[slot_in[h]]
     q2 = -t_ba
@@ -162,9 +187,9 @@ def assemble_gregory(targets: Targets) -> GregoryPatchSet:
     d0_left, d0_right = t[slot_in[prev[h]]], t[slot_out[nxt[g]]]
     d3_left, d3_right = t[slot_out[nxt[h]]], t[slot_in[prev[g]]]
     corner_normals = targets.corner_normals.reshape(-1, 3)  # a smooth edge's two faces share A's sector, and B's
-    alpha0, beta0, phi0, margin0 = corner_split(q0, d0_left, d0_right, corner_normals[h])
-    alpha1, beta1, phi2, margin1 = corner_split(q2, d3_left, d3_right, corner_normals[nxt[h]])
-    _raise_invalid(topology, np.concatenate([a_vertex, b_vertex]), np.concatenate([margin0, margin1]))
+    alpha0, beta0, phi0, margins[0, split] = corner_split(q0, d0_left, d0_right, corner_normals[h])
+    alpha1, beta1, phi2, margins[1, split] = corner_split(q2, d3_left, d3_right, corner_normals[nxt[h]])
+    _raise_invalid(topology, margins)
 
     left, right = h >> 2, g >> 2
     k_left, k_right = h & 3, g & 3
@@ -197,7 +222,6 @@ def assemble_gregory(targets: Targets) -> GregoryPatchSet:
     near[right, k_right] = b2 + d2_right / 3.0
     points[:, 12::2] = near
     points[:, 13::2] = far
-    return GregoryPatchSet(points)
 
 
 def _kh_fit(
@@ -242,3 +266,139 @@ def _kh_fit(
     g1 = (r_g - c * h1[:, None]) / a[:, None]
     h1 = h1[:, None]
     return tuple(k_i + c_i * g1 + v_i * h1 for k_i, v_i, c_i in zip(constant, along, scalar, strict=True))  # type: ignore[return-value]
+
+
+# ----------------------------------------------------------------------------------------------
+# the numba kernel (compiled on first use by :func:`g1patch.targets.local.jit_kernel`): the formulas
+# and operation order of the NumPy code above, one half-edge or one edge at a time
+
+
+def _assemble_kernel(
+    x: FloatArray, t: FloatArray, origin: NDArray[np.int64], slot_out: NDArray[np.int64], slot_in: NDArray[np.int64],
+    corner_normals: FloatArray, interior: FloatArray, edge_halfedges: NDArray[np.int64], seams: NDArray[np.bool_],
+    symmetric_tolerance: float, ridge: float, points: FloatArray, margins: FloatArray,
+) -> None:
+    """:func:`_assemble_numpy` one half-edge, then one edge at a time, straight into ``points`` (F, 20, 3).
+
+    Per half-edge: corner, edge points ``A + t/3`` and the interior targets. Per interior
+    non-seam edge: both corner splits (margins into ``margins[:, e]``), then the symmetric
+    correction or the closed-form k-h fit of :func:`_kh_fit`, and its four interior points.
+    """
+    for i in range(origin.size):
+        f, k = i >> 2, i & 3
+        prev = (i & ~3) | ((k + 3) & 3)
+        v, s_out, s_in = origin[i], slot_out[i], slot_in[prev]
+        for d in range(3):
+            points[f, k, d] = x[v, d]
+            points[f, 4 + 2 * k, d] = x[v, d] + t[s_out, d] / 3.0
+            points[f, 5 + 2 * k, d] = x[v, d] + t[s_in, d] / 3.0
+            points[f, 12 + 2 * k, d] = interior[f, k, 0, d]
+            points[f, 13 + 2 * k, d] = interior[f, k, 1, d]
+    q0, q1, q2 = np.empty(3), np.empty(3), np.empty(3)
+    b1, b2 = np.empty(3), np.empty(3)
+    d0, d3 = np.empty(3), np.empty(3)  # d_L at A and at B
+    r = np.empty((4, 3))  # targets r1_L, r2_L, r1_R, r2_R
+    const = np.empty((4, 3))  # k_i
+    along = np.empty((4, 3))  # v_i
+    scalar = np.empty(4)  # c_i
+    c, r_g = np.empty(3), np.empty(3)  # Σ c_i v_i, Σ c_i (r_i − k_i)
+    out = np.empty((4, 3))  # d1_L, d2_L, d1_R, d2_R
+    split = np.empty((2, 3))  # α, β, φ at A and at B
+    for e in range(edge_halfedges.shape[0]):
+        h, g = edge_halfedges[e, 0], edge_halfedges[e, 1]
+        if g < 0 or seams[e]:
+            continue
+        h_next, h_prev = (h & ~3) | ((h + 1) & 3), (h & ~3) | ((h + 3) & 3)
+        g_next, g_prev = (g & ~3) | ((g + 1) & 3), (g & ~3) | ((g + 3) & 3)
+        a_vertex, b_vertex = origin[h], origin[h_next]
+        s0, s2 = slot_out[h], slot_in[h]
+        for d in range(3):
+            q0[d] = t[s0, d]
+            q2[d] = -t[s2, d]
+            b1[d] = x[a_vertex, d] + t[s0, d] / 3.0
+            b2[d] = x[b_vertex, d] + t[s2, d] / 3.0
+            q1[d] = 3.0 * (b2[d] - b1[d])
+        # corner splits at A (q = q0, d_L, d_R, N) and at B (q = q2)
+        for end in range(2):
+            if end == 0:
+                left_slot, right_slot, corner = slot_in[h_prev], slot_out[g_next], h
+            else:
+                left_slot, right_slot, corner = slot_out[h_next], slot_in[g_prev], h_next
+            n0, n1, n2 = corner_normals[corner, 0], corner_normals[corner, 1], corner_normals[corner, 2]
+            qx, qy, qz = (q0[0], q0[1], q0[2]) if end == 0 else (q2[0], q2[1], q2[2])
+            lx, ly, lz = t[left_slot, 0], t[left_slot, 1], t[left_slot, 2]
+            rx, ry, rz = t[right_slot, 0], t[right_slot, 1], t[right_slot, 2]
+            if end == 0:
+                d0[0], d0[1], d0[2] = lx, ly, lz
+            else:
+                d3[0], d3[1], d3[2] = lx, ly, lz
+            left = (qy * lz - qz * ly) * n0 + (qz * lx - qx * lz) * n1 + (qx * ly - qy * lx) * n2  # [q, d_L]
+            right = (ry * qz - rz * qy) * n0 + (rz * qx - rx * qz) * n1 + (rx * qy - ry * qx) * n2  # [d_R, q]
+            total = left + right
+            safe = total if total != 0.0 else 1.0
+            split[end, 0] = 2.0 * right / safe
+            split[end, 1] = 2.0 * left / safe
+            split[end, 2] = -2.0 * ((ly * rz - lz * ry) * n0 + (lz * rx - lx * rz) * n1 + (lx * ry - ly * rx) * n2) / safe
+            size = np.sqrt(qx * qx + qy * qy + qz * qz) * max(
+                np.sqrt(lx * lx + ly * ly + lz * lz), np.sqrt(rx * rx + ry * ry + rz * rz))
+            smaller = left if left < right else right
+            if np.isnan(left) or np.isnan(right):
+                smaller = np.nan
+            margins[end, e] = smaller / (size if size > 0 else 1.0)
+        alpha0, beta0, phi0 = split[0, 0], split[0, 1], split[0, 2]
+        alpha1, beta1, phi2 = split[1, 0], split[1, 1], split[1, 2]
+        left_face, right_face, k_left, k_right = h >> 2, g >> 2, h & 3, g & 3
+        for d in range(3):
+            r[0, d] = 3.0 * (interior[left_face, k_left, 0, d] - b1[d])
+            r[1, d] = 3.0 * (interior[left_face, (k_left + 1) & 3, 1, d] - b2[d])
+            r[2, d] = 3.0 * (interior[right_face, (k_right + 1) & 3, 1, d] - b1[d])
+            r[3, d] = 3.0 * (interior[right_face, k_right, 0, d] - b2[d])
+        if abs(alpha0 - 1.0) <= symmetric_tolerance and abs(alpha1 - 1.0) <= symmetric_tolerance:
+            for d in range(3):  # D_L + D_R = Φ c', Φ linear: both sides move by the same vector
+                sum1 = (2.0 * phi0 * q1[d] + phi2 * q0[d]) / 3.0
+                sum2 = (phi0 * q2[d] + 2.0 * phi2 * q1[d]) / 3.0
+                shift1 = 0.5 * (sum1 - r[0, d] - r[2, d])
+                shift2 = 0.5 * (sum2 - r[1, d] - r[3, d])
+                out[0, d], out[2, d] = r[0, d] + shift1, r[2, d] + shift1
+                out[1, d], out[3, d] = r[1, d] + shift2, r[3, d] + shift2
+        else:  # _kh_fit
+            scalar[0], scalar[1] = 2.0 * beta0 / 3.0, 2.0 * beta1 / 3.0
+            scalar[2], scalar[3] = -2.0 * alpha0 / 3.0, -2.0 * alpha1 / 3.0
+            h_r0, h_r1 = phi0 / beta0, phi2 / beta1
+            for d in range(3):
+                g0, g2 = d0[d] / beta0, d3[d] / beta1
+                const[0, d] = beta1 * g0 / 3.0
+                const[1, d] = beta0 * g2 / 3.0
+                const[2, d] = -alpha1 * g0 / 3.0 + (2.0 * h_r0 * q1[d] + h_r1 * q0[d]) / 3.0
+                const[3, d] = -alpha0 * g2 / 3.0 + (h_r0 * q2[d] + 2.0 * h_r1 * q1[d]) / 3.0
+                along[0, d] = q0[d] / 3.0
+                along[1, d] = -beta0 * q2[d] / (3.0 * beta1) + 2.0 * q1[d] / 3.0
+                along[2, d] = -alpha1 * q0[d] / (3.0 * beta1)
+                along[3, d] = alpha0 * q2[d] / (3.0 * beta1) - 2.0 * alpha1 * q1[d] / (3.0 * beta1)
+            a = scalar[0] ** 2 + scalar[1] ** 2 + scalar[2] ** 2 + scalar[3] ** 2
+            dd = 0.0
+            r_h = 0.0
+            for i in range(4):
+                dd += along[i, 0] * along[i, 0] + along[i, 1] * along[i, 1] + along[i, 2] * along[i, 2]
+                r_h += (along[i, 0] * (r[i, 0] - const[i, 0]) + along[i, 1] * (r[i, 1] - const[i, 1])
+                        + along[i, 2] * (r[i, 2] - const[i, 2]))
+            c_r, c_c = 0.0, 0.0
+            for d in range(3):
+                c[d] = scalar[0] * along[0, d] + scalar[1] * along[1, d] + scalar[2] * along[2, d] + scalar[3] * along[3, d]
+                r_g[d] = (scalar[0] * (r[0, d] - const[0, d]) + scalar[1] * (r[1, d] - const[1, d])
+                          + scalar[2] * (r[2, d] - const[2, d]) + scalar[3] * (r[3, d] - const[3, d]))
+                c_r += c[d] * r_g[d]
+                c_c += c[d] * c[d]
+            lam = ridge * max(a, dd)
+            a += lam
+            dd += lam
+            h1 = (r_h - c_r / a) / (dd - c_c / a)  # Schur complement, then G1 = (r_G − c h)/a
+            for d in range(3):
+                g1 = (r_g[d] - c[d] * h1) / a
+                for i in range(4):
+                    out[i, d] = const[i, d] + scalar[i] * g1 + along[i, d] * h1
+        for d in range(3):
+            points[left_face, 12 + 2 * k_left, d] = b1[d] + out[0, d] / 3.0
+            points[left_face, 13 + 2 * ((k_left + 1) & 3), d] = b2[d] + out[1, d] / 3.0
+            points[right_face, 13 + 2 * ((k_right + 1) & 3), d] = b1[d] + out[2, d] / 3.0
+            points[right_face, 12 + 2 * k_right, d] = b2[d] + out[3, d] / 3.0

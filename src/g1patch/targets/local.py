@@ -4,10 +4,15 @@
 * ``least_squares_normals``: the paper's normal, the best plane through the vertex and its ring;
 * ``corner_tangents``: a mesh edge projected onto the tangent plane, ``s = d − (n·d) n``, with the
   chord length or the circle-aware arc length ``2|d|²/(|d| + |s|)``.
+
+``jit_kernel`` compiles the numba kernels of the targets and the assembly (plain functions with
+loops, kept beside the NumPy code they replace, which stays as the reference).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import cache
 from typing import Literal
 
 import numpy as np
@@ -16,12 +21,25 @@ from numpy.typing import NDArray
 from ..errors import ConstructionError, check_choice
 from ..mesh import QuadMesh
 
-__all__ = ["NORMALS", "TANGENTS", "NormalRule", "TangentRule", "corner_tangents", "cross", "fan_normals", "least_squares_normals"]
+__all__ = [
+    "NORMALS", "TANGENTS", "NormalRule", "TangentRule", "corner_tangents", "cross", "fan_normals", "in_vertex_planes", "jit_kernel",
+    "least_squares_normals",
+]
 
 NormalRule = Literal["fan", "paper"]
 TangentRule = Literal["chord", "arc"]
 NORMALS: tuple[NormalRule, ...] = ("fan", "paper")
 TANGENTS: tuple[TangentRule, ...] = ("chord", "arc")
+
+
+@cache
+def jit_kernel(kernel: Callable[..., object]) -> Callable[..., object]:
+    """``kernel`` compiled by numba on first use: ``njit(cache=True)`` (cached on disk), float64
+    IEEE arithmetic as NumPy's (no fastmath, NumPy's division semantics). numba is imported here, so
+    that ``import g1patch`` stays fast."""
+    import numba
+
+    return numba.njit(cache=True, error_model="numpy")(kernel)
 
 
 def cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -34,6 +52,29 @@ def cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]
     return out
 
 
+def in_vertex_planes(
+    tangents: NDArray[np.float64], normals: NDArray[np.float64], offsets: NDArray[np.int64], out: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
+    """Slot vectors moved into their vertex's tangent plane, ``t − (N·t) N`` (N the unit normal of
+    the slot's vertex, slots ``offsets[v]:offsets[v + 1]``), by a numba kernel; ``out`` may be ``tangents``."""
+    out = np.empty_like(tangents) if out is None else out
+    jit_kernel(_plane_kernel)(tangents, normals, offsets, out)
+    return out
+
+
+def _plane_kernel(tangents: NDArray[np.float64], normals: NDArray[np.float64], offsets: NDArray[np.int64],
+                  out: NDArray[np.float64]) -> None:
+    """``out = t − (N·t) N`` slot by slot."""
+    for v in range(offsets.size - 1):
+        n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
+        for s in range(offsets[v], offsets[v + 1]):
+            t0, t1, t2 = tangents[s, 0], tangents[s, 1], tangents[s, 2]
+            height = t0 * n0 + t1 * n1 + t2 * n2
+            out[s, 0] = t0 - height * n0
+            out[s, 1] = t1 - height * n1
+            out[s, 2] = t2 - height * n2
+
+
 def _unit_or_fail(vectors: NDArray[np.float64], what: str) -> NDArray[np.float64]:
     length = np.linalg.norm(vectors, axis=-1, keepdims=True)
     if not (length > 0).all():
@@ -42,14 +83,20 @@ def _unit_or_fail(vectors: NDArray[np.float64], what: str) -> NDArray[np.float64
     return vectors / length
 
 
-def fan_normals(mesh: QuadMesh) -> NDArray[np.float64]:
+def fan_normals(mesh: QuadMesh, *, compiled: bool = True) -> NDArray[np.float64]:
     """Unit fan normals ``N_A = normalize(Σ (x_next − A) × (x_prev − A))`` over the faces at A.
 
     In face f the corner A has a next and a previous vertex; the pair are consecutive ring
     neighbours of A, so the sum runs over consecutive ring edges (non-cyclic on a boundary).
+    ``compiled``: one numba pass over the face corners (:func:`_fan_kernel`, the same sums in the
+    same order), else NumPy.
     """
     faces = mesh.faces
     x = mesh.vertices
+    if compiled:
+        total = np.zeros_like(x)
+        jit_kernel(_fan_kernel)(x, faces, total)
+        return _unit_or_fail(total, "fan normal")
     here = x[faces]
     to_next = np.roll(here, -1, axis=1) - here
     to_prev = np.roll(here, 1, axis=1) - here
@@ -57,6 +104,18 @@ def fan_normals(mesh: QuadMesh) -> NDArray[np.float64]:
     corners = faces.reshape(-1)
     total = np.stack([np.bincount(corners, corner_normals[:, d], minlength=len(x)) for d in range(3)], axis=1)
     return _unit_or_fail(total, "fan normal")
+
+
+def _fan_kernel(x: NDArray[np.float64], faces: NDArray[np.int64], total: NDArray[np.float64]) -> None:
+    """``total[A] += (x_next − A) × (x_prev − A)`` for every face corner A, in corner order."""
+    for f in range(faces.shape[0]):
+        for k in range(4):
+            a, b, c = faces[f, k], faces[f, (k + 1) & 3], faces[f, (k + 3) & 3]
+            nx, ny, nz = x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], x[b, 2] - x[a, 2]
+            px, py, pz = x[c, 0] - x[a, 0], x[c, 1] - x[a, 1], x[c, 2] - x[a, 2]
+            total[a, 0] += ny * pz - nz * py
+            total[a, 1] += nz * px - nx * pz
+            total[a, 2] += nx * py - ny * px
 
 
 def least_squares_normals(mesh: QuadMesh) -> NDArray[np.float64]:
