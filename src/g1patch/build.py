@@ -29,7 +29,7 @@ from .continuity import folded_patches
 from .errors import InputError, check_choice
 from .frame import Frame
 from .gregory import GregoryPatchSet
-from .mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology
+from .mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology, Tag
 from .network import PatchNetwork, Patches, network_from_mesh
 from .patches import PatchSet
 from .targets import Targets
@@ -167,18 +167,18 @@ def build_network(
         mesh = subdivide(mesh, refine)
     frame = Frame.of_points(mesh.vertices)
     local = mesh.with_vertices(frame.to_local(mesh.vertices))
+    if method == "split4" and mesh.features.sharp_edges.any():
+        logger.warning(
+            "split4 does not keep sharp edges yet: the %d tagged sharp edges come out smooth (use --method gregory)",
+            int(mesh.features.sharp_edges.sum()),
+        )
+        local = _without_creases(local)
     targets = shape_targets(local, shape, tangents=tangents)
     guard = shape == "interpolate"
     surface = mesh if shape != "limit" else mesh.with_vertices(frame.to_world(targets.positions))  # the points passed through
     provenance = _provenance(mesh, method, shape, tangents, targets, refine, repairs)
     if method == "split4":
         from .construct.split4 import split4_network_from_targets
-
-        if targets.seams.any():
-            logger.warning(
-                "split4 does not keep sharp edges yet: the %d tagged sharp edges come out smooth (use --method gregory)",
-                int(targets.seams.sum()),
-            )
 
         if mesh.features.holes.any():
             logger.warning("split4 does not leave holes open yet: the %d hole faces get patches (use --method gregory)",
@@ -218,6 +218,21 @@ def _without_holes(
     seams[sub.halfedge_edge] = targets.seams[parent]
     provenance = {**provenance, "holes": str(int((~keep).sum()))}
     return network_from_mesh(sub, patches.take(np.flatnonzero(keep)), vertices[used], targets.normals[used], provenance, seam_edges=seams)
+
+
+def _without_creases(mesh: QuadMesh) -> QuadMesh:
+    """The mesh without its infinitely sharp creases and corners (the rest of its tags kept), for
+    constructions that cannot keep them: their targets must then be consistently smooth."""
+    features = mesh.features
+    topology = mesh.topology
+    tags = [tag for tag in mesh.tags if tag.name not in ("crease", "corner")]
+    kept = np.flatnonzero((features.edge_sharpness > 0) & (features.edge_sharpness < INFINITE_SHARPNESS))
+    if kept.size:
+        tags.append(Tag("crease", tuple(topology.edges[kept].ravel().tolist()), tuple(features.edge_sharpness[kept].tolist())))
+    corners = np.flatnonzero((features.vertex_sharpness > 0) & (features.vertex_sharpness < INFINITE_SHARPNESS))
+    if corners.size:
+        tags.append(Tag("corner", tuple(corners.tolist()), tuple(features.vertex_sharpness[corners].tolist())))
+    return QuadMesh(mesh.vertices, topology, tuple(tags), mesh.source, mesh.repairs)
 
 
 def _split4_local(local: QuadMesh, targets: Targets) -> PatchSet:
