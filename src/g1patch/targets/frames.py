@@ -66,15 +66,13 @@ largest entry, the same masks: tests/test_frames.py).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
-from functools import cache
 
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from .local import cross, fan_normals
+from .local import cross, fan_normals, jit_kernel
 from ..mesh import QuadMesh
 
 __all__ = ["VertexFrames", "vertex_frames", "RESIDUAL", "MAX_TILT", "MAX_STEEPNESS", "MIN_PIVOT"]
@@ -350,28 +348,37 @@ def _circle_fit(q: FloatArray, mask: BoolArray, edges: FloatArray, edge_mask: Bo
     return out
 
 
-def _fit_kernel(x: FloatArray, vertices: IntArray, hood_offsets: IntArray, hood_points: IntArray,
-                ring_offsets: IntArray, ring_d: FloatArray, start: FloatArray, cubic: bool, tilt: bool,
-                out_normals: FloatArray, out_shape: FloatArray, out_residual: FloatArray,
-                out_pivot: FloatArray) -> None:
-    """:func:`_circle_fit` of ``vertices`` one at a time, compiled by :func:`_compiled` (same formulas and steps).
+def _fit_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray,
+                neighbor_offsets: IntArray, neighbors: IntArray, vertices: IntArray, start: FloatArray, tilt: bool,
+                out_normals: FloatArray, out_shape: FloatArray, out_residual: FloatArray, out_pivot: FloatArray) -> None:
+    """:func:`_circle_fit` of ``vertices`` one at a time, compiled by :func:`~g1patch.targets.local.jit_kernel`
+    (same formulas and steps), with each vertex's neighbourhood gathered from the topology on the spot.
 
+    The face 1-ring are the corners of the faces at v; the face 2-ring adds the corners of the
+    faces at those (the rows of ``I Iᵀ`` and ``(I Iᵀ)²`` of :func:`_face_rings`, in the same
+    order). With ``tilt`` a vertex with a 2-ring of ≥ :data:`CUBIC_POINTS` points fits it with the
+    cubic, else its 1-ring without; without ``tilt`` the 1-ring, normal held. The Gram matrix is
+    accumulated point by point, each entry summed over the points in order.
     Writes row i of the ``out_`` arrays for ``vertices[i]``; S as in :func:`_circle_fit`, before symmetrising.
     """
-    k = 3 + 2 * tilt + 4 * cubic
-    h = 2 * tilt
-    most = 0
-    for v in vertices:
-        most = max(most, hood_offsets[v + 1] - hood_offsets[v])
-    q = np.empty((most, 3))
-    weighted = np.empty((k, most))
-    design = np.empty((k, most))
-    z = np.empty(most)
-    gram = np.empty((k, k))
-    lower = np.empty((k, k))
-    rhs = np.empty(k)
-    pivot = np.empty(k)
-    c = np.empty(k)
+    most = 1  # the largest face count: bounds the scratch of one ring
+    for u in range(ring_offsets.size - 1):
+        most = max(most, ring_offsets[u + 1] - ring_offsets[u])
+    ring_faces = np.empty(most, dtype=np.int64)
+    ring = np.empty(4 * most, dtype=np.int64)
+    centres = np.empty(4 * most, dtype=np.int64)
+    corners = np.empty(4, dtype=np.int64)
+    seen = np.full(x.shape[0], -1)  # stamp of the ring being gathered
+    taken = np.full(x.shape[0], -1)  # v once a point is in v's 2-ring
+    stamp = 0
+    hood = np.empty(64, dtype=np.int64)
+    q = np.empty((64, 3))
+    row = np.empty(9)
+    gram = np.empty((9, 9))
+    lower = np.empty((9, 9))
+    rhs = np.empty(9)
+    pivot = np.empty(9)
+    c = np.empty(9)
     n = np.empty(3)
     e1 = np.empty(3)
     e2 = np.empty(3)
@@ -380,10 +387,77 @@ def _fit_kernel(x: FloatArray, vertices: IntArray, hood_offsets: IntArray, hood_
     product = np.empty((3, 3))
     for i in range(vertices.size):
         v = vertices[i]
-        first, m = hood_offsets[v], hood_offsets[v + 1] - hood_offsets[v]
+        # Rows of I Iᵀ in scipy's order (reversed first encounter, over the faces in increasing
+        # order and their corners in increasing order), so that the sums are those of the NumPy
+        # reference: R(v) gives the 1-ring, and the 2-ring is the reversed first encounter over
+        # R(c) for c in R(v).
+        count = 0
+        m = 0
+        for at in range(-1, 4 * most):
+            if at == count or (at >= 0 and not tilt):
+                break
+            centre = v if at < 0 else centres[at]
+            stamp += 1
+            first, faces_here = ring_offsets[centre], ring_offsets[centre + 1] - ring_offsets[centre]
+            for r in range(faces_here):  # insertion sort of the ring's faces
+                f = ring_halfedges[first + r] >> 2
+                j = r
+                while j > 0 and ring_faces[j - 1] > f:
+                    ring_faces[j] = ring_faces[j - 1]
+                    j -= 1
+                ring_faces[j] = f
+            size = 0
+            for r in range(faces_here):
+                for corner in range(4):
+                    p = faces[ring_faces[r], corner]
+                    j = corner
+                    while j > 0 and corners[j - 1] > p:
+                        corners[j] = corners[j - 1]
+                        j -= 1
+                    corners[j] = p
+                for corner in range(4):
+                    p = corners[corner]
+                    if seen[p] != stamp:
+                        seen[p] = stamp
+                        ring[size] = p
+                        size += 1
+            if at < 0:
+                count = size
+                for j in range(size):
+                    centres[j] = ring[size - 1 - j]
+                continue
+            for j in range(size - 1, -1, -1):
+                p = ring[j]
+                if taken[p] != v:
+                    taken[p] = v
+                    if m == hood.size:
+                        grown = np.empty(2 * m, dtype=np.int64)
+                        grown[:m] = hood
+                        hood = grown
+                    hood[m] = p
+                    m += 1
+        cubic = tilt and m - 1 >= CUBIC_POINTS
+        if cubic:  # the 2-ring: reversed, without v
+            for j in range(m // 2):
+                hood[j], hood[m - 1 - j] = hood[m - 1 - j], hood[j]
+        else:  # the 1-ring, without v
+            if hood.size < count:
+                hood = np.empty(count, dtype=np.int64)
+            m = count
+            hood[:m] = centres[:m]
+        kept = 0
+        for j in range(m):
+            if hood[j] != v:
+                hood[kept] = hood[j]
+                kept += 1
+        m = kept
+        k = 3 + 2 * tilt + 4 * cubic
+        h = 2 * tilt
+        if q.shape[0] < m:
+            q = np.empty((hood.size, 3))
         for j in range(m):
             for d in range(3):
-                q[j, d] = x[hood_points[first + j], d] - x[v, d]
+                q[j, d] = x[hood[j], d] - x[v, d]
         n[:] = start[v]
         for _ in range(ITERATIONS if tilt else 1):
             # the frame (_frame): e1 = unit(n × axis), axis the first coordinate axis least aligned with n
@@ -400,20 +474,23 @@ def _fit_kernel(x: FloatArray, vertices: IntArray, hood_offsets: IntArray, hood_
             e2[1] = n[2] * e1[0] - n[0] * e1[2]
             e2[2] = n[0] * e1[1] - n[1] * e1[0]
             spread = 0.0
-            for j in range(ring_offsets[v], ring_offsets[v + 1]):
-                dx, dy, dz = ring_d[j, 0], ring_d[j, 1], ring_d[j, 2]
+            for j in range(neighbor_offsets[v], neighbor_offsets[v + 1]):
+                dx, dy, dz = x[neighbors[j], 0] - x[v, 0], x[neighbors[j], 1] - x[v, 1], x[neighbors[j], 2] - x[v, 2]
                 height = n[0] * dx + n[1] * dy + n[2] * dz
                 spread += (dx * dx + dy * dy + dz * dz) - height * height
-            hbar = np.sqrt(spread / (ring_offsets[v + 1] - ring_offsets[v]))
-            gram[:, :] = 0.0
-            rhs[:] = 0.0
+            hbar = np.sqrt(spread / (neighbor_offsets[v + 1] - neighbor_offsets[v]))
+            ux, uy, uz = e1[0] / hbar, e1[1] / hbar, e1[2] / hbar
+            vx, vy, vz = e2[0] / hbar, e2[1] / hbar, e2[2] / hbar
+            nx, ny, nz = n[0] / hbar, n[1] / hbar, n[2] / hbar
+            gram[:k, :k] = 0.0
+            rhs[:k] = 0.0
             sum_w = 0.0
             sum_wzz = 0.0
             for j in range(m):
                 px, py, pz = q[j, 0], q[j, 1], q[j, 2]
-                xj = (e1[0] / hbar) * px + (e1[1] / hbar) * py + (e1[2] / hbar) * pz
-                yj = (e2[0] / hbar) * px + (e2[1] / hbar) * py + (e2[2] / hbar) * pz
-                zj = (n[0] / hbar) * px + (n[1] / hbar) * py + (n[2] / hbar) * pz
+                xj = ux * px + uy * py + uz * pz
+                yj = vx * px + vy * py + vz * pz
+                zj = nx * px + ny * py + nz * pz
                 xx, xy, yy = xj * xj, xj * yj, yj * yj
                 r2 = xx + yy
                 if r2 > 1e-24:
@@ -422,29 +499,23 @@ def _fit_kernel(x: FloatArray, vertices: IntArray, hood_offsets: IntArray, hood_
                 else:
                     a, w = 0.5 + 0.5 * zj * zj, 0.0
                 if tilt:
-                    design[0, j], design[1, j] = xj, yj
-                design[h, j], design[h + 1, j], design[h + 2, j] = a * xx, 2.0 * a * xy, a * yy
+                    row[0], row[1] = xj, yj
+                row[h], row[h + 1], row[h + 2] = a * xx, 2.0 * a * xy, a * yy
                 if cubic:
-                    design[h + 3, j], design[h + 4, j] = xx * (xj / 6.0), xx * (yj / 2.0)
-                    design[h + 5, j], design[h + 6, j] = yy * (xj / 2.0), yy * (yj / 6.0)
+                    row[h + 3], row[h + 4] = xx * (xj / 6.0), xx * (yj / 2.0)
+                    row[h + 5], row[h + 6] = yy * (xj / 2.0), yy * (yj / 6.0)
                 for r in range(k):
-                    weighted[r, j] = design[r, j] * w
-                z[j] = zj
+                    weighted = row[r] * w
+                    for s in range(r, k):
+                        gram[r, s] += weighted * row[s]
+                    rhs[r] += weighted * zj
                 sum_w += w
                 sum_wzz += w * zj * zj
             for r in range(k):
-                for s in range(r, k):
-                    total = 0.0
-                    for j in range(m):
-                        total += weighted[r, j] * design[s, j]
-                    gram[r, s] = total
-                    gram[s, r] = total
-                total = 0.0
-                for j in range(m):
-                    total += weighted[r, j] * z[j]
-                rhs[r] = total
+                for s in range(r + 1, k):
+                    gram[s, r] = gram[r, s]
             # the pivot-dropping Cholesky of _solve, in place in ``lower``
-            lower[:, :] = gram
+            lower[:k, :k] = gram[:k, :k]
             for j in range(k):
                 diagonal = gram[j, j]
                 pivot[j] = lower[j, j] / diagonal if diagonal > 0 else 0.0
@@ -503,23 +574,53 @@ def _fit_kernel(x: FloatArray, vertices: IntArray, hood_offsets: IntArray, hood_
                 out_shape[i, r, s] = total
 
 
-@cache
-def _compiled() -> Callable[..., None]:
-    """:func:`_fit_kernel` compiled by numba (imported here, so that ``import g1patch`` stays fast; cached on disk)."""
-    import numba
+def _ring_kernel(x: FloatArray, neighbor_offsets: IntArray, neighbors: IntArray, face_count: IntArray,
+                 boundary: BoolArray, normals: FloatArray, vertices: IntArray, out_valid: BoolArray,
+                 out_steepness: FloatArray) -> None:
+    """:meth:`_Ring.valid` and :meth:`_Ring.steepness` of ``normals[v]`` at ``vertices``, vertex by vertex
+    (row i for ``vertices[i]``): turning angles ``atan2(N·(d_i × d_{i+1}), d_i·d_{i+1} − (N·d_i)(N·d_{i+1}))``
+    summed over the ring's consecutive pairs, and the largest ``|N·d|/|d|``."""
+    for i in range(vertices.size):
+        v = vertices[i]
+        n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
+        first, count = neighbor_offsets[v], neighbor_offsets[v + 1] - neighbor_offsets[v]
+        total = 0.0
+        folded = False
+        for step in range(face_count[v]):
+            a, b = neighbors[first + step], neighbors[first + (step + 1) % count]
+            ax, ay, az = x[a, 0] - x[v, 0], x[a, 1] - x[v, 1], x[a, 2] - x[v, 2]
+            bx, by, bz = x[b, 0] - x[v, 0], x[b, 1] - x[v, 1], x[b, 2] - x[v, 2]
+            sine = n0 * (ay * bz - az * by) + n1 * (az * bx - ax * bz) + n2 * (ax * by - ay * bx)
+            cosine = (ax * bx + ay * by + az * bz) - (ax * n0 + ay * n1 + az * n2) * (bx * n0 + by * n1 + bz * n2)
+            total += np.arctan2(sine, cosine)
+            folded |= not sine > 0
+        once = total < 2.0 * np.pi if boundary[v] else abs(total - 2.0 * np.pi) < np.pi
+        out_valid[i] = once and not folded
+        steepest = 0.0
+        for j in range(first, first + count):
+            p = neighbors[j]
+            dx, dy, dz = x[p, 0] - x[v, 0], x[p, 1] - x[v, 1], x[p, 2] - x[v, 2]
+            sine = abs(dx * n0 + dy * n1 + dz * n2) / np.sqrt(dx * dx + dy * dy + dz * dz)
+            if not sine <= steepest:
+                steepest = sine
+        out_steepness[i] = steepest
 
-    return numba.njit(cache=True, error_model="numpy")(_fit_kernel)
+
+def _ring_checks(mesh: QuadMesh, normals: FloatArray, vertices: IntArray) -> tuple[BoolArray, FloatArray]:
+    """:func:`_ring_kernel`: validity and steepness of ``normals`` at ``vertices``."""
+    topo = mesh.topology
+    valid = np.empty(vertices.size, dtype=bool)
+    steepness = np.empty(vertices.size)
+    jit_kernel(_ring_kernel)(mesh.vertices, topo.neighbor_offsets, topo.neighbors, topo.face_count, topo.is_boundary_vertex,
+                           normals, vertices, valid, steepness)
+    return valid, steepness
 
 
 def _fit_all(mesh: QuadMesh, ring: _Ring, hood: _Hood, vertices: IntArray, n: FloatArray,
-             cubic: bool, tilt: bool, compiled: bool) -> _Fit:
+             cubic: bool, tilt: bool) -> _Fit:
     """:func:`_circle_fit` of ``vertices`` with neighbourhoods ``hood`` and start normals ``n`` (V, 3), row i for
-    ``vertices[i]``: by the compiled kernel, or block by block in NumPy."""
+    ``vertices[i]``, block by block in NumPy (the reference of :func:`_fit_kernel`)."""
     out = _Fit.empty(vertices.size)
-    if compiled:
-        _compiled()(mesh.vertices, vertices, hood.offsets, hood.points, ring.offsets, ring.d, n, cubic, tilt,
-                    out.normals, out.shape_operator, out.residual, out.pivot)
-        return out
     x = mesh.vertices
     order = np.argsort(hood.sizes[vertices], kind="stable")
     for rows in (order[s:s + BLOCK] for s in range(0, order.size, BLOCK)):
@@ -533,34 +634,49 @@ def _fit_all(mesh: QuadMesh, ring: _Ring, hood: _Hood, vertices: IntArray, n: Fl
     return out
 
 
+def _fit_compiled(mesh: QuadMesh, vertices: IntArray, n: FloatArray, tilt: bool) -> _Fit:
+    """:func:`_fit_kernel` of ``vertices`` (row i for ``vertices[i]``) with start normals ``n`` (V, 3)."""
+    topo = mesh.topology
+    out = _Fit.empty(vertices.size)
+    jit_kernel(_fit_kernel)(mesh.vertices, topo.faces, topo.ring_offsets, topo.ring_halfedges, topo.neighbor_offsets,
+                          topo.neighbors, vertices, n, tilt, out.normals, out.shape_operator, out.residual, out.pivot)
+    return out
+
+
 def vertex_frames(mesh: QuadMesh, *, compiled: bool = True) -> VertexFrames:
     """Unit normals and shape operators at the vertices of ``mesh``: repaired fan normal, circle-aware
     fit where trusted, else the fan normal with the fixed-normal circle fit of S (module doc).
 
-    ``compiled`` runs the fits in the numba kernel; ``False`` runs the NumPy reference (the same to
-    rounding, tests/test_frames.py).
+    ``compiled`` runs the fits and ring checks in numba kernels (:func:`_fit_kernel`,
+    :func:`_ring_kernel`); ``False`` runs the NumPy reference (the same to rounding, tests/test_frames.py).
     """
     nv = mesh.n_vertices
-    ring = _Ring.of(mesh)
-    start = fan_normals(mesh)
+    everything = np.arange(nv)
+    ring = None if compiled else _Ring.of(mesh)
+    start = fan_normals(mesh, compiled=compiled)
     repaired = np.zeros(nv, dtype=bool)
-    bad = np.flatnonzero(~ring.valid(start))
+    bad = np.flatnonzero(~(_ring_checks(mesh, start, everything)[0] if compiled else ring.valid(start)))
     if bad.size:
+        ring = ring or _Ring.of(mesh)
         start, done = ring.repair(start, bad)
         repaired[bad[done]] = True
 
-    one, two = _face_rings(mesh)
-    normals = np.empty((nv, 3))
-    shape_operator = np.empty((nv, 3, 3))
-    residual = np.empty(nv)
-    pivot = np.empty(nv)
     with np.errstate(invalid="ignore", divide="ignore"):
-        large = two.sizes >= CUBIC_POINTS
-        for hood, cubic in ((two, True), (one, False)):
-            vertices = np.flatnonzero(large == cubic)
-            fit = _fit_all(mesh, ring, hood, vertices, start, cubic, True, compiled)
-            normals[vertices], shape_operator[vertices], residual[vertices], pivot[vertices] = (
-                fit.normals, fit.shape_operator, fit.residual, fit.pivot)
+        if compiled:
+            fit = _fit_compiled(mesh, everything, start, True)
+            normals, shape_operator, residual, pivot = fit.normals, fit.shape_operator, fit.residual, fit.pivot
+        else:
+            one, two = _face_rings(mesh)
+            normals = np.empty((nv, 3))
+            shape_operator = np.empty((nv, 3, 3))
+            residual = np.empty(nv)
+            pivot = np.empty(nv)
+            large = two.sizes >= CUBIC_POINTS
+            for hood, cubic in ((two, True), (one, False)):
+                vertices = np.flatnonzero(large == cubic)
+                fit = _fit_all(mesh, ring, hood, vertices, start, cubic, True)
+                normals[vertices], shape_operator[vertices], residual[vertices], pivot[vertices] = (
+                    fit.normals, fit.shape_operator, fit.residual, fit.pivot)
         fitted = (
             ~mesh.topology.is_boundary_vertex  # a one-sided neighbourhood extrapolates the normal
             & np.isfinite(normals).all(axis=1)
@@ -568,12 +684,19 @@ def vertex_frames(mesh: QuadMesh, *, compiled: bool = True) -> VertexFrames:
             & (residual <= RESIDUAL)
             & (pivot >= MIN_PIVOT)
             & (np.einsum("vd,vd->v", normals, start) >= np.cos(np.radians(MAX_TILT)))
-            & (ring.steepness(normals) <= np.sin(np.radians(MAX_STEEPNESS)))
         )
-        fitted &= ring.valid(np.where(fitted[:, None], normals, start))
+        if compiled:
+            candidates = np.flatnonzero(fitted)
+            valid, steepness = _ring_checks(mesh, normals, candidates)
+            fitted[candidates] = valid & (steepness <= np.sin(np.radians(MAX_STEEPNESS)))
+        else:
+            fitted &= ring.steepness(normals) <= np.sin(np.radians(MAX_STEEPNESS))
+            fitted &= ring.valid(np.where(fitted[:, None], normals, start))
         rest = np.flatnonzero(~fitted)
         normals[rest] = start[rest]
         if rest.size:
-            held = _fit_all(mesh, ring, one, rest, start, False, False, compiled)
+            held = _fit_compiled(mesh, rest, start, False) if compiled else _fit_all(mesh, ring, one, rest, start, False, False)
             shape_operator[rest] = np.nan_to_num(held.shape_operator)
-    return VertexFrames(normals, 0.5 * (shape_operator + shape_operator.transpose(0, 2, 1)), fitted, repaired)
+    shape_operator += shape_operator.transpose(0, 2, 1).copy()
+    shape_operator *= 0.5
+    return VertexFrames(normals, shape_operator, fitted, repaired)
