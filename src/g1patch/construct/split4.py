@@ -35,6 +35,20 @@ bilinear Coons point of the split curves in the tangent directions (its height f
 the seam tangents at a midpoint take the two faces' own width across the edge and their own lean
 along it (:func:`_seam_tangents`), and the star is shrunk where it is much longer than its target
 or its chord (:func:`split4_star`).
+
+Reproduction: the assembly moves the targets only as far as G1 requires (DESIGN §1). Each face's
+targets are one bicubic (corners, slot tangents, :attr:`~g1patch.targets.Targets.corner_interior`,
+:func:`target_nets`); where they already meet the conditions above to rounding
+(:data:`REPRODUCE_RTOL` of their extent) its halves are taken instead of the free choices: at an
+edge whose split4 curve is the targets' own curve halved, and whose targets' seam tangents at M
+satisfy the midpoint star ``t_L + t_R = μ t_X`` (what rounding leaves of the gap is split equally),
+those seam tangents and the twists next to M; on a face whose every edge is kept so (a boundary edge
+needs only its curve), the bicubic's centre, its cross and its centre twists. Targets that are a C1
+bicubic B-spline with μ = 0 (closed grid lines: a regular torus under ``limit``) then give that
+B-spline subdivided at ½, the min-norm twist changes vanish, and each quad is one bicubic. Elsewhere
+(fitted or shrunk stars, sheared or shifted curves, targets that do not meet the star) the heuristics
+above stay. The star length safeguard stays everywhere: a star longer than it allows (B-spline
+tangents on a strongly graded cage) is shrunk even where its targets are consistent.
 """
 
 from __future__ import annotations
@@ -55,8 +69,8 @@ from ..patches import PatchSet
 from ..targets import Targets, halfedge_slots
 
 __all__ = [
-    "BSPLINE_KNOTS", "STAR_LENGTH_LIMIT", "SplitStar", "bspline_nets", "macro_nets",
-    "split4_network_from_targets", "split4_patches", "split4_star",
+    "BSPLINE_KNOTS", "REPRODUCE_RTOL", "STAR_LENGTH_LIMIT", "SplitStar", "bspline_nets", "macro_nets",
+    "split4_network_from_targets", "split4_patches", "split4_star", "target_nets",
 ]
 
 #: knots of each quad's B-spline patch, in u and in v
@@ -72,6 +86,12 @@ _LOCAL = np.stack(
     [np.stack([_P, _Q], -1), np.stack([3 - _Q, _P], -1), np.stack([3 - _P, 3 - _Q], -1), np.stack([_Q, 3 - _P], -1)]
 )
 _SUB_ORIGIN = np.array([[0, 0], [3, 0], [3, 3], [0, 3]])  # (s, t)·3: where sub-patch k sits in the 7×7 net
+
+
+def _extent(points: FloatArray) -> float:
+    """The bounding-box diagonal of ``points`` (1 where they are all one point)."""
+    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) if len(points) else 0.0
+    return diagonal if diagonal > 0 else 1.0
 
 
 def _unit(v: FloatArray) -> FloatArray:
@@ -261,6 +281,57 @@ def _cycle(n: int, closed: bool) -> FloatArray:
 
 _MIDPOINT = np.array([[1.0, 1, 0, 0], [0, 0, 1, 1], [1, 0, 1, 0], [0, 1, 0, 1]])  # (LX, RX, LY, RY)
 
+#: targets that meet split4's G1 conditions to within this share of their extent (the bounding-box
+#: diagonal of the positions) are reproduced: rounding, far below any shape difference
+REPRODUCE_RTOL = 1e-12
+
+# de Casteljau halving of a cubic at ½: the 7 × 4 matrix from Bézier points to the two halves'
+_HALVE = np.array([[8.0, 0, 0, 0], [4, 4, 0, 0], [2, 4, 2, 0], [1, 3, 3, 1], [0, 2, 4, 2], [0, 0, 4, 4], [0, 0, 0, 8]]) / 8.0
+# the points (p, q) of the subdivided target bicubic, in the frame of corner k, that the assembly
+# takes over where the targets are consistent: seam point e (3,1), b (3,2), the twists at MID[k]
+# (2,1), MID[k−1] (1,2) and C (2,2), the centre (3,3)
+_SEAM, _CROSS, _TWIST_MID, _TWIST_PREV, _TWIST_CENTRE, _CENTRE = range(6)
+_TARGET_POINTS = ((3, 1), (3, 2), (2, 1), (1, 2), (2, 2), (3, 3))
+
+
+def _macro_index(k: int, p: int, q: int) -> tuple[int, int]:
+    """Index (i, j) in the 7×7 macro net of point (p, q) in the frame of corner k (as :data:`_LOCAL`, on 0..6)."""
+    return [(p, q), (6 - q, p), (6 - p, 6 - q), (q, 6 - p)][k]
+
+
+#: [k, point, 4 i + j]: weights of the face's 4×4 Bézier net for each of :data:`_TARGET_POINTS` in the frame of corner k
+_TARGET_WEIGHTS = np.array(
+    [[np.outer(_HALVE[i], _HALVE[j]).ravel() for i, j in (_macro_index(k, p, q) for p, q in _TARGET_POINTS)] for k in range(4)]
+)
+
+
+def target_nets(targets: Targets) -> FloatArray:
+    """The (F, 4, 4, 3) Bézier nets of the targets' own bicubic per face: corners, edge points
+    ``x + t/3`` from the slot tangents, interior points :attr:`Targets.corner_interior`
+    (``net[i, j]``, i along edge 0, j along edge 3 reversed)."""
+    from ..gregory import INTERIOR_INDEX
+
+    topology = targets.topology
+    slot_out, slot_in = halfedge_slots(topology)
+    h = 4 * np.arange(topology.n_faces)[:, None] + np.arange(4)
+    corner = targets.positions[topology.faces]
+    net = np.empty((topology.n_faces, 4, 4, 3))
+    net[:, [0, 3, 3, 0], [0, 0, 3, 3]] = corner
+    net[:, [1, 3, 2, 0], [0, 1, 3, 2]] = corner + targets.tangents[slot_out[h]] / 3.0  # edge k, next to corner k
+    net[:, [2, 3, 1, 0], [0, 2, 3, 1]] = np.roll(corner, -1, axis=1) + targets.tangents[slot_in[h]] / 3.0  # next to k + 1
+    net[:, INTERIOR_INDEX[:, 0], INTERIOR_INDEX[:, 1]] = targets.corner_interior
+    return net
+
+
+def _target_points(targets: Targets) -> FloatArray:
+    """Per half-edge h = 4f + k the (4F, 6, 3) points :data:`_TARGET_POINTS` of face f's target
+    bicubic subdivided at ½ (:func:`target_nets`), in the frame of corner k."""
+    nets = target_nets(targets).reshape(-1, 16, 3)
+    out = np.empty((len(nets), 4, len(_TARGET_POINTS), 3))
+    for f0 in range(0, len(nets), _GROUPS):
+        out[f0:f0 + _GROUPS] = np.einsum("kpn,fnd->fkpd", _TARGET_WEIGHTS, nets[f0:f0 + _GROUPS])
+    return out.reshape(-1, len(_TARGET_POINTS), 3)
+
 
 # Sources of the assembly, per half-edge h = 4f + k: 0 V, 1..7 the points of _assemble's
 # ``points`` (P1, P2 and M from the origin, P1 and P2 from the target, the seam point into f, b),
@@ -363,8 +434,8 @@ def split4_patches(
 ) -> tuple[PatchSet, FloatArray, FloatArray, SplitStar]:
     """The 4 F Bézier sub-patches (sub-patch ``4 f + k`` at corner k of face f), and the positions
     and unit surface normals of the edge midpoints and face centres, each stacked as (E + F, 3).
-    The normal at M is N_M (the seam and curve tangents there are ⊥ N_M); at C it is
-    ``(M_0 − M_2) × (M_1 − M_3)``, the cross of the centre's star. Also returns the star
+    The normal at M is N_M (the seam and curve tangents there are ⊥ N_M; at a kept midpoint it is
+    ``t_L × t_X``); at C it is ``(b_0 − b_2) × (b_1 − b_3)``, the cross of the centre's star. Also returns the star
     (:func:`split4_star`: which vertices were refitted or shrunk).
 
     ``targets`` are in local coordinates ``(x − centre) / scale``; the sub-patches are mapped
@@ -409,6 +480,24 @@ def split4_patches(
     d1, d2 = on_side(0, 4, ~canonical), on_side(1, 3, ~canonical)  # from the target of h
     del near
 
+    # -- where the targets already meet the G1 conditions they are kept (module docstring,
+    # "Reproduction"): an edge whose split4 curve is the targets' own, halved; an interior edge
+    # whose targets' seam tangents at M satisfy the midpoint star; a face whose edges all are
+    tolerance = REPRODUCE_RTOL * _extent(pos)
+    own = _target_points(targets)  # (4F, 6, 3) per half-edge, in the frame of its corner
+    unsheared = np.zeros(len(mu))
+    target_curve = np.stack(_edge_curves(
+        pos[x_of], pos[y_of], targets.tangents[slot_out[h_l]], targets.tangents[slot_in[h_l]], unsheared, unsheared, unsheared,
+    ), axis=1)
+    same_curve = np.abs(curve - target_curve).max(axis=(1, 2)) <= tolerance
+    del target_curve, unsheared
+    t_x = 3.0 * (p2 - m)
+    own_seam = 3.0 * (own[:, _SEAM] - m[edge_of])  # the targets' seam tangent at M into the face of h
+    star_gap = own_seam[h_l] + np.where(interior[:, None], own_seam[h_r], 0.0) - mu[:, None] * t_x
+    kept_edge = same_curve & interior & (np.abs(star_gap).max(axis=1) <= tolerance)
+    kept_face = np.where(interior, kept_edge, same_curve)[edge_of].reshape(n_faces, 4).all(axis=1)
+    kept_mid = kept_edge | (~interior & kept_face[h_l >> 2])  # the seam tangents and twists at M are the targets'
+
     # -- centres (any C keeps G1: its star is a plain cross), and its cross b_k = C + (M_k − M_{k+2}) / 6;
     # the middle of the targets' bicubic is (Σ corners + 3 Σ edge points + 9 Σ interior) / 64
     # = (7 Σ V + Σ (t_next + t_prev) + 9 Σ Ft) / 64
@@ -429,9 +518,14 @@ def split4_patches(
     n_c = cross / np.where(size > 0, size, 1.0)
     centres = coons + _dot(centres - coons, n_c)[:, None] * n_c
     b = centres[:, None] + (mids - np.roll(mids, -2, axis=1)) / 6.0
+    # a kept face: the centre and its cross of the targets' bicubic (opposite arms, so still a plain cross)
+    own_face = own.reshape(n_faces, 4, -1, 3)[kept_face]
+    centres[kept_face] = own_face[:, 0, _CENTRE]
+    arms = own_face[:, :, _CROSS]
+    b[kept_face] = centres[kept_face, None] + 0.5 * (arms - np.roll(arms, -2, axis=1))
+    del own_face, arms
 
     # -- midpoint stars: t_L + t_R = μ t_X, seam points e = M + t/3
-    t_x = 3.0 * (p2 - m)
     n_m = normals[x_of] + normals[y_of]
     n_m -= (_dot(n_m, t_x) / _dot(t_x, t_x))[:, None] * t_x
     h_other = np.where(interior, h_r, h_l)
@@ -440,15 +534,19 @@ def split4_patches(
         [face_corners[halfedges >> 2, (corner_of + 2) & 3, None], face_corners[halfedges >> 2, (corner_of + 3) & 3, None],
          mids[halfedges >> 2, (corner_of + 2) & 3, None]], axis=1)
     t_l, t_r = _seam_tangents(m, t_x, n_m, mu, centres[h_l >> 2], centres[h_other >> 2], far[h_l], far[h_other], interior)
+    # kept midpoints: the targets' seam tangents, the rounding-level gap of the star split equally
+    t_l[kept_mid] = own_seam[h_l[kept_mid]] - 0.5 * star_gap[kept_mid]
+    t_r[kept_edge] = own_seam[h_r[kept_edge]] - 0.5 * star_gap[kept_edge]
+    n_m[kept_mid] = np.cross(t_l[kept_mid], t_x[kept_mid])  # ⊥ both tangents of the star at M
     e_l = m + t_l / 3.0
     e_r = m + t_r / 3.0
     seam = np.where(canonical[:, None], e_l[edge_of], e_r[edge_of])  # into the face of h
-    del t_x, far, t_l, t_r
+    del t_x, far, t_l, t_r, own_seam, star_gap
 
     # -- twist targets τ = e1 + e2 − c ± w at the corners V, MID[k], MID[k−1], C of each sub-patch,
     # w = (V − M_k + C − M_{k−1}) / 9 (the bilinear term, + at V and C, − at the midpoints); at V the
     # targets' own twist p_uv = 9 (Ft − V) − 3 (t_next + t_prev), a quarter of it on the half-size
-    # sub-patch: w_V = p_uv / 36
+    # sub-patch: w_V = p_uv / 36; at kept midpoints and centres the targets' own subdivided twists
     m_h = m[edge_of]
     b_flat = b.reshape(-1, 3)
     corner_points = pos[topology.faces.reshape(-1)]
@@ -460,10 +558,10 @@ def split4_patches(
     vertex_twist *= stars.factor[topology.faces.reshape(-1), None]  # a shrunk star: the twist shrinks with it
     twist[:, 0] = o1 + d1[prev] - corner_points + vertex_twist
     del vertex_twist, target_next, target_prev
-    twist[:, 1] = o2 + seam - m_h - w
-    twist[:, 2] = d2[prev] + seam[prev] - m_prev - w
-    twist[:, 3] = b_flat + b_flat[prev] - centre_points + w
-    del w, m_prev, centre_points
+    twist[:, 1] = np.where(kept_mid[edge_of, None], own[:, _TWIST_MID], o2 + seam - m_h - w)
+    twist[:, 2] = np.where(kept_mid[edge_of[prev], None], own[:, _TWIST_PREV], d2[prev] + seam[prev] - m_prev - w)
+    twist[:, 3] = np.where(np.repeat(kept_face, 4)[:, None], own[:, _TWIST_CENTRE], b_flat + b_flat[prev] - centre_points + w)
+    del w, m_prev, centre_points, own
 
     # -- original vertices: F_{j−1} + F_j = R_j over the interior ring edges
     origin = topology.faces.reshape(-1)
@@ -506,7 +604,7 @@ def split4_patches(
     control = _assemble((o1, o2, m_h, d1, d2, seam, b_flat), centres, twist, corners[topology.faces], scale, centre)
     del o1, o2, m_h, d1, d2, seam, twist
     extra = np.concatenate([m, centres]) * scale + centre
-    extra_normals = np.concatenate([_unit(n_m), _unit(np.cross(mids[:, 0] - mids[:, 2], mids[:, 1] - mids[:, 3]))])
+    extra_normals = np.concatenate([_unit(n_m), _unit(np.cross(b[:, 0] - b[:, 2], b[:, 1] - b[:, 3]))])
     return PatchSet(control.reshape(-1, 4, 4, 3)), extra, extra_normals, stars
 
 
