@@ -1,0 +1,107 @@
+"""Fuzzing at scale: 10,000 hostile inputs through build → check → export → render.
+
+The cases are those of ``tests/fuzzing.py`` (seeds 0 … N − 1; the CI test draws its seeds with
+hypothesis), run by a pool of worker processes so that a crash inside a native library kills a
+worker, not the run: a crashed case is counted and the pool restarted. Every 20th case also
+exports STEP through OpenCASCADE, every 5th renders a PNG. Per worker the resident peak is
+checked against ``--memory-cap``.
+
+Summary table: cases, commands run, exit codes, tracebacks, crashes, leftover files, NaN in
+reports, slow commands, other broken promises, time; then the first findings, one line each.
+
+Run:  .venv/bin/python benchmarks/fuzz.py [--cases N] [--workers W] [--memory-cap MB]
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import os
+import resource
+import sys
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+import fuzzing  # noqa: E402
+
+
+def one_case(seed: int) -> tuple[int, list[int | None], list[str], float]:
+    """Run case ``seed`` in a fresh directory: (seed, exit codes, findings, resident peak in MB)."""
+    import warnings
+
+    warnings.simplefilter("ignore")
+    with tempfile.TemporaryDirectory() as directory:
+        case = fuzzing.make_case(seed, Path(directory))
+        outcomes = fuzzing.run_case(case, render=seed % 5 == 0, cad=seed % 20 == 0)
+        found = fuzzing.problems(case, outcomes)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    return seed, [outcome.code for outcome in outcomes], found, peak
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cases", type=int, default=10_000)
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 2)
+    parser.add_argument("--memory-cap", type=float, default=4096.0, help="MB of resident memory per worker")
+    args = parser.parse_args()
+
+    start = time.perf_counter()
+    codes: collections.Counter[int | None] = collections.Counter()
+    findings: list[str] = []
+    crashes: list[int] = []
+    peak = 0.0
+    pending = list(range(args.cases))
+    while pending:
+        with ProcessPoolExecutor(args.workers, max_tasks_per_child=200) as pool:
+            futures = {pool.submit(one_case, seed): seed for seed in pending}
+            done: set[int] = set()
+            try:
+                for future in as_completed(futures):
+                    seed, case_codes, found, case_peak = future.result()
+                    done.add(seed)
+                    codes.update(case_codes)
+                    findings += found
+                    peak = max(peak, case_peak)
+                    if case_peak > args.memory_cap:
+                        findings.append(f"seed {seed}: worker resident peak {case_peak:.0f} MB above {args.memory_cap:.0f} MB")
+            except BrokenProcessPool:
+                running = [s for f, s in futures.items() if s not in done and not f.done()]
+                broken = [s for f, s in futures.items() if s not in done and f.done() and f.exception() is not None]
+                crashes += broken[:1] or running[:1]
+                findings.append(f"seed {(broken[:1] or running[:1])[0]}: a worker crashed (native crash or killed)")
+                done.update(crashes)
+        pending = [seed for seed in pending if seed not in done]
+
+    categories = {"tracebacks": "traceback", "leftover files": ": left ", "NaN in reports": "NaN", "slow commands": " took ",
+                  "crashes": "crashed"}
+    counted = {name: sum(1 for line in findings if marker in line) for name, marker in categories.items()}
+    commands = sum(codes.values())
+    elapsed = time.perf_counter() - start
+    load = os.getloadavg()[0]
+    print(f"fuzz: {args.cases} cases, {args.workers} workers, load average {load:.2f}")
+    print("| measure | value |")
+    print("|---|---|")
+    rows = [
+        ("cases", args.cases),
+        ("commands run", commands),
+        ("exit 0 / 1 / 2", f"{codes.get(0, 0)} / {codes.get(1, 0)} / {codes.get(2, 0)}"),
+        ("other exit codes", sum(n for code, n in codes.items() if code not in (0, 1, 2))),
+        *((name, counted[name]) for name in categories),
+        ("other broken promises", len(findings) - sum(counted.values())),
+        ("largest worker resident peak", f"{peak:.0f} MB"),
+        ("time", f"{elapsed / 60:.1f} min"),
+    ]
+    for name, value in rows:
+        print(f"| {name} | {value} |")
+    for line in findings[:50]:
+        print(line)
+    sys.exit(1 if findings else 0)
+
+
+if __name__ == "__main__":
+    main()
