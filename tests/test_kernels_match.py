@@ -72,3 +72,49 @@ def test_assembly_of_a_random_fan_takes_the_kh_fit() -> None:
     interior = targets.interior + rng.normal(0.0, 0.01, targets.interior.shape)
     shaken = targets.with_changes(tangents=targets.tangents * scale, interior=interior)
     assert_close(assemble_gregory(shaken).points, assemble_gregory(shaken, compiled=False).points)
+
+
+def test_targets_kernels(mesh: QuadMesh) -> None:
+    """Projected tangents, fan validity (on the raw fans, valid or not), interior targets with and
+    without the shape operator, and the coarse-face turn."""
+    from g1patch.targets import interpolate
+    from g1patch.targets.frames import vertex_frames
+    from g1patch.targets.local import jit_kernel
+
+    frames = vertex_frames(mesh)
+    topology, n = mesh.topology, frames.normals
+    fast, reference = interpolate._projected_tangents(mesh, n), interpolate._projected_tangents(mesh, n, compiled=False)
+    for a, b in zip(fast, reference, strict=True):
+        assert_close(a, b)
+    raw = fast[0]
+    twisted = raw * np.where(np.arange(len(raw)) % 3 == 0, -1.0, 1.0)[:, None]  # folded fans fail
+    for t in (raw, twisted):
+        assert_close(interpolate._valid_fans(topology, n, t), interpolate._valid_fans(topology, n, t, compiled=False))
+    for s in (frames.shape_operator, None):
+        assert_close(interpolate._interior_targets(topology, mesh.vertices, raw, n, s),
+                     interpolate._interior_targets(topology, mesh.vertices, raw, n, s, compiled=False))
+    corner_normals = n[topology.faces]
+    turn = np.empty(mesh.n_faces)
+    jit_kernel(interpolate._turn_kernel)(corner_normals, turn)
+    cosine = np.einsum("fkd,fkd->fk", corner_normals, np.roll(corner_normals, -1, axis=1))
+    assert_close(turn, np.arccos(np.clip(cosine, -1.0, 1.0)).max(axis=1))
+
+
+def test_slot_tables(mesh: QuadMesh) -> None:
+    from g1patch.targets import halfedge_slots
+    from g1patch.targets.local import slot_tables
+
+    for a, b in zip(slot_tables(mesh.topology), halfedge_slots(mesh.topology), strict=True):
+        assert_close(a, b)
+
+
+def test_faces_at_risk(mesh: QuadMesh) -> None:
+    """The fold guard's risk test picks the same faces (also with fallbacks and shaken tangents)."""
+    from g1patch.build import _faces_at_risk
+
+    targets = interpolate_targets(mesh)
+    rng = np.random.default_rng(9)
+    shaken = targets.with_changes(tangents=targets.tangents * rng.uniform(0.4, 1.8, len(targets.tangents))[:, None],
+                                  fallback=rng.random(mesh.n_vertices) < 0.05)
+    for t in (targets, shaken):
+        assert_close(_faces_at_risk(t), _faces_at_risk(t, compiled=False))

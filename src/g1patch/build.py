@@ -83,15 +83,23 @@ def _provenance(
     return provenance
 
 
-def _faces_at_risk(targets: Targets) -> np.ndarray:
+def _faces_at_risk(targets: Targets, *, compiled: bool = True) -> np.ndarray:
     """Faces whose targets are far from a smooth regular patch, where a fold is possible: a corner
     that needed a fallback, corner normals more than :data:`RISK_TURN` apart across an edge, or an
     edge tangent off its chord by more than :data:`RISK_TANGENT` in angle or outside
-    :data:`RISK_LENGTH` × its length. On a fine smooth mesh no face is, and the guard costs nothing."""
+    :data:`RISK_LENGTH` × its length. On a fine smooth mesh no face is, and the guard costs nothing.
+    ``compiled``: face by face in :func:`_risk_kernel`, else NumPy."""
     from .targets import halfedge_slots
+    from .targets.local import jit_kernel, slot_tables
 
     topology = targets.topology
     faces = topology.faces
+    if compiled:
+        risky = np.empty(topology.n_faces, dtype=bool)
+        jit_kernel(_risk_kernel)(faces, targets.positions, targets.tangents, slot_tables(topology)[0], targets.fallback,
+                                 targets.corner_normals, np.cos(RISK_TURN), np.cos(RISK_TANGENT), RISK_LENGTH[0], RISK_LENGTH[1],
+                                 risky)
+        return np.flatnonzero(risky)
     n = targets.corner_normals
     risky = targets.fallback[faces].any(axis=1)
     risky |= (np.einsum("fkd,fkd->fk", n, np.roll(n, -1, axis=1)) < np.cos(RISK_TURN)).any(axis=1)
@@ -107,6 +115,29 @@ def _faces_at_risk(targets: Targets) -> np.ndarray:
     return np.flatnonzero(risky)
 
 
+def _risk_kernel(faces: np.ndarray, x: np.ndarray, tangents: np.ndarray, slot_out: np.ndarray, fallback: np.ndarray,
+                 corner_normals: np.ndarray, min_turn_cosine: float, min_tangent_cosine: float, shortest: float,
+                 longest: float, risky: np.ndarray) -> None:
+    """:func:`_faces_at_risk` face by face: per edge k the corner normals' cosine ``n_k·n_{k+1}``, and
+    the tangent t of slot A → B against the chord d = B − A: ``t·d / (|t||d|)`` and ``|t|/|d|``."""
+    tiny = np.finfo(np.float64).tiny
+    for f in range(faces.shape[0]):
+        at_risk = False
+        for k in range(4):
+            a, b = faces[f, k], faces[f, (k + 1) & 3]
+            n, m = corner_normals[f, k], corner_normals[f, (k + 1) & 3]
+            t = tangents[slot_out[4 * f + k]]
+            d0, d1, d2 = x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], x[b, 2] - x[a, 2]
+            chord = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            length = np.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
+            ratio = length / (chord if chord > 0 else 1.0)
+            size = chord * length
+            cosine = (d0 * t[0] + d1 * t[1] + d2 * t[2]) / (size if size > tiny else tiny)
+            at_risk |= (fallback[a] or n[0] * m[0] + n[1] * m[1] + n[2] * m[2] < min_turn_cosine
+                        or cosine < min_tangent_cosine or ratio < shortest or ratio > longest)
+        risky[f] = at_risk
+
+
 def _guarded(
     targets: Targets, assemble: Callable[[Targets], Patches], patches_per_face: int
 ) -> tuple[Patches, Targets]:
@@ -119,7 +150,6 @@ def _guarded(
     patches = assemble(targets)
     retreated = np.zeros(topology.n_vertices, dtype=bool)
     guarded = targets
-    slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
     for step, weight in enumerate(GUARD_STEPS):
         tested = _faces_at_risk(guarded)
         if not tested.size:
@@ -131,6 +161,7 @@ def _guarded(
         corners = np.zeros(topology.n_vertices, dtype=bool)
         corners[topology.faces[np.unique(folded // patches_per_face)]] = True
         if step:
+            slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
             corners[topology.neighbors[corners[slot_vertex]]] = True
         retreated |= corners
         guarded = retreat(targets, np.flatnonzero(retreated), weight)

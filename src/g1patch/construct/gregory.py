@@ -48,7 +48,7 @@ from ..errors import ConstructionError
 from ..gregory import GregoryPatchSet
 from ..mesh import QuadTopology
 from ..targets import Targets, halfedge_slots, slot_sector_normals
-from ..targets.local import in_vertex_planes, jit_kernel
+from ..targets.local import in_vertex_planes, jit_kernel, slot_tables
 
 __all__ = ["assemble_gregory", "corner_split", "tangent_plane_tangents"]
 
@@ -143,7 +143,7 @@ def assemble_gregory(targets: Targets, *, compiled: bool = True) -> GregoryPatch
     """
     topology = targets.topology
     t = tangent_plane_tangents(targets, compiled=compiled)
-    slot_out, slot_in = halfedge_slots(topology)
+    slot_out, slot_in = slot_tables(topology) if compiled else halfedge_slots(topology)
     points = np.empty((topology.n_faces, 20, 3))
     margins = np.full((2, topology.n_edges), np.inf)
     if compiled:

@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .creases import INTERPOLATE_SHARPNESS, crease_tangents, seam_edges, sharp_vertices
-from .local import TANGENTS, TangentRule, corner_tangents, cross, fan_normals
+from .local import TANGENTS, TangentRule, corner_tangents, cross, fan_normals, in_vertex_planes, jit_kernel, slot_tables
 from ..errors import ConstructionError, check_choice
 from ..mesh import QuadMesh, QuadTopology
 from . import Targets
@@ -150,12 +150,20 @@ def legacy_targets(mesh: QuadMesh, tangents: TangentRule = "arc") -> Targets:
 
 
 def _projected_tangents(
-    mesh: QuadMesh, normals: FloatArray, slot_vertex: IntArray
+    mesh: QuadMesh, normals: FloatArray, *, compiled: bool = True
 ) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
-    """Circle-aware projected edge tangents per slot, the chord lengths, and which slots are
-    (near) parallel to the normal (their tangent is set to 0)."""
+    """Circle-aware projected edge tangents per slot, the chord lengths, and per vertex whether a
+    slot is (near) parallel to the normal (its tangent is set to 0). ``compiled``: slot by slot in
+    :func:`_projected_kernel`, else NumPy."""
+    topology = mesh.topology
     x = mesh.vertices
-    d = x[mesh.topology.neighbors] - x[slot_vertex]
+    if compiled:
+        out, chord = np.empty((len(topology.neighbors), 3)), np.empty(len(topology.neighbors))
+        parallel = np.empty(topology.n_vertices, dtype=bool)
+        jit_kernel(_projected_kernel)(x, normals, topology.neighbor_offsets, topology.neighbors, _PARALLEL, out, chord, parallel)
+        return out, chord, parallel
+    slot_vertex = slot_vertices(topology)
+    d = x[topology.neighbors] - x[slot_vertex]
     n = normals[slot_vertex]
     s = d - _dot(d, n)[:, None] * n
     in_plane = np.linalg.norm(s, axis=1)
@@ -163,7 +171,29 @@ def _projected_tangents(
     parallel = ~(in_plane > _PARALLEL * chord)
     length = 2.0 * chord**2 / (chord + in_plane)
     scale = np.where(parallel, 0.0, length / np.where(parallel, 1.0, in_plane))
-    return s * scale[:, None], chord, parallel
+    return s * scale[:, None], chord, np.bincount(slot_vertex, parallel, minlength=topology.n_vertices) > 0
+
+
+def _projected_kernel(x: FloatArray, normals: FloatArray, offsets: IntArray, neighbors: IntArray, parallel_share: float,
+                      out: FloatArray, chord: FloatArray, parallel: NDArray[np.bool_]) -> None:
+    """:func:`_projected_tangents` vertex by vertex: ``s = d − (N·d) N``, ``s · 2|d|²/(|d| + |s|)/|s|``."""
+    for v in range(offsets.size - 1):
+        n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
+        parallel[v] = False
+        for slot in range(offsets[v], offsets[v + 1]):
+            b = neighbors[slot]
+            d0, d1, d2 = x[b, 0] - x[v, 0], x[b, 1] - x[v, 1], x[b, 2] - x[v, 2]
+            height = d0 * n0 + d1 * n1 + d2 * n2
+            s0, s1, s2 = d0 - height * n0, d1 - height * n1, d2 - height * n2
+            in_plane = np.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+            length = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            chord[slot] = length
+            if in_plane > parallel_share * length:
+                scale = 2.0 * (length * length) / (length + in_plane) / in_plane
+            else:
+                scale = 0.0
+                parallel[v] = True
+            out[slot, 0], out[slot, 1], out[slot, 2] = s0 * scale, s1 * scale, s2 * scale
 
 
 def _smooth_boundary_tangents(mesh: QuadMesh, normals: FloatArray, raw: FloatArray) -> FloatArray:
@@ -220,8 +250,14 @@ def _fan_gaps(topology: QuadTopology, normals: FloatArray, t: FloatArray) -> tup
     return gaps, gap_vertex, first
 
 
-def _valid_fans(topology: QuadTopology, normals: FloatArray, t: FloatArray) -> NDArray[np.bool_]:
-    """Per vertex: every consecutive turn in (ε, 180° − ε), once around inside, less than once at a boundary."""
+def _valid_fans(topology: QuadTopology, normals: FloatArray, t: FloatArray, *, compiled: bool = True) -> NDArray[np.bool_]:
+    """Per vertex: every consecutive turn in (ε, 180° − ε), once around inside, less than once at a
+    boundary (``compiled``: vertex by vertex in :func:`_valid_fans_kernel`)."""
+    if compiled:
+        valid = np.empty(topology.n_vertices, dtype=bool)
+        jit_kernel(_valid_fans_kernel)(normals, t, topology.neighbor_offsets, topology.face_count, topology.valence,
+                                       topology.is_boundary_vertex, _MIN_GAP, _MIN_GAP_SHARE, valid)
+        return valid
     gaps, gap_vertex, first = _fan_gaps(topology, normals, t)
     n = np.maximum(topology.valence, 3)
     eps = np.minimum(_MIN_GAP, _MIN_GAP_SHARE * 2.0 * np.pi / n)[gap_vertex]
@@ -232,6 +268,28 @@ def _valid_fans(topology: QuadTopology, normals: FloatArray, t: FloatArray) -> N
     once = np.where(topology.is_boundary_vertex, total < 2.0 * np.pi - _MIN_GAP, np.abs(total - 2.0 * np.pi) < 1e-6)
     last = topology.neighbor_offsets[1:] - 1  # a boundary vertex's last slot ends no gap: check its length too
     return valid & once & (length[last] > 0)
+
+
+def _valid_fans_kernel(normals: FloatArray, t: FloatArray, offsets: IntArray, face_count: IntArray, valence: IntArray,
+                       boundary: NDArray[np.bool_], min_gap: float, min_gap_share: float, valid: NDArray[np.bool_]) -> None:
+    """:func:`_valid_fans` vertex by vertex: the turns ``atan2((a × b)·N, a·b)`` of the gaps (:func:`_fan_gaps`)."""
+    for v in range(offsets.size - 1):
+        n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
+        first, size = offsets[v], offsets[v + 1] - offsets[v]
+        eps = min(min_gap, min_gap_share * 2.0 * np.pi / max(valence[v], 3))
+        ok = True
+        total = 0.0
+        for j in range(face_count[v]):
+            a, b = first + j, first + (j + 1) % size
+            a0, a1, a2 = t[a, 0], t[a, 1], t[a, 2]
+            b0, b1, b2 = t[b, 0], t[b, 1], t[b, 2]
+            gap = np.arctan2((a1 * b2 - a2 * b1) * n0 + (a2 * b0 - a0 * b2) * n1 + (a0 * b1 - a1 * b0) * n2,
+                             a0 * b0 + a1 * b1 + a2 * b2)
+            ok &= gap > eps and gap < np.pi - eps and np.sqrt(a0 * a0 + a1 * a1 + a2 * a2) > 0
+            total += gap
+        last = first + size - 1
+        once = total < 2.0 * np.pi - min_gap if boundary[v] else abs(total - 2.0 * np.pi) < 1e-6
+        valid[v] = ok and once and np.sqrt(t[last, 0] ** 2 + t[last, 1] ** 2 + t[last, 2] ** 2) > 0
 
 
 def spread_fan(topology: QuadTopology, normals: FloatArray, t: FloatArray, chord: FloatArray, vertices: IntArray) -> FloatArray:
@@ -295,17 +353,25 @@ def safeguarded_fans(
 
 
 def _interior_targets(
-    topology: QuadTopology, positions: FloatArray, tangents: FloatArray, normals: FloatArray, shape_operator: FloatArray | None
+    topology: QuadTopology, positions: FloatArray, tangents: FloatArray, normals: FloatArray, shape_operator: FloatArray | None,
+    *, compiled: bool = True,
 ) -> FloatArray:
     """``Ft = A + (t_AB + t_AD)/3 + w/9`` per face corner, ``w = A − B + C − D``; with a shape
     operator S = dN (:class:`~g1patch.targets.frames.VertexFrames`) the normal part of w is replaced by
-    the second fundamental form, ``N·p_uv = −t_ABᵀ S t_AD``: ``w ← P_A w − (t_ABᵀ S t_AD) N_A``."""
+    the second fundamental form, ``N·p_uv = −t_ABᵀ S t_AD``: ``w ← P_A w − (t_ABᵀ S t_AD) N_A``.
+    ``compiled``: corner by corner in :func:`_interior_kernel`, else NumPy."""
     from . import halfedge_slots
 
     faces = topology.faces
-    x = positions[faces]  # (F, 4, 3): A at corner k
-    slot_out, slot_in = halfedge_slots(topology)
+    slot_out, slot_in = slot_tables(topology) if compiled else halfedge_slots(topology)
     count = topology.n_faces
+    if compiled:
+        out = np.empty((count, 4, 3))
+        curved = shape_operator is not None
+        jit_kernel(_interior_kernel)(positions, faces, tangents, slot_out, slot_in, normals,
+                                     shape_operator if curved else np.zeros((1, 3, 3)), curved, out)
+        return out
+    x = positions[faces]  # (F, 4, 3): A at corner k
     t_next = tangents[slot_out].reshape(count, 4, 3)  # A → B
     prev = QuadTopology.prev(np.arange(4 * count))
     t_prev = tangents[slot_in[prev]].reshape(count, 4, 3)  # A → D (the reverse of D → A)
@@ -315,6 +381,28 @@ def _interior_targets(
         s = shape_operator[faces]
         w = w - (_dot(w, n) + np.einsum("fki,fkij,fkj->fk", t_next, s, t_prev))[..., None] * n
     return x + (t_next + t_prev) / 3.0 + w / 9.0
+
+
+def _interior_kernel(x: FloatArray, faces: IntArray, tangents: FloatArray, slot_out: IntArray, slot_in: IntArray,
+                     normals: FloatArray, shape_operator: FloatArray, curved: bool, out: FloatArray) -> None:
+    """:func:`_interior_targets` corner by corner, into ``out`` (F, 4, 3)."""
+    w = np.empty(3)
+    for f in range(faces.shape[0]):
+        for k in range(4):
+            a, b, c, d = faces[f, k], faces[f, (k + 1) & 3], faces[f, (k + 2) & 3], faces[f, (k + 3) & 3]
+            s_next, s_prev = slot_out[4 * f + k], slot_in[4 * f + ((k + 3) & 3)]
+            for i in range(3):
+                w[i] = x[a, i] - x[b, i] + x[c, i] - x[d, i]
+            if curved:
+                n0, n1, n2 = normals[a, 0], normals[a, 1], normals[a, 2]
+                bend = 0.0
+                for i in range(3):
+                    for j in range(3):
+                        bend += tangents[s_next, i] * shape_operator[a, i, j] * tangents[s_prev, j]
+                along = (w[0] * n0 + w[1] * n1 + w[2] * n2) + bend
+                w[0], w[1], w[2] = w[0] - along * n0, w[1] - along * n1, w[2] - along * n2
+            for i in range(3):
+                out[f, k, i] = x[a, i] + (tangents[s_next, i] + tangents[s_prev, i]) / 3.0 + w[i] / 9.0
 
 
 #: faces whose corner normals turn by less than this keep the local twist targets; from here to
@@ -464,12 +552,11 @@ def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, corner_normals: Fl
     blended patch would turn its normal more than 60° away from its corners' (a thin wedge of a
     high-valence fan, where the sections are poorly posed) halves the weight, up to three times,
     then keeps its twist targets."""
-    from . import halfedge_slots
-
     topology = mesh.topology
     faces = topology.faces
     n = corner_normals
-    turn = np.arccos(np.clip(_dot(n, n[:, _NEXT]), -1.0, 1.0)).max(axis=1)
+    turn = np.empty(len(n))
+    jit_kernel(_turn_kernel)(n, turn)
     weight = np.clip((turn - _ROUND_START) / (_ROUND_FULL - _ROUND_START), 0.0, 1.0)
     weight = weight * weight * (3.0 - 2.0 * weight)
     chosen = np.flatnonzero(weight > 0)
@@ -479,7 +566,7 @@ def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, corner_normals: Fl
     chosen = chosen[weight[chosen] > 0]
     if not chosen.size:
         return interior
-    slot_out, slot_in = halfedge_slots(topology)
+    slot_out, slot_in = slot_tables(topology)
     x = mesh.vertices
     out = interior.copy()
     for low in range(0, chosen.size, _ROUND_BLOCK):
@@ -501,6 +588,19 @@ def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, corner_normals: Fl
     return out
 
 
+def _turn_kernel(corner_normals: FloatArray, turn: FloatArray) -> None:
+    """Per face the largest angle between the corner normals at the ends of an edge,
+    ``max_k arccos(clip(n_k·n_{k+1}, −1, 1))``."""
+    for f in range(corner_normals.shape[0]):
+        largest = 0.0
+        for k in range(4):
+            a, b = corner_normals[f, k], corner_normals[f, (k + 1) & 3]
+            angle = np.arccos(min(max(a[0] * b[0] + a[1] * b[1] + a[2] * b[2], -1.0), 1.0))
+            if not angle <= largest:
+                largest = angle
+        turn[f] = largest
+
+
 def interpolate_targets(mesh: QuadMesh) -> Targets:
     """The default interpolating rule (module docstring)."""
     from .frames import vertex_frames
@@ -508,12 +608,11 @@ def interpolate_targets(mesh: QuadMesh) -> Targets:
     frames = vertex_frames(mesh)
     topology = mesh.topology
     normals = frames.normals
-    slot_vertex = slot_vertices(topology)
-    raw, chord, parallel = _projected_tangents(mesh, normals, slot_vertex)
+    raw, chord, parallel = _projected_tangents(mesh, normals)
     raw = _smooth_boundary_tangents(mesh, normals, raw)
     tangents, guarded = safeguarded_fans(topology, normals, raw, chord)
-    tangents -= _dot(tangents, normals[slot_vertex])[:, None] * normals[slot_vertex]
-    fallback = guarded | frames.repaired | (np.bincount(slot_vertex, parallel, minlength=topology.n_vertices) > 0)
+    tangents = in_vertex_planes(tangents, normals, topology.neighbor_offsets, out=tangents)
+    fallback = guarded | frames.repaired | parallel
     seams = seam_edges(mesh, INTERPOLATE_SHARPNESS)
     corner_normals = normals[topology.faces]
     interior = _interior_targets(topology, mesh.vertices, tangents, normals, frames.shape_operator)

@@ -19,11 +19,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ConstructionError, check_choice
-from ..mesh import QuadMesh
+from ..mesh import QuadMesh, QuadTopology
 
 __all__ = [
     "NORMALS", "TANGENTS", "NormalRule", "TangentRule", "corner_tangents", "cross", "fan_normals", "in_vertex_planes", "jit_kernel",
-    "least_squares_normals",
+    "least_squares_normals", "slot_tables",
 ]
 
 NormalRule = Literal["fan", "paper"]
@@ -73,6 +73,32 @@ def _plane_kernel(tangents: NDArray[np.float64], normals: NDArray[np.float64], o
             out[s, 0] = t0 - height * n0
             out[s, 1] = t1 - height * n1
             out[s, 2] = t2 - height * n2
+
+
+def slot_tables(topology: QuadTopology) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """:func:`g1patch.targets.halfedge_slots` by a numba kernel: the ring slot of each half-edge
+    A → B at A (``slot_out``), and of B → A at B (``slot_in``; the last slot of B where A → B is
+    a boundary half-edge)."""
+    slot_out = np.empty(topology.n_halfedges, dtype=np.int64)
+    slot_in = np.empty(topology.n_halfedges, dtype=np.int64)
+    jit_kernel(_slots_kernel)(topology.faces.reshape(-1), topology.twin, topology.ring_offsets, topology.ring_halfedges,
+                              topology.neighbor_offsets, slot_out, slot_in)
+    return slot_out, slot_in
+
+
+def _slots_kernel(origin: NDArray[np.int64], twin: NDArray[np.int64], ring_offsets: NDArray[np.int64],
+                  ring_halfedges: NDArray[np.int64], neighbor_offsets: NDArray[np.int64], slot_out: NDArray[np.int64],
+                  slot_in: NDArray[np.int64]) -> None:
+    """Ring position j of the outgoing half-edge ``ring_halfedges[ring_offsets[v] + j]`` → slot
+    ``neighbor_offsets[v] + j``; ``slot_in[h] = slot_out[twin[h]]``."""
+    for v in range(ring_offsets.size - 1):
+        for r in range(ring_offsets[v], ring_offsets[v + 1]):
+            slot_out[ring_halfedges[r]] = neighbor_offsets[v] + r - ring_offsets[v]
+    for h in range(origin.size):
+        if twin[h] >= 0:
+            slot_in[h] = slot_out[twin[h]]
+        else:
+            slot_in[h] = neighbor_offsets[origin[(h & ~3) | ((h + 1) & 3)] + 1] - 1
 
 
 def _unit_or_fail(vectors: NDArray[np.float64], what: str) -> NDArray[np.float64]:
