@@ -158,3 +158,129 @@ def test_faces_on_closed_lines_of_an_irregular_cage_give_the_bspline() -> None:
     diagonal = float(np.linalg.norm(mesh.vertices.max(axis=0) - mesh.vertices.min(axis=0)))
     error = np.abs(macro_nets(network.patches.world_control())[faces] - bspline_macro_nets(mesh, faces)).max()
     assert error <= REPRODUCTION_RTOL * diagonal
+
+
+# ------------------------------------------------------------------------------ CAD export
+
+try:
+    import OCP  # noqa: F401  (is the extra installed?)
+
+    HAVE_OCP = True
+except ImportError:
+    HAVE_OCP = False
+requires_ocp = pytest.mark.skipif(not HAVE_OCP, reason="OCP is not installed (extra 'cad': pip install 'g1patch[cad]')")
+CUBE = Path(__file__).parents[1] / "src" / "g1patch" / "data" / "cube.obj"
+
+
+def quad_order(model: object, network: PatchNetwork, n_quads: int) -> list[int]:
+    """For each quad the read face whose middle (u, v) = (½, ½) is the quad's centre point."""
+    from scipy.spatial import cKDTree
+
+    middles = np.concatenate([face.evaluate(np.array([[0.5, 0.5]])) for face in model.faces])  # type: ignore[attr-defined]
+    centres = network.patches.evaluate(np.array([[1.0, 1.0]]))[::4, 0]  # corner 2 of sub-patch 4f: C
+    distance, order = cKDTree(middles).query(centres)
+    assert distance.max() <= 1e-9 * network.bounding_box_diagonal() and len(set(order.tolist())) == n_quads
+    return order.tolist()
+
+
+def read_back(path: Path, mesh: QuadMesh, network: PatchNetwork, samples: int = 9) -> tuple[list[tuple[int, int]], float, float]:
+    """Per quad its read face's pole-grid size; the read surfaces' largest distance from the
+    sub-patches (relative to the diagonal); the largest angle between the read faces' OCC normals
+    across the mesh edges (degrees)."""
+    from g1patch.continuity import angle_between
+    from g1patch.io.cad import read_step_faces
+    from g1patch.network import edge_parameters
+
+    topology = mesh.topology
+    model = read_step_faces(path)
+    assert len(model.faces) == topology.n_faces
+    faces = [model.faces[i] for i in quad_order(model, network, topology.n_faces)]
+    assert all(face.bounds == (0.0, 1.0, 0.0, 1.0) for face in faces)
+    s = np.linspace(0.0, 1.0, 5)
+    uv = np.stack(np.meshgrid(s, s, indexing="ij"), axis=-1).reshape(-1, 2)
+    corner = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    distance = 0.0
+    for f, face in enumerate(faces):
+        for k in range(4):
+            expected = network.patches.take([4 * f + k]).evaluate(uv)[0]
+            distance = max(distance, float(np.linalg.norm(face.evaluate(0.5 * (uv + corner[k])) - expected, axis=1).max()))
+    t = np.linspace(0.0, 1.0, samples)
+    angle = 0.0
+    for h in topology.edge_halfedges[~topology.is_boundary_edge, 0].tolist():
+        twin = int(topology.twin[h])
+        a = faces[h >> 2].normals(edge_parameters(np.full(samples, h & 3), t))
+        b = faces[twin >> 2].normals(edge_parameters(np.full(samples, twin & 3), 1.0 - t))
+        angle = max(angle, float(angle_between(a, b).max()))
+    return [face.poles().shape[:2] for face in faces], distance / network.bounding_box_diagonal(), angle
+
+
+@requires_ocp
+@pytest.mark.parametrize("name", ["torus_8_4", "cube", "collapsed_torus"])
+def test_limit_split4_step_is_one_face_per_quad(name: str, tmp_path: Path) -> None:
+    """A valid solid, one face per quad named after it, single-span where the quad is one bicubic,
+    the surface itself to the file's decimals, and OCC's own normals agree across every mesh edge."""
+    from test_split4 import collapsed
+
+    from g1patch.io.cad import export_step, split4_quad_faces
+
+    mesh = {"torus_8_4": lambda: shapes.torus(8, 4), "cube": lambda: read_mesh(CUBE),
+            "collapsed_torus": lambda: collapsed(shapes.torus(12, 8), [0])}[name]()
+    assert mesh is not None
+    network = build_network(mesh, "split4", "limit")
+    quads = split4_quad_faces(network)
+    assert quads is not None
+    result = export_step(tmp_path / f"{name}.step", network)
+    assert result.faces == mesh.n_faces and result.exact and result.solid and result.valid and result.free_edges == 0
+    assert result.max_g1_angle_deg <= 1e-7
+    text = (tmp_path / f"{name}.step").read_text()
+    assert text.count("ADVANCED_FACE(") == mesh.n_faces
+    assert all(f"ADVANCED_FACE('face {f}'" in text for f in range(mesh.n_faces))
+    sizes, distance, angle = read_back(result.path, mesh, network)
+    assert sizes == [(4, 4) if one else (6, 6) for one in quads.single]
+    assert distance <= 1e-11 and angle <= 1e-7
+    single = int(quads.single.sum())
+    if name == "torus_8_4":
+        assert single == mesh.n_faces and result.spans == 1  # all regular: every quad is the B-spline's span
+    elif name == "cube":
+        assert single == 0 and result.spans == 2  # no regular face: two spans each, never dozens
+    else:
+        assert 0 < single < mesh.n_faces and result.spans == 2
+
+
+@requires_ocp
+def test_limit_split4_cube_file_is_a_tenth_of_the_gregory_one(tmp_path: Path) -> None:
+    """The issue's size bar: split4 limit cube ≤ 1/10 of the default Gregory cube's (fitted, 22 spans)."""
+    from g1patch.io.cad import export_step
+
+    mesh = read_mesh(CUBE)
+    split4 = export_step(tmp_path / "split4.step", build_network(mesh, "split4", "limit"))
+    gregory = export_step(tmp_path / "gregory.step", build_network(mesh))
+    assert split4.spans == 2 and gregory.spans > 10
+    assert 10 * split4.path.stat().st_size <= gregory.path.stat().st_size
+
+
+def test_quads_that_are_not_one_bicubic_keep_two_spans() -> None:
+    """The single-span test reads the bicubic off the net's corners and subdivides it again: one
+    moved interior point of the 7×7 net (C1 kept) makes that quad two-span; a net that is not C1
+    inside, or patches without split4's connectivity (4f + k at corner k of quad f), are not split4
+    quads at all (they are written one face per patch)."""
+    import dataclasses
+
+    from g1patch.io.cad import split4_quad_faces
+    from g1patch.network import network_from_patch_points
+    from g1patch.patches import PatchSet
+
+    network = build_network(shapes.torus(8, 4), "split4", "limit")
+    quads = split4_quad_faces(network)
+    assert quads is not None and quads.single.all()
+    control = network.patches.control.copy()  # local coordinates
+    control[4 * 5, 1, 1] += 1e-9  # the twist at corner 0 of quad 5: rows and columns 2–4 untouched, still C1
+    moved = dataclasses.replace(network, patches=dataclasses.replace(network.patches, control=control))
+    quads = split4_quad_faces(moved)
+    assert quads is not None and np.flatnonzero(~quads.single).tolist() == [5]
+    control[4 * 5, 2, 2] += 1e-6  # next to the seams: row 3 is no longer the midpoints, a kink inside quad 5
+    assert split4_quad_faces(dataclasses.replace(network, patches=dataclasses.replace(network.patches, control=control))) is None
+    # bare sub-patches in split4's order are recognised from their shared points; in any other order they are not
+    bare = network.patches.world_control()
+    assert split4_quad_faces(network_from_patch_points(PatchSet(bare))) is not None
+    assert split4_quad_faces(network_from_patch_points(PatchSet(np.roll(bare, 1, axis=0)))) is None

@@ -7,6 +7,13 @@ Every patch becomes one face on a bicubic B-spline surface (``Geom_BSplineSurfac
 * any other patches (rational Gregory patches, …) by :func:`fit_bspline_surfaces`, a least-squares
   fit on dyadic knots, refined until the deviation is below the tolerance.
 
+A split4 network (four C1 sub-patches per quad, :mod:`g1patch.construct.split4`) becomes one face
+per quad instead (:func:`split4_quad_faces`), exactly: a quad whose pieces are one bicubic
+subdivided at ½ (a regular region of a limit surface) is that bicubic, knots ``[0,0,0,0,1,1,1,1]``;
+any other quad is its two-span B-spline, knots ``[0,0,0,0,½,½,1,1,1,1]``. Its STEP edges carry no
+pcurves (each face is a whole surface, its edges its boundary iso-lines, rebuilt by any reader). In
+STEP every face is named after its index (``'face 12'``: the patch, or the quad, it was made from).
+
 The faces are sewn into shells (``BRepBuilderAPI_Sewing``, tolerance ``SEWING_RTOL`` × the
 bounding-box diagonal); a closed shell becomes a solid (``BRepBuilderAPI_MakeSolid``, oriented
 outwards by ``BRepLib::OrientClosedSolid``). The exported surfaces' G1 angles are measured by
@@ -29,6 +36,7 @@ import os
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import SimpleNamespace
@@ -299,8 +307,11 @@ _OCC_NAMES: dict[str, tuple[str, ...]] = {
     "GProp": ("GProp_GProps",),
     "IFSelect": ("IFSelect_ReturnStatus",),
     "IGESControl": ("IGESControl_Reader", "IGESControl_Writer"),
+    "Interface": ("Interface_Static",),
     "Message": ("Message", "Message_Gravity"),
+    "STEPConstruct": ("STEPConstruct",),
     "STEPControl": ("STEPControl_AsIs", "STEPControl_Reader", "STEPControl_Writer"),
+    "TCollection": ("TCollection_HAsciiString",),
     "TopAbs": ("TopAbs_FACE", "TopAbs_REVERSED", "TopAbs_SHELL"),
     "TopExp": ("TopExp_Explorer",),
     "TopoDS": ("TopoDS", "TopoDS_Compound"),
@@ -368,6 +379,91 @@ def _make_faces(
     return faces
 
 
+# ----------------------------------------------------------------------------------- split4 quads
+
+#: a split4 quad whose four sub-patches are one bicubic subdivided at ½, to within this share of
+#: the control nets' bounding-box diagonal, is written as that bicubic: a single-span face
+SINGLE_SPAN_RTOL = 1e-12
+#: split4's sub-patches join C1 inside each quad (row and column 3 of its 7×7 net are the
+#: midpoints of their neighbours) to within this share of the diagonal, or the network is written
+#: one face per patch
+_C1_RTOL = 1e-10
+# a cubic's Bézier points from its two halves' seven: b0, 2 h1 − b0, 2 h5 − b3, b3
+_EXTRACT = np.array([[1.0, 0, 0, 0, 0, 0, 0], [-1, 2, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 2, -1], [0, 0, 0, 0, 0, 0, 1]])
+# de Casteljau at ½: the two halves' seven points from a cubic's four
+_HALVE = np.array([[8.0, 0, 0, 0], [4, 4, 0, 0], [2, 4, 2, 0], [1, 3, 3, 1], [0, 2, 4, 2], [0, 0, 4, 4], [0, 0, 0, 8]]) / 8.0
+# sub-patch 4f + k covers (uv + _QUARTER[k]) / 2 of quad f
+_QUARTER = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+
+
+class QuadFaces(NamedTuple):
+    """A split4 network written one face per quad, in quad order: ``single`` (F,) marks the quads
+    that are one bicubic, written as it (``bezier``: 4×4 nets, knots :func:`bezier_knots`); the
+    others are their two-span B-spline (``two_span``: 6×6 nets, knots ``[0,0,0,0,½,½,1,1,1,1]``).
+    Poles in world coordinates."""
+
+    single: NDArray[np.bool_]
+    bezier: BSplineFit
+    two_span: BSplineFit
+
+
+def split4_quad_faces(network: PatchNetwork) -> QuadFaces | None:
+    """The quads of a split4 network (sub-patch ``4f + k`` at corner k of quad f, its seams to
+    ``4f + k ± 1`` joined C1: :mod:`g1patch.construct.split4`), or None for any other network.
+
+    A quad is single-span when its 7×7 macro net is, to :data:`SINGLE_SPAN_RTOL` of the diagonal,
+    the de Casteljau subdivision at ½ of the bicubic read off its corners (the Bézier points of each
+    corner's 2×2 block, ``b1 = 2 h1 − b0``): then the four pieces are that bicubic and nothing is
+    lost. The tests run in the patches' working coordinates (their frame), the poles are mapped to world.
+    """
+    from ..construct.split4 import BSPLINE_KNOTS, macro_nets
+
+    patches = network.patches
+    if not isinstance(patches, PatchSet) or not len(patches) or len(patches) % 4:
+        return None
+    p = np.arange(len(patches))
+    k = p % 4
+    seams = (network.neighbor[p, (k + 1) % 4] == p - k + (k + 1) % 4) & (network.neighbor[p, (k + 2) % 4] == p - k + (k + 3) % 4)
+    if not seams.all():
+        return None
+    bezier = patches.convert("bezier")
+    nets = macro_nets(bezier.control)
+    flat = nets.reshape(-1, 3)
+    diagonal = float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0)))
+    if not (np.isfinite(diagonal) and diagonal > 0):
+        return None
+    c1_gap = max(float(np.abs(nets[:, 3] - 0.5 * (nets[:, 2] + nets[:, 4])).max()),
+                 float(np.abs(nets[:, :, 3] - 0.5 * (nets[:, :, 2] + nets[:, :, 4])).max()))
+    if not c1_gap <= _C1_RTOL * diagonal:
+        return None
+    cubic = np.einsum("ai,fijd,bj->fabd", _EXTRACT, nets, _EXTRACT)
+    again = np.einsum("ai,fijd,bj->fabd", _HALVE, cubic, _HALVE)
+    single = np.abs(again - nets).max(axis=(1, 2, 3)) <= SINGLE_SPAN_RTOL * diagonal
+    keep = np.array([0, 1, 2, 4, 5, 6])  # row and column 3 are midpoints: the double knot at ½
+    two_span = np.ascontiguousarray(nets[~single][:, keep][:, :, keep])
+    one = np.ascontiguousarray(cubic[single])
+    if bezier.frame is not None:
+        one, two_span = bezier.frame.to_world(one, out=one), bezier.frame.to_world(two_span, out=two_span)
+    knots = bezier_knots(1)
+    return QuadFaces(single, BSplineFit(one, knots, knots.copy(), 0.0),
+                     BSplineFit(two_span, BSPLINE_KNOTS.copy(), BSPLINE_KNOTS.copy(), 0.0))
+
+
+def _quad_groups(quads: QuadFaces) -> list[BSplineFit]:
+    """The non-empty groups of faces with one knot vector each, single-span first."""
+    return [group for group in (quads.bezier, quads.two_span) if len(group.control)]
+
+
+def _make_quad_faces(occ: SimpleNamespace, quads: QuadFaces, tolerance: float, progress: Progress | None) -> list[Any]:
+    """One face per quad, in quad order: single-span ones from ``quads.bezier``, the rest two-span."""
+    faces: list[Any] = [None] * len(quads.single)
+    for rows, group in ((np.flatnonzero(quads.single), quads.bezier), (np.flatnonzero(~quads.single), quads.two_span)):
+        if rows.size:
+            for row, face in zip(rows.tolist(), _make_faces(occ, group, tolerance, progress)):
+                faces[row] = face
+    return faces
+
+
 def _sew(occ: SimpleNamespace, faces: Sequence[Any], tolerance: float) -> tuple[Any, list[Any], int]:
     """Sewn shape, the sewn face of every input face, number of free edges."""
     sewing = occ.BRepBuilderAPI_Sewing(tolerance)
@@ -419,9 +515,13 @@ def _face_normals(occ: SimpleNamespace, face: Any, uv: NDArray[np.float64]) -> N
 
 
 def _occ_g1_angles(
-    occ: SimpleNamespace, faces: Sequence[Any], network: PatchNetwork, samples: int, progress: Progress | None
+    occ: SimpleNamespace, faces: Sequence[Any], network: PatchNetwork, samples: int, progress: Progress | None,
+    quads: bool = False,
 ) -> NDArray[np.float64]:
-    """(E, samples) angles (degrees) between the two sewn faces' OCC normals along every shared edge."""
+    """(E, samples) angles (degrees) between the two sewn faces' OCC normals along every shared edge.
+    With ``quads`` the faces are a split4 network's quads (:func:`split4_quad_faces`): sub-patch
+    ``4f + k`` is evaluated on its quarter of face f, so the seams inside a quad compare the one
+    surface with itself (0), and every mesh edge compares the two quads' surfaces."""
     from ..continuity import angle_between
 
     patch, edge = network.shared_edges()
@@ -430,8 +530,12 @@ def _occ_g1_angles(
     t_other = np.where(network.same_direction[patch, edge][:, None], t, 1.0 - t)
     uv_a = edge_parameters(edge[:, None], t)  # (E, K, 2)
     uv_b = edge_parameters(other_edge[:, None], t_other)
+    face_a, face_b = patch, other
+    if quads:
+        uv_a, uv_b = 0.5 * (uv_a + _QUARTER[patch % 4, None]), 0.5 * (uv_b + _QUARTER[other % 4, None])
+        face_a, face_b = patch // 4, other // 4
     # one adaptor per face: gather every face's samples, evaluate, scatter back
-    face_of = np.concatenate([np.repeat(patch, samples), np.repeat(other, samples)])
+    face_of = np.concatenate([np.repeat(face_a, samples), np.repeat(face_b, samples)])
     uv = np.concatenate([uv_a.reshape(-1, 2), uv_b.reshape(-1, 2)])
     order = np.argsort(face_of, kind="stable")
     bounds = np.searchsorted(face_of[order], np.arange(len(faces) + 1))
@@ -462,7 +566,7 @@ class ExportResult:
     free_edges: int
     #: polynomial patches written exactly (their Bézier control nets)
     exact: bool
-    #: uniform knot spans per direction (1 for exact export)
+    #: knot spans per direction (1 for exact export; 2 where split4 quads keep their two spans)
     spans: int
     #: max |surface − patch| of the fit, measured on a grid twice as fine as its samples; 0.0 when exact
     fit_deviation: float
@@ -505,12 +609,61 @@ def _as_network(network: PatchNetwork | PatchSet) -> PatchNetwork:
     raise InputError(f"network: expected a PatchNetwork or a PatchSet, got {type(network).__name__}")
 
 
+def _name_step_faces(occ: SimpleNamespace, writer: Any, faces: Sequence[Any]) -> None:
+    """Name the ``ADVANCED_FACE`` of each of ``faces`` after its index (``'face 12'``): the patch,
+    or the quad of a split4 network, it was made from."""
+    process = writer.WS().TransferWriter().FinderProcess()
+    for n, face in enumerate(faces):
+        entity = occ.STEPConstruct.FindEntity_s(process, face)
+        if entity is not None and hasattr(entity, "SetName"):
+            entity.SetName(occ.TCollection_HAsciiString(f"face {n}"))
+
+
+@contextmanager
+def _static(occ: SimpleNamespace, name: str, value: int) -> Iterator[None]:
+    """OCC's process-wide integer setting ``name`` at ``value`` for the duration, then as it was."""
+    before = occ.Interface_Static.IVal_s(name)
+    occ.Interface_Static.SetIVal_s(name, value)
+    try:
+        yield
+    finally:
+        occ.Interface_Static.SetIVal_s(name, before)
+
+
+class _StepOptions(NamedTuple):
+    """What export_cad asks of the STEP writer beyond the shape (:func:`_step_options`)."""
+
+    faces: Sequence[Any]
+    pcurves: bool
+
+
+_STEP_OPTIONS: ContextVar[_StepOptions] = ContextVar("_STEP_OPTIONS", default=_StepOptions((), True))
+
+
+@contextmanager
+def _step_options(faces: Sequence[Any], pcurves: bool) -> Iterator[None]:
+    """For the :func:`_write` calls inside: name ``faces`` after their index; with ``pcurves``
+    False, write the edges without parameter-space curves."""
+    token = _STEP_OPTIONS.set(_StepOptions(faces, pcurves))
+    try:
+        yield
+    finally:
+        _STEP_OPTIONS.reset(token)
+
+
 def _write(occ: SimpleNamespace, shape: Any, path: Path, kind: CadFormat) -> None:
+    """Write ``shape``. In STEP the faces of :func:`_step_options` are named after their index (IGES
+    faces carry no names here), and without its ``pcurves`` the edges carry no parameter-space curves
+    (``write.surfacecurve.mode`` 0): every face written here is a whole B-spline surface, its edges
+    the iso-lines u, v ∈ {0, 1}, which a reader rebuilds exactly."""
+    options = _STEP_OPTIONS.get()
     with _quiet(occ):
         if kind == "step":
             writer = occ.STEPControl_Writer()
-            status = writer.Transfer(shape, occ.STEPControl_AsIs)
+            with _static(occ, "write.surfacecurve.mode", 1 if options.pcurves else 0):
+                status = writer.Transfer(shape, occ.STEPControl_AsIs)
             if status == occ.IFSelect_ReturnStatus.IFSelect_RetDone:
+                _name_step_faces(occ, writer, options.faces)
                 status = writer.Write(str(path))
             ok = status == occ.IFSelect_ReturnStatus.IFSelect_RetDone
         else:
@@ -534,10 +687,10 @@ def export_cad(
 ) -> ExportResult:
     """Write a network as a STEP or IGES B-rep, chosen by the extension (``.step .stp .iges .igs``).
 
-    One B-spline face per patch (exact for polynomial patches, else fitted within ``tolerance``,
-    default 1e-6 × the bounding-box diagonal), sewn, a solid where the shells close; seams stay
-    sharp edges. The G1 angles of the written surfaces are measured by OCC on ``g1_samples`` points
-    per shared edge (0: skip), seams apart.
+    One B-spline face per patch, or per quad of a split4 network (exact for polynomial patches,
+    else fitted within ``tolerance``, default 1e-6 × the bounding-box diagonal), sewn, a solid
+    where the shells close; seams stay sharp edges. The G1 angles of the written surfaces are
+    measured by OCC on ``g1_samples`` points per shared edge (0: skip), seams apart.
     The extension and OCP are checked before anything is computed or written.
     """
     target = Path(path)
@@ -560,14 +713,20 @@ def export_cad(
     diagonal = network.bounding_box_diagonal()
     exact = isinstance(network.patches, PatchSet)
     fit_tolerance = _tolerance(tolerance, diagonal)
-    if exact:
+    quads = split4_quad_faces(network) if exact else None
+    if quads is not None:  # one face per quad; `fit` is the finest group, for `spans`
+        fit = _quad_groups(quads)[-1]
+    elif exact:
         knots = bezier_knots(1)
         fit = BSplineFit(network.patches.convert("bezier").world_control(), knots, knots, 0.0)
     else:
         fit = fit_bspline_surfaces(network, fit_tolerance)
     lap("fit")
     sewing_tolerance = SEWING_RTOL * diagonal if diagonal > 0 else SEWING_RTOL
-    faces = _make_faces(occ, fit, 0.01 * sewing_tolerance, progress)
+    if quads is None:
+        faces = _make_faces(occ, fit, 0.01 * sewing_tolerance, progress)
+    else:
+        faces = _make_quad_faces(occ, quads, 0.01 * sewing_tolerance, progress)
     lap("faces")
     sewn, sewn_faces, free_edges = _sew(occ, faces, sewing_tolerance)
     lap("sew")
@@ -576,13 +735,14 @@ def export_cad(
     valid = bool(occ.BRepCheck_Analyzer(shape).IsValid())
     volume = _volume(occ, shape) if solid else None
     lap("check")
-    angles = _occ_g1_angles(occ, sewn_faces, network, g1_samples, progress) if g1_samples else np.zeros((0, 0))
+    angles = (_occ_g1_angles(occ, sewn_faces, network, g1_samples, progress, quads is not None) if g1_samples
+              else np.zeros((0, 0)))
     lap("g1")
     shared_patch, shared_edge = network.shared_edges()
     seam = network.seam[shared_patch, shared_edge]
     smooth = angles[~seam].max(axis=1) if angles.size else np.zeros(0)
     seam_angles = angles[seam] if angles.size else np.zeros(0)
-    with atomic_path(target) as temporary:
+    with atomic_path(target) as temporary, _step_options(sewn_faces, pcurves=quads is None):
         _write(occ, shape, temporary, kind)
     lap("write")
     return ExportResult(
@@ -593,7 +753,7 @@ def export_cad(
         valid=valid,
         free_edges=free_edges,
         exact=exact,
-        spans=len(fit.knots_u) - 7,
+        spans=len(np.unique(fit.knots_u)) - 1,
         fit_deviation=fit.deviation,
         fit_tolerance=0.0 if exact else fit_tolerance,
         sewing_tolerance=sewing_tolerance,
