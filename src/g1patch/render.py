@@ -11,10 +11,17 @@ Three modes, one camera:
   G1-continuous edge and jump where the normals of the two sides differ: reflection lines double
   the normal's angle, a 1° crease moves them by about ``stripes · 2° / 360°`` of a period.
 * ``deviation``: the patch boundary curves, drawn as thin bands along every patch edge and
-  coloured by the G1 angle of their edge (from :func:`g1patch.continuity.check`), over a light
-  grey surface, with a colour bar in degrees (logarithmic when the angles span decades). Seams
-  (edges sharp on purpose, ``network.seam``) are drawn in a colour of their own, outside the
-  colour map, named in a legend; their angles do not enter the colour scale.
+  coloured by the G1 angle of their edge (from :func:`g1patch.continuity.check`'s edge measure),
+  over a light grey surface, with a colour bar in degrees (logarithmic when the angles span
+  decades). Seams (edges sharp on purpose, ``network.seam``) are drawn in a colour of their own,
+  outside the colour map, named in a legend; their angles do not enter the colour scale. Bands are
+  drawn only where they can be told apart: a patch whose opposite edges lie less than
+  :data:`EDGE_SPACING_PX` pixels apart on the screen is filled instead with the colour of its
+  worst edge (a seam colour if one of its sides is a seam), so a network of a million patches
+  becomes a map of its G1 angles instead of a moiré of bands. Without a report only the edge
+  angles are measured (not check's folds and fairness), at 33 samples per edge (check's default)
+  or, for networks of many edges, fewer: at most :data:`EDGE_SAMPLES_PER_PIXEL` samples per
+  pixel of the picture, at least :data:`MIN_EDGE_SAMPLES` per edge (the caption says how many).
 
 Every patch is sampled on its own grid and its normals come from its own exact derivatives
 (``p_u × p_v``), so the two sides of a crease are not averaged into one normal: the picture shows
@@ -27,8 +34,11 @@ surfaces), the rest are sorted back to front and drawn by one call to Agg's Gour
 (colours given at the three corners and interpolated inside), without antialiased edges, so
 neither cracks nor a wireframe show. Lighting is computed at the sample points (smooth shading);
 zebra stripes are a ramp of ``sin φ`` at the points, so their edges follow the interpolated
-contour instead of stepping from triangle to triangle. The triangle count follows a budget
-(:func:`choose_resolution`): the 2928-patch Spot cow takes a few seconds. The figure is an Agg
+contour instead of stepping from triangle to triangle. The sampling density follows the
+pixels, not the patch count: without a resolution, every patch gets one sample about every
+:data:`SAMPLE_SPACING_PX` pixels of its projected size (at least 2 per side, at most
+:data:`MAX_SAMPLES` points in all), so the triangles drawn scale with the picture and a
+million-patch network costs about one triangle pair per patch. The figure is an Agg
 canvas of its own (no pyplot, no change to the caller's backend) saved at exactly the requested
 pixel size. Every write is atomic. pyvista is not used: matplotlib alone draws every mode.
 
@@ -48,17 +58,22 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .continuity import DEGENERATE_RTOL, ContinuityReport, check
+from .continuity import DEGENERATE_RTOL, ContinuityReport
 from .errors import InputError, MissingDependencyError, as_float_array, check_choice
 from .io.atomic import atomic_path
-from .network import PatchNetwork, edge_parameters
+from .network import PatchNetwork, Patches, edge_parameters
+from .patches import CORNER_PARAMETERS
 from .tessellate import TriangleMesh
 
 __all__ = [
     "DEFAULT_STRIPES",
     "DEFAULT_VIEW",
+    "EDGE_SAMPLES_PER_PIXEL",
+    "EDGE_SPACING_PX",
     "EXACT_G1_DEG",
+    "MIN_EDGE_SAMPLES",
     "MODES",
+    "SAMPLE_SPACING_PX",
     "TRIANGLE_BUDGET",
     "UP_AXES",
     "choose_resolution",
@@ -79,14 +94,31 @@ UP_AXES = ("z", "y", "x")
 DEFAULT_VIEW = (25.0, -60.0)
 #: black/white stripe pairs per full turn of the reflected direction about the stripe axis
 DEFAULT_STRIPES = 12
-#: triangles drawn per picture when the resolution is chosen for you (a closed surface samples
-#: twice as many: the half facing away is dropped before drawing); matplotlib's Agg draws about
-#: 2·10^5 triangles a second
+#: triangles per picture for :func:`choose_resolution` (a closed surface samples twice as many:
+#: the half facing away is dropped before drawing); matplotlib's Agg draws about 2·10^5 triangles
+#: a second. :func:`render` chooses by pixels instead (:data:`SAMPLE_SPACING_PX`)
 TRIANGLE_BUDGET = 200_000
 #: resolutions chosen for you lie in this range (samples per patch side)
 RESOLUTION_RANGE = (2, 129)
-#: a resolution chosen for a zoomed picture samples at most this many points per network
+#: a resolution chosen for you samples at most this many points per network (unless 2 per side is more)
 MAX_SAMPLES = 4_000_000
+#: a resolution chosen for you puts a sample about every this many pixels along a patch (the
+#: 90th percentile of the patches' projected sizes sets it)
+SAMPLE_SPACING_PX = 3.0
+#: the deviation mode draws a patch's edges as bands when its opposite edges lie at least this
+#: many pixels apart on the screen (a band is about 2 pixels on each side of its edge); a smaller
+#: patch is filled with the colour of its worst edge
+EDGE_SPACING_PX = 8.0
+#: the deviation mode without a report samples each edge at 33 parameters while that makes at
+#: most this many samples per pixel of the picture, fewer (down to :data:`MIN_EDGE_SAMPLES`) for
+#: networks with more edges
+EDGE_SAMPLES_PER_PIXEL = 4
+#: the fewest samples per edge of the deviation mode without a report (the ends, the middle, the quarters)
+MIN_EDGE_SAMPLES = 5
+#: check's samples per edge
+_CHECK_SAMPLES = 33
+#: patches whose curves :func:`_band_width` measures (evenly spaced through the network)
+_BAND_WIDTH_PATCHES = 4096
 #: the project's bar for "exactly G1", degrees (marked on the colour bar of the deviation mode)
 EXACT_G1_DEG = 1e-9
 #: tilt of the stripe axis from the screen's vertical, degrees
@@ -321,11 +353,45 @@ def choose_resolution(n_patches: int, panels: int = 1, budget: int = TRIANGLE_BU
     return int(np.clip(math.floor(math.sqrt(cells)) + 1, low, high))
 
 
-def _zoomed_resolution(n_patches: int, panels: int, closed: bool, zoom: float) -> int:
-    """:func:`choose_resolution` for the part of the surface a ``zoom``-times magnified picture
-    shows (about 1 / zoom² of the patches), at most :data:`MAX_SAMPLES` points in all."""
-    r = choose_resolution(max(1, round(n_patches / max(zoom, 1.0) ** 2)), panels, closed=closed)
-    return max(RESOLUTION_RANGE[0], min(r, math.isqrt(MAX_SAMPLES // max(n_patches, 1))))
+@dataclass(frozen=True)
+class _Footprint:
+    """How big a network's patches come out in its panel, from their corner quads: the panel's
+    pixels per model unit, every patch's largest side in pixels (3-D chords, at most what a side
+    can cover on the screen), and the projected distance in pixels between its opposite edges (the
+    smaller of the two pairs; ~0 for a patch seen edge-on)."""
+
+    pixels_per_unit: float
+    side_px: NDArray[np.float64]
+    spacing_px: NDArray[np.float64]
+
+
+def _footprint(network: PatchNetwork, camera: _Camera, size: tuple[int, int], panels: int, zoom: float) -> _Footprint:
+    corners = network.patches.evaluate(CORNER_PARAMETERS)  # (N, 4, 3)
+    screen, _ = camera.project(corners)  # (N, 4, 2)
+    flat = screen.reshape(-1, 2)
+    extent = np.maximum(flat.max(axis=0) - flat.min(axis=0), 1e-300) * 1.06
+    pixels_per_unit = float(zoom * min(size[0] / panels / extent[0], size[1] / extent[1]))
+    side = np.linalg.norm(np.roll(corners, -1, axis=1) - corners, axis=-1)  # side k: corner k to k + 1
+    projected = np.linalg.norm(np.roll(screen, -1, axis=1) - screen, axis=-1)
+    x, y = screen[..., 0], screen[..., 1]
+    area = 0.5 * np.abs((x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y).sum(axis=1))
+    # the sides 0, 2 run along u, 1, 3 along v: the distance between sides 1 and 3 is the area
+    # over their mean length, and so on
+    across_u = area / np.maximum(0.5 * (projected[:, 1] + projected[:, 3]), 1e-300)
+    across_v = area / np.maximum(0.5 * (projected[:, 0] + projected[:, 2]), 1e-300)
+    return _Footprint(pixels_per_unit, side.max(axis=1) * pixels_per_unit,
+                      np.minimum(across_u, across_v) * pixels_per_unit)
+
+
+def _pixel_resolution(footprint: _Footprint) -> int:
+    """Samples per patch side for one sample about every :data:`SAMPLE_SPACING_PX` pixels along the
+    patches (the 90th percentile of their sizes), in :data:`RESOLUTION_RANGE` and at most
+    :data:`MAX_SAMPLES` points in all (but 2 per side at least)."""
+    low, high = RESOLUTION_RANGE
+    count = len(footprint.side_px)
+    size = float(np.quantile(footprint.side_px, 0.9)) if count else 0.0
+    r = int(np.clip(math.ceil(size / SAMPLE_SPACING_PX) + 1, low, high))
+    return max(low, min(r, math.isqrt(MAX_SAMPLES // max(count, 1))))
 
 
 @dataclass(frozen=True)
@@ -374,34 +440,66 @@ def _fill_degenerate(normals: NDArray[np.float64], usable: NDArray[np.bool_]) ->
     return normals
 
 
-def _sample(network: PatchNetwork, resolution: int, band: tuple[float, float] | None) -> _Surface:
+#: band mask bit of a triangle of a filled patch (deviation mode): coloured by its worst side
+_FILLED = 16
+
+
+def _sample(
+    network: PatchNetwork, resolution: int, band: tuple[float, float] | None, filled: NDArray[np.bool_] | None = None
+) -> _Surface:
     """Every patch on its own grid; with ``band`` = (w_u, w_v) the first and last cells in u (in
     v) have the parameter width w_u (w_v): the bands along the patch edges that the deviation
-    mode colours."""
-    r = resolution
-    if band is None:
-        u = v = np.linspace(0.0, 1.0, r)
-    else:
-        r = max(r, 4)
-        u, v = (np.concatenate([[0.0], np.linspace(w, 1.0 - w, r - 2), [1.0]]) for w in band)
+    mode colours. ``filled`` (N,) bool, with a band: those patches are sampled on the plain grid
+    instead and their triangles marked to take the colour of their worst side.
+
+    Points of the banded patches come first (in patch order), then those of the filled ones."""
     patches = network.patches
     count = len(patches)
-    points = patches.evaluate_grid(u, v)
-    normals = np.cross(patches.evaluate_grid(u, v, 1, 0), patches.evaluate_grid(u, v, 0, 1))
-    length = np.linalg.norm(normals, axis=-1)
-    diagonal = float(np.linalg.norm(points.reshape(-1, 3).max(axis=0) - points.reshape(-1, 3).min(axis=0))) or 1.0
-    usable = length > DEGENERATE_RTOL * diagonal**2
-    normals = _fill_degenerate(normals / np.where(usable, length, 1.0)[..., None], usable)
-    triangles, cell_a, cell_b = _grid_triangles(count, r, r)
     closed = len(network.open_edges()[0]) == 0 and not network.same_direction.any()
-    surface = _Surface(points.reshape(-1, 3), normals.reshape(-1, 3), triangles, closed)
+    r = resolution
+    plain = np.linspace(0.0, 1.0, r)
     if band is None:
-        return surface
-    # the patch sides each triangle's cell lies on, as a 4-bit mask (0: interior):
-    # bit 0 edge 0 (v = 0), bit 1 edge 1 (u = 1), bit 2 edge 2 (v = 1), bit 3 edge 3 (u = 0)
-    sides = np.stack([cell_b == 0, cell_a == r - 2, cell_b == r - 2, cell_a == 0], axis=-1)
-    mask = (sides * (1 << np.arange(4))).sum(axis=-1).astype(np.int64)
-    return _Surface(surface.points, surface.normals, triangles, closed, triangles[:, 0] // (r * r), mask)
+        groups = [(np.arange(count), r, plain, plain, False)]
+    else:
+        rb = max(r, 4)
+        u, v = (np.concatenate([[0.0], np.linspace(w, 1.0 - w, rb - 2), [1.0]]) for w in band)
+        fill = np.zeros(count, dtype=bool) if filled is None else np.asarray(filled, dtype=bool)
+        groups = [(np.flatnonzero(~fill), rb, u, v, False), (np.flatnonzero(fill), r, plain, plain, True)]
+    samples = []
+    for ids, _, gu, gv, _ in groups:
+        part = patches if len(ids) == count else patches.take(ids)
+        if not len(ids):
+            samples.append((np.zeros((0, len(gu), len(gv), 3)), np.zeros((0, len(gu), len(gv), 3))))
+            continue
+        points = part.evaluate_grid(gu, gv)
+        samples.append((points, np.cross(part.evaluate_grid(gu, gv, 1, 0), part.evaluate_grid(gu, gv, 0, 1))))
+    every = np.concatenate([points.reshape(-1, 3) for points, _ in samples])
+    diagonal = float(np.linalg.norm(every.max(axis=0) - every.min(axis=0))) if len(every) else 0.0
+    diagonal = diagonal or 1.0
+    normal_parts, triangle_parts, patch_parts, mask_parts = [], [], [], []
+    offset = 0
+    for (ids, rg, _, _, is_filled), (points, normals) in zip(groups, samples):
+        length = np.linalg.norm(normals, axis=-1)
+        usable = length > DEGENERATE_RTOL * diagonal**2
+        normal_parts.append(_fill_degenerate(normals / np.where(usable, length, 1.0)[..., None], usable).reshape(-1, 3))
+        triangles, cell_a, cell_b = _grid_triangles(len(ids), rg, rg)
+        triangle_parts.append(triangles + offset)
+        offset += len(ids) * rg * rg
+        if band is None:
+            continue
+        patch_parts.append(ids[triangles[:, 0] // (rg * rg)])
+        if is_filled:  # every triangle of a filled patch takes the colour of its worst side
+            mask_parts.append(np.full(len(triangles), _FILLED | 0b1111, dtype=np.int64))
+        else:
+            # the patch sides each triangle's cell lies on, as a 4-bit mask (0: interior):
+            # bit 0 edge 0 (v = 0), bit 1 edge 1 (u = 1), bit 2 edge 2 (v = 1), bit 3 edge 3 (u = 0)
+            sides = np.stack([cell_b == 0, cell_a == rg - 2, cell_b == rg - 2, cell_a == 0], axis=-1)
+            mask_parts.append((sides * (1 << np.arange(4))).sum(axis=-1).astype(np.int64))
+    triangles = np.concatenate(triangle_parts)
+    normals = np.concatenate(normal_parts)
+    if band is None:
+        return _Surface(every, normals, triangles, closed)
+    return _Surface(every, normals, triangles, closed, np.concatenate(patch_parts), np.concatenate(mask_parts))
 
 
 # --------------------------------------------------------------------------- colours
@@ -478,13 +576,16 @@ def _angle_scale(angles: Sequence[NDArray[np.float64]], angle_range: tuple[float
     return _AngleScale(Normalize(0.0, high, clip=True), cmap, False)
 
 
-def _deviation_caption(report: ContinuityReport) -> str:
-    """The deviation panel's figure line: the largest G1 angle on the smooth edges, and the seams."""
+def _deviation_caption(report: ContinuityReport | _EdgeAngles) -> str:
+    """The deviation panel's figure line: the largest G1 angle on the smooth edges, and the seams
+    (and the samples per edge when fewer than check's 33)."""
     caption = f"max G1 angle {report.max_edge_angle_deg:.3g}° on {report.shared_edges - report.seam_edges} edges"
+    if report.samples_per_edge < _CHECK_SAMPLES:
+        caption += f" ({report.samples_per_edge} samples each)"
     return caption + (f", {report.seam_edges} seams" if report.seam_edges else "")
 
 
-def _band_angles(network: PatchNetwork, report: ContinuityReport) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+def _band_angles(network: PatchNetwork, report: ContinuityReport | _EdgeAngles) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """G1 angle of every patch side (N, 4), NaN on open, collapsed and seam sides; and the seam sides (N, 4)."""
     angles = np.full((network.n_patches, 4), np.nan)
     seams = np.zeros((network.n_patches, 4), dtype=bool)
@@ -507,7 +608,9 @@ def _deviation_colours(
 ) -> NDArray[np.float64]:
     """Per-corner colours (T, 3, 3): the lit grey surface, and the edge bands in one flat colour
     each, the colour of their edge's G1 angle (a corner cell lies on two sides: the larger), or
-    the seam colour where a side is a seam (it wins at corner cells: seams stay unbroken lines)."""
+    the seam colour where a side is a seam (it wins at corner cells: seams stay unbroken lines).
+    A filled patch's triangles lie on all four sides: the colour of its worst side, the seam
+    colour if it has a seam side, and the grey surface if it has neither (open or collapsed sides)."""
     assert surface.band_patch is not None and surface.band_mask is not None
     triangles = surface.triangles[keep]
     colours = vertex_colours[triangles]
@@ -529,7 +632,9 @@ def _deviation_colours(
     normal /= np.maximum(np.linalg.norm(normal, axis=-1, keepdims=True), 1e-300)
     diffuse, _ = _diffuse(normal, camera)
     band[lit] *= (0.82 + 0.18 * diffuse)[:, None]
-    colours[in_band] = band[:, None, :]
+    painted = lit | ((mask[in_band] & _FILLED) == 0)
+    band_rows = np.flatnonzero(in_band)[painted]
+    colours[band_rows] = band[painted][:, None, :]
     return colours
 
 
@@ -681,22 +786,70 @@ def _gouraud_artist(polygons: NDArray[np.float64], colours: NDArray[np.float64])
     return GouraudTriangles()
 
 
-def _band_width(
-    network: PatchNetwork, camera: _Camera, size: tuple[int, int], panels: int, zoom: float = 1.0
-) -> tuple[float, float]:
+def _band_width(patches: Patches, pixels_per_unit: float) -> tuple[float, float]:
     """Parameter widths (w_u, w_v) of the edge bands: about 2 pixels on each side of an edge line,
-    at most a tenth of the patch (the mean length of the u- and v-curves, in pixels of the
-    picture, sets the scale)."""
+    at most a tenth of the patch (the mean length of the u- and v-curves of ``patches``, at most
+    :data:`_BAND_WIDTH_PATCHES` of them evenly spaced, in pixels of the picture, sets the scale)."""
+    if len(patches) > _BAND_WIDTH_PATCHES:
+        patches = patches.take(np.linspace(0, len(patches) - 1, _BAND_WIDTH_PATCHES).round().astype(np.int64))
     params = np.linspace(0.0, 1.0, 5)
-    coarse = network.patches.evaluate_grid(params, params)
-    screen, _ = camera.project(coarse.reshape(-1, 3))
-    extent = np.maximum(screen.max(axis=0) - screen.min(axis=0), 1e-300) * 1.06
-    pixels_per_unit = zoom * min(size[0] / panels / extent[0], size[1] / extent[1])
+    coarse = patches.evaluate_grid(params, params)
     widths = []
     for axis in (1, 2):  # the u-curves, then the v-curves
         length = float(np.linalg.norm(np.diff(coarse, axis=axis), axis=-1).sum(axis=axis).mean())
         widths.append(float(np.clip(2.0 / max(length * pixels_per_unit, 1e-9), 0.003, 0.1)))
     return widths[0], widths[1]
+
+
+@dataclass(frozen=True)
+class _EdgeAngles:
+    """What the deviation mode needs of a :class:`ContinuityReport`: per shared edge its patches,
+    sides, G1 angle and seam flag, and the caption's figures."""
+
+    edge_patches: NDArray[np.int64]
+    edge_sides: NDArray[np.int64]
+    edge_angle_deg: NDArray[np.float64]
+    edge_seam: NDArray[np.bool_]
+    samples_per_edge: int
+
+    @property
+    def shared_edges(self) -> int:
+        return len(self.edge_angle_deg)
+
+    @property
+    def seam_edges(self) -> int:
+        return int(self.edge_seam.sum())
+
+    @property
+    def max_edge_angle_deg(self) -> float:
+        return float(self.edge_angle_deg[~self.edge_seam].max(initial=0.0))
+
+
+def _edge_angles(network: PatchNetwork, samples: int) -> _EdgeAngles:
+    """The G1 angle of every shared edge as :func:`g1patch.continuity.check` measures it (the same
+    function on the same blocks: equal figures at ``samples`` = 33), without check's corner, fold
+    and fairness measures."""
+    from .continuity import _blocks, _diagonal, _edge_measures, _local
+
+    local = _local(network.patches)
+    diagonal = _diagonal(local.evaluate(CORNER_PARAMETERS)) or 1.0
+    left_patch, left_edge = network.shared_edges()
+    right_patch = network.neighbor[left_patch, left_edge]
+    right_edge = network.neighbor_edge[left_patch, left_edge]
+    same = network.same_direction[left_patch, left_edge]
+    angle = np.zeros(len(left_patch))
+    for block in _blocks(len(left_patch), 4096):
+        angle[block] = _edge_measures(local, left_patch[block], left_edge[block], right_patch[block], right_edge[block],
+                                      same[block], samples, DEGENERATE_RTOL * diagonal**2)[0]
+    return _EdgeAngles(np.stack([left_patch, right_patch], axis=1), np.stack([left_edge, right_edge], axis=1), angle,
+                       network.seam[left_patch, left_edge], samples)
+
+
+def _edge_samples(edge_counts: Sequence[int], size: tuple[int, int]) -> int:
+    """Samples per edge of the deviation mode without a report: 33 while the picture's edges take
+    at most :data:`EDGE_SAMPLES_PER_PIXEL` samples per pixel, fewer for more, at least :data:`MIN_EDGE_SAMPLES`."""
+    budget = EDGE_SAMPLES_PER_PIXEL * size[0] * size[1]
+    return int(np.clip(budget // max(sum(edge_counts), 1), MIN_EDGE_SAMPLES, _CHECK_SAMPLES))
 
 
 # --------------------------------------------------------------------------- public
@@ -721,11 +874,13 @@ def render(
     ``mode``: ``"shaded"``, ``"zebra"`` (reflection lines, ``stripes`` black/white pairs per turn)
     or ``"deviation"`` (patch edges coloured by their G1 angle from ``report``, which is computed
     when None; ``angle_range`` = (low, high) in degrees fixes the colour scale; the title gets the
-    largest angle). ``resolution``: samples per patch side, None to choose it from
-    :data:`TRIANGLE_BUDGET`. ``view`` = (elevation, azimuth) in degrees about the world axis
+    largest angle; without a report only the edge angles are measured, see the module docstring;
+    patches too small on the screen for their edge bands are filled with their worst edge's
+    colour). ``resolution``: samples per patch side, None to choose it from the pixels (one
+    sample about every :data:`SAMPLE_SPACING_PX` pixels along a patch). ``view`` = (elevation, azimuth) in degrees about the world axis
     ``up`` (``"z"``, ``"y"`` for most OBJ files, or ``"x"``). ``zoom`` magnifies the picture
     about the world point ``target`` (default: the middle of the surface); the resolution chosen
-    for you then grows with the zoom. Bad arguments raise :class:`InputError`; without
+    for you then grows with the zoom (at most :data:`MAX_SAMPLES` points). Bad arguments raise :class:`InputError`; without
     matplotlib, :class:`MissingDependencyError`. The file appears complete or not at all.
     """
     render_side_by_side(
@@ -792,7 +947,10 @@ def render_side_by_side(
     shown_titles = list(titles)
     legend: list[tuple[str, NDArray[np.float64]]] = []
     if mode == "deviation":
-        full = [r if r is not None else check(n) for r, n in zip(checked, networks)]
+        samples = _edge_samples([len(n.shared_edges()[0]) for r, n in zip(checked, networks) if r is None], size)
+        full: list[ContinuityReport | _EdgeAngles] = [
+            r if r is not None else _edge_angles(n, samples) for r, n in zip(checked, networks)
+        ]
         sides = [_band_angles(n, r) for n, r in zip(networks, full)]
         scale = _angle_scale([r.edge_angle_deg[~r.edge_seam] for r in full], angle_range)
         shown_titles = ["\n".join(filter(None, [t, _deviation_caption(r)])) for t, r in zip(titles, full)]
@@ -800,10 +958,14 @@ def render_side_by_side(
             legend.append((_SEAM_LABEL, _SEAM_COLOUR))
     panels = []
     for network, title, network_sides in zip(networks, shown_titles, sides):
-        closed = len(network.open_edges()[0]) == 0 and not network.same_direction.any()
-        r = resolution or _zoomed_resolution(network.n_patches, count, closed, zoom)
-        band = _band_width(network, camera, size, count, zoom) if mode == "deviation" else None
-        surface = _sample(network, r, band)
+        footprint = _footprint(network, camera, size, count, zoom)
+        r = resolution or _pixel_resolution(footprint)
+        band, filled = None, None
+        if mode == "deviation":
+            filled = footprint.spacing_px < EDGE_SPACING_PX
+            banded = network.patches if not filled.any() else network.patches.take(np.flatnonzero(~filled))
+            band = _band_width(banded, footprint.pixels_per_unit) if len(banded) else (0.1, 0.1)
+        surface = _sample(network, r, band, filled)
         panels.append(_panel(surface, camera, mode, title, stripes=stripes, sides=network_sides, scale=scale,
                              zoom=zoom, target=target_point))
     label = "G1 angle across the edge (degrees" + (", log scale)" if scale is not None and scale.log else ")")
