@@ -119,8 +119,8 @@ def _parser() -> argparse.ArgumentParser:
     export.add_argument("network", type=Path, help="network file (.npz)")
     export.add_argument("-o", "--output", type=Path, required=True, help="file to write; the extension picks the format")
     export.add_argument("--resolution", type=int, metavar="N",
-                        help="meshes: samples per patch side (default: 17, fewer for networks of more than "
-                             "~7 000 patches, so that the mesh has at most ~2 M triangles; at least 2)")
+                        help="meshes: samples per patch side (default: 17, fewer above ~3 900 patches so that "
+                             "the mesh has at most ~2 M triangles, and at least 2)")
     export.add_argument("--force", action="store_true",
                         help="meshes: allow a --resolution making more than 20 M triangles")
     export.add_argument("--tolerance", type=float, metavar="REL",
