@@ -163,16 +163,24 @@ def _progress(label: str, quiet: bool) -> Iterator[Callable[[int, int], None]]:
 
 
 def _load_surface(path: Path) -> Any:
+    """The network ``check`` and ``render`` read: a network file (.npz, validated by
+    :func:`load_network`) or Bézier patches (.bpt, validated by :func:`read_bpt`). Anything else,
+    a missing file included, is one :class:`FormatError` saying what was expected instead."""
     from .io.bpt import read_bpt
-    from .io.network_file import load_network
+    from .io.network_file import describe_file, load_network
     from .network import network_from_patch_points
 
+    expects = "check and render read a network file (.npz) written by g1patch build, or Bézier patches (.bpt)"
     suffix = path.suffix.lower()
     if suffix == ".bpt":
         return network_from_patch_points(read_bpt(path), source=str(path))
     if suffix == ".npz":
-        return load_network(path)
-    raise FormatError(path, f"unsupported extension {suffix or '(none)'!r}; expected .npz or .bpt")
+        return load_network(path, expects=expects)
+    if not path.exists():
+        raise FormatError(path, "no such file")
+    what = describe_file(path, b"")
+    hint = f" (make a network from it: g1patch build {path} -o {path.with_suffix('.npz')})" if suffix in MESH_SUFFIXES + (".off",) else ""
+    raise FormatError(path, f"not a network or patch file but {what}; {expects}{hint}")
 
 
 def build_network(mesh: Any, method: str, *, shape: str = "interpolate", tangents: str = "arc", twist: str = "bilinear",

@@ -2,6 +2,13 @@
 
 The 16 points of a patch are 4 rows of 4; row r, column c is control point ``P[r, c]`` (r along
 u, c along v).
+
+Reading validates every line: the count is a positive integer the file has room for (17 non-empty
+lines a patch; a truncated file names its last line), every patch header is ``3 3``, every point
+three finite numbers of magnitude at most :data:`MAX_COORDINATE` (1e30, the bound of the network
+file, :mod:`g1patch.io.network_file`), nothing follows the last patch; a file larger than
+:data:`MAX_BPT_BYTES` (1 GiB, ~5 million patches) is refused before it is read. Each violation is
+one :class:`FormatError` naming the file and the line.
 """
 
 from __future__ import annotations
@@ -14,15 +21,24 @@ import numpy as np
 from ..errors import FormatError
 from ..patches import PatchSet
 from .atomic import atomic_path
+from .network_file import MAX_COORDINATE
 
-__all__ = ["read_bpt", "write_bpt"]
+__all__ = ["read_bpt", "write_bpt", "MAX_BPT_BYTES"]
+
+#: largest .bpt file read (a patch takes ~200 bytes of text: about 5 million patches)
+MAX_BPT_BYTES = 2**30
 
 
 def read_bpt(path: str | os.PathLike[str]) -> PatchSet:
     """Read a ``.bpt`` file into Bézier patches; a malformed file raises FormatError naming the line."""
     source = Path(path)
     try:
+        size = source.stat().st_size
+        if size > MAX_BPT_BYTES:
+            raise FormatError(source, f"{size} bytes, above the {MAX_BPT_BYTES} a .bpt file may have")
         text = source.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FormatError(source, "no such file") from None
     except UnicodeDecodeError:
         raise FormatError(source, "not a text file") from None
     except OSError as exc:
@@ -32,7 +48,7 @@ def read_bpt(path: str | os.PathLike[str]) -> PatchSet:
     if not lines:
         raise FormatError(source, "empty file; expected a patch count on the first line")
     number, words = lines[0]
-    if len(words) != 1 or not words[0].isdigit() or int(words[0]) < 1:
+    if len(words) != 1 or not (words[0].isascii() and words[0].isdigit()) or int(words[0]) < 1:
         raise FormatError(source, f"expected a positive patch count, got {' '.join(words)!r}", number)
     count = int(words[0])
     expected_lines = 1 + 17 * count
@@ -57,6 +73,9 @@ def read_bpt(path: str | os.PathLike[str]) -> PatchSet:
                 values = []
             if len(values) != 3 or not np.isfinite(values).all():
                 raise FormatError(source, f"patch {patch + 1}: expected three finite numbers 'x y z', got {' '.join(words)!r}", number)
+            if not max(map(abs, values)) <= MAX_COORDINATE:
+                raise FormatError(source, f"patch {patch + 1}: coordinate of magnitude {max(map(abs, values)):g} in "
+                                          f"{' '.join(words)!r} exceeds the bound |x| ≤ {MAX_COORDINATE:g}", number)
             control[patch, point] = values
     return PatchSet(control.reshape(count, 4, 4, 3), "bezier")
 
