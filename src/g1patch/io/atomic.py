@@ -66,7 +66,7 @@ def _create_temporary(target: Path) -> Path:
         except FileExistsError:
             continue
         try:
-            if mode != 0o666:
+            if mode != 0o666 and hasattr(os, "fchmod"):
                 os.fchmod(handle, mode)
         finally:
             os.close(handle)
