@@ -1,0 +1,652 @@
+"""The top-level API: ``g1patch.read``, ``g1patch.smooth`` and the :class:`Surface` they lead to.
+
+One import does the whole job, in the style of ``trimesh.load`` and ``meshio.read``::
+
+    import g1patch
+    surface = g1patch.smooth("mesh.obj")            # or (vertices, faces), a meshio.Mesh, a trimesh
+    print(surface.check())                          # the continuity report
+    surface.export("mesh.step")                     # by suffix: .npz .obj .ply .stl .step .iges .bpt
+    surface.render("zebra.png", mode="zebra")
+
+A :class:`Surface` is a thin wrapper around the :class:`~g1patch.network.PatchNetwork` it holds
+(``surface.network``), so everything in the deep modules keeps working on that. Heavy modules
+(SciPy, numba, matplotlib, OpenCASCADE) are imported only by the call that needs them, so
+``import g1patch`` stays fast.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import reprlib
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .errors import FormatError, G1PatchError, InputError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .continuity import ContinuityReport
+    from .gregory import GregoryPatchSet
+    from .io.cad import ExportResult
+    from .mesh import QuadMesh, Tag
+    from .network import PatchNetwork
+    from .patches import PatchSet
+
+__all__ = [
+    "MESH_SUFFIXES",
+    "NETWORK_SUFFIXES",
+    "EXPORT_SUFFIXES",
+    "NotAvailableError",
+    "Surface",
+    "as_mesh",
+    "as_network",
+    "check",
+    "export",
+    "read",
+    "smooth",
+]
+
+logger = logging.getLogger(__name__)
+
+PathLike = str | os.PathLike[str]
+
+#: files :func:`read` and :func:`smooth` open as meshes
+MESH_SUFFIXES = (".obj", ".ply", ".off")
+#: files :func:`read` opens as networks: g1patch's network file and Newell's Bézier patches
+NETWORK_SUFFIXES = (".npz", ".bpt")
+TRIANGLE_SUFFIXES = (".obj", ".ply", ".stl")
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
+#: what :meth:`Surface.export` writes, by suffix
+EXPORT_SUFFIXES = (".npz", *TRIANGLE_SUFFIXES, *CAD_SUFFIXES, ".bpt")
+#: pixels of the pictures Jupyter shows (``_repr_png_``)
+PREVIEW_SIZE = (400, 400)
+#: networks (or meshes, in faces) larger than this are not drawn automatically in Jupyter: the
+#: text repr is shown instead, and :meth:`Surface.render` draws them on request
+PREVIEW_MAX_PATCHES = 20_000
+
+_SOURCES = ("a mesh file path (.obj, .ply, .off), a (vertices, faces) pair of arrays or lists, a meshio.Mesh, "
+            "an object with vertices and faces (trimesh), a pyvista.PolyData or a QuadMesh")
+
+
+class NotAvailableError(G1PatchError, NotImplementedError):
+    """A feature g1patch names but does not have yet; the message says what to use meanwhile."""
+
+
+# ------------------------------------------------------------------------------- descriptions
+
+
+def describe(value: object) -> str:
+    """A short phrase naming ``value`` for an error message: its type and a repr of at most ~60
+    characters (arrays by shape and dtype, never their contents)."""
+    kind = type(value)
+    name = kind.__qualname__ if kind.__module__ == "builtins" else f"{kind.__module__.split('.')[0]}.{kind.__qualname__}"
+    if isinstance(value, np.ndarray):
+        return f"a numpy.ndarray of shape {value.shape} and dtype {value.dtype}"
+    short = reprlib.Repr()
+    short.maxstring, short.maxother, short.maxlist, short.maxtuple, short.maxdict = 40, 40, 4, 4, 3
+    try:
+        text = short.repr(value)
+    except Exception:  # a repr that fails says nothing useful
+        text = "…"
+    if len(text) > 60:
+        text = text[:59] + "…"
+    article = "an" if name[:1].lower() in "aeiou" else "a"
+    return f"{article} {name} ({text})"
+
+
+def _number(value: float) -> str:
+    return f"{float(value) + 0.0:.4g}"  # + 0.0: no "-0"
+
+
+def bbox_text(low: Any, high: Any) -> str:
+    """``"bbox (-1, -1, -1)…(1, 1, 1)"``, 4 significant digits."""
+    low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
+    if low.shape != (3,) or not (np.isfinite(low).all() and np.isfinite(high).all()):
+        return "bbox empty"
+    return f"bbox ({', '.join(map(_number, low))})…({', '.join(map(_number, high))})"
+
+
+def short_source(source: object) -> str:
+    """The file name of a source path, at most 40 characters."""
+    name = Path(str(source)).name or str(source)
+    return name if len(name) <= 40 else name[:39] + "…"
+
+
+def patch_kind(patches: object) -> str:
+    """``"gregory"`` for Gregory patches, the form (``"bezier"``, ``"hermite"``, ``"bspline"``) for bicubics."""
+    return getattr(patches, "kind", None) or str(getattr(patches, "form", type(patches).__name__))
+
+
+#: samples per patch side of the box in reprs: corners, edge midpoints and the centre, where a
+#: patch of a smooth surface bulges most
+BOX_SAMPLES = 3
+_BLOCK = 1 << 16
+
+
+def surface_box(patches: Any, samples: int = BOX_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
+    """(lowest, highest) corner of the box around the surface sampled on a ``samples²`` grid per
+    patch (world coordinates): one batched product of the grid's weights with the stored points,
+    a block of patches at a time and without copies, so a million patches take well under a second."""
+    from .basis import basis_values
+    from .gregory import GregoryPatchSet, gregory_weights
+
+    t = np.linspace(0.0, 1.0, samples)
+    if isinstance(patches, GregoryPatchSet):
+        weights = gregory_weights(t[:, None], t[None, :]).reshape(-1, 20)
+        points = patches.points
+    else:
+        values = basis_values(patches.form, t)  # (samples, 4)
+        weights = np.einsum("ia,jb->ijab", values, values).reshape(-1, 16)
+        points = patches.control.reshape(-1, 16, 3)
+    low, high = np.full(3, np.inf), np.full(3, -np.inf)
+    for start in range(0, len(points), _BLOCK):
+        sampled = np.matmul(weights, points[start:start + _BLOCK]).reshape(-1, 3)
+        low, high = np.minimum(low, sampled.min(axis=0)), np.maximum(high, sampled.max(axis=0))
+    frame = getattr(patches, "frame", None)
+    if frame is not None and len(points):  # x ↦ c + s x with s > 0 keeps the order of every coordinate
+        low, high = frame.to_world(low), frame.to_world(high)
+    return low, high
+
+
+def network_box(network: PatchNetwork) -> tuple[np.ndarray, np.ndarray]:
+    """The box of a network's surface (:func:`surface_box`)."""
+    return surface_box(network.patches)
+
+
+def network_repr(network: PatchNetwork, name: str = "PatchNetwork", notes: Sequence[str] = ()) -> str:
+    """``<PatchNetwork 6 gregory patches, interpolate, bbox (-1.732, -1.732, -1.732)…(1.732, 1.732, 1.732)>``."""
+    provenance = network.provenance
+    method = provenance.get("method")
+    kind = method if method and method != "file" else patch_kind(network.patches)
+    parts = [f"{network.n_patches} {kind} patches"]
+    if provenance.get("shape"):
+        parts.append(provenance["shape"])
+    elif provenance.get("source"):
+        parts.append(f"from {short_source(provenance['source'])}")
+    if network.n_seams:
+        parts.append(f"{network.n_seams} seams")
+    parts.extend(notes)
+    if network.n_patches:
+        parts.append(bbox_text(*network_box(network)))
+    return f"<{name} {', '.join(parts)}>"
+
+
+# ------------------------------------------------------------------------------- pictures
+
+
+def _png_via_file(draw: Any) -> bytes:
+    with tempfile.TemporaryDirectory(prefix="g1patch-png-") as folder:
+        path = Path(folder) / "picture.png"
+        draw(path)
+        return path.read_bytes()
+
+
+def network_png(network: PatchNetwork, size: tuple[int, int] = PREVIEW_SIZE, **options: Any) -> bytes:
+    """The PNG bytes of :func:`g1patch.render.render` of ``network``."""
+    from .render import render
+
+    return _png_via_file(lambda path: render(path, network, size=size, **options))
+
+
+def mesh_png(mesh: QuadMesh, size: tuple[int, int] = PREVIEW_SIZE) -> bytes:
+    """The PNG bytes of a quad mesh drawn flat-shaded (each quad as two triangles with its own normal)."""
+    from .render import render_surfaces
+    from .tessellate import TriangleMesh
+
+    triangles = mesh.faces[:, [0, 1, 2, 0, 2, 3]].reshape(-1, 3)
+    points = mesh.vertices[triangles].reshape(-1, 3)
+    corner = mesh.vertices[mesh.faces]
+    normal = np.cross(corner[:, 2] - corner[:, 0], corner[:, 3] - corner[:, 1])  # the quad's diagonals
+    length = np.linalg.norm(normal, axis=1, keepdims=True)
+    normal = np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
+    normals = np.repeat(normal, 6, axis=0)
+    flat = TriangleMesh(points, normals, np.arange(len(points), dtype=np.int64).reshape(-1, 3))
+    return _png_via_file(lambda path: render_surfaces(path, [flat], [None], size=size))  # type: ignore[list-item]
+
+
+def preview_png(draw: Any, count: int) -> bytes | None:
+    """``draw()`` for Jupyter's ``_repr_png_``: None (the text repr is shown instead) above
+    :data:`PREVIEW_MAX_PATCHES` items, or when the picture cannot be made (no matplotlib, an
+    empty or degenerate surface): a display hook must not raise."""
+    if count > PREVIEW_MAX_PATCHES:
+        return None
+    try:
+        return draw()
+    except (G1PatchError, OSError, ValueError, ArithmeticError, RuntimeError):
+        logger.info("no picture: drawing failed", exc_info=True)
+        return None
+
+
+# ------------------------------------------------------------------------------- inputs
+
+
+def _check_path(name: str, path: object) -> Path:
+    if isinstance(path, (str, os.PathLike)):
+        return Path(path)
+    raise InputError(f"{name}: expected a file name (str or pathlib.Path), got {describe(path)}")
+
+
+def read(path: PathLike, *, split: bool = True, sharp_angle: float | None = None, strict: bool | None = None) -> QuadMesh | PatchNetwork:
+    """Open a file by its suffix: a mesh (``.obj`` with OpenSubdiv tags, ``.ply``, ``.off``) as a
+    :class:`~g1patch.mesh.QuadMesh` (options as for :func:`g1patch.io.meshfile.read_mesh`), a
+    network file (``.npz``, written by ``g1patch build`` or :meth:`Surface.export`) or Newell's
+    Bézier patches (``.bpt``, their shared edges matched) as a
+    :class:`~g1patch.network.PatchNetwork`. A bad file raises :class:`FormatError` naming it."""
+    target = _check_path("path", path)
+    suffix = target.suffix.lower()
+    if suffix in MESH_SUFFIXES:
+        from .io.meshfile import read_mesh
+
+        return read_mesh(target, split=split, sharp_angle=sharp_angle, strict=strict)
+    if suffix == ".npz":
+        from .io.network_file import load_network
+
+        return load_network(target)
+    if suffix == ".bpt":
+        from .io.bpt import read_bpt
+        from .network import network_from_patch_points
+
+        return network_from_patch_points(read_bpt(target), source=str(target))
+    raise FormatError(target, f"unsupported extension {target.suffix or '(none)'!r}; g1patch.read opens meshes "
+                              f"({', '.join(MESH_SUFFIXES)}), network files (.npz) and Bézier patches (.bpt)")
+
+
+def _sharp_tags(vertices: Any, faces: Any, degrees: float | None) -> tuple[Tag, ...]:
+    """The ``sharp_angle`` tags of polygons given as arrays (none when the polygons are not usable:
+    the mesh checks then name what is wrong)."""
+    if degrees is None:
+        return ()
+    from .mesh import _as_polygons
+    from .sharpen import sharp_angle_tags
+
+    corners, sizes = _as_polygons(faces)
+    points = np.asarray(vertices, dtype=np.float64)
+    if (points.ndim != 2 or points.shape[1] != 3 or not sizes.size or not corners.size or corners.min() < 0
+            or corners.max() >= len(points) or not np.isfinite(points).all() or sizes.min() < 3):
+        return ()
+    return sharp_angle_tags(points, corners, sizes, degrees)
+
+
+def _planar_to_space(vertices: Any) -> Any:
+    """(n, 2) points as (n, 3) with z = 0 (meshio and trimesh keep 2-D meshes so); others unchanged."""
+    array = np.asarray(vertices)
+    if array.ndim == 2 and array.shape[1] == 2 and array.dtype != object:
+        return np.column_stack([array, np.zeros(len(array))])
+    return vertices
+
+
+def _from_arrays(vertices: Any, faces: Any, source: str | None, *, split: bool, sharp_angle: float | None,
+                 strict: bool | None) -> QuadMesh:
+    from .mesh import QuadMesh
+
+    vertices = _planar_to_space(vertices)
+    tags = _sharp_tags(vertices, faces, sharp_angle)
+    return QuadMesh.from_arrays(vertices, faces, split=split, source=source, tags=tags, strict=strict)
+
+
+#: meshio cell types of surfaces (polygon blocks are "polygon", in older files "polygonN")
+_MESHIO_SURFACES = ("triangle", "quad")
+
+
+def _meshio_faces(mesh: Any) -> Any:
+    """The faces of a meshio.Mesh's triangle, quad and polygon blocks, in block order: one (F, n)
+    array when all have n corners, else a list of index arrays. Points, lines and vertex cells are
+    left out; volume and higher-order cells raise :class:`InputError` naming the block."""
+    blocks = []
+    skipped = []
+    for index, block in enumerate(mesh.cells):
+        kind = str(getattr(block, "type", "?"))
+        data = getattr(block, "data", None)
+        if kind in _MESHIO_SURFACES or kind.startswith("polygon"):
+            if isinstance(data, np.ndarray) and data.ndim == 2:
+                blocks.append(data.astype(np.int64, copy=False))
+            else:  # polygon blocks of mixed sizes come as a list of arrays
+                blocks.extend(np.atleast_2d(np.asarray(face, dtype=np.int64)) for face in data)
+        elif kind == "vertex" or kind.startswith("line"):
+            skipped.append(kind)
+        else:
+            raise InputError(
+                f"meshio.Mesh: cell block {index} holds {kind!r} cells; g1patch smooths surfaces made of "
+                "linear triangle, quad and polygon cells (give the corner points only, without mid-edge nodes, "
+                "and the boundary of a volume mesh)"
+            )
+    if skipped:
+        logger.info("meshio.Mesh: left out the %s cells (not faces)", ", ".join(sorted(set(skipped))))
+    if not blocks:
+        raise InputError("meshio.Mesh: has no triangle, quad or polygon cells: there is no surface to smooth")
+    if len({block.shape[1] for block in blocks}) == 1:
+        return np.concatenate(blocks)
+    return [row for block in blocks for row in block]
+
+
+def _vtk_faces(flat: Any) -> Any:
+    """VTK's padded cell array ``[n0, i…, n1, j…, …]`` (pyvista's ``PolyData.faces``) as polygons."""
+    cells = np.asarray(flat, dtype=np.int64).ravel()
+    faces = []
+    position = 0
+    while position < len(cells):
+        size = int(cells[position])
+        if size < 1 or position + 1 + size > len(cells):
+            raise InputError(f"faces: not a VTK cell array (a cell of {size} points at entry {position} of {len(cells)})")
+        faces.append(cells[position + 1: position + 1 + size])
+        position += 1 + size
+    sizes = {len(face) for face in faces}
+    return np.stack(faces) if len(sizes) == 1 else faces
+
+
+def as_mesh(source: Any, *, split: bool = True, sharp_angle: float | None = None, strict: bool | None = None) -> QuadMesh:
+    """A validated :class:`~g1patch.mesh.QuadMesh` of anything :func:`smooth` accepts.
+
+    ``source``: a mesh file path (str or path-like: ``.obj``, ``.ply``, ``.off``); a
+    ``(vertices, faces)`` pair (arrays or lists; faces an (F, n) array or a list of index lists of
+    any sizes; 2-D points get z = 0); a ``meshio.Mesh`` (its triangle, quad and polygon blocks);
+    any object with ``vertices`` and ``faces`` (``trimesh.Trimesh``); an object with ``points``
+    and a VTK cell array ``faces`` (``pyvista.PolyData``); or a QuadMesh (returned as it is, with
+    ``sharp_angle`` tags added). Non-quad faces are split (one smooth Catmull–Clark step) unless
+    ``split`` is False; ``sharp_angle`` and ``strict`` as for :func:`g1patch.io.meshfile.read_mesh`.
+    Anything else raises :class:`InputError` naming what was passed.
+    """
+    from .mesh import QuadMesh
+
+    if isinstance(source, QuadMesh):
+        if sharp_angle is None:
+            return source
+        tags = _sharp_tags(source.vertices, source.faces, sharp_angle)
+        return QuadMesh(source.vertices, source.topology, source.tags + tags, source.source, source.repairs)
+    if isinstance(source, (str, os.PathLike)):
+        path = Path(source)
+        suffix = path.suffix.lower()
+        if suffix in NETWORK_SUFFIXES:
+            raise InputError(f"{path}: is a {'network' if suffix == '.npz' else 'Bézier patch'} file, already a surface, "
+                             "not a mesh to smooth; open it with g1patch.read(path) or g1patch.Surface(g1patch.read(path))")
+        from .io.meshfile import read_mesh
+
+        return read_mesh(path, split=split, sharp_angle=sharp_angle, strict=strict)
+    if isinstance(source, (tuple, list)) and len(source) == 2:
+        vertices, faces = source
+        return _from_arrays(vertices, faces, None, split=split, sharp_angle=sharp_angle, strict=strict)
+    if hasattr(source, "points") and hasattr(source, "cells") and not hasattr(source, "faces"):  # meshio.Mesh
+        return _from_arrays(source.points, _meshio_faces(source), None, split=split, sharp_angle=sharp_angle,
+                            strict=strict)
+    if hasattr(source, "vertices") and hasattr(source, "faces"):  # trimesh.Trimesh and the like
+        return _from_arrays(np.asarray(source.vertices), _face_list(source.faces), None, split=split,
+                            sharp_angle=sharp_angle, strict=strict)
+    if hasattr(source, "points") and hasattr(source, "faces"):  # pyvista.PolyData: faces a VTK cell array
+        faces = source.faces
+        faces = _vtk_faces(faces) if np.ndim(faces) == 1 else _face_list(faces)
+        return _from_arrays(np.asarray(source.points), faces, None, split=split, sharp_angle=sharp_angle, strict=strict)
+    if isinstance(source, _surface_types()):
+        raise InputError(f"smooth: got a {type(source).__name__}, already a surface, not a mesh; use "
+                         f"g1patch.Surface({type(source).__name__.lower()}) to check, export or render it")
+    raise InputError(f"smooth: cannot make a mesh of {describe(source)}; expected {_SOURCES}")
+
+
+def _face_list(faces: Any) -> Any:
+    """Faces as an array when they are one (a trimesh's TrackedArray included), else as given."""
+    return faces if isinstance(faces, (list, tuple)) else np.asarray(faces)
+
+
+def _surface_types() -> tuple[type, ...]:
+    from .gregory import GregoryPatchSet
+    from .network import PatchNetwork
+    from .patches import PatchSet
+
+    return (Surface, PatchNetwork, PatchSet, GregoryPatchSet)
+
+
+def as_network(surface: Any, name: str = "surface") -> PatchNetwork:
+    """The :class:`~g1patch.network.PatchNetwork` of a Surface, a network (itself), a
+    :class:`~g1patch.patches.PatchSet` or a :class:`~g1patch.gregory.GregoryPatchSet` (their
+    shared edges found by matching boundary control points,
+    :func:`~g1patch.network.network_from_patch_points`), or a ``.npz`` / ``.bpt`` file name.
+    Anything else raises :class:`InputError` naming it."""
+    from dataclasses import replace
+
+    from .gregory import GregoryPatchSet
+    from .network import PatchNetwork, network_from_patch_points
+    from .patches import PatchSet
+
+    if isinstance(surface, PatchNetwork):
+        return surface
+    if isinstance(surface, Surface):
+        return surface.network
+    if isinstance(surface, PatchSet):
+        return network_from_patch_points(surface, source="PatchSet")
+    if isinstance(surface, GregoryPatchSet):
+        # the boundary curves are the Bézier net's boundary rows: match those, keep the Gregory patches
+        bezier = PatchSet(surface.to_bezier_control(), "bezier", surface.frame)
+        return replace(network_from_patch_points(bezier, source="GregoryPatchSet"), patches=surface)
+    if isinstance(surface, (str, os.PathLike)) and Path(surface).suffix.lower() in NETWORK_SUFFIXES:
+        return read(surface)  # type: ignore[return-value]
+    raise InputError(f"{name}: expected a Surface, PatchNetwork, PatchSet, GregoryPatchSet or a network file "
+                     f"(.npz, .bpt), got {describe(surface)}")
+
+
+# ------------------------------------------------------------------------------- the surface
+
+
+class Surface:
+    """A smooth surface: a :class:`~g1patch.network.PatchNetwork` (``.network``) with the mesh it
+    was made from (``.mesh``, None for patch files), and the few things one does with it.
+
+    Make one with :func:`smooth`, or wrap a network, a PatchSet or a GregoryPatchSet:
+    ``Surface(network)``. The network stays a plain PatchNetwork, so the deep modules
+    (:mod:`g1patch.continuity`, :mod:`g1patch.tessellate`, :mod:`g1patch.render`,
+    :mod:`g1patch.io`) take ``surface.network`` as ever.
+    """
+
+    __slots__ = ("network", "mesh", "_report")
+
+    def __init__(self, network: PatchNetwork | PatchSet | GregoryPatchSet | Surface, mesh: QuadMesh | None = None) -> None:
+        if isinstance(network, Surface):
+            mesh = network.mesh if mesh is None else mesh
+        self.network: PatchNetwork = as_network(network, "network")
+        from .mesh import QuadMesh
+
+        if mesh is not None and not isinstance(mesh, QuadMesh):
+            raise InputError(f"mesh: expected a QuadMesh or None, got {describe(mesh)}")
+        self.mesh: QuadMesh | None = mesh
+        self._report: ContinuityReport | None = None
+
+    # -- what it is ------------------------------------------------------------------------
+
+    @property
+    def patches(self) -> PatchSet | GregoryPatchSet:
+        return self.network.patches  # type: ignore[return-value]
+
+    @property
+    def n_patches(self) -> int:
+        return self.network.n_patches
+
+    @property
+    def provenance(self) -> dict[str, str]:
+        """How it was made: method, shape, refine, repairs, source… (:attr:`PatchNetwork.provenance`)."""
+        return self.network.provenance
+
+    @property
+    def method(self) -> str:
+        """``gregory``, ``split4`` or ``corner``; ``file`` for patches nobody here built."""
+        return self.provenance.get("method", "file")
+
+    @property
+    def shape(self) -> str | None:
+        """The shape rule (``interpolate``, ``limit``, …), None for patch files."""
+        return self.provenance.get("shape")
+
+    @property
+    def repairs(self) -> tuple[str, ...]:
+        """What was repaired in the input mesh (empty if nothing)."""
+        return self.mesh.repairs if self.mesh is not None else ()
+
+    @property
+    def bounding_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lowest, highest) corner of the box around the surface, sampled at 3 × 3 points a patch
+        (corners, edge midpoints, centre; :func:`surface_box`)."""
+        return network_box(self.network)
+
+    def __repr__(self) -> str:
+        repaired = ("repaired",) if self.repairs else ()  # what: .repairs
+        return network_repr(self.network, "Surface", repaired)
+
+    def _repr_png_(self) -> bytes | None:
+        return preview_png(lambda: network_png(self.network), self.n_patches)
+
+    # -- what one does with it -------------------------------------------------------------
+
+    def check(self, **options: Any) -> ContinuityReport:
+        """The :class:`~g1patch.continuity.ContinuityReport` (G0 gaps, G1 angles, folds,
+        fairness): :func:`g1patch.continuity.check` with ``options`` (``samples``,
+        ``fold_samples``, ``progress``…). The default report is computed once and kept."""
+        from .continuity import check as measure
+
+        if options:
+            return measure(self.network, **options)
+        if self._report is None:
+            self._report = measure(self.network)
+        return self._report
+
+    def tessellate(self, resolution: int | None = None, *, force: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """``(points (P, 3), triangles (T, 3))``: every patch sampled on a ``resolution²`` grid,
+        welded along shared edges (:func:`g1patch.tessellate.tessellate`; None: about 2 M
+        triangles at most, 17 samples a side for small networks; ``force`` allows more than 20 M)."""
+        from .tessellate import tessellate
+
+        mesh = tessellate(self.network, resolution, force=force)
+        return mesh.points, mesh.triangles
+
+    def export(self, path: PathLike, **options: Any) -> Path | ExportResult:
+        """Write the surface to ``path``, the format chosen by its suffix:
+
+        * ``.npz``: the network file (``g1patch check/render/export`` read it; :func:`read` too);
+        * ``.obj``, ``.ply``, ``.stl``: triangles of :meth:`tessellate` (options ``resolution``,
+          ``force``);
+        * ``.step``/``.stp``, ``.iges``/``.igs``: a B-rep, one B-spline face per patch (split4:
+          per quad), exact for polynomial patches, else fitted within ``tolerance`` (model units,
+          default 1e-6 × the bbox diagonal); also ``progress``, ``g1_samples``
+          (:func:`g1patch.io.cad.export_cad`, needs ``pip install 'g1patch[cad]'``);
+        * ``.bpt``: Newell's Bézier patches (polynomial networks only: corner, split4, files).
+
+        Returns the path written, or for STEP/IGES the
+        :class:`~g1patch.io.cad.ExportResult` (faces, solid, fit deviation, the G1 angles
+        OpenCASCADE measures; its ``path``). The file appears complete or not at all; an unknown
+        suffix or an option the format does not take raises :class:`InputError`/:class:`FormatError`.
+        """
+        target = _check_path("path", path)
+        suffix = target.suffix.lower()
+        if suffix not in EXPORT_SUFFIXES:
+            raise FormatError(target, f"unsupported extension {target.suffix or '(none)'!r}; expected one of "
+                                      f"{', '.join(EXPORT_SUFFIXES)}")
+        if suffix in CAD_SUFFIXES:
+            _check_options(target, options, ("tolerance", "progress", "g1_samples"))
+            from .io.cad import export_cad
+
+            return export_cad(target, self.network, **options)
+        if suffix in TRIANGLE_SUFFIXES:
+            _check_options(target, options, ("resolution", "force"))
+            from .io.meshfile import write_triangles
+
+            points, triangles = self.tessellate(options.get("resolution"), force=bool(options.get("force", False)))
+            write_triangles(target, points, triangles)
+            return target
+        _check_options(target, options, ())
+        if suffix == ".npz":
+            from .io.network_file import save_network
+
+            save_network(target, self.network)
+            return target
+        from .io.bpt import write_bpt
+        from .patches import PatchSet
+
+        if not isinstance(self.network.patches, PatchSet):
+            raise FormatError(target, ".bpt holds polynomial Bézier patches; this surface's patches are rational "
+                                      "Gregory patches (export to .step, or smooth with method='split4')")
+        write_bpt(target, self.network.patches)
+        return target
+
+    def render(self, path: PathLike | None = None, mode: str = "shaded", **options: Any) -> Path | bytes:
+        """A PNG of the surface: ``mode`` ``"shaded"``, ``"zebra"`` (reflection lines, they
+        break where it creases) or ``"deviation"`` (every patch edge coloured by its G1 angle);
+        ``options`` as for :func:`g1patch.render.render` (``size``, ``view``, ``up``, ``zoom``,
+        ``title``…). Written to ``path`` (returned), or returned as PNG bytes when ``path`` is None."""
+        from .render import render
+
+        if mode == "deviation" and "report" not in options and self._report is not None:
+            options["report"] = self._report
+        if path is None:
+            return _png_via_file(lambda file: render(file, self.network, mode=mode, **options))  # type: ignore[arg-type]
+        target = _check_path("path", path)
+        render(target, self.network, mode=mode, **options)  # type: ignore[arg-type]
+        return target
+
+    def view(self, path: PathLike | None = None) -> None:
+        """An interactive viewer: not available yet; it comes with the ``g1patch view`` command.
+        Raises :class:`NotAvailableError` (a :class:`G1PatchError`)."""
+        raise NotAvailableError(
+            "an interactive viewer is not available yet: it comes with the 'g1patch view' command; meanwhile "
+            "write a picture with surface.render('surface.png', mode='shaded'|'zebra'|'deviation'), display the "
+            "surface in Jupyter, or export it (surface.export('surface.obj')) for any mesh viewer"
+        )
+
+
+def _check_options(target: Path, options: dict[str, Any], allowed: Sequence[str]) -> None:
+    unknown = sorted(set(options) - set(allowed))
+    if unknown:
+        takes = f"takes only {', '.join(allowed)}" if allowed else "takes no options"
+        raise InputError(f"export to {target.suffix.lower()}: unknown option {', '.join(map(repr, unknown))} "
+                         f"(this format {takes})")
+
+
+# ------------------------------------------------------------------------------- functions
+
+
+def smooth(
+    source: Any,
+    shape: str = "interpolate",
+    method: str = "gregory",
+    *,
+    refine: int = 0,
+    sharp_angle: float | None = None,
+    strict: bool | None = None,
+    split: bool = True,
+    tangents: str = "arc",
+) -> Surface:
+    """The smooth surface of a mesh: exactly G1 bicubic patches (:func:`g1patch.build.build_network`).
+
+    ``source``: a mesh file path, a ``(vertices, faces)`` pair, a ``meshio.Mesh``, a trimesh, a
+    pyvista PolyData or a QuadMesh (:func:`as_mesh`). ``shape``: ``interpolate`` (through the
+    vertices, the default), ``limit`` (the Catmull–Clark limit of the mesh as a cage),
+    ``limit-interpolate`` or ``legacy``. ``method``: ``gregory`` (exact G1, the default),
+    ``split4`` (exact G1, polynomial: exact in STEP) or ``corner`` (the paper's, G1 at corners
+    only). ``refine``: Catmull–Clark steps first. ``sharp_angle`` (degrees): keep edges whose faces
+    turn by more than that sharp. ``strict``: refuse a mesh that needs repair instead of repairing
+    it. ``split``: split non-quad faces (else they raise). ``tangents``: the legacy shape's.
+    """
+    from .build import METHODS, build_network
+    from .errors import check_choice
+    from .targets.interpolate import SHAPES
+
+    check_choice("shape", shape, SHAPES)  # before a large file is read
+    check_choice("method", method, METHODS)
+    mesh = as_mesh(source, split=split, sharp_angle=sharp_angle, strict=strict)
+    network = build_network(mesh, method, shape, tangents=tangents, refine=refine)  # type: ignore[arg-type]
+    return Surface(network, mesh)
+
+
+def check(surface: Any, **options: Any) -> ContinuityReport:
+    """The continuity report of a Surface, PatchNetwork, PatchSet, GregoryPatchSet or network file
+    (``.npz``, ``.bpt``); ``options`` as for :func:`g1patch.continuity.check`."""
+    from .continuity import check as measure
+
+    if isinstance(surface, Surface):
+        return surface.check(**options)
+    return measure(as_network(surface), **options)
+
+
+def export(surface: Any, path: PathLike, **options: Any) -> Path | ExportResult:
+    """:meth:`Surface.export` of a Surface, PatchNetwork, PatchSet, GregoryPatchSet or network file."""
+    wrapped = surface if isinstance(surface, Surface) else Surface(as_network(surface))
+    return wrapped.export(path, **options)
