@@ -44,7 +44,7 @@ from ._grid import BLOCK_POINTS
 from .errors import InputError
 from .gregory import GregoryPatchSet, gregory_weights
 from .network import PatchNetwork, Patches, edge_parameters
-from .patches import CORNER_PARAMETERS
+from .patches import CORNER_PARAMETERS, PatchSet
 
 __all__ = ["SEAM_G0_RTOL", "ContinuityReport", "check", "fairness", "folded_patches", "angle_between", "format_reports"]
 
@@ -251,6 +251,30 @@ class ContinuityReport:
         """A short human-readable table."""
         return format_reports([self])
 
+    def verdict(self, max_angle_deg: float = 1e-9) -> str:
+        """One phrase: ``"exact G1 (max angle 3.1e-12°), no folds"``, or what fails."""
+        angle = max(self.max_edge_angle_deg, self.max_corner_angle_deg)
+        g1 = f"exact G1 (max angle {angle:.2g}°)" if self.is_g1(max_angle_deg) else f"not G1 (max angle {angle:.3g}°)"
+        folds = f"{self.folds} folded patches" if self.folds else "no folds"
+        seams = f", {self.seam_edges} seams" + ("" if self.seams_closed() else f" open by {self.seam_g0_max:.2g}") if self.seam_edges else ""
+        return f"{g1}, {folds}{seams}"
+
+    def __repr__(self) -> str:
+        return f"<ContinuityReport {self.patches} patches, {self.shared_edges} shared edges: {self.verdict()}>"
+
+    def __str__(self) -> str:
+        return self.summary()
+
+    def _repr_html_(self) -> str:
+        """The :meth:`rows` as an HTML table under the verdict, for Jupyter."""
+        from html import escape
+
+        verdict = "passes" if self.passes() else "fails"
+        cells = "".join(f"<tr><td style='text-align:left'>{escape(label)}</td><td style='text-align:left'>{escape(value)}</td></tr>"
+                        for label, value in self.rows())
+        return (f"<div><b>ContinuityReport</b>: {escape(self.verdict())} (the check {verdict} at 1e-9°)"
+                f"<table>{cells}</table></div>")
+
 
 def format_reports(reports: list[ContinuityReport], titles: list[str] | None = None) -> str:
     """The reports' figures as a table, one column per report (rows missing from one are blank)."""
@@ -264,7 +288,7 @@ def format_reports(reports: list[ContinuityReport], titles: list[str] | None = N
 
 
 def check(
-    network: PatchNetwork,
+    network: PatchNetwork | PatchSet | GregoryPatchSet,
     samples: int = 33,
     fold_samples: int = FOLD_SAMPLES,
     degenerate_rtol: float = DEGENERATE_RTOL,
@@ -277,10 +301,16 @@ def check(
     bounded on networks of millions of patches (the default keeps a block's sample arrays near
     the size of a core's L2 cache, the fastest setting measured); ``progress(done, total)`` is
     called after each block. Degenerate normals, folds and fairness share the
-    ``fold_samples²`` grid of every patch.
+    ``fold_samples²`` grid of every patch. A :class:`~g1patch.patches.PatchSet` or
+    :class:`~g1patch.gregory.GregoryPatchSet` is measured as the network of its matching boundary
+    curves (:func:`g1patch.api.as_network`).
     """
     for name, value, least in (("samples", samples, 2), ("fold_samples", fold_samples, 2), ("chunk", chunk, 1)):
         _check_count(name, value, least)
+    if not isinstance(network, PatchNetwork):  # a PatchSet or GregoryPatchSet: match its shared edges
+        from .api import as_network
+
+        network = as_network(network, "network")
     patches = network.patches
     local = _local(patches)
     corners = local.evaluate(CORNER_PARAMETERS)

@@ -155,6 +155,14 @@ class GregoryPatchSet:
     def __len__(self) -> int:
         return int(self.points.shape[0])
 
+    def __repr__(self) -> str:
+        """``<GregoryPatchSet 6 patches, bbox (-1, -1, -1)…(1, 1, 1)>`` (the box of the surface sampled at
+        3 × 3 points a patch, world coordinates), never the arrays."""
+        from .api import bbox_text, surface_box
+
+        box = f", {bbox_text(*surface_box(self))}" if len(self) else ""
+        return f"<GregoryPatchSet {len(self)} patches{box}>"
+
     def take(self, indices: ArrayLike) -> GregoryPatchSet:
         """The patches at ``indices`` (any integer array, repeats allowed), in that order."""
         return GregoryPatchSet(self.points[np.asarray(indices, dtype=np.int64)], self.frame)

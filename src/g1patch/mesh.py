@@ -273,6 +273,15 @@ class QuadTopology:
             if isinstance(value, np.ndarray):
                 value.flags.writeable = False
 
+    def _counts(self) -> str:
+        boundary = int(self.is_boundary_edge.sum())
+        shape = "closed" if not boundary else f"open ({boundary} boundary edges)"
+        return f"{self.n_vertices} vertices, {self.n_faces} quads, {self.n_edges} edges, {shape}"
+
+    def __repr__(self) -> str:
+        """``<QuadTopology 8 vertices, 6 quads, 12 edges, closed>``: counts, never the arrays."""
+        return f"<QuadTopology {self._counts()}>"
+
     # -- half-edge arithmetic ------------------------------------------------------------------
 
     @staticmethod
@@ -1174,6 +1183,28 @@ class QuadMesh:
                 )
                 topology = QuadTopology.from_faces(quads, quad_points.shape[0])
         return cls(quad_points, topology, quad_tags, source, repairs)
+
+    def __repr__(self) -> str:
+        """``<QuadMesh 8 vertices, 6 quads, 12 edges, closed, bbox (-1, -1, -1)…(1, 1, 1), cube.obj>``:
+        counts, tags, repairs, the box and the file name, never the arrays."""
+        from .api import bbox_text, short_source
+
+        parts = [self.topology._counts()]
+        if self.tags:
+            parts.append("tags " + " ".join(dict.fromkeys(tag.name for tag in self.tags)))
+        if self.repairs:
+            parts.append("repaired")
+        parts.append(bbox_text(*self.bounding_box))
+        if self.source:
+            parts.append(short_source(self.source))
+        return f"<QuadMesh {', '.join(parts)}>"
+
+    def _repr_png_(self) -> bytes | None:
+        """A small flat-shaded picture of the quads for Jupyter (None above
+        :data:`g1patch.api.PREVIEW_MAX_PATCHES` faces)."""
+        from .api import mesh_png, preview_png
+
+        return preview_png(lambda: mesh_png(self), self.n_faces)
 
     def with_vertices(self, new_vertices: ArrayLike) -> QuadMesh:
         """The same topology, tags and repair record with new positions (validated the same way)."""

@@ -165,6 +165,19 @@ class PatchNetwork:
         labels = connected_components(graph, directed=False)[1]
         return labels[: 4 * count].reshape(count, 4).astype(np.int64)
 
+    def __repr__(self) -> str:
+        """``<PatchNetwork 6 gregory patches, interpolate, bbox (-1, -1, -1)…(1, 1, 1)>``: counts,
+        method and shape (or source), seams, the surface's box (3 × 3 samples a patch); never the arrays."""
+        from .api import network_repr
+
+        return network_repr(self)
+
+    def _repr_png_(self) -> bytes | None:
+        """A small shaded picture for Jupyter (None above :data:`g1patch.api.PREVIEW_MAX_PATCHES`)."""
+        from .api import network_png, preview_png
+
+        return preview_png(lambda: network_png(self), self.n_patches)
+
     @property
     def n_patches(self) -> int:
         return len(self.patches)

@@ -83,6 +83,14 @@ class PatchSet:
     def __len__(self) -> int:
         return int(self.control.shape[0])
 
+    def __repr__(self) -> str:
+        """``<PatchSet 6 bezier patches, bbox (-1, -1, -1)…(1, 1, 1)>`` (the box of the surface sampled at
+        3 × 3 points a patch, world coordinates), never the arrays."""
+        from .api import bbox_text, surface_box
+
+        box = f", {bbox_text(*surface_box(self))}" if len(self) else ""
+        return f"<PatchSet {len(self)} {self.form} patches{box}>"
+
     def take(self, indices: ArrayLike) -> PatchSet:
         """The patches at ``indices`` (any integer array, repeats allowed), in that order."""
         return PatchSet(self.control[np.asarray(indices, dtype=np.int64)], self.form, self.frame)
