@@ -27,6 +27,20 @@ merges faces across any edge; the G1 figures leave seams out and report their an
 OCP is imported only inside these functions; without it they raise
 :class:`MissingDependencyError` naming the extra, before anything is written. Writes go through
 :func:`atomic_path`: an error never leaves a partial file.
+
+Nothing reaches OpenCASCADE unchecked. OCC segfaults (it does not raise) on some inputs that look
+harmless — a face sewn away because it is smaller than the sewing tolerance or OCC's fixed
+``Precision::Confusion()`` (1e-7) leaves a null face, and evaluating it crashes; infinite or huge
+coordinates make infinite tolerances — so before any OCC call: the patches' world coordinates are
+finite and at most :data:`MAX_COORDINATE` (1e30, the bound of :mod:`g1patch.io.network_file`; past
+1e40 the G1 measurement's eighth powers overflow), the model has a positive bounding box, the poles
+handed over are finite and bounded, both knot vectors are clamped cubic ones (finite,
+non-decreasing, end multiplicity 4, interior multiplicity ≤ 3, spans at least 1e-12 of the range,
+as many knots as poles + 4), and every face's control net spans at least :data:`MIN_FACE_EXTENT`
+(1e-5, 100 × ``Precision::Confusion``) and 10 × the sewing tolerance. Each violation is an
+:class:`InputError` naming the output file and the patch. After sewing, a face OCC dropped anyway
+is an :class:`OpenCascadeError`, and so is any exception raised inside OCP (``Standard_Failure``,
+``Standard_ConstructionError``, …): never a traceback, never a crash.
 """
 
 from __future__ import annotations
@@ -66,6 +80,9 @@ __all__ = [
     "read_cad_faces",
     "read_step_faces",
     "read_iges_faces",
+    "OpenCascadeError",
+    "MAX_COORDINATE",
+    "MIN_FACE_EXTENT",
 ]
 
 PathLike = str | os.PathLike[str]
@@ -84,6 +101,17 @@ SEWING_RTOL = 1e-7
 SAMPLES_PER_SPAN = 4
 #: points per shared edge at which the exported surfaces' G1 angle is measured (as the check)
 G1_SAMPLES = 33
+#: largest |coordinate| (world units) handed to OpenCASCADE: the network file's bound
+MAX_COORDINATE = 1e30
+#: smallest extent (control-net bounding-box diagonal, model units) of a face handed to
+#: OpenCASCADE: 100 × its fixed ``Precision::Confusion()`` (1e-7); smaller faces are sewn away
+MIN_FACE_EXTENT = 1e-5
+#: smallest extent of a face relative to the sewing tolerance (which would sew it away)
+MIN_FACE_SEWING = 10.0
+
+
+class OpenCascadeError(ConstructionError):
+    """OpenCASCADE failed on the geometry: an exception raised inside OCP, or a face its sewing dropped."""
 
 
 # ----------------------------------------------------------------------------------- fitting
@@ -549,6 +577,120 @@ def _occ_g1_angles(
     return angle_between(normals[:half], normals[half:]).reshape(len(patch), samples)
 
 
+# ----------------------------------------------------------------------------------- guards
+#: the stage export_cad enters after each lap, for a failure's message
+_NEXT_STAGE = {"fit": "making the faces", "faces": "sewing", "sew": "making solids", "solid": "checking the shape",
+               "check": "measuring G1 angles", "g1": "writing the file"}
+
+
+def _raised_by_occ(error: BaseException) -> bool:
+    """An exception from inside OCP: its classes live in ``OCP.*``, or pybind11's translation of a
+    C++ exception it does not know (``RuntimeError``)."""
+    return type(error) is RuntimeError or any(cls.__module__.startswith("OCP") for cls in type(error).__mro__)
+
+
+@contextmanager
+def _occ_failures(target: Path, doing: list[str]) -> Iterator[None]:
+    """Turn an exception raised inside OCP into :class:`OpenCascadeError` naming ``target`` and the stage."""
+    try:
+        yield
+    except G1PatchError:
+        raise
+    except Exception as error:
+        if not _raised_by_occ(error):
+            raise
+        text = str(error).strip()
+        detail = text.splitlines()[0] if text else "no message"
+        raise OpenCascadeError(f"{target}: OpenCASCADE failed while {doing[0]} ({type(error).__name__}: {detail})") from error
+
+
+def _bound_message(value: float) -> str:
+    what = "is not a number" if np.isnan(value) else "is infinite" if np.isinf(value) else f"reaches magnitude {abs(value):.3g}"
+    return f"{what}; OpenCASCADE export needs finite coordinates of magnitude at most {MAX_COORDINATE:g}"
+
+
+def _check_patch_coordinates(target: Path, patches: object) -> None:
+    """Polynomial and Gregory patches: world coordinates finite and within :data:`MAX_COORDINATE`
+    (``|c| + s·max|x|`` with a frame, in Python floats: no overflow warning); other patches are
+    checked on their fitted poles."""
+    data = patches.control if isinstance(patches, PatchSet) else getattr(patches, "points", None)
+    if not isinstance(data, np.ndarray) or data.dtype.kind != "f" or not data.size:
+        return
+    low, high = float(data.min()), float(data.max())
+    largest = max(-low, high) if low == low and high == high else float("nan")
+    frame = getattr(patches, "frame", None)
+    if isinstance(frame, Frame):
+        largest = float(np.abs(frame.centre).max()) + frame.scale * largest
+    if not largest <= MAX_COORDINATE:
+        raise InputError(f"{target}: cannot export: the largest of the patches' coordinates {_bound_message(largest)}")
+
+
+def _check_diagonal(target: Path, diagonal: float) -> None:
+    if not (np.isfinite(diagonal) and diagonal > 0):
+        what = "0: all patch corners coincide" if diagonal == 0 else f"{diagonal!r}"
+        raise InputError(f"{target}: cannot export: the bounding-box diagonal of the patch corners is {what}")
+
+
+def _check_knots(target: Path, name: str, knots: NDArray[np.float64], poles: int) -> None:
+    """A clamped cubic knot vector for ``poles`` poles, as ``Geom_BSplineSurface`` takes it."""
+    knots = np.asarray(knots, dtype=np.float64)
+    problem = None
+    if knots.ndim != 1 or len(knots) != poles + 4:
+        problem = f"has {knots.size} knots for {poles} poles (needs poles + 4)"
+    elif not np.isfinite(knots).all():
+        problem = "is not finite"
+    elif np.any(np.diff(knots) < 0):
+        problem = "decreases"
+    else:
+        values, counts = np.unique(knots, return_counts=True)
+        span = values[-1] - values[0]
+        if len(values) < 2 or not span > 0:
+            problem = "spans nothing"
+        elif counts[0] != 4 or counts[-1] != 4:
+            problem = f"has end multiplicities {counts[0]} and {counts[-1]} (a clamped cubic needs 4)"
+        elif len(counts) > 2 and counts[1:-1].max() > 3:
+            problem = f"has an interior knot of multiplicity {counts[1:-1].max()} (at most 3 for cubics)"
+        elif np.diff(values).min() < 1e-12 * span:
+            problem = f"has a span of {np.diff(values).min():.3g}, below 1e-12 of its range"
+    if problem is not None:
+        raise InputError(f"{target}: cannot export: the B-spline knot vector in {name} {problem}")
+
+
+def _check_fit(target: Path, fit: BSplineFit, sewing_tolerance: float) -> None:
+    """The poles and knots handed to ``Geom_BSplineSurface``: finite, bounded, clamped cubic knots,
+    no face smaller than OCC can sew (module docstring)."""
+    control = np.asarray(fit.control)
+    if control.ndim != 4 or control.shape[-1] != 3 or not control.shape[0]:
+        raise InputError(f"{target}: cannot export: expected control nets (N, nu, nv, 3), got {control.shape}")
+    low, high = float(control.min()), float(control.max())
+    if not (low >= -MAX_COORDINATE and high <= MAX_COORDINATE):
+        bad = np.argwhere(~(np.abs(control) <= MAX_COORDINATE))[0]
+        raise InputError(f"{target}: cannot export: patch {bad[0]}: a B-spline pole {_bound_message(float(control[tuple(bad)]))}")
+    _check_knots(target, "u", fit.knots_u, control.shape[1])
+    _check_knots(target, "v", fit.knots_v, control.shape[2])
+    if not (np.isfinite(sewing_tolerance) and sewing_tolerance > 0):
+        raise InputError(f"{target}: cannot export: the sewing tolerance is {sewing_tolerance!r}")
+    extent = np.linalg.norm(control.max(axis=(1, 2)) - control.min(axis=(1, 2)), axis=-1)
+    smallest = max(MIN_FACE_EXTENT, MIN_FACE_SEWING * sewing_tolerance)
+    small = np.flatnonzero(extent < smallest)
+    if small.size:
+        first = int(small[0])
+        others = f" (and {small.size - 1} more)" if small.size > 1 else ""
+        raise InputError(
+            f"{target}: cannot export: patch {first}{others} spans {extent[first]:.3g} (its control net's diagonal), "
+            f"below {smallest:.3g}, the least OpenCASCADE can sew (100 × its fixed precision 1e-7, at least "
+            f"10 × the sewing tolerance): a degenerate or too small patch"
+        )
+
+
+def _check_sewn(target: Path, faces: Sequence[Any]) -> None:
+    """Every input face has a sewn face: OCC segfaults evaluating the null face of one it dropped."""
+    dropped = [n for n, face in enumerate(faces) if face.IsNull()]
+    if dropped:
+        raise OpenCascadeError(f"{target}: OpenCASCADE's sewing dropped the face of patch {dropped[0]}"
+                               f"{f' (and {len(dropped) - 1} more)' if len(dropped) > 1 else ''}: a degenerate face")
+
+
 # ----------------------------------------------------------------------------------- export
 
 
@@ -696,21 +838,25 @@ def export_cad(
     target = Path(path)
     kind = _format_of(target, format)
     occ = _occ()
+    _check_patch_coordinates(target, network.patches if isinstance(network, PatchNetwork) else network)
     network = _as_network(network)
     if not (isinstance(g1_samples, (int, np.integer)) and (g1_samples == 0 or g1_samples >= 2)):
         raise InputError(f"g1_samples: expected 0 or an integer ≥ 2, got {g1_samples!r}")
     seconds: dict[str, float] = {}
     clock = time.perf_counter()
+    doing = ["fitting the surfaces"]  # what OCC was doing, for a failure's message
 
     def lap(stage: str) -> None:
         nonlocal clock
         now = time.perf_counter()
         seconds[stage] = now - clock
         clock = now
+        doing[0] = _NEXT_STAGE.get(stage, stage)
         if progress is not None:
             progress(stage, 1, 1)
 
     diagonal = network.bounding_box_diagonal()
+    _check_diagonal(target, diagonal)
     exact = isinstance(network.patches, PatchSet)
     fit_tolerance = _tolerance(tolerance, diagonal)
     quads = split4_quad_faces(network) if exact else None
@@ -723,28 +869,32 @@ def export_cad(
         fit = fit_bspline_surfaces(network, fit_tolerance)
     lap("fit")
     sewing_tolerance = SEWING_RTOL * diagonal if diagonal > 0 else SEWING_RTOL
-    if quads is None:
-        faces = _make_faces(occ, fit, 0.01 * sewing_tolerance, progress)
-    else:
-        faces = _make_quad_faces(occ, quads, 0.01 * sewing_tolerance, progress)
-    lap("faces")
-    sewn, sewn_faces, free_edges = _sew(occ, faces, sewing_tolerance)
-    lap("sew")
-    shape, solid = _solids(occ, sewn)
-    lap("solid")
-    valid = bool(occ.BRepCheck_Analyzer(shape).IsValid())
-    volume = _volume(occ, shape) if solid else None
-    lap("check")
-    angles = (_occ_g1_angles(occ, sewn_faces, network, g1_samples, progress, quads is not None) if g1_samples
-              else np.zeros((0, 0)))
-    lap("g1")
-    shared_patch, shared_edge = network.shared_edges()
-    seam = network.seam[shared_patch, shared_edge]
-    smooth = angles[~seam].max(axis=1) if angles.size else np.zeros(0)
-    seam_angles = angles[seam] if angles.size else np.zeros(0)
-    with atomic_path(target) as temporary, _step_options(sewn_faces, pcurves=quads is None):
-        _write(occ, shape, temporary, kind)
-    lap("write")
+    for group in [fit] if quads is None else _quad_groups(quads):
+        _check_fit(target, group, sewing_tolerance)
+    with _occ_failures(target, doing):
+        if quads is None:
+            faces = _make_faces(occ, fit, 0.01 * sewing_tolerance, progress)
+        else:
+            faces = _make_quad_faces(occ, quads, 0.01 * sewing_tolerance, progress)
+        lap("faces")
+        sewn, sewn_faces, free_edges = _sew(occ, faces, sewing_tolerance)
+        _check_sewn(target, sewn_faces)
+        lap("sew")
+        shape, solid = _solids(occ, sewn)
+        lap("solid")
+        valid = bool(occ.BRepCheck_Analyzer(shape).IsValid())
+        volume = _volume(occ, shape) if solid else None
+        lap("check")
+        angles = (_occ_g1_angles(occ, sewn_faces, network, g1_samples, progress, quads is not None) if g1_samples
+                  else np.zeros((0, 0)))
+        lap("g1")
+        shared_patch, shared_edge = network.shared_edges()
+        seam = network.seam[shared_patch, shared_edge]
+        smooth = angles[~seam].max(axis=1) if angles.size else np.zeros(0)
+        seam_angles = angles[seam] if angles.size else np.zeros(0)
+        with atomic_path(target) as temporary, _step_options(sewn_faces, pcurves=quads is None):
+            _write(occ, shape, temporary, kind)
+        lap("write")
     return ExportResult(
         path=target,
         format=kind,
@@ -838,14 +988,14 @@ def read_cad_faces(path: PathLike) -> CadModel:
     occ = _occ()
     if not source.is_file():
         raise FormatError(source, "no such file")
-    with _quiet(occ):
+    with _occ_failures(source, ["reading the file"]), _quiet(occ):
         reader = occ.STEPControl_Reader() if kind == "step" else occ.IGESControl_Reader()
         status = reader.ReadFile(str(source))
         if status != occ.IFSelect_ReturnStatus.IFSelect_RetDone:
             raise FormatError(source, f"OpenCASCADE cannot read it as {kind.upper()} ({status.name})")
         reader.TransferRoots()
         shape = reader.OneShape()
-    faces = [CadFace(occ, face) for face in _faces_of(occ, shape)]
+        faces = [CadFace(occ, face) for face in _faces_of(occ, shape) if not face.IsNull()]
     if not faces:
         raise FormatError(source, f"the {kind.upper()} file holds no faces")
     return CadModel(shape, faces)
