@@ -621,3 +621,17 @@ def test_random_damage_is_always_a_format_error(compressed: bool, tmp_path: Path
                 assert "\n" not in str(error) and str(error).startswith(str(bad))
                 refused += 1
     assert refused > 300
+
+
+@pytest.mark.parametrize("at", [0, 1 << 17, (1 << 17) + 5, 3 * (1 << 17) - 1])
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf, -1e31])
+def test_the_bound_check_sees_every_chunk(at: int, value: float) -> None:
+    """The coordinate check runs in chunks: a bad value in any of them, first or last element, is found."""
+    from g1patch.io.network_file import _Checker, _extremes
+
+    array = np.zeros(3 * (1 << 17))
+    array[at] = value
+    low, high = _extremes(array)
+    assert not (low >= -MAX_COORDINATE and high <= MAX_COORDINATE)
+    with pytest.raises(FormatError, match=rf"member 'points\.npy': value .* at index \({at},\)"):
+        _Checker(Path("x.npz"), "").coordinates("points", array)

@@ -135,6 +135,8 @@ PER_PATCH_BYTES = 1024
 MAX_HEADER_BYTES = 2**20
 #: largest other string member (patch kind, form)
 _MAX_NAME_BYTES = 1024
+#: elements per chunk of the value checks: their temporaries stay in the cache
+_CHUNK = 1 << 17
 #: room for one ``.npy`` header (numpy reads at most 10 000 bytes of one) and its preamble
 _NPY_HEADER_BYTES = 10_000 + 16
 
@@ -670,7 +672,7 @@ class _Checker:
         array = array.astype(np.float64, copy=False)
         if not array.size:
             return array, 0.0
-        low, high = float(array.min()), float(array.max())  # a NaN anywhere makes both NaN
+        low, high = _extremes(array)
         if low >= -MAX_COORDINATE and high <= MAX_COORDINATE:
             return array, max(-low, high)
         bad = np.argwhere(~(np.abs(array) <= MAX_COORDINATE))[0]
@@ -692,31 +694,33 @@ class _Checker:
         """−1 at the same places, every neighbour pointing back, both sides naming one edge id.
 
         On the flat half-edge numbering ``4 p + k``: ``twin = 4 neighbor + neighbor_edge`` (−5 on an
-        open edge) must satisfy ``twin[twin[h]] = h`` on every shared edge (taken modulo 4P, so open
-        edges index harmlessly and are masked after)."""
-        flat_neighbor, flat_edge = neighbor.reshape(-1), neighbor_edge.reshape(-1)
-        open_edge = flat_neighbor < 0
-        mismatch = open_edge != (flat_edge < 0)
-        if mismatch.any():
-            at = int(np.argmax(mismatch))
-            raise self.fail("neighbor_edge", f"value {int(flat_edge[at])} at index ({at // 4}, {at % 4}) does not match "
-                                             f"'neighbor.npy' ({int(flat_neighbor[at])}): -1 in both or in neither")
-        twin = flat_neighbor * 4 + flat_edge
-        back = np.take(twin, twin, mode="wrap")
-        wrong = back != np.arange(len(twin), dtype=twin.dtype)
-        wrong &= ~open_edge
-        if wrong.any():
-            at = int(np.argmax(wrong))
-            raise self.fail("neighbor", f"patch {at // 4} edge {at % 4} points to patch {int(twin[at]) // 4} edge "
-                                        f"{int(twin[at]) % 4}, which does not point back")
-        flat_ids = edge_ids.reshape(-1)
-        differs = np.take(flat_ids, twin, mode="wrap") != flat_ids
-        differs &= ~open_edge
-        if differs.any():
-            at = int(np.argmax(differs))
-            q = int(twin[at])
-            raise self.fail("edge_ids", f"patch {at // 4} edge {at % 4} and its neighbour, patch {q // 4} edge {q % 4}, "
-                                        f"name different edges ({int(flat_ids[at])} and {int(flat_ids[q])})")
+        open edge) must satisfy ``twin[twin[h]] = h`` on every shared edge (gathered modulo 4P, so
+        open edges index harmlessly and are masked after). In chunks of :data:`_CHUNK` half-edges:
+        the temporaries stay in the cache and no large array is allocated."""
+        flat_neighbor, flat_edge, flat_ids = neighbor.reshape(-1), neighbor_edge.reshape(-1), edge_ids.reshape(-1)
+        for start in range(0, len(flat_neighbor), _CHUNK):
+            stop = min(start + _CHUNK, len(flat_neighbor))
+            near, edge = flat_neighbor[start:stop], flat_edge[start:stop]
+            shared = near >= 0
+            mismatch = shared != (edge >= 0)
+            if mismatch.any():
+                at = start + int(np.argmax(mismatch))
+                raise self.fail("neighbor_edge", f"value {int(flat_edge[at])} at index ({at // 4}, {at % 4}) does not match "
+                                                 f"'neighbor.npy' ({int(flat_neighbor[at])}): -1 in both or in neither")
+            twin = near * 4 + edge
+            back = np.take(flat_neighbor, twin, mode="wrap") * 4 + np.take(flat_edge, twin, mode="wrap")
+            wrong = (back != np.arange(start, stop)) & shared
+            if wrong.any():
+                at = int(np.argmax(wrong))
+                h, q = start + at, int(twin[at])
+                raise self.fail("neighbor", f"patch {h // 4} edge {h % 4} points to patch {q // 4} edge {q % 4}, "
+                                            f"which does not point back")
+            differs = (np.take(flat_ids, twin, mode="wrap") != flat_ids[start:stop]) & shared
+            if differs.any():
+                at = int(np.argmax(differs))
+                h, q = start + at, int(twin[at])
+                raise self.fail("edge_ids", f"patch {h // 4} edge {h % 4} and its neighbour, patch {q // 4} edge {q % 4}, "
+                                            f"name different edges ({int(flat_ids[h])} and {int(flat_ids[q])})")
 
     def frame(self, arrays: dict[str, Any], extent: dict[str, float], patch_name: str) -> None:
         """The frame's own checks (:meth:`Frame.from_arrays`: both arrays, shapes, finite, scale > 0), then
@@ -735,5 +739,19 @@ class _Checker:
                                         f"beyond the bound |x| ≤ {MAX_COORDINATE:g} on coordinates")
 
 
+def _extremes(array: NDArray[np.float64]) -> tuple[float, float]:
+    """``(min, max)`` of ``array`` in one pass over memory (each chunk's min and max while it is in
+    the cache); a NaN anywhere makes both NaN."""
+    flat = array.reshape(-1) if array.flags.c_contiguous else np.ravel(array)
+    low, high = np.inf, -np.inf
+    for start in range(0, len(flat), _CHUNK):
+        chunk = flat[start:start + _CHUNK]
+        chunk_low, chunk_high = float(chunk.min()), float(chunk.max())
+        if chunk_low != chunk_low:  # NaN (numpy's min propagates it; Python's min would drop it)
+            return np.nan, np.nan
+        low, high = min(low, chunk_low), max(high, chunk_high)
+    return low, high
+
+
 def _where(index: NDArray[np.int64]) -> str:
-    return "index (" + ", ".join(str(int(i)) for i in index) + ")" if len(index) else "index ()"
+    return f"index {tuple(int(i) for i in index)}"
