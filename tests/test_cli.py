@@ -129,7 +129,9 @@ def assert_clean_failure(result: subprocess.CompletedProcess[str], output: Path)
     assert len(lines) == 1 and lines[0].startswith("g1patch: error: "), result.stderr
     assert "Traceback" not in result.stderr
     assert not output.exists()
-    assert not list(output.parent.glob(f".{output.name}*")), "a temporary file was left behind"
+    from g1patch.io.atomic import TEMPORARY_PREFIX
+
+    assert not list(output.parent.glob(f"{TEMPORARY_PREFIX}*")), "a temporary file was left behind"
 
 
 @pytest.mark.parametrize("bad", sorted(p.name for p in MALFORMED.iterdir()))
