@@ -89,7 +89,8 @@ DROP_PIVOT = 1e-10  #: relative pivot below which a column is dropped from the f
 ITERATIONS = 3  #: most refits of the normal
 STOP = 1e-14  #: a vertex's refits stop once its slope |g| is below this
 CUBIC_POINTS = 12  #: fewest 2-ring points for the cubic term
-BLOCK = 2048  #: vertices per padded block
+BLOCK = 2048  #: vertices per padded block (NumPy), per gathered block (kernel)
+LANES = 16  #: vertices the kernel fits side by side
 GILBERT_STEPS = 64
 
 
@@ -348,230 +349,342 @@ def _circle_fit(q: FloatArray, mask: BoolArray, edges: FloatArray, edge_mask: Bo
     return out
 
 
-def _fit_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray,
-                neighbor_offsets: IntArray, neighbors: IntArray, vertices: IntArray, start: FloatArray, tilt: bool,
-                out_normals: FloatArray, out_shape: FloatArray, out_residual: FloatArray, out_pivot: FloatArray) -> None:
-    """:func:`_circle_fit` of ``vertices`` one at a time, compiled by :func:`~g1patch.targets.local.jit_kernel`
-    (same formulas and steps), with each vertex's neighbourhood gathered from the topology on the spot.
-
-    The face 1-ring are the corners of the faces at v; the face 2-ring adds the corners of the
-    faces at those (the rows of ``I Iᵀ`` and ``(I Iᵀ)²`` of :func:`_face_rings`, in the same
-    order). With ``tilt`` a vertex with a 2-ring of ≥ :data:`CUBIC_POINTS` points fits it with the
-    cubic, else its 1-ring without; without ``tilt`` the 1-ring, normal held. The Gram matrix is
-    accumulated point by point, each entry summed over the points in order.
-    Writes row i of the ``out_`` arrays for ``vertices[i]``; S as in :func:`_circle_fit`, before symmetrising.
-    """
-    most = 1  # the largest face count: bounds the scratch of one ring
+def _rows_kernel(faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray, offsets: IntArray,
+                 points: IntArray, fill: bool) -> None:
+    """The rows of ``I Iᵀ`` (I the vertex–face incidence, :func:`_face_rings`) in scipy's order: per
+    vertex the corners of its faces, the faces in increasing order and each face's corners in
+    increasing order, each point once, reversed (scipy's sparse product lists a row's columns in
+    reverse order of first encounter). ``fill=False`` writes the row sizes to ``offsets[v + 1]``,
+    then ``fill=True`` the points, from ``offsets[v]``."""
+    most = 1
     for u in range(ring_offsets.size - 1):
         most = max(most, ring_offsets[u + 1] - ring_offsets[u])
     ring_faces = np.empty(most, dtype=np.int64)
     ring = np.empty(4 * most, dtype=np.int64)
-    centres = np.empty(4 * most, dtype=np.int64)
     corners = np.empty(4, dtype=np.int64)
-    seen = np.full(x.shape[0], -1)  # stamp of the ring being gathered
+    seen = np.full(ring_offsets.size - 1, -1)
+    for v in range(ring_offsets.size - 1):
+        first, count = ring_offsets[v], ring_offsets[v + 1] - ring_offsets[v]
+        for r in range(count):  # insertion sort of the faces at v
+            f = ring_halfedges[first + r] >> 2
+            j = r
+            while j > 0 and ring_faces[j - 1] > f:
+                ring_faces[j] = ring_faces[j - 1]
+                j -= 1
+            ring_faces[j] = f
+        size = 0
+        for r in range(count):
+            for corner in range(4):
+                p = faces[ring_faces[r], corner]
+                j = corner
+                while j > 0 and corners[j - 1] > p:
+                    corners[j] = corners[j - 1]
+                    j -= 1
+                corners[j] = p
+            for corner in range(4):
+                p = corners[corner]
+                if seen[p] != v:
+                    seen[p] = v
+                    ring[size] = p
+                    size += 1
+        if fill:
+            for j in range(size):
+                points[offsets[v] + j] = ring[size - 1 - j]
+        else:
+            offsets[v + 1] = size
+
+
+def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_offsets: IntArray, neighbors: IntArray,
+                vertices: IntArray, start: FloatArray, tilt: bool, lanes: int, out_normals: FloatArray,
+                out_shape: FloatArray, out_residual: FloatArray, out_pivot: FloatArray) -> None:
+    """:func:`_circle_fit` of ``vertices``, compiled by :func:`~g1patch.targets.local.jit_kernel`: each
+    vertex goes through the same formulas and steps, in the same order, as in the NumPy reference
+    one vertex at a time; ``lanes`` vertices (of one column count) are fitted side by side, so
+    that the innermost loops run over them and vectorise, while each lane's arithmetic is that of
+    the vertex alone.
+
+    Neighbourhoods: the face 1-ring is v's row of ``I Iᵀ`` (``rows``, :func:`_rows_kernel`) without
+    v; the face 2-ring is v's row of ``(I Iᵀ)²``, in scipy's order too (reversed first encounter over
+    the rows of v's row), without v. With ``tilt`` a vertex with a 2-ring of ≥ :data:`CUBIC_POINTS`
+    points fits it with the cubic, else its 1-ring without; without ``tilt`` the 1-ring, normal
+    held. :data:`BLOCK` vertices at a time are gathered and ordered by size, so that lanes have
+    (nearly) as many points; a lane with fewer is padded with points at the vertex itself, which
+    get weight 0 and add exactly nothing. Writes row i of the ``out_`` arrays for ``vertices[i]``;
+    S as in :func:`_circle_fit`, before symmetrising.
+    """
     taken = np.full(x.shape[0], -1)  # v once a point is in v's 2-ring
-    stamp = 0
-    hood = np.empty(64, dtype=np.int64)
-    q = np.empty((64, 3))
-    row = np.empty(9)
-    gram = np.empty((9, 9))
-    lower = np.empty((9, 9))
-    rhs = np.empty(9)
-    pivot = np.empty(9)
-    c = np.empty(9)
-    n = np.empty(3)
-    e1 = np.empty(3)
-    e2 = np.empty(3)
-    frame_h = np.empty((3, 3))
+    hood = np.empty(32 * BLOCK, dtype=np.int64)
+    hood_start = np.empty(BLOCK + 1, dtype=np.int64)
+    key = np.empty(BLOCK, dtype=np.int64)
+    large = np.int64(1) << 40  # key = size, + large for the cubic fits
+    q = np.zeros((32, 3, lanes))
+    n = np.empty((3, lanes))
+    e1 = np.empty((3, lanes))
+    e2 = np.empty((3, lanes))
+    scaled = np.empty((9, lanes))  # e1/h̄, e2/h̄, n/h̄
+    hbar = np.empty(lanes)
+    row = np.empty((11, lanes))
+    weighted = np.empty(lanes)
+    ws = np.empty(lanes)
+    root = np.empty(lanes)
+    total = np.empty(lanes)
+    sum_w = np.empty(lanes)
+    sum_wzz = np.empty(lanes)
+    gram = np.empty((9, 9, lanes))
+    lower = np.empty((9, 9, lanes))
+    rhs = np.empty((9, lanes))
+    pivot = np.empty((9, lanes))
+    c = np.empty((9, lanes))
+    frame_h = np.empty((3, 3, lanes))
+    active = np.empty(lanes, dtype=np.bool_)
+    axis_e1 = np.empty(3)
     project = np.empty((3, 3))
     product = np.empty((3, 3))
-    for i in range(vertices.size):
-        v = vertices[i]
-        # Rows of I Iᵀ in scipy's order (reversed first encounter, over the faces in increasing
-        # order and their corners in increasing order), so that the sums are those of the NumPy
-        # reference: R(v) gives the 1-ring, and the 2-ring is the reversed first encounter over
-        # R(c) for c in R(v).
-        count = 0
-        m = 0
-        for at in range(-1, 4 * most):
-            if at == count or (at >= 0 and not tilt):
-                break
-            centre = v if at < 0 else centres[at]
-            stamp += 1
-            first, faces_here = ring_offsets[centre], ring_offsets[centre + 1] - ring_offsets[centre]
-            for r in range(faces_here):  # insertion sort of the ring's faces
-                f = ring_halfedges[first + r] >> 2
-                j = r
-                while j > 0 and ring_faces[j - 1] > f:
-                    ring_faces[j] = ring_faces[j - 1]
-                    j -= 1
-                ring_faces[j] = f
-            size = 0
-            for r in range(faces_here):
-                for corner in range(4):
-                    p = faces[ring_faces[r], corner]
-                    j = corner
-                    while j > 0 and corners[j - 1] > p:
-                        corners[j] = corners[j - 1]
-                        j -= 1
-                    corners[j] = p
-                for corner in range(4):
-                    p = corners[corner]
-                    if seen[p] != stamp:
-                        seen[p] = stamp
-                        ring[size] = p
-                        size += 1
-            if at < 0:
-                count = size
-                for j in range(size):
-                    centres[j] = ring[size - 1 - j]
-                continue
-            for j in range(size - 1, -1, -1):
-                p = ring[j]
-                if taken[p] != v:
-                    taken[p] = v
-                    if m == hood.size:
-                        grown = np.empty(2 * m, dtype=np.int64)
-                        grown[:m] = hood
-                        hood = grown
-                    hood[m] = p
-                    m += 1
-        cubic = tilt and m - 1 >= CUBIC_POINTS
-        if cubic:  # the 2-ring: reversed, without v
-            for j in range(m // 2):
-                hood[j], hood[m - 1 - j] = hood[m - 1 - j], hood[j]
-        else:  # the 1-ring, without v
-            if hood.size < count:
-                hood = np.empty(count, dtype=np.int64)
-            m = count
-            hood[:m] = centres[:m]
-        kept = 0
-        for j in range(m):
-            if hood[j] != v:
-                hood[kept] = hood[j]
-                kept += 1
-        m = kept
-        k = 3 + 2 * tilt + 4 * cubic
-        h = 2 * tilt
-        if q.shape[0] < m:
-            q = np.empty((hood.size, 3))
-        for j in range(m):
-            for d in range(3):
-                q[j, d] = x[hood[j], d] - x[v, d]
-        n[:] = start[v]
-        for _ in range(ITERATIONS if tilt else 1):
-            # the frame (_frame): e1 = unit(n × axis), axis the first coordinate axis least aligned with n
-            axis = 0
-            for d in (1, 2):
-                if abs(n[d]) < abs(n[axis]):
-                    axis = d
-            e1[0], e1[1], e1[2] = 0.0, 0.0, 0.0
-            e1[(axis + 1) % 3] = n[(axis + 2) % 3]
-            e1[(axis + 2) % 3] = -n[(axis + 1) % 3]
-            length = np.sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2])
-            e1 /= length
-            e2[0] = n[1] * e1[2] - n[2] * e1[1]
-            e2[1] = n[2] * e1[0] - n[0] * e1[2]
-            e2[2] = n[0] * e1[1] - n[1] * e1[0]
-            spread = 0.0
-            for j in range(neighbor_offsets[v], neighbor_offsets[v + 1]):
-                dx, dy, dz = x[neighbors[j], 0] - x[v, 0], x[neighbors[j], 1] - x[v, 1], x[neighbors[j], 2] - x[v, 2]
-                height = n[0] * dx + n[1] * dy + n[2] * dz
-                spread += (dx * dx + dy * dy + dz * dz) - height * height
-            hbar = np.sqrt(spread / (neighbor_offsets[v + 1] - neighbor_offsets[v]))
-            ux, uy, uz = e1[0] / hbar, e1[1] / hbar, e1[2] / hbar
-            vx, vy, vz = e2[0] / hbar, e2[1] / hbar, e2[2] / hbar
-            nx, ny, nz = n[0] / hbar, n[1] / hbar, n[2] / hbar
-            gram[:k, :k] = 0.0
-            rhs[:k] = 0.0
-            sum_w = 0.0
-            sum_wzz = 0.0
-            for j in range(m):
-                px, py, pz = q[j, 0], q[j, 1], q[j, 2]
-                xj = ux * px + uy * py + uz * pz
-                yj = vx * px + vy * py + vz * pz
-                zj = nx * px + ny * py + nz * pz
-                xx, xy, yy = xj * xj, xj * yj, yj * yj
-                r2 = xx + yy
-                if r2 > 1e-24:
-                    a = 0.5 + 0.5 * zj * zj / r2
-                    w = np.exp(-0.5 * r2)
-                else:
-                    a, w = 0.5 + 0.5 * zj * zj, 0.0
-                if tilt:
-                    row[0], row[1] = xj, yj
-                row[h], row[h + 1], row[h + 2] = a * xx, 2.0 * a * xy, a * yy
-                if cubic:
-                    row[h + 3], row[h + 4] = xx * (xj / 6.0), xx * (yj / 2.0)
-                    row[h + 5], row[h + 6] = yy * (xj / 2.0), yy * (yj / 6.0)
-                for r in range(k):
-                    weighted = row[r] * w
-                    for s in range(r, k):
-                        gram[r, s] += weighted * row[s]
-                    rhs[r] += weighted * zj
-                sum_w += w
-                sum_wzz += w * zj * zj
-            for r in range(k):
-                for s in range(r + 1, k):
-                    gram[s, r] = gram[r, s]
-            # the pivot-dropping Cholesky of _solve, in place in ``lower``
-            lower[:k, :k] = gram[:k, :k]
-            for j in range(k):
-                diagonal = gram[j, j]
-                pivot[j] = lower[j, j] / diagonal if diagonal > 0 else 0.0
-                root = np.sqrt(lower[j, j]) if pivot[j] > DROP_PIVOT else 0.0
-                for r in range(j, k):
-                    lower[r, j] = lower[r, j] / root if pivot[j] > DROP_PIVOT else 0.0
-                for r in range(j + 1, k):
-                    for s in range(j + 1, r + 1):
-                        lower[r, s] -= lower[r, j] * lower[s, j]
-            for j in range(k):
-                total = rhs[j]
-                for r in range(j):
-                    total -= lower[j, r] * c[r]
-                c[j] = total / lower[j, j] if pivot[j] > DROP_PIVOT else 0.0
-            for j in range(k - 1, -1, -1):
-                total = c[j]
-                for r in range(j + 1, k):
-                    total -= lower[r, j] * c[r]
-                c[j] = total / lower[j, j] if pivot[j] > DROP_PIVOT else 0.0
-            explained = 0.0
-            for r in range(k):
-                explained += c[r] * rhs[r]
-            unexplained = sum_wzz - explained
-            out_residual[i] = np.sqrt((0.0 if unexplained < 0.0 else unexplained) / sum_w)
-            smallest = pivot[0]
-            for j in range(1, h + 3):
-                if pivot[j] < smallest or np.isnan(pivot[j]):
-                    smallest = pivot[j]
-            out_pivot[i] = smallest
-            h11, h12, h22 = c[h] / hbar, c[h + 1] / hbar, c[h + 2] / hbar
-            for r in range(3):
-                for s in range(3):
-                    frame_h[r, s] = (h11 * e1[r] * e1[s] + h12 * (e1[r] * e2[s] + e2[r] * e1[s])
-                                     + h22 * e2[r] * e2[s])
-            if tilt:
+    for low in range(0, vertices.size, BLOCK):
+        count = min(BLOCK, vertices.size - low)
+        used = 0
+        for b in range(count):
+            v = vertices[low + b]
+            hood_start[b] = used
+            one = row_offsets[v + 1] - row_offsets[v]
+            m = 0
+            if tilt:  # the 2-ring: first encounter over the rows of v's row
+                for at in range(row_offsets[v], row_offsets[v + 1]):
+                    centre = rows[at]
+                    for j in range(row_offsets[centre], row_offsets[centre + 1]):
+                        p = rows[j]
+                        if taken[p] != v:
+                            taken[p] = v
+                            if used + m == hood.size:
+                                grown = np.empty(2 * hood.size, dtype=np.int64)
+                                grown[:used + m] = hood[:used + m]
+                                hood = grown
+                            hood[used + m] = p
+                            m += 1
+            cubic = tilt and m - 1 >= CUBIC_POINTS
+            if cubic:  # reversed, without v
+                for j in range(m // 2):
+                    hood[used + j], hood[used + m - 1 - j] = hood[used + m - 1 - j], hood[used + j]
+                kept = 0
+                for j in range(m):
+                    if hood[used + j] != v:
+                        hood[used + kept] = hood[used + j]
+                        kept += 1
+                m = kept
+            else:  # the 1-ring: v's row without v
+                while used + one > hood.size:
+                    grown = np.empty(2 * hood.size, dtype=np.int64)
+                    grown[:used] = hood[:used]
+                    hood = grown
+                m = 0
+                for j in range(row_offsets[v], row_offsets[v + 1]):
+                    if rows[j] != v:
+                        hood[used + m] = rows[j]
+                        m += 1
+            used += m
+            key[b] = m + (large if cubic else 0)
+        hood_start[count] = used
+        order = np.argsort(key[:count])
+        first = 0
+        while first < count:
+            cubic = key[order[first]] >= large
+            nl = 1
+            while nl < lanes and first + nl < count and (key[order[first + nl]] >= large) == cubic:
+                nl += 1
+            k = 3 + 2 * tilt + 4 * cubic
+            h = 2 * tilt
+            offset = 2 - h  # column r is feature offset + r
+            most = 0
+            for l in range(nl):
+                b = order[first + l]
+                most = max(most, hood_start[b + 1] - hood_start[b])
+            if q.shape[0] < most:
+                q = np.zeros((most, 3, lanes))
+            for l in range(nl):
+                b = order[first + l]
+                v = vertices[low + b]
+                m = hood_start[b + 1] - hood_start[b]
+                for j in range(most):
+                    for d in range(3):
+                        q[j, d, l] = x[hood[hood_start[b] + j], d] - x[v, d] if j < m else 0.0
                 for d in range(3):
-                    n[d] = n[d] - c[0] * e1[d] - c[1] * e2[d]
-                n /= np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
-                if np.hypot(c[0], c[1]) < STOP:
+                    n[d, l] = start[v, d]
+                active[l] = True
+            for _ in range(ITERATIONS if tilt else 1):
+                # per lane: the frame (_frame: e1 = unit(n × axis), axis the first coordinate axis
+                # least aligned with n), h̄ from the ring edges, the scaled axes
+                for l in range(nl):
+                    v = vertices[low + order[first + l]]
+                    axis = 0
+                    for d in (1, 2):
+                        if abs(n[d, l]) < abs(n[axis, l]):
+                            axis = d
+                    axis_e1[0], axis_e1[1], axis_e1[2] = 0.0, 0.0, 0.0
+                    axis_e1[(axis + 1) % 3] = n[(axis + 2) % 3, l]
+                    axis_e1[(axis + 2) % 3] = -n[(axis + 1) % 3, l]
+                    length = np.sqrt(axis_e1[0] * axis_e1[0] + axis_e1[1] * axis_e1[1] + axis_e1[2] * axis_e1[2])
+                    for d in range(3):
+                        e1[d, l] = axis_e1[d] / length
+                    e2[0, l] = n[1, l] * e1[2, l] - n[2, l] * e1[1, l]
+                    e2[1, l] = n[2, l] * e1[0, l] - n[0, l] * e1[2, l]
+                    e2[2, l] = n[0, l] * e1[1, l] - n[1, l] * e1[0, l]
+                    spread = 0.0
+                    for j in range(neighbor_offsets[v], neighbor_offsets[v + 1]):
+                        p = neighbors[j]
+                        dx, dy, dz = x[p, 0] - x[v, 0], x[p, 1] - x[v, 1], x[p, 2] - x[v, 2]
+                        height = n[0, l] * dx + n[1, l] * dy + n[2, l] * dz
+                        spread += (dx * dx + dy * dy + dz * dz) - height * height
+                    hbar[l] = np.sqrt(spread / (neighbor_offsets[v + 1] - neighbor_offsets[v]))
+                    for d in range(3):
+                        scaled[d, l] = e1[d, l] / hbar[l]
+                        scaled[3 + d, l] = e2[d, l] / hbar[l]
+                        scaled[6 + d, l] = n[d, l] / hbar[l]
+                for r in range(k):
+                    for s in range(k):
+                        gram[r, s, :nl] = 0.0
+                    rhs[r, :nl] = 0.0
+                sum_w[:nl] = 0.0
+                sum_wzz[:nl] = 0.0
+                for j in range(most):
+                    # features of point j (lane loops of few arrays each, so that they vectorise):
+                    # x, y, a x², 2a xy, a y², the cubic's x³/6, x²y/2, xy²/2, y³/6, then z and r²
+                    for l in range(nl):
+                        px, py, pz = q[j, 0, l], q[j, 1, l], q[j, 2, l]
+                        xj = scaled[0, l] * px + scaled[1, l] * py + scaled[2, l] * pz
+                        yj = scaled[3, l] * px + scaled[4, l] * py + scaled[5, l] * pz
+                        zj = scaled[6, l] * px + scaled[7, l] * py + scaled[8, l] * pz
+                        xx, xy, yy = xj * xj, xj * yj, yj * yj
+                        r2 = xx + yy
+                        away = r2 if r2 > 1e-24 else 1.0  # a = ½(1 + z²) at the vertex itself (weight 0)
+                        a = 0.5 + 0.5 * zj * zj / away
+                        row[0, l] = xj
+                        row[1, l] = yj
+                        row[2, l] = a * xx
+                        row[3, l] = 2.0 * a * xy
+                        row[4, l] = a * yy
+                        row[9, l] = zj
+                        row[10, l] = r2
+                    if cubic:
+                        for l in range(nl):
+                            xj, yj = row[0, l], row[1, l]
+                            xx, yy = xj * xj, yj * yj
+                            row[5, l] = xx * (xj / 6.0)
+                            row[6, l] = xx * (yj / 2.0)
+                            row[7, l] = yy * (xj / 2.0)
+                            row[8, l] = yy * (yj / 6.0)
+                    for l in range(nl):
+                        weight = np.exp(-0.5 * row[10, l])
+                        ws[l] = weight if row[10, l] > 1e-24 else 0.0
+                    for r in range(k):
+                        feature = row[offset + r]
+                        for l in range(nl):
+                            weighted[l] = feature[l] * ws[l]
+                        for s in range(r, k):
+                            into, by = gram[r, s], row[offset + s]
+                            for l in range(nl):
+                                into[l] += weighted[l] * by[l]
+                        into, by = rhs[r], row[9]
+                        for l in range(nl):
+                            into[l] += weighted[l] * by[l]
+                    for l in range(nl):
+                        sum_w[l] += ws[l]
+                        sum_wzz[l] += ws[l] * row[9, l] * row[9, l]
+                for r in range(k):
+                    for s in range(k):
+                        into, by = lower[r, s], gram[min(r, s), max(r, s)]
+                        for l in range(nl):
+                            into[l] = by[l]
+                # the pivot-dropping Cholesky of _solve, in place in ``lower`` (quotients and roots
+                # computed in every lane, then kept or dropped: the same values as the branches)
+                for j in range(k):
+                    diagonal, here, kept = gram[j, j], lower[j, j], pivot[j]
+                    for l in range(nl):
+                        quotient = here[l] / diagonal[l]
+                        kept[l] = quotient if diagonal[l] > 0 else 0.0
+                    for l in range(nl):
+                        square_root = np.sqrt(here[l])
+                        root[l] = square_root if kept[l] > DROP_PIVOT else 0.0
+                    for r in range(j, k):
+                        into = lower[r, j]
+                        for l in range(nl):
+                            quotient = into[l] / root[l]
+                            into[l] = quotient if kept[l] > DROP_PIVOT else 0.0
+                    for r in range(j + 1, k):
+                        for s in range(j + 1, r + 1):
+                            into, left, right = lower[r, s], lower[r, j], lower[s, j]
+                            for l in range(nl):
+                                into[l] -= left[l] * right[l]
+                for j in range(k):
+                    total[:nl] = rhs[j, :nl]
+                    for r in range(j):
+                        left, right = lower[j, r], c[r]
+                        for l in range(nl):
+                            total[l] -= left[l] * right[l]
+                    diagonal, kept, into = lower[j, j], pivot[j], c[j]
+                    for l in range(nl):
+                        quotient = total[l] / diagonal[l]
+                        into[l] = quotient if kept[l] > DROP_PIVOT else 0.0
+                for j in range(k - 1, -1, -1):
+                    total[:nl] = c[j, :nl]
+                    for r in range(j + 1, k):
+                        left, right = lower[r, j], c[r]
+                        for l in range(nl):
+                            total[l] -= left[l] * right[l]
+                    diagonal, kept, into = lower[j, j], pivot[j], c[j]
+                    for l in range(nl):
+                        quotient = total[l] / diagonal[l]
+                        into[l] = quotient if kept[l] > DROP_PIVOT else 0.0
+                going = False
+                for l in range(nl):
+                    if not active[l]:
+                        continue
+                    i = low + order[first + l]
+                    explained = 0.0
+                    for r in range(k):
+                        explained += c[r, l] * rhs[r, l]
+                    unexplained = sum_wzz[l] - explained
+                    out_residual[i] = np.sqrt((0.0 if unexplained < 0.0 else unexplained) / sum_w[l])
+                    smallest = pivot[0, l]
+                    for j in range(1, h + 3):
+                        if pivot[j, l] < smallest or np.isnan(pivot[j, l]):
+                            smallest = pivot[j, l]
+                    out_pivot[i] = smallest
+                    h11, h12, h22 = c[h, l] / hbar[l], c[h + 1, l] / hbar[l], c[h + 2, l] / hbar[l]
+                    for r in range(3):
+                        for s in range(3):
+                            frame_h[r, s, l] = (h11 * e1[r, l] * e1[s, l] + h12 * (e1[r, l] * e2[s, l] + e2[r, l] * e1[s, l])
+                                                + h22 * e2[r, l] * e2[s, l])
+                    if tilt:
+                        for d in range(3):
+                            n[d, l] = n[d, l] - c[0, l] * e1[d, l] - c[1, l] * e2[d, l]
+                        length = np.sqrt(n[0, l] * n[0, l] + n[1, l] * n[1, l] + n[2, l] * n[2, l])
+                        for d in range(3):
+                            n[d, l] /= length
+                        if np.hypot(c[0, l], c[1, l]) < STOP:
+                            active[l] = False
+                    going |= active[l]
+                if not going:
                     break
-        out_normals[i] = n
-        for r in range(3):  # S = ((−P) H) P
-            for s in range(3):
-                project[r, s] = (1.0 if r == s else 0.0) - n[r] * n[s]
-        for r in range(3):
-            for s in range(3):
-                total = 0.0
-                for t in range(3):
-                    total += -project[r, t] * frame_h[t, s]
-                product[r, s] = total
-        for r in range(3):
-            for s in range(3):
-                total = 0.0
-                for t in range(3):
-                    total += product[r, t] * project[t, s]
-                out_shape[i, r, s] = total
+            for l in range(nl):
+                i = low + order[first + l]
+                for d in range(3):
+                    out_normals[i, d] = n[d, l]
+                for r in range(3):  # S = ((−P) H) P
+                    for s in range(3):
+                        project[r, s] = (1.0 if r == s else 0.0) - n[r, l] * n[s, l]
+                for r in range(3):
+                    for s in range(3):
+                        acc = 0.0
+                        for t in range(3):
+                            acc += -project[r, t] * frame_h[t, s, l]
+                        product[r, s] = acc
+                for r in range(3):
+                    for s in range(3):
+                        acc = 0.0
+                        for t in range(3):
+                            acc += product[r, t] * project[t, s]
+                        out_shape[i, r, s] = acc
+            first += nl
 
 
 def _ring_kernel(x: FloatArray, neighbor_offsets: IntArray, neighbors: IntArray, face_count: IntArray,
@@ -634,12 +747,24 @@ def _fit_all(mesh: QuadMesh, ring: _Ring, hood: _Hood, vertices: IntArray, n: Fl
     return out
 
 
-def _fit_compiled(mesh: QuadMesh, vertices: IntArray, n: FloatArray, tilt: bool) -> _Fit:
+def _face_ring_rows(mesh: QuadMesh) -> tuple[IntArray, IntArray]:
+    """The rows of ``I Iᵀ`` as CSR (offsets, points), by :func:`_rows_kernel`."""
+    topo = mesh.topology
+    offsets = np.zeros(mesh.n_vertices + 1, dtype=np.int64)
+    kernel = jit_kernel(_rows_kernel)
+    kernel(topo.faces, topo.ring_offsets, topo.ring_halfedges, offsets, offsets, False)
+    np.cumsum(offsets, out=offsets)
+    points = np.empty(int(offsets[-1]), dtype=np.int64)
+    kernel(topo.faces, topo.ring_offsets, topo.ring_halfedges, offsets, points, True)
+    return offsets, points
+
+
+def _fit_compiled(mesh: QuadMesh, rows: tuple[IntArray, IntArray], vertices: IntArray, n: FloatArray, tilt: bool) -> _Fit:
     """:func:`_fit_kernel` of ``vertices`` (row i for ``vertices[i]``) with start normals ``n`` (V, 3)."""
     topo = mesh.topology
     out = _Fit.empty(vertices.size)
-    jit_kernel(_fit_kernel)(mesh.vertices, topo.faces, topo.ring_offsets, topo.ring_halfedges, topo.neighbor_offsets,
-                          topo.neighbors, vertices, n, tilt, out.normals, out.shape_operator, out.residual, out.pivot)
+    jit_kernel(_fit_kernel)(mesh.vertices, rows[0], rows[1], topo.neighbor_offsets, topo.neighbors, vertices, n, tilt, LANES,
+                            out.normals, out.shape_operator, out.residual, out.pivot)
     return out
 
 
@@ -663,7 +788,8 @@ def vertex_frames(mesh: QuadMesh, *, compiled: bool = True) -> VertexFrames:
 
     with np.errstate(invalid="ignore", divide="ignore"):
         if compiled:
-            fit = _fit_compiled(mesh, everything, start, True)
+            rows = _face_ring_rows(mesh)
+            fit = _fit_compiled(mesh, rows, everything, start, True)
             normals, shape_operator, residual, pivot = fit.normals, fit.shape_operator, fit.residual, fit.pivot
         else:
             one, two = _face_rings(mesh)
@@ -695,8 +821,18 @@ def vertex_frames(mesh: QuadMesh, *, compiled: bool = True) -> VertexFrames:
         rest = np.flatnonzero(~fitted)
         normals[rest] = start[rest]
         if rest.size:
-            held = _fit_compiled(mesh, rest, start, False) if compiled else _fit_all(mesh, ring, one, rest, start, False, False)
+            held = _fit_compiled(mesh, rows, rest, start, False) if compiled else _fit_all(mesh, ring, one, rest, start, False, False)
             shape_operator[rest] = np.nan_to_num(held.shape_operator)
-    shape_operator += shape_operator.transpose(0, 2, 1).copy()
-    shape_operator *= 0.5
+    if compiled:
+        jit_kernel(_symmetric_kernel)(shape_operator)
+    else:
+        shape_operator = 0.5 * (shape_operator + shape_operator.transpose(0, 2, 1))
     return VertexFrames(normals, shape_operator, fitted, repaired)
+
+
+def _symmetric_kernel(s: FloatArray) -> None:
+    """``S ← ½ (S + Sᵀ)`` in place, (V, 3, 3)."""
+    for i in range(s.shape[0]):
+        for r in range(3):
+            for c in range(r, 3):
+                s[i, r, c] = s[i, c, r] = 0.5 * (s[i, r, c] + s[i, c, r])
