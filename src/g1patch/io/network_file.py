@@ -137,6 +137,8 @@ MAX_HEADER_BYTES = 2**20
 _MAX_NAME_BYTES = 1024
 #: elements per chunk of the value checks: their temporaries stay in the cache
 _CHUNK = 1 << 17
+#: bytes per read of a stored member, whose CRC runs on the second thread while the next is read
+_READ_STEP = 1 << 26
 #: room for one ``.npy`` header (numpy reads at most 10 000 bytes of one) and its preamble
 _NPY_HEADER_BYTES = 10_000 + 16
 
@@ -215,6 +217,12 @@ def _as_bytes(array: NDArray[Any]) -> memoryview:
 
 def _crc(header: bytes, data: memoryview) -> int:
     return zlib.crc32(data, zlib.crc32(header))  # releases the GIL on large buffers
+
+
+def _crc_step(running: list[int], data: memoryview) -> int:
+    """The CRC-32 of everything so far, ``running[0]``, extended by ``data`` (steps run in order)."""
+    running[0] = zlib.crc32(data, running[0])
+    return running[0]
 
 
 def _write_stored_zip(handle: BinaryIO, members: Mapping[str, NDArray[Any]]) -> None:
@@ -442,11 +450,19 @@ class _Reader:
         view = memoryview(array.reshape(-1, order="A").view(np.uint8)) if array.size else memoryview(b"")
         label = member.info.filename
         if member.info.compress_type == zipfile.ZIP_STORED:
+            # read in steps, each step's CRC queued as it arrives: the one CRC thread runs them in
+            # order, chaining the running value, while the next step is read
             self.handle.seek(member.data_offset)
-            got = self.handle.readinto(view) if view.nbytes else 0
-            if got != view.nbytes:
-                raise self.fail(f"truncated: member {label!r} ends after {got} of {view.nbytes} bytes")
-            crcs.append((member, crc_thread.submit(_crc, member.npy_header, view)))
+            running = [zlib.crc32(member.npy_header)]
+            crc: Future[int] = crc_thread.submit(lambda: running[0])
+            done = 0
+            while done < view.nbytes:
+                got = self.handle.readinto(view[done:done + _READ_STEP])
+                if not got:
+                    raise self.fail(f"truncated: member {label!r} ends after {done} of {view.nbytes} bytes")
+                crc = crc_thread.submit(_crc_step, running, view[done:done + got])
+                done += got
+            crcs.append((member, crc))
             return array
         try:
             with self.stream(member) as stream:
