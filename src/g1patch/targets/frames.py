@@ -89,6 +89,10 @@ DROP_PIVOT = 1e-10  #: relative pivot below which a column is dropped from the f
 ITERATIONS = 3  #: most refits of the normal
 STOP = 1e-14  #: a vertex's refits stop once its slope |g| is below this
 CUBIC_POINTS = 12  #: fewest 2-ring points for the cubic term
+#: a vertex whose face 1-ring has more points than this is a *hub* (the centre of a split n-gon, a
+#: pole): its neighbours' 2-rings take the hub but not its whole ring, which keeps the fits linear
+#: in the valence (a 100,000-gon's rim would otherwise see the whole centre ring from every vertex)
+HUB_POINTS = 64
 BLOCK = 2048  #: vertices per padded block (NumPy), per gathered block (kernel)
 LANES = 16  #: vertices the kernel fits side by side
 GILBERT_STEPS = 64
@@ -234,7 +238,14 @@ def _face_rings(mesh: QuadMesh) -> tuple[_Hood, _Hood]:
     incidence = sp.csr_matrix((np.ones(4 * nf, dtype=bool), (mesh.faces.ravel(), np.repeat(np.arange(nf), 4))),
                               shape=(nv, nf))
     one = (incidence @ incidence.T).tocsr()
-    return _Hood.without_self(one), _Hood.without_self((one @ one).tocsr())
+    # through a hub (a face 1-ring of more than HUB_POINTS points) the 2-ring takes the hub alone
+    hub = np.flatnonzero(np.diff(one.indptr) > HUB_POINTS)
+    passed = one
+    if hub.size:
+        coo = one.tocoo()
+        keep = ~np.isin(coo.row, hub) | (coo.row == coo.col)
+        passed = sp.csr_matrix((coo.data[keep], (coo.row[keep], coo.col[keep])), shape=one.shape)
+    return _Hood.without_self(one), _Hood.without_self((one @ passed).tocsr())
 
 
 def _padded(vertices: IntArray, offsets: IntArray) -> tuple[IntArray, BoolArray]:
@@ -451,8 +462,10 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
             if tilt:  # the 2-ring: first encounter over the rows of v's row
                 for at in range(row_offsets[v], row_offsets[v + 1]):
                     centre = rows[at]
-                    for j in range(row_offsets[centre], row_offsets[centre + 1]):
-                        p = rows[j]
+                    size = row_offsets[centre + 1] - row_offsets[centre]
+                    hub = centre != v and size > HUB_POINTS  # through a hub the 2-ring takes the hub alone
+                    for j in range(1 if hub else size):
+                        p = centre if hub else rows[row_offsets[centre] + j]
                         if taken[p] != v:
                             taken[p] = v
                             if used + m == hood.size:
