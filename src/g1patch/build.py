@@ -88,17 +88,18 @@ def _faces_at_risk(targets: Targets, *, compiled: bool = True) -> np.ndarray:
     that needed a fallback, corner normals more than :data:`RISK_TURN` apart across an edge, or an
     edge tangent off its chord by more than :data:`RISK_TANGENT` in angle or outside
     :data:`RISK_LENGTH` × its length. On a fine smooth mesh no face is, and the guard costs nothing.
-    ``compiled``: face by face in :func:`_risk_kernel`, else NumPy."""
+    ``compiled``: in :func:`_risk_kernel`, else NumPy."""
     from .targets import halfedge_slots
-    from .targets.local import jit_kernel, slot_tables
 
     topology = targets.topology
     faces = topology.faces
     if compiled:
-        risky = np.empty(topology.n_faces, dtype=bool)
-        jit_kernel(_risk_kernel)(faces, targets.positions, targets.tangents, slot_tables(topology)[0], targets.fallback,
-                                 targets.corner_normals, np.cos(RISK_TURN), np.cos(RISK_TANGENT), RISK_LENGTH[0], RISK_LENGTH[1],
-                                 risky)
+        from .targets.local import jit_kernel
+
+        risky = np.zeros(topology.n_faces, dtype=bool)
+        jit_kernel(_risk_kernel)(faces, topology.ring_offsets, topology.ring_halfedges, topology.neighbor_offsets,
+                                 targets.positions, targets.tangents, targets.fallback, targets.corner_normals,
+                                 np.cos(RISK_TURN), np.cos(RISK_TANGENT), RISK_LENGTH[0], RISK_LENGTH[1], risky)
         return np.flatnonzero(risky)
     n = targets.corner_normals
     risky = targets.fallback[faces].any(axis=1)
@@ -115,27 +116,32 @@ def _faces_at_risk(targets: Targets, *, compiled: bool = True) -> np.ndarray:
     return np.flatnonzero(risky)
 
 
-def _risk_kernel(faces: np.ndarray, x: np.ndarray, tangents: np.ndarray, slot_out: np.ndarray, fallback: np.ndarray,
-                 corner_normals: np.ndarray, min_turn_cosine: float, min_tangent_cosine: float, shortest: float,
-                 longest: float, risky: np.ndarray) -> None:
-    """:func:`_faces_at_risk` face by face: per edge k the corner normals' cosine ``n_k·n_{k+1}``, and
-    the tangent t of slot A → B against the chord d = B − A: ``t·d / (|t||d|)`` and ``|t|/|d|``."""
+def _risk_kernel(faces: np.ndarray, ring_offsets: np.ndarray, ring_halfedges: np.ndarray, slot_offsets: np.ndarray,
+                 x: np.ndarray, tangents: np.ndarray, fallback: np.ndarray, corner_normals: np.ndarray,
+                 min_turn_cosine: float, min_tangent_cosine: float, shortest: float, longest: float,
+                 risky: np.ndarray) -> None:
+    """:func:`_faces_at_risk` into ``risky`` (F,), all False on entry: per face the fallbacks and
+    the corner normals' cosines ``n_k·n_{k+1}``; per vertex A and ring face i the tangent t of slot
+    i (A → B) against the chord d = B − A, ``t·d / (|t||d|)`` and ``|t|/|d|``."""
     tiny = np.finfo(np.float64).tiny
     for f in range(faces.shape[0]):
-        at_risk = False
         for k in range(4):
-            a, b = faces[f, k], faces[f, (k + 1) & 3]
             n, m = corner_normals[f, k], corner_normals[f, (k + 1) & 3]
-            t = tangents[slot_out[4 * f + k]]
+            if fallback[faces[f, k]] or n[0] * m[0] + n[1] * m[1] + n[2] * m[2] < min_turn_cosine:
+                risky[f] = True
+    for a in range(ring_offsets.size - 1):
+        for i in range(ring_offsets[a + 1] - ring_offsets[a]):
+            h = ring_halfedges[ring_offsets[a] + i]
+            b = faces[h >> 2, ((h & 3) + 1) & 3]
+            t = tangents[slot_offsets[a] + i]
             d0, d1, d2 = x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], x[b, 2] - x[a, 2]
             chord = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
             length = np.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
             ratio = length / (chord if chord > 0 else 1.0)
             size = chord * length
             cosine = (d0 * t[0] + d1 * t[1] + d2 * t[2]) / (size if size > tiny else tiny)
-            at_risk |= (fallback[a] or n[0] * m[0] + n[1] * m[1] + n[2] * m[2] < min_turn_cosine
-                        or cosine < min_tangent_cosine or ratio < shortest or ratio > longest)
-        risky[f] = at_risk
+            if cosine < min_tangent_cosine or ratio < shortest or ratio > longest:
+                risky[h >> 2] = True
 
 
 def _guarded(

@@ -119,48 +119,51 @@ def tangent_plane_tangents(targets: Targets, *, compiled: bool = True) -> FloatA
     return t
 
 
-def _raise_invalid(topology: QuadTopology, margins: FloatArray) -> None:
-    """Raise where a corner split's margin (2, E) is not positive: row 0 at the origin of each
-    edge's first half-edge, row 1 at its target (+inf on edges that were not split)."""
-    bad = np.flatnonzero(~(margins.ravel() > 0))
-    if bad.size:
-        end, edge = divmod(int(bad[0]), topology.n_edges)
+def _raise_invalid(topology: QuadTopology, bad: int, end: int, edge: int, margin: float) -> None:
+    """Raise if ``bad`` corner splits have a margin that is not positive; the first of them is at
+    ``end`` (0: the origin of the edge's first half-edge, 1: its target) of ``edge``."""
+    if bad:
         h = int(topology.edge_halfedges[edge, 0])
         v = int(topology.origin(h) if end == 0 else topology.target(h))
         raise ConstructionError(
             f"gregory: the target tangents at vertex {v} (valence {topology.valence[v]}) do not turn "
-            f"counter-clockwise about its normal (margin {margins.ravel()[bad[0]]:.3g}); the targets rule must "
-            f"supply a valid fan ({bad.size} edge ends affected)"
+            f"counter-clockwise about its normal (margin {margin:.3g}); the targets rule must "
+            f"supply a valid fan ({bad} edge ends affected)"
         )
 
 
 def assemble_gregory(targets: Targets, *, compiled: bool = True) -> GregoryPatchSet:
     """The Gregory patches of ``targets``, one per face, exactly G1 on every interior edge (module docstring).
 
-    ``compiled`` runs the per-edge solve in a numba kernel (:func:`_assemble_kernel`); ``False`` runs
+    ``compiled`` runs the assembly in a numba kernel (:func:`_assemble_kernel`, which moves the
+    tangents into their vertex planes as it reads them where there are no seams); ``False`` runs
     the NumPy reference (the same to rounding, tests/test_kernels_match.py). Raises
     :class:`ConstructionError` when the targets' fan is invalid at some vertex.
     """
     topology = targets.topology
-    t = tangent_plane_tangents(targets, compiled=compiled)
-    slot_out, slot_in = slot_tables(topology) if compiled else halfedge_slots(topology)
     points = np.empty((topology.n_faces, 20, 3))
-    margins = np.full((2, topology.n_edges), np.inf)
-    if compiled:
-        jit_kernel(_assemble_kernel)(
-            targets.positions, t, topology.faces.reshape(-1), slot_out, slot_in, targets.corner_normals.reshape(-1, 3),
-            targets.interior, topology.edge_halfedges, targets.seams, SYMMETRIC_TOLERANCE, RIDGE, points, margins,
-        )
-        _raise_invalid(topology, margins)
-    else:
-        _assemble_numpy(targets, t, slot_out, slot_in, points, margins)
+    if not compiled:
+        margins = np.full((2, topology.n_edges), np.inf)
+        _assemble_numpy(targets, tangent_plane_tangents(targets, compiled=False), *halfedge_slots(topology), points, margins)
+        return GregoryPatchSet(points)
+    sectors = targets.has_sectors
+    slot_out, slot_in = slot_tables(topology)
+    bad, first_origin, origin_margin, first_target, target_margin = jit_kernel(_assemble_kernel)(
+        targets.positions, tangent_plane_tangents(targets) if sectors else targets.tangents, targets.normals, not sectors,
+        topology.faces.reshape(-1), slot_out, slot_in, targets.corner_normals.reshape(-1, 3), targets.interior,
+        topology.edge_halfedges, targets.seams, SYMMETRIC_TOLERANCE, RIDGE, points,
+    )
+    if first_origin >= 0:
+        _raise_invalid(topology, bad, 0, first_origin, origin_margin)
+    _raise_invalid(topology, bad, 1, first_target, target_margin)
     return GregoryPatchSet(points)
 
 
 def _assemble_numpy(
     targets: Targets, t: FloatArray, slot_out: NDArray[np.int64], slot_in: NDArray[np.int64], points: FloatArray, margins: FloatArray
 ) -> None:
-    """The NumPy reference of :func:`_assemble_kernel`: gathers, scatters and batched closed-form solves over edges."""
+    """The NumPy reference of :func:`_assemble_kernel`: gathers, scatters and batched closed-form solves over
+    edges (corner-split margins into ``margins`` (2, E), raising where one is not positive)."""
     topology = targets.topology
     faces = topology.faces
     count = topology.n_faces
@@ -189,7 +192,10 @@ def _assemble_numpy(
     corner_normals = targets.corner_normals.reshape(-1, 3)  # a smooth edge's two faces share A's sector, and B's
     alpha0, beta0, phi0, margins[0, split] = corner_split(q0, d0_left, d0_right, corner_normals[h])
     alpha1, beta1, phi2, margins[1, split] = corner_split(q2, d3_left, d3_right, corner_normals[nxt[h]])
-    _raise_invalid(topology, margins)
+    bad = np.flatnonzero(~(margins.ravel() > 0))
+    if bad.size:
+        end, edge = divmod(int(bad[0]), topology.n_edges)
+        _raise_invalid(topology, bad.size, end, edge, float(margins.ravel()[bad[0]]))
 
     left, right = h >> 2, g >> 2
     k_left, k_right = h & 3, g & 3
@@ -274,29 +280,37 @@ def _kh_fit(
 
 
 def _assemble_kernel(
-    x: FloatArray, t: FloatArray, origin: NDArray[np.int64], slot_out: NDArray[np.int64], slot_in: NDArray[np.int64],
-    corner_normals: FloatArray, interior: FloatArray, edge_halfedges: NDArray[np.int64], seams: NDArray[np.bool_],
-    symmetric_tolerance: float, ridge: float, points: FloatArray, margins: FloatArray,
-) -> None:
+    x: FloatArray, t: FloatArray, normals: FloatArray, project: bool, origin: NDArray[np.int64], slot_out: NDArray[np.int32],
+    slot_in: NDArray[np.int32], corner_normals: FloatArray, interior: FloatArray, edge_halfedges: NDArray[np.int64],
+    seams: NDArray[np.bool_], symmetric_tolerance: float, ridge: float, points: FloatArray,
+) -> tuple[int, int, float, int, float]:
     """:func:`_assemble_numpy` one half-edge, then one edge at a time, straight into ``points`` (F, 20, 3).
 
-    Per half-edge: corner, edge points ``A + t/3`` and the interior targets. Per interior
-    non-seam edge: both corner splits (margins into ``margins[:, e]``), then the symmetric
-    correction or the closed-form k-h fit of :func:`_kh_fit`, and its four interior points.
+    Each slot tangent is read as ``t − (N·t) N`` with its vertex's normal N when ``project`` (the
+    seam-free :func:`tangent_plane_tangents`, same operations), else as given. Per half-edge:
+    corner, edge points ``A + t/3`` and the interior targets. Per interior non-seam edge: both
+    corner splits, then the symmetric correction or the closed-form k-h fit of :func:`_kh_fit`, and
+    its four interior points. Returns how many splits have a margin that is not positive and, per
+    end (the origin, then the target of the edge's first half-edge), the first such edge (−1 if
+    none) and its margin.
     """
     for i in range(origin.size):
         f, k = i >> 2, i & 3
         prev = (i & ~3) | ((k + 3) & 3)
         v, s_out, s_in = origin[i], slot_out[i], slot_in[prev]
+        height_out = height_in = 0.0
+        if project:
+            height_out = t[s_out, 0] * normals[v, 0] + t[s_out, 1] * normals[v, 1] + t[s_out, 2] * normals[v, 2]
+            height_in = t[s_in, 0] * normals[v, 0] + t[s_in, 1] * normals[v, 1] + t[s_in, 2] * normals[v, 2]
         for d in range(3):
             points[f, k, d] = x[v, d]
-            points[f, 4 + 2 * k, d] = x[v, d] + t[s_out, d] / 3.0
-            points[f, 5 + 2 * k, d] = x[v, d] + t[s_in, d] / 3.0
+            points[f, 4 + 2 * k, d] = x[v, d] + (t[s_out, d] - height_out * normals[v, d]) / 3.0
+            points[f, 5 + 2 * k, d] = x[v, d] + (t[s_in, d] - height_in * normals[v, d]) / 3.0
             points[f, 12 + 2 * k, d] = interior[f, k, 0, d]
             points[f, 13 + 2 * k, d] = interior[f, k, 1, d]
+    tangent = np.empty((6, 3))  # t_AB = q0, t_BA = −q2, then d_L, d_R at A and d_L, d_R at B
     q0, q1, q2 = np.empty(3), np.empty(3), np.empty(3)
     b1, b2 = np.empty(3), np.empty(3)
-    d0, d3 = np.empty(3), np.empty(3)  # d_L at A and at B
     r = np.empty((4, 3))  # targets r1_L, r2_L, r1_R, r2_R
     const = np.empty((4, 3))  # k_i
     along = np.empty((4, 3))  # v_i
@@ -304,6 +318,10 @@ def _assemble_kernel(
     c, r_g = np.empty(3), np.empty(3)  # Σ c_i v_i, Σ c_i (r_i − k_i)
     out = np.empty((4, 3))  # d1_L, d2_L, d1_R, d2_R
     split = np.empty((2, 3))  # α, β, φ at A and at B
+    slots = np.empty(6, dtype=np.int64)  # of the six tangents
+    bad = 0
+    first = np.full(2, -1)
+    first_margin = np.zeros(2)
     for e in range(edge_halfedges.shape[0]):
         h, g = edge_halfedges[e, 0], edge_halfedges[e, 1]
         if g < 0 or seams[e]:
@@ -311,27 +329,28 @@ def _assemble_kernel(
         h_next, h_prev = (h & ~3) | ((h + 1) & 3), (h & ~3) | ((h + 3) & 3)
         g_next, g_prev = (g & ~3) | ((g + 1) & 3), (g & ~3) | ((g + 3) & 3)
         a_vertex, b_vertex = origin[h], origin[h_next]
-        s0, s2 = slot_out[h], slot_in[h]
+        slots[0], slots[1], slots[2] = slot_out[h], slot_in[h], slot_in[h_prev]
+        slots[3], slots[4], slots[5] = slot_out[g_next], slot_out[h_next], slot_in[g_prev]
+        for u in range(6):
+            s, v = slots[u], a_vertex if u == 0 or u == 2 or u == 3 else b_vertex
+            height = 0.0
+            if project:
+                height = t[s, 0] * normals[v, 0] + t[s, 1] * normals[v, 1] + t[s, 2] * normals[v, 2]
+            for d in range(3):
+                tangent[u, d] = t[s, d] - height * normals[v, d] if project else t[s, d]
         for d in range(3):
-            q0[d] = t[s0, d]
-            q2[d] = -t[s2, d]
-            b1[d] = x[a_vertex, d] + t[s0, d] / 3.0
-            b2[d] = x[b_vertex, d] + t[s2, d] / 3.0
+            q0[d] = tangent[0, d]
+            q2[d] = -tangent[1, d]
+            b1[d] = x[a_vertex, d] + tangent[0, d] / 3.0
+            b2[d] = x[b_vertex, d] + tangent[1, d] / 3.0
             q1[d] = 3.0 * (b2[d] - b1[d])
         # corner splits at A (q = q0, d_L, d_R, N) and at B (q = q2)
         for end in range(2):
-            if end == 0:
-                left_slot, right_slot, corner = slot_in[h_prev], slot_out[g_next], h
-            else:
-                left_slot, right_slot, corner = slot_out[h_next], slot_in[g_prev], h_next
+            corner = h if end == 0 else h_next
             n0, n1, n2 = corner_normals[corner, 0], corner_normals[corner, 1], corner_normals[corner, 2]
             qx, qy, qz = (q0[0], q0[1], q0[2]) if end == 0 else (q2[0], q2[1], q2[2])
-            lx, ly, lz = t[left_slot, 0], t[left_slot, 1], t[left_slot, 2]
-            rx, ry, rz = t[right_slot, 0], t[right_slot, 1], t[right_slot, 2]
-            if end == 0:
-                d0[0], d0[1], d0[2] = lx, ly, lz
-            else:
-                d3[0], d3[1], d3[2] = lx, ly, lz
+            lx, ly, lz = tangent[2 + 2 * end, 0], tangent[2 + 2 * end, 1], tangent[2 + 2 * end, 2]
+            rx, ry, rz = tangent[3 + 2 * end, 0], tangent[3 + 2 * end, 1], tangent[3 + 2 * end, 2]
             left = (qy * lz - qz * ly) * n0 + (qz * lx - qx * lz) * n1 + (qx * ly - qy * lx) * n2  # [q, d_L]
             right = (ry * qz - rz * qy) * n0 + (rz * qx - rx * qz) * n1 + (rx * qy - ry * qx) * n2  # [d_R, q]
             total = left + right
@@ -344,7 +363,11 @@ def _assemble_kernel(
             smaller = left if left < right else right
             if np.isnan(left) or np.isnan(right):
                 smaller = np.nan
-            margins[end, e] = smaller / (size if size > 0 else 1.0)
+            margin = smaller / (size if size > 0 else 1.0)
+            if not margin > 0:
+                bad += 1
+                if first[end] < 0:
+                    first[end], first_margin[end] = e, margin
         alpha0, beta0, phi0 = split[0, 0], split[0, 1], split[0, 2]
         alpha1, beta1, phi2 = split[1, 0], split[1, 1], split[1, 2]
         left_face, right_face, k_left, k_right = h >> 2, g >> 2, h & 3, g & 3
@@ -366,7 +389,7 @@ def _assemble_kernel(
             scalar[2], scalar[3] = -2.0 * alpha0 / 3.0, -2.0 * alpha1 / 3.0
             h_r0, h_r1 = phi0 / beta0, phi2 / beta1
             for d in range(3):
-                g0, g2 = d0[d] / beta0, d3[d] / beta1
+                g0, g2 = tangent[2, d] / beta0, tangent[4, d] / beta1
                 const[0, d] = beta1 * g0 / 3.0
                 const[1, d] = beta0 * g2 / 3.0
                 const[2, d] = -alpha1 * g0 / 3.0 + (2.0 * h_r0 * q1[d] + h_r1 * q0[d]) / 3.0
@@ -402,3 +425,4 @@ def _assemble_kernel(
             points[left_face, 13 + 2 * ((k_left + 1) & 3), d] = b2[d] + out[1, d] / 3.0
             points[right_face, 13 + 2 * ((k_right + 1) & 3), d] = b1[d] + out[2, d] / 3.0
             points[right_face, 12 + 2 * k_right, d] = b2[d] + out[3, d] / 3.0
+    return bad, first[0], first_margin[0], first[1], first_margin[1]

@@ -418,15 +418,16 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
     v; the face 2-ring is v's row of ``(I Iᵀ)²``, in scipy's order too (reversed first encounter over
     the rows of v's row), without v. With ``tilt`` a vertex with a 2-ring of ≥ :data:`CUBIC_POINTS`
     points fits it with the cubic, else its 1-ring without; without ``tilt`` the 1-ring, normal
-    held. :data:`BLOCK` vertices at a time are gathered and ordered by size, so that lanes have
-    (nearly) as many points; a lane with fewer is padded with points at the vertex itself, which
-    get weight 0 and add exactly nothing. Writes row i of the ``out_`` arrays for ``vertices[i]``;
+    held. :data:`BLOCK` vertices at a time are gathered, then fitted in lanes of one column count
+    (the cubic fits first); a lane with fewer points than the largest of its batch is padded with
+    points at the vertex itself, which get weight 0 and add exactly nothing. Writes row i of the ``out_`` arrays for ``vertices[i]``;
     S as in :func:`_circle_fit`, before symmetrising.
     """
     taken = np.full(x.shape[0], -1)  # v once a point is in v's 2-ring
     hood = np.empty(32 * BLOCK, dtype=np.int64)
     hood_start = np.empty(BLOCK + 1, dtype=np.int64)
     key = np.empty(BLOCK, dtype=np.int64)
+    order = np.empty(BLOCK, dtype=np.int64)
     large = np.int64(1) << 40  # key = size, + large for the cubic fits
     q = np.zeros((32, 3, lanes))
     n = np.empty((3, lanes))
@@ -470,7 +471,8 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                             taken[p] = v
                             if used + m == hood.size:
                                 grown = np.empty(2 * hood.size, dtype=np.int64)
-                                grown[:used + m] = hood[:used + m]
+                                for j2 in range(used + m):
+                                    grown[j2] = hood[j2]
                                 hood = grown
                             hood[used + m] = p
                             m += 1
@@ -487,7 +489,8 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
             else:  # the 1-ring: v's row without v
                 while used + one > hood.size:
                     grown = np.empty(2 * hood.size, dtype=np.int64)
-                    grown[:used] = hood[:used]
+                    for j in range(used):
+                        grown[j] = hood[j]
                     hood = grown
                 m = 0
                 for j in range(row_offsets[v], row_offsets[v + 1]):
@@ -497,7 +500,13 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
             used += m
             key[b] = m + (large if cubic else 0)
         hood_start[count] = used
-        order = np.argsort(key[:count])
+        # lanes share a column count: the cubic fits first, then the others (each in block order)
+        placed = 0
+        for cubic_first in (True, False):
+            for b in range(count):
+                if (key[b] >= large) == cubic_first:
+                    order[placed] = b
+                    placed += 1
         first = 0
         while first < count:
             cubic = key[order[first]] >= large
@@ -554,10 +563,13 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                         scaled[6 + d, l] = n[d, l] / hbar[l]
                 for r in range(k):
                     for s in range(k):
-                        gram[r, s, :nl] = 0.0
-                    rhs[r, :nl] = 0.0
-                sum_w[:nl] = 0.0
-                sum_wzz[:nl] = 0.0
+                        for l in range(nl):
+                            gram[r, s, l] = 0.0
+                    for l in range(nl):
+                        rhs[r, l] = 0.0
+                for l in range(nl):
+                    sum_w[l] = 0.0
+                    sum_wzz[l] = 0.0
                 for j in range(most):
                     # features of point j (lane loops of few arrays each, so that they vectorise):
                     # x, y, a x², 2a xy, a y², the cubic's x³/6, x²y/2, xy²/2, y³/6, then z and r²
@@ -628,7 +640,8 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                             for l in range(nl):
                                 into[l] -= left[l] * right[l]
                 for j in range(k):
-                    total[:nl] = rhs[j, :nl]
+                    for l in range(nl):
+                        total[l] = rhs[j, l]
                     for r in range(j):
                         left, right = lower[j, r], c[r]
                         for l in range(nl):
@@ -638,7 +651,8 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                         quotient = total[l] / diagonal[l]
                         into[l] = quotient if kept[l] > DROP_PIVOT else 0.0
                 for j in range(k - 1, -1, -1):
-                    total[:nl] = c[j, :nl]
+                    for l in range(nl):
+                        total[l] = c[j, l]
                     for r in range(j + 1, k):
                         left, right = lower[r, j], c[r]
                         for l in range(nl):
@@ -761,13 +775,13 @@ def _fit_all(mesh: QuadMesh, ring: _Ring, hood: _Hood, vertices: IntArray, n: Fl
 
 
 def _face_ring_rows(mesh: QuadMesh) -> tuple[IntArray, IntArray]:
-    """The rows of ``I Iᵀ`` as CSR (offsets, points), by :func:`_rows_kernel`."""
+    """The rows of ``I Iᵀ`` as CSR (offsets, int32 points), by :func:`_rows_kernel`."""
     topo = mesh.topology
     offsets = np.zeros(mesh.n_vertices + 1, dtype=np.int64)
     kernel = jit_kernel(_rows_kernel)
-    kernel(topo.faces, topo.ring_offsets, topo.ring_halfedges, offsets, offsets, False)
+    kernel(topo.faces, topo.ring_offsets, topo.ring_halfedges, offsets, np.empty(0, dtype=np.int32), False)
     np.cumsum(offsets, out=offsets)
-    points = np.empty(int(offsets[-1]), dtype=np.int64)
+    points = np.empty(int(offsets[-1]), dtype=np.int32)
     kernel(topo.faces, topo.ring_offsets, topo.ring_halfedges, offsets, points, True)
     return offsets, points
 

@@ -354,23 +354,24 @@ def safeguarded_fans(
 
 def _interior_targets(
     topology: QuadTopology, positions: FloatArray, tangents: FloatArray, normals: FloatArray, shape_operator: FloatArray | None,
-    *, compiled: bool = True,
+    *, compiled: bool = True, out: FloatArray | None = None,
 ) -> FloatArray:
     """``Ft = A + (t_AB + t_AD)/3 + w/9`` per face corner, ``w = A − B + C − D``; with a shape
     operator S = dN (:class:`~g1patch.targets.frames.VertexFrames`) the normal part of w is replaced by
     the second fundamental form, ``N·p_uv = −t_ABᵀ S t_AD``: ``w ← P_A w − (t_ABᵀ S t_AD) N_A``.
-    ``compiled``: corner by corner in :func:`_interior_kernel`, else NumPy."""
+    ``compiled``: corner by corner in :func:`_interior_kernel`, into ``out`` (F, 4, 3) if given;
+    else NumPy."""
     from . import halfedge_slots
 
     faces = topology.faces
-    slot_out, slot_in = slot_tables(topology) if compiled else halfedge_slots(topology)
     count = topology.n_faces
     if compiled:
-        out = np.empty((count, 4, 3))
+        out = np.empty((count, 4, 3)) if out is None else out
         curved = shape_operator is not None
-        jit_kernel(_interior_kernel)(positions, faces, tangents, slot_out, slot_in, normals,
-                                     shape_operator if curved else np.zeros((1, 3, 3)), curved, out)
+        jit_kernel(_interior_kernel)(positions, faces, topology.ring_offsets, topology.ring_halfedges, topology.neighbor_offsets,
+                                     tangents, normals, shape_operator if curved else np.zeros((1, 3, 3)), curved, out)
         return out
+    slot_out, slot_in = halfedge_slots(topology)
     x = positions[faces]  # (F, 4, 3): A at corner k
     t_next = tangents[slot_out].reshape(count, 4, 3)  # A → B
     prev = QuadTopology.prev(np.arange(4 * count))
@@ -383,26 +384,31 @@ def _interior_targets(
     return x + (t_next + t_prev) / 3.0 + w / 9.0
 
 
-def _interior_kernel(x: FloatArray, faces: IntArray, tangents: FloatArray, slot_out: IntArray, slot_in: IntArray,
-                     normals: FloatArray, shape_operator: FloatArray, curved: bool, out: FloatArray) -> None:
-    """:func:`_interior_targets` corner by corner, into ``out`` (F, 4, 3)."""
+def _interior_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray, slot_offsets: IntArray,
+                     tangents: FloatArray, normals: FloatArray, shape_operator: FloatArray, curved: bool,
+                     out: FloatArray) -> None:
+    """:func:`_interior_targets` vertex by vertex, over its ring: the corner of ring face i is
+    between slots i (A → B) and i + 1 (A → D, cyclic inside), so no slot table is needed."""
     w = np.empty(3)
-    for f in range(faces.shape[0]):
-        for k in range(4):
-            a, b, c, d = faces[f, k], faces[f, (k + 1) & 3], faces[f, (k + 2) & 3], faces[f, (k + 3) & 3]
-            s_next, s_prev = slot_out[4 * f + k], slot_in[4 * f + ((k + 3) & 3)]
-            for i in range(3):
-                w[i] = x[a, i] - x[b, i] + x[c, i] - x[d, i]
+    for a in range(ring_offsets.size - 1):
+        slots = slot_offsets[a + 1] - slot_offsets[a]
+        for i in range(ring_offsets[a + 1] - ring_offsets[a]):
+            h = ring_halfedges[ring_offsets[a] + i]
+            f, k = h >> 2, h & 3
+            b, c, d = faces[f, (k + 1) & 3], faces[f, (k + 2) & 3], faces[f, (k + 3) & 3]
+            s_next, s_prev = slot_offsets[a] + i, slot_offsets[a] + (i + 1) % slots
+            for j in range(3):
+                w[j] = x[a, j] - x[b, j] + x[c, j] - x[d, j]
             if curved:
                 n0, n1, n2 = normals[a, 0], normals[a, 1], normals[a, 2]
                 bend = 0.0
-                for i in range(3):
+                for r in range(3):
                     for j in range(3):
-                        bend += tangents[s_next, i] * shape_operator[a, i, j] * tangents[s_prev, j]
+                        bend += tangents[s_next, r] * shape_operator[a, r, j] * tangents[s_prev, j]
                 along = (w[0] * n0 + w[1] * n1 + w[2] * n2) + bend
                 w[0], w[1], w[2] = w[0] - along * n0, w[1] - along * n1, w[2] - along * n2
-            for i in range(3):
-                out[f, k, i] = x[a, i] + (tangents[s_next, i] + tangents[s_prev, i]) / 3.0 + w[i] / 9.0
+            for j in range(3):
+                out[f, k, j] = x[a, j] + (tangents[s_next, j] + tangents[s_prev, j]) / 3.0 + w[j] / 9.0
 
 
 #: faces whose corner normals turn by less than this keep the local twist targets; from here to
@@ -615,7 +621,9 @@ def interpolate_targets(mesh: QuadMesh) -> Targets:
     fallback = guarded | frames.repaired | parallel
     seams = seam_edges(mesh, INTERPOLATE_SHARPNESS)
     corner_normals = normals[topology.faces]
-    interior = _interior_targets(topology, mesh.vertices, tangents, normals, frames.shape_operator)
+    both = np.empty((topology.n_faces, 4, 2, 3))  # Targets.interior: the same target for both edges at a corner
+    first = both[:, :, 0]
+    interior = _interior_targets(topology, mesh.vertices, tangents, normals, frames.shape_operator, out=first)
     if seams.any():
         tangents, sector_normals, creased, spread = crease_tangents(
             mesh, seams, tangents, sharp_vertices(mesh, INTERPOLATE_SHARPNESS)
@@ -630,11 +638,10 @@ def interpolate_targets(mesh: QuadMesh) -> Targets:
     rounded = _round_coarse_faces(mesh, tangents, corner_normals, interior)
     if seams.any():  # the circle sections model one sphere through a face's corners: not across a crease
         rounded = np.where(at_crease.any(axis=1)[:, None, None], interior, rounded)
-    interior = rounded
-    return Targets(
-        topology, mesh.vertices, normals, tangents, np.stack([interior, interior], axis=2), seams, fallback, "interpolate",
-        corner_normals,
-    )
+    if rounded is not first:
+        first[:] = rounded
+    both[:, :, 1] = first
+    return Targets(topology, mesh.vertices, normals, tangents, both, seams, fallback, "interpolate", corner_normals)
 
 
 def retreat(targets: Targets, vertices: IntArray, weight: float) -> Targets:

@@ -75,20 +75,20 @@ def _plane_kernel(tangents: NDArray[np.float64], normals: NDArray[np.float64], o
             out[s, 2] = t2 - height * n2
 
 
-def slot_tables(topology: QuadTopology) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """:func:`g1patch.targets.halfedge_slots` by a numba kernel: the ring slot of each half-edge
-    A → B at A (``slot_out``), and of B → A at B (``slot_in``; the last slot of B where A → B is
-    a boundary half-edge)."""
-    slot_out = np.empty(topology.n_halfedges, dtype=np.int64)
-    slot_in = np.empty(topology.n_halfedges, dtype=np.int64)
+def slot_tables(topology: QuadTopology) -> tuple[NDArray[np.int32], NDArray[np.int32]]:
+    """:func:`g1patch.targets.halfedge_slots` by a numba kernel, as int32 (half the memory): the ring
+    slot of each half-edge A → B at A (``slot_out``), and of B → A at B (``slot_in``; the last slot
+    of B where A → B is a boundary half-edge)."""
+    slot_out = np.empty(topology.n_halfedges, dtype=np.int32)
+    slot_in = np.empty(topology.n_halfedges, dtype=np.int32)
     jit_kernel(_slots_kernel)(topology.faces.reshape(-1), topology.twin, topology.ring_offsets, topology.ring_halfedges,
                               topology.neighbor_offsets, slot_out, slot_in)
     return slot_out, slot_in
 
 
 def _slots_kernel(origin: NDArray[np.int64], twin: NDArray[np.int64], ring_offsets: NDArray[np.int64],
-                  ring_halfedges: NDArray[np.int64], neighbor_offsets: NDArray[np.int64], slot_out: NDArray[np.int64],
-                  slot_in: NDArray[np.int64]) -> None:
+                  ring_halfedges: NDArray[np.int64], neighbor_offsets: NDArray[np.int64], slot_out: NDArray[np.int32],
+                  slot_in: NDArray[np.int32]) -> None:
     """Ring position j of the outgoing half-edge ``ring_halfedges[ring_offsets[v] + j]`` → slot
     ``neighbor_offsets[v] + j``; ``slot_in[h] = slot_out[twin[h]]``."""
     for v in range(ring_offsets.size - 1):
