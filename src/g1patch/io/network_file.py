@@ -31,12 +31,15 @@ zipfile ``ZIP_DEFLATED``, level 1        328 MB    19.1 s    15.7 s    10.7 s
 this module (stored, see below)          670 MB     0.77 s    0.74 s   10.7 s
 ======================================  ========  ========  ========  =========
 
-(The machine was shared: the compressed figures vary by 2× between runs, 20.7 s and 2.9 s in a
-quieter one; the stored ones by less.) Compression halves the file and costs 25–50× the time to
-save: float64 control points with busy mantissas deflate by 2:1 at best, at ~35 MB/s even at
-level 1. So members are stored (``ZIP_STORED``): each ``.npy`` member is written straight from the
-array's memory (no copy) while a second thread computes its CRC-32, and read back with one
-``readinto`` at its offset, its CRC checked on a second thread while the arrays are validated.
+The machine was shared with other jobs (load 3–6 on its 2 cores) and first touches of fresh
+memory are slow and erratic in its VM, so figures spread between runs: over four runs this
+module saved in 0.71–1.87 s and loaded in 0.74–2.17 s, ``np.savez_compressed`` saved in 38–45 s
+(20.7 s and a 2.9 s load in a quieter hour, when ``build`` took 33 s). Compression halves the
+file and costs 25–50× the time to save: float64 control points with busy mantissas deflate by
+2:1 at best, at ~35 MB/s even at level 1. So members are stored (``ZIP_STORED``): each ``.npy``
+member is written straight from the array's memory (no copy) while a second thread computes its
+CRC-32, and read back with ``readinto`` at its offset in 64 MB steps, each step's CRC computed on a
+second thread while the next is read and the arrays are validated.
 Arrays keep the dtypes :class:`PatchNetwork` holds (int64 indices, so loading allocates nothing
 but the arrays themselves). The container is unchanged — a zip of ``.npy`` members, what
 ``np.load`` reads — so the version stays 3, and compressed files (every earlier release's) are
