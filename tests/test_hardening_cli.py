@@ -87,8 +87,11 @@ def test_a_replaced_file_keeps_its_mode(tmp_path: Path, cube: Path) -> None:
 @pytest.mark.parametrize(("signum", "code", "words"), [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")])
 def test_a_signal_during_export_leaves_no_file(tmp_path: Path, torus: Path, signum: int, code: int, words: str) -> None:
     output = tmp_path / "out.obj"
+    # a job started in the background by a shell inherits SIGINT ignored, and Python then keeps it so:
+    # give the child the default disposition, as a terminal's foreground job has
     process = subprocess.Popen([sys.executable, "-m", "g1patch.cli", "export", str(torus), "-o", str(output)],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         deadline = time.monotonic() + 120
         while not temporaries(tmp_path) and process.poll() is None and time.monotonic() < deadline:
