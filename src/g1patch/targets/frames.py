@@ -94,7 +94,7 @@ CUBIC_POINTS = 12  #: fewest 2-ring points for the cubic term
 #: in the valence (a 100,000-gon's rim would otherwise see the whole centre ring from every vertex)
 HUB_POINTS = 64
 BLOCK = 2048  #: vertices per padded block (NumPy), per gathered block (kernel)
-LANES = 16  #: vertices the kernel fits side by side
+LANES = 32  #: vertices the kernel fits side by side
 GILBERT_STEPS = 64
 
 
@@ -423,9 +423,10 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
     points at the vertex itself, which get weight 0 and add exactly nothing. Writes row i of the ``out_`` arrays for ``vertices[i]``;
     S as in :func:`_circle_fit`, before symmetrising.
     """
-    taken = np.full(x.shape[0], -1)  # v once a point is in v's 2-ring
+    taken = np.full(x.shape[0], -1, dtype=np.int32)  # v once a point is in v's 2-ring
     hood = np.empty(32 * BLOCK, dtype=np.int64)
-    hood_start = np.empty(BLOCK + 1, dtype=np.int64)
+    hood_begin = np.empty(BLOCK, dtype=np.int64)
+    hood_size = np.empty(BLOCK, dtype=np.int64)
     key = np.empty(BLOCK, dtype=np.int64)
     order = np.empty(BLOCK, dtype=np.int64)
     large = np.int64(1) << 40  # key = size, + large for the cubic fits
@@ -457,10 +458,23 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
         used = 0
         for b in range(count):
             v = vertices[low + b]
-            hood_start[b] = used
-            one = row_offsets[v + 1] - row_offsets[v]
+            # room: the 2-ring has at most Σ |row(c)| points over c in v's row (1 through a hub)
+            room = row_offsets[v + 1] - row_offsets[v]
+            if tilt:
+                room = 0
+                for at in range(row_offsets[v], row_offsets[v + 1]):
+                    centre = rows[at]
+                    size = row_offsets[centre + 1] - row_offsets[centre]
+                    room += 1 if centre != v and size > HUB_POINTS else size
+            if used + room > hood.size:
+                grown = np.empty(max(2 * hood.size, used + room), dtype=np.int64)
+                for j in range(used):
+                    grown[j] = hood[j]
+                hood = grown
             m = 0
-            if tilt:  # the 2-ring: first encounter over the rows of v's row
+            if tilt:  # the 2-ring: first encounter over the rows of v's row, written backwards (reversed)
+                taken[v] = v  # without v
+                end = used + room
                 for at in range(row_offsets[v], row_offsets[v + 1]):
                     centre = rows[at]
                     size = row_offsets[centre + 1] - row_offsets[centre]
@@ -469,37 +483,21 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                         p = centre if hub else rows[row_offsets[centre] + j]
                         if taken[p] != v:
                             taken[p] = v
-                            if used + m == hood.size:
-                                grown = np.empty(2 * hood.size, dtype=np.int64)
-                                for j2 in range(used + m):
-                                    grown[j2] = hood[j2]
-                                hood = grown
-                            hood[used + m] = p
                             m += 1
-            cubic = tilt and m - 1 >= CUBIC_POINTS
-            if cubic:  # reversed, without v
-                for j in range(m // 2):
-                    hood[used + j], hood[used + m - 1 - j] = hood[used + m - 1 - j], hood[used + j]
-                kept = 0
-                for j in range(m):
-                    if hood[used + j] != v:
-                        hood[used + kept] = hood[used + j]
-                        kept += 1
-                m = kept
+                            hood[end - m] = p
+            cubic = tilt and m >= CUBIC_POINTS
+            if cubic:
+                hood_begin[b] = used + room - m
             else:  # the 1-ring: v's row without v
-                while used + one > hood.size:
-                    grown = np.empty(2 * hood.size, dtype=np.int64)
-                    for j in range(used):
-                        grown[j] = hood[j]
-                    hood = grown
+                hood_begin[b] = used
                 m = 0
                 for j in range(row_offsets[v], row_offsets[v + 1]):
                     if rows[j] != v:
                         hood[used + m] = rows[j]
                         m += 1
-            used += m
+            hood_size[b] = m
+            used += room
             key[b] = m + (large if cubic else 0)
-        hood_start[count] = used
         # lanes share a column count: the cubic fits first, then the others (each in block order)
         placed = 0
         for cubic_first in (True, False):
@@ -519,16 +517,16 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
             most = 0
             for l in range(nl):
                 b = order[first + l]
-                most = max(most, hood_start[b + 1] - hood_start[b])
+                most = max(most, hood_size[b])
             if q.shape[0] < most:
                 q = np.zeros((most, 3, lanes))
             for l in range(nl):
                 b = order[first + l]
                 v = vertices[low + b]
-                m = hood_start[b + 1] - hood_start[b]
+                m, begin = hood_size[b], hood_begin[b]
                 for j in range(most):
                     for d in range(3):
-                        q[j, d, l] = x[hood[hood_start[b] + j], d] - x[v, d] if j < m else 0.0
+                        q[j, d, l] = x[hood[begin + j], d] - x[v, d] if j < m else 0.0
                 for d in range(3):
                     n[d, l] = start[v, d]
                 active[l] = True
