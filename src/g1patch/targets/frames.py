@@ -717,11 +717,14 @@ def _ring_kernel(x: FloatArray, neighbor_offsets: IntArray, neighbors: IntArray,
                  out_steepness: FloatArray) -> None:
     """:meth:`_Ring.valid` and :meth:`_Ring.steepness` of ``normals[v]`` at ``vertices``, vertex by vertex
     (row i for ``vertices[i]``): turning angles ``atan2(N·(d_i × d_{i+1}), d_i·d_{i+1} − (N·d_i)(N·d_{i+1}))``
-    summed over the ring's consecutive pairs, and the largest ``|N·d|/|d|``."""
+    summed over the ring's consecutive pairs, and the largest ``|N·d|/|d|``. An interior vertex of
+    valence ≤ 4 whose turns are all positive goes around exactly once (its n < 5 turns of less than
+    π each sum to 2π times a whole number), so there the angles are not computed."""
     for i in range(vertices.size):
         v = vertices[i]
         n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
         first, count = neighbor_offsets[v], neighbor_offsets[v + 1] - neighbor_offsets[v]
+        turns = boundary[v] or face_count[v] > 4
         total = 0.0
         folded = False
         for step in range(face_count[v]):
@@ -729,10 +732,11 @@ def _ring_kernel(x: FloatArray, neighbor_offsets: IntArray, neighbors: IntArray,
             ax, ay, az = x[a, 0] - x[v, 0], x[a, 1] - x[v, 1], x[a, 2] - x[v, 2]
             bx, by, bz = x[b, 0] - x[v, 0], x[b, 1] - x[v, 1], x[b, 2] - x[v, 2]
             sine = n0 * (ay * bz - az * by) + n1 * (az * bx - ax * bz) + n2 * (ax * by - ay * bx)
-            cosine = (ax * bx + ay * by + az * bz) - (ax * n0 + ay * n1 + az * n2) * (bx * n0 + by * n1 + bz * n2)
-            total += np.arctan2(sine, cosine)
             folded |= not sine > 0
-        once = total < 2.0 * np.pi if boundary[v] else abs(total - 2.0 * np.pi) < np.pi
+            if turns:
+                cosine = (ax * bx + ay * by + az * bz) - (ax * n0 + ay * n1 + az * n2) * (bx * n0 + by * n1 + bz * n2)
+                total += np.arctan2(sine, cosine)
+        once = not turns or (total < 2.0 * np.pi if boundary[v] else abs(total - 2.0 * np.pi) < np.pi)
         out_valid[i] = once and not folded
         steepest = 0.0
         for j in range(first, first + count):
