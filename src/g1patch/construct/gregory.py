@@ -35,8 +35,12 @@ Boundary edges and seams (``Targets.seams``: creased on purpose) keep their targ
 of a seam share its boundary cubic (C0) and each keeps its own cross-boundary derivative. At a
 vertex the corner split of an edge uses the normal of the edge's sector
 (``Targets.corner_normals``), and every slot tangent is moved into its sectors' planes
-(:func:`tangent_plane_tangents`), so each sector is G1 at the corner by itself. Every step is a gather, a scatter or a batched 4 × 4 solve
-over edges: no Python loop over vertices, edges or faces.
+(:func:`tangent_plane_tangents`), so each sector is G1 at the corner by itself.
+
+The assembly runs in one numba kernel, half-edge by half-edge and edge by edge, writing the
+(F, 20, 3) points directly (:func:`_assemble_kernel`); the NumPy reference
+(``assemble_gregory(targets, compiled=False)``) does the same with gathers, scatters and
+closed-form solves batched over edges. No Python loop over vertices, edges or faces either way.
 """
 
 from __future__ import annotations

@@ -57,11 +57,13 @@ hold; elsewhere the
   the span of the earlier ones; ≥ 0.5 on every mesh above). Cubic columns below 1e-10 are
   dropped (coefficient 0).
 
-**Evaluation.** The fits run vertex by vertex in a numba kernel (:func:`_fit_kernel`, compiled
-on first use and cached on disk; numba is imported only then). The NumPy reference
-(``vertex_frames(mesh, compiled=False)``) sorts the vertices by neighbourhood size and fits
-padded blocks; the two agree to rounding (normals within 256 ε, S within 2¹⁴ ε of its
-largest entry, the same masks: tests/test_frames.py).
+**Evaluation.** The fits run in a numba kernel (:func:`_fit_kernel`, compiled on first use and
+cached on disk; numba is imported only then): every vertex goes through the one-vertex sequence
+of operations, :data:`LANES` vertices side by side so that the inner loops vectorise, with the
+neighbourhoods in scipy's order, so the sums are the same; the ring checks and fan normals are
+kernels too. The NumPy reference (``vertex_frames(mesh, compiled=False)``) sorts the vertices by
+neighbourhood size and fits padded blocks; the two agree to rounding (normals within 256 ε, S
+within 2¹⁴ ε of its largest entry, the same masks: tests/test_frames.py).
 """
 
 from __future__ import annotations
