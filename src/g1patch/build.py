@@ -155,6 +155,7 @@ def _guarded(
     topology = targets.topology
     patches = assemble(targets)
     retreated = np.zeros(topology.n_vertices, dtype=bool)
+    applied = 0.0
     guarded = targets
     for step, weight in enumerate(GUARD_STEPS):
         tested = _faces_at_risk(guarded)
@@ -169,7 +170,10 @@ def _guarded(
         if step:
             slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
             corners[topology.neighbors[corners[slot_vertex]]] = True
+        if not (corners & ~retreated).any() and weight == applied:
+            break  # the same retreat again: the same patches
         retreated |= corners
+        applied = weight
         guarded = retreat(targets, np.flatnonzero(retreated), weight)
         patches = assemble(guarded)
     return patches, guarded
