@@ -121,7 +121,7 @@ def test_open_and_mixed_orientation_networks_render(tmp_path: Path, shared_data:
     for network, name in ((wave, "wave"), (teapot, "teapot")):
         for mode in MODES:
             path = tmp_path / f"{name}_{mode}.png"
-            render(path, network, mode=mode, size=(240, 180), resolution=9, view=(40.0, -70.0))
+            render(path, network, mode=mode, size=(240, 180), resolution=9)
             assert_picture(path, (240, 180))
 
 
@@ -139,15 +139,16 @@ def test_up_axis_is_a_rotation_of_the_world(tmp_path: Path) -> None:
     mesh = shapes.cube_sphere(1)
     turned = mesh.with_vertices(np.roll(mesh.vertices, -1, axis=1))
     first, second = tmp_path / "z.png", tmp_path / "y.png"
-    render(first, build_corner_network(mesh), mode="zebra", size=(200, 200), resolution=9)
+    render(first, build_corner_network(mesh), mode="zebra", size=(200, 200), resolution=9, up="z")
     render(second, build_corner_network(turned), mode="zebra", size=(200, 200), resolution=9, up="y")
     assert np.abs(read_png(first) - read_png(second)).mean() < 2e-3
 
 
 def test_zoom_magnifies_about_the_target(tmp_path: Path, corner_cube: PatchNetwork) -> None:
     whole, zoomed = tmp_path / "whole.png", tmp_path / "zoomed.png"
-    render(whole, corner_cube, size=(200, 200), resolution=9)
-    render(zoomed, corner_cube, size=(200, 200), resolution=9, zoom=4.0, target=(1.0, -1.0, 1.0))
+    camera = {"view": render_module.DEFAULT_VIEW, "up": "z"}  # the corner (1, -1, 1) faces this camera
+    render(whole, corner_cube, size=(200, 200), resolution=9, **camera)
+    render(zoomed, corner_cube, size=(200, 200), resolution=9, zoom=4.0, target=(1.0, -1.0, 1.0), **camera)
     def background(image: np.ndarray) -> float:
         return float((image[..., :3].mean(axis=-1) > 0.99).mean())
 

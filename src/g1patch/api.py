@@ -567,13 +567,17 @@ class Surface:
         write_bpt(target, self.network.patches)
         return target
 
-    def render(self, path: PathLike | None = None, mode: str = "shaded", **options: Any) -> Path | bytes:
+    def render(self, path: PathLike | None = None, mode: str = "shaded", *, view: tuple[float, float] | str = "auto",
+               up: str = "auto", **options: Any) -> Path | bytes:
         """A PNG of the surface: ``mode`` ``"shaded"``, ``"zebra"`` (reflection lines, they
         break where it creases) or ``"deviation"`` (every patch edge coloured by its G1 angle);
-        ``options`` as for :func:`g1patch.render.render` (``size``, ``view``, ``up``, ``zoom``,
-        ``title``…). Written to ``path`` (returned), or returned as PNG bytes when ``path`` is None."""
+        ``view`` = (elevation, azimuth) and the ``up`` axis default to ``"auto"``: chosen from the
+        surface (:func:`g1patch.render.auto_camera`); ``options`` as for
+        :func:`g1patch.render.render` (``size``, ``zoom``, ``title``…). Written to ``path``
+        (returned), or returned as PNG bytes when ``path`` is None."""
         from .render import render
 
+        options.update(view=view, up=up)
         if mode == "deviation" and "report" not in options and self._report is not None:
             options["report"] = self._report
         if path is None:

@@ -138,12 +138,12 @@ def _parser() -> argparse.ArgumentParser:
     mode.add_argument("--zebra", action="store_true", help="reflection lines: they break where the surface creases")
     mode.add_argument("--deviation", action="store_true", help="colour every patch edge by its G1 angle")
     render.add_argument("--size", type=int, nargs=2, default=(900, 900), metavar=("W", "H"), help="pixels (default: 900 900)")
-    render.add_argument("--view", type=float, nargs=2, default=(25.0, -60.0), metavar=("ELEV", "AZIM"), help="camera angles in degrees")
-    render.add_argument("--up", choices=("x", "y", "z"), default="z", help="the model's up axis (default: z)")
+    _camera_arguments(render)
     render.add_argument("--zoom", type=float, default=1.0, help="magnification (default: 1)")
 
     demo = command("demo", "the paper's example: the cube smoothed by the paper's patches and by exact G1")
     demo.add_argument("--out", type=Path, default=Path("out"), help="folder for the OBJ and PNG files (default: out)")
+    _camera_arguments(demo)
 
     batch = command("batch", "build, check and export many meshes on a Dask cluster, with a summary (needs g1patch[batch])")
     batch.add_argument("inputs", type=Path, nargs="+", metavar="INPUT", help="mesh files, or folders of them (.obj .ply .off)")
@@ -162,6 +162,29 @@ def _parser() -> argparse.ArgumentParser:
     where.add_argument("--scheduler", metavar="ADDRESS", help="use the Dask cluster whose scheduler is at ADDRESS "
                                                               "(e.g. tcp://127.0.0.1:8786) instead of a local one")
     return parser
+
+
+def _camera_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--view`` and ``--up`` of the commands that draw pictures."""
+    parser.add_argument("--view", nargs="+", default=["auto"], metavar="auto|ELEV AZIM",
+                        help="camera: elevation and azimuth in degrees, or auto (default): the front three-quarter "
+                             "view of the surface when it has a long axis (g1patch.render.auto_camera)")
+    parser.add_argument("--up", choices=("auto", "x", "y", "z"), default="auto",
+                        help="the model's up axis (default: auto: z for a surface lying flat in the xy plane, "
+                             "else y as in OBJ files)")
+
+
+def _camera_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The ``view`` and ``up`` of :func:`g1patch.render.render` from ``--view`` and ``--up``."""
+    from .errors import InputError
+
+    if args.view == ["auto"]:
+        return {"view": "auto", "up": args.up}
+    try:
+        elevation, azimuth = (float(value) for value in args.view)
+    except ValueError:
+        raise InputError(f"--view: expected auto or two angles ELEV AZIM in degrees, got {' '.join(args.view)!r}") from None
+    return {"view": (elevation, azimuth), "up": args.up}
 
 
 @contextmanager
@@ -360,7 +383,7 @@ def _render(args: argparse.Namespace) -> int:
         raise FormatError(args.output, "pictures are written as .png")
     mode: Literal["shaded", "zebra", "deviation"] = "zebra" if args.zebra else "deviation" if args.deviation else "shaded"
     network = _load_surface(args.network)
-    render(args.output, network, mode=mode, size=tuple(args.size), view=tuple(args.view), up=args.up, zoom=args.zoom,
+    render(args.output, network, mode=mode, size=tuple(args.size), **_camera_options(args), zoom=args.zoom,
            title=f"{args.network.name}: {mode}")
     print(f"wrote {args.output}")
     return EXIT_OK
@@ -389,6 +412,7 @@ def _demo(args: argparse.Namespace) -> int:
     from .render import render_side_by_side
     from .tessellate import tessellate
 
+    camera = _camera_options(args)
     with resources.as_file(resources.files("g1patch") / "data" / "cube.obj") as cube_path:
         mesh = read_mesh(cube_path)
     corner = build_corner_network(mesh, tangents="arc", twist="coons")
@@ -431,7 +455,7 @@ def _demo(args: argparse.Namespace) -> int:
     titles = ["paper: corner G1 (creased)", "Gregory (exact G1)", "split4 (exact G1, polynomial)", "Catmull–Clark limit (exact G1)"]
     for mode in ("zebra", "deviation"):
         path = args.out / f"cube_{mode}.png"
-        render_side_by_side(path, [corner, gregory, split4, limit], titles, mode=mode, size=(2400, 640),
+        render_side_by_side(path, [corner, gregory, split4, limit], titles, mode=mode, size=(2400, 640), **camera,
                             reports=reports if mode == "deviation" else None)
         written.append(path)
     print("\nwrote " + ", ".join(str(path) for path in written))

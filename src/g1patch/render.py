@@ -1,6 +1,8 @@
 """Pictures a person can judge: shaded surfaces, zebra stripes and maps of the G1 angle.
 
-Three modes, one camera:
+Three modes, one camera, chosen from the surface unless asked for (:func:`auto_camera`: y-up as
+in OBJ files unless the surface is a slab lying in the xy plane, seen from the front three-quarter
+when it has a long horizontal axis, framed to its silhouette):
 
 * ``shaded``: ambient light plus a key and a fill light and a soft highlight.
 * ``zebra``: reflection lines. The viewer looks along ``d``; a point with unit normal n reflects
@@ -66,16 +68,25 @@ from .patches import CORNER_PARAMETERS
 from .tessellate import TriangleMesh
 
 __all__ = [
+    "AUTO",
+    "AUTO_AXIS_TOLERANCE_DEG",
+    "AUTO_CORRELATION",
+    "AUTO_ELEVATION",
+    "AUTO_LONG_RATIO",
+    "AUTO_SLAB_RATIO",
+    "AUTO_TURN_DEG",
     "DEFAULT_STRIPES",
     "DEFAULT_VIEW",
     "EDGE_SAMPLES_PER_PIXEL",
     "EDGE_SPACING_PX",
     "EXACT_G1_DEG",
+    "FILL",
     "MIN_EDGE_SAMPLES",
     "MODES",
     "SAMPLE_SPACING_PX",
     "TRIANGLE_BUDGET",
     "UP_AXES",
+    "auto_camera",
     "choose_resolution",
     "render",
     "render_side_by_side",
@@ -90,8 +101,13 @@ MODES: tuple[Mode, ...] = ("shaded", "zebra", "deviation")
 UP_AXES = ("z", "y", "x")
 
 #: (elevation, azimuth) in degrees, matplotlib's convention: the camera looks at the centre from
-#: azimuth ``azim`` about +z and ``elev`` above the xy plane. This one shows three cube faces.
+#: azimuth ``azim`` about +z and ``elev`` above the xy plane (about the up axis, azimuth 0 along the
+#: next axis: y up, from +z towards +x; x up, from +y towards +z). This one shows three cube faces;
+#: :func:`auto_camera` takes it for surfaces without a front.
 DEFAULT_VIEW = (25.0, -60.0)
+#: the surface's box on the screen (the box of its silhouette) fills this fraction of its panel's
+#: width or height, whichever binds
+FILL = 0.9
 #: black/white stripe pairs per full turn of the reflected direction about the stripe axis
 DEFAULT_STRIPES = 12
 #: triangles per picture for :func:`choose_resolution` (a closed surface samples twice as many:
@@ -181,8 +197,8 @@ def stripe_phase(
     ``r = d − 2 (d·n) n`` with d the viewing direction of ``view``; ``φ = stripes · atan2(r·b, r·a)``
     about the stripe axis (see the module docstring). A function of the normal alone.
     """
-    view, stripes, up = _check_view(view), _check_stripes(stripes), check_choice("up", up, UP_AXES)
-    camera = _Camera.from_view(view, up)
+    view, stripes, up = _check_view(view, auto=False), _check_stripes(stripes), check_choice("up", up, UP_AXES)
+    camera = _Camera.from_view(view, up)  # type: ignore[arg-type]
     return _phase(np.asarray(normals, dtype=np.float64), camera, stripes)
 
 
@@ -193,13 +209,143 @@ def _phase(normals: NDArray[np.float64], camera: _Camera, stripes: int) -> NDArr
     return stripes * np.arctan2(reflected @ b, reflected @ a)
 
 
+# --------------------------------------------------------------------------- the automatic camera
+#: ``up`` / ``view`` value asking :func:`render` to choose from the data (:func:`auto_camera`)
+AUTO = "auto"
+#: z is up when the surface's spread along its thinnest principal axis is at most this fraction of
+#: the next one's (a slab: the teapot's is 0.86, a flat torus 0.24, the cube 1)
+AUTO_SLAB_RATIO = 0.9
+#: a principal axis "is" a coordinate axis when they are at most this many degrees apart
+AUTO_AXIS_TOLERANCE_DEG = 25.0
+#: the horizontal footprint has a long axis when its shorter spread is at most this fraction of its longer
+AUTO_LONG_RATIO = 0.9
+#: height and position along the long axis are uncorrelated below this correlation (the front is then +axis)
+AUTO_CORRELATION = 0.05
+#: the camera's elevation in degrees: the first for a surface as tall as it is wide, rising to the
+#: second for a flat one (so that a flat surface is not seen edge-on)
+AUTO_ELEVATION = (25.0, 45.0)
+#: front three-quarter: the camera is turned this many degrees from the front towards the model's left
+AUTO_TURN_DEG = 35.0
+#: patches sampled by :func:`auto_camera` on a network (evenly spaced through it), 4 × 4 points each
+_AUTO_PATCHES = 65_536
+_AUTO_GRID = 4
+
+
+def _area_samples(surface: PatchNetwork | TriangleMesh) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Points (N, 3) on ``surface`` and the area each stands for (N,): a network's patches at the
+    midpoints of a 4 × 4 grid of cells, weighted by ``|p_u × p_v|`` (at most :data:`_AUTO_PATCHES`
+    patches, evenly spaced), a triangle mesh's triangle centroids weighted by their areas."""
+    if isinstance(surface, TriangleMesh):
+        corners = np.asarray(surface.points, dtype=np.float64)[np.asarray(surface.triangles, dtype=np.int64)]
+        area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=-1)
+        return corners.mean(axis=1), area
+    patches = surface.patches
+    if len(patches) > _AUTO_PATCHES:
+        patches = patches.take(np.linspace(0, len(patches) - 1, _AUTO_PATCHES).round().astype(np.int64))
+    t = (np.arange(_AUTO_GRID) + 0.5) / _AUTO_GRID
+    area = np.linalg.norm(np.cross(patches.evaluate_grid(t, t, 1, 0), patches.evaluate_grid(t, t, 0, 1)), axis=-1)
+    return patches.evaluate_grid(t, t).reshape(-1, 3), area.reshape(-1)
+
+
+def auto_camera(
+    surface: PatchNetwork | TriangleMesh | ArrayLike, weights: ArrayLike | None = None, *, up: str = AUTO
+) -> tuple[str, tuple[float, float]]:
+    """The up axis and ``(elevation, azimuth)`` that :func:`render` uses for ``up`` / ``view`` = ``"auto"``.
+
+    ``surface``: a :class:`~g1patch.network.PatchNetwork` or a
+    :class:`~g1patch.tessellate.TriangleMesh` (sampled for you, area-weighted), or points (N, 3)
+    on the surface with the area each stands for in ``weights`` (N,) (equal when None). ``up``: an
+    axis to keep (``"x"``, ``"y"``, ``"z"``), or ``"auto"`` to choose it. The view is in the
+    convention of :func:`render`'s ``view`` about that axis.
+
+    The rule, on the weighted mean and covariance of the samples, whose principal axes have
+    spreads (standard deviations) σ₀ ≤ σ₁ ≤ σ₂:
+
+    * **up** is **z** when the surface is a slab lying in the xy plane: its thinnest principal
+      axis is within :data:`AUTO_AXIS_TOLERANCE_DEG` of z, σ₀ ≤ :data:`AUTO_SLAB_RATIO` σ₁, and it
+      has no long axis along y (σ₁ ≤ :data:`AUTO_LONG_RATIO` σ₂ with the longest axis within the
+      tolerance of y: a tall thing thin from front to back stands in y). CAD data and the
+      Utah teapot (spread 0.86 of the next along z) are like that. Otherwise **y**, the convention
+      of OBJ (and glTF, Maya, Blender's OBJ export): the Spot cow (thinnest along x, its width) is
+      y-up. x is never chosen: pass ``up="x"``.
+    * **view**: elevation ``25° + 20° · (1 − min(1, σ_up / σ_wide))`` above the horizontal plane
+      (:data:`AUTO_ELEVATION`; σ_up the spread along the up axis, σ_wide the footprint's longer
+      principal spread): 25° for Spot and the cube, 32° for the teapot, 45° for a flat sheet. Azimuth: when the footprint (the samples
+      projected on the horizontal plane) has a long axis (its shorter principal spread at most
+      :data:`AUTO_LONG_RATIO` of its longer), the front is the end of the long axis where the
+      surface stands higher (the sign of the correlation of height and position along it: an
+      animal holds its head up; the axis's + end when the correlation is below
+      :data:`AUTO_CORRELATION`), and the camera looks from
+      :data:`AUTO_TURN_DEG` off the front towards the model's left (front three-quarter: the front
+      points to the left of the picture). A footprint without a long axis (the cube, a sphere, a
+      flat torus) has no front: the azimuth of :data:`DEFAULT_VIEW`.
+
+    A heuristic on the shape alone, right on the shared Spot and teapot and on the generated
+    shapes; it misreads e.g. a z-up animal (thin along x, so taken as y-up: it lies on its side), a
+    square y-up relief (thin along z: taken as a z-up slab) and a car whose rear stands higher
+    than its bonnet (seen from behind). Pass ``up`` / ``view`` for those.
+    """
+    up = check_choice("up", up, (AUTO, *UP_AXES))
+    if isinstance(surface, (PatchNetwork, TriangleMesh)):
+        if weights is not None:
+            raise InputError("weights: a network or mesh is weighted by its own area; pass weights with points only")
+        points, area = _area_samples(surface)
+    else:
+        points = as_float_array("points", surface, (3,))
+        if points.ndim != 2:
+            raise InputError(f"points: expected an (N, 3) array, got shape {points.shape}")
+        area = np.ones(len(points)) if weights is None else as_float_array("weights", weights, (len(points),))
+        if area.shape != (len(points),) or (area < 0).any():
+            raise InputError(f"weights: expected {len(points)} non-negative areas, got shape {area.shape}")
+    total = float(area.sum())
+    mean = area @ points / max(total, 1e-300)
+    offset = points - mean
+    covariance = (offset * area[:, None]).T @ offset / max(total, 1e-300)
+    if not np.trace(covariance) > 0.0:  # no area, or all in one point: nothing to choose by
+        return ("y" if up == AUTO else up), DEFAULT_VIEW
+    spread2, axes = np.linalg.eigh(covariance)  # ascending
+    cos_tol = math.cos(math.radians(AUTO_AXIS_TOLERANCE_DEG))
+    if up == AUTO:
+        slab = spread2[0] <= AUTO_SLAB_RATIO**2 * spread2[1] and abs(axes[2, 0]) >= cos_tol
+        standing = spread2[1] <= AUTO_LONG_RATIO**2 * spread2[2] and abs(axes[1, 2]) >= cos_tol
+        up = "z" if slab and not standing else "y"
+    k = {"x": 0, "y": 1, "z": 2}[up]
+    first, second = (k + 1) % 3, (k + 2) % 3  # the horizontal axes azimuth 0° and 90° point along
+    flat = covariance[np.ix_([first, second], [first, second])]
+    spread2, axes = np.linalg.eigh(flat)
+    low, high = AUTO_ELEVATION
+    flatness = 1.0 - min(1.0, math.sqrt(covariance[k, k] / spread2[1])) if spread2[1] > 0.0 else 0.0
+    elevation = low + (high - low) * flatness
+    if spread2[0] > AUTO_LONG_RATIO**2 * spread2[1]:
+        return up, (elevation, DEFAULT_VIEW[1])
+    front = axes[:, 1] * np.sign(axes[np.argmax(np.abs(axes[:, 1])), 1])  # +axis unless the data says otherwise
+    height = covariance[k, [first, second]] @ front  # covariance of height and position along the long axis
+    if height < -AUTO_CORRELATION * math.sqrt(covariance[k, k] * spread2[1]):  # the front stands higher
+        front = -front
+    turn = math.radians(AUTO_TURN_DEG)
+    left = np.array([-front[1], front[0]])  # up × front in the horizontal frame (first, second)
+    eye = math.cos(turn) * front + math.sin(turn) * left
+    return up, (elevation, math.degrees(math.atan2(eye[1], eye[0])))
+
+
+def _camera(view: tuple[float, float] | str, up: str, surfaces: Sequence[PatchNetwork | TriangleMesh]) -> _Camera:
+    """The camera of checked ``view`` and ``up``; ``"auto"`` in either: :func:`auto_camera` of all
+    ``surfaces`` together (one camera for side-by-side panels)."""
+    if view != AUTO and up != AUTO:
+        return _Camera.from_view(view, up)  # type: ignore[arg-type]
+    samples = [_area_samples(surface) for surface in surfaces]
+    chosen_up, chosen_view = auto_camera(np.concatenate([p for p, _ in samples]), np.concatenate([w for _, w in samples]),
+                                         up=up)
+    return _Camera.from_view(chosen_view if view == AUTO else view, chosen_up)  # type: ignore[arg-type]
+
+
 def stripe_jumps(
     network: PatchNetwork,
     *,
-    view: tuple[float, float] = DEFAULT_VIEW,
+    view: tuple[float, float] | str = AUTO,
     stripes: int = DEFAULT_STRIPES,
     samples: int = 33,
-    up: str = "z",
+    up: str = AUTO,
 ) -> NDArray[np.float64]:
     """Per shared edge, the largest jump of the zebra stripe phase across it, in stripe periods.
 
@@ -208,13 +354,14 @@ def stripe_jumps(
     exact normals, as :func:`g1patch.continuity.check` does; the difference of the reflected
     directions' angle about the stripe axis (wrapped to (−π, π]) times ``stripes`` / 2π is the
     jump. 0 on an exactly G1 edge (up to rounding); about ``stripes · 2 θ / 360°`` on a crease of
-    θ degrees whose normals turn about the stripe axis. Degenerate normals are left out.
+    θ degrees whose normals turn about the stripe axis. Degenerate normals are left out. The camera
+    is :func:`render`'s: ``view`` and ``up`` ``"auto"`` choose it as the picture does (:func:`auto_camera`).
     """
     _check_network(network)
-    view, stripes, up = _check_view(view), _check_stripes(stripes), check_choice("up", up, UP_AXES)
+    view, stripes, up = _check_view(view), _check_stripes(stripes), check_choice("up", up, (AUTO, *UP_AXES))
     if not isinstance(samples, (int, np.integer)) or isinstance(samples, bool) or samples < 2:
         raise InputError(f"samples: expected an integer ≥ 2, got {samples!r}")
-    camera = _Camera.from_view(view, up)
+    camera = _camera(view, up, [network])
     patches = network.patches
     count = len(patches)
     t = np.linspace(0.0, 1.0, int(samples))
@@ -260,11 +407,15 @@ def _check_size(size: Any) -> tuple[int, int]:
     return int(width), int(height)
 
 
-def _check_view(view: Any) -> tuple[float, float]:
+def _check_view(view: Any, auto: bool = True) -> tuple[float, float] | str:
+    if isinstance(view, str):
+        if auto and view == AUTO:
+            return AUTO
+        raise InputError(f"view: expected (elevation, azimuth) in degrees{' or auto' if auto else ''}, got {view!r}")
     try:
         elev, azim = (float(x) for x in view)
     except (TypeError, ValueError):
-        raise InputError(f"view: expected (elevation, azimuth) in degrees, got {view!r}") from None
+        raise InputError(f"view: expected (elevation, azimuth) in degrees{' or auto' if auto else ''}, got {view!r}") from None
     if not (math.isfinite(elev) and math.isfinite(azim)):
         raise InputError(f"view: expected finite angles, got {view!r}")
     if abs(elev) >= 90.0:
@@ -369,7 +520,7 @@ def _footprint(network: PatchNetwork, camera: _Camera, size: tuple[int, int], pa
     corners = network.patches.evaluate(CORNER_PARAMETERS)  # (N, 4, 3)
     screen, _ = camera.project(corners)  # (N, 4, 2)
     flat = screen.reshape(-1, 2)
-    extent = np.maximum(flat.max(axis=0) - flat.min(axis=0), 1e-300) * 1.06
+    extent = np.maximum(flat.max(axis=0) - flat.min(axis=0), 1e-300) / FILL
     pixels_per_unit = float(zoom * min(size[0] / panels / extent[0], size[1] / extent[1]))
     side = np.linalg.norm(np.roll(corners, -1, axis=1) - corners, axis=-1)  # side k: corner k to k + 1
     projected = np.linalg.norm(np.roll(screen, -1, axis=1) - screen, axis=-1)
@@ -684,7 +835,8 @@ def _panel(
     """Colour every point of ``surface`` for ``mode`` and sort the visible triangles back to front.
     ``sides``: the deviation mode's G1 angle and seam flag of every patch side (:func:`_band_angles`).
 
-    The picture shows the whole surface (with a 3 % margin) magnified ``zoom`` times about the
+    The picture shows the whole surface (its screen box filling :data:`FILL` of the panel's width
+    or height, whichever binds) magnified ``zoom`` times about the
     point ``target`` (default: the middle of the surface's screen box)."""
     keep, corners, depth = _visible(surface, camera)
     facing = _facing(surface.normals, camera)
@@ -705,7 +857,7 @@ def _panel(
     screen, _ = camera.project(surface.points)
     lower, upper = screen.min(axis=0), screen.max(axis=0)
     centre = (lower + upper) / 2.0 if target is None else camera.project(target)[0]
-    extent = np.maximum(upper - lower, 1e-12) * 1.06 / zoom
+    extent = np.maximum(upper - lower, 1e-12) / (FILL * zoom)
     return _Panel(corners[keep][order], colours[order], centre, extent, title)
 
 
@@ -860,8 +1012,8 @@ def render(
     mode: Mode = "shaded",
     size: tuple[int, int] = (800, 800),
     resolution: int | None = None,
-    view: tuple[float, float] = DEFAULT_VIEW,
-    up: str = "z",
+    view: tuple[float, float] | str = AUTO,
+    up: str = AUTO,
     title: str | None = None,
     report: ContinuityReport | None = None,
     stripes: int = DEFAULT_STRIPES,
@@ -877,8 +1029,12 @@ def render(
     largest angle; without a report only the edge angles are measured, see the module docstring;
     patches too small on the screen for their edge bands are filled with their worst edge's
     colour). ``resolution``: samples per patch side, None to choose it from the pixels (one
-    sample about every :data:`SAMPLE_SPACING_PX` pixels along a patch). ``view`` = (elevation, azimuth) in degrees about the world axis
-    ``up`` (``"z"``, ``"y"`` for most OBJ files, or ``"x"``). ``zoom`` magnifies the picture
+    sample about every :data:`SAMPLE_SPACING_PX` pixels along a patch). ``view`` = (elevation,
+    azimuth) in degrees about the world axis ``up`` (``"z"``, ``"y"`` for most OBJ files, or
+    ``"x"``); ``"auto"`` (the default of both) chooses them from the surface by the rule of
+    :func:`auto_camera` (z-up for a slab lying in the xy plane, else y-up; a front three-quarter
+    view when the footprint has a long axis). The surface's screen box fills :data:`FILL` of the
+    picture. ``zoom`` magnifies the picture
     about the world point ``target`` (default: the middle of the surface); the resolution chosen
     for you then grows with the zoom (at most :data:`MAX_SAMPLES` points). Bad arguments raise :class:`InputError`; without
     matplotlib, :class:`MissingDependencyError`. The file appears complete or not at all.
@@ -897,8 +1053,8 @@ def render_side_by_side(
     mode: Mode = "shaded",
     size: tuple[int, int] = (1400, 700),
     resolution: int | None = None,
-    view: tuple[float, float] = DEFAULT_VIEW,
-    up: str = "z",
+    view: tuple[float, float] | str = AUTO,
+    up: str = AUTO,
     reports: Sequence[ContinuityReport | None] | None = None,
     stripes: int = DEFAULT_STRIPES,
     angle_range: tuple[float, float] | None = None,
@@ -913,7 +1069,7 @@ def render_side_by_side(
     check_choice("mode", mode, MODES)
     size = _check_size(size)
     view = _check_view(view)
-    up = check_choice("up", up, UP_AXES)
+    up = check_choice("up", up, (AUTO, *UP_AXES))
     stripes = _check_stripes(stripes)
     resolution = _check_resolution(resolution)
     angle_range = _check_angle_range(angle_range)
@@ -940,7 +1096,7 @@ def render_side_by_side(
                for i, (r, n) in enumerate(zip(reports, networks))]
     _matplotlib()
 
-    camera = _Camera.from_view(view, up)
+    camera = _camera(view, up, networks)
     count = len(networks)
     scale = None
     sides: list[tuple[NDArray[np.float64], NDArray[np.bool_]] | None] = [None] * count
@@ -978,8 +1134,8 @@ def render_surfaces(
     titles: Sequence[str],
     *,
     size: tuple[int, int] = (1200, 600),
-    view: tuple[float, float] = DEFAULT_VIEW,
-    up: str = "z",
+    view: tuple[float, float] | str = AUTO,
+    up: str = AUTO,
 ) -> None:
     """Write a PNG with the shaded triangle ``meshes`` side by side, each under its title.
 
@@ -987,7 +1143,7 @@ def render_surfaces(
     :func:`render` / :func:`render_side_by_side`, which keep each patch's exact normals.
     """
     target = _check_path(path)
-    size, view, up = _check_size(size), _check_view(view), check_choice("up", up, UP_AXES)
+    size, view, up = _check_size(size), _check_view(view), check_choice("up", up, (AUTO, *UP_AXES))
     if isinstance(meshes, TriangleMesh) or not isinstance(meshes, Sequence) or not meshes:
         raise InputError(f"meshes: expected a non-empty sequence of TriangleMesh, got {type(meshes).__name__}")
     if isinstance(titles, str) or not isinstance(titles, Sequence) or len(titles) != len(meshes):
@@ -998,7 +1154,7 @@ def render_surfaces(
             raise InputError(f"meshes[{index}]: expected a TriangleMesh, got {type(mesh).__name__}")
         _check_title(f"titles[{index}]", title)
     _matplotlib()
-    camera = _Camera.from_view(view, up)
+    camera = _camera(view, up, meshes)
     panels = []
     for mesh, title in zip(meshes, titles):
         # a tessellation is welded: call it closed when every triangle edge has two triangles
