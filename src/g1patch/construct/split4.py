@@ -323,6 +323,17 @@ def target_nets(targets: Targets) -> FloatArray:
     return net
 
 
+#: the twist point (1, 1) next to V, in the frame of corner k: the guide's vertex twist target
+_VERTEX_TWIST = ((1, 1),)
+
+
+def _guide_points(guide: FloatArray, points: tuple[tuple[int, int], ...] = _TARGET_POINTS) -> FloatArray:
+    """Per half-edge h = 4f + k the (4F, len(points), 3) ``points`` (p, q) of face f's macro net
+    ``guide`` (F, 7, 7, 3), in the frame of corner k (:func:`_macro_index`)."""
+    index = np.array([[_macro_index(k, p, q) for p, q in points] for k in range(4)])  # (4, n, 2)
+    return np.ascontiguousarray(guide[:, index[..., 0], index[..., 1]]).reshape(-1, len(points), 3)
+
+
 def _target_points(targets: Targets) -> FloatArray:
     """Per half-edge h = 4f + k the (4F, 6, 3) points :data:`_TARGET_POINTS` of face f's target
     bicubic subdivided at ½ (:func:`target_nets`), in the frame of corner k."""
@@ -430,7 +441,7 @@ def split4_star(targets: Targets) -> SplitStar:
 
 
 def split4_patches(
-    targets: Targets, corners: FloatArray, centre: FloatArray, scale: float
+    targets: Targets, corners: FloatArray, centre: FloatArray, scale: float, guide: FloatArray | None = None
 ) -> tuple[PatchSet, FloatArray, FloatArray, SplitStar]:
     """The 4 F Bézier sub-patches (sub-patch ``4 f + k`` at corner k of face f), and the positions
     and unit surface normals of the edge midpoints and face centres, each stacked as (E + F, 3).
@@ -440,7 +451,15 @@ def split4_patches(
 
     ``targets`` are in local coordinates ``(x − centre) / scale``; the sub-patches are mapped
     back and their corners at mesh vertices set to ``corners`` (the input positions, (V, 3)) exactly.
+
+    ``guide`` (F, 7, 7, 3), local coordinates: a macro net per face (:func:`macro_nets`) whose
+    interior the split should follow, e.g. a fit of another surface (:mod:`g1patch.construct.polynomial`).
+    With it every face is treated as kept (module docstring, "Reproduction") with the guide's
+    subdivided points in place of the targets' bicubic, and the vertex twist targets are the
+    guide's: the min-norm G1 corrections then move the guide only as far as G1 requires.
     """
+    if guide is not None and np.shape(guide) != (targets.topology.n_faces, 7, 7, 3):
+        raise InputError(f"guide: expected shape ({targets.topology.n_faces}, 7, 7, 3), got {np.shape(guide)}")
     topology = targets.topology
     n_faces = topology.n_faces
     pos = targets.positions
@@ -484,7 +503,7 @@ def split4_patches(
     # "Reproduction"): an edge whose split4 curve is the targets' own, halved; an interior edge
     # whose targets' seam tangents at M satisfy the midpoint star; a face whose edges all are
     tolerance = REPRODUCE_RTOL * _extent(pos)
-    own = _target_points(targets)  # (4F, 6, 3) per half-edge, in the frame of its corner
+    own = _target_points(targets) if guide is None else _guide_points(guide)  # (4F, 6, 3) per half-edge, frame of its corner
     unsheared = np.zeros(len(mu))
     target_curve = np.stack(_edge_curves(
         pos[x_of], pos[y_of], targets.tangents[slot_out[h_l]], targets.tangents[slot_in[h_l]], unsheared, unsheared, unsheared,
@@ -497,6 +516,8 @@ def split4_patches(
     kept_edge = same_curve & interior & (np.abs(star_gap).max(axis=1) <= tolerance)
     kept_face = np.where(interior, kept_edge, same_curve)[edge_of].reshape(n_faces, 4).all(axis=1)
     kept_mid = kept_edge | (~interior & kept_face[h_l >> 2])  # the seam tangents and twists at M are the targets'
+    if guide is not None:
+        kept_edge, kept_face, kept_mid = interior, np.ones(n_faces, dtype=bool), np.ones(len(mu), dtype=bool)
 
     # -- centres (any C keeps G1: its star is a plain cross), and its cross b_k = C + (M_k − M_{k+2}) / 6;
     # the middle of the targets' bicubic is (Σ corners + 3 Σ edge points + 9 Σ interior) / 64
@@ -556,7 +577,7 @@ def split4_patches(
     twist = np.empty((4 * n_faces, 4, 3))  # targets, replaced in place by the solved twists
     vertex_twist = (9.0 * (interior_targets - face_corners) - 3.0 * (target_next + target_prev)).reshape(-1, 3) / 36.0
     vertex_twist *= stars.factor[topology.faces.reshape(-1), None]  # a shrunk star: the twist shrinks with it
-    twist[:, 0] = o1 + d1[prev] - corner_points + vertex_twist
+    twist[:, 0] = o1 + d1[prev] - corner_points + vertex_twist if guide is None else _guide_points(guide, _VERTEX_TWIST)[:, 0]
     del vertex_twist, target_next, target_prev
     twist[:, 1] = np.where(kept_mid[edge_of, None], own[:, _TWIST_MID], o2 + seam - m_h - w)
     twist[:, 2] = np.where(kept_mid[edge_of[prev], None], own[:, _TWIST_PREV], d2[prev] + seam[prev] - m_prev - w)
@@ -689,7 +710,8 @@ def _split4_network(
 
 
 def split4_network_from_targets(
-    mesh: QuadMesh, targets: Targets, frame: Frame, provenance: dict[str, str], seam_edges: ArrayLike | None = None
+    mesh: QuadMesh, targets: Targets, frame: Frame, provenance: dict[str, str], seam_edges: ArrayLike | None = None,
+    guide: FloatArray | None = None,
 ) -> PatchNetwork:
     """The 2×2-split bicubic network of ``targets`` (in the local coordinates of ``frame``):
     polynomial, exactly G1 on mesh edges and seams, C1 inside each quad, interpolating the mesh
@@ -699,8 +721,8 @@ def split4_network_from_targets(
 
     ``seam_edges`` (E,) bool, in ``mesh.topology.edges`` order: mesh edges sharp on purpose; both
     halves of each (edge ids 2e, 2e + 1) become :attr:`PatchNetwork.seam` edges on both sides (the
-    split's own inner seams M–C never are)."""
-    patches, extra, extra_normals, stars = split4_patches(targets, targets.positions, np.zeros(3), 1.0)
+    split's own inner seams M–C never are). ``guide``: per-face macro nets to follow (:func:`split4_patches`)."""
+    patches, extra, extra_normals, stars = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide)
     patches = patches.with_frame(frame)
     extra = frame.to_world(extra)
     provenance = dict(
