@@ -371,13 +371,14 @@ def test_step_export_of_fitted_non_polynomial_patches(tmp_path: Path) -> None:
 @requires_ocp
 @pytest.mark.parametrize("name", ["cube", "torus_8_6", "catmark_torus"])
 def test_step_round_trip_of_gregory_networks(name: str, request: pytest.FixtureRequest, tmp_path: Path) -> None:
-    """Rational Gregory patches are fitted: a valid closed solid within the export tolerance."""
+    """Rational Gregory patches fitted (method "fit"): a valid closed solid within the export tolerance."""
     from g1patch.build import build_gregory_network
 
     data = request.getfixturevalue("shared_data") if name in SHARED else None
     network = build_gregory_network(CLOSED[name](data))
-    result = export_step(tmp_path / f"{name}.step", network)
-    assert not result.exact and result.fit_deviation <= result.fit_tolerance
+    result = export_step(tmp_path / f"{name}.step", network, method="fit")
+    assert not result.exact and result.method == "fit" and result.fit_deviation <= result.fit_tolerance
+    assert result.deviation == result.fit_deviation
     assert result.solid and result.valid and result.free_edges == 0
     model = read_step_faces(result.path)
     valid, volume, kind = occ_solid_figures(model.shape)

@@ -525,15 +525,17 @@ class Surface:
         * ``.obj``, ``.ply``, ``.stl``: triangles of :meth:`tessellate` (options ``resolution``,
           ``force``);
         * ``.step``/``.stp``, ``.iges``/``.igs``: a B-rep, one B-spline face per patch (split4:
-          per quad), exact for polynomial patches, else fitted within ``tolerance`` (model units,
-          default 1e-6 × the bbox diagonal); also ``progress``, ``g1_samples``
+          per quad), exact for polynomial patches; a Gregory network by ``method`` (``auto``:
+          its split4 re-assembly, exact G1 in CAD; ``fit``: fitted within ``tolerance``, model
+          units, default 1e-6 × the bbox diagonal); also ``progress``, ``g1_samples``
           (:func:`g1patch.io.cad.export_cad`, needs ``pip install 'g1patch[cad]'``);
         * ``.bpt``: Newell's Bézier patches (polynomial networks only: corner, split4, files).
 
         Returns the path written, or for STEP/IGES the
-        :class:`~g1patch.io.cad.ExportResult` (faces, solid, fit deviation, the G1 angles
-        OpenCASCADE measures; its ``path``). The file appears complete or not at all; an unknown
-        suffix or an option the format does not take raises :class:`InputError`/:class:`FormatError`.
+        :class:`~g1patch.io.cad.ExportResult` (faces, solid, file size, deviation from this
+        surface, the G1 angles OpenCASCADE measures; its ``path``). The file appears complete or
+        not at all; an unknown suffix or an option the format does not take raises
+        :class:`InputError`/:class:`FormatError`.
         """
         target = _check_path("path", path)
         suffix = target.suffix.lower()
@@ -541,7 +543,7 @@ class Surface:
             raise FormatError(target, f"unsupported extension {target.suffix or '(none)'!r}; expected one of "
                                       f"{', '.join(EXPORT_SUFFIXES)}")
         if suffix in CAD_SUFFIXES:
-            _check_options(target, options, ("tolerance", "progress", "g1_samples"))
+            _check_options(target, options, ("tolerance", "progress", "g1_samples", "method"))
             from .io.cad import export_cad
 
             return export_cad(target, self.network, **options)

@@ -53,7 +53,8 @@ _EXAMPLES = {
     "export": """examples:
   g1patch export surface.npz -o surface.obj            # about 2 M triangles at most
   g1patch export surface.npz -o surface.obj --resolution 33
-  g1patch export surface.npz -o surface.step            # exact B-splines, or a fit within --tolerance
+  g1patch export surface.npz -o surface.step            # exact G1 B-splines (Gregory: its split4 re-assembly)
+  g1patch export surface.npz -o surface.step --json     # the figures (faces, bytes, deviation, OCC's G1 angle) as JSON
   g1patch export surface.npz -o patches.bpt             # Bezier patches (polynomial networks)""",
     "render": """examples:
   g1patch render surface.npz -o surface.png
@@ -71,6 +72,7 @@ _EXAMPLES = {
 
 def _parser() -> argparse.ArgumentParser:
     from .construct.corner import TWISTS
+    from .io.cad import CAD_METHODS
     from .targets.local import NORMALS, TANGENTS
     from .targets.interpolate import SHAPES
 
@@ -130,6 +132,11 @@ def _parser() -> argparse.ArgumentParser:
                         help="meshes: allow a --resolution making more than 20 M triangles")
     export.add_argument("--tolerance", type=float, metavar="REL",
                         help="CAD: fit tolerance for rational patches, relative to the bbox diagonal (default: 1e-6)")
+    export.add_argument("--cad-method", choices=CAD_METHODS, default="auto",
+                        help="CAD, Gregory networks: split4 = re-assemble their targets polynomially (exact G1 in CAD), "
+                             "fit = fit each patch (closest, but CAD sees kinks); auto (default): split4, fit where "
+                             "the network has seams (split4 does not keep them yet)")
+    export.add_argument("--json", action="store_true", help="CAD: print the figures as one JSON object")
 
     render = command("render", "draw a network as a PNG: shaded, zebra stripes or a map of G1 angles")
     render.add_argument("network", type=Path, help="network (.npz) or patches (.bpt)")
@@ -311,18 +318,20 @@ def _export(args: argparse.Namespace) -> int:
     if suffix in CAD_SUFFIXES:
         from .io.cad import export_cad
 
-        with _progress("export", args.quiet) as progress:
+        with _progress("export", args.quiet or args.json) as progress:
             tolerance = None if args.tolerance is None else args.tolerance * network.bounding_box_diagonal()
-            result = export_cad(args.output, network, tolerance=tolerance,
+            result = export_cad(args.output, network, tolerance=tolerance, method=args.cad_method,
                                 progress=lambda stage, done, total: progress(done, total))
-        kind = "exact B-spline faces" if result.exact else f"B-spline faces fitted within {result.fit_deviation:.2e} (model units)"
-        print(f"wrote {result.faces} {kind}{', a closed solid' if result.solid else ''} -> {args.output}")
-        print(f"G1 angle of the exported surfaces (measured by OpenCASCADE): max {result.max_g1_angle_deg:.3e}°")
-        if result.seam_edges:
-            angles = ("" if result.seam_angle_min_deg is None else
-                      f", their faces meet at {result.seam_angle_min_deg:.4g}° to {result.seam_angle_max_deg:.4g}°")
-            print(f"{result.seam_edges} seams kept as sharp edges{angles}")
+        corner_only = network.provenance.get("method") == "corner"
+        if args.json:
+            print(json.dumps({**result.to_dict(), "g1_by_design": not corner_only}))
+            return EXIT_OK
+        print(_cad_export_text(result, corner_only))
         return EXIT_OK
+    if args.json:
+        from .errors import InputError
+
+        raise InputError(f"--json: reports CAD exports ({', '.join(CAD_SUFFIXES)}); {args.output} is not one")
     if suffix == ".bpt":
         from .io.bpt import write_bpt
         from .patches import PatchSet
@@ -343,6 +352,29 @@ def _export(args: argparse.Namespace) -> int:
     write_triangles(args.output, mesh.points, mesh.triangles)
     print(f"wrote {len(mesh.triangles)} triangles, {len(mesh.points)} points -> {args.output}")
     return EXIT_OK
+
+
+def _cad_export_text(result: Any, corner_only: bool) -> str:
+    """The lines ``export`` prints for a CAD file: faces, size, deviation, OCC's G1 angle, seams."""
+    from .tessellate import _size_text
+
+    kind = {"exact": "exact B-spline faces", "split4": "exact B-spline faces of the split4 re-assembly (exact G1)",
+            "fit": "fitted B-spline faces"}[result.method]
+    lines = [f"wrote {result.faces} {kind}{', a closed solid' if result.solid else ''}, "
+             f"{_size_text(result.file_bytes, 'B')} -> {result.path}",
+             f"max deviation from the network's surface: {result.deviation:.3e} ({result.relative_deviation:.2e} of the "
+             f"bbox diagonal{', split4 vs Gregory' if result.method == 'split4' else ''})"]
+    if result.g1_measured:
+        lines.append(f"max G1 angle across shared edges, measured by OpenCASCADE: {result.max_g1_angle_deg:.3e}°")
+    else:
+        lines.append(f"G1 angle across shared edges: {result.g1_note}")
+    if corner_only:
+        lines.append("the network is G1 at its corners only (method corner): its edges kink by design")
+    if result.seam_edges:
+        angles = ("" if result.seam_angle_min_deg is None else
+                  f", their faces meet at {result.seam_angle_min_deg:.4g}° to {result.seam_angle_max_deg:.4g}°")
+        lines.append(f"{result.seam_edges} seams kept as sharp edges{angles}")
+    return "\n".join(lines)
 
 
 def _estimated_file_size(suffix: str, n_points: int, n_triangles: int) -> int:

@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import re
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -68,6 +69,7 @@ from .atomic import atomic_path
 
 __all__ = [
     "CAD_FORMATS",
+    "CAD_METHODS",
     "BSplineFit",
     "ExportResult",
     "CadFace",
@@ -78,6 +80,7 @@ __all__ = [
     "fit_bspline_surfaces",
     "bezier_knots",
     "read_cad_faces",
+    "file_g1_angles",
     "read_step_faces",
     "read_iges_faces",
     "OpenCascadeError",
@@ -87,6 +90,11 @@ __all__ = [
 
 PathLike = str | os.PathLike[str]
 CadFormat = Literal["step", "iges"]
+CadMethod = Literal["auto", "split4", "fit"]
+#: how a rational (Gregory) network reaches CAD: ``split4`` its targets re-assembled polynomially
+#: (exact G1 in CAD, :mod:`g1patch.construct.polynomial`), ``fit`` its patches fitted one by one
+#: (close, kinked), ``auto`` split4 unless the network has seams (split4 does not keep them yet)
+CAD_METHODS: tuple[CadMethod, ...] = ("auto", "split4", "fit")
 #: file extensions of each format
 CAD_FORMATS: dict[CadFormat, tuple[str, ...]] = {"step": (".step", ".stp"), "iges": (".iges", ".igs")}
 #: ``progress(stage, done, total)``; stages: fit, faces, sew, solid, g1, write
@@ -579,7 +587,7 @@ def _occ_g1_angles(
 
 # ----------------------------------------------------------------------------------- guards
 #: the stage export_cad enters after each lap, for a failure's message
-_NEXT_STAGE = {"fit": "making the faces", "faces": "sewing", "sew": "making solids", "solid": "checking the shape",
+_NEXT_STAGE = {"split4": "fitting the surfaces", "fit": "making the faces", "faces": "sewing", "sew": "making solids", "solid": "checking the shape",
                "check": "measuring G1 angles", "g1": "writing the file"}
 
 
@@ -708,6 +716,9 @@ class ExportResult:
     free_edges: int
     #: polynomial patches written exactly (their Bézier control nets)
     exact: bool
+    #: how the faces were made: ``exact`` (polynomial patches), ``split4`` (a Gregory network's
+    #: targets re-assembled polynomially, then exact) or ``fit`` (fitted B-splines)
+    method: str
     #: knot spans per direction (1 for exact export; 2 where split4 quads keep their two spans)
     spans: int
     #: max |surface − patch| of the fit, measured on a grid twice as fine as its samples; 0.0 when exact
@@ -724,7 +735,17 @@ class ExportResult:
     seam_angle_max_deg: float | None
     #: OCC's volume of the solid (BRepGProp::VolumeProperties), None when no solid was made
     volume: float | None
-    #: seconds per stage: fit, faces, sew, solid, check, g1, write
+    #: max distance of the written surface from the network's own surface (model units): 0 when
+    #: exact, the fit deviation when fitted, the foot-point distance to the Gregory surface for split4
+    deviation: float
+    #: :attr:`deviation` / the bounding-box diagonal
+    relative_deviation: float
+    #: bytes of the written file
+    file_bytes: int
+    #: whether OCC measured the G1 angles; if not, why (``g1_note``)
+    g1_measured: bool
+    g1_note: str
+    #: seconds per stage: split4 (a Gregory network re-assembled), fit, faces, sew, solid, check, g1, write
     seconds: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
@@ -818,6 +839,65 @@ def _write(occ: SimpleNamespace, shape: Any, path: Path, kind: CadFormat) -> Non
         raise G1PatchError(f"{path}: OpenCASCADE could not write the {kind.upper()} file")
 
 
+def _cad_method(target: Path, network: PatchNetwork, method: CadMethod) -> str:
+    """What ``method`` means for ``network``: ``exact``, ``split4`` or ``fit``."""
+    from ..gregory import GregoryPatchSet
+
+    check_choice("method", method, CAD_METHODS)
+    if isinstance(network.patches, PatchSet):
+        return "exact"
+    if method == "fit" or not isinstance(network.patches, GregoryPatchSet):
+        if method == "split4":
+            raise InputError(f"{target}: method 'split4' re-assembles Gregory networks; these patches are "
+                             f"{type(network.patches).__name__} (use method 'fit')")
+        return "fit"
+    if network.seam.any():
+        if method == "split4":
+            raise InputError(f"{target}: method 'split4' does not keep seams yet; this network has {network.n_seams} "
+                             "(use method 'fit' or 'auto', which fits it)")
+        return "fit"
+    return "split4"
+
+
+_ENTITY_END = re.compile(rb";[ \t\r]*\n(?=#\d)")
+_REFERENCE = re.compile(rb"#(\d+)")
+_POINT = re.compile(rb"#\d+\s*=\s*CARTESIAN_POINT\(")
+
+
+def share_step_points(path: Path) -> None:
+    """Rewrite a STEP file so that equal ``CARTESIAN_POINT`` entities are one, numbered densely.
+
+    OCC's writer gives every surface pole, every edge curve's pole and every vertex its own point
+    entity, so a pole on a mesh edge is written once per face, once per edge curve and once per
+    vertex; the numbers are bit-identical (neighbouring faces share their boundary rows, edge
+    curves are the surfaces' boundary rows). Points with the same text (blanks removed) become
+    the first of them, and entities ``#1 …`` are renumbered in order: the same B-rep, the same
+    numbers, about a third fewer bytes for a split4 network (nothing else is touched).
+    """
+    text = path.read_bytes()
+    start = text.index(b"\nDATA;") + len(b"\nDATA;")
+    end = text.index(b"\nENDSEC;", start)
+    entities = _ENTITY_END.split(text[start:end].strip())
+    entities[-1] = entities[-1].rstrip(b";")
+    renumber: dict[bytes, bytes] = {}
+    first: dict[bytes, bytes] = {}
+    kept: list[bytes] = []
+    for entity in entities:
+        name, _, body = entity.partition(b"=")
+        number = name.strip()[1:]
+        if _POINT.match(entity):
+            key = b"".join(body.split())
+            if key in first:
+                renumber[number] = first[key]
+                continue
+            first[key] = renumber[number] = str(len(kept) + 1).encode()
+        else:
+            renumber[number] = str(len(kept) + 1).encode()
+        kept.append(entity)
+    data = _REFERENCE.sub(lambda match: b"#" + renumber[match.group(1)], b";\n".join(kept) + b";")
+    path.write_bytes(text[:start] + b"\n" + data + text[end:])
+
+
 def export_cad(
     path: PathLike,
     network: PatchNetwork | PatchSet,
@@ -826,12 +906,16 @@ def export_cad(
     tolerance: float | None = None,
     progress: Progress | None = None,
     g1_samples: int = G1_SAMPLES,
+    method: CadMethod = "auto",
 ) -> ExportResult:
     """Write a network as a STEP or IGES B-rep, chosen by the extension (``.step .stp .iges .igs``).
 
-    One B-spline face per patch, or per quad of a split4 network (exact for polynomial patches,
-    else fitted within ``tolerance``, default 1e-6 × the bounding-box diagonal), sewn, a solid
-    where the shells close; seams stay sharp edges. The G1 angles of the written surfaces are
+    One B-spline face per patch, or per quad of a split4 network, sewn, a solid where the shells
+    close; seams stay sharp edges. Polynomial patches are written exactly. A Gregory network goes
+    by ``method`` (:data:`CAD_METHODS`): ``split4`` writes the polynomial re-assembly of its targets
+    (exact G1 in CAD; its distance to the Gregory surface is the reported deviation), ``fit`` fits
+    each patch within ``tolerance`` (default 1e-6 × the bounding-box diagonal; OCC then sees kinks),
+    ``auto`` is split4 unless the network has seams. The G1 angles of the written surfaces are
     measured by OCC on ``g1_samples`` points per shared edge (0: skip), seams apart.
     The extension and OCP are checked before anything is computed or written.
     """
@@ -842,6 +926,7 @@ def export_cad(
     network = _as_network(network)
     if not (isinstance(g1_samples, (int, np.integer)) and (g1_samples == 0 or g1_samples >= 2)):
         raise InputError(f"g1_samples: expected 0 or an integer ≥ 2, got {g1_samples!r}")
+    chosen = _cad_method(target, network, method)
     seconds: dict[str, float] = {}
     clock = time.perf_counter()
     doing = ["fitting the surfaces"]  # what OCC was doing, for a failure's message
@@ -857,6 +942,13 @@ def export_cad(
 
     diagonal = network.bounding_box_diagonal()
     _check_diagonal(target, diagonal)
+    deviation = 0.0
+    if chosen == "split4":
+        from ..construct.polynomial import split4_of_gregory, surface_deviation
+
+        source, network = network, split4_of_gregory(network)
+        deviation = surface_deviation(source, network)[1]
+        lap("split4")
     exact = isinstance(network.patches, PatchSet)
     fit_tolerance = _tolerance(tolerance, diagonal)
     quads = split4_quad_faces(network) if exact else None
@@ -867,6 +959,7 @@ def export_cad(
         fit = BSplineFit(network.patches.convert("bezier").world_control(), knots, knots, 0.0)
     else:
         fit = fit_bspline_surfaces(network, fit_tolerance)
+        deviation = fit.deviation
     lap("fit")
     sewing_tolerance = SEWING_RTOL * diagonal if diagonal > 0 else SEWING_RTOL
     for group in [fit] if quads is None else _quad_groups(quads):
@@ -894,7 +987,12 @@ def export_cad(
         seam_angles = angles[seam] if angles.size else np.zeros(0)
         with atomic_path(target) as temporary, _step_options(sewn_faces, pcurves=quads is None):
             _write(occ, shape, temporary, kind)
+            if kind == "step":
+                share_step_points(temporary)
+            file_bytes = temporary.stat().st_size
         lap("write")
+    note = ("measured by OpenCASCADE on the written shape" if smooth.size else
+            "not measured: g1_samples=0" if not g1_samples else "not measured: no shared edges but seams")
     return ExportResult(
         path=target,
         format=kind,
@@ -903,6 +1001,7 @@ def export_cad(
         valid=valid,
         free_edges=free_edges,
         exact=exact,
+        method=chosen,
         spans=len(np.unique(fit.knots_u)) - 1,
         fit_deviation=fit.deviation,
         fit_tolerance=0.0 if exact else fit_tolerance,
@@ -913,24 +1012,31 @@ def export_cad(
         seam_angle_min_deg=float(seam_angles.min()) if seam_angles.size else None,
         seam_angle_max_deg=float(seam_angles.max()) if seam_angles.size else None,
         volume=volume,
+        deviation=deviation,
+        relative_deviation=deviation / diagonal,
+        file_bytes=file_bytes,
+        g1_measured=bool(smooth.size),
+        g1_note=note,
         seconds=seconds,
     )
 
 
 def export_step(
     path: PathLike, network: PatchNetwork | PatchSet, *, tolerance: float | None = None,
-    progress: Progress | None = None, g1_samples: int = G1_SAMPLES,
+    progress: Progress | None = None, g1_samples: int = G1_SAMPLES, method: CadMethod = "auto",
 ) -> ExportResult:
     """Write a STEP file (``.step`` / ``.stp``, AP214); see :func:`export_cad`."""
-    return export_cad(path, network, format="step", tolerance=tolerance, progress=progress, g1_samples=g1_samples)
+    return export_cad(path, network, format="step", tolerance=tolerance, progress=progress, g1_samples=g1_samples,
+                      method=method)
 
 
 def export_iges(
     path: PathLike, network: PatchNetwork | PatchSet, *, tolerance: float | None = None,
-    progress: Progress | None = None, g1_samples: int = G1_SAMPLES,
+    progress: Progress | None = None, g1_samples: int = G1_SAMPLES, method: CadMethod = "auto",
 ) -> ExportResult:
     """Write an IGES file (``.iges`` / ``.igs``, B-rep mode); see :func:`export_cad`."""
-    return export_cad(path, network, format="iges", tolerance=tolerance, progress=progress, g1_samples=g1_samples)
+    return export_cad(path, network, format="iges", tolerance=tolerance, progress=progress, g1_samples=g1_samples,
+                      method=method)
 
 
 # ----------------------------------------------------------------------------------- reading
@@ -1013,3 +1119,25 @@ def read_iges_faces(path: PathLike) -> CadModel:
     if _format_of(Path(path), None) != "iges":
         raise FormatError(path, f"expected an IGES file ({', '.join(CAD_FORMATS['iges'])}), got {Path(path).suffix!r}")
     return read_cad_faces(path)
+
+
+def file_g1_angles(path: PathLike, network: PatchNetwork, samples: int = G1_SAMPLES) -> NDArray[np.float64]:
+    """(E, samples) angles (degrees) between the OCC normals of a *read-back* CAD file's faces
+    along every shared edge of ``network``, the network that was written (for a Gregory network
+    exported by split4, its :func:`~g1patch.construct.polynomial.split4_of_gregory`): what a CAD
+    user's system sees. Faces are matched to patches (or split4 quads) by their middle points
+    (nearest, each face once); seams are included (``network.seam`` tells them apart)."""
+    from scipy.spatial import cKDTree
+
+    model = read_cad_faces(path)
+    quads = split4_quad_faces(network) is not None
+    middles = np.concatenate([face.evaluate(np.array([[0.5 * (face.bounds[0] + face.bounds[1]),
+                                                        0.5 * (face.bounds[2] + face.bounds[3])]])) for face in model.faces])
+    centres = (network.patches.evaluate(np.array([[1.0, 1.0]]))[::4, 0] if quads
+               else network.patches.evaluate(np.array([[0.5, 0.5]]))[:, 0])
+    distance, order = cKDTree(middles).query(centres)
+    if len(model.faces) != len(centres) or len(set(order.tolist())) != len(centres):
+        raise FormatError(path, f"its {len(model.faces)} faces do not match the network's {len(centres)} "
+                                f"{'quads' if quads else 'patches'} one to one")
+    faces = [model.faces[i].face for i in order.tolist()]
+    return _occ_g1_angles(_occ(), faces, network, samples, None, quads)

@@ -1,0 +1,191 @@
+"""CAD export of Gregory networks by their split4 re-assembly (issue 15): exact G1 in CAD, compact, honest.
+
+The figures are checked against independent measurements: OCC's normals on the file read back
+(:func:`file_g1_angles`), a dense sampling of the Gregory surface for the deviation, the poles
+of the file without shared points for :func:`share_step_points`.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from g1patch import shapes
+from g1patch.build import build_network
+from g1patch.cli import main
+from g1patch.construct.corner import build_corner_network
+from g1patch.construct.polynomial import gregory_targets, split4_of_gregory, surface_deviation
+from g1patch.construct.split4 import target_nets
+from g1patch.errors import InputError
+from g1patch.gregory import BEZIER_INDEX
+from g1patch.io.meshfile import read_mesh
+from g1patch.io.network_file import save_network
+from g1patch.network import PatchNetwork
+from g1patch.patches import CORNER_PARAMETERS
+
+try:
+    import OCP  # noqa: F401  (is the extra installed?)
+
+    HAVE_OCP = True
+except ImportError:
+    HAVE_OCP = False
+requires_ocp = pytest.mark.skipif(
+    not HAVE_OCP, reason="OCP is not installed (extra 'cad': pip install 'g1patch[cad]', i.e. cadquery-ocp-novtk)"
+)
+
+
+def gregory(name: str, data: Path | None) -> PatchNetwork:
+    mesh = shapes.cube() if data is None else read_mesh(data / f"{name}.obj")
+    return build_network(mesh)
+
+
+# ------------------------------------------------------------------------------- the re-assembly
+
+
+def test_gregory_targets_are_the_gregory_patches_points(shared_data: Path) -> None:
+    """Corners, edge points (t = 3 (E − A) per slot) and interior pairs read back exactly: the
+    targets' bicubic has the Gregory boundary, and interior points the means of its pairs."""
+    network = gregory("catmark_torus", shared_data)
+    targets, frame = gregory_targets(network)
+    points = network.patches.local().points  # type: ignore[attr-defined]
+    nets = target_nets(targets)
+    boundary = nets[:, BEZIER_INDEX[:, 0], BEZIER_INDEX[:, 1]]
+    assert np.abs(boundary - points[:, :12]).max() <= 1e-15  # x + (3 (E − x))/3: rounding only
+    np.testing.assert_array_equal(targets.interior, points[:, 12:].reshape(-1, 4, 2, 3))
+    assert frame is network.patches.frame  # type: ignore[attr-defined]
+
+
+def test_split4_of_gregory_is_exactly_g1_and_keeps_the_corners(shared_data: Path) -> None:
+    from g1patch.continuity import check
+
+    network = gregory("spot_quadrangulated", shared_data)
+    split4 = split4_of_gregory(network)
+    assert split4.n_patches == 4 * network.n_patches and split4.provenance["from"] == "gregory"
+    report = check(split4)
+    assert report.max_edge_angle_deg <= 1e-9 and report.folds == 0  # the design's "exactly G1"
+    corners = split4.patches.evaluate(CORNER_PARAMETERS).reshape(-1, 4, 4, 3)[:, np.arange(4), np.arange(4)]  # 4f + k at corner k
+    assert np.abs(corners - network.patches.corners()).max() <= 1e-12 * network.bounding_box_diagonal()
+
+
+@pytest.mark.parametrize("name", ["cube", "catmark_torus"])
+def test_surface_deviation_is_the_distance_to_the_gregory_surface(name: str, shared_data: Path) -> None:
+    """The foot-point distance lies between a dense sampling's nearest distance and that minus
+    its spacing (the true distance does), and never above the parametric one."""
+    network = gregory(name, None if name == "cube" else shared_data)
+    split4 = split4_of_gregory(network)
+    parametric, geometric = surface_deviation(network, split4)
+    t = np.linspace(0.0, 1.0, 129)
+    dense = network.patches.evaluate_grid(t, t).reshape(-1, 3)
+    half = np.linspace(0.0, 1.0, 3)
+    samples = split4.patches.evaluate_grid(half, half).reshape(-1, 3)
+    nearest = float(cKDTree(dense).query(samples)[0].max())
+    spacing = float(np.linalg.norm(np.diff(network.patches.evaluate_grid(t[:2], t[:1]), axis=1), axis=-1).max())
+    assert nearest - spacing <= geometric <= nearest + 1e-12 and geometric <= parametric
+
+
+def test_guiding_the_interiors_brings_split4_closer(shared_data: Path) -> None:
+    """Without the guide split4 keeps its own interior heuristics: the cube is 6e-3 of the
+    diagonal off the Gregory cube; guided by the Gregory surface 4e-4 (parametric, measured)."""
+    network = gregory("catmark_cube", shared_data)
+    diagonal = network.bounding_box_diagonal()
+    plain = surface_deviation(network, split4_of_gregory(network, guided=False))[0] / diagonal
+    guided = surface_deviation(network, split4_of_gregory(network))[0] / diagonal
+    assert guided <= 1e-3 < plain and guided <= plain / 5
+
+
+def test_split4_patches_refuse_a_guide_of_the_wrong_shape() -> None:
+    from g1patch.construct.split4 import split4_patches
+
+    targets = gregory_targets(gregory("cube", None))[0]
+    with pytest.raises(InputError, match=r"guide: expected shape \(6, 7, 7, 3\)"):
+        split4_patches(targets, targets.positions, np.zeros(3), 1.0, np.zeros((6, 4, 4, 3)))
+
+
+# ------------------------------------------------------------------------------- export
+
+
+@requires_ocp
+@pytest.mark.parametrize("name", ["catmark_cube", "catmark_torus", "catmark_xord_interior"])
+def test_default_export_of_a_gregory_network_is_g1_in_opencascade(name: str, shared_data: Path, tmp_path: Path) -> None:
+    """The acceptance: valid (a solid where the mesh is closed), OCC's normals of the file read
+    back agree across every shared edge to ≤ 1e-7°, the deviation reported is the re-assembly's."""
+    from g1patch.io.cad import export_step, file_g1_angles
+
+    network = gregory(name, shared_data)
+    result = export_step(tmp_path / f"{name}.step", network)
+    closed = name != "catmark_xord_interior"
+    assert result.method == "split4" and result.exact and result.valid and result.solid == closed
+    assert result.faces == network.n_patches and (result.free_edges == 0) == closed
+    assert result.g1_measured and result.max_g1_angle_deg <= 1e-7
+    split4 = split4_of_gregory(network)
+    angles = file_g1_angles(result.path, split4)
+    assert angles.max() <= 1e-7  # the file's 12 decimal digits leave ~1e-9°
+    assert result.deviation == surface_deviation(network, split4)[1]
+    assert result.relative_deviation == pytest.approx(result.deviation / network.bounding_box_diagonal(), rel=1e-12)
+    assert result.file_bytes == result.path.stat().st_size
+    if name == "catmark_cube":
+        assert result.relative_deviation <= 1e-3 and result.file_bytes <= 50_000  # measured 1.5e-4, 19.7 KB
+
+
+@requires_ocp
+def test_shared_points_change_no_pole(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Sharing equal points is only a rewrite: the same faces and poles, fewer point entities."""
+    from g1patch.io import cad
+
+    network = split4_of_gregory(gregory("cube", None))
+    shared = cad.export_step(tmp_path / "shared.step", network, g1_samples=0)
+    monkeypatch.setattr(cad, "share_step_points", lambda path: None)
+    plain = cad.export_step(tmp_path / "plain.step", network, g1_samples=0)
+    poles = [np.stack([face.poles() for face in cad.read_step_faces(r.path).faces]) for r in (shared, plain)]
+    np.testing.assert_array_equal(poles[0], poles[1])
+    counts = [r.path.read_text().count("CARTESIAN_POINT(") for r in (shared, plain)]
+    # 6 faces of 6 × 6 poles, 12 edge curves of 6, 8 vertices; shared: 8 corners, 12 × 4 edge poles, 6 × 16 inside
+    assert counts == [8 + 12 * 4 + 6 * 16 + 1, 6 * 36 + 12 * 6 + 8 + 1]  # + the placement's origin
+    assert shared.file_bytes < 0.75 * plain.file_bytes
+
+
+@requires_ocp
+def test_methods_choose_as_documented(shared_data: Path, tmp_path: Path) -> None:
+    from g1patch.io.cad import export_step
+
+    network = gregory("cube", None)
+    fit = export_step(tmp_path / "fit.step", network, method="fit", g1_samples=5)
+    assert fit.method == "fit" and not fit.exact and fit.max_g1_angle_deg > 1e-5  # the fit's kinks, as measured
+    seamed = build_network(read_mesh(shared_data / "catmark_cube_creases2.obj"))
+    assert export_step(tmp_path / "seams.step", seamed, g1_samples=0).method == "fit"  # auto: split4 has no seams yet
+    with pytest.raises(InputError, match="does not keep seams yet"):
+        export_step(tmp_path / "refused.step", seamed, method="split4")
+    corner = build_corner_network(shapes.cube())
+    assert export_step(tmp_path / "corner.step", corner, method="split4", g1_samples=0).method == "exact"
+    with pytest.raises(InputError, match="method: unknown value .best."):
+        export_step(tmp_path / "bad.step", network, method="best")  # type: ignore[arg-type]
+    not_measured = export_step(tmp_path / "quiet.step", network, g1_samples=0)
+    assert not not_measured.g1_measured and "g1_samples=0" in not_measured.g1_note
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["corner.step", "fit.step", "quiet.step", "seams.step"]
+
+
+@requires_ocp
+def test_export_prints_the_figures_and_json_gives_the_same(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    save_network(tmp_path / "cube.npz", gregory("cube", None))
+    assert main(["export", str(tmp_path / "cube.npz"), "-o", str(tmp_path / "a.step"), "-q"]) == 0
+    text = capsys.readouterr().out
+    assert main(["export", str(tmp_path / "cube.npz"), "-o", str(tmp_path / "b.step"), "-q", "--json"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    assert figures["faces"] == 6 and figures["method"] == "split4" and figures["g1_measured"] and figures["g1_by_design"]
+    assert figures["file_bytes"] == (tmp_path / "b.step").stat().st_size
+    assert f"wrote 6 exact B-spline faces of the split4 re-assembly (exact G1), a closed solid, " in text
+    assert f"{figures['file_bytes'] / 1e3:.3g} kB" in text
+    assert f"{figures['deviation']:.3e} ({figures['relative_deviation']:.2e} of the bbox diagonal" in text
+    assert f"measured by OpenCASCADE: {figures['max_g1_angle_deg']:.3e}°" in text
+    save_network(tmp_path / "corner.npz", build_corner_network(shapes.cube()))
+    assert main(["export", str(tmp_path / "corner.npz"), "-o", str(tmp_path / "c.step"), "-q"]) == 0
+    assert "G1 at its corners only (method corner): its edges kink by design" in capsys.readouterr().out
+    assert main(["export", str(tmp_path / "cube.npz"), "-o", str(tmp_path / "c.step"), "-q", "--cad-method", "fit",
+                 "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["method"] == "fit"
+    assert main(["export", str(tmp_path / "cube.npz"), "-o", str(tmp_path / "c.obj"), "--json"]) == 2
+    assert "--json: reports CAD exports" in capsys.readouterr().err
