@@ -189,3 +189,20 @@ def test_export_prints_the_figures_and_json_gives_the_same(tmp_path: Path, capsy
     assert json.loads(capsys.readouterr().out)["method"] == "fit"
     assert main(["export", str(tmp_path / "cube.npz"), "-o", str(tmp_path / "c.obj"), "--json"]) == 2
     assert "--json: reports CAD exports" in capsys.readouterr().err
+
+
+@requires_ocp
+def test_auto_fits_what_split4_cannot_reassemble_and_says_so(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from g1patch.construct import polynomial
+    from g1patch.errors import ConstructionError
+    from g1patch.io.cad import export_step
+
+    def refuse(network: PatchNetwork, **options: object) -> PatchNetwork:
+        raise ConstructionError("split4: simulated")
+
+    monkeypatch.setattr(polynomial, "split4_of_gregory", refuse)
+    result = export_step(tmp_path / "auto.step", gregory("cube", None), g1_samples=0)
+    assert result.method == "fit" and result.method_note == "split4 could not re-assemble it (split4: simulated): fitted"
+    with pytest.raises(ConstructionError, match="simulated"):
+        export_step(tmp_path / "split4.step", gregory("cube", None), method="split4")
+    assert [p.name for p in tmp_path.iterdir()] == ["auto.step"]

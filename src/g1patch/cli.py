@@ -364,6 +364,8 @@ def _cad_export_text(result: Any, corner_only: bool) -> str:
              f"{_size_text(result.file_bytes, 'B')} -> {result.path}",
              f"max deviation from the network's surface: {result.deviation:.3e} ({result.relative_deviation:.2e} of the "
              f"bbox diagonal{', split4 vs Gregory' if result.method == 'split4' else ''})"]
+    if result.method_note:
+        lines.append(result.method_note)
     if result.g1_measured:
         lines.append(f"max G1 angle across shared edges, measured by OpenCASCADE: {result.max_g1_angle_deg:.3e}°")
     else:

@@ -60,7 +60,7 @@ from typing import Any, Literal, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import ConstructionError, FormatError, G1PatchError, InputError, MissingDependencyError, check_choice
+from ..errors import ConstructionError, FormatError, G1PatchError, InputError, MeshError, MissingDependencyError, check_choice
 from ..frame import Frame
 from ..geometry import grid_row_chunks
 from ..network import Patches, PatchNetwork, edge_parameters, network_from_patch_points
@@ -719,6 +719,8 @@ class ExportResult:
     #: how the faces were made: ``exact`` (polynomial patches), ``split4`` (a Gregory network's
     #: targets re-assembled polynomially, then exact) or ``fit`` (fitted B-splines)
     method: str
+    #: why ``auto`` fitted a Gregory network without seams (split4 failed on it), else ""
+    method_note: str
     #: knot spans per direction (1 for exact export; 2 where split4 quads keep their two spans)
     spans: int
     #: max |surface − patch| of the fit, measured on a grid twice as fine as its samples; 0.0 when exact
@@ -942,12 +944,19 @@ def export_cad(
 
     diagonal = network.bounding_box_diagonal()
     _check_diagonal(target, diagonal)
-    deviation = 0.0
+    deviation, method_note = 0.0, ""
     if chosen == "split4":
         from ..construct.polynomial import split4_of_gregory, surface_deviation
 
-        source, network = network, split4_of_gregory(network)
-        deviation = surface_deviation(source, network)[1]
+        try:
+            converted = split4_of_gregory(network)
+        except (ConstructionError, MeshError) as error:
+            if method != "auto":
+                raise
+            chosen, method_note = "fit", f"split4 could not re-assemble it ({error}): fitted"
+        else:
+            deviation = surface_deviation(network, converted)[1]
+            network = converted
         lap("split4")
     exact = isinstance(network.patches, PatchSet)
     fit_tolerance = _tolerance(tolerance, diagonal)
@@ -1002,6 +1011,7 @@ def export_cad(
         free_edges=free_edges,
         exact=exact,
         method=chosen,
+        method_note=method_note,
         spans=len(np.unique(fit.knots_u)) - 1,
         fit_deviation=fit.deviation,
         fit_tolerance=0.0 if exact else fit_tolerance,
