@@ -48,6 +48,7 @@ __all__ = [
     "export",
     "read",
     "smooth",
+    "view",
 ]
 
 logger = logging.getLogger(__name__)
@@ -588,14 +589,20 @@ class Surface:
         render(target, self.network, mode=mode, **options)  # type: ignore[arg-type]
         return target
 
-    def view(self, path: PathLike | None = None) -> None:
-        """An interactive viewer: not available yet; it comes with the ``g1patch view`` command.
-        Raises :class:`NotAvailableError` (a :class:`G1PatchError`)."""
-        raise NotAvailableError(
-            "an interactive viewer is not available yet: it comes with the 'g1patch view' command; meanwhile "
-            "write a picture with surface.render('surface.png', mode='shaded'|'zebra'|'deviation'), display the "
-            "surface in Jupyter, or export it (surface.export('surface.obj')) for any mesh viewer"
-        )
+    def view(self, path: PathLike | None = None, *, resolution: int | None = None, force: bool = False,
+             title: str | None = None, up: str = "auto", view: tuple[float, float] | str = "auto") -> Path | str:
+        """An interactive viewer: one self-contained HTML page (orbit, zoom, pan; shaded, zebra and
+        G1-deviation modes; seams as lines; the continuity summary), written to ``path``
+        (``.html``, returned) or returned as a string when ``path`` is None. ``resolution``:
+        samples per patch side (None: about 2 M triangles at most); a page of more needs ``force``.
+        ``up``, ``view``: the first camera, as for :meth:`render` (``"auto"``: from the data).
+        :func:`g1patch.viewer.view_html` makes the page; opening it needs no network."""
+        from .viewer import view_html, write_view
+
+        options: dict[str, Any] = {"resolution": resolution, "force": force, "title": title, "up": up, "view": view}
+        if path is None:
+            return view_html(self.network, report=self.check(), **options)
+        return write_view(_check_path("path", path), self.network, report=self.check(), **options)
 
 
 def _check_options(target: Path, options: dict[str, Any], allowed: Sequence[str]) -> None:
@@ -656,3 +663,9 @@ def export(surface: Any, path: PathLike, **options: Any) -> Path | ExportResult:
     """:meth:`Surface.export` of a Surface, PatchNetwork, PatchSet, GregoryPatchSet or network file."""
     wrapped = surface if isinstance(surface, Surface) else Surface(as_network(surface))
     return wrapped.export(path, **options)
+
+
+def view(surface: Any, path: PathLike | None = None, **options: Any) -> Path | str:
+    """:meth:`Surface.view` of a Surface, PatchNetwork, PatchSet, GregoryPatchSet or network file."""
+    wrapped = surface if isinstance(surface, Surface) else Surface(as_network(surface))
+    return wrapped.view(path, **options)
