@@ -60,6 +60,10 @@ _EXAMPLES = {
   g1patch render surface.npz -o surface.png
   g1patch render surface.npz -o zebra.png --zebra
   g1patch render surface.npz -o kinks.png --deviation --size 1200 900""",
+    "view": """examples:
+  g1patch view surface.npz -o surface.html              # open it in a browser: no network needed
+  g1patch view surface.npz -o coarse.html --resolution 5
+  g1patch view teapot.bpt -o teapot.html""",
     "demo": """example:
   g1patch demo --out out""",
     "batch": """examples:
@@ -147,6 +151,14 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--size", type=int, nargs=2, default=(900, 900), metavar=("W", "H"), help="pixels (default: 900 900)")
     _camera_arguments(render)
     render.add_argument("--zoom", type=float, default=1.0, help="magnification (default: 1)")
+
+    view = command("view", "write an interactive viewer: one self-contained HTML page (shaded, zebra, G1 deviation)")
+    view.add_argument("network", type=Path, help="network (.npz) or patches (.bpt)")
+    view.add_argument("-o", "--output", type=Path, required=True, help="HTML page to write")
+    view.add_argument("--resolution", type=int, metavar="R",
+                      help="samples per patch side (default: about 2 M triangles at most, 17 for small networks)")
+    view.add_argument("--force", action="store_true", help="allow a page of more than 2 M triangles")
+    _camera_arguments(view)
 
     demo = command("demo", "the paper's example: the cube smoothed by the paper's patches and by exact G1")
     demo.add_argument("--out", type=Path, default=Path("out"), help="folder for the OBJ and PNG files (default: out)")
@@ -437,6 +449,18 @@ def _batch(args: argparse.Namespace) -> int:
     return EXIT_CHECK_FAILED if failed else EXIT_OK
 
 
+def _view(args: argparse.Namespace) -> int:
+    from .api import Surface
+    from .tessellate import _size_text, choose_resolution, triangle_count
+
+    network = _load_surface(args.network)
+    resolution = choose_resolution(network.n_patches) if args.resolution is None else args.resolution
+    path = Surface(network).view(args.output, resolution=resolution, force=args.force, **_camera_options(args))
+    print(f"wrote a viewer of {network.n_patches} patches, {triangle_count(network.n_patches, resolution)} triangles "
+          f"({_size_text(path.stat().st_size, 'B')}) -> {path}")
+    return EXIT_OK
+
+
 def _demo(args: argparse.Namespace) -> int:
     from .build import build_gregory_network, build_network, build_split4_network
     from .construct.corner import build_corner_network
@@ -578,7 +602,7 @@ def _without_huge_page_advice() -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code (see the module docstring)."""
     _without_huge_page_advice()
-    handlers = {"build": _build, "check": _check, "export": _export, "render": _render, "demo": _demo,
+    handlers = {"build": _build, "check": _check, "export": _export, "render": _render, "view": _view, "demo": _demo,
                 "batch": _batch}
     with _signal_handlers():
         try:
