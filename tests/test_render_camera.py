@@ -249,3 +249,13 @@ def test_render_and_demo_take_auto_and_explicit_cameras(tmp_path: Path, capsys: 
     assert "--view" in capsys.readouterr().err
     assert main(["render", str(network), "-o", str(tmp_path / "bad.png"), "--view", "1", "2", "3"]) == 2
     assert not (tmp_path / "bad.png").exists()
+
+
+def test_a_long_title_fits_its_panel(tmp_path: Path) -> None:
+    """The title's font shrinks until its longest line fits: no text runs off the picture's sides."""
+    path = tmp_path / "titled.png"
+    render(path, build_gregory_network(shapes.cube()), size=(240, 200), title="a rather long title " * 4)
+    grey = matplotlib.image.imread(path)[..., :3].mean(axis=-1)
+    band = grey[: grey.shape[0] // 6]
+    assert (band < 0.5).any(), "the title is drawn"
+    assert (band[:, :3] > 0.99).all() and (band[:, -3:] > 0.99).all(), "the title runs off the picture"

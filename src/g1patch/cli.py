@@ -185,7 +185,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def _camera_arguments(parser: argparse.ArgumentParser) -> None:
     """``--view`` and ``--up`` of the commands that draw pictures."""
-    parser.add_argument("--view", nargs="+", default=["auto"], metavar="auto|ELEV AZIM",
+    parser.add_argument("--view", nargs="+", default=["auto"], metavar=("auto|ELEV", "AZIM"),
                         help="camera: elevation and azimuth in degrees, or auto (default): the front three-quarter "
                              "view of the surface when it has a long axis (g1patch.render.auto_camera)")
     parser.add_argument("--up", choices=("auto", "x", "y", "z"), default="auto",

@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import math
 import os
+import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -270,14 +271,14 @@ def auto_camera(
       y-up. x is never chosen: pass ``up="x"``.
     * **view**: elevation ``25° + 20° · (1 − min(1, σ_up / σ_wide))`` above the horizontal plane
       (:data:`AUTO_ELEVATION`; σ_up the spread along the up axis, σ_wide the footprint's longer
-      principal spread): 25° for Spot and the cube, 32° for the teapot, 45° for a flat sheet. Azimuth: when the footprint (the samples
-      projected on the horizontal plane) has a long axis (its shorter principal spread at most
-      :data:`AUTO_LONG_RATIO` of its longer), the front is the end of the long axis where the
-      surface stands higher (the sign of the correlation of height and position along it: an
-      animal holds its head up; the axis's + end when the correlation is below
-      :data:`AUTO_CORRELATION`), and the camera looks from
-      :data:`AUTO_TURN_DEG` off the front towards the model's left (front three-quarter: the front
-      points to the left of the picture). A footprint without a long axis (the cube, a sphere, a
+      principal spread): 25° for Spot and the cube, 32° for the teapot, 45° for a flat sheet.
+      Azimuth: when the footprint (the samples projected on the horizontal plane) has a long axis
+      (its shorter principal spread at most :data:`AUTO_LONG_RATIO` of its longer), the front is
+      the end of the long axis where the surface stands higher (the end towards which height and
+      position along the axis correlate: an animal holds its head up; the axis's + end when the
+      correlation is below :data:`AUTO_CORRELATION` in size), and the camera looks from
+      :data:`AUTO_TURN_DEG` off the front towards the model's left (front three-quarter: the
+      front points to the left of the picture). A footprint without a long axis (the cube, a sphere, a
       flat torus) has no front: the azimuth of :data:`DEFAULT_VIEW`.
 
     A heuristic on the shape alone, right on the shared Spot and teapot and on the generated
@@ -878,7 +879,14 @@ def _draw(
     bar_width = 0.0 if scale is None else min(0.22, 120.0 / width)
     panel_width = (1.0 - bar_width) / len(panels)
     title_size = float(np.clip(min(height, width * panel_width) / 30.0, 6.0, 15.0))
-    lines = max((p.title.count("\n") + 1 for p in panels if p.title), default=0)
+    # a glyph is about 0.6 of the font size wide: the font shrinks (to 6 pt) until the longest
+    # line fits its panel, and lines still too long are wrapped
+    longest = max((len(line) for p in panels if p.title for line in p.title.splitlines()), default=0)
+    if longest:
+        title_size = max(6.0, min(title_size, 0.95 * width * panel_width / (0.6 * longest) * 72.0 / _DPI))
+    fits = max(8, int(0.95 * width * panel_width / (0.6 * title_size * _DPI / 72.0)))
+    titles = ["\n".join(textwrap.fill(line, fits) for line in p.title.splitlines()) if p.title else None for p in panels]
+    lines = max((t.count("\n") + 1 for t in titles if t), default=0)
     title_band = min(0.4, (0.9 + 1.3 * lines) * title_size * (_DPI / 72.0) / height) if lines else 0.0
     legend_size = max(6.0, title_size * 0.8)
     legend_band = min(0.2, 2.2 * legend_size * (_DPI / 72.0) / height) if legend else 0.0
@@ -894,8 +902,8 @@ def _draw(
         # triangles wholly outside the picture (zoomed in) are not drawn
         inside = ((panel.polygons.max(axis=1) >= low) & (panel.polygons.min(axis=1) <= high)).all(axis=1)
         axes.add_artist(_gouraud_artist(panel.polygons[inside], panel.colours[inside]))
-        if panel.title:
-            figure.text((column + 0.5) * panel_width, 1.0 - 0.5 * title_band, panel.title, ha="center",
+        if titles[column]:
+            figure.text((column + 0.5) * panel_width, 1.0 - 0.5 * title_band, titles[column], ha="center",
                         va="center", fontsize=title_size, color="0.15", linespacing=1.3)
     if scale is not None:
         from matplotlib.cm import ScalarMappable
