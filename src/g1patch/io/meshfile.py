@@ -3,9 +3,15 @@
 * OBJ is read by a small parser of its own (``v``, ``f``, OpenSubdiv ``t`` tag lines; other OBJ
   statements are skipped, unknown ones are errors) so that every error names its line and mixed
   polygon lists keep their order.
-* PLY is read by meshio (``meshio.ply``), after checking the header here: meshio silently returns
-  fewer faces from a truncated binary file.
+* PLY: binary files of the common layout (x, y, z and other scalars per vertex, one list of
+  vertex indices per face, every face with as many corners) are read as NumPy records, any other
+  by meshio (``meshio.ply``), after checking the header here: meshio silently returns fewer faces
+  from a truncated binary file.
 * OFF is read by a parser of its own: meshio's OFF reader only accepts triangles.
+
+OBJ and OFF text is parsed in bulk by NumPy over the whole file; only where that fast path
+declines (anything unusual, any error) is the file read again line by line, by the reference
+parser whose results and line-numbered messages the fast path reproduces exactly.
 
 Every problem with a file raises :class:`FormatError` (file, line where known, what was expected);
 problems with the mesh it describes raise the :class:`MeshError` family, prefixed with the file
@@ -17,6 +23,7 @@ memory), binary PLY by meshio.
 from __future__ import annotations
 
 import os
+import re
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -129,13 +136,182 @@ def _polygon_list(corners: NDArray[np.int64], sizes: NDArray[np.int64]) -> NDArr
     return np.split(corners, np.cumsum(sizes)[:-1])
 
 
+# -- vectorised text parsing -------------------------------------------------------------------
+#
+# The text readers first try a fast path: the whole file is normalised by bytes operations (comments
+# cut, CR LF and tabs made LF and spaces, runs of spaces made one, no space at a line's ends), its
+# lines located and their tokens counted with NumPy, and each kind of line (``v``, ``f``, an OFF
+# vertex or face) converted in bulk. It never raises: on anything it does not handle exactly as the
+# line-by-line parser does (non-ASCII text, a token it does not convert the same way, any error in
+# the file) it returns None, and the line-by-line parser reads the file again, so every result and
+# every message is that parser's.
+
+#: bytes ``str.splitlines`` or ``str.split`` treat as line breaks or spaces and ``bytes.split`` does not
+_ODD_BYTES = (b"\x0b", b"\x0c", b"\x1c", b"\x1d", b"\x1e", b"\x1f")
+_SPACES = re.compile(rb" {2,}")
+_EDGE_SPACE = re.compile(rb"(?m)^ | $")
+_SLASHED = re.compile(rb"/[^ \n]*")
+
+
+class _Lines(NamedTuple):
+    """A normalised text and its lines: line ``i`` is ``text[starts[i]:ends[i]]``, line ``i + 1`` of the file."""
+
+    text: bytes
+    array: NDArray[np.uint8]
+    starts: NDArray[np.int64]
+    ends: NDArray[np.int64]
+    tokens: NDArray[np.int64]
+
+    def byte(self, column: int) -> NDArray[np.uint8]:
+        """Byte ``column`` of every line (0 where the line is shorter)."""
+        if self.array.size == 0:
+            return np.zeros(self.starts.size, dtype=np.uint8)
+        at = np.minimum(self.starts + column, self.array.size - 1)
+        return np.where(self.ends - self.starts > column, self.array[at], 0).astype(np.uint8)
+
+    def chunk(self, rows: NDArray[np.int64]) -> bytes:
+        """The text of lines ``rows`` (increasing), one per line: consecutive lines are sliced at once."""
+        if rows.size == 0:
+            return b""
+        breaks = np.flatnonzero(np.diff(rows) != 1) + 1
+        first, last = rows[np.r_[0, breaks]], rows[np.r_[breaks - 1, rows.size - 1]]
+        text = self.text
+        return b"\n".join([text[s:e] for s, e in zip(self.starts[first].tolist(), self.ends[last].tolist())])
+
+
+def _scan(data: bytes) -> _Lines | None:
+    """``data`` normalised and split into lines, or None if it is not plain ASCII text."""
+    if not data.isascii() or any(odd in data for odd in _ODD_BYTES):
+        return None
+    text = data
+    if b"\r" in text:  # CR LF or a lone CR ends a line, as for str.splitlines
+        text = text.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+    if b"#" in text:
+        text = _uncommented(text)
+    if b"\t" in text:
+        text = text.replace(b"\t", b" ")
+    if b"  " in text:
+        text = _SPACES.sub(b" ", text)
+    if b" \n" in text or b"\n " in text or text.startswith(b" ") or text.endswith(b" "):
+        text = _EDGE_SPACE.sub(b"", text)
+    array = np.frombuffer(text, dtype=np.uint8)
+    separators = np.flatnonzero((array == ord(" ")) | (array == ord("\n")))
+    newlines = np.flatnonzero(array[separators] == ord("\n"))
+    ends = separators[newlines]
+    if text and not text.endswith(b"\n"):
+        ends, newlines = np.append(ends, len(text)), np.append(newlines, separators.size)
+    starts = np.concatenate(([0], ends[:-1] + 1)).astype(np.int64)
+    spaces = np.diff(newlines, prepend=-1) - 1  # separators between a line's end and the previous one's
+    return _Lines(text, array, starts, ends.astype(np.int64), np.where(ends > starts, spaces + 1, 0))
+
+
+def _uncommented(text: bytes) -> bytes:
+    """``text`` with each ``#`` and the rest of its line cut (lines end in LF)."""
+    parts, at = [], 0
+    while (mark := text.find(b"#", at)) >= 0:
+        parts.append(text[at:mark])
+        at = text.find(b"\n", mark)
+        if at < 0:
+            return b"".join(parts)
+    parts.append(text[at:])
+    return b"".join(parts)
+
+
+def _gather_floats(text: bytes, counts: NDArray[np.int64], columns: Sequence[int]) -> NDArray[np.float64] | None:
+    """Tokens ``columns`` of each line of ``text`` (``counts`` tokens each) as floats, converted as
+    ``float`` converts them; None if one is not a number."""
+    tokens = np.array(text.split(), dtype=object)
+    if tokens.size != counts.sum():
+        return None
+    offsets = np.cumsum(counts) - counts
+    try:
+        return tokens[offsets[:, None] + np.asarray(columns)].astype(np.float64)
+    except (ValueError, OverflowError, TypeError):
+        return None
+
+
+#: the bytes a line of numbers may hold besides its keyword, and those that may follow a sign
+_NUMBER_BYTES = {np.int64: (b"0123456789+- \n", b"0123456789"), np.float64: (b"0123456789.eE+- \n", b"0123456789.")}
+
+
+def _numbers(text: bytes, keyword: bytes, count: int, dtype: type[np.int64] | type[np.float64]) -> NDArray | None:
+    """The ``count`` numbers of ``text`` (lines of ``keyword`` then numbers), each token converted as
+    ``int`` or ``float`` converts it, by one ``np.fromstring``; None where ``text`` holds anything
+    else, or a token that ``np.fromstring`` might read otherwise."""
+    allowed, after_sign = _NUMBER_BYTES[dtype]
+    if text.translate(None, allowed).replace(keyword, b"") != b"":
+        return None
+    if b"-" in text or b"+" in text:  # numpy reads a lone sign at the end as 0; int and float refuse it
+        array = np.frombuffer(text, dtype=np.uint8)
+        signs = np.flatnonzero((array == ord("-")) | (array == ord("+")))
+        if signs[-1] + 1 == array.size or not np.isin(array[signs + 1], np.frombuffer(after_sign, dtype=np.uint8)).all():
+            return None
+    try:
+        values = np.fromstring(text.replace(keyword, b" ") if keyword else text, dtype=dtype, sep=" ")
+    except ValueError:  # a token it cannot read; a token it reads as two numbers changes the count
+        return None
+    return values if values.size == count else None
+
+
 # -- OBJ ---------------------------------------------------------------------------------------
 
 
 def _read_obj(path: Path, data: bytes) -> _Parsed:
     """OBJ: ``v x y z [w]``; ``f a b c …`` with ``a`` = ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn``.
 
-    Indices are 1-based; negative ones count back from the last vertex defined so far.
+    Indices are 1-based; negative ones count back from the last vertex defined so far. Read by
+    :func:`_obj_fast`, or line by line (:func:`_read_obj_lines`) where it declines.
+    """
+    parsed = _obj_fast(data)
+    return parsed if parsed is not None else _read_obj_lines(path, data)
+
+
+def _obj_fast(data: bytes) -> _Parsed | None:
+    """The vectorised OBJ reader (see above); None where the line-by-line one must read the file."""
+    lines = _scan(data)
+    if lines is None:
+        return None
+    first, second, third = lines.byte(0), lines.byte(1), lines.byte(2)
+    is_vertex = (first == ord("v")) & (second == ord(" "))
+    is_face = (first == ord("f")) & (second == ord(" "))
+    skipped = (first == ord("v")) & np.isin(second, np.frombuffer(b"tnp", np.uint8)) & ((third == ord(" ")) | (lines.ends - lines.starts == 2))
+    tags: list[Tag] = []
+    for row in np.flatnonzero((lines.tokens > 0) & ~(is_vertex | is_face | skipped)).tolist():
+        parts = lines.text[lines.starts[row]:lines.ends[row]].decode("ascii").split()
+        if parts[0] == "t":
+            try:
+                tags.append(_parse_tag(Path(), parts, row + 1))
+            except FormatError:
+                return None
+        elif parts[0] not in OBJ_SKIPPED:
+            return None  # unknown, or 'v' / 'f' alone
+    vertex_rows, face_rows = np.flatnonzero(is_vertex), np.flatnonzero(is_face)
+    vertex_tokens, sizes = lines.tokens[vertex_rows], lines.tokens[face_rows] - 1
+    if face_rows.size == 0 or (vertex_tokens < 4).any() or (vertex_tokens > 8).any() or (sizes < 3).any():
+        return None
+    text = lines.chunk(vertex_rows)
+    if (vertex_tokens == 4).all() and (values := _numbers(text, b"v", 3 * vertex_rows.size, np.float64)) is not None:
+        points = values.reshape(-1, 3)
+    else:  # 'v x y z w', or tokens np.fromstring does not read as float does
+        points = _gather_floats(text, vertex_tokens, (1, 2, 3))
+    if points is None or not np.isfinite(points).all():
+        return None
+    text = lines.chunk(face_rows)
+    if b"/" in text:  # v/vt/vn: keep v
+        text = _SLASHED.sub(b"", text)
+    written = _numbers(text, b"f", int(sizes.sum()), np.int64)
+    if written is None or (written == 0).any():
+        return None
+    # 1-based; negative indices count back from the last vertex defined before the face
+    before = np.repeat(np.cumsum(is_vertex)[face_rows], sizes)
+    corners = np.where(written > 0, written - 1, before + written)
+    if corners.size and (corners.min() < 0 or corners.max() >= points.shape[0]):
+        return None
+    return _Parsed(points, _polygon_list(corners, sizes), tuple(tags))
+
+
+def _read_obj_lines(path: Path, data: bytes) -> _Parsed:
+    """The line-by-line OBJ reader, the reference: every error names its line.
 
     The loop over lines only sorts tokens; NumPy converts them in bulk, and only on a bad number
     are the lines searched again to name the one at fault.
@@ -232,7 +408,63 @@ OFF_HEADERS = frozenset({"OFF", "COFF", "NOFF", "CNOFF", "STOFF", "STCOFF", "STN
 
 
 def _read_off(path: Path, data: bytes) -> _Parsed:
-    """``OFF``, ``nv nf ne``, nv lines ``x y z …``, nf lines ``n i_1 … i_n …`` (0-based); ``#`` comments."""
+    """``OFF``, ``nv nf ne``, nv lines ``x y z …``, nf lines ``n i_1 … i_n …`` (0-based); ``#`` comments.
+
+    Read by :func:`_off_fast`, or line by line (:func:`_read_off_lines`) where it declines.
+    """
+    parsed = _off_fast(data)
+    return parsed if parsed is not None else _read_off_lines(path, data)
+
+
+def _off_fast(data: bytes) -> _Parsed | None:
+    """The vectorised OFF reader (see above); None where the line-by-line one must read the file."""
+    lines = _scan(data)
+    if lines is None:
+        return None
+    content = np.flatnonzero(lines.tokens > 0)
+    head = [lines.text[lines.starts[row]:lines.ends[row]].decode("ascii").split() for row in content[:2].tolist()]
+    if not head or head[0][0] not in OFF_HEADERS:
+        return None
+    counts, body = (head[0][1:], content[1:]) if len(head[0]) > 1 or len(head) == 1 else (head[1], content[2:])
+    try:
+        n_vertices, n_faces = int(counts[0]), int(counts[1])
+    except (IndexError, ValueError):
+        return None
+    if n_vertices < 0 or n_faces <= 0 or body.size < n_vertices + n_faces:
+        return None
+    vertex_rows, face_rows = body[:n_vertices], body[n_vertices:n_vertices + n_faces]
+    vertex_tokens, face_tokens = lines.tokens[vertex_rows], lines.tokens[face_rows]
+    if (vertex_tokens < 3).any():
+        return None
+    text = lines.chunk(vertex_rows)
+    if (vertex_tokens == 3).all() and (values := _numbers(text, b"", 3 * n_vertices, np.float64)) is not None:
+        points = values.reshape(-1, 3)
+    else:  # more than x y z (colours), or tokens np.fromstring does not read as float does
+        points = _gather_floats(text, vertex_tokens, (0, 1, 2))
+    if points is None or not np.isfinite(points).all():
+        return None
+    text = lines.chunk(face_rows)
+    offsets = np.cumsum(face_tokens) - face_tokens
+    values = _numbers(text, b"", int(face_tokens.sum()), np.int64)
+    if values is not None and (values[offsets] == face_tokens - 1).all():  # 'n i_1 ... i_n' only
+        sizes, corners = values[offsets], np.delete(values, offsets)
+    else:  # more after the indices (colours): convert the indices only
+        tokens = np.array(text.split(), dtype=object)
+        try:
+            sizes = tokens[offsets].astype(np.int64)
+            if (sizes < 3).any() or (face_tokens < sizes + 1).any():
+                return None
+            starts = np.repeat(offsets + 1 - (np.cumsum(sizes) - sizes), sizes)
+            corners = tokens[starts + np.arange(int(sizes.sum()))].astype(np.int64)
+        except (ValueError, OverflowError, TypeError):
+            return None
+    if (sizes < 3).any() or corners.min() < 0 or corners.max() >= n_vertices:
+        return None
+    return _Parsed(points, _polygon_list(corners, sizes))
+
+
+def _read_off_lines(path: Path, data: bytes) -> _Parsed:
+    """The line-by-line OFF reader, the reference: every error names its line."""
     content = [
         (number, parts)
         for number, line in enumerate(_decode(path, data), start=1)
@@ -315,11 +547,83 @@ def _ply_header(path: Path, data: bytes) -> _PlyHeader:
 
 
 def _read_ply(path: Path, data: bytes) -> _Parsed:
-    """PLY through ``meshio.ply``; the vertex and face counts are checked against the header."""
+    """Binary PLY of the common layout as NumPy records (:func:`_ply_records`), any other through
+    ``meshio.ply``, the vertex and face counts checked against the header."""
     header = _ply_header(path, data)
     counts = dict(header.elements)
     if counts.get("face", 0) == 0:
         raise FormatError(path, "no faces: the header declares no 'element face'")
+    records = None if header.ascii else _ply_records(data)
+    if records is not None:
+        points, corners, sizes = records
+        vertex_lines = face_lines = None
+    else:
+        points, corners, sizes, vertex_lines, face_lines = _ply_meshio(path, header)
+    _finite_vertices(path, points, vertex_lines)
+    _faces_in_range(path, corners, sizes, points.shape[0], face_lines)
+    return _Parsed(points, _polygon_list(corners, sizes))
+
+
+#: PLY scalar types as NumPy codes (without the byte order), those of meshio's binary reader as it
+#: maps them (``uchar`` signed), so that a file reads the same by either path
+_PLY_TYPES = {
+    "uchar": "i1", "uint": "u4", "uint8": "u1", "uint16": "u2", "uint32": "u4", "uint64": "u8", "int": "i4",
+    "int8": "i1", "int32": "i4", "int64": "i8", "float": "f4", "float32": "f4", "double": "f8",
+}
+_PLY_ORDER = {"format binary_little_endian 1.0": "<", "format binary_big_endian 1.0": ">"}
+
+
+def _ply_records(data: bytes) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]] | None:
+    """Points, corners and sizes of a binary PLY file laid out as writers commonly do, read as NumPy
+    records: a vertex element of scalar properties with x, y, z, then a face element of one list
+    ``vertex_indices``, every face with as many corners, nothing after. None for any other file."""
+    end = data.find(b"end_header")  # the header is ASCII before it (checked by _ply_header)
+    lines = data[:end].decode("ascii").splitlines()
+    if data[end:end + 11] != b"end_header\n" or len(lines) < 2 or lines[0].strip() != "ply" or lines[1].strip() not in _PLY_ORDER:
+        return None
+    order = _PLY_ORDER[lines[1].strip()]
+    elements: list[tuple[str, int, list[list[str]]]] = []
+    for line in lines[2:]:
+        parts = line.split()
+        if parts[:1] == ["element"] and len(parts) == 3:
+            elements.append((parts[1], int(parts[2]), []))
+        elif parts[:1] == ["property"] and elements:
+            elements[-1][2].append(parts[1:])
+        elif parts[:1] not in (["comment"], ["obj_info"]):
+            return None
+    if [name for name, _, _ in elements] != ["vertex", "face"]:
+        return None
+    (_, n_vertices, vertex_properties), (_, n_faces, face_properties) = elements
+    names = [p[-1] for p in vertex_properties]
+    if (
+        any(len(p) != 2 or p[0] not in _PLY_TYPES for p in vertex_properties)
+        or len(set(names)) != len(names) or not {"x", "y", "z"} <= set(names)
+        or len(face_properties) != 1 or len(face_properties[0]) != 4 or face_properties[0][0] != "list"
+        or face_properties[0][3] != "vertex_indices" or not set(face_properties[0][1:3]) <= _PLY_TYPES.keys()
+    ):
+        return None
+    vertex_type = np.dtype([(name, order + _PLY_TYPES[kind]) for kind, name in vertex_properties])
+    count_type, index_type = (np.dtype(order + _PLY_TYPES[kind]) for kind in face_properties[0][1:3])
+    start = end + len(b"end_header\n")
+    faces_start = start + n_vertices * vertex_type.itemsize
+    if count_type.kind == "f" or index_type.kind == "f" or len(data) < faces_start + count_type.itemsize:
+        return None
+    corners = int(np.frombuffer(data, count_type, 1, faces_start)[0])
+    face_type = np.dtype([("n", count_type), ("i", index_type, (max(corners, 0),))])
+    if corners < 3 or len(data) != faces_start + n_faces * face_type.itemsize:
+        return None
+    faces = np.frombuffer(data, face_type, n_faces, faces_start)
+    if (faces["n"] != corners).any():
+        return None
+    vertices = np.frombuffer(data, vertex_type, n_vertices, start)
+    points = np.stack([vertices[axis].astype(np.float64) for axis in "xyz"], axis=1)
+    return points, faces["i"].astype(np.int64).ravel(), np.full(n_faces, corners, dtype=np.int64)
+
+
+def _ply_meshio(path: Path, header: _PlyHeader) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64] | None, NDArray[np.int64] | None]:
+    """Points, corners, sizes and, for an ASCII file of vertices then faces, the vertices' and
+    faces' lines, read by ``meshio.ply``."""
+    counts = dict(header.elements)
     try:
         with warnings.catch_warnings():  # numbers beyond the declared type: the finite-coordinate check names them
             warnings.simplefilter("ignore", RuntimeWarning)
@@ -341,10 +645,7 @@ def _read_ply(path: Path, data: bytes) -> _Parsed:
     in_order = header.ascii and [name for name, _ in header.elements] == ["vertex", "face"]
     vertex_lines = header.lines + 1 + np.arange(points.shape[0]) if in_order else None
     face_lines = header.lines + 1 + points.shape[0] + np.arange(sizes.size) if in_order else None
-    _finite_vertices(path, points, vertex_lines)
-    corners = np.concatenate([b.ravel() for b in blocks])
-    _faces_in_range(path, corners, sizes, points.shape[0], face_lines)
-    return _Parsed(points, _polygon_list(corners, sizes))
+    return points, np.concatenate([b.ravel() for b in blocks]), sizes, vertex_lines, face_lines
 
 
 # -- writing -----------------------------------------------------------------------------------
