@@ -127,6 +127,11 @@ def test_budget_refuses_large_pages_unless_forced(cube: g1patch.Surface, tmp_pat
     assert isinstance(ViewTooLargeError("x"), g1patch.InputError)
     page = view_html(cube.network, resolution=3)
     assert _meta(page)["resolution"] == 3
+    from g1patch.viewer import _resolution
+
+    with pytest.raises(ViewTooLargeError, match=r"1200000 patches at 2 samples .* 2.4 M triangles \(~180 MB\).*coarsest"):
+        _resolution(1_200_000, None, False)  # above a million patches even the coarsest page is too large
+    assert _resolution(1_200_000, None, True) == 2
 
 
 def test_bad_input_is_one_clear_error(cube: g1patch.Surface, tmp_path: Path) -> None:

@@ -135,7 +135,8 @@ def _resolution(n_patches: int, resolution: object, force: bool) -> int:
         raise ViewTooLargeError(
             f"{n_patches} patches at {r} samples a side would make a page of {_size_text(triangles)} triangles "
             f"(~{_size_text(page_size(n_patches, r), 'B')}), above the viewer's budget of "
-            f"{_size_text(TRIANGLE_BUDGET)} triangles; pass force=True (--force) or a lower resolution"
+            f"{_size_text(TRIANGLE_BUDGET)} triangles; pass force=True (--force)"
+            + (" or a lower resolution" if r > 2 else " (2 samples a side is the coarsest)")
         )
     return r
 
@@ -228,7 +229,12 @@ def _summary(report: ContinuityReport) -> list[list[str]]:
 def _verdict(report: ContinuityReport) -> str:
     if report.passes():
         return "exactly G1" + (" apart from the seams" if report.seam_edges else "") + ", no folds"
-    return "not G1: see the deviation mode" if report.folds == 0 else f"{report.folds} folded patches"
+    parts = [f"{report.folds} folded patches"] if report.folds else []
+    if not report.is_g1():
+        parts.append(f"not G1: kinks up to {max(report.max_edge_angle_deg, report.max_corner_angle_deg):.3g}°")
+    if not report.seams_closed():
+        parts.append(f"seams open by {report.seam_g0_max:.2g} of the diagonal")
+    return ", ".join(parts)
 
 
 def _base64(array: NDArray[Any]) -> bytes:
