@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import multiprocessing
 import os
 import resource
 import sys
@@ -28,6 +29,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import fuzzing  # noqa: E402
+
+TASKS_PER_WORKER = 200  #: cases a worker runs before its pool is replaced
 
 
 def one_case(seed: int) -> tuple[int, list[int | None], list[str], float]:
@@ -57,8 +60,11 @@ def main() -> None:
     peak = 0.0
     pending = list(range(args.cases))
     while pending:
-        with ProcessPoolExecutor(args.workers, max_tasks_per_child=200) as pool:
-            futures = {pool.submit(one_case, seed): seed for seed in pending}
+        # a fresh pool per chunk of TASKS_PER_WORKER cases a worker, so no worker's memory grows over
+        # the run (max_tasks_per_child hangs the pool once a worker retires, on Python 3.11)
+        chunk = pending[: args.workers * TASKS_PER_WORKER]
+        with ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            futures = {pool.submit(one_case, seed): seed for seed in chunk}
             done: set[int] = set()
             try:
                 for future in as_completed(futures):
@@ -76,6 +82,7 @@ def main() -> None:
                 findings.append(f"seed {(broken[:1] or running[:1])[0]}: a worker crashed (native crash or killed)")
                 done.update(crashes)
         pending = [seed for seed in pending if seed not in done]
+        print(f"fuzz: {args.cases - len(pending)} of {args.cases} cases, {time.perf_counter() - start:.0f} s", file=sys.stderr)
 
     categories = {"tracebacks": "traceback", "leftover files": ": left ", "NaN in reports": "NaN", "slow commands": " took ",
                   "crashes": "crashed"}
