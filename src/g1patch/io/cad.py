@@ -4,15 +4,20 @@ Every patch becomes one face on a bicubic B-spline surface (``Geom_BSplineSurfac
 
 * polynomial patches (:class:`PatchSet` in any form) exactly, as their Bézier control net with
   the knots ``[0, 0, 0, 0, 1, 1, 1, 1]`` (``PatchSet.convert("bezier").world_control()``);
-* any other patches (rational Gregory patches, …) by :func:`fit_bspline_surfaces`, a least-squares
-  fit on dyadic knots, refined until the deviation is below the tolerance.
+* a Gregory network, by default (``method="auto"``), as the split4 re-assembly of its targets
+  (:mod:`g1patch.construct.polynomial`): polynomial, so exact, and G1 in OCC; the reported
+  deviation is its distance to the Gregory surface. Networks with seams (split4 does not keep
+  them yet), ``method="fit"`` and any other patches: :func:`fit_bspline_surfaces`, a least-squares
+  fit on dyadic knots, refined until the deviation is below the tolerance (OCC sees kinks).
 
 A split4 network (four C1 sub-patches per quad, :mod:`g1patch.construct.split4`) becomes one face
 per quad instead (:func:`split4_quad_faces`), exactly: a quad whose pieces are one bicubic
 subdivided at ½ (a regular region of a limit surface) is that bicubic, knots ``[0,0,0,0,1,1,1,1]``;
 any other quad is its two-span B-spline, knots ``[0,0,0,0,½,½,1,1,1,1]``. Its STEP edges carry no
 pcurves (each face is a whole surface, its edges its boundary iso-lines, rebuilt by any reader). In
-STEP every face is named after its index (``'face 12'``: the patch, or the quad, it was made from).
+STEP every face is named after its index (``'face 12'``: the patch, or the quad, it was made from),
+and the file is compacted (:func:`compact_step`): equal points written once, poles with 15
+significant digits instead of OCC's 12.
 
 The faces are sewn into shells (``BRepBuilderAPI_Sewing``, tolerance ``SEWING_RTOL`` × the
 bounding-box diagonal); a closed shell becomes a solid (``BRepBuilderAPI_MakeSolid``, oriented
@@ -81,6 +86,7 @@ __all__ = [
     "bezier_knots",
     "read_cad_faces",
     "file_g1_angles",
+    "compact_step",
     "read_step_faces",
     "read_iges_faces",
     "OpenCascadeError",
@@ -864,40 +870,81 @@ def _cad_method(target: Path, network: PatchNetwork, method: CadMethod) -> str:
 _ENTITY_END = re.compile(rb";[ \t\r]*\n(?=#\d)")
 _REFERENCE = re.compile(rb"#(\d+)")
 _POINT = re.compile(rb"#\d+\s*=\s*CARTESIAN_POINT\(")
+_NAMED_FACE = re.compile(rb"ADVANCED_FACE\('face (\d+)',\([^)]*\),#(\d+),")
+_POLE_GRID = re.compile(rb"B_SPLINE_SURFACE_WITH_KNOTS\('[^']*',\d+,\d+,\(\((.*?)\)\),")
+_BLANKS = re.compile(rb"\n\s*")
+#: significant digits of the coordinates :func:`compact_step` writes (OCC's writer: 12)
+STEP_DIGITS = 15
 
 
-def share_step_points(path: Path) -> None:
-    """Rewrite a STEP file so that equal ``CARTESIAN_POINT`` entities are one, numbered densely.
+def _step_real(value: float) -> bytes:
+    """A STEP real with :data:`STEP_DIGITS` significant digits (always with its decimal point)."""
+    text = f"{value:.{STEP_DIGITS}G}"
+    if "." not in text:
+        text = text.replace("E", ".E") if "E" in text else text + "."
+    return text.encode()
+
+
+#: a file's 12-digit pole and the exact one agree to this share of the model's size (:func:`compact_step`)
+STEP_MATCH_RTOL = 1e-10
+
+
+def _face_nets(faces: BSplineFit | QuadFaces) -> list[NDArray[np.float64]]:
+    """The world control net of every face, in face order (split4 quads: 4×4 single-span or 6×6)."""
+    if isinstance(faces, BSplineFit):
+        return list(faces.control)
+    single, two = iter(faces.bezier.control), iter(faces.two_span.control)
+    return [next(single) if one else next(two) for one in faces.single.tolist()]
+
+
+def compact_step(path: Path, nets: Sequence[NDArray[np.float64]] = (), tolerance: float = 0.0) -> None:
+    """Rewrite a STEP file written by OCC: equal ``CARTESIAN_POINT`` entities become one, surface
+    poles get :data:`STEP_DIGITS` digits, entities are numbered densely, without line breaks.
 
     OCC's writer gives every surface pole, every edge curve's pole and every vertex its own point
     entity, so a pole on a mesh edge is written once per face, once per edge curve and once per
-    vertex; the numbers are bit-identical (neighbouring faces share their boundary rows, edge
-    curves are the surfaces' boundary rows). Points with the same text (blanks removed) become
-    the first of them, and entities ``#1 …`` are renumbered in order: the same B-rep, the same
-    numbers, about a third fewer bytes for a split4 network (nothing else is touched).
+    vertex: points with the same text (blanks removed) become the first of them. OCC writes 12
+    significant digits, which leaves OCC's normals across Spot's small faces 7e-8° apart on reading
+    back: the poles of face ``'face N'`` (its ``B_SPLINE_SURFACE_WITH_KNOTS``) are written from
+    ``nets[N]`` (world poles, (nu, nv, 3)) with 15, where the file's value agrees with it within
+    ``tolerance`` (so a point is only ever made more precise). The same B-rep; a split4 network's
+    file is a third smaller.
     """
     text = path.read_bytes()
     start = text.index(b"\nDATA;") + len(b"\nDATA;")
     end = text.index(b"\nENDSEC;", start)
-    entities = _ENTITY_END.split(text[start:end].strip())
+    entities = [_BLANKS.sub(b"", entity) for entity in _ENTITY_END.split(text[start:end].strip())]
     entities[-1] = entities[-1].rstrip(b";")
-    renumber: dict[bytes, bytes] = {}
+    bodies: dict[bytes, bytes] = {}
+    canonical: dict[bytes, bytes] = {}  # point number → the number of the first equal point
     first: dict[bytes, bytes] = {}
-    kept: list[bytes] = []
     for entity in entities:
         name, _, body = entity.partition(b"=")
-        number = name.strip()[1:]
+        number, body = name.strip()[1:], body.strip()
+        bodies[number] = body
         if _POINT.match(entity):
-            key = b"".join(body.split())
-            if key in first:
-                renumber[number] = first[key]
-                continue
-            first[key] = renumber[number] = str(len(kept) + 1).encode()
-        else:
-            renumber[number] = str(len(kept) + 1).encode()
-        kept.append(entity)
-    data = _REFERENCE.sub(lambda match: b"#" + renumber[match.group(1)], b";\n".join(kept) + b";")
-    path.write_bytes(text[:start] + b"\n" + data + text[end:])
+            canonical[number] = first.setdefault(body, number)
+    exact: dict[bytes, bytes] = {}
+    for face, surface in _NAMED_FACE.findall(b"".join(body for body in bodies.values() if b"ADVANCED_FACE" in body)):
+        grid = _POLE_GRID.match(bodies.get(surface, b""))
+        if grid is None or int(face) >= len(nets):
+            continue
+        rows = [_REFERENCE.findall(row) for row in grid.group(1).split(b"),(")]
+        net = nets[int(face)]
+        if [len(row) for row in rows] != [net.shape[1]] * net.shape[0]:
+            continue
+        for row, poles in zip(rows, net.tolist()):
+            for number, pole in zip(row, poles):
+                point = canonical[number]
+                written = [float(x) for x in bodies[point].split(b"(")[-1].rstrip(b")").split(b",")]
+                if max(abs(x - y) for x, y in zip(written, pole)) <= tolerance:
+                    exact[point] = b"CARTESIAN_POINT('',(" + b",".join(_step_real(x) for x in pole) + b"))"
+    kept = [(number, exact.get(number, body)) for number, body in bodies.items() if canonical.get(number, number) == number]
+    renumber = {number: str(n).encode() for n, (number, _) in enumerate(kept, start=1)}
+    renumber.update({number: renumber[point] for number, point in canonical.items()})
+    data = _REFERENCE.sub(lambda match: b"#" + renumber[match.group(1)],
+                          b"".join(b"#" + number + b"=" + body + b";\n" for number, body in kept))
+    path.write_bytes(text[:start] + b"\n" + data.rstrip(b"\n") + text[end:])
 
 
 def export_cad(
@@ -997,7 +1044,8 @@ def export_cad(
         with atomic_path(target) as temporary, _step_options(sewn_faces, pcurves=quads is None):
             _write(occ, shape, temporary, kind)
             if kind == "step":
-                share_step_points(temporary)
+                nets = _face_nets(fit if quads is None else quads)
+                compact_step(temporary, nets, STEP_MATCH_RTOL * max(diagonal, max(float(np.abs(net).max()) for net in nets)))
             file_bytes = temporary.stat().st_size
         lap("write")
     note = ("measured by OpenCASCADE on the written shape" if smooth.size else
