@@ -30,11 +30,13 @@ def needs_dask() -> None:
 
 @pytest.fixture(scope="module")
 def scheduler() -> Iterator[str]:
-    """The address of one LocalCluster of 2 worker processes on 127.0.0.1, shared by the tests here."""
+    """The address of one LocalCluster of 2 workers on 127.0.0.1, shared by the tests here. Its
+    workers are threads of this process (no process starts: the embedded cluster's worker
+    processes are tested through the command itself)."""
     needs_dask()
     from distributed import LocalCluster
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, protocol="tcp", host="127.0.0.1",
                       dashboard_address=None) as cluster:
         yield cluster.scheduler_address
 
@@ -64,10 +66,11 @@ def assert_one_line_error(record: dict, name: str) -> None:
 
 
 def test_embedded_cluster_converts_generated_meshes_and_reports_the_broken_one(meshes: Path, tmp_path: Path) -> None:
-    """The command as a user runs it: its own LocalCluster of 2 workers, two formats per file."""
+    """The command as a user runs it: its own LocalCluster (one worker process: each costs an
+    interpreter, g1patch and its kernels), two formats per file."""
     needs_dask()
     out = tmp_path / "out"
-    result = subprocess.run([sys.executable, "-m", "g1patch.cli", "batch", meshes, "--out", out, "--workers", "2",
+    result = subprocess.run([sys.executable, "-m", "g1patch.cli", "batch", meshes, "--out", out, "--workers", "1",
                              "--formats", "npz,obj"], capture_output=True, text=True, timeout=300)
     assert result.returncode == 1, result.stderr
     records = summary(out)
@@ -160,7 +163,7 @@ def test_scheduler_started_separately(meshes: Path, tmp_path: Path, capsys: pyte
         address = json.loads(scheduler_file.read_text())["address"]
         assert address.startswith("tcp://127.0.0.1:")
         processes.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1",
-                                           "--no-dashboard", "--host", "127.0.0.1"], stdout=logs, stderr=logs))
+                                           "--no-nanny", "--no-dashboard", "--host", "127.0.0.1"], stdout=logs, stderr=logs))
         out = tmp_path / "out"
         assert main(["batch", str(meshes), "--out", str(out), "--scheduler", address]) == 0, capsys.readouterr().err
         assert {r["status"] for r in summary(out).values()} == {"built"}
@@ -169,7 +172,11 @@ def test_scheduler_started_separately(meshes: Path, tmp_path: Path, capsys: pyte
         for process in reversed(processes):
             process.terminate()
         for process in processes:
-            process.wait(timeout=30)
+            try:
+                process.wait(timeout=15)
+            except subprocess.TimeoutExpired:  # a worker still closing gracefully
+                process.kill()
+                process.wait()
         logs.close()
 
 

@@ -309,7 +309,7 @@ def _client(stack: ExitStack, scheduler: str | None, workers: int | None, n_jobs
         count = workers or min(_cores(), n_jobs)
         cluster = stack.enter_context(LocalCluster(
             n_workers=count, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
-            silence_logs=logging.ERROR,
+            silence_logs=logging.CRITICAL,  # a record says what failed; no shutdown races on stderr
         ))
         return stack.enter_context(Client(cluster)), f"{count} local worker{'s' if count > 1 else ''}"
     try:
@@ -365,6 +365,8 @@ def run_batch(
     outputs, an unreachable scheduler) raise :class:`InputError` before any file is converted;
     a file's own failure is its record's ``error``. ``out/summary.json`` is written at the end,
     and on an interrupt too (the files not done marked ``cancelled``) before it is raised again.
+    The local cluster's workers are spawned processes: a script calling this needs Python's
+    ``if __name__ == "__main__":`` guard (the ``g1patch`` command has it).
     """
     options = BuildOptions() if options is None else options
     formats = parse_formats(formats)
