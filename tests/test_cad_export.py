@@ -212,3 +212,13 @@ def test_auto_fits_what_split4_cannot_reassemble_and_says_so(tmp_path: Path, mon
     with pytest.raises(ConstructionError, match="simulated"):
         export_step(tmp_path / "split4.step", gregory("cube", None), method="split4")
     assert [p.name for p in tmp_path.iterdir()] == ["auto.step"]
+
+
+def test_step_reals_always_carry_their_decimal_point() -> None:
+    """ISO 10303-21 reals need the point ('1.E-05', not '1E-05'); 15 significant digits: relative error ≤ 5e-15."""
+    from g1patch.io.cad import _step_real
+
+    assert [_step_real(x) for x in (1.0, -2.0, 1e-5, 1.5e20, 0.1 + 0.2)] == [
+        b"1.", b"-2.", b"1.E-05", b"1.5E+20", b"0.3"]
+    value = -0.039181315715812345
+    assert abs(float(_step_real(value)) - value) <= 5e-15 * abs(value)
