@@ -18,7 +18,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .api import NotAvailableError, Surface, as_mesh, as_network, check, export, read, smooth
+    from .api import Surface, as_mesh, as_network, check, export, read, smooth, view
     from .continuity import ContinuityReport
     from .errors import FormatError, G1PatchError, InputError, MeshError, MissingDependencyError
     from .gregory import GregoryPatchSet
@@ -29,7 +29,7 @@ if TYPE_CHECKING:  # pragma: no cover
 #: public name → the module that defines it (imported on first access, PEP 562)
 _LAZY = {
     "read": "api", "smooth": "api", "Surface": "api", "check": "api", "export": "api", "as_mesh": "api",
-    "as_network": "api", "NotAvailableError": "api",
+    "as_network": "api", "view": "api",
     "QuadMesh": "mesh", "QuadTopology": "mesh", "PatchNetwork": "network", "PatchSet": "patches",
     "GregoryPatchSet": "gregory", "ContinuityReport": "continuity",
     "G1PatchError": "errors", "InputError": "errors", "MeshError": "errors", "FormatError": "errors",

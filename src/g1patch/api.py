@@ -40,7 +40,6 @@ __all__ = [
     "MESH_SUFFIXES",
     "NETWORK_SUFFIXES",
     "EXPORT_SUFFIXES",
-    "NotAvailableError",
     "Surface",
     "as_mesh",
     "as_network",
@@ -71,10 +70,6 @@ PREVIEW_MAX_PATCHES = 20_000
 
 _SOURCES = ("a mesh file path (.obj, .ply, .off), a (vertices, faces) pair of arrays or lists, a meshio.Mesh, "
             "an object with vertices and faces (trimesh), a pyvista.PolyData or a QuadMesh")
-
-
-class NotAvailableError(G1PatchError, NotImplementedError):
-    """A feature g1patch names but does not have yet; the message says what to use meanwhile."""
 
 
 # ------------------------------------------------------------------------------- descriptions
