@@ -35,14 +35,16 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cache
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ._grid import BLOCK_POINTS
+from .basis import basis_values
 from .errors import InputError
-from .gregory import GregoryPatchSet, gregory_weights
+from .gregory import BEZIER_INDEX, INTERIOR_INDEX, GregoryPatchSet, gregory_weights
 from .network import PatchNetwork, Patches, edge_parameters
 from .patches import CORNER_PARAMETERS, PatchSet
 
@@ -294,6 +296,8 @@ def check(
     degenerate_rtol: float = DEGENERATE_RTOL,
     chunk: int = 4096,
     progress: Callable[[int, int], None] | None = None,
+    *,
+    compiled: bool = True,
 ) -> ContinuityReport:
     """Measure G0 and G1 continuity, folds and fairness of ``network`` (see the module docstring).
 
@@ -303,7 +307,8 @@ def check(
     called after each block. Degenerate normals, folds and fairness share the
     ``fold_samples²`` grid of every patch. A :class:`~g1patch.patches.PatchSet` or
     :class:`~g1patch.gregory.GregoryPatchSet` is measured as the network of its matching boundary
-    curves (:func:`g1patch.api.as_network`).
+    curves (:func:`g1patch.api.as_network`). ``compiled``: the numba kernels (see below), all edges
+    and all patches in one pass each (``progress`` after each); False: the NumPy reference.
     """
     for name, value, least in (("samples", samples, 2), ("fold_samples", fold_samples, 2), ("chunk", chunk, 1)):
         _check_count(name, value, least)
@@ -326,24 +331,33 @@ def check(
     edge_angle_min = np.zeros(len(left_patch))
     edge_gap = np.zeros(len(left_patch))
     edge_worst = np.zeros(len(left_patch), dtype=np.int64)
-    edge_blocks = _blocks(len(left_patch), chunk)
-    patch_blocks = _blocks(len(local), min(chunk, _patch_block(fold_samples)))
+    patch_block = min(chunk, _patch_block(fold_samples))
     total = len(left_patch) + len(local)
-    for block in edge_blocks:
-        edge_angle[block], edge_angle_min[block], edge_worst[block], edge_gap[block] = _edge_measures(
-            local, left_patch[block], left_edge[block], right_patch[block], right_edge[block], same[block],
-            samples, degenerate_level,
-        )
-        if progress is not None:
-            progress(block.stop, total)
-    edge_gap /= diagonal
-
-    corner_angle = _max_corner_angle(network, local, degenerate_level, oriented=not same.any())
+    form = _evaluation_form(local) if compiled else None
     grid = _GridMeasures(len(local), fold_samples, degenerate_level)
-    for block in patch_blocks:
-        grid.add(local, block)
+    if form is not None:
+        sides = (left_patch, left_edge, right_patch, right_edge, same)
+        edge_angle, edge_angle_min, edge_worst, edge_gap = _edge_measures_compiled(*form, sides, samples, degenerate_level)
         if progress is not None:
-            progress(len(left_patch) + block.stop, total)
+            progress(len(left_patch), total)
+        corner_angle = _max_corner_angle_compiled(network, _corner_normals_compiled(*form), degenerate_level, not same.any())
+        grid.add_compiled(*form, patch_block)
+        if progress is not None:
+            progress(total, total)
+    else:
+        for block in _blocks(len(left_patch), chunk):
+            edge_angle[block], edge_angle_min[block], edge_worst[block], edge_gap[block] = _edge_measures(
+                local, left_patch[block], left_edge[block], right_patch[block], right_edge[block], same[block],
+                samples, degenerate_level,
+            )
+            if progress is not None:
+                progress(block.stop, total)
+        corner_angle = _max_corner_angle(network, local, degenerate_level, oriented=not same.any())
+        for block in _blocks(len(local), patch_block):
+            grid.add(local, block)
+            if progress is not None:
+                progress(len(left_patch) + block.stop, total)
+    edge_gap /= diagonal
     figures = grid.fairness(diagonal)
     folded_edges = np.flatnonzero((edge_angle > 90.0) & ~seam)
     folded = grid.folded.copy()
@@ -398,34 +412,45 @@ def check(
     )
 
 
-def fairness(network: PatchNetwork, samples: int = FOLD_SAMPLES, degenerate_rtol: float = DEGENERATE_RTOL) -> dict[str, float]:
+def fairness(
+    network: PatchNetwork, samples: int = FOLD_SAMPLES, degenerate_rtol: float = DEGENERATE_RTOL, *, compiled: bool = True
+) -> dict[str, float]:
     """The fairness figures of :func:`check` on a ``samples²`` grid per patch.
 
     Keys: ``turn_median_deg``, ``turn_p99_deg``, ``turn_max_deg`` (the normal turn between
     neighbouring grid samples along u and v, over all pairs of all patches) and ``thin_plate``
     (``Σ ∫∫ |p_uu|² + 2|p_uv|² + |p_vv|² du dv / diag²``).
     """
-    grid, diagonal = _grid_measures(network.patches, samples, degenerate_rtol)
+    grid, diagonal = _grid_measures(network.patches, samples, degenerate_rtol, compiled=compiled)
     return grid.fairness(diagonal)
 
 
-def folded_patches(patches: Patches, samples: int = 9, degenerate_rtol: float = DEGENERATE_RTOL) -> NDArray[np.bool_]:
+def folded_patches(
+    patches: Patches, samples: int = 9, degenerate_rtol: float = DEGENERATE_RTOL, *, compiled: bool = True
+) -> NDArray[np.bool_]:
     """Which patches fold (the intrinsic test of :func:`check`) on a ``samples²`` grid, (N,) bool.
 
-    For a builder's fold guard: no network needed, patches in any coordinates.
+    For a builder's fold guard: no network needed, patches in any coordinates. ``compiled``: the
+    grid kernel (False: the NumPy reference).
     """
-    return _grid_measures(patches, samples, degenerate_rtol, fairness=False)[0].folded
+    return _grid_measures(patches, samples, degenerate_rtol, fairness=False, compiled=compiled)[0].folded
 
 
-def _grid_measures(patches: Patches, samples: int, degenerate_rtol: float, fairness: bool = True) -> tuple[_GridMeasures, float]:
+def _grid_measures(
+    patches: Patches, samples: int, degenerate_rtol: float, fairness: bool = True, *, compiled: bool = True
+) -> tuple[_GridMeasures, float]:
     """The grid measures of every patch (``fairness`` False: folds and degenerate normals only),
     in local coordinates, and the bounding-box diagonal."""
     _check_count("samples", samples, 2)
     local = _local(patches)
     diagonal = _diagonal(local.evaluate(CORNER_PARAMETERS)) or 1.0
     grid = _GridMeasures(len(local), samples, degenerate_rtol * diagonal**2, fairness)
-    for block in _blocks(len(local), _patch_block(samples)):
-        grid.add(local, block)
+    form = _evaluation_form(local) if compiled else None
+    if form is not None:
+        grid.add_compiled(*form, _patch_block(samples))
+    else:
+        for block in _blocks(len(local), _patch_block(samples)):
+            grid.add(local, block)
     return grid, diagonal
 
 
@@ -720,6 +745,68 @@ class _GridMeasures:
             energy += _dot3(along_u, along_u).sum(axis=1) @ self.weights
             energy += _dot3(along_v, along_v).sum(axis=2) @ self.weights
 
+    def add_compiled(self, points: NDArray[np.float64], form: str, block: int) -> None:
+        """Measure all patches ``points`` (:func:`_evaluation_form`) in :func:`_grid_kernel`.
+
+        The kernel keeps each patch's largest squared chord along u and along v with the angle of
+        its pair; the reference's maximum turn (per ``block`` of patches: the first largest chord
+        along u, replaced by the first along v if larger) is picked from those, so it is the angle
+        of the same pair of normals as :meth:`add` over blocks of ``block`` patches finds.
+        """
+        count, resolution = len(points), len(self.grid)
+        if not count:
+            return
+        chunks = _chunks(count)
+        location = np.empty(count, dtype=np.int64)
+        degenerate = np.zeros(chunks, dtype=np.int64)
+        histogram = np.zeros((chunks if self.fairness_wanted else 1, _BINS), dtype=np.int64)
+        best = np.empty((count if self.fairness_wanted else 0, 4))
+        _compiled(_grid_kernel)(points, *_grid_tables(form, self.grid), self.weights, self.degenerate_level,
+                                self.fairness_wanted, _CODE_MIN, _LANES, chunks, location, degenerate, histogram, best, self.energy)
+        self.degenerate += int(degenerate.sum())
+        self.folded = location >= 0
+        for patch in np.flatnonzero(self.folded)[:MAX_FOLD_LOCATIONS - len(self.locations)]:
+            i, j = divmod(int(location[patch]), resolution)
+            self.locations.append((int(patch), float(self.grid[i]), float(self.grid[j])))
+        if not self.fairness_wanted:
+            return
+        self.histogram += histogram.sum(axis=0)
+        if form == "gregory":
+            self._exact_turns(points, best, block)
+        blocks = -(-count // block)
+        padded = np.full((blocks * block, 4), -1.0)
+        padded[:count] = best
+        padded = padded.reshape(blocks, block, 4)
+        rows = np.arange(blocks)
+        along_u = padded[rows, np.argmax(padded[:, :, 0], axis=1), :2]
+        along_v = padded[rows, np.argmax(padded[:, :, 2], axis=1), 2:]
+        use_v = along_v[:, 0] > along_u[:, 0]
+        chord2 = np.where(use_v, along_v[:, 0], along_u[:, 0])
+        angle = np.where(use_v, along_v[:, 1], along_u[:, 1])[chord2 > -1.0]
+        self.max_turn_deg = max(self.max_turn_deg, float(angle.max(initial=0.0)))
+
+    def _exact_turns(self, points: NDArray[np.float64], best: NDArray[np.float64], block: int) -> None:
+        """Replace the largest chords of Gregory patches (tensor sums in the kernel) by the
+        reference's (:func:`_turn_kernel`) where a patch's could be the largest of its block: its
+        chord ``√chord²`` within :data:`_TURN_CANDIDATE_ATOL` of the block's largest (the two
+        evaluations' chords differ by rounding, ~1e-15); the other patches' are set to −1 (they
+        are smaller than the block's largest either way)."""
+        count = len(points)
+        blocks = -(-count // block)
+        padded = np.full(blocks * block, -1.0)
+        for axis in (0, 1):
+            padded[:count] = best[:, 2 * axis]
+            largest = np.repeat(padded.reshape(blocks, block).max(axis=1), block)[:count]
+            chord = np.sqrt(np.maximum(best[:, 2 * axis], 0.0))
+            candidate = (best[:, 2 * axis] > -1.0) & (chord >= np.sqrt(np.maximum(largest, 0.0)) - _TURN_CANDIDATE_ATOL)
+            patches = np.flatnonzero(candidate)
+            chord2, angle = np.empty(len(patches)), np.empty(len(patches))
+            if len(patches):
+                _compiled(_turn_kernel)(points, _gregory_grid_weights(self.grid), self.degenerate_level, patches,
+                                        np.full(len(patches), axis), chord2, angle)
+            best[:, 2 * axis] = -1.0
+            best[patches, 2 * axis], best[patches, 2 * axis + 1] = chord2, angle
+
     def _tangents(self, group: Patches) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``p_u`` and ``p_v`` of ``group`` on the grid, planar ``(3, B, G, G)``.
 
@@ -758,3 +845,531 @@ class _GridMeasures:
         fraction = (rank - (cumulative[b] - self.histogram[b]) + 0.5) / self.histogram[b]
         chord2 = _EDGES[b] + fraction * (_EDGES[b + 1] - _EDGES[b])
         return min(_turn_deg(chord2), self.max_turn_deg)
+
+
+# ---------------------------------------------------------------------------------------------
+# Compiled kernels (``compiled=True``, the default of :func:`check`, :func:`fairness` and
+# :func:`folded_patches`); the NumPy code above is their reference (``compiled=False``), and
+# tests/test_check_kernels.py holds the two to one report.
+#
+# Patches enter the kernels as ``points (N, M, 3)`` and weight tables: Gregory patches their 20
+# points, a PatchSet its 16 control points ``4 i + j`` (any basis form). Edge samples and corner
+# normals are formed as the reference's matrix products form them: a sequential fused
+# multiply-add over the points, ``acc = fma(P_m, W_m, acc)`` for m = 0, 1, …, the order of
+# OpenBLAS's dgemm micro-kernel, skipping the weights that are exactly 0 (they add exactly
+# nothing); they equal the reference's bit for bit except on the rows OpenBLAS gives its tail
+# kernels. The grid measures use the tensor structure instead: a Gregory patch is the bicubic
+# Bézier patch of its net with Fp_k inside plus ``Σ_k S_k (Fn_k − Fp_k)`` (``S_k``: the weight of
+# Fn_k in :func:`~g1patch.gregory.gregory_weights`, as ``w_α + w_β = 1``), so a grid row of
+# tangents costs one u contraction of the net, then 8 products and 4 blends per point and
+# derivative, against 20 weights.
+
+_TINY = float(np.finfo(np.float64).tiny)
+
+_CANDIDATE_RTOL = 1e-12
+"""An edge's extreme angles are computed (``atan2``) only at the samples whose pseudo-angle
+``y / (y + x)`` (``2 − y / (y + |x|)`` where x < 0; y = |n_L × n_R|, x = n_L · n_R; strictly
+increasing in the angle) is within this relative distance of the extreme one. Its rounding
+(≤ 2 ULP) and atan2's (≤ 1 ULP), scaled by the pseudo-angle's slope (between ½ and 1 per radian),
+stay below 10 ULP: this margin is 400× that."""
+
+_TURN_CANDIDATE_ATOL = 1e-10
+"""Patches whose largest chord between neighbouring unit normals (tensor evaluation) is within
+this distance of their block's largest have it recomputed as the reference computes it (see
+:meth:`_GridMeasures._exact_turns`): 10⁵ times the rounding of a unit normal (~1e-15)."""
+
+_PAIRWISE_SECTOR = 64
+"""Sectors of at most this many corners compare all pairs of corner normals; larger ones only the
+pairs of the vertices of their gnomonic convex hull (see :func:`_corner_kernel`)."""
+
+prange = range  # numba.prange once a kernel is compiled
+
+#: patches the grid kernel measures side by side, its vector lanes (a run-time argument: a
+#: constant trip count is unrolled before the loop vectoriser sees it, and left scalar)
+_LANES = 8
+
+#: functions the kernels call, compiled (and rebound) with the first kernel
+_KERNEL_HELPERS = ("_pair_angle", "_hull_corners")
+
+
+def _fma(a: float, b: float, c: float) -> float:
+    """``a b + c`` rounded once; bound to an LLVM intrinsic by :func:`_compiled` (numba has no math.fma)."""
+    raise NotImplementedError("_fma runs compiled only")
+
+
+@cache
+def _compiled(kernel: Callable[..., Any]) -> Callable[..., Any]:
+    """``kernel`` compiled by numba, cached on disk, with float64 IEEE arithmetic as NumPy's (no
+    fastmath) and ``parallel=True`` (its ``prange`` loop runs on every core), which
+    :func:`g1patch.targets.local.jit_kernel` does not offer. numba is imported here, so that
+    ``import g1patch`` stays fast."""
+    global _fma, prange
+    import numba
+    from numba.extending import intrinsic
+
+    if prange is range:
+        @intrinsic  # type: ignore[misc]
+        def fused(typingctx: Any, a: Any, b: Any, c: Any) -> Any:
+            signature = numba.types.float64(numba.types.float64, numba.types.float64, numba.types.float64)
+            return signature, lambda context, builder, sig, args: builder.fma(*args)
+
+        _fma, prange = fused, numba.prange
+        for name in _KERNEL_HELPERS:
+            globals()[name] = numba.njit(cache=True, error_model="numpy")(globals()[name])
+    return numba.njit(cache=True, error_model="numpy", parallel=True)(kernel)  # type: ignore[no-any-return]
+
+
+def _chunks(count: int) -> int:
+    """Chunks of a kernel's parallel loop: a few per core (the cores share the machine)."""
+    import numba
+
+    return max(1, min(count, 4 * numba.get_num_threads()))
+
+
+def _evaluation_form(patches: Patches) -> tuple[NDArray[np.float64], str] | None:
+    """``(points (N, M, 3), form)``: Gregory patches' points (M = 20, form "gregory") or a
+    PatchSet's control points (M = 16, its basis form); None for other patch types."""
+    if isinstance(patches, GregoryPatchSet):
+        return patches.points, "gregory"
+    if isinstance(patches, PatchSet):
+        return patches.control.reshape(len(patches), 16, 3), str(patches.form)
+    return None
+
+
+def _weights(form: str, uv: NDArray[np.float64], du: int, dv: int) -> NDArray[np.float64]:
+    """Weights ``(..., M)`` of the points in ``∂^(du+dv) p`` at ``uv (..., 2)``, formed as the
+    reference forms them (:func:`gregory_weights`, or the tensor of ``PatchSet.evaluate``)."""
+    if form == "gregory":
+        return gregory_weights(uv[..., 0], uv[..., 1], du, dv)
+    weights_u = basis_values(form, uv[..., 0], du)  # type: ignore[arg-type]
+    weights_v = basis_values(form, uv[..., 1], dv)  # type: ignore[arg-type]
+    return (weights_u[..., :, None] * weights_v[..., None, :]).reshape(*uv.shape[:-1], 16)
+
+
+def _sparse(weights: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+    """``weights (..., K, M)`` as ``(W (..., M, K), index (..., M), count (...))``: the points with
+    a nonzero weight at some sample are ``index[..., :count]``, ascending."""
+    nonzero = (weights != 0.0).any(axis=-2)
+    index = np.argsort(~nonzero, axis=-1, kind="stable").astype(np.int64)
+    return np.ascontiguousarray(np.swapaxes(weights, -1, -2)), index, nonzero.sum(axis=-1).astype(np.int64)
+
+
+def _edge_measures_compiled(
+    points: NDArray[np.float64], form: str, sides: tuple[NDArray[Any], ...], samples: int, degenerate_level: float,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
+    """:func:`_edge_measures` of all the given edges, both sides of each in one kernel pass."""
+    left_patch, left_edge, right_patch, right_edge, same = sides
+    t = np.linspace(0.0, 1.0, samples)
+    uv = np.stack([np.stack([edge_parameters(np.int64(edge), t[::-1] if reverse else t) for reverse in (False, True)])
+                   for edge in range(4)])  # (edge, reversed, K, 2)
+    table = np.stack([_weights(form, uv, du, dv) for du, dv in ((0, 0), (1, 0), (0, 1))], axis=2)
+    weights, index, count = _sparse(table)  # (edge, reversed, derivative, M, K)
+    edges = len(left_patch)
+    angle, least, gap = np.empty(edges), np.empty(edges), np.empty(edges)
+    worst = np.empty(edges, dtype=np.int64)
+    if edges:
+        _compiled(_edge_kernel)(points, left_patch, left_edge, right_patch, right_edge, same, weights, index, count,
+                                degenerate_level, _CANDIDATE_RTOL, _chunks(edges), angle, least, worst, gap)
+    return angle, least, worst, gap
+
+
+def _edge_kernel(points: NDArray[np.float64], left_patch: NDArray[np.int64], left_edge: NDArray[np.int64],
+                 right_patch: NDArray[np.int64], right_edge: NDArray[np.int64], same: NDArray[np.bool_],
+                 weights: NDArray[np.float64], index: NDArray[np.int64], count: NDArray[np.int64], level: float,
+                 rtol: float, chunks: int, angle: NDArray[np.float64], least: NDArray[np.float64],
+                 worst: NDArray[np.int64], gap: NDArray[np.float64]) -> None:
+    """Per edge: both sides' points and normals at the K samples, then the reference's max and min
+    angle, worst sample and max gap; ``atan2`` only at the candidates (:data:`_CANDIDATE_RTOL`)."""
+    samples, edges = weights.shape[-1], left_patch.size
+    for chunk in prange(chunks):
+        values = np.empty((2, 3, 3, samples))  # side, derivative (p, p_u, p_v), coordinate, sample
+        y, x, pseudo = np.empty(samples), np.empty(samples), np.empty(samples)
+        usable = np.empty(samples, dtype=np.bool_)
+        for e in range(chunk * edges // chunks, (chunk + 1) * edges // chunks):
+            values[:] = 0.0
+            for side in range(2):
+                patch = left_patch[e] if side == 0 else right_patch[e]
+                edge = left_edge[e] if side == 0 else right_edge[e]
+                backwards = 0 if side == 0 or same[e] else 1
+                for q in range(3):
+                    for r in range(count[edge, backwards, q]):
+                        m = index[edge, backwards, q, r]
+                        w = weights[edge, backwards, q, m]
+                        for d in range(3):
+                            p = points[patch, m, d]
+                            out = values[side, q, d]
+                            for k in range(samples):
+                                out[k] = _fma(p, w[k], out[k])
+            flip = -1.0 if same[e] else 1.0
+            gap2, top, bottom = 0.0, -1.0, np.inf
+            for k in range(samples):
+                u0, u1, u2 = values[0, 1, 0, k], values[0, 1, 1, k], values[0, 1, 2, k]
+                v0, v1, v2 = values[0, 2, 0, k], values[0, 2, 1, k], values[0, 2, 2, k]
+                l0, l1, l2 = u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0
+                u0, u1, u2 = values[1, 1, 0, k], values[1, 1, 1, k], values[1, 1, 2, k]
+                v0, v1, v2 = values[1, 2, 0, k], values[1, 2, 1, k], values[1, 2, 2, k]
+                r0, r1, r2 = (u1 * v2 - u2 * v1) * flip, (u2 * v0 - u0 * v2) * flip, (u0 * v1 - u1 * v0) * flip
+                g0, g1, g2 = values[0, 0, 0, k] - values[1, 0, 0, k], values[0, 0, 1, k] - values[1, 0, 1, k], values[0, 0, 2, k] - values[1, 0, 2, k]
+                gap2 = max(gap2, (g0 * g0 + g1 * g1) + g2 * g2)
+                usable[k] = np.sqrt((l0 * l0 + l1 * l1) + l2 * l2) > level and np.sqrt((r0 * r0 + r1 * r1) + r2 * r2) > level
+                if not usable[k]:
+                    continue
+                c0, c1, c2 = l1 * r2 - l2 * r1, l2 * r0 - l0 * r2, l0 * r1 - l1 * r0
+                y[k] = np.sqrt((c0 * c0 + c1 * c1) + c2 * c2)
+                x[k] = (l0 * r0 + l2 * r2) + l1 * r1
+                total = y[k] + abs(x[k])
+                ratio = y[k] / total if total > 0.0 else 0.0
+                pseudo[k] = ratio if x[k] >= 0.0 else 2.0 - ratio
+                top, bottom = max(top, pseudo[k]), min(bottom, pseudo[k])
+            gap[e] = np.sqrt(gap2)
+            best, best_at, low = 0.0, 0, np.inf
+            for k in range(samples):
+                if usable[k] and (pseudo[k] >= top * (1.0 - rtol) or pseudo[k] <= bottom * (1.0 + rtol)):
+                    value = np.degrees(np.arctan2(y[k], x[k]))
+                    if value > best:
+                        best, best_at = value, k
+                    low = min(low, value)
+            angle[e], worst[e], least[e] = best, best_at, low
+
+
+def _corner_normals_compiled(points: NDArray[np.float64], form: str) -> NDArray[np.float64]:
+    """``p_u × p_v`` at the four corners of every patch, ``(N, 4, 3)`` (the reference's
+    ``_cross3`` of ``evaluate(CORNER_PARAMETERS, 1, 0)`` and ``(0, 1)``)."""
+    table = np.stack([_weights(form, CORNER_PARAMETERS[:, None], du, dv) for du, dv in ((1, 0), (0, 1))])  # (2, 4, 1, M)
+    weights, index, count = _sparse(table)  # (2, 4, M, 1)
+    normals = np.empty((len(points), 4, 3))
+    if len(points):
+        _compiled(_corner_normal_kernel)(points, weights, index, count, _chunks(len(points)), normals)
+    return normals
+
+
+def _corner_normal_kernel(points: NDArray[np.float64], weights: NDArray[np.float64], index: NDArray[np.int64],
+                          count: NDArray[np.int64], chunks: int, normals: NDArray[np.float64]) -> None:
+    """Corner normals patch by patch (``weights (derivative, corner, M, 1)``)."""
+    patches = points.shape[0]
+    for chunk in prange(chunks):
+        tangent = np.empty((2, 3))
+        for n in range(chunk * patches // chunks, (chunk + 1) * patches // chunks):
+            for corner in range(4):
+                for q in range(2):
+                    for d in range(3):
+                        acc = 0.0
+                        for r in range(count[q, corner]):
+                            m = index[q, corner, r]
+                            acc = _fma(points[n, m, d], weights[q, corner, m, 0], acc)
+                        tangent[q, d] = acc
+                a, b = tangent[0], tangent[1]
+                normals[n, corner, 0] = a[1] * b[2] - a[2] * b[1]
+                normals[n, corner, 1] = a[2] * b[0] - a[0] * b[2]
+                normals[n, corner, 2] = a[0] * b[1] - a[1] * b[0]
+
+
+def _max_corner_angle_compiled(network: PatchNetwork, normals: NDArray[np.float64], degenerate_level: float, oriented: bool) -> float:
+    """:func:`_max_corner_angle` from the corner normals ``(N, 4, 3)``, sector by sector in a kernel."""
+    normals = normals.reshape(-1, 3)
+    ids = network.corner_sectors().reshape(-1).astype(np.int64)
+    if not len(ids):
+        return 0.0
+    order = np.argsort(ids, kind="stable")
+    starts = np.flatnonzero(np.r_[True, ids[order][1:] != ids[order][:-1], True])
+    worst = np.zeros(len(starts) - 1)
+    _compiled(_corner_kernel)(normals, order, starts, degenerate_level, oriented, _PAIRWISE_SECTOR, _chunks(len(worst)), worst)
+    return float(worst.max(initial=0.0))
+
+
+def _pair_angle(a: NDArray[np.float64], b: NDArray[np.float64], oriented: bool) -> float:
+    """``atan2(|a × b|, a · b)`` in degrees (``|a · b|`` unless ``oriented``)."""
+    c0, c1, c2 = a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
+    dot = (a[0] * b[0] + a[2] * b[2]) + a[1] * b[1]
+    return float(np.degrees(np.arctan2(np.sqrt((c0 * c0 + c1 * c1) + c2 * c2), dot if oriented else abs(dot))))
+
+
+def _corner_kernel(normals: NDArray[np.float64], order: NDArray[np.int64], starts: NDArray[np.int64], level: float,
+                   oriented: bool, pairwise: int, chunks: int, worst: NDArray[np.float64]) -> None:
+    """Per sector (corners ``order[starts[s]:starts[s + 1]]``): the largest angle between two of its
+    usable corner normals. Sectors of more than ``pairwise`` corners, oriented, whose normals lie in
+    one open hemisphere around their mean m compare only the vertices of the convex hull of their
+    gnomonic projections ``(n·e₁, n·e₂) / (n·m)`` (e₁, e₂ ⟂ m): great circles project to lines,
+    and the angle to a point is quasi-convex along the arcs of a hemisphere, so the largest angle
+    is between hull vertices (up to rounding). Work O(m log m + h²) for h hull vertices."""
+    sectors = starts.size - 1
+    for chunk in prange(chunks):
+        for s in range(chunk * sectors // chunks, (chunk + 1) * sectors // chunks):
+            members = order[starts[s]:starts[s + 1]]
+            keep = np.empty(members.size, dtype=np.int64)
+            kept = 0
+            for corner in members:
+                a = normals[corner]
+                if np.sqrt((a[0] * a[0] + a[1] * a[1]) + a[2] * a[2]) > level:
+                    keep[kept] = corner
+                    kept += 1
+            keep = keep[:kept]
+            if kept > pairwise and oriented:
+                keep = _hull_corners(normals, keep)
+            best = 0.0
+            for i in range(keep.size):
+                for j in range(i + 1, keep.size):
+                    best = max(best, _pair_angle(normals[keep[i]], normals[keep[j]], oriented))
+            worst[s] = best
+
+
+def _hull_corners(normals: NDArray[np.float64], corners: NDArray[np.int64]) -> NDArray[np.int64]:
+    """The corners whose unit normals' gnomonic projections are vertices of their convex hull
+    (Andrew's monotone chain), or all of them when some normal is not within 90° of the mean."""
+    unit = np.empty((corners.size, 3))
+    mean = np.zeros(3)
+    for i in range(corners.size):
+        a = normals[corners[i]]
+        unit[i] = a / np.sqrt((a[0] * a[0] + a[1] * a[1]) + a[2] * a[2])
+        mean += unit[i]
+    mean /= np.sqrt((mean[0] * mean[0] + mean[1] * mean[1]) + mean[2] * mean[2])
+    axis = np.zeros(3)
+    axis[np.argmin(np.abs(mean))] = 1.0
+    e1 = np.cross(mean, axis)
+    e1 /= np.sqrt((e1[0] * e1[0] + e1[1] * e1[1]) + e1[2] * e1[2])
+    e2 = np.cross(mean, e1)
+    heights = unit @ mean
+    if heights.min() <= 0.0:
+        return corners
+    px, py = (unit @ e1) / heights, (unit @ e2) / heights
+    by_y = np.argsort(py, kind="mergesort")
+    sort = by_y[np.argsort(px[by_y], kind="mergesort")]  # by x, then y
+    hull = np.empty(2 * sort.size, dtype=np.int64)
+    size = 0
+    for sweep in range(2):
+        base = size
+        for step in range(sort.size):
+            p = sort[step] if sweep == 0 else sort[sort.size - 1 - step]
+            while size >= base + 2:
+                a, b = hull[size - 2], hull[size - 1]
+                if (px[b] - px[a]) * (py[p] - py[a]) - (py[b] - py[a]) * (px[p] - px[a]) > 0.0:
+                    break
+                size -= 1
+            hull[size] = p
+            size += 1
+        size -= 1  # each chain's last point starts the other
+    return corners[np.unique(hull[:max(size, 1)])]
+
+
+def _grid_tables(form: str, grid: NDArray[np.float64]) -> tuple[NDArray[Any], ...]:
+    """The grid kernel's tables: ``index (16,)`` (the point of net entry ``4 i + j``), the blend
+    pairs ``fn, fp (B,)``, the bases ``bu, dbu (G, 4)`` and ``bv, dbv (4, G)``, the blend weights
+    ``su, sv (B, G, G)`` (B = 4 for Gregory patches, 0 for a PatchSet)."""
+    basis = "bezier" if form == "gregory" else form
+    bu, dbu = basis_values(basis, grid), basis_values(basis, grid, 1)  # type: ignore[arg-type]
+    tables_v = np.ascontiguousarray(bu.T), np.ascontiguousarray(dbu.T)
+    if form != "gregory":
+        empty = np.zeros((0, len(grid), len(grid)))
+        none = np.zeros(0, dtype=np.int64)
+        return np.arange(16), none, none, bu, dbu, *tables_v, empty, empty
+    index = np.empty(16, dtype=np.int64)
+    index[4 * BEZIER_INDEX[:, 0] + BEZIER_INDEX[:, 1]] = np.arange(12)
+    index[4 * INTERIOR_INDEX[:, 0] + INTERIOR_INDEX[:, 1]] = 13 + 2 * np.arange(4)  # Fp_k
+    su, sv = (np.ascontiguousarray(np.moveaxis(table.reshape(len(grid), len(grid), 20)[..., 12::2], -1, 0))
+              for table in _gregory_grid_weights(grid))
+    return index, 12 + 2 * np.arange(4), 13 + 2 * np.arange(4), bu, dbu, *tables_v, su, sv
+
+
+def _gregory_grid_weights(grid: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The point weights of p_u and p_v on the grid, ``(2, G², 20)``, as :meth:`_GridMeasures._tangents` forms them."""
+    u, v = grid[:, None], grid[None, :]
+    return np.stack([gregory_weights(u, v, du, dv).reshape(-1, 20) for du, dv in ((1, 0), (0, 1))])
+
+
+def _turn_kernel(points: NDArray[np.float64], exact: NDArray[np.float64], level: float, patches: NDArray[np.int64],
+                 axes: NDArray[np.int64], chord2: NDArray[np.float64], angle: NDArray[np.float64]) -> None:
+    """For Gregory patches ``patches[c]`` and ``axes[c]`` (0: along u): the first largest squared
+    chord between neighbouring unit normals along that axis and the angle of its pair, from the
+    tangents summed as the reference's matrix product sums them (``exact (2, G², 20)``: the point
+    weights of p_u and p_v, a sequential fused multiply-add over the points), so the reference's
+    values (chord² −1 without pairs)."""
+    samples = exact.shape[1]
+    g = int(round(np.sqrt(samples)))
+    for c in prange(patches.size):
+        n, axis = patches[c], axes[c]
+        normal, unit = np.empty((samples, 3)), np.empty((samples, 3))
+        usable = np.empty(samples, dtype=np.bool_)
+        tangent = np.empty((2, 3))
+        for s in range(samples):
+            for q in range(2):
+                for d in range(3):
+                    acc = 0.0
+                    for m in range(20):
+                        acc = _fma(points[n, m, d], exact[q, s, m], acc)
+                    tangent[q, d] = acc
+            a, b = tangent[0], tangent[1]
+            n0, n1, n2 = a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
+            length = np.sqrt((n0 * n0 + n1 * n1) + n2 * n2)
+            usable[s] = length > level
+            inverse = 1.0 / max(length, _TINY)
+            normal[s, 0], normal[s, 1], normal[s, 2] = n0, n1, n2
+            unit[s, 0], unit[s, 1], unit[s, 2] = n0 * inverse, n1 * inverse, n2 * inverse
+        top, top_at, step = -1.0, -1, g if axis == 0 else 1
+        for a in range(g - 1 + axis):
+            for b in range(g - axis):
+                s = a * g + b
+                if usable[s] and usable[s + step]:
+                    c0, c1, c2 = unit[s + step, 0] - unit[s, 0], unit[s + step, 1] - unit[s, 1], unit[s + step, 2] - unit[s, 2]
+                    value = (c0 * c0 + c2 * c2) + c1 * c1
+                    if value > top:
+                        top, top_at = value, s
+        chord2[c] = top
+        angle[c] = _pair_angle(normal[top_at], normal[top_at + step], True) if top_at >= 0 else 0.0
+
+
+def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDArray[np.int64], fp: NDArray[np.int64],
+                 bu: NDArray[np.float64], dbu: NDArray[np.float64], bv: NDArray[np.float64], dbv: NDArray[np.float64],
+                 su: NDArray[np.float64], sv: NDArray[np.float64], weights: NDArray[np.float64],
+                 level: float, fairness: bool, code_min: int, lanes: int, chunks: int, location: NDArray[np.int64],
+                 degenerate: NDArray[np.int64], histogram: NDArray[np.int64], best: NDArray[np.float64],
+                 energy: NDArray[np.float64]) -> None:
+    """:meth:`_GridMeasures.add` for ``lanes`` patches at a time (the lanes, last axis of
+    every scratch array, so the arithmetic vectorises across patches), their grids in the cache:
+    tangents (fused multiply-adds: one u contraction of the net per row, 4 products and 4 blends
+    per point), normals, the corner-cell and 90° tests (``location``: the first offending sample
+    ``G i + j``, −1 if none), degenerate normals and, if ``fairness``, the histogram of the turns
+    (a row per chunk), the thin-plate energy, and per axis (u, v) the first largest squared chord
+    with the angle of its pair (``best (N, 4)``: chord², angle, chord², angle; chord² −1 without
+    pairs). Samples are flat, ``s = G i + j``."""
+    patches, g, blends, bins = points.shape[0], bu.shape[0], fn.size, histogram.shape[1]
+    gg, last = g * g, g - 1
+    groups = (patches + lanes - 1) // lanes
+    for chunk in prange(chunks):
+        tangent, normal, unit = np.empty((6, gg, lanes)), np.empty((3, gg, lanes)), np.empty((3, gg, lanes))
+        usable, offending = np.empty((gg, lanes), dtype=np.bool_), np.empty((gg, lanes), dtype=np.bool_)
+        chord2, narrow = np.empty((2, gg, lanes)), np.empty((gg, lanes), dtype=np.float32)
+        net, blend = np.zeros((3, 16, lanes)), np.zeros((3, 4, lanes))
+        row_u, row_v = np.empty((4, lanes)), np.empty((4, lanes))
+        column, row, total = np.empty((g, lanes)), np.empty(lanes), np.empty(lanes)
+        pair = np.empty((2, 3))
+        code = narrow.view(np.int32)
+        for group in range(chunk * groups // chunks, (chunk + 1) * groups // chunks):
+            first = group * lanes
+            count = min(lanes, patches - first)
+            for d in range(3):
+                for lane in range(count):
+                    for m in range(16):
+                        net[d, m, lane] = points[first + lane, index[m], d]
+                    for k in range(blends):
+                        blend[d, k, lane] = points[first + lane, fn[k], d] - points[first + lane, fp[k], d]
+            for d in range(3):
+                c, e = net[d], blend[d]
+                for a in range(g):
+                    w0, w1, w2, w3 = dbu[a, 0], dbu[a, 1], dbu[a, 2], dbu[a, 3]
+                    x0, x1, x2, x3 = bu[a, 0], bu[a, 1], bu[a, 2], bu[a, 3]
+                    for j in range(4):
+                        for lane in range(lanes):
+                            row_u[j, lane] = _fma(w3, c[12 + j, lane], _fma(w2, c[8 + j, lane], _fma(w1, c[4 + j, lane], w0 * c[j, lane])))
+                            row_v[j, lane] = _fma(x3, c[12 + j, lane], _fma(x2, c[8 + j, lane], _fma(x1, c[4 + j, lane], x0 * c[j, lane])))
+                    for b in range(g):
+                        out_u, out_v = tangent[d, a * g + b], tangent[3 + d, a * g + b]
+                        y0, y1, y2, y3 = bv[0, b], bv[1, b], bv[2, b], bv[3, b]
+                        z0, z1, z2, z3 = dbv[0, b], dbv[1, b], dbv[2, b], dbv[3, b]
+                        for lane in range(lanes):
+                            out_u[lane] = _fma(row_u[3, lane], y3, _fma(row_u[2, lane], y2, _fma(row_u[1, lane], y1, row_u[0, lane] * y0)))
+                            out_v[lane] = _fma(row_v[3, lane], z3, _fma(row_v[2, lane], z2, _fma(row_v[1, lane], z1, row_v[0, lane] * z0)))
+                        if blends:
+                            s0, s1, s2, s3 = su[0, a, b], su[1, a, b], su[2, a, b], su[3, a, b]
+                            t0, t1, t2, t3 = sv[0, a, b], sv[1, a, b], sv[2, a, b], sv[3, a, b]
+                            for lane in range(lanes):
+                                out_u[lane] = _fma(s3, e[3, lane], _fma(s2, e[2, lane], _fma(s1, e[1, lane], _fma(s0, e[0, lane], out_u[lane]))))
+                                out_v[lane] = _fma(t3, e[3, lane], _fma(t2, e[2, lane], _fma(t1, e[1, lane], _fma(t0, e[0, lane], out_v[lane]))))
+            for s in range(gg):
+                pu0, pu1, pu2, pv0, pv1, pv2 = tangent[0, s], tangent[1, s], tangent[2, s], tangent[3, s], tangent[4, s], tangent[5, s]
+                n0, n1, n2, h0, h1, h2 = normal[0, s], normal[1, s], normal[2, s], unit[0, s], unit[1, s], unit[2, s]
+                ok, bad = usable[s], offending[s]
+                for lane in range(lanes):
+                    x = pu1[lane] * pv2[lane] - pu2[lane] * pv1[lane]
+                    y = pu2[lane] * pv0[lane] - pu0[lane] * pv2[lane]
+                    z = pu0[lane] * pv1[lane] - pu1[lane] * pv0[lane]
+                    length = np.sqrt((x * x + y * y) + z * z)
+                    inverse = 1.0 / max(length, _TINY)
+                    n0[lane], n1[lane], n2[lane] = x, y, z
+                    h0[lane], h1[lane], h2[lane] = x * inverse, y * inverse, z * inverse
+                    ok[lane] = length > level
+                    bad[lane] = False
+            for axis in range(2):  # neighbours along u (s, s + G), along v (s, s + 1)
+                step = g if axis == 0 else 1
+                for s in range(gg - step):
+                    values, ahead = chord2[axis, s], s + step
+                    for lane in range(lanes):
+                        c0 = unit[0, ahead, lane] - unit[0, s, lane]
+                        c1 = unit[1, ahead, lane] - unit[1, s, lane]
+                        c2 = unit[2, ahead, lane] - unit[2, s, lane]
+                        values[lane] = (c0 * c0 + c2 * c2) + c1 * c1  # |n̂_a − n̂_b|² = 4 sin²(θ/2): > 2 where θ > 90°
+            for lane in range(count):
+                n = first + lane
+                lost = 0
+                for s in range(gg):
+                    lost += 0 if usable[s, lane] else 1
+                degenerate[chunk] += lost
+                for corner in range(4):  # the corner's grid cell: a patch turned over at its corner
+                    cu = 0 if corner == 0 or corner == 3 else last
+                    cv = 0 if corner < 2 else last
+                    o = cu * g + cv
+                    if not usable[o, lane]:
+                        continue
+                    step_u, step_v = (g if cu == 0 else -g), (1 if cv == 0 else -1)
+                    for cell in range(3):
+                        s = o + (0 if cell == 1 else step_u) + (0 if cell == 0 else step_v)
+                        dot = (normal[0, s, lane] * normal[0, o, lane] + normal[2, s, lane] * normal[2, o, lane]) + normal[1, s, lane] * normal[1, o, lane]
+                        if usable[s, lane] and dot < 0.0:
+                            offending[s, lane] = True
+                for axis in range(2):
+                    step = g if axis == 0 else 1
+                    if fairness:
+                        for s in range(gg - step):
+                            narrow[s, lane] = chord2[axis, s, lane]
+                    top, top_at = -1.0, -1
+                    for s in range(gg - step):
+                        if axis == 1 and s % g == last or not (usable[s, lane] and usable[s + step, lane]):
+                            continue
+                        value = chord2[axis, s, lane]
+                        if value > 2.0:
+                            offending[s, lane] = True
+                        if fairness:
+                            histogram[chunk, min(max((code[s, lane] >> _SHIFT) - (code_min - 1), 0), bins - 1)] += 1
+                            if value > top:
+                                top, top_at = value, s
+                    if fairness:
+                        best[n, 2 * axis], best[n, 2 * axis + 1] = top, 0.0
+                        if top_at >= 0:
+                            for d in range(3):
+                                pair[0, d], pair[1, d] = normal[d, top_at, lane], normal[d, top_at + step, lane]
+                            best[n, 2 * axis + 1] = _pair_angle(pair[0], pair[1], True)
+                location[n] = -1
+                for s in range(gg):
+                    if offending[s, lane]:
+                        location[n] = s
+                        break
+            if not fairness:
+                continue
+            total[:] = 0.0
+            for plane in range(2):
+                q0, q1, q2 = tangent[3 * plane], tangent[3 * plane + 1], tangent[3 * plane + 2]
+                column[:] = 0.0  # along u: Σ_i per column j, then the trapezoid weights
+                for a in range(last):
+                    for b in range(g):
+                        s = a * g + b
+                        for lane in range(lanes):
+                            c0, c1, c2 = q0[s + g, lane] - q0[s, lane], q1[s + g, lane] - q1[s, lane], q2[s + g, lane] - q2[s, lane]
+                            column[b, lane] += (c0 * c0 + c2 * c2) + c1 * c1
+                row[:] = 0.0
+                for b in range(g):
+                    for lane in range(lanes):
+                        row[lane] += weights[b] * column[b, lane]
+                total += row
+                column[:] = 0.0  # along v: Σ_j per row i
+                for a in range(g):
+                    for b in range(last):
+                        s = a * g + b
+                        for lane in range(lanes):
+                            c0, c1, c2 = q0[s + 1, lane] - q0[s, lane], q1[s + 1, lane] - q1[s, lane], q2[s + 1, lane] - q2[s, lane]
+                            column[a, lane] += (c0 * c0 + c2 * c2) + c1 * c1
+                row[:] = 0.0
+                for a in range(g):
+                    for lane in range(lanes):
+                        row[lane] += weights[a] * column[a, lane]
+                total += row
+            for lane in range(count):
+                energy[first + lane] = total[lane]

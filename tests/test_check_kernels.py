@@ -1,0 +1,153 @@
+"""The compiled check (numba kernels) against its NumPy reference (``compiled=False``).
+
+Counts, folds, their locations and the turn histogram must be equal; so must the turn maximum (the
+kernels recompute its pair as the reference sums it). Angles and gaps may differ by the rounding
+of the tangents: the kernels sum the edge and corner samples as OpenBLAS's dgemm micro-kernel does
+(a sequential fused multiply-add), which equals the reference except on the rows OpenBLAS gives
+its tail kernels; there a tangent differs by a few ULP of ``Σ |w_m| |P_m|``, and so does a normal,
+so an angle (atan2 of vectors of that accuracy) differs by at most :data:`ANGLE_ATOL` radians
+measured ≤ 2e-13° = 16 ε rad on the shared meshes), and a gap by :data:`GAP_ATOL` of the diagonal.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from g1patch import shapes
+from g1patch.api import as_network, read
+from g1patch.build import build_gregory_network, build_split4_network
+from g1patch.continuity import ContinuityReport, check, fairness, folded_patches
+from g1patch.gregory import BEZIER_INDEX, INTERIOR_INDEX, GregoryPatchSet
+from g1patch.network import PatchNetwork
+from g1patch.patches import PatchSet
+
+EPS = float(np.finfo(float).eps)
+#: angles (degrees): 64 ε radians, 4× the largest difference measured (16 ε, catmark_xord_interior)
+ANGLE_ATOL = 64 * EPS * 180 / np.pi
+#: gaps relative to the diagonal: 4 ε (measured ≤ 0.3 ε)
+GAP_ATOL = 4 * EPS
+#: thin-plate energy, relative: its sums run in another order over tangents of a few ULP
+#: difference, whose neighbours' differences lose up to log2(G) bits (measured ≤ 1.4 ε)
+ENERGY_RTOL = 64 * EPS
+
+
+def energy_atol(report: ContinuityReport) -> float:
+    """Absolute slack of the thin-plate energy of flat patches (energy at the rounding level): per
+    patch 4 G² squared differences of tangents (~ diag) each off by up to 16 ε."""
+    return report.patches * 4 * report.fold_samples**2 * (16 * EPS) ** 2
+
+EXACT = (
+    "patches", "shared_edges", "open_edges", "collapsed_edges", "collapsed_patch_edges", "samples_per_edge",
+    "degenerate_normals", "folds", "inconsistent_orientation_edges", "bounding_box_diagonal", "max_vertex_deviation",
+    "fold_samples", "fold_locations", "turn_median_deg", "turn_p99_deg", "turn_max_deg", "seam_edges",
+)
+ANGLES = ("max_edge_angle_deg", "mean_edge_angle_deg", "max_corner_angle_deg", "seam_angle_min_deg", "seam_angle_max_deg")
+
+
+def assert_same_report(compiled: ContinuityReport, reference: ContinuityReport) -> None:
+    """The kernels' report equals the reference's: exactly, or within the bounds above."""
+    for name in EXACT:
+        assert getattr(compiled, name) == getattr(reference, name), name
+    for name in ("edge_patches", "edge_sides", "edge_seam"):
+        np.testing.assert_array_equal(getattr(compiled, name), getattr(reference, name), err_msg=name)
+    for name in ANGLES:
+        value, expected = getattr(compiled, name), getattr(reference, name)
+        assert (value is None) == (expected is None), name
+        if value is not None:
+            assert abs(value - expected) <= ANGLE_ATOL, (name, value, expected)
+    np.testing.assert_allclose(compiled.edge_angle_deg, reference.edge_angle_deg, rtol=0, atol=ANGLE_ATOL)
+    np.testing.assert_allclose(compiled.edge_gap, reference.edge_gap, rtol=0, atol=GAP_ATOL)
+    assert abs(compiled.max_g0_gap - reference.max_g0_gap) <= GAP_ATOL
+    assert abs(compiled.seam_g0_max - reference.seam_g0_max) <= GAP_ATOL
+    assert compiled.thin_plate == pytest.approx(reference.thin_plate, rel=ENERGY_RTOL, abs=energy_atol(reference))
+
+
+MESHES: dict[str, Callable[[], object]] = {
+    "torus": lambda: shapes.torus(12, 8),
+    "cube_sphere": lambda: shapes.cube_sphere(2),
+    "fan": lambda: shapes.fan(7, 2),
+    "flat_fan": lambda: shapes.flat_fan(9),
+    "noisy_sphere": lambda: shapes.noisy_sphere(2, 0.3),
+    "filleted_box": lambda: shapes.filleted_box(4),
+    "box_cage": lambda: shapes.box_cage(),
+}
+
+
+@pytest.mark.parametrize("build", [build_gregory_network, build_split4_network])
+@pytest.mark.parametrize("name", sorted(MESHES))
+def test_generated_meshes_report_as_the_reference(name: str, build: Callable[..., PatchNetwork]) -> None:
+    network = build(MESHES[name]())
+    assert_same_report(check(network), check(network, compiled=False))
+
+
+def test_shared_meshes_report_as_the_reference(shared_data: Path) -> None:
+    paths = sorted(shared_data.glob("*.obj")) + [shared_data / "teapot.bpt"]
+    for path in paths:
+        source = read(path)
+        networks = [source] if isinstance(source, PatchNetwork) else [build_gregory_network(source), build_split4_network(source)]
+        for network in networks:
+            assert_same_report(check(network), check(network, compiled=False))
+
+
+def perturbed(network: PatchNetwork, scale: float, seed: int, moved: slice = slice(12, 20)) -> PatchNetwork:
+    """``network`` with its Gregory points ``moved`` (default: the interior ones, so shared
+    boundaries are kept) moved at random by ``scale`` × the diagonal: patches folded, edges and
+    corners (edge points moved) far from G1."""
+    patches = network.patches
+    assert isinstance(patches, GregoryPatchSet)
+    points = patches.points.copy()
+    rng = np.random.default_rng(seed)
+    points[:, moved] += scale * network.bounding_box_diagonal() * rng.standard_normal(points[:, moved].shape)
+    return dataclasses.replace(network, patches=GregoryPatchSet(points, patches.frame))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_folds_and_their_locations_as_the_reference(seed: int) -> None:
+    network = perturbed(build_gregory_network(shapes.torus(10, 6)), 0.2, seed)
+    compiled, reference = check(network), check(network, compiled=False)
+    assert reference.folds > 10  # the test can fail: many folds, located
+    assert_same_report(compiled, reference)
+
+
+@pytest.mark.parametrize("samples", [2, 3, 9, 17])
+def test_folded_patches_as_the_reference(samples: int) -> None:
+    # flat unit squares with their control points moved at random: some fold, some do not
+    rng = np.random.default_rng(samples)
+    grid = np.stack(np.meshgrid(np.arange(4) / 3, np.arange(4) / 3, [0.0], indexing="ij"), axis=-1).reshape(4, 4, 3)
+    index = np.r_[BEZIER_INDEX, np.repeat(INTERIOR_INDEX, 2, axis=0)]
+    gregory = GregoryPatchSet(grid[index[:, 0], index[:, 1]] + 0.3 * rng.standard_normal((300, 20, 3)))
+    bezier = PatchSet(grid + 0.3 * rng.standard_normal((300, 4, 4, 3)), "bezier")
+    bspline = PatchSet(grid + 0.3 * rng.standard_normal((300, 4, 4, 3)), "bspline")
+    for patches in (gregory, bezier, bspline):
+        folded = folded_patches(patches, samples)
+        np.testing.assert_array_equal(folded, folded_patches(patches, samples, compiled=False))
+        assert 0 < folded.sum() < len(folded)
+
+
+def test_degenerate_normals_counted_as_the_reference() -> None:
+    # a collapsed edge: corners 0 and 1 of every patch are one point
+    network = build_gregory_network(shapes.cube_sphere(1))
+    points = network.patches.points.copy()
+    points[:, [1, 6, 7]] = points[:, [0]]
+    patches = GregoryPatchSet(points)
+    compiled = fairness(as_network(patches))
+    reference = fairness(as_network(patches), compiled=False)
+    assert compiled["turn_max_deg"] == reference["turn_max_deg"]
+    assert compiled["thin_plate"] == pytest.approx(reference["thin_plate"], rel=ENERGY_RTOL)
+    assert check(patches).degenerate_normals == check(patches, compiled=False).degenerate_normals > 0
+
+
+@pytest.mark.parametrize("valence", [65, 200])
+def test_large_sectors_as_the_reference(valence: int) -> None:
+    # more corners than the kernels compare pairwise: the gnomonic hull's vertices only
+    network = build_gregory_network(shapes.fan(valence))
+    assert_same_report(check(network), check(network, compiled=False))
+    bent = perturbed(network, 0.01, 3, slice(4, 12))
+    compiled, reference = check(bent), check(bent, compiled=False)
+    assert reference.max_corner_angle_deg > 1.0
+    assert abs(compiled.max_corner_angle_deg - reference.max_corner_angle_deg) <= ANGLE_ATOL
