@@ -1,0 +1,86 @@
+"""STEP export of the default (Gregory) networks per CAD method: file size, time, deviation, OCC's G1 angle.
+
+Workload: every mesh of the shared data (``--data``, default ``../shared/data``; ``--meshes`` picks
+some), built with the defaults (Gregory, interpolate; not timed). Per mesh and method, in the same run:
+
+* ``fit`` (the baseline: the previous default): each Gregory patch fitted on adaptive knots within
+  1e-6 of the diagonal (:func:`g1patch.io.cad.fit_bspline_surfaces`);
+* ``split4`` (the default where the network has no seams): the split4 re-assembly of the network's
+  targets, written exactly (:mod:`g1patch.construct.polynomial`); networks with seams: "n/a".
+
+Columns: faces; a closed solid, OCC's validity (``BRepCheck_Analyzer``); the file's bytes; the export's wall time (``export_step``, one run, the G1
+measurement included); the deviation from the Gregory surface over the bounding-box diagonal (fit:
+its fit deviation; split4: the foot-point distance); OCC's max angle across shared smooth edges on
+the written shape and on the file read back (:func:`g1patch.io.cad.file_g1_angles`); ratios
+split4 / fit of bytes and time. Times drift on a shared machine; the ratios are of the same run.
+
+Run:  .venv/bin/python benchmarks/bench_cad.py [--data DIR] [--meshes NAME ...] [--out DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import tempfile
+import time
+from pathlib import Path
+
+
+from g1patch.build import build_network
+from g1patch.construct.polynomial import split4_of_gregory
+from g1patch.io.cad import ExportResult, export_step, file_g1_angles
+from g1patch.io.meshfile import read_mesh
+from g1patch.network import PatchNetwork
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+METHODS = ("fit", "split4")
+
+
+def file_angle(result: ExportResult, written: PatchNetwork) -> float:
+    """OCC's max angle across shared smooth edges of the file read back."""
+    angles = file_g1_angles(result.path, written)
+    patch, edge = written.shared_edges()
+    smooth = ~written.seam[patch, edge]
+    return float(angles[smooth].max()) if smooth.any() else 0.0
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", type=Path, default=DATA)
+    parser.add_argument("--meshes", nargs="*", help="mesh names (file stems); default: every .obj in --data")
+    parser.add_argument("--out", type=Path, help="folder for the STEP files (default: a temporary one, removed)")
+    args = parser.parse_args()
+    paths = sorted(args.data.glob("*.obj"))
+    if args.meshes:
+        paths = [p for p in paths if p.stem in args.meshes]
+    print(f"# {platform.processor() or platform.machine()}, Python {platform.python_version()}; export_step of the default network")
+    header = (f"{'mesh':26} {'method':7} {'faces':>6} {'solid':>5} {'valid':>5} {'bytes':>11} {'time s':>7} {'dev/diag':>9} "
+              f"{'OCC max° (shape)':>17} {'OCC max° (file)':>16} {'bytes ratio':>11} {'time ratio':>10}")
+    print(header)
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = args.out or Path(scratch)
+        folder.mkdir(parents=True, exist_ok=True)
+        for path in paths:
+            network = build_network(read_mesh(path))
+            diagonal = network.bounding_box_diagonal()
+            rows: dict[str, tuple[ExportResult, float, float]] = {}
+            for method in METHODS:
+                if method == "split4" and network.seam.any():
+                    print(f"{path.stem:26} {method:7} n/a: {network.n_seams} seams (split4 does not keep them yet; auto = fit)")
+                    continue
+                start = time.perf_counter()
+                result = export_step(folder / f"{path.stem}.{method}.step", network, method=method)
+                seconds = time.perf_counter() - start
+                written = split4_of_gregory(network) if method == "split4" else network
+                rows[method] = (result, seconds, file_angle(result, written))
+            base = rows["fit"]
+            for method, (result, seconds, angle) in rows.items():
+                ratios = (f"{result.file_bytes / base[0].file_bytes:11.3f} {seconds / base[1]:10.3f}"
+                          if method != "fit" else f"{'1':>11} {'1':>10}")
+                print(f"{path.stem:26} {method:7} {result.faces:6d} {result.solid!s:>5} {result.valid!s:>5} "
+                      f"{result.file_bytes:11,d} {seconds:7.2f} "
+                      f"{result.deviation / diagonal:9.2e} {result.max_g1_angle_deg:17.2e} {angle:16.2e} {ratios}")
+
+
+if __name__ == "__main__":
+    main()
