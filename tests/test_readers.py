@@ -19,6 +19,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from g1patch import shapes
 from g1patch.errors import FormatError, G1PatchError
 from g1patch.io import meshfile
 from g1patch.io.meshfile import read_mesh
@@ -27,14 +28,14 @@ from g1patch.mesh import QuadMesh
 SETTINGS = settings(max_examples=300, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
 PATH = Path("mesh.obj")
 
-#: how a coordinate may be spelt; the fast path reads the last ones as float() does, not by np.fromstring
-COORDINATES = st.one_of(
+#: how a coordinate may be spelt; the fast path reads those with '_' as float() does, not by np.fromstring
+PLAIN_COORDINATES = st.one_of(
     st.floats(-1e6, 1e6, allow_nan=False).map(repr),
     st.floats(allow_nan=False, allow_infinity=False).map(repr),
     st.integers(-1000, 1000).map(str),
     st.sampled_from(["0", "-0", "+1.5", ".5", "-.25", "5.", "1e3", "1E-3", "-2.5e+2", "0.30000000000000004", "4.9e-324"]),
-    st.sampled_from(["1_0", "1_000.5"]),
 )
+COORDINATES = st.one_of(PLAIN_COORDINATES, st.sampled_from(["1_0", "1_000.5"]))
 SPACE = st.sampled_from([" ", "  ", "\t", " \t "])
 NEWLINE = st.sampled_from(["\n", "\r\n", "\r"])
 
@@ -244,3 +245,64 @@ def test_binary_ply_other_layouts_go_to_meshio(tmp_path: Path) -> None:
         read_mesh(path)
     path.write_bytes(quads.replace(b"property list uchar int vertex_indices", b"property list uchar int vertex_index\x20"))
     assert meshfile._ply_records(path.read_bytes()) is None
+
+
+# -- ASCII PLY -----------------------------------------------------------------------------------
+
+
+@st.composite
+def ascii_ply_files(draw) -> bytes:
+    """An ASCII PLY file of a few faces (double coordinates, maybe a normal per vertex, mixed corner
+    counts), maybe damaged: the fast path reads it as meshio does, or declines."""
+    n = draw(st.integers(3, 10))
+    normals = draw(st.booleans())
+    width = 6 if normals else 3
+    coordinates = draw(st.lists(st.lists(PLAIN_COORDINATES, min_size=width, max_size=width), min_size=n, max_size=n))
+    faces = draw(st.lists(st.lists(st.integers(0, n - 1), min_size=3, max_size=5), min_size=1, max_size=6))
+    properties = ["property double x", "property double y", "property double z"]
+    properties += ["property double nx", "property double ny", "property double nz"] if normals else []
+    index = draw(st.sampled_from(["int", "uint32", "int32"]))
+    lines = ["ply", "format ascii 1.0", "comment generated", f"element vertex {n}", *properties, f"element face {len(faces)}",
+             f"property list uchar {index} vertex_indices", "end_header"]
+    lines += [draw(SPACE).join(row) for row in coordinates]
+    lines += [draw(SPACE).join(map(str, [len(face), *face])) for face in faces]
+    damage = draw(st.sampled_from([None] * 4 + ["token", "line", "blank", "comment", "crlf"]))
+    if damage == "token":
+        row = draw(st.integers(len(lines) - n - len(faces), len(lines) - 1))
+        parts = lines[row].split()
+        parts[draw(st.integers(0, len(parts) - 1))] = draw(st.sampled_from(["x", "-", "nan", "99", "-1", "1.5", "2"]))
+        lines[row] = " ".join(parts)
+    elif damage == "line":
+        del lines[draw(st.integers(len(lines) - n - len(faces), len(lines) - 1))]
+    elif damage == "blank":
+        lines.insert(draw(st.integers(len(lines) - n - len(faces), len(lines))), "")
+    elif damage == "comment":
+        lines[-1] += " # a comment"
+    newline = "\r\n" if damage == "crlf" else "\n"
+    return (newline.join(lines) + newline).encode()
+
+
+@SETTINGS
+@given(ascii_ply_files())
+def test_ascii_ply_fast_path_is_meshio(tmp_path_factory, data: bytes) -> None:
+    path = tmp_path_factory.mktemp("ply") / "m.ply"
+    path.write_bytes(data)
+    fast = meshfile._ply_text(data)
+    reference = outcome(meshfile._read_ply, path, data)  # through the fast path where it accepts the file
+    try:
+        expected = meshfile._ply_meshio(path, meshfile._ply_header(path, data))
+    except FormatError as error:
+        assert fast is None and reference == ("FormatError", str(error), None)
+        return
+    if fast is not None:
+        assert fast[0].tobytes() == expected[0].tobytes()
+        assert fast[1].tolist() == expected[1].tolist() and fast[2].tolist() == expected[2].tolist()
+
+
+def test_ascii_ply_as_meshio_writes_it_takes_the_fast_path(tmp_path: Path) -> None:
+    mesh = shapes.torus(6, 4)
+    path = tmp_path / "torus.ply"
+    meshio.ply.write(str(path), meshio.Mesh(mesh.vertices, [("quad", mesh.faces.astype(np.int32))]), binary=False)
+    assert meshfile._ply_text(path.read_bytes()) is not None
+    again = read_mesh(path)
+    assert again.vertices.tobytes() == mesh.vertices.tobytes() and again.faces.tolist() == mesh.faces.tolist()
