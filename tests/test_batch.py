@@ -281,3 +281,15 @@ def test_interrupt_writes_the_summary_so_far(meshes: Path, tmp_path: Path, monke
         batch.run_batch([meshes], out)
     statuses = {name: record["status"] for name, record in summary(out).items()}
     assert statuses == {"broken.obj": "failed", "cube.obj": "cancelled", "grid.ply": "cancelled", "torus.obj": "cancelled"}
+
+
+def test_cad_exports_record_what_opencascade_measured(meshes: Path, tmp_path: Path) -> None:
+    pytest.importorskip("OCP", reason="STEP export needs cadquery-ocp-novtk: pip install 'g1patch[cad]'")
+    from g1patch.batch import _json_ready
+
+    record = convert(Job(str(meshes / "cube.obj"), (str(tmp_path / "cube.step"),), BuildOptions()))
+    assert record["status"] == "built", record["error"]
+    step = record["cad"]["step"]
+    assert step["faces"] == 6 and step["max_g1_angle_deg"] <= 1e-9 and step["path"] == str(tmp_path / "cube.step")
+    json.dumps(_json_ready(record), allow_nan=False)  # summary.json holds it as it is
+    assert _json_ready({"a": float("nan"), "b": (1, float("inf"))}) == {"a": None, "b": [1, None]}

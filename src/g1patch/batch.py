@@ -36,6 +36,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .api import CAD_SUFFIXES, EXPORT_SUFFIXES, MESH_SUFFIXES, PathLike
 from .errors import G1PatchError, InputError, MissingDependencyError, check_choice
 
@@ -216,7 +218,7 @@ def _record(job: Job, status: str = CANCELLED) -> dict[str, Any]:
         "input": job.source, "name": Path(job.source).name, "status": status, **asdict(job.options),
         "patches": None, "max_g1_angle_deg": None, "max_edge_angle_deg": None, "max_corner_angle_deg": None,
         "folds": None, "repairs": [], "seams": None, "fallback_vertices": None,
-        "times": {}, "outputs": [], "error": None, "note": None,
+        "times": {}, "outputs": [], "cad": {}, "error": None, "note": None,
     }
 
 
@@ -271,9 +273,12 @@ def convert(job: Job) -> dict[str, Any]:
                       max_corner_angle_deg=_finite(report.max_corner_angle_deg), folds=report.folds)
         times["export"] = {}
         for output in job.outputs:
-            surface.export(output)
-            times["export"][Path(output).suffix[1:]] = lap()
+            written = surface.export(output)
+            name = Path(output).suffix[1:]
+            times["export"][name] = lap()
             record["outputs"].append(output)
+            if not isinstance(written, Path):  # STEP/IGES: faces, deviation, OpenCASCADE's G1 angles
+                record["cad"][name] = written.to_dict()
         record["status"] = BUILT
         if mesh.repairs:
             record["note"] = mesh.repair_note
@@ -409,7 +414,23 @@ def _write_summary(folder: Path, records: list[dict[str, Any]], formats: Sequenc
         "files": records,
     }
     with atomic_path(folder / SUMMARY_NAME) as temporary:
-        temporary.write_text(json.dumps(summary, indent=1, allow_nan=False) + "\n", encoding="utf-8")
+        temporary.write_text(json.dumps(_json_ready(summary), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+
+
+def _json_ready(value: Any) -> Any:
+    """``value`` with NaN and infinities as None (JSON has neither), NumPy scalars as Python's, and
+    anything else JSON lacks as its str."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, dict):
+        return {str(key): _json_ready(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_ready(item) for item in value]
+    if isinstance(value, bool) or value is None or isinstance(value, (int, str)):
+        return value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    return str(value)
 
 
 # ------------------------------------------------------------------------------- the table
