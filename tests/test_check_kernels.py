@@ -5,9 +5,10 @@ kernels recompute its pair as the reference sums it). Angles and gaps may differ
 of the tangents: the kernels sum the edge and corner samples as OpenBLAS's dgemm micro-kernel does
 (a sequential fused multiply-add), which equals the reference except on the rows OpenBLAS gives
 its tail kernels; there a tangent differs by a few ULP of ``Σ |w_m| |P_m|``, and so does a normal,
-so an angle (atan2 of vectors of that accuracy) differs by at most :data:`ANGLE_ATOL` radians
-measured ≤ 2e-13° = 16 ε rad on the shared meshes), and a gap by :data:`GAP_ATOL` of the diagonal.
-"""
+so an angle (atan2 of vectors of that accuracy) differs by at most :data:`ANGLE_ATOL` (measured
+≤ 4.0e-13° = 32 ε rad on the shared meshes, spot's Gregory network), and a gap by
+:data:`GAP_ATOL` of the diagonal. The reference is no steadier: its own gaps move as much with its
+``chunk`` (which rows fall in BLAS's tail kernels)."""
 
 from __future__ import annotations
 
@@ -27,8 +28,9 @@ from g1patch.network import PatchNetwork
 from g1patch.patches import PatchSet
 
 EPS = float(np.finfo(float).eps)
-#: angles (degrees): 64 ε radians, 4× the largest difference measured (16 ε, catmark_xord_interior)
-ANGLE_ATOL = 64 * EPS * 180 / np.pi
+#: angles (degrees): 128 ε radians, 4× the largest difference measured (32 ε, spot): a normal's
+#: direction is off by a few ULP of Σ |w_m| |P_m| / |p_u|, tens of ε for small patches
+ANGLE_ATOL = 128 * EPS * 180 / np.pi
 #: gaps relative to the diagonal: 4 ε (measured ≤ 0.3 ε)
 GAP_ATOL = 4 * EPS
 #: thin-plate energy, relative: its sums run in another order over tangents of a few ULP
