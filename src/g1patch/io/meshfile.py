@@ -190,12 +190,16 @@ def _scan(data: bytes) -> _Lines | None:
         text = _uncommented(text)
     if b"\t" in text:
         text = text.replace(b"\t", b" ")
-    if b"  " in text:
-        text = _SPACES.sub(b" ", text)
-    if b" \n" in text or b"\n " in text or text.startswith(b" ") or text.endswith(b" "):
-        text = _EDGE_SPACE.sub(b"", text)
+    separators = _separators(text)
+    if separators is None:
+        return None
+    # a run of spaces, or a space at either end of a line (two-byte searches are slow: found here)
+    adjacent = np.flatnonzero(np.diff(separators) == 1)
     array = np.frombuffer(text, dtype=np.uint8)
-    separators = np.flatnonzero((array == ord(" ")) | (array == ord("\n")))
+    messy = (array[separators[adjacent]] == ord(" ")) | (array[separators[adjacent + 1]] == ord(" "))
+    if messy.any() or text.startswith(b" ") or text.endswith(b" "):
+        text = _EDGE_SPACE.sub(b"", _SPACES.sub(b" ", text))
+        array, separators = np.frombuffer(text, dtype=np.uint8), _separators(text)
     newlines = np.flatnonzero(array[separators] == ord("\n"))
     ends = separators[newlines]
     if text and not text.endswith(b"\n"):
@@ -203,6 +207,15 @@ def _scan(data: bytes) -> _Lines | None:
     starts = np.concatenate(([0], ends[:-1] + 1)).astype(np.int64)
     spaces = np.diff(newlines, prepend=-1) - 1  # separators between a line's end and the previous one's
     return _Lines(text, array, starts, ends.astype(np.int64), np.where(ends > starts, spaces + 1, 0))
+
+
+def _separators(text: bytes) -> NDArray[np.int64] | None:
+    """Where ``text`` (no tab or CR) has a space or LF; None if it has another control byte, which
+    ``str.split`` does not split at."""
+    array = np.frombuffer(text, dtype=np.uint8)
+    separators = np.flatnonzero(array <= ord(" "))
+    kinds = array[separators]
+    return None if ((kinds != ord(" ")) & (kinds != ord("\n"))).any() else separators
 
 
 def _uncommented(text: bytes) -> bytes:
