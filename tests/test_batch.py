@@ -271,8 +271,8 @@ def test_interrupt_writes_the_summary_so_far(meshes: Path, tmp_path: Path, monke
     """Ctrl-C during a batch: the records done are kept, the others marked cancelled, and it is raised again."""
     import g1patch.batch as batch
 
-    def run(jobs: list[Job], *rest: object) -> Iterator[dict]:
-        yield convert(jobs[0])
+    def run(jobs: list[Job], scheduler: object, workers: object, progress: object, done: dict) -> None:
+        done[jobs[0].source] = convert(jobs[0])
         raise KeyboardInterrupt
 
     monkeypatch.setattr(batch, "_run", run)

@@ -28,9 +28,10 @@ import json
 import logging
 import math
 import os
+import signal
 import sys
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from contextlib import ExitStack
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -307,6 +308,21 @@ def _distributed() -> Any:
     return distributed
 
 
+def _ignoring_interrupts() -> Any:
+    """A worker plugin: the embedded cluster's worker processes ignore SIGINT. Ctrl-C reaches the
+    whole process group; the command handles it and closes the cluster (each worker would print
+    its own KeyboardInterrupt traceback)."""
+    from distributed.diagnostics.plugin import WorkerPlugin
+
+    class IgnoreInterrupts(WorkerPlugin):
+        name = "g1patch-ignore-interrupts"
+
+        def setup(self, worker: Any) -> None:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+    return IgnoreInterrupts()
+
+
 def _client(stack: ExitStack, scheduler: str | None, workers: int | None, n_jobs: int) -> tuple[Any, str]:
     """A connected ``distributed.Client`` (closed by ``stack``) and a phrase saying where it runs."""
     Client, LocalCluster = _distributed().Client, _distributed().LocalCluster
@@ -316,7 +332,9 @@ def _client(stack: ExitStack, scheduler: str | None, workers: int | None, n_jobs
             n_workers=count, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
             silence_logs=logging.CRITICAL,  # a record says what failed; no shutdown races on stderr
         ))
-        return stack.enter_context(Client(cluster)), f"{count} local worker{'s' if count > 1 else ''}"
+        client = stack.enter_context(Client(cluster))
+        client.register_plugin(_ignoring_interrupts())
+        return client, f"{count} local worker{'s' if count > 1 else ''}"
     try:
         client = stack.enter_context(Client(scheduler))
     except (OSError, TimeoutError, ValueError) as error:
@@ -330,8 +348,11 @@ def _client(stack: ExitStack, scheduler: str | None, workers: int | None, n_jobs
     return client, f"the cluster at {scheduler} ({count} worker{'s' if count > 1 else ''})"
 
 
-def _run(jobs: Sequence[Job], scheduler: str | None, workers: int | None, progress: bool) -> Iterator[dict[str, Any]]:
-    """The records of ``jobs`` as they finish, one task each on the cluster."""
+def _run(jobs: Sequence[Job], scheduler: str | None, workers: int | None, progress: bool,
+         done: dict[str, dict[str, Any]]) -> None:
+    """Run ``jobs`` on the cluster, one task each, putting each record into ``done`` (by input path)
+    as it finishes. On an interrupt the tasks already finished are collected too before it is raised
+    again, so that their outputs count as built."""
     from tqdm import tqdm
 
     as_completed = _distributed().as_completed
@@ -342,13 +363,19 @@ def _run(jobs: Sequence[Job], scheduler: str | None, workers: int | None, progre
         futures = {client.submit(convert, job, pure=False): job for job in jobs}
         bar = stack.enter_context(tqdm(total=len(jobs), desc="batch", unit="file", file=sys.stderr,
                                        disable=not progress, leave=False))
-        for future in as_completed(futures):
-            try:
-                record = future.result()
-            except Exception as error:  # the task died (its worker killed, the cluster gone)
-                record = {**_record(futures[future], FAILED), "error": f"task lost: {one_line(error)}"}
-            bar.update()
-            yield record
+        try:
+            for future in as_completed(futures):
+                try:
+                    record = future.result()
+                except Exception as error:  # the task died (its worker killed, the cluster gone)
+                    record = {**_record(futures[future], FAILED), "error": f"task lost: {one_line(error)}"}
+                done[record["input"]] = record
+                bar.update()
+        except KeyboardInterrupt:
+            finished = [future for future in futures if future.status == "finished"]
+            for record in client.gather(finished, errors="skip"):
+                done.setdefault(record["input"], record)
+            raise
 
 
 def run_batch(
@@ -393,8 +420,7 @@ def run_batch(
 
     try:
         if jobs:
-            for record in _run(jobs, scheduler, workers, progress):
-                done[record["input"]] = record
+            _run(jobs, scheduler, workers, progress, done)
     except KeyboardInterrupt:
         _write_summary(folder, records(), formats, time.perf_counter() - start, scheduler)
         raise
