@@ -108,27 +108,48 @@ def test_split4_patches_refuse_a_guide_of_the_wrong_shape() -> None:
 # ------------------------------------------------------------------------------- export
 
 
+OPEN = {"catmark_xord_interior", "catmark_tent_creases1", "catmark_dart_edgecorner"}
+
+
 @requires_ocp
-@pytest.mark.parametrize("name", ["catmark_cube", "catmark_torus", "catmark_xord_interior"])
+@pytest.mark.parametrize("name", ["catmark_cube", "catmark_torus", "catmark_xord_interior", "catmark_cube_creases2",
+                                  "catmark_torus_creases0", "catmark_tent_creases1", "catmark_dart_edgecorner"])
 def test_default_export_of_a_gregory_network_is_g1_in_opencascade(name: str, shared_data: Path, tmp_path: Path) -> None:
     """The acceptance: valid (a solid where the mesh is closed), OCC's normals of the file read
-    back agree across every shared edge to ≤ 1e-7°, the deviation reported is the re-assembly's."""
+    back agree across every shared edge but seams to ≤ 1e-7°, seams kept, the deviation reported
+    is the re-assembly's."""
     from g1patch.io.cad import export_step, file_g1_angles
 
     network = gregory(name, shared_data)
     result = export_step(tmp_path / f"{name}.step", network)
-    closed = name != "catmark_xord_interior"
-    assert result.method == "split4" and result.exact and result.valid and result.solid == closed
+    closed = name not in OPEN
+    flat = name == "catmark_cube_creases2"  # every Gregory patch a bicubic (its pairs agree): written as it is
+    assert result.method == ("exact" if flat else "split4") and result.exact and result.valid and result.solid == closed
     assert result.faces == network.n_patches and (result.free_edges == 0) == closed
     assert result.g1_measured and result.max_g1_angle_deg <= 1e-7
-    split4 = split4_of_gregory(network)
-    angles = file_g1_angles(result.path, split4)
+    split4 = network if flat else split4_of_gregory(network)
+    assert result.seam_edges == network.n_seams  # each a sharp edge of the B-rep
+    patch, edge = split4.shared_edges()
+    angles = file_g1_angles(result.path, split4)[~split4.seam[patch, edge]]
     assert angles.max() <= 1e-9  # 15 significant digits (compact_step) leave ~1e-12° here, Spot 5e-10°
-    assert result.deviation == surface_deviation(network, split4)[1]
+    assert result.deviation == (0.0 if flat else surface_deviation(network, split4)[1])
     assert result.relative_deviation == pytest.approx(result.deviation / network.bounding_box_diagonal(), rel=1e-12)
     assert result.file_bytes == result.path.stat().st_size
     if name == "catmark_cube":
-        assert result.relative_deviation <= 1e-3 and result.file_bytes <= 50_000  # measured 1.5e-4, 19.7 KB
+        assert result.relative_deviation <= 1e-3 and result.file_bytes <= 50_000  # measured 1.5e-4, 19.3 KB
+
+
+def test_seams_stay_seams_and_close(shared_data: Path) -> None:
+    """A seamed network cut open for split4: exactly G1 off the seams, the seams closed (G0 to
+    rounding: both sides share each seam curve) and marked, crease angles as the Gregory network's."""
+    from g1patch.continuity import check
+
+    network = gregory("catmark_cube_creases2", shared_data)
+    split4 = split4_of_gregory(network)
+    report, before = check(split4), check(network)
+    assert report.max_edge_angle_deg <= 1e-9 and report.max_corner_angle_deg <= 1e-9 and report.folds == 0
+    assert split4.n_seams == 2 * network.n_seams and report.seam_g0_max <= 1e-12 * network.bounding_box_diagonal()
+    assert report.seam_angle_max_deg == pytest.approx(before.seam_angle_max_deg, abs=1.0)  # the cube's 90° creases
 
 
 @requires_ocp
@@ -161,17 +182,13 @@ def test_methods_choose_as_documented(shared_data: Path, tmp_path: Path) -> None
     network = gregory("cube", None)
     fit = export_step(tmp_path / "fit.step", network, method="fit", g1_samples=5)
     assert fit.method == "fit" and not fit.exact and fit.max_g1_angle_deg > 1e-5  # the fit's kinks, as measured
-    seamed = build_network(read_mesh(shared_data / "catmark_cube_creases2.obj"))
-    assert export_step(tmp_path / "seams.step", seamed, g1_samples=0).method == "fit"  # auto: split4 has no seams yet
-    with pytest.raises(InputError, match="does not keep seams yet"):
-        export_step(tmp_path / "refused.step", seamed, method="split4")
     corner = build_corner_network(shapes.cube())
     assert export_step(tmp_path / "corner.step", corner, method="split4", g1_samples=0).method == "exact"
     with pytest.raises(InputError, match="method: unknown value .best."):
         export_step(tmp_path / "bad.step", network, method="best")  # type: ignore[arg-type]
     not_measured = export_step(tmp_path / "quiet.step", network, g1_samples=0)
     assert not not_measured.g1_measured and "g1_samples=0" in not_measured.g1_note
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["corner.step", "fit.step", "quiet.step", "seams.step"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["corner.step", "fit.step", "quiet.step"]
 
 
 @requires_ocp

@@ -138,8 +138,8 @@ def _parser() -> argparse.ArgumentParser:
                         help="CAD: fit tolerance for rational patches, relative to the bbox diagonal (default: 1e-6)")
     export.add_argument("--cad-method", choices=CAD_METHODS, default="auto",
                         help="CAD, Gregory networks: split4 = re-assemble their targets polynomially (exact G1 in CAD), "
-                             "fit = fit each patch (closest, but CAD sees kinks); auto (default): split4, fit where "
-                             "the network has seams (split4 does not keep them yet)")
+                             "fit = fit each patch (closest, but CAD sees kinks); auto (default): split4, or fit where "
+                             "split4 cannot re-assemble the network")
     export.add_argument("--json", action="store_true", help="CAD: print the figures as one JSON object")
 
     render = command("render", "draw a network as a PNG: shaded, zebra stripes or a map of G1 angles")

@@ -14,6 +14,13 @@ exactly. Per Gregory patch f (one per quad, patch edge k = half-edge ``4 f + k``
 * ``normals``: the network's vertex normals; ``corner_normals``: the patches' normals at their corners;
 * ``seams``: the network's seams per mesh edge.
 
+split4's interiors are then guided by a least-squares fit of each Gregory patch (:func:`guide_nets`).
+split4 keeps no seams itself, so a network with seams is re-assembled on its mesh *cut open* along
+them (one vertex per corner sector, each seam two boundary edges), with stars that keep every seam
+tangent exactly (:func:`seam_stars`; a nearly straight crease first gets opposite tangents,
+:func:`_straight_creases`): both sides of a seam then compute the same boundary curve, bit for bit,
+and the sub-patches are connected on the uncut mesh with those edges marked as seams.
+
 The result is compared with the Gregory surface itself (:func:`surface_deviation`).
 """
 
@@ -22,30 +29,41 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import InputError
+from ..errors import ConstructionError, InputError
 from ..frame import Frame
 from ..gregory import GregoryPatchSet
 from ..mesh import QuadMesh, QuadTopology
 from ..network import PatchNetwork
 from ..patches import CORNER_PARAMETERS
 from ..targets import Targets, halfedge_slots
+from .split4 import SplitStar
 
-__all__ = ["gregory_targets", "split4_of_gregory", "surface_deviation"]
+__all__ = ["gregory_targets", "seam_stars", "split4_of_gregory", "surface_deviation"]
+
+#: a sector between two seams takes its star's second axis from both seam tangents when the
+#: sine of its turn is at least this (else, a straight crease or a dart's end, by least squares)
+SIN_FLOOR = 0.2
 
 FloatArray = NDArray[np.float64]
 
 
-def _topology_of(network: PatchNetwork) -> QuadTopology:
-    """The quad mesh a one-patch-per-quad network was built on: faces = ``corner_ids``."""
+def _topology_of(network: PatchNetwork, cut: bool) -> QuadTopology:
+    """The quad mesh a one-patch-per-quad network was built on (faces = ``corner_ids``); ``cut``:
+    cut open along its seams, one vertex per corner *sector* (:meth:`PatchNetwork.corner_sectors`)."""
     if not isinstance(network.patches, GregoryPatchSet):
         raise InputError(f"network: expected Gregory patches, got {type(network.patches).__name__}")
-    return QuadTopology.from_faces(network.corner_ids, network.n_corners)
+    if not cut:
+        return QuadTopology.from_faces(network.corner_ids, network.n_corners)
+    labels, faces = np.unique(network.corner_sectors(), return_inverse=True)
+    return QuadTopology.from_faces(faces.reshape(-1, 4), len(labels))
 
 
-def gregory_targets(network: PatchNetwork) -> tuple[Targets, Frame]:
+def gregory_targets(network: PatchNetwork, *, cut: bool = False) -> tuple[Targets, Frame]:
     """The :class:`Targets` a Gregory network interpolates (module docstring), in the local
-    coordinates of its frame (``Frame.of_points`` of the corners where the patches carry none)."""
-    topology = _topology_of(network)
+    coordinates of its frame (``Frame.of_points`` of the corners where the patches carry none).
+    With ``cut`` on the network's topology cut open along its seams (:func:`_topology_of`): a seam
+    is two boundary edges, a vertex per sector with the sector's normal, and no seams are left."""
+    topology = _topology_of(network, cut)
     patches: GregoryPatchSet = network.patches  # type: ignore[assignment]
     frame = patches.frame or Frame.of_points(patches.points[:, :4])
     points = patches.points if patches.frame is not None else frame.to_local(patches.points)
@@ -57,17 +75,112 @@ def gregory_targets(network: PatchNetwork) -> tuple[Targets, Frame]:
     tangents[slot_in] = (3.0 * (points[:, 5 + 2 * ((np.arange(4) + 1) % 4)] - np.roll(corners, -1, axis=1))).reshape(-1, 3)
     tangents[slot_out] = (3.0 * (points[:, 4:12:2] - corners)).reshape(-1, 3)
     corner_normals = patches.normals(CORNER_PARAMETERS)
-    if network.vertex_normals is not None and len(network.vertex_normals) == topology.n_vertices:
+    if not cut and network.vertex_normals is not None and len(network.vertex_normals) == topology.n_vertices:
         normals = network.vertex_normals
     else:
         normals = np.zeros((topology.n_vertices, 3))
         np.add.at(normals, topology.faces.reshape(-1), corner_normals.reshape(-1, 3))
         normals /= np.linalg.norm(normals, axis=1, keepdims=True)
     seams = np.zeros(topology.n_edges, dtype=bool)
-    seams[topology.halfedge_edge] = network.seam.reshape(-1)
+    if not cut:
+        seams[topology.halfedge_edge] = network.seam.reshape(-1)
     targets = Targets(topology, positions, normals, tangents, points[:, 12:].reshape(-1, 4, 2, 3),
                       seams=seams, rule="gregory network", corner_normals=corner_normals)
     return targets, frame
+
+
+#: a vertex whose two seams' tangents are at least this far apart (degrees) is a straight crease
+STRAIGHT_CREASE_DEG = 150.0
+
+
+def _straight_creases(targets: Targets, topology: QuadTopology, seam_halfedges: NDArray[np.bool_]) -> Targets:
+    """Where exactly two seams pass through a vertex nearly straight (:data:`STRAIGHT_CREASE_DEG`),
+    their tangents made opposite, ``±(t_1 − t_2)/2``, in every copy: a sector's regular star
+    through both then exists (its turn is π), and both sides still share them."""
+    slot_out, slot_in = halfedge_slots(targets.topology)
+    h = np.flatnonzero(seam_halfedges)
+    slots = np.concatenate([slot_out[h], slot_in[h]])  # every seam slot of every copy
+    key = np.concatenate([topology.faces.reshape(-1)[h], topology.target(h)]) * topology.n_edges + np.tile(
+        topology.halfedge_edge[h], 2)  # (original vertex, seam edge)
+    pairs, first, which = np.unique(key, return_index=True, return_inverse=True)
+    vertex = pairs // topology.n_edges
+    count = np.bincount(vertex, minlength=topology.n_vertices)
+    one = np.flatnonzero((count[vertex] == 2) & (np.r_[True, vertex[1:] != vertex[:-1]]))  # first pair of a 2-seam vertex
+    t1, t2 = targets.tangents[slots[first[one]]], targets.tangents[slots[first[one + 1]]]
+    cosine = np.einsum("nd,nd->n", t1, t2) / (np.linalg.norm(t1, axis=1) * np.linalg.norm(t2, axis=1))
+    straight = cosine <= np.cos(np.radians(STRAIGHT_CREASE_DEG))
+    if not straight.any():
+        return targets
+    value = np.full((len(pairs), 3), np.nan)
+    value[one[straight]] = 0.5 * (t1 - t2)[straight]
+    value[one[straight] + 1] = -0.5 * (t1 - t2)[straight]
+    moved = ~np.isnan(value[which, 0])
+    tangents = targets.tangents.copy()
+    tangents[slots[moved]] = value[which[moved]]
+    return targets.with_changes(tangents=tangents)
+
+
+def seam_stars(targets: Targets, seam_halfedges: NDArray[np.bool_]) -> SplitStar:
+    """split4's stars on a topology cut along seams (``seam_halfedges``: the cut's boundary
+    half-edges that were seams), where both sides of a seam must keep its tangents exactly.
+
+    Elsewhere :func:`~g1patch.construct.split4.split4_star`. At a vertex copy with k ≥ 2 faces
+    and a seam slot e (0 or k): the regular star ``t_j = t_e cos φ_j + b sin φ_j``, ``φ_j = |j − e| θ``,
+    ``θ = Φ / k`` (Φ the fan's turn from slot 0 to slot k about the sector normal), b by least
+    squares over the other slots, or from the other end's seam tangent,
+    ``b = (t_k − t_0 cos Φ) / sin Φ``, where both ends are seams and ``|sin Φ| ≥`` :data:`SIN_FLOOR`;
+    ``c_v = cos θ``, no length safeguard. A one-face sector keeps its tangents (as split4 does).
+    """
+    from .split4 import split4_star
+
+    topology = targets.topology
+    base = split4_star(targets)
+    star, cosine, factor = base.star.copy(), base.cosine.copy(), base.factor.copy()
+    offsets = topology.neighbor_offsets
+    origin = topology.faces.reshape(-1)
+    seam_at = np.zeros(int(offsets[-1]), dtype=bool)
+    slot_out, slot_in = halfedge_slots(topology)
+    seam_at[slot_out[seam_halfedges]] = True
+    seam_at[slot_in[seam_halfedges]] = True
+    copies = np.unique(np.concatenate([origin[seam_halfedges], topology.target(np.flatnonzero(seam_halfedges))]))
+    k = topology.face_count[copies]
+    first, last = offsets[copies], offsets[copies + 1] - 1
+    single = copies[k == 1]
+    star[offsets[single][:, None] + np.arange(2)] = targets.tangents[offsets[single][:, None] + np.arange(2)]
+    factor[single] = 1.0
+    many = k >= 2
+    copies, k, first, last = copies[many], k[many], first[many], last[many]
+    if not copies.size:
+        return SplitStar(star, cosine, base.refitted, base.shrunk & (factor < 1.0), factor)
+    owner = np.repeat(np.arange(copies.size), k + 1)
+    j = np.arange(owner.size) - np.repeat(np.cumsum(k + 1) - (k + 1), k + 1)
+    slot = first[owner] + j
+    t = targets.tangents[slot]
+    n = targets.normals[copies][owner]
+    previous = np.where(j > 0, slot - 1, slot)
+    turn = np.arctan2(np.einsum("sd,sd->s", np.cross(targets.tangents[previous], t), n),
+                      np.einsum("sd,sd->s", targets.tangents[previous], t))
+    total = np.bincount(owner, turn, minlength=copies.size)
+    theta = total / k
+    anchor_last = ~seam_at[first] & seam_at[last]  # the seam is slot k only
+    e = np.where(anchor_last, k, 0)
+    anchor = targets.tangents[np.where(anchor_last, last, first)]
+    phi = np.abs(j - e[owner]) * theta[owner]
+    c, sn = np.cos(phi), np.sin(phi)
+    residual = t - c[:, None] * anchor[owner]
+    free = j != e[owner]
+    b = np.stack([np.bincount(owner, np.where(free, sn * residual[:, d], 0.0), minlength=copies.size) for d in range(3)], axis=1)
+    b /= np.maximum(np.bincount(owner, np.where(free, sn * sn, 0.0), minlength=copies.size), 1e-300)[:, None]
+    both = seam_at[first] & seam_at[last]
+    sin_total = np.sin(total)
+    exact = both & (np.abs(sin_total) >= SIN_FLOOR)
+    b[exact] = (targets.tangents[last[exact]] - np.cos(total[exact])[:, None] * anchor[exact]) / sin_total[exact, None]
+    fitted = c[:, None] * anchor[owner] + sn[:, None] * b[owner]
+    fitted[seam_at[slot]] = t[seam_at[slot]]  # the seams' own tangents, bit for bit: both sides share them
+    star[slot] = fitted
+    cosine[copies] = np.cos(theta)
+    factor[copies] = 1.0
+    return SplitStar(star, cosine, base.refitted, base.shrunk & (factor < 1.0), factor)
 
 
 #: samples per direction and patch of the guide fit (:func:`guide_nets`): 2× the 6 unknowns, both ends
@@ -95,14 +208,43 @@ def split4_of_gregory(network: PatchNetwork, *, guided: bool = True) -> PatchNet
     """The split4 network (:func:`~g1patch.construct.split4.split4_network_from_targets`) of a
     Gregory network's targets (:func:`gregory_targets`): exactly G1, polynomial, through the same
     corners; with ``guided`` its interiors follow the Gregory surface (:func:`guide_nets`).
-    Provenance ``from = gregory``."""
-    from .split4 import split4_network_from_targets
+    Seams: assembled on the topology cut along them (each side a boundary, :func:`seam_stars`
+    keeping the seam tangents, so both sides get the same boundary curve), connected on the
+    uncut one with the seams marked. Provenance ``from = gregory``."""
+    from .split4 import _split4_network, split4_network_from_targets, split4_patches
 
-    targets, frame = gregory_targets(network)
-    mesh = QuadMesh(frame.to_world(targets.positions), targets.topology)
     provenance = {**network.provenance, "method": "split4", "from": "gregory"}
     guide = guide_nets(network.patches) if guided else None  # type: ignore[arg-type]
-    return split4_network_from_targets(mesh, targets, frame, provenance, guide=guide)
+    if not network.seam.any():
+        targets, frame = gregory_targets(network)
+        mesh = QuadMesh(frame.to_world(targets.positions), targets.topology)
+        return split4_network_from_targets(mesh, targets, frame, provenance, guide=guide)
+    topology = _topology_of(network, cut=False)
+    targets, frame = gregory_targets(network, cut=True)
+    cut = targets.topology
+    seam_halfedges = (cut.twin < 0) & (topology.twin >= 0)
+    if not np.array_equal(network.seam.reshape(-1), seam_halfedges):
+        raise ConstructionError("split4: cutting the network along its seams leaves a seam uncut "
+                                "(a seam edge whose both ends have one sector)")
+    targets = _straight_creases(targets, topology, seam_halfedges)
+    patches, extra, extra_normals, stars = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide,
+                                                          seam_stars(targets, seam_halfedges))
+    patches = patches.with_frame(frame)
+    edge_of = np.empty(topology.n_edges, dtype=np.int64)
+    edge_of[topology.halfedge_edge] = cut.halfedge_edge
+    points = np.concatenate([frame.to_world(extra[edge_of]), frame.to_world(extra[cut.n_edges:])])
+    point_normals = np.concatenate([extra_normals[edge_of], extra_normals[cut.n_edges:]])
+    vertices = np.zeros((topology.n_vertices, 3))
+    vertices[topology.faces.reshape(-1)] = frame.to_world(targets.positions[cut.faces.reshape(-1)])
+    vertex_normals = np.zeros((topology.n_vertices, 3))
+    vertex_normals[topology.faces.reshape(-1)] = targets.normals[cut.faces.reshape(-1)]  # one sector's
+    if network.vertex_normals is not None and len(network.vertex_normals) == topology.n_vertices:
+        vertex_normals = network.vertex_normals
+    result = _split4_network(topology, patches, np.concatenate([vertices, points]),
+                             np.concatenate([vertex_normals, point_normals]), provenance)
+    seams = np.zeros(topology.n_edges, dtype=bool)
+    seams[topology.halfedge_edge] = network.seam.reshape(-1)
+    return result.with_seams(np.concatenate([np.repeat(seams, 2), np.zeros(4 * topology.n_faces, dtype=bool)]))
 
 
 #: Gauss–Newton steps of :func:`surface_deviation`'s foot points

@@ -441,7 +441,8 @@ def split4_star(targets: Targets) -> SplitStar:
 
 
 def split4_patches(
-    targets: Targets, corners: FloatArray, centre: FloatArray, scale: float, guide: FloatArray | None = None
+    targets: Targets, corners: FloatArray, centre: FloatArray, scale: float, guide: FloatArray | None = None,
+    star: SplitStar | None = None,
 ) -> tuple[PatchSet, FloatArray, FloatArray, SplitStar]:
     """The 4 F Bézier sub-patches (sub-patch ``4 f + k`` at corner k of face f), and the positions
     and unit surface normals of the edge midpoints and face centres, each stacked as (E + F, 3).
@@ -457,6 +458,8 @@ def split4_patches(
     With it every face is treated as kept (module docstring, "Reproduction") with the guide's
     subdivided points in place of the targets' bicubic, and the vertex twist targets are the
     guide's: the min-norm G1 corrections then move the guide only as far as G1 requires.
+    ``star``: the vertex stars to use instead of :func:`split4_star`'s (regular per vertex, each
+    ``c_v`` its angle step's cosine).
     """
     if guide is not None and np.shape(guide) != (targets.topology.n_faces, 7, 7, 3):
         raise InputError(f"guide: expected shape ({targets.topology.n_faces}, 7, 7, 3), got {np.shape(guide)}")
@@ -464,7 +467,7 @@ def split4_patches(
     n_faces = topology.n_faces
     pos = targets.positions
     normals = targets.normals
-    stars = split4_star(targets)
+    stars = split4_star(targets) if star is None else star
     star, cosine = stars.star, stars.cosine
     slot_out, slot_in = halfedge_slots(topology)
     lam = 2.0 * cosine

@@ -6,8 +6,8 @@ Every patch becomes one face on a bicubic B-spline surface (``Geom_BSplineSurfac
   the knots ``[0, 0, 0, 0, 1, 1, 1, 1]`` (``PatchSet.convert("bezier").world_control()``);
 * a Gregory network, by default (``method="auto"``), as the split4 re-assembly of its targets
   (:mod:`g1patch.construct.polynomial`): polynomial, so exact, and G1 in OCC; the reported
-  deviation is its distance to the Gregory surface. Networks with seams (split4 does not keep
-  them yet), ``method="fit"`` and any other patches: :func:`fit_bspline_surfaces`, a least-squares
+  deviation is its distance to the Gregory surface; seams stay seams. ``method="fit"``, networks
+  split4 cannot re-assemble, and any other patches: :func:`fit_bspline_surfaces`, a least-squares
   fit on dyadic knots, refined until the deviation is below the tolerance (OCC sees kinks).
 
 A split4 network (four C1 sub-patches per quad, :mod:`g1patch.construct.split4`) becomes one face
@@ -57,7 +57,7 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any, Literal, NamedTuple
@@ -99,7 +99,7 @@ CadFormat = Literal["step", "iges"]
 CadMethod = Literal["auto", "split4", "fit"]
 #: how a rational (Gregory) network reaches CAD: ``split4`` its targets re-assembled polynomially
 #: (exact G1 in CAD, :mod:`g1patch.construct.polynomial`), ``fit`` its patches fitted one by one
-#: (close, kinked), ``auto`` split4 unless the network has seams (split4 does not keep them yet)
+#: (close, kinked), ``auto`` split4, or fit where split4 cannot re-assemble the network
 CAD_METHODS: tuple[CadMethod, ...] = ("auto", "split4", "fit")
 #: file extensions of each format
 CAD_FORMATS: dict[CadFormat, tuple[str, ...]] = {"step": (".step", ".stp"), "iges": (".iges", ".igs")}
@@ -722,7 +722,7 @@ class ExportResult:
     free_edges: int
     #: polynomial patches written exactly (their Bézier control nets)
     exact: bool
-    #: how the faces were made: ``exact`` (polynomial patches), ``split4`` (a Gregory network's
+    #: how the faces were made: ``exact`` (polynomial patches, or Gregory patches that are bicubics), ``split4`` (a Gregory network's
     #: targets re-assembled polynomially, then exact) or ``fit`` (fitted B-splines)
     method: str
     #: why ``auto`` fitted a Gregory network without seams (split4 failed on it), else ""
@@ -847,6 +847,26 @@ def _write(occ: SimpleNamespace, shape: Any, path: Path, kind: CadFormat) -> Non
         raise G1PatchError(f"{path}: OpenCASCADE could not write the {kind.upper()} file")
 
 
+#: Gregory patches whose interior pairs agree to this share of the model's size are bicubics
+BICUBIC_RTOL = 1e-12
+
+
+def _bicubic(patches: Any) -> bool:
+    """Whether Gregory patches are bicubics already (every pair ``Fn_k = Fp_k``, to :data:`BICUBIC_RTOL`)."""
+    from ..gregory import GregoryPatchSet
+
+    if not isinstance(patches, GregoryPatchSet):
+        return False
+    points = patches.points
+    extent = float(np.abs(points).max())
+    return bool(np.abs(points[:, 12::2] - points[:, 13::2]).max() <= BICUBIC_RTOL * extent)
+
+
+def _as_bicubics(patches: Any) -> PatchSet:
+    """Gregory patches that are bicubics (:func:`_bicubic`) as Bézier patches: the same surface, exactly."""
+    return PatchSet(patches.to_bezier_control(), "bezier").with_frame(patches.frame)
+
+
 def _cad_method(target: Path, network: PatchNetwork, method: CadMethod) -> str:
     """What ``method`` means for ``network``: ``exact``, ``split4`` or ``fit``."""
     from ..gregory import GregoryPatchSet
@@ -858,11 +878,6 @@ def _cad_method(target: Path, network: PatchNetwork, method: CadMethod) -> str:
         if method == "split4":
             raise InputError(f"{target}: method 'split4' re-assembles Gregory networks; these patches are "
                              f"{type(network.patches).__name__} (use method 'fit')")
-        return "fit"
-    if network.seam.any():
-        if method == "split4":
-            raise InputError(f"{target}: method 'split4' does not keep seams yet; this network has {network.n_seams} "
-                             "(use method 'fit' or 'auto', which fits it)")
         return "fit"
     return "split4"
 
@@ -964,7 +979,8 @@ def export_cad(
     by ``method`` (:data:`CAD_METHODS`): ``split4`` writes the polynomial re-assembly of its targets
     (exact G1 in CAD; its distance to the Gregory surface is the reported deviation), ``fit`` fits
     each patch within ``tolerance`` (default 1e-6 × the bounding-box diagonal; OCC then sees kinks),
-    ``auto`` is split4 unless the network has seams. The G1 angles of the written surfaces are
+    ``auto`` is split4 (seams kept: the network is cut open along them, both sides share each seam
+    curve), or fit where split4 raises. The G1 angles of the written surfaces are
     measured by OCC on ``g1_samples`` points per shared edge (0: skip), seams apart.
     The extension and OCP are checked before anything is computed or written.
     """
@@ -976,6 +992,8 @@ def export_cad(
     if not (isinstance(g1_samples, (int, np.integer)) and (g1_samples == 0 or g1_samples >= 2)):
         raise InputError(f"g1_samples: expected 0 or an integer ≥ 2, got {g1_samples!r}")
     chosen = _cad_method(target, network, method)
+    if chosen != "fit" and not isinstance(network.patches, PatchSet) and _bicubic(network.patches):
+        network, chosen = replace(network, patches=_as_bicubics(network.patches)), "exact"
     seconds: dict[str, float] = {}
     clock = time.perf_counter()
     doing = ["fitting the surfaces"]  # what OCC was doing, for a failure's message
@@ -1066,7 +1084,7 @@ def export_cad(
         sewing_tolerance=sewing_tolerance,
         max_g1_angle_deg=float(smooth.max()) if smooth.size else 0.0,
         mean_g1_angle_deg=float(smooth.mean()) if smooth.size else 0.0,
-        seam_edges=int(seam.sum()),
+        seam_edges=int(seam.sum()) // (2 if quads is not None else 1),  # a quad face's edge is two split4 halves
         seam_angle_min_deg=float(seam_angles.min()) if seam_angles.size else None,
         seam_angle_max_deg=float(seam_angles.max()) if seam_angles.size else None,
         volume=volume,
