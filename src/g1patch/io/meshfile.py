@@ -146,7 +146,7 @@ def _polygon_list(corners: NDArray[np.int64], sizes: NDArray[np.int64]) -> NDArr
 # the file) it returns None, and the line-by-line parser reads the file again, so every result and
 # every message is that parser's.
 
-#: bytes ``str.splitlines`` or ``str.split`` treat as line breaks or spaces and ``bytes.split`` does not
+#: bytes ``str.splitlines`` or ``str.split`` treat as line breaks or spaces; the fast path declines a file with one
 _ODD_BYTES = (b"\x0b", b"\x0c", b"\x1c", b"\x1d", b"\x1e", b"\x1f")
 _SPACES = re.compile(rb" {2,}")
 _EDGE_SPACE = re.compile(rb"(?m)^ | $")
