@@ -84,7 +84,7 @@ MESHES: dict[str, Callable[[], object]] = {
 @pytest.mark.parametrize("name", sorted(MESHES))
 def test_generated_meshes_report_as_the_reference(name: str, build: Callable[..., PatchNetwork]) -> None:
     network = build(MESHES[name]())
-    assert_same_report(check(network), check(network, compiled=False))
+    assert_same_report(check(network, compiled=True), check(network, compiled=False))
 
 
 def test_shared_meshes_report_as_the_reference(shared_data: Path) -> None:
@@ -93,7 +93,7 @@ def test_shared_meshes_report_as_the_reference(shared_data: Path) -> None:
         source = read(path)
         networks = [source] if isinstance(source, PatchNetwork) else [build_gregory_network(source), build_split4_network(source)]
         for network in networks:
-            assert_same_report(check(network), check(network, compiled=False))
+            assert_same_report(check(network, compiled=True), check(network, compiled=False))
 
 
 def perturbed(network: PatchNetwork, scale: float, seed: int, moved: slice = slice(12, 20)) -> PatchNetwork:
@@ -111,7 +111,7 @@ def perturbed(network: PatchNetwork, scale: float, seed: int, moved: slice = sli
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_folds_and_their_locations_as_the_reference(seed: int) -> None:
     network = perturbed(build_gregory_network(shapes.torus(10, 6)), 0.2, seed)
-    compiled, reference = check(network), check(network, compiled=False)
+    compiled, reference = check(network, compiled=True), check(network, compiled=False)
     assert reference.folds > 10  # the test can fail: many folds, located
     assert_same_report(compiled, reference)
 
@@ -126,7 +126,7 @@ def test_folded_patches_as_the_reference(samples: int) -> None:
     bezier = PatchSet(grid + 0.3 * rng.standard_normal((300, 4, 4, 3)), "bezier")
     bspline = PatchSet(grid + 0.3 * rng.standard_normal((300, 4, 4, 3)), "bspline")
     for patches in (gregory, bezier, bspline):
-        folded = folded_patches(patches, samples)
+        folded = folded_patches(patches, samples, compiled=True)
         np.testing.assert_array_equal(folded, folded_patches(patches, samples, compiled=False))
         assert 0 < folded.sum() < len(folded)
 
@@ -137,18 +137,18 @@ def test_degenerate_normals_counted_as_the_reference() -> None:
     points = network.patches.points.copy()
     points[:, [1, 6, 7]] = points[:, [0]]
     patches = GregoryPatchSet(points)
-    compiled = fairness(as_network(patches))
+    compiled = fairness(as_network(patches), compiled=True)
     reference = fairness(as_network(patches), compiled=False)
     assert compiled["turn_max_deg"] == reference["turn_max_deg"]
     assert compiled["thin_plate"] == pytest.approx(reference["thin_plate"], rel=ENERGY_RTOL)
-    assert check(patches).degenerate_normals == check(patches, compiled=False).degenerate_normals > 0
+    assert check(patches, compiled=True).degenerate_normals == check(patches, compiled=False).degenerate_normals > 0
 
 
 @pytest.mark.parametrize("valence", [65, 200])
 def test_large_sectors_as_the_reference(valence: int) -> None:
     # more corners than the kernels compare pairwise: the gnomonic hull's vertices only
     network = build_gregory_network(shapes.fan(valence))
-    assert_same_report(check(network), check(network, compiled=False))
+    assert_same_report(check(network, compiled=True), check(network, compiled=False))
     bent = perturbed(network, 0.01, 3, slice(4, 12))
     compiled, reference = check(bent), check(bent, compiled=False)
     assert reference.max_corner_angle_deg > 1.0

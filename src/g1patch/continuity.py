@@ -26,8 +26,9 @@ On a ``G × G`` grid of every patch (``G = fold_samples``, both borders included
   ``∫∫ |p_uu|² + 2|p_uv|² + |p_vv|² du dv = ∫∫ |∇p_u|² + |∇p_v|² du dv`` (``p_uv = p_vu``), summed
   over the patches and divided by diag².
 
-**Evaluation.** By default (``compiled=True``) numba kernels do the work, compiled on first use
-and cached on disk (see "Compiled kernels" below): one parallel pass over the shared edges (both
+**Evaluation.** From :data:`KERNEL_PATCHES` patches on (``compiled=None``, the default; ``True``
+always) numba kernels do the work, compiled on first use and cached on disk (see "Compiled
+kernels" below): one parallel pass over the shared edges (both
 sides of each), one over the corner sectors and one over the patches' grids, several patches at a
 time. ``compiled=False`` runs the NumPy reference, block by block. The two agree exactly on
 counts, folds, their locations, the turn figures, and within a few ULP on angles, gaps and energy
@@ -296,6 +297,18 @@ def format_reports(reports: list[ContinuityReport], titles: list[str] | None = N
     return "\n".join("  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True)).rstrip() for row in table)
 
 
+#: networks of at least this many patches are measured by the kernels by default: below it the
+#: NumPy reference takes seconds at most (Spot's 2,928 patches: 0.5–0.7 s), while the kernels'
+#: one-time compile takes about a minute (57 s measured from an empty cache, against 0.8 s for
+#: the reference's whole check of the cube), which a first ``make demo`` should not pay
+KERNEL_PATCHES = 20_000
+
+
+def _kernels_wanted(compiled: bool | None, count: int) -> bool:
+    """Whether to use the kernels: ``compiled`` when given, else from :data:`KERNEL_PATCHES` patches on."""
+    return count >= KERNEL_PATCHES if compiled is None else compiled
+
+
 def check(
     network: PatchNetwork | PatchSet | GregoryPatchSet,
     samples: int = 33,
@@ -304,7 +317,7 @@ def check(
     chunk: int = 4096,
     progress: Callable[[int, int], None] | None = None,
     *,
-    compiled: bool = True,
+    compiled: bool | None = None,
 ) -> ContinuityReport:
     """Measure G0 and G1 continuity, folds and fairness of ``network`` (see the module docstring).
 
@@ -315,7 +328,8 @@ def check(
     ``fold_samples²`` grid of every patch. A :class:`~g1patch.patches.PatchSet` or
     :class:`~g1patch.gregory.GregoryPatchSet` is measured as the network of its matching boundary
     curves (:func:`g1patch.api.as_network`). ``compiled``: the numba kernels (see below), all edges
-    and all patches in one pass each (``progress`` after each); False: the NumPy reference.
+    and all patches in one pass each (``progress`` after each); False: the NumPy reference; None
+    (default): the kernels from :data:`KERNEL_PATCHES` patches on.
     """
     for name, value, least in (("samples", samples, 2), ("fold_samples", fold_samples, 2), ("chunk", chunk, 1)):
         _check_count(name, value, least)
@@ -340,7 +354,7 @@ def check(
     edge_worst = np.zeros(len(left_patch), dtype=np.int64)
     patch_block = min(chunk, _patch_block(fold_samples))
     total = len(left_patch) + len(local)
-    form = _evaluation_form(local) if compiled else None
+    form = _evaluation_form(local) if _kernels_wanted(compiled, len(local)) else None
     grid = _GridMeasures(len(local), fold_samples, degenerate_level)
     if form is not None:
         sides = (left_patch, left_edge, right_patch, right_edge, same)
@@ -420,7 +434,7 @@ def check(
 
 
 def fairness(
-    network: PatchNetwork, samples: int = FOLD_SAMPLES, degenerate_rtol: float = DEGENERATE_RTOL, *, compiled: bool = True
+    network: PatchNetwork, samples: int = FOLD_SAMPLES, degenerate_rtol: float = DEGENERATE_RTOL, *, compiled: bool | None = None
 ) -> dict[str, float]:
     """The fairness figures of :func:`check` on a ``samples²`` grid per patch.
 
@@ -433,18 +447,18 @@ def fairness(
 
 
 def folded_patches(
-    patches: Patches, samples: int = 9, degenerate_rtol: float = DEGENERATE_RTOL, *, compiled: bool = True
+    patches: Patches, samples: int = 9, degenerate_rtol: float = DEGENERATE_RTOL, *, compiled: bool | None = None
 ) -> NDArray[np.bool_]:
     """Which patches fold (the intrinsic test of :func:`check`) on a ``samples²`` grid, (N,) bool.
 
     For a builder's fold guard: no network needed, patches in any coordinates. ``compiled``: the
-    grid kernel (False: the NumPy reference).
+    grid kernel (False: the NumPy reference; None: as :func:`check`).
     """
     return _grid_measures(patches, samples, degenerate_rtol, fairness=False, compiled=compiled)[0].folded
 
 
 def _grid_measures(
-    patches: Patches, samples: int, degenerate_rtol: float, fairness: bool = True, *, compiled: bool = True
+    patches: Patches, samples: int, degenerate_rtol: float, fairness: bool = True, *, compiled: bool | None = None
 ) -> tuple[_GridMeasures, float]:
     """The grid measures of every patch (``fairness`` False: folds and degenerate normals only),
     in local coordinates, and the bounding-box diagonal."""
@@ -452,7 +466,7 @@ def _grid_measures(
     local = _local(patches)
     diagonal = _diagonal(local.evaluate(CORNER_PARAMETERS)) or 1.0
     grid = _GridMeasures(len(local), samples, degenerate_rtol * diagonal**2, fairness)
-    form = _evaluation_form(local) if compiled else None
+    form = _evaluation_form(local) if _kernels_wanted(compiled, len(local)) else None
     if form is not None:
         grid.add_compiled(*form, _patch_block(samples))
     else:
@@ -856,7 +870,7 @@ class _GridMeasures:
 
 # ---------------------------------------------------------------------------------------------
 # Compiled kernels (``compiled=True``, the default of :func:`check`, :func:`fairness` and
-# :func:`folded_patches`); the NumPy code above is their reference (``compiled=False``), and
+# :func:`folded_patches` from KERNEL_PATCHES patches on); the NumPy code above is their reference (``compiled=False``), and
 # tests/test_check_kernels.py holds the two to one report.
 #
 # Patches enter the kernels as ``points (N, M, 3)`` and weight tables: Gregory patches their 20
