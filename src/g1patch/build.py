@@ -209,10 +209,6 @@ def build_network(
     frame = Frame.of_points(mesh.vertices)
     local = mesh.with_vertices(frame.to_local(mesh.vertices))
     if method == "split4" and mesh.features.sharp_edges.any():
-        logger.warning(
-            "split4 does not keep sharp edges yet: the %d tagged sharp edges come out smooth (use --method gregory)",
-            int(mesh.features.sharp_edges.sum()),
-        )
         local = _without_creases(local)
     targets = shape_targets(local, shape, tangents=tangents)
     guard = shape == "interpolate"
@@ -221,13 +217,18 @@ def build_network(
     if method == "split4":
         from .construct.split4 import split4_network_from_targets
 
-        if mesh.features.holes.any():
-            logger.warning("split4 does not leave holes open yet: the %d hole faces get patches (use --method gregory)",
-                           int(mesh.features.holes.sum()))
         if guard:
             targets = _guarded(targets, lambda t: _split4_local(local, t), 4)[1]
             provenance["fallback_vertices"] = str(targets.n_fallback)
-        return split4_network_from_targets(surface, targets, frame, provenance)
+        network = split4_network_from_targets(surface, targets, frame, provenance)
+        # said once the network exists: a build that then fails says one thing, its error
+        if mesh.features.sharp_edges.any():
+            logger.warning("split4 does not keep sharp edges yet: the %d tagged sharp edges come out smooth "
+                           "(use --method gregory)", int(mesh.features.sharp_edges.sum()))
+        if mesh.features.holes.any():
+            logger.warning("split4 does not leave holes open yet: the %d hole faces get patches (use --method gregory)",
+                           int(mesh.features.holes.sum()))
+        return network
     assemble: Callable[[Targets], Patches] = assemble_corner if method == "corner" else assemble_gregory
     if guard:
         patches, targets = _guarded(targets, assemble, 1)
