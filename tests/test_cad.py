@@ -38,15 +38,7 @@ from g1patch.io.meshfile import read_mesh
 from g1patch.network import PatchNetwork, network_from_patch_points
 from g1patch.patches import PatchSet
 
-try:
-    import OCP  # noqa: F401  (is the extra installed?)
-
-    HAVE_OCP = True
-except ImportError:
-    HAVE_OCP = False
-requires_ocp = pytest.mark.skipif(
-    not HAVE_OCP, reason="OCP is not installed (extra 'cad': pip install 'g1patch[cad]', i.e. cadquery-ocp-novtk)"
-)
+from ocp_marks import HAVE_OCP, requires_ocp  # noqa: E402
 
 #: closed meshes of the acceptance: generated ones and the shared files
 CLOSED = {

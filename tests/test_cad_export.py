@@ -27,15 +27,7 @@ from g1patch.io.network_file import save_network
 from g1patch.network import PatchNetwork
 from g1patch.patches import CORNER_PARAMETERS
 
-try:
-    import OCP  # noqa: F401  (is the extra installed?)
-
-    HAVE_OCP = True
-except ImportError:
-    HAVE_OCP = False
-requires_ocp = pytest.mark.skipif(
-    not HAVE_OCP, reason="OCP is not installed (extra 'cad': pip install 'g1patch[cad]', i.e. cadquery-ocp-novtk)"
-)
+from ocp_marks import requires_ocp  # noqa: E402
 
 
 def gregory(name: str, data: Path | None) -> PatchNetwork:

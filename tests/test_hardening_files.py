@@ -32,13 +32,7 @@ from g1patch.io.network_file import MAX_COORDINATE, load_network, save_network
 from g1patch.network import PatchNetwork, network_from_patch_points
 from g1patch.patches import PatchSet
 
-try:
-    import OCP  # noqa: F401
-
-    HAVE_OCP = True
-except ImportError:
-    HAVE_OCP = False
-requires_ocp = pytest.mark.skipif(not HAVE_OCP, reason="OCP is not installed (extra 'cad')")
+from ocp_marks import HAVE_OCP, requires_ocp  # noqa: E402
 
 #: every command that reads a network, with the output it would write (None: writes nothing)
 COMMANDS: dict[str, Callable[[Path, Path], list[str]]] = {

@@ -162,13 +162,7 @@ def test_faces_on_closed_lines_of_an_irregular_cage_give_the_bspline() -> None:
 
 # ------------------------------------------------------------------------------ CAD export
 
-try:
-    import OCP  # noqa: F401  (is the extra installed?)
-
-    HAVE_OCP = True
-except ImportError:
-    HAVE_OCP = False
-requires_ocp = pytest.mark.skipif(not HAVE_OCP, reason="OCP is not installed (extra 'cad': pip install 'g1patch[cad]')")
+from ocp_marks import requires_ocp  # noqa: E402
 CUBE = Path(__file__).parents[1] / "src" / "g1patch" / "data" / "cube.obj"
 
 
