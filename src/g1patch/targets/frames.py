@@ -176,14 +176,16 @@ class _Ring:
         return np.maximum.reduceat(sine, self.offsets[:-1])
 
     def repair(self, n: FloatArray, bad: IntArray) -> tuple[FloatArray, BoolArray]:
-        """Valid normals for vertices ``bad``: unit-direction fan, else max–min of unit corner normals."""
+        """Valid normals for vertices ``bad``: unit-direction fan, else max–min of unit corner normals.
+        A zero ring edge or corner (coincident points) gives a NaN candidate, which is not taken."""
         pick = np.isin(self.pair_owner, bad)
         owner = np.searchsorted(bad, self.pair_owner[pick])
-        u = _unit(self.d)
-        unit_fan = np.zeros((bad.size, 3))
-        np.add.at(unit_fan, owner, cross(u[self.first[pick]], u[self.second[pick]]))
-        corner = _unit(self.cross[pick])
-        candidates = [_unit(unit_fan), _unit(_gilbert(corner, owner, bad.size))]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            u = _unit(self.d)
+            unit_fan = np.zeros((bad.size, 3))
+            np.add.at(unit_fan, owner, cross(u[self.first[pick]], u[self.second[pick]]))
+            corner = _unit(self.cross[pick])
+            candidates = [_unit(unit_fan), _unit(_gilbert(corner, owner, bad.size))]
         out = n.copy()
         done = np.zeros(bad.size, dtype=bool)
         for candidate in candidates:
