@@ -8,6 +8,7 @@ of the file without shared points for :func:`compact_step`.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -231,3 +232,14 @@ def test_step_reals_always_carry_their_decimal_point() -> None:
         b"1.", b"-2.", b"1.E-05", b"1.5E+20", b"0.3"]
     value = -0.039181315715812345
     assert abs(float(_step_real(value)) - value) <= 5e-15 * abs(value)
+
+
+@requires_ocp
+def test_export_result_repr_is_one_short_line(tmp_path: Path) -> None:
+    from g1patch.io.cad import export_cad
+
+    result = export_cad(tmp_path / "cube.step", build_network(shapes.cube()))
+    text = repr(result)
+    assert re.fullmatch(r"<ExportResult cube\.step: step, 6 faces, solid, valid, split4, OCC G1 ≤ \S+°, "
+                        r"deviation \S+ of diagonal, [\d,]+ bytes>", text), text
+    assert len(text) < 200

@@ -708,7 +708,7 @@ def _check_sewn(target: Path, faces: Sequence[Any]) -> None:
 # ----------------------------------------------------------------------------------- export
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class ExportResult:
     """What was written and how good it is (distances in model units, angles in degrees)."""
 
@@ -755,6 +755,14 @@ class ExportResult:
     g1_note: str
     #: seconds per stage: split4 (a Gregory network re-assembled), fit, faces, sew, solid, check, g1, write
     seconds: dict[str, float] = field(default_factory=dict)
+
+    def __repr__(self) -> str:
+        """One line: the file, its faces and verdicts, the method, OCC's G1 angle, the deviation."""
+        shape = "solid" if self.solid else f"{self.free_edges} free edges"
+        angle = f"OCC G1 ≤ {self.max_g1_angle_deg:.1e}°" if self.g1_measured else "G1 not measured"
+        return (f"<ExportResult {self.path.name}: {self.format}, {self.faces} faces, {shape}, "
+                f"{'valid' if self.valid else 'INVALID'}, {self.method}, {angle}, "
+                f"deviation {self.relative_deviation:.1e} of diagonal, {self.file_bytes:,} bytes>")
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready figures."""
