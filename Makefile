@@ -26,6 +26,10 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_split4.py
 	$(BIN)/python benchmarks/bench_shape.py
 	$(BIN)/python benchmarks/bench_limit.py
+	$(BIN)/python benchmarks/bench_check.py
+	$(BIN)/python benchmarks/bench_readers.py
+	$(BIN)/python benchmarks/bench_files.py
+	$(BIN)/python benchmarks/bench_cad.py
 
 clean:
 	rm -rf $(VENV) out
