@@ -153,3 +153,21 @@ def test_large_sectors_as_the_reference(valence: int) -> None:
     compiled, reference = check(bent), check(bent, compiled=False)
     assert reference.max_corner_angle_deg > 1.0
     assert abs(compiled.max_corner_angle_deg - reference.max_corner_angle_deg) <= ANGLE_ATOL
+
+
+def test_kernels_by_default_only_from_kernel_patches_on(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Below KERNEL_PATCHES the default check runs the NumPy reference (no minute-long compile on a
+    first small check); at or above it, and with compiled=True, the kernels."""
+    from g1patch import continuity
+
+    def no_kernels(patches: object) -> None:
+        raise AssertionError("the kernels were asked for")
+
+    network = build_gregory_network(shapes.cube_sphere(1))
+    monkeypatch.setattr(continuity, "_evaluation_form", no_kernels)
+    check(network), fairness(network), folded_patches(network.patches)  # the reference, untouched
+    with pytest.raises(AssertionError, match="kernels were asked"):
+        check(network, compiled=True)
+    monkeypatch.setattr(continuity, "KERNEL_PATCHES", len(network.patches))
+    with pytest.raises(AssertionError, match="kernels were asked"):
+        folded_patches(network.patches)
