@@ -163,3 +163,26 @@ def test_high_valence_and_folded_rings_build(method: str) -> None:
     report = check(network)
     assert max(report.max_edge_angle_deg, report.max_corner_angle_deg) <= MAX_ANGLE_DEG
     _exact_and_unfolded(build_network(shapes.flat_fan(360), method))  # type: ignore[arg-type]
+
+
+def test_fold_guard_never_repeats_a_retreat(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A 100,000-gon split around its centre: 91 % of its sliver faces unfold once every vertex is
+    retreated, the rest never do, so the guard's third step would retreat the same vertices by the
+    same weight again and rebuild the same patches; it stops instead."""
+    import g1patch.build as build_module
+    from g1patch.mesh import QuadMesh
+
+    n = 100_000
+    theta = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    mesh = QuadMesh.from_arrays(np.stack([np.cos(theta), np.sin(theta), 0.1 * np.sin(3.0 * theta)], axis=1), [list(range(n))])
+    retreats: list[tuple[float, bytes]] = []
+    original = build_module.retreat
+
+    def recorded(targets, vertices, weight):  # type: ignore[no-untyped-def]
+        retreats.append((weight, vertices.tobytes()))
+        return original(targets, vertices, weight)
+
+    monkeypatch.setattr(build_module, "retreat", recorded)
+    build_network(mesh)
+    assert len(retreats) >= 2
+    assert all(a != b for a, b in zip(retreats, retreats[1:]))
