@@ -394,15 +394,27 @@ class _Connectivity(NamedTuple):
     neighbors: IntArray
 
 
-def _connect(corners: IntArray, sizes: IntArray, n_vertices: int) -> _Connectivity:
+#: from this many half-edges on (``compiled=None``) :func:`_connect` runs :func:`_connect_kernel`
+KERNEL_HALFEDGES = 40_000
+
+
+def _connect(corners: IntArray, sizes: IntArray, n_vertices: int, *, compiled: bool | None = None) -> _Connectivity:
     """Half-edge connectivity of polygons given as flat ``corners`` with ``sizes``, validated.
 
     Half-edge ``h`` is corner ``h``, running to the next corner of its face; unused vertices get
     empty rings. Checks, in order: index range, repeated vertex, edges (at most two faces,
-    opposite directions), one fan per vertex, interior valence ≥ 3.
+    opposite directions), one fan per vertex, interior valence ≥ 3. ``compiled`` (default: from
+    :data:`KERNEL_HALFEDGES` half-edges on): by :func:`_connect_kernel`, the same arrays; where it
+    finds a problem, the NumPy code below, the reference, runs and names it.
     """
     _check_index_range(corners, sizes, n_vertices)
     _check_repeated_vertices(corners, sizes, n_vertices)
+    if corners.size >= KERNEL_HALFEDGES if compiled is None else compiled:
+        from .targets.local import jit_kernel  # numba, imported on first use
+
+        valid, *arrays = jit_kernel(_connect_kernel)(corners, sizes, n_vertices)
+        if valid:
+            return _Connectivity(*arrays)
     halfedges = np.arange(corners.size, dtype=np.int64)
     following = _following_corner(sizes)
     preceding = np.empty_like(following)
@@ -452,6 +464,126 @@ def _connect(corners: IntArray, sizes: IntArray, n_vertices: int) -> _Connectivi
         twin, pairing.edges, pairing.halfedge_edge, pairing.edge_halfedges, valence, face_count,
         is_boundary_vertex, ring_offsets, ring, neighbor_offsets, neighbors,
     )
+
+
+#: half-edges sharing their smaller vertex that :func:`_connect_kernel` sorts (by insertion); a
+#: vertex that is the smaller end of more leaves the mesh to the NumPy code
+_KERNEL_BUCKET = 256
+
+
+def _connect_kernel(corners: IntArray, sizes: IntArray, n_vertices: int) -> tuple:
+    """:func:`_connect`'s arrays, compiled by :func:`~g1patch.targets.local.jit_kernel`, with
+    ``valid`` first: False (the other arrays unset) where a check of :func:`_connect` fails or a
+    vertex is the smaller end of more than :data:`_KERNEL_BUCKET` half-edges.
+
+    Half-edges are bucketed by their smaller vertex (a counting sort), each bucket sorted by the
+    larger vertex, then ``h``, so edges come in the reference's lexicographic order; rings are
+    walked vertex by vertex. Indices must be in range.
+    """
+    nh = corners.size
+    quads = sizes.size * 4 == nh and (sizes == 4).all()
+    following = np.empty(0 if quads else nh, dtype=np.int64)  # of quads: (h & ~3) | ((h + 1) & 3)
+    at = 0
+    for f in range(0 if quads else sizes.size):
+        for k in range(sizes[f]):
+            following[at + k] = at + (k + 1) % sizes[f]
+        at += sizes[f]
+    preceding = np.empty(0 if quads else nh, dtype=np.int64)
+    for h in range(0 if quads else nh):
+        preceding[following[h]] = h
+    bucket = np.zeros(n_vertices + 1, dtype=np.int64)
+    for h in range(nh):  # counting sort by the smaller vertex
+        bucket[min(corners[h], corners[(h & ~3) | ((h + 1) & 3) if quads else following[h]]) + 1] += 1
+    for v in range(n_vertices):
+        bucket[v + 1] += bucket[v]
+    fill = bucket[:-1].copy()
+    order = np.empty(nh, dtype=np.int64)
+    high = np.empty(nh, dtype=np.int64)  # the larger vertex of order[i]
+    for h in range(nh):
+        target = corners[(h & ~3) | ((h + 1) & 3) if quads else following[h]]
+        low = min(corners[h], target)
+        order[fill[low]], high[fill[low]] = h, max(corners[h], target)
+        fill[low] += 1
+    valid = True
+    for v in range(n_vertices):  # by the larger vertex, stable (h increases within a bucket)
+        if bucket[v + 1] - bucket[v] > _KERNEL_BUCKET:
+            valid = False
+            break
+        for i in range(bucket[v] + 1, bucket[v + 1]):
+            h, key = order[i], high[i]
+            j = i - 1
+            while j >= bucket[v] and high[j] > key:
+                order[j + 1], high[j + 1] = order[j], high[j]
+                j -= 1
+            order[j + 1], high[j + 1] = h, key
+
+    twin = np.full(nh, -1, dtype=np.int64)
+    halfedge_edge = np.empty(nh, dtype=np.int64)
+    edges = np.empty((nh, 2), dtype=np.int64)  # the first n_edges rows are written (and their pages touched)
+    edge_halfedges = np.empty((nh, 2), dtype=np.int64)
+    valence = np.zeros(n_vertices, dtype=np.int64)
+    n_edges = 0
+    for v in range(n_vertices if valid else 0):
+        i = bucket[v]
+        while i < bucket[v + 1]:
+            a = order[i]
+            count = 1
+            while i + count < bucket[v + 1] and high[i + count] == high[i]:
+                count += 1
+            if count > 2 or (count == 2 and corners[a] == corners[order[i + 1]]):  # crowded, or one direction
+                valid = False
+                break
+            halfedge_edge[a] = n_edges
+            edges[n_edges, 0], edges[n_edges, 1] = v, high[i]
+            edge_halfedges[n_edges, 0], edge_halfedges[n_edges, 1] = a, -1
+            if count == 2:
+                b = order[i + 1]
+                twin[a], twin[b] = b, a
+                halfedge_edge[b] = n_edges
+                edge_halfedges[n_edges, 1] = b  # a < b: h increases within a key
+            valence[v] += 1
+            valence[high[i]] += 1
+            n_edges += 1
+            i += count
+        if not valid:
+            break
+
+    face_count = np.zeros(n_vertices, dtype=np.int64)
+    is_boundary_vertex = np.zeros(n_vertices, dtype=np.bool_)
+    start = np.full(n_vertices, nh, dtype=np.int64)
+    for h in range(nh if valid else 0):
+        v = corners[h]
+        face_count[v] += 1
+        if twin[h] < 0:
+            valid = valid and not is_boundary_vertex[v]  # a second boundary fan
+            is_boundary_vertex[v] = True
+            start[v] = h
+        elif not is_boundary_vertex[v]:
+            start[v] = min(start[v], h)
+    ring_offsets = np.zeros(n_vertices + 1, dtype=np.int64)
+    neighbor_offsets = np.zeros(n_vertices + 1, dtype=np.int64)
+    for v in range(n_vertices if valid else 0):
+        valid = valid and (is_boundary_vertex[v] or face_count[v] == 0 or valence[v] >= 3)
+        ring_offsets[v + 1] = ring_offsets[v] + face_count[v]
+        neighbor_offsets[v + 1] = neighbor_offsets[v] + face_count[v] + is_boundary_vertex[v]
+    ring = np.empty(nh, dtype=np.int64)
+    neighbors = np.empty(neighbor_offsets[n_vertices], dtype=np.int64)
+    for v in range(n_vertices if valid else 0):
+        h = start[v]
+        for k in range(face_count[v]):
+            if h < 0 or (k > 0 and h == start[v]):  # the boundary, or round a closed fan, before all faces: another fan
+                valid = False
+                break
+            ring[ring_offsets[v] + k] = h
+            neighbors[neighbor_offsets[v] + k] = corners[(h & ~3) | ((h + 1) & 3) if quads else following[h]]
+            h = twin[(h & ~3) | ((h + 3) & 3) if quads else preceding[h]]
+        if not valid:
+            break
+        if is_boundary_vertex[v]:
+            last = ring[ring_offsets[v + 1] - 1]
+            neighbors[neighbor_offsets[v + 1] - 1] = corners[(last & ~3) | ((last + 3) & 3) if quads else preceding[last]]
+    return (valid, twin, edges[:n_edges], halfedge_edge, edge_halfedges[:n_edges], valence, face_count,
+            is_boundary_vertex, ring_offsets, ring, neighbor_offsets, neighbors)
 
 
 #: ring positions written one rotation step at a time (for all vertices at once); the rest of the
@@ -605,7 +737,10 @@ def sectors(topology: QuadTopology | _Connectivity, seams: NDArray[np.bool_]) ->
 
 
 def _check_finite(vertices: FloatArray) -> None:
-    """Every coordinate finite and within :data:`MAX_COORDINATE`."""
+    """Every coordinate finite and within :data:`MAX_COORDINATE` (two reductions, which NaN makes
+    fail, before any search for the vertex to name)."""
+    if vertices.size == 0 or (vertices.max() <= MAX_COORDINATE and vertices.min() >= -MAX_COORDINATE):
+        return
     bad = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
     if bad.size:
         raise InputError(
@@ -620,8 +755,24 @@ def _check_finite(vertices: FloatArray) -> None:
         )
 
 
-def _check_face_areas(vertices: FloatArray, faces: IntArray) -> None:
-    """Zero area: ``|d1 × d2| <= tol · max(|d1|, |d2|)²`` for the diagonals d1 = p2 − p0, d2 = p3 − p1."""
+#: from this many faces on (``compiled=None``) :func:`_check_face_areas` first runs :func:`_face_area_kernel`
+KERNEL_FACES = 10_000
+#: faces the kernel finds within this relative margin of the tolerance go to the NumPy check
+_AREA_MARGIN = 1e-6
+
+
+def _check_face_areas(vertices: FloatArray, faces: IntArray, *, compiled: bool | None = None) -> None:
+    """Zero area: ``|d1 × d2| <= tol · max(|d1|, |d2|)²`` for the diagonals d1 = p2 − p0, d2 = p3 − p1.
+
+    ``compiled`` (default: from :data:`KERNEL_FACES` faces on): :func:`_face_area_kernel` passes
+    the mesh when every face clears the tolerance by the margin :data:`_AREA_MARGIN` (far beyond
+    any rounding of the two computations); otherwise the NumPy code below, the reference, decides.
+    """
+    if faces.shape[0] >= KERNEL_FACES if compiled is None else compiled:
+        from .targets.local import jit_kernel  # numba, imported on first use
+
+        if jit_kernel(_face_area_kernel)(vertices, faces, DEGENERATE_AREA_TOLERANCE * (1.0 + _AREA_MARGIN)):
+            return
     corners = vertices[faces]
     d1 = corners[:, 2] - corners[:, 0]
     d2 = corners[:, 3] - corners[:, 1]
@@ -634,6 +785,20 @@ def _check_face_areas(vertices: FloatArray, faces: IntArray) -> None:
             f"face {f} {tuple(faces[f].tolist())} has zero area (|d1 x d2| = {double_area[f]:.3g})"
             + _all_of(bad, "faces")
         )
+
+
+def _face_area_kernel(vertices: FloatArray, faces: IntArray, tolerance: float) -> bool:
+    """Whether every face has ``|d1 × d2|² > (tolerance · max(|d1|², |d2|²))²`` (NaN fails), face
+    by face; compiled by :func:`~g1patch.targets.local.jit_kernel`."""
+    for f in range(faces.shape[0]):
+        a, b, c, d = faces[f, 0], faces[f, 1], faces[f, 2], faces[f, 3]
+        u0, u1, u2 = vertices[c, 0] - vertices[a, 0], vertices[c, 1] - vertices[a, 1], vertices[c, 2] - vertices[a, 2]
+        w0, w1, w2 = vertices[d, 0] - vertices[b, 0], vertices[d, 1] - vertices[b, 1], vertices[d, 2] - vertices[b, 2]
+        n0, n1, n2 = u1 * w2 - u2 * w1, u2 * w0 - u0 * w2, u0 * w1 - u1 * w0
+        size = tolerance * max(u0 * u0 + u1 * u1 + u2 * u2, w0 * w0 + w1 * w1 + w2 * w2)
+        if not n0 * n0 + n1 * n1 + n2 * n2 > size * size:
+            return False
+    return True
 
 
 def _as_polygons(faces: ArrayLike | Sequence[Sequence[int]]) -> tuple[IntArray, IntArray]:
