@@ -25,7 +25,8 @@ from __future__ import annotations
 import os
 import re
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from functools import cache
 from pathlib import Path
 from typing import NamedTuple
 
@@ -273,9 +274,10 @@ def _read_obj(path: Path, data: bytes) -> _Parsed:
     """OBJ: ``v x y z [w]``; ``f a b c …`` with ``a`` = ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn``.
 
     Indices are 1-based; negative ones count back from the last vertex defined so far. Read by
-    :func:`_obj_fast`, or line by line (:func:`_read_obj_lines`) where it declines.
+    :func:`_obj_compiled` (from :data:`KERNEL_BYTES` on) or :func:`_obj_fast`, or line by line
+    (:func:`_read_obj_lines`) where it declines.
     """
-    parsed = _obj_fast(data)
+    parsed = _obj_compiled(data) if len(data) >= KERNEL_BYTES else _obj_fast(data)
     return parsed if parsed is not None else _read_obj_lines(path, data)
 
 
@@ -414,6 +416,265 @@ def _parse_tag(path: Path, parts: Sequence[str], line: int) -> Tag:
         raise FormatError(path, f"tag {parts[1]!r}: expected {n_ints} integers then {n_floats} numbers", line) from None
     return Tag(parts[1], ints, floats, tuple(values[n_ints + n_floats:]))
 
+
+# -- compiled OBJ reader -----------------------------------------------------------------------
+#
+# From KERNEL_BYTES on, OBJ text is read by one numba kernel that scans the bytes once: ``v`` lines'
+# first three numbers are converted as they are met (Eisel–Lemire: correctly rounded, as float();
+# a number it cannot settle, or spelt otherwise, is left to float()), ``f`` lines' indices (the
+# part before a '/') resolved, ``vt`` / ``vn`` / ``vp`` skipped, and every other statement handed
+# back as a span for Python to read (tags, skipped statements, unknown keywords). As the NumPy fast
+# path, it never raises: on anything else it declines and the line-by-line parser reads the file.
+
+#: OBJ files of at least this many bytes are read by the compiled reader (its first use, on a fresh
+#: install, compiles it: see benchmarks/bench_readers.py)
+KERNEL_BYTES = 1 << 20
+#: helpers the OBJ kernel calls, compiled (and rebound) with it
+_KERNEL_HELPERS = ("_product", "_decimal")
+
+
+@cache
+def _powers_of_five() -> NDArray[np.uint64]:
+    """``5^q`` for q in -342..308 as 128-bit significands (high, low word), the top bit set: truncated
+    for q ≥ 0, rounded up for q < 0 (the table of Lemire's fast_float)."""
+    words = []
+    for q in range(-342, 309):
+        if q >= 0:
+            value = 5**q
+            value <<= max(0, 128 - value.bit_length())
+            value >>= max(0, value.bit_length() - 128)
+        else:
+            power = 5**-q
+            z = power.bit_length()
+            value = (1 << (z + 127 if q >= -27 else 2 * z + 128)) // power + 1
+            value >>= max(0, value.bit_length() - 128)
+        words += [value >> 64, value & (2**64 - 1)]
+    return np.array(words, dtype=np.uint64)
+
+
+def _product(a: np.uint64, b: np.uint64) -> tuple[np.uint64, np.uint64]:
+    """The 128-bit product ``a b`` as (high, low) 64-bit words."""
+    low32, shift = np.uint64(0xFFFFFFFF), np.uint64(32)
+    a0, a1, b0, b1 = a & low32, a >> shift, b & low32, b >> shift
+    p00, p01, p10, p11 = a0 * b0, a0 * b1, a1 * b0, a1 * b1
+    middle = p10 + (p00 >> shift) + (p01 & low32)
+    return p11 + (middle >> shift) + (p01 >> shift), (middle << shift) | (p00 & low32)
+
+
+def _decimal(w: np.uint64, q: int, powers: NDArray[np.uint64]) -> int:
+    """The float64 bits of ``w · 10^q`` (``0 < w < 10^19``), correctly rounded (Eisel–Lemire,
+    as fast_float), or -1 where it cannot tell, the result is subnormal or infinite."""
+    if q < -342 or q > 308:
+        return -1
+    one, ones = np.uint64(1), np.uint64(0xFFFFFFFFFFFFFFFF)
+    lz = 0
+    for shift in (32, 16, 8, 4, 2, 1):  # normalise: the top bit set
+        if w < one << np.uint64(64 - shift):
+            w <<= np.uint64(shift)
+            lz += shift
+    index = 2 * (q + 342)
+    high, low = _product(w, powers[index])
+    if high & np.uint64(0x1FF) == np.uint64(0x1FF):  # the 55 bits needed may carry: the next 64 bits of 5^q
+        high2, _ = _product(w, powers[index + 1])
+        low += high2
+        if high2 > low:
+            high += one
+    if low == ones and (q < -27 or q > 55):
+        return -1
+    upper = np.int64(high >> np.uint64(63))
+    mantissa = high >> np.uint64(upper + 9)
+    power2 = ((217706 * q) >> 16) + 63 + upper - lz + 1023
+    if power2 <= 0:
+        return -1
+    if low <= one and -4 <= q <= 23 and mantissa & np.uint64(3) == one and (mantissa << np.uint64(upper + 9)) == high:
+        mantissa &= ~one  # exactly halfway: to even
+    mantissa += mantissa & one
+    mantissa >>= one
+    if mantissa >= np.uint64(2) << np.uint64(52):
+        mantissa = one << np.uint64(52)
+        power2 += 1
+    if power2 >= 0x7FF:
+        return -1
+    return np.int64((mantissa & ~(one << np.uint64(52))) | (np.uint64(power2) << np.uint64(52)))  # int64 as every return
+
+
+#: byte classes of the OBJ kernel: 0 a token's, 1 space or tab, 2 LF or CR, 3 '#', 4 any other (not
+#: ASCII, a control byte, or one ``str.splitlines`` breaks at): the kernel declines the file
+_TOKEN, _SPACE, _BREAK, _HASH, _ODD = range(5)
+_BYTE_CLASSES = np.full(256, _ODD, dtype=np.uint8)
+_BYTE_CLASSES[33:128] = _TOKEN
+_BYTE_CLASSES[[ord(" "), ord("\t")]] = _SPACE
+_BYTE_CLASSES[[ord("\n"), ord("\r")]] = _BREAK
+_BYTE_CLASSES[ord("#")] = _HASH
+
+
+def _obj_kernel(
+    data: NDArray[np.uint8], classes: NDArray[np.uint8], powers: NDArray[np.uint64], points: NDArray[np.uint64],
+    corners: NDArray[np.int64], sizes: NDArray[np.int64], hard: NDArray[np.int64], others: NDArray[np.int64],
+) -> tuple[bool, int, int, int, int, int]:
+    """Scan OBJ bytes once into the arrays given; returns ``valid`` and the items found: coordinates,
+    faces, corners, hard numbers, other lines (those beyond an array's length are counted, not written).
+    ``points``: float64 bits, x y z per vertex (0 where hard); ``corners`` (0-based, resolved) and
+    ``sizes`` of the faces; ``hard``: (start, end, slot in points) of each number left to ``float``;
+    ``others``: (start, end) of each line of another statement, comment cut. Not ``valid`` (a byte
+    of class 4, or anything the line-by-line parser reports): that parser reads the file."""
+    n = data.size
+    n_points = n_faces = n_corners = n_hard = n_others = 0
+    i, valid = 0, True
+    while i < n and valid:
+        while i < n and classes[data[i]] == _SPACE:
+            i += 1
+        start = i
+        while i < n and classes[data[i]] == _TOKEN:  # the keyword
+            i += 1
+        keyword = i - start
+        kind = 0  # 1: v, 2: f, 3: vt/vn/vp, 4: other
+        if keyword == 1 and data[start] == 118:
+            kind = 1
+        elif keyword == 1 and data[start] == 102:
+            kind = 2
+        elif keyword == 2 and data[start] == 118 and (data[start + 1] == 116 or data[start + 1] == 110 or data[start + 1] == 112):
+            kind = 3
+        elif keyword > 0:
+            kind = 4
+        tokens = 0
+        while True:  # the tokens after the keyword, up to a comment or the end of the line
+            while i < n and classes[data[i]] == _SPACE:
+                i += 1
+            if i >= n or classes[data[i]] != _TOKEN:
+                break
+            first = i
+            while i < n and classes[data[i]] == _TOKEN:
+                i += 1
+            tokens += 1
+            if kind == 1 and tokens <= 3:
+                at, negative = first, False
+                if data[at] == 43 or data[at] == 45:
+                    negative = data[at] == 45
+                    at += 1
+                w, digits, fraction, seen, exact = np.uint64(0), 0, 0, False, True
+                while at < i and 48 <= data[at] <= 57:
+                    seen = True
+                    if w != np.uint64(0) or data[at] != 48:
+                        w = w * np.uint64(10) + np.uint64(data[at] - 48)
+                        digits += 1
+                    at += 1
+                if at < i and data[at] == 46:
+                    at += 1
+                    while at < i and 48 <= data[at] <= 57:
+                        seen = True
+                        fraction += 1
+                        if w != np.uint64(0) or data[at] != 48:
+                            w = w * np.uint64(10) + np.uint64(data[at] - 48)
+                            digits += 1
+                        at += 1
+                exponent = 0
+                if seen and at < i and (data[at] == 101 or data[at] == 69):
+                    at += 1
+                    sign = 1
+                    if at < i and (data[at] == 43 or data[at] == 45):
+                        sign = -1 if data[at] == 45 else 1
+                        at += 1
+                    exact = at < i
+                    while at < i and 48 <= data[at] <= 57:
+                        exponent = min(exponent * 10 + data[at] - 48, 100_000)
+                        at += 1
+                    exponent *= sign
+                bits = 0 if w == np.uint64(0) else -1
+                if seen and exact and at == i and digits <= 19 and w != np.uint64(0):
+                    bits = _decimal(w, exponent - fraction, powers)
+                if not (seen and exact and at == i) or bits < 0:
+                    if n_hard < hard.shape[0]:
+                        hard[n_hard, 0], hard[n_hard, 1], hard[n_hard, 2] = first, i, n_points + tokens - 1
+                    n_hard += 1
+                    bits = 0
+                if n_points + 3 <= points.size:
+                    points[n_points + tokens - 1] = np.uint64(bits) | (np.uint64(1) << np.uint64(63) if negative else np.uint64(0))
+            elif kind == 2:
+                at, negative, value = first, False, 0
+                if data[at] == 43 or data[at] == 45:
+                    negative = data[at] == 45
+                    at += 1
+                end = at
+                while end < i and data[end] != 47:  # the index: up to a '/'
+                    end += 1
+                valid = at < end <= at + 18
+                while valid and at < end:
+                    valid = 48 <= data[at] <= 57
+                    value = value * 10 + data[at] - 48
+                    at += 1
+                if not valid or value == 0:
+                    valid = False
+                    break
+                if n_corners < corners.size:
+                    corners[n_corners] = n_points // 3 - value if negative else value - 1
+                n_corners += 1
+        if i < n and classes[data[i]] == _HASH:  # a comment
+            while i < n and classes[data[i]] != _BREAK:
+                valid = valid and classes[data[i]] != _ODD
+                i += 1
+        if i < n and classes[data[i]] == _ODD:
+            valid = False
+        if kind == 1:
+            valid = valid and 4 <= tokens + 1 <= 8
+            n_points += 3
+        elif kind == 2:
+            valid = valid and tokens >= 3
+            if n_faces < sizes.size:
+                sizes[n_faces] = tokens
+            n_faces += 1
+        elif kind == 4:
+            if n_others < others.shape[0]:
+                others[n_others, 0], others[n_others, 1] = start, i
+            n_others += 1
+        i += 1  # the line break (CR LF: the LF ends an empty line)
+    return valid, n_points, n_faces, n_corners, n_hard, n_others
+
+
+@cache
+def _compiled_obj_kernel() -> Callable[..., tuple]:
+    """:func:`_obj_kernel` compiled by :func:`~g1patch.targets.local.jit_kernel`, its helpers first."""
+    from ..targets.local import jit_kernel  # numba, imported on first use
+
+    for name in _KERNEL_HELPERS:
+        globals()[name] = jit_kernel(globals()[name])
+    return jit_kernel(_obj_kernel)  # type: ignore[return-value]
+
+
+def _obj_compiled(data: bytes) -> _Parsed | None:
+    """The compiled OBJ reader (see above); None where the line-by-line one must read the file."""
+    buffer, kernel = np.frombuffer(data, dtype=np.uint8), _compiled_obj_kernel()
+    found = (3 * (len(data) // 24 + 64), len(data) // 6 + 64, len(data) // 24 + 64, 1024, 1024)  # most files fit
+    while True:
+        n_points, n_corners, n_faces, n_hard, n_others = found
+        arrays = (np.empty(n_points, dtype=np.uint64), np.empty(n_corners, dtype=np.int64), np.empty(n_faces, dtype=np.int64),
+                  np.empty((n_hard, 3), dtype=np.int64), np.empty((n_others, 2), dtype=np.int64))
+        valid, *counts = kernel(buffer, _BYTE_CLASSES, _powers_of_five(), *arrays)
+        found = (counts[0], counts[2], counts[1], counts[3], counts[4])
+        if not valid or all(count <= len(array) for count, array in zip(found, arrays)):
+            break
+    if not valid or found[2] == 0:
+        return None
+    points, corners, sizes, hard, others = (array[:count] for array, count in zip(arrays, found))
+    vertices = points.view(np.float64).reshape(-1, 3)
+    for start, end, slot in hard.tolist():  # spelt otherwise ('1_0', 'inf'), or hard to round
+        try:
+            vertices.flat[slot] = float(data[start:end])
+        except ValueError:
+            return None
+    tags: list[Tag] = []
+    for start, end in others.tolist():
+        parts = data[start:end].decode("ascii").split()
+        if parts[0] == "t":
+            try:
+                tags.append(_parse_tag(Path(), parts, 0))
+            except FormatError:
+                return None
+        elif parts[0] not in OBJ_SKIPPED:
+            return None
+    if not np.isfinite(vertices).all() or corners.min() < 0 or corners.max() >= len(vertices):
+        return None
+    return _Parsed(vertices, _polygon_list(corners, sizes), tuple(tags))
 
 # -- OFF ---------------------------------------------------------------------------------------
 
