@@ -12,6 +12,7 @@ from __future__ import annotations
 from decimal import Decimal
 from pathlib import Path
 
+import meshio
 import numpy as np
 import pytest
 from hypothesis import given
@@ -20,7 +21,7 @@ from hypothesis import strategies as st
 from g1patch import shapes
 from g1patch.io import meshfile
 from g1patch.io.meshfile import read_mesh, write_quads
-from test_readers import PATH, SETTINGS, obj_files, outcome
+from test_readers import PATH, PLAIN_COORDINATES, SETTINGS, obj_files, outcome
 
 
 @SETTINGS
@@ -105,3 +106,40 @@ def test_large_malformed_obj_keeps_the_line_numbered_message(tmp_path: Path, tex
     reference = outcome(meshfile._read_obj_lines, path, path.read_bytes())
     assert meshfile._obj_compiled(path.read_bytes()) is None
     assert outcome(meshfile._read_obj, path, path.read_bytes()) == reference and reference[2] == line + 1
+
+
+# -- the numbers of OFF and ASCII PLY text ------------------------------------------------------
+
+
+@SETTINGS
+@given(st.lists(st.one_of(PLAIN_COORDINATES, st.sampled_from(["1_0", "x", "-", "+", "nan", "inf", "1e", "1e400", "--1", "1.2.3"])),
+                min_size=1, max_size=40), st.sampled_from([" ", "\n"]))
+def test_floats_kernel_is_numbers(tokens: list[str], separator: str) -> None:
+    """``_floats_compiled`` returns what the NumPy ``_numbers`` returns where that accepts the text
+    (the same bits), and declines the same texts, but for the numbers np.fromstring cannot be trusted with."""
+    text = separator.join(tokens).encode() + b"\n"
+    compiled = meshfile._floats_compiled(text, len(tokens))
+    numpy = meshfile._numbers(text, b"", len(tokens), np.float64)
+    if numpy is not None:
+        assert compiled is not None and compiled.tobytes() == numpy.tobytes()
+    if compiled is not None:
+        assert compiled.tobytes() == np.array([float(t) for t in tokens]).tobytes()
+    plain = all(t.lstrip("+-")[:1].isdigit() or t.lstrip("+-")[:1] == "." for t in tokens) and not any(
+        t in ("1e", "--1", "1.2.3", "1_0") for t in tokens)
+    assert (compiled is not None) == plain, tokens
+
+
+def test_large_off_and_ascii_ply_are_the_references(tmp_path: Path) -> None:
+    """Past KERNEL_BYTES, OFF and ASCII PLY coordinates go through the kernel: the reference's mesh bit for bit."""
+    mesh = shapes.large_torus(40_000)
+    off = tmp_path / "torus.off"
+    off.write_text(f"OFF\n{mesh.n_vertices} {mesh.n_faces} 0\n" + ("%r %r %r\n" * mesh.n_vertices) % tuple(mesh.vertices.ravel().tolist())
+                   + ("4 %d %d %d %d\n" * mesh.n_faces) % tuple(mesh.faces.ravel().tolist()))
+    assert off.stat().st_size >= meshfile.KERNEL_BYTES
+    reference = meshfile._read_off_lines(off, off.read_bytes())
+    assert meshfile._off_fast(off.read_bytes()).vertices.tobytes() == reference.vertices.tobytes() == mesh.vertices.tobytes()
+    ply = tmp_path / "torus.ply"
+    meshio.ply.write(str(ply), meshio.Mesh(mesh.vertices, [("quad", mesh.faces.astype(np.int32))]), binary=False)
+    records = meshfile._ply_text(ply.read_bytes())
+    assert records is not None and records[0].tobytes() == mesh.vertices.tobytes()
+    assert read_mesh(ply).vertices.tobytes() == read_mesh(off).vertices.tobytes() == mesh.vertices.tobytes()

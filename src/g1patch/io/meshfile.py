@@ -9,9 +9,10 @@
   from a truncated binary file.
 * OFF is read by a parser of its own: meshio's OFF reader only accepts triangles.
 
-OBJ and OFF text is parsed in bulk by NumPy over the whole file; only where that fast path
+OBJ and OFF text is parsed in bulk by NumPy over the whole file, and from :data:`KERNEL_BYTES` on
+by numba kernels (OBJ in one scan; the coordinates of OFF and ASCII PLY); only where a fast path
 declines (anything unusual, any error) is the file read again line by line, by the reference
-parser whose results and line-numbered messages the fast path reproduces exactly.
+parser whose results and line-numbered messages the fast paths reproduce exactly.
 
 Every problem with a file raises :class:`FormatError` (file, line where known, what was expected);
 problems with the mesh it describes raise the :class:`MeshError` family, prefixed with the file
@@ -250,8 +251,11 @@ _NUMBER_BYTES = {np.int64: (b"0123456789+- \n", b"0123456789"), np.float64: (b"0
 
 def _numbers(text: bytes, keyword: bytes, count: int, dtype: type[np.int64] | type[np.float64]) -> NDArray | None:
     """The ``count`` numbers of ``text`` (lines of ``keyword`` then numbers), each token converted as
-    ``int`` or ``float`` converts it, by one ``np.fromstring``; None where ``text`` holds anything
-    else, or a token that ``np.fromstring`` might read otherwise."""
+    ``int`` or ``float`` converts it, by one ``np.fromstring`` (floats from :data:`KERNEL_BYTES` on,
+    without a keyword: :func:`_floats_compiled`); None where ``text`` holds anything else, or a token
+    that ``np.fromstring`` might read otherwise."""
+    if dtype is np.float64 and not keyword and len(text) >= KERNEL_BYTES:
+        return _floats_compiled(text, count)
     allowed, after_sign = _NUMBER_BYTES[dtype]
     if text.translate(None, allowed).replace(keyword, b"") != b"":
         return None
@@ -417,20 +421,23 @@ def _parse_tag(path: Path, parts: Sequence[str], line: int) -> Tag:
     return Tag(parts[1], ints, floats, tuple(values[n_ints + n_floats:]))
 
 
-# -- compiled OBJ reader -----------------------------------------------------------------------
+# -- compiled readers --------------------------------------------------------------------------
 #
 # From KERNEL_BYTES on, OBJ text is read by one numba kernel that scans the bytes once: ``v`` lines'
 # first three numbers are converted as they are met (Eisel–Lemire: correctly rounded, as float();
 # a number it cannot settle, or spelt otherwise, is left to float()), ``f`` lines' indices (the
 # part before a '/') resolved, ``vt`` / ``vn`` / ``vp`` skipped, and every other statement handed
-# back as a span for Python to read (tags, skipped statements, unknown keywords). As the NumPy fast
-# path, it never raises: on anything else it declines and the line-by-line parser reads the file.
+# back as a span for Python to read (tags, skipped statements, unknown keywords). The coordinates
+# of OFF and ASCII PLY (``_numbers``) are converted by the same code. As the NumPy fast paths,
+# they never raise: on anything else they decline and the line-by-line parser reads the file.
 
-#: OBJ files of at least this many bytes are read by the compiled reader (its first use, on a fresh
-#: install, compiles it: see benchmarks/bench_readers.py)
+#: OBJ files, and OFF / ASCII PLY coordinates, of at least this many bytes are read by the kernels
+#: (their first use, on a fresh install, compiles them: see benchmarks/bench_readers.py)
 KERNEL_BYTES = 1 << 20
-#: helpers the OBJ kernel calls, compiled (and rebound) with it
-_KERNEL_HELPERS = ("_product", "_decimal")
+#: helpers the kernels call, compiled (and rebound) with the first kernel
+_KERNEL_HELPERS = ("_product", "_decimal", "_number")
+#: the sign bit of a float64, as int64
+_SIGN_BIT = -(2**63)
 
 
 @cache
@@ -498,6 +505,48 @@ def _decimal(w: np.uint64, q: int, powers: NDArray[np.uint64]) -> int:
     return np.int64((mantissa & ~(one << np.uint64(52))) | (np.uint64(power2) << np.uint64(52)))  # int64 as every return
 
 
+def _number(data: NDArray[np.uint8], first: int, end: int, powers: NDArray[np.uint64]) -> int:
+    """The float64 bits (as int64) of the number ``data[first:end]`` spelt ``[+-]digits[.digits][(e|E)[+-]digits]``
+    (or ``.digits``), correctly rounded as ``float`` rounds it; -1 for any other spelling, more than
+    19 significant digits, or a number :func:`_decimal` cannot settle: ``float`` must convert it."""
+    at, negative = first, False
+    if data[at] == 43 or data[at] == 45:
+        negative = data[at] == 45
+        at += 1
+    w, digits, fraction, seen = np.uint64(0), 0, 0, False
+    while at < end and 48 <= data[at] <= 57:
+        seen = True
+        if w != np.uint64(0) or data[at] != 48:  # leading zeros are not significant
+            w = w * np.uint64(10) + np.uint64(data[at] - 48)
+            digits += 1
+        at += 1
+    if at < end and data[at] == 46:
+        at += 1
+        while at < end and 48 <= data[at] <= 57:
+            seen = True
+            fraction += 1
+            if w != np.uint64(0) or data[at] != 48:
+                w = w * np.uint64(10) + np.uint64(data[at] - 48)
+                digits += 1
+            at += 1
+    exponent = 0
+    if seen and at < end and (data[at] == 101 or data[at] == 69):
+        at += 1
+        sign = 1
+        if at < end and (data[at] == 43 or data[at] == 45):
+            sign = -1 if data[at] == 45 else 1
+            at += 1
+        seen = at < end
+        while at < end and 48 <= data[at] <= 57:
+            exponent = min(exponent * 10 + data[at] - 48, 100_000)
+            at += 1
+        exponent *= sign
+    if not seen or at != end or digits > 19:
+        return -1
+    bits = 0 if w == np.uint64(0) else _decimal(w, exponent - fraction, powers)
+    return -1 if bits < 0 else bits | (_SIGN_BIT if negative else 0)  # -1: a NaN's bits, never a number's
+
+
 #: byte classes of the OBJ kernel: 0 a token's, 1 space or tab, 2 LF or CR, 3 '#', 4 any other (not
 #: ASCII, a control byte, or one ``str.splitlines`` breaks at): the kernel declines the file
 _TOKEN, _SPACE, _BREAK, _HASH, _ODD = range(5)
@@ -548,48 +597,14 @@ def _obj_kernel(
                 i += 1
             tokens += 1
             if kind == 1 and tokens <= 3:
-                at, negative = first, False
-                if data[at] == 43 or data[at] == 45:
-                    negative = data[at] == 45
-                    at += 1
-                w, digits, fraction, seen, exact = np.uint64(0), 0, 0, False, True
-                while at < i and 48 <= data[at] <= 57:
-                    seen = True
-                    if w != np.uint64(0) or data[at] != 48:
-                        w = w * np.uint64(10) + np.uint64(data[at] - 48)
-                        digits += 1
-                    at += 1
-                if at < i and data[at] == 46:
-                    at += 1
-                    while at < i and 48 <= data[at] <= 57:
-                        seen = True
-                        fraction += 1
-                        if w != np.uint64(0) or data[at] != 48:
-                            w = w * np.uint64(10) + np.uint64(data[at] - 48)
-                            digits += 1
-                        at += 1
-                exponent = 0
-                if seen and at < i and (data[at] == 101 or data[at] == 69):
-                    at += 1
-                    sign = 1
-                    if at < i and (data[at] == 43 or data[at] == 45):
-                        sign = -1 if data[at] == 45 else 1
-                        at += 1
-                    exact = at < i
-                    while at < i and 48 <= data[at] <= 57:
-                        exponent = min(exponent * 10 + data[at] - 48, 100_000)
-                        at += 1
-                    exponent *= sign
-                bits = 0 if w == np.uint64(0) else -1
-                if seen and exact and at == i and digits <= 19 and w != np.uint64(0):
-                    bits = _decimal(w, exponent - fraction, powers)
-                if not (seen and exact and at == i) or bits < 0:
+                bits = _number(data, first, i, powers)
+                if bits == -1:
                     if n_hard < hard.shape[0]:
                         hard[n_hard, 0], hard[n_hard, 1], hard[n_hard, 2] = first, i, n_points + tokens - 1
                     n_hard += 1
                     bits = 0
                 if n_points + 3 <= points.size:
-                    points[n_points + tokens - 1] = np.uint64(bits) | (np.uint64(1) << np.uint64(63) if negative else np.uint64(0))
+                    points[n_points + tokens - 1] = np.uint64(bits)
             elif kind == 2:
                 at, negative, value = first, False, 0
                 if data[at] == 43 or data[at] == 45:
@@ -631,19 +646,76 @@ def _obj_kernel(
     return valid, n_points, n_faces, n_corners, n_hard, n_others
 
 
+def _floats_kernel(
+    data: NDArray[np.uint8], classes: NDArray[np.uint8], powers: NDArray[np.uint64], out: NDArray[np.uint64],
+    hard: NDArray[np.int64],
+) -> tuple[bool, int, int]:
+    """The numbers of a text of numbers separated by spaces and line breaks, by :func:`_number`, into
+    ``out`` (float64 bits; 0 where hard): returns ``valid`` (no byte but a number's, a space or a
+    line break), the numbers and the hard ones found (those beyond ``out`` or ``hard`` counted,
+    not written); ``hard``: (start, end, slot in out) of each number left to ``float``."""
+    n, count, n_hard, i = data.size, 0, 0, 0
+    while i < n:
+        kind = classes[data[i]]
+        if kind == _SPACE or kind == _BREAK:
+            i += 1
+            continue
+        if kind != _TOKEN:
+            return False, count, n_hard
+        first = i
+        while i < n and classes[data[i]] == _TOKEN:
+            i += 1
+        bits = _number(data, first, i, powers)
+        if bits == -1:
+            if n_hard < hard.shape[0]:
+                hard[n_hard, 0], hard[n_hard, 1], hard[n_hard, 2] = first, i, count
+            n_hard += 1
+            bits = 0
+        if count < out.size:
+            out[count] = np.uint64(bits)
+        count += 1
+    return True, count, n_hard
+
+
 @cache
-def _compiled_obj_kernel() -> Callable[..., tuple]:
-    """:func:`_obj_kernel` compiled by :func:`~g1patch.targets.local.jit_kernel`, its helpers first."""
+def _compiled(kernel: Callable[..., tuple]) -> Callable[..., tuple]:
+    """``kernel`` compiled by :func:`~g1patch.targets.local.jit_kernel`, the helpers first."""
     from ..targets.local import jit_kernel  # numba, imported on first use
 
     for name in _KERNEL_HELPERS:
-        globals()[name] = jit_kernel(globals()[name])
-    return jit_kernel(_obj_kernel)  # type: ignore[return-value]
+        if not hasattr(globals()[name], "py_func"):
+            globals()[name] = jit_kernel(globals()[name])
+    return jit_kernel(kernel)  # type: ignore[return-value]
+
+
+def _floats_compiled(text: bytes, count: int) -> NDArray[np.float64] | None:
+    """The ``count`` numbers of ``text`` (numbers, spaces, line breaks) converted as ``float`` converts
+    them, by :func:`_floats_kernel`; None if it holds anything else or another count. As
+    :func:`_numbers`, a token of other bytes than ``0-9 . e E + -`` is refused, not given to ``float``."""
+    buffer, kernel, n_hard = np.frombuffer(text, dtype=np.uint8), _compiled(_floats_kernel), 1024
+    out = np.empty(count, dtype=np.uint64)
+    while True:
+        hard = np.empty((n_hard, 3), dtype=np.int64)
+        valid, found, n_hard = kernel(buffer, _BYTE_CLASSES, _powers_of_five(), out, hard)
+        if not valid or found != count or n_hard <= len(hard):
+            break
+    if not valid or found != count:
+        return None
+    values = out.view(np.float64)
+    for start, end, slot in hard[:n_hard].tolist():
+        token = text[start:end]
+        if token.translate(None, b"0123456789.eE+-"):
+            return None
+        try:
+            values[slot] = float(token)
+        except ValueError:
+            return None
+    return values
 
 
 def _obj_compiled(data: bytes) -> _Parsed | None:
     """The compiled OBJ reader (see above); None where the line-by-line one must read the file."""
-    buffer, kernel = np.frombuffer(data, dtype=np.uint8), _compiled_obj_kernel()
+    buffer, kernel = np.frombuffer(data, dtype=np.uint8), _compiled(_obj_kernel)
     found = (3 * (len(data) // 24 + 64), len(data) // 6 + 64, len(data) // 24 + 64, 1024, 1024)  # most files fit
     while True:
         n_points, n_corners, n_faces, n_hard, n_others = found
