@@ -12,14 +12,14 @@
   ``c(i/m)`` of the edge, ``m = 2^L`` (limit points and normals ``n_i`` of the cage refined L
   times, :func:`~g1patch.subdivision.refine_grids`): ``min Σ_i rᵀ (n_i n_iᵀ + ρ I) r``,
   ``r = H(i/m) − c(i/m)``, a 4 × 4 solve per edge. The normal part is the geometric error; the
-  small parametric share ρ (:data:`_PARAMETRIC`) fixes the tangential freedom. Matching the
+  small parametric share ρ (:data:`_PARAMETRIC_EDGE`) fixes the tangential freedom. Matching the
   singular parameterisation point for point (ρ = ∞) left 5–8e-3 of the diagonal on the cube;
-  ρ = 0.05 leaves 0.8e-3;
+  ρ = 0.05 left 0.8e-3, ρ = 0.01 leaves 3.9e-4 (the surface, after the assembly);
 * interior points: on a face whose four corners are regular the uniform B-spline's Bézier points,
   ``b11 = (4A + 2B + 2D + C)/9`` at corner A of face (A, B, C, D) of the cage (the tensor product
   of the curve rule ``(2P_0 + P_1)/3``), exactly; elsewhere the four interior points of the
   bicubic with those boundary curves that fit the exact limit samples inside the face in the
-  same weighted sense (a 12 × 12 solve per face). The Gregory assembly then moves them as far as
+  same weighted sense, with a larger share ρ (:data:`_PARAMETRIC_INTERIOR`) (a 12 × 12 solve per face). The Gregory assembly then moves them as far as
   G1 requires.
 
 Every manifold quad mesh gets valid targets: a fitted fan that does not turn counter-clockwise
@@ -57,11 +57,17 @@ BoolArray = NDArray[np.bool_]
 FIT_LEVELS = 3
 #: vertex rings of faces around those whose limit samples are needed, refined with them
 _SAMPLE_MARGIN = 3
-#: weight of the parametric residual against the normal one in the fits: the limit surface's
-#: parameterisation is singular at extraordinary vertices (speed ~ (2λ)^m), so matching it
-#: point for point would bend the cubics; the normal distance is the geometric error, and this
-#: small share fixes the tangential freedom it leaves
-_PARAMETRIC = 0.05
+#: weight of the parametric residual against the normal one in the fits of the edge tangents
+#: and of the interior points: the limit surface's parameterisation is singular at
+#: extraordinary vertices (speed ~ (2λ)^m), so matching it point for point would bend the
+#: cubics; the normal distance is the geometric error, and this small share fixes the
+#: tangential freedom it leaves. An edge cubic has 4 free numbers and follows the limit curve
+#: better with a small share (the cube's edge curves: 4.7e-4 of the diagonal at 0.01, 8.0e-4
+#: at 0.05; at 0.001, 4.5e-4, but the wild cages of ``limit-interpolate`` then fold); the
+#: interior points need more (at 0.001 they drift along the surface, and the assembly, which
+#: keeps them only as far as G1 allows, then bent the cube's patches to 1.2e-3)
+_PARAMETRIC_EDGE = 0.01
+_PARAMETRIC_INTERIOR = 0.05
 #: a vertex whose limit tangents span less than this (|a × b| / (|a|² + |b|²)) has no usable plane
 _DEGENERATE = 1e-9
 #: edge k of a face as grid positions (i, j) at parameter t = s/m, from corner k to corner k + 1
@@ -101,8 +107,8 @@ def regular_faces(topology: QuadTopology) -> BoolArray:
 
 
 def _weigh(r: FloatArray, n: FloatArray) -> FloatArray:
-    """``W r`` with ``W = n nᵀ + ρ I``: the residual's normal part, plus :data:`_PARAMETRIC` of all of it."""
-    return _dot(r, n)[..., None] * n + _PARAMETRIC * r
+    """``W r`` with ``W = n nᵀ + ρ I``: the residual's normal part, plus :data:`_PARAMETRIC_EDGE` of all of it."""
+    return _dot(r, n)[..., None] * n + _PARAMETRIC_EDGE * r
 
 
 def _plane_bases(normals: FloatArray, a: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -242,7 +248,7 @@ def _fit_interior(net: FloatArray, samples: FloatArray, sample_normals: FloatArr
     known = np.einsum("kij,fijd->fkd", basis, net)
     residual = known - samples[:, 1:m, 1:m].reshape(count, -1, 3)
     n = sample_normals[:, 1:m, 1:m].reshape(count, -1, 3)
-    weight = n[..., :, None] * n[..., None, :] + _PARAMETRIC * np.eye(3)  # (F, K, 3, 3)
+    weight = n[..., :, None] * n[..., None, :] + _PARAMETRIC_INTERIOR * np.eye(3)  # (F, K, 3, 3)
     gram = np.einsum("kc,kg,fkde->fcdge", inner, inner, weight).reshape(count, 12, 12)
     rhs = -np.einsum("kc,fkde,fke->fcd", inner, weight, residual).reshape(count, 12)
     return np.linalg.solve(gram, rhs[..., None]).reshape(count, 4, 3)
