@@ -41,7 +41,7 @@ from ..gregory import INTERIOR_INDEX
 from ..errors import MeshError
 from ..mesh import QuadMesh, QuadTopology, Sectors, Tag, sectors
 from ..subdivision import (
-    boundary_mode, corner_vertices, limit_corner_normals, limit_normals, limit_points, limit_stars, limit_tangents, refine_grids,
+    boundary_mode, corner_vertices, limit_corner_normals, limit_data, limit_normals, limit_points, refine_grids,
 )
 from . import Targets, halfedge_slots, slot_sector_normals
 from .creases import seam_edges, spread_sectors
@@ -175,14 +175,14 @@ def _limit_samples(mesh: QuadMesh, faces: IntArray, levels: int) -> tuple[FloatA
 
 
 def _fit_tangents(
-    mesh: QuadMesh, x: FloatArray, t: FloatArray, free: BoolArray, bases: tuple[FloatArray, FloatArray],
+    mesh: QuadMesh, x: FloatArray, t: FloatArray, free: BoolArray, planes: FloatArray,
     samples: FloatArray, sample_normals: FloatArray, row: IntArray, m: int,
 ) -> FloatArray:
     """The free slot tangents fitted in their tangent planes: per interior edge A → B with a free end
     the least-squares fit of ``H(s) = B0 A + B1 (A + t_A/3) + B2 (B + t_B/3) + B3 B`` to the limit
-    curve samples, ``t = α e1 + β e2`` at a free end (a 4 × 4 solve per edge; ``bases`` per slot,
-    the plane of the slot's sector), the other end fixed; ``samples[row[f]]`` holds face f's grid
-    of limit samples."""
+    curve samples, ``t = α e1 + β e2`` at a free end (a 4 × 4 solve per edge; ``(e1, e2)`` per
+    slot, :func:`_plane_bases` of ``planes``, the normal of the slot's sector), the other end
+    fixed; ``samples[row[f]]`` holds face f's grid of limit samples."""
     topology = mesh.topology
     slot_out, slot_in = halfedge_slots(topology)
     h = _fitted_edges(topology, free)
@@ -198,12 +198,12 @@ def _fit_tangents(
     w = _bernstein(s / m)
     va, vb = topology.origin(h), topology.target(h)
     base = (w[:, 0] + w[:, 1])[None, :, None] * x[va][:, None] + (w[:, 2] + w[:, 3])[None, :, None] * x[vb][:, None] - curve
-    e1, e2 = bases
+    (e1a, e2a), (e1b, e2b) = _plane_bases(planes[sa], t[sa]), _plane_bases(planes[sb], t[sb])
     columns = np.stack([  # ∂H/∂(α_A, β_A, α_B, β_B): (E, 4, m + 1, 3)
-        w[None, :, 1, None] * e1[sa][:, None] / 3.0, w[None, :, 1, None] * e2[sa][:, None] / 3.0,
-        w[None, :, 2, None] * e1[sb][:, None] / 3.0, w[None, :, 2, None] * e2[sb][:, None] / 3.0,
+        w[None, :, 1, None] * e1a[:, None] / 3.0, w[None, :, 1, None] * e2a[:, None] / 3.0,
+        w[None, :, 2, None] * e1b[:, None] / 3.0, w[None, :, 2, None] * e2b[:, None] / 3.0,
     ], axis=1)
-    known = np.stack([_dot(t[sa], e1[sa]), _dot(t[sa], e2[sa]), _dot(t[sb], e1[sb]), _dot(t[sb], e2[sb])], axis=1)
+    known = np.stack([_dot(t[sa], e1a), _dot(t[sa], e2a), _dot(t[sb], e1b), _dot(t[sb], e2b)], axis=1)
     unknown = np.repeat(np.stack([free[sa], free[sb]], axis=1), 2, axis=1)  # (E, 4)
     fixed_part = np.einsum("ec,ecsd->esd", np.where(unknown, 0.0, known), columns)
     weighted = _weigh(columns, normal[:, None])
@@ -214,8 +214,8 @@ def _fit_tangents(
     gram = np.where(both, gram, np.where(eye, 1.0, 0.0))
     rhs = np.where(unknown, rhs, known)
     p = np.linalg.solve(gram, rhs[..., None])[..., 0]
-    fitted_a = p[:, 0, None] * e1[sa] + p[:, 1, None] * e2[sa]
-    fitted_b = p[:, 2, None] * e1[sb] + p[:, 3, None] * e2[sb]
+    fitted_a = p[:, 0, None] * e1a + p[:, 1, None] * e2a
+    fitted_b = p[:, 2, None] * e1b + p[:, 3, None] * e2b
     out[sa[free[sa]]] = fitted_a[free[sa]]
     out[sb[free[sb]]] = fitted_b[free[sb]]
     return out
@@ -254,10 +254,9 @@ def _fit_interior(net: FloatArray, samples: FloatArray, sample_normals: FloatArr
     return np.linalg.solve(gram, rhs[..., None]).reshape(count, 4, 3)
 
 
-def _limit_normals(mesh: QuadMesh) -> tuple[FloatArray, BoolArray]:
-    """Unit ``a × b`` of the limit stars; the fan normal where the plane is degenerate
+def _limit_normals(mesh: QuadMesh, a: FloatArray, b: FloatArray) -> tuple[FloatArray, BoolArray]:
+    """Unit ``a × b`` of the limit stars ``(a, b)``; the fan normal where the plane is degenerate
     (:data:`_DEGENERATE`), flagged."""
-    a, b = limit_stars(mesh)
     a_cross_b = np.cross(a, b)
     length = np.linalg.norm(a_cross_b, axis=1)
     degenerate = ~(length > _DEGENERATE * (_dot(a, a) + _dot(b, b)))
@@ -316,8 +315,9 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
     """The Catmull–Clark limit targets of ``mesh`` (module docstring); ``levels`` of refinement for the fits."""
     topology = mesh.topology
     slot_vertex = slot_vertices(topology)
-    x = limit_points(mesh)
-    normals, degenerate = _limit_normals(mesh)
+    limit = limit_data(mesh)
+    x = limit.points
+    normals, degenerate = _limit_normals(mesh, limit.a, limit.b)
     seams = seam_edges(mesh)
     found, bound, inner_exact = _sector_slots(mesh, seams)
     creased = found.creased
@@ -327,7 +327,7 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
     plane = Targets(topology, x, normals, np.zeros((slot_vertex.size, 3)), np.zeros((topology.n_faces, 4, 2, 3)),
                     seams, corner_normals=corner_normals)
     n = slot_sector_normals(plane)[1]  # each slot's sector plane (the right-hand face's)
-    star = limit_tangents(mesh)
+    star = limit.tangents
     projected = star - _dot(star, n)[:, None] * n
     star = np.where(bound[:, None], star, projected)  # crease tangents lie in both sectors' planes already
     touched = _touched(mesh)
@@ -342,8 +342,7 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
         row[needed] = np.arange(needed.size)
         samples, sample_normals = _limit_samples(mesh, needed, levels)
         m = 2**levels
-        bases = _plane_bases(n, star)
-        fitted = _fit_tangents(mesh, x, star, free, bases, samples, sample_normals, row, m)
+        fitted = _fit_tangents(mesh, x, star, free, n, samples, sample_normals, row, m)
     t, guarded = _guarded(mesh, normals, fitted, star, creased)
     spread = np.zeros(topology.n_vertices, dtype=bool)
     if creased.any():
