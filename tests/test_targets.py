@@ -23,7 +23,7 @@ from g1patch.mesh import QuadMesh
 from g1patch.network import network_from_mesh
 from g1patch.patches import PatchSet
 from g1patch.targets import Targets, halfedge_slots
-from g1patch.targets.interpolate import interpolate_targets, legacy_targets, slot_vertices
+from g1patch.targets.interpolate import interpolate_targets, legacy_targets, safeguarded_fans, slot_vertices
 
 
 def _torus_grid(n: int, m: int) -> QuadMesh:
@@ -168,3 +168,40 @@ def test_unknown_shape_and_method() -> None:
         build_network(shapes.cube(), "gregory", "lumpy")  # type: ignore[arg-type]
     with pytest.raises(InputError, match="method: unknown value 'spline'"):
         build_network(shapes.cube(), "spline")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1e3])
+def test_the_gregory_assembly_scales_with_its_targets(scale: float) -> None:
+    """Targets scaled by s give points scaled by s: the k-h fit's ridge is relative to each
+    unknown's own diagonal entry (G1 a length, h_L1 a number), so no size is preferred. One ridge
+    scaled by the larger entry moved a noisy torus's points by 1e-4 of their size at s = 0.5
+    and folded the slivers of a large polygon's split. Bound: a few ε of the points' size."""
+    targets = interpolate_targets(perturbed(shapes.torus(6, 4), 0.05, 3))
+    scaled = targets.with_changes(
+        positions=scale * targets.positions, tangents=scale * targets.tangents, interior=scale * targets.interior
+    )
+    for compiled in (True, False):
+        points = assemble_gregory(targets, compiled=compiled).points
+        np.testing.assert_allclose(assemble_gregory(scaled, compiled=compiled).points / scale, points, rtol=0, atol=64 * np.finfo(float).eps * np.abs(points).max())
+
+
+def test_a_nearly_straight_corner_narrows_instead_of_spreading() -> None:
+    """A one-face corner whose rim turns by 179.9° (a 3600-gon's corner) is its own regular star,
+    so no blend towards it is valid: its tangents turn towards each other by (θ − 180° + 3ε/2)/2
+    each, to 180° − 3ε/2 = 177° (ε = 2°), keeping their lengths, instead of being spread to 90°."""
+    theta = np.radians(179.9)
+    vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0 + np.cos(theta), 1.0, 0.0], [np.cos(theta), np.sin(theta), 0.0]])
+    vertices[2] = vertices[1] + vertices[3]  # a parallelogram with a 179.9° corner at vertex 0
+    mesh = QuadMesh.from_arrays(vertices, [[0, 1, 2, 3]])
+    topology = mesh.topology
+    normals = np.tile([0.0, 0.0, 1.0], (4, 1))
+    raw = (mesh.vertices[topology.neighbors] - mesh.vertices[slot_vertices(topology)]) * 1.0
+    chord = np.linalg.norm(raw, axis=1)
+    tangents, guarded = safeguarded_fans(topology, normals, raw, chord)
+    first = topology.neighbor_offsets[0]
+    a, b = tangents[first], tangents[first + 1]
+    turn = np.degrees(np.arctan2(np.cross(a, b)[2], a @ b))
+    assert guarded[0]
+    assert turn == pytest.approx(177.0, abs=1e-12)
+    np.testing.assert_allclose(np.linalg.norm([a, b], axis=1), chord[[first, first + 1]], rtol=1e-15)
+    np.testing.assert_allclose(np.degrees(np.arctan2(a[1], a[0])) - np.degrees(np.arctan2(raw[first][1], raw[first][0])), 1.45, atol=1e-12)

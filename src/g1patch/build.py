@@ -151,22 +151,31 @@ def _guarded(
     faces at risk (:func:`_faces_at_risk`) are tested; the retreated set only grows, each step
     starts again from the rule's own targets, and from the second step on it takes in the faces'
     1-rings too (a face depends on its corners' targets only, but a fully retreated corner next to
-    an untouched one can fold the face between)."""
+    an untouched one can fold the face between). The guard returns the attempt with the fewest
+    folded faces: a retreat can fold more than it mends (where the 1-ring of a folded face is
+    most of the mesh, as around the centre of a large polygon's split), and the guard never makes
+    a surface worse than the rule's own. Faces a step does not test kept their corners' targets
+    (every retreated corner is a fallback, so its faces are at risk), hence their state."""
     topology = targets.topology
     patches = assemble(targets)
     retreated = np.zeros(topology.n_vertices, dtype=bool)
     applied = 0.0
     guarded = targets
-    for step, weight in enumerate(GUARD_STEPS):
+    folded_faces = np.zeros(topology.n_faces, dtype=bool)
+    best: tuple[int, Patches, Targets] | None = None
+    for step, weight in enumerate((*GUARD_STEPS, None)):
         tested = _faces_at_risk(guarded)
-        if not tested.size:
-            break
         rows = (patches_per_face * tested[:, None] + np.arange(patches_per_face)).ravel()
-        folded = rows[folded_patches(patches.take(rows), GUARD_SAMPLES)]
-        if not folded.size:
+        folded = rows[folded_patches(patches.take(rows), GUARD_SAMPLES)] if rows.size else rows
+        folded_faces[tested] = False
+        folded_faces[folded // patches_per_face] = True
+        count = int(folded_faces.sum())
+        if best is None or count < best[0]:
+            best = (count, patches, guarded)
+        if not count or weight is None:
             break
         corners = np.zeros(topology.n_vertices, dtype=bool)
-        corners[topology.faces[np.unique(folded // patches_per_face)]] = True
+        corners[topology.faces[folded_faces]] = True
         if step:
             slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
             corners[topology.neighbors[corners[slot_vertex]]] = True
@@ -176,7 +185,8 @@ def _guarded(
         applied = weight
         guarded = retreat(targets, np.flatnonzero(retreated), weight)
         patches = assemble(guarded)
-    return patches, guarded
+    assert best is not None
+    return best[1], best[2]
 
 
 def build_network(

@@ -80,7 +80,7 @@ from .mesh import QuadMesh, QuadTopology, Tag, refine_polygons
 
 __all__ = [
     "BOUNDARY_MODES", "BoundaryMode", "INFINITE_SHARPNESS", "RULE_CORNER", "RULE_CREASE", "RULE_SMOOTH", "boundary_mode",
-    "catmull_clark_points", "corner_vertices", "limit_corner_normals", "limit_normals", "limit_points", "limit_stars",
+    "LimitData", "catmull_clark_points", "corner_vertices", "limit_corner_normals", "limit_data", "limit_normals", "limit_points", "limit_stars",
     "limit_tangents", "refine", "refine_grids", "sharp_edges", "vertex_rules",
 ]
 
@@ -724,6 +724,26 @@ def limit_normals(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatAr
     gives every sector's)."""
     data = _limit(mesh, sharpness, frames=True)
     return _unit(np.cross(data.a, data.b))
+
+
+class LimitData(NamedTuple):
+    """What :func:`limit_points`, :func:`limit_stars`, :func:`limit_tangents` and :func:`limit_normals` return."""
+
+    points: FloatArray
+    a: FloatArray
+    b: FloatArray
+    tangents: FloatArray
+    normals: FloatArray
+
+
+def limit_data(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> LimitData:
+    """:func:`limit_points`, :func:`limit_stars`, :func:`limit_tangents` and :func:`limit_normals`
+    at once, each stencil applied once (called one by one, the stars are computed three times)."""
+    frames = _limit(mesh, sharpness, frames=True)
+    assert frames.tangents is not None and frames.a is not None and frames.b is not None
+    points = _limit(mesh, sharpness, frames=False).points
+    assert points is not None
+    return LimitData(points, frames.a, frames.b, frames.tangents, _unit(np.cross(frames.a, frames.b)))
 
 
 def limit_corner_normals(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArray:

@@ -60,7 +60,9 @@ FloatArray = NDArray[np.float64]
 
 #: edges whose corner splits are within this of α = β = 1 at both ends take the symmetric form
 SYMMETRIC_TOLERANCE = 1e-12
-#: ridge of the k-h fit, relative to the largest diagonal entry of its normal equations: keeps
+#: ridge of the k-h fit, relative to each unknown's own diagonal entry of its normal equations
+#: (G1 is a length, h_L1 a number: one ridge for both, scaled by the larger entry, made the
+#: fit depend on the model's size and damped h_L1 on fine meshes, where |c'|² ≪ 1): keeps
 #: the free values bounded where G1 and h_L1 are nearly dependent (edge cubic nearly quadratic,
 #: α nearly constant), which would otherwise inflate round-off (shape-quality.md §3.4)
 RIDGE = 1e-6
@@ -241,7 +243,8 @@ def _kh_fit(
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Interior coefficients ``d1_L, d2_L, d1_R, d2_R`` of the k-h form (h_L0 = 0) whose free values
     p = (G1, h_L1) fit ``wanted`` best: each coefficient is ``k_i + c_i G1 + v_i h_L1``, and
-    ``min Σ_i |k_i + c_i G1 + v_i h − r_i|² + λ |p|²`` is a 4 × 4 system per edge whose G1 block
+    ``min Σ_i |k_i + c_i G1 + v_i h − r_i|² + λ (a |G1|² + d h²)`` (a, d: the diagonal entries of
+    G1 and h, λ = :data:`RIDGE`) is a 4 × 4 system per edge whose G1 block
     is a multiple of I, solved in closed form."""
     b0, b1_, a0, a1 = beta0[:, None], beta1[:, None], alpha0[:, None], alpha1[:, None]
     g0 = d0_left / b0
@@ -268,9 +271,8 @@ def _kh_fit(
     residuals = [r_i - k_i for r_i, k_i in zip(wanted, constant, strict=True)]
     r_g = sum(c_i * y for c_i, y in zip(scalar, residuals, strict=True))
     r_h = sum(_dot(v_i, y) for v_i, y in zip(along, residuals, strict=True))
-    ridge = RIDGE * np.maximum(a, d)
-    a = a + ridge
-    d = d + ridge
+    a = a * (1.0 + RIDGE)
+    d = d * (1.0 + RIDGE)
     # Schur complement: h = (r_h − c·r_G/a) / (d − |c|²/a), G1 = (r_G − c h)/a
     h1 = (r_h - _dot(c, r_g) / a) / (d - _dot(c, c) / a)
     g1 = (r_g - c * h1[:, None]) / a[:, None]
@@ -416,9 +418,8 @@ def _assemble_kernel(
                           + scalar[2] * (r[2, d] - const[2, d]) + scalar[3] * (r[3, d] - const[3, d]))
                 c_r += c[d] * r_g[d]
                 c_c += c[d] * c[d]
-            lam = ridge * max(a, dd)
-            a += lam
-            dd += lam
+            a *= 1.0 + ridge
+            dd *= 1.0 + ridge
             h1 = (r_h - c_r / a) / (dd - c_c / a)  # Schur complement, then G1 = (r_G − c h)/a
             for d in range(3):
                 g1 = (r_g[d] - c[d] * h1) / a

@@ -16,8 +16,11 @@ Two rules, both returning :class:`~g1patch.targets.Targets` on the mesh's own po
       than ``ε = min(2°, ¼ · 360°/n)`` and less than ``180° − ε``, and go once around (interior)
       or less than once (boundary). Where they do not, ``t = (1 − μ) t_raw + μ t_star`` with the
       smallest ``μ ∈ {1/8, …, 1}`` that passes, t_star the regular star fitted to the raw fan; if
-      even the star fails, evenly spread directions with the raw lengths. Such vertices are
-      counted in ``Targets.fallback``;
+      even the star fails, evenly spread directions with the raw lengths. A corner with one face
+      turning by ``180° − ε`` or more (nearly straight: every corner of a split polygon of 180 or
+      more sides) is its own regular star, so no blend helps: its two tangents turn towards each
+      other, about the normal, until they are ``180° − 3ε/2`` apart, instead of being spread to
+      90°, which folded the polygon's thin faces. Such vertices are counted in ``Targets.fallback``;
     * interior points: at corner A of face (A, B, C, D) with B next and D previous,
       ``Ft = A + (t_AB + t_AD)/3 + [P_A w + II_A(t_AB, t_AD) N_A]/9``, ``w = A − B + C − D``: the
       bilinear twist with its normal part replaced by the estimated second fundamental form,
@@ -323,6 +326,25 @@ def _any_perpendicular(n: FloatArray) -> FloatArray:
     return np.cross(n, axis)
 
 
+def _narrowed_straight_corners(topology: QuadTopology, normals: FloatArray, t: FloatArray, corners: IntArray) -> FloatArray:
+    """At one-face ``corners`` whose two tangents turn by ``θ ≥ 180° − ε`` about the normal, both
+    rotated in the tangent plane by ``δ = (θ − 180° + 3ε/2)/2`` towards each other (the first slot
+    counter-clockwise, the second clockwise); the other corners unchanged."""
+    out = t.copy()
+    if not corners.size:
+        return out
+    first = topology.neighbor_offsets[corners]
+    a, b, n = t[first], t[first + 1], normals[corners]
+    a_plane = a - _dot(a, n)[:, None] * n
+    b_plane = b - _dot(b, n)[:, None] * n
+    turn = np.arctan2(_dot(cross(a_plane, b_plane), n), _dot(a_plane, b_plane))
+    eps = np.minimum(_MIN_GAP, _MIN_GAP_SHARE * 2.0 * np.pi / np.maximum(topology.valence[corners], 3))
+    delta = np.where(turn >= np.pi - eps, 0.5 * (turn - np.pi + 1.5 * eps), 0.0)[:, None]
+    out[first] = a - a_plane + np.cos(delta) * a_plane + np.sin(delta) * cross(n, a_plane)
+    out[first + 1] = b - b_plane + np.cos(delta) * b_plane - np.sin(delta) * cross(n, b_plane)
+    return out
+
+
 def safeguarded_fans(
     topology: QuadTopology, normals: FloatArray, raw: FloatArray, chord: FloatArray
 ) -> tuple[FloatArray, NDArray[np.bool_]]:
@@ -333,10 +355,14 @@ def safeguarded_fans(
     needs = ~valid
     if not needs.any():
         return raw, needs
+    t = _narrowed_straight_corners(topology, normals, raw, np.flatnonzero(needs & (topology.face_count == 1)))
+    pending = needs & ~_valid_fans(topology, normals, t)
+    if not pending.any():
+        return t, needs
+    raw = t
     star, _, _ = fit_regular_star(topology, normals, raw)
     slot_vertex = slot_vertices(topology)
     t = raw.copy()
-    pending = needs.copy()
     for mu in _BLENDS:
         rows = pending[slot_vertex]
         trial = t.copy()
@@ -352,13 +378,32 @@ def safeguarded_fans(
     return t, needs
 
 
+#: a corner's twist ``w`` may reach this many times its edge tangents, ``|P_A w| ≤ k (|t_AB| +
+#: |t_AD|)``, and keep the second fundamental form in full; from here to ``_TWIST_BILINEAR`` the
+#: replacement fades out (smoothstep). Past it the face is not a patch about its corner A but
+#: a sliver reaching far beyond A's edges (the outer corner of a large polygon's split, 180° −
+#: 360°/n), where the height a tangent-plane estimate gives to a point that far off the edges
+#: folded the face
+_TWIST_LOCAL = 1.0
+_TWIST_BILINEAR = 2.0
+
+
+def _local_twist_weights(planar: FloatArray, reach: FloatArray) -> FloatArray:
+    """The share of the second fundamental form in each corner's twist: 1 where ``planar ≤
+    _TWIST_LOCAL · reach``, 0 from ``_TWIST_BILINEAR · reach`` on, smoothstep between (the
+    kernel inlines the same formula)."""
+    u = np.clip((_TWIST_BILINEAR * reach - planar) / np.where(reach > 0, (_TWIST_BILINEAR - _TWIST_LOCAL) * reach, 1.0), 0.0, 1.0)
+    return np.where(reach > 0, u * u * (3.0 - 2.0 * u), planar == 0)
+
+
 def _interior_targets(
     topology: QuadTopology, positions: FloatArray, tangents: FloatArray, normals: FloatArray, shape_operator: FloatArray | None,
     *, compiled: bool = True, out: FloatArray | None = None,
 ) -> FloatArray:
     """``Ft = A + (t_AB + t_AD)/3 + w/9`` per face corner, ``w = A − B + C − D``; with a shape
     operator S = dN (:class:`~g1patch.targets.frames.VertexFrames`) the normal part of w is replaced by
-    the second fundamental form, ``N·p_uv = −t_ABᵀ S t_AD``: ``w ← P_A w − (t_ABᵀ S t_AD) N_A``.
+    the second fundamental form, ``N·p_uv = −t_ABᵀ S t_AD``: ``w ← P_A w − (t_ABᵀ S t_AD) N_A``,
+    by the weight :func:`_local_twist_weights` of ``|P_A w| / (|t_AB| + |t_AD|)``.
     ``compiled``: corner by corner in :func:`_interior_kernel`, into ``out`` (F, 4, 3) if given;
     else NumPy."""
     from . import halfedge_slots
@@ -380,7 +425,11 @@ def _interior_targets(
     if shape_operator is not None:
         n = normals[faces]
         s = shape_operator[faces]
-        w = w - (_dot(w, n) + np.einsum("fki,fkij,fkj->fk", t_next, s, t_prev))[..., None] * n
+        normal = _dot(w, n)
+        planar = np.sqrt(np.maximum(_dot(w, w) - normal**2, 0.0))
+        reach = np.linalg.norm(t_next, axis=-1) + np.linalg.norm(t_prev, axis=-1)
+        weight = _local_twist_weights(planar, reach)
+        w = w - ((normal + np.einsum("fki,fkij,fkj->fk", t_next, s, t_prev)) * weight)[..., None] * n
     return x + (t_next + t_prev) / 3.0 + w / 9.0
 
 
@@ -405,7 +454,14 @@ def _interior_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, rin
                 for r in range(3):
                     for j in range(3):
                         bend += tangents[s_next, r] * shape_operator[a, r, j] * tangents[s_prev, j]
-                along = (w[0] * n0 + w[1] * n1 + w[2] * n2) + bend
+                normal = w[0] * n0 + w[1] * n1 + w[2] * n2
+                planar = np.sqrt(max(w[0] * w[0] + w[1] * w[1] + w[2] * w[2] - normal * normal, 0.0))
+                reach = np.sqrt(tangents[s_next, 0] ** 2 + tangents[s_next, 1] ** 2 + tangents[s_next, 2] ** 2)
+                reach += np.sqrt(tangents[s_prev, 0] ** 2 + tangents[s_prev, 1] ** 2 + tangents[s_prev, 2] ** 2)
+                u = 1.0 if planar == 0 else 0.0
+                if reach > 0:
+                    u = min(max((_TWIST_BILINEAR * reach - planar) / ((_TWIST_BILINEAR - _TWIST_LOCAL) * reach), 0.0), 1.0)
+                along = (normal + bend) * u * u * (3.0 - 2.0 * u)
                 w[0], w[1], w[2] = w[0] - along * n0, w[1] - along * n1, w[2] - along * n2
             for j in range(3):
                 out[f, k, j] = x[a, j] + (tangents[s_next, j] + tangents[s_prev, j]) / 3.0 + w[j] / 9.0

@@ -12,14 +12,14 @@
   ``c(i/m)`` of the edge, ``m = 2^L`` (limit points and normals ``n_i`` of the cage refined L
   times, :func:`~g1patch.subdivision.refine_grids`): ``min Σ_i rᵀ (n_i n_iᵀ + ρ I) r``,
   ``r = H(i/m) − c(i/m)``, a 4 × 4 solve per edge. The normal part is the geometric error; the
-  small parametric share ρ (:data:`_PARAMETRIC`) fixes the tangential freedom. Matching the
+  small parametric share ρ (:data:`_PARAMETRIC_EDGE`) fixes the tangential freedom. Matching the
   singular parameterisation point for point (ρ = ∞) left 5–8e-3 of the diagonal on the cube;
-  ρ = 0.05 leaves 0.8e-3;
+  ρ = 0.05 left 0.8e-3, ρ = 0.01 leaves 3.9e-4 (the surface, after the assembly);
 * interior points: on a face whose four corners are regular the uniform B-spline's Bézier points,
   ``b11 = (4A + 2B + 2D + C)/9`` at corner A of face (A, B, C, D) of the cage (the tensor product
   of the curve rule ``(2P_0 + P_1)/3``), exactly; elsewhere the four interior points of the
   bicubic with those boundary curves that fit the exact limit samples inside the face in the
-  same weighted sense (a 12 × 12 solve per face). The Gregory assembly then moves them as far as
+  same weighted sense, with a larger share ρ (:data:`_PARAMETRIC_INTERIOR`) (a 12 × 12 solve per face). The Gregory assembly then moves them as far as
   G1 requires.
 
 Every manifold quad mesh gets valid targets: a fitted fan that does not turn counter-clockwise
@@ -41,7 +41,7 @@ from ..gregory import INTERIOR_INDEX
 from ..errors import MeshError
 from ..mesh import QuadMesh, QuadTopology, Sectors, Tag, sectors
 from ..subdivision import (
-    boundary_mode, corner_vertices, limit_corner_normals, limit_normals, limit_points, limit_stars, limit_tangents, refine_grids,
+    boundary_mode, corner_vertices, limit_corner_normals, limit_data, limit_normals, limit_points, refine_grids,
 )
 from . import Targets, halfedge_slots, slot_sector_normals
 from .creases import seam_edges, spread_sectors
@@ -57,11 +57,17 @@ BoolArray = NDArray[np.bool_]
 FIT_LEVELS = 3
 #: vertex rings of faces around those whose limit samples are needed, refined with them
 _SAMPLE_MARGIN = 3
-#: weight of the parametric residual against the normal one in the fits: the limit surface's
-#: parameterisation is singular at extraordinary vertices (speed ~ (2λ)^m), so matching it
-#: point for point would bend the cubics; the normal distance is the geometric error, and this
-#: small share fixes the tangential freedom it leaves
-_PARAMETRIC = 0.05
+#: weight of the parametric residual against the normal one in the fits of the edge tangents
+#: and of the interior points: the limit surface's parameterisation is singular at
+#: extraordinary vertices (speed ~ (2λ)^m), so matching it point for point would bend the
+#: cubics; the normal distance is the geometric error, and this small share fixes the
+#: tangential freedom it leaves. An edge cubic has 4 free numbers and follows the limit curve
+#: better with a small share (the cube's edge curves: 4.7e-4 of the diagonal at 0.01, 8.0e-4
+#: at 0.05; at 0.001, 4.5e-4, but the wild cages of ``limit-interpolate`` then fold); the
+#: interior points need more (at 0.001 they drift along the surface, and the assembly, which
+#: keeps them only as far as G1 allows, then bent the cube's patches to 1.2e-3)
+_PARAMETRIC_EDGE = 0.01
+_PARAMETRIC_INTERIOR = 0.05
 #: a vertex whose limit tangents span less than this (|a × b| / (|a|² + |b|²)) has no usable plane
 _DEGENERATE = 1e-9
 #: edge k of a face as grid positions (i, j) at parameter t = s/m, from corner k to corner k + 1
@@ -101,8 +107,8 @@ def regular_faces(topology: QuadTopology) -> BoolArray:
 
 
 def _weigh(r: FloatArray, n: FloatArray) -> FloatArray:
-    """``W r`` with ``W = n nᵀ + ρ I``: the residual's normal part, plus :data:`_PARAMETRIC` of all of it."""
-    return _dot(r, n)[..., None] * n + _PARAMETRIC * r
+    """``W r`` with ``W = n nᵀ + ρ I``: the residual's normal part, plus :data:`_PARAMETRIC_EDGE` of all of it."""
+    return _dot(r, n)[..., None] * n + _PARAMETRIC_EDGE * r
 
 
 def _plane_bases(normals: FloatArray, a: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -169,14 +175,14 @@ def _limit_samples(mesh: QuadMesh, faces: IntArray, levels: int) -> tuple[FloatA
 
 
 def _fit_tangents(
-    mesh: QuadMesh, x: FloatArray, t: FloatArray, free: BoolArray, bases: tuple[FloatArray, FloatArray],
+    mesh: QuadMesh, x: FloatArray, t: FloatArray, free: BoolArray, planes: FloatArray,
     samples: FloatArray, sample_normals: FloatArray, row: IntArray, m: int,
 ) -> FloatArray:
     """The free slot tangents fitted in their tangent planes: per interior edge A → B with a free end
     the least-squares fit of ``H(s) = B0 A + B1 (A + t_A/3) + B2 (B + t_B/3) + B3 B`` to the limit
-    curve samples, ``t = α e1 + β e2`` at a free end (a 4 × 4 solve per edge; ``bases`` per slot,
-    the plane of the slot's sector), the other end fixed; ``samples[row[f]]`` holds face f's grid
-    of limit samples."""
+    curve samples, ``t = α e1 + β e2`` at a free end (a 4 × 4 solve per edge; ``(e1, e2)`` per
+    slot, :func:`_plane_bases` of ``planes``, the normal of the slot's sector), the other end
+    fixed; ``samples[row[f]]`` holds face f's grid of limit samples."""
     topology = mesh.topology
     slot_out, slot_in = halfedge_slots(topology)
     h = _fitted_edges(topology, free)
@@ -192,12 +198,12 @@ def _fit_tangents(
     w = _bernstein(s / m)
     va, vb = topology.origin(h), topology.target(h)
     base = (w[:, 0] + w[:, 1])[None, :, None] * x[va][:, None] + (w[:, 2] + w[:, 3])[None, :, None] * x[vb][:, None] - curve
-    e1, e2 = bases
+    (e1a, e2a), (e1b, e2b) = _plane_bases(planes[sa], t[sa]), _plane_bases(planes[sb], t[sb])
     columns = np.stack([  # ∂H/∂(α_A, β_A, α_B, β_B): (E, 4, m + 1, 3)
-        w[None, :, 1, None] * e1[sa][:, None] / 3.0, w[None, :, 1, None] * e2[sa][:, None] / 3.0,
-        w[None, :, 2, None] * e1[sb][:, None] / 3.0, w[None, :, 2, None] * e2[sb][:, None] / 3.0,
+        w[None, :, 1, None] * e1a[:, None] / 3.0, w[None, :, 1, None] * e2a[:, None] / 3.0,
+        w[None, :, 2, None] * e1b[:, None] / 3.0, w[None, :, 2, None] * e2b[:, None] / 3.0,
     ], axis=1)
-    known = np.stack([_dot(t[sa], e1[sa]), _dot(t[sa], e2[sa]), _dot(t[sb], e1[sb]), _dot(t[sb], e2[sb])], axis=1)
+    known = np.stack([_dot(t[sa], e1a), _dot(t[sa], e2a), _dot(t[sb], e1b), _dot(t[sb], e2b)], axis=1)
     unknown = np.repeat(np.stack([free[sa], free[sb]], axis=1), 2, axis=1)  # (E, 4)
     fixed_part = np.einsum("ec,ecsd->esd", np.where(unknown, 0.0, known), columns)
     weighted = _weigh(columns, normal[:, None])
@@ -208,8 +214,8 @@ def _fit_tangents(
     gram = np.where(both, gram, np.where(eye, 1.0, 0.0))
     rhs = np.where(unknown, rhs, known)
     p = np.linalg.solve(gram, rhs[..., None])[..., 0]
-    fitted_a = p[:, 0, None] * e1[sa] + p[:, 1, None] * e2[sa]
-    fitted_b = p[:, 2, None] * e1[sb] + p[:, 3, None] * e2[sb]
+    fitted_a = p[:, 0, None] * e1a + p[:, 1, None] * e2a
+    fitted_b = p[:, 2, None] * e1b + p[:, 3, None] * e2b
     out[sa[free[sa]]] = fitted_a[free[sa]]
     out[sb[free[sb]]] = fitted_b[free[sb]]
     return out
@@ -242,16 +248,15 @@ def _fit_interior(net: FloatArray, samples: FloatArray, sample_normals: FloatArr
     known = np.einsum("kij,fijd->fkd", basis, net)
     residual = known - samples[:, 1:m, 1:m].reshape(count, -1, 3)
     n = sample_normals[:, 1:m, 1:m].reshape(count, -1, 3)
-    weight = n[..., :, None] * n[..., None, :] + _PARAMETRIC * np.eye(3)  # (F, K, 3, 3)
+    weight = n[..., :, None] * n[..., None, :] + _PARAMETRIC_INTERIOR * np.eye(3)  # (F, K, 3, 3)
     gram = np.einsum("kc,kg,fkde->fcdge", inner, inner, weight).reshape(count, 12, 12)
     rhs = -np.einsum("kc,fkde,fke->fcd", inner, weight, residual).reshape(count, 12)
     return np.linalg.solve(gram, rhs[..., None]).reshape(count, 4, 3)
 
 
-def _limit_normals(mesh: QuadMesh) -> tuple[FloatArray, BoolArray]:
-    """Unit ``a × b`` of the limit stars; the fan normal where the plane is degenerate
+def _limit_normals(mesh: QuadMesh, a: FloatArray, b: FloatArray) -> tuple[FloatArray, BoolArray]:
+    """Unit ``a × b`` of the limit stars ``(a, b)``; the fan normal where the plane is degenerate
     (:data:`_DEGENERATE`), flagged."""
-    a, b = limit_stars(mesh)
     a_cross_b = np.cross(a, b)
     length = np.linalg.norm(a_cross_b, axis=1)
     degenerate = ~(length > _DEGENERATE * (_dot(a, a) + _dot(b, b)))
@@ -310,8 +315,9 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
     """The Catmull–Clark limit targets of ``mesh`` (module docstring); ``levels`` of refinement for the fits."""
     topology = mesh.topology
     slot_vertex = slot_vertices(topology)
-    x = limit_points(mesh)
-    normals, degenerate = _limit_normals(mesh)
+    limit = limit_data(mesh)
+    x = limit.points
+    normals, degenerate = _limit_normals(mesh, limit.a, limit.b)
     seams = seam_edges(mesh)
     found, bound, inner_exact = _sector_slots(mesh, seams)
     creased = found.creased
@@ -321,7 +327,7 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
     plane = Targets(topology, x, normals, np.zeros((slot_vertex.size, 3)), np.zeros((topology.n_faces, 4, 2, 3)),
                     seams, corner_normals=corner_normals)
     n = slot_sector_normals(plane)[1]  # each slot's sector plane (the right-hand face's)
-    star = limit_tangents(mesh)
+    star = limit.tangents
     projected = star - _dot(star, n)[:, None] * n
     star = np.where(bound[:, None], star, projected)  # crease tangents lie in both sectors' planes already
     touched = _touched(mesh)
@@ -336,8 +342,7 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
         row[needed] = np.arange(needed.size)
         samples, sample_normals = _limit_samples(mesh, needed, levels)
         m = 2**levels
-        bases = _plane_bases(n, star)
-        fitted = _fit_tangents(mesh, x, star, free, bases, samples, sample_normals, row, m)
+        fitted = _fit_tangents(mesh, x, star, free, n, samples, sample_normals, row, m)
     t, guarded = _guarded(mesh, normals, fitted, star, creased)
     spread = np.zeros(topology.n_vertices, dtype=bool)
     if creased.any():
