@@ -8,13 +8,19 @@ digits, as the OBJ writer). For each file, best of ``--repeats``:
 * ``parse``: the format reader alone (its fast path for these files) and ``from_arrays`` alone on
   its arrays: the validation's share of the read;
 * ``before``: the reader this replaces, once — the line-by-line parser (OBJ, OFF) or meshio
-  (PLY), which the fast paths fall back to — plus the same ``from_arrays``.
+  (PLY), which the fast paths fall back to — plus ``from_arrays`` by its NumPy code.
 
 Baselines of the same run: the raw read of the file's bytes (``Path.read_bytes``), ``np.fromfile``
 of the same bytes, meshio's own reader of the file (OBJ, PLY; its OFF reader takes only
 triangles), and, for the text formats, ``np.fromstring`` of the file's numbers alone (coordinates
 as float64, indices as int64, already cut out of the text): the cost of the number conversion that
 any text parser pays. Targets (issue 13, 1 M quads): OBJ read ≤ 1 s, binary PLY ≤ 0.5 s.
+
+Below the table, the compiled paths against their NumPy references, same run: the OBJ kernel
+(``_obj_compiled``) against the NumPy fast path (``_obj_fast``), and ``from_arrays`` with its
+kernels against the NumPy pairing and face check (kernel thresholds raised); and the cold compile:
+``read_mesh`` of the OBJ, and of the binary PLY, each in a fresh process with an empty numba cache
+(what a fresh install's first large read costs), then again in that process (warm).
 
 Run:  .venv/bin/python benchmarks/bench_readers.py [--quads N] [--repeats R] [--dir DIR]
 """
@@ -24,9 +30,12 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import subprocess
+import sys
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +44,7 @@ import numpy as np
 
 from g1patch import shapes
 from g1patch.cli import _without_huge_page_advice
+from g1patch import mesh as meshmodule
 from g1patch.io import meshfile
 from g1patch.io.meshfile import read_mesh, write_quads
 from g1patch.mesh import QuadMesh
@@ -91,6 +101,42 @@ def before(name: str, path: Path) -> Callable[[], meshfile._Parsed]:
     return meshio_path
 
 
+@contextmanager
+def numpy_references() -> Iterator[None]:
+    """``from_arrays`` by its NumPy code: the kernels' thresholds out of reach."""
+    saved = meshmodule.KERNEL_HALFEDGES, meshmodule.KERNEL_FACES
+    meshmodule.KERNEL_HALFEDGES = meshmodule.KERNEL_FACES = sys.maxsize
+    try:
+        yield
+    finally:
+        meshmodule.KERNEL_HALFEDGES, meshmodule.KERNEL_FACES = saved
+
+
+COLD = """
+import sys, time
+from g1patch.cli import _without_huge_page_advice
+_without_huge_page_advice()
+from g1patch.io.meshfile import read_mesh
+times = []
+for _ in range(2):
+    start = time.perf_counter()
+    read_mesh(sys.argv[1])
+    times.append(time.perf_counter() - start)
+print(*times)
+"""
+
+
+def cold_read(path: Path, directory: Path | None) -> tuple[float, float]:
+    """(first, second) ``read_mesh`` seconds of ``path`` in a fresh process with an empty numba
+    cache: the first read compiles every kernel the read uses."""
+    with tempfile.TemporaryDirectory(dir=directory) as cache:
+        environment = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        output = subprocess.run([sys.executable, "-c", COLD, str(path)], env=environment, check=True,
+                                capture_output=True, text=True).stdout
+    first, second = map(float, output.split())
+    return first, second
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quads", type=int, default=1_000_000)
@@ -120,13 +166,21 @@ def main() -> None:
             assert again.vertices.tobytes() == mesh.vertices.tobytes() and np.array_equal(again.faces, mesh.faces)
             parse_seconds = best(parse, args.repeats)
             validate = best(lambda: QuadMesh.from_arrays(parsed.vertices, parsed.faces, source=str(path)), args.repeats)
-            old = best(before(name, path), 1) + validate
+            with numpy_references():
+                numpy_valid = best(lambda: QuadMesh.from_arrays(parsed.vertices, parsed.faces, source=str(path)), args.repeats)
+            old = best(before(name, path), 1) + numpy_valid
             raw = best(path.read_bytes, args.repeats)
             fromfile = best(lambda: np.fromfile(path, dtype=np.uint8), args.repeats)
             library = None if name == "OFF" else best(lambda: meshio.read(path), 1 if name == "PLY ascii" else args.repeats)
             bound = best(numbers, args.repeats) if name != "PLY binary" else None  # next to parse: the load changes
             rows.append((name, path.stat().st_size, old, read, parse_seconds, validate, raw, fromfile, library, bound))
             print(f"  {name}: read_mesh {read:.2f} s", flush=True)
+            if name == "OBJ":
+                data = path.read_bytes()
+                kernel_parse = best(lambda: meshfile._obj_compiled(data), args.repeats)
+                numpy_parse = best(lambda: meshfile._obj_fast(data), args.repeats)
+                kernel_valid, numpy_obj_valid = validate, numpy_valid
+        cold = [cold_read(paths[name], args.dir) for name in ("OBJ", "PLY binary")]
 
     def cell(seconds: float | None) -> str:
         return f"{seconds:8.2f}" if seconds is not None else f"{'-':>8s}"
@@ -144,10 +198,20 @@ def main() -> None:
         print(f"{name:11s} {size / 1e6:6.1f} {cell(old)} {cell(read)} {cell(parse_seconds)} {cell(validate)} {cell(raw)} "
               f"{cell(fromfile)} {cell(library)} {cell(bound)} {ratio(old, read)} {ratio(read, library)} "
               f"{ratio(parse_seconds, bound)} {ratio(parse_seconds, fromfile)}")
-    print("seconds. before: the replaced reader (line-by-line OBJ/OFF parser, meshio for PLY) + validation, once; "
+    print("seconds. before: the replaced reader (line-by-line OBJ/OFF parser, meshio for PLY) + NumPy validation, once; "
           "read: read_mesh; parse: the reader alone; valid.: QuadMesh.from_arrays on its arrays; numbers: np.fromstring "
           "of the coordinates and indices alone.")
-    print(f"load average at end {os.getloadavg()[0]:.2f}. Targets: OBJ read ≤ 1 s, binary PLY read ≤ 0.5 s (1 M quads).")
+    print(f"load average {os.getloadavg()[0]:.2f}. Targets: OBJ read ≤ 1 s, binary PLY read ≤ 0.5 s (1 M quads).")
+
+    print()
+    print(f"compiled paths against their NumPy references (best of {args.repeats}):")
+    print(f"  OBJ parse: kernel {kernel_parse:.2f} s, NumPy fast path {numpy_parse:.2f} s ({numpy_parse / kernel_parse:.1f}×)")
+    print(f"  from_arrays: kernels {kernel_valid:.2f} s, NumPy {numpy_obj_valid:.2f} s ({numpy_obj_valid / kernel_valid:.1f}×)")
+    (obj_first, obj_warm), (ply_first, ply_warm) = cold
+    print(f"  cold compile (fresh process, empty numba cache): first read_mesh OBJ {obj_first:.2f} s, then {obj_warm:.2f} s "
+          f"(compile ≈ {obj_first - obj_warm:.1f} s); binary PLY {ply_first:.2f} s, then {ply_warm:.2f} s "
+          f"(≈ {ply_first - ply_warm:.1f} s)")
+    print(f"load average at end {os.getloadavg()[0]:.2f}")
 
 
 if __name__ == "__main__":

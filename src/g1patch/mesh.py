@@ -394,8 +394,9 @@ class _Connectivity(NamedTuple):
     neighbors: IntArray
 
 
-#: from this many half-edges on (``compiled=None``) :func:`_connect` runs :func:`_connect_kernel`
-KERNEL_HALFEDGES = 40_000
+#: from this many half-edges on (``compiled=None``) :func:`_connect` runs :func:`_connect_kernel` (20 000 quads,
+#: as ``continuity.KERNEL_PATCHES``: a fresh install's first use compiles it, a few seconds)
+KERNEL_HALFEDGES = 80_000
 
 
 def _connect(corners: IntArray, sizes: IntArray, n_vertices: int, *, compiled: bool | None = None) -> _Connectivity:
@@ -756,7 +757,7 @@ def _check_finite(vertices: FloatArray) -> None:
 
 
 #: from this many faces on (``compiled=None``) :func:`_check_face_areas` first runs :func:`_face_area_kernel`
-KERNEL_FACES = 10_000
+KERNEL_FACES = 20_000
 #: faces the kernel finds within this relative margin of the tolerance go to the NumPy check
 _AREA_MARGIN = 1e-6
 

@@ -433,7 +433,7 @@ def _parse_tag(path: Path, parts: Sequence[str], line: int) -> Tag:
 
 #: OBJ files, and OFF / ASCII PLY coordinates, of at least this many bytes are read by the kernels
 #: (their first use, on a fresh install, compiles them: see benchmarks/bench_readers.py)
-KERNEL_BYTES = 1 << 20
+KERNEL_BYTES = 2 << 20
 #: helpers the kernels call, compiled (and rebound) with the first kernel
 _KERNEL_HELPERS = ("_product", "_decimal", "_number")
 #: the sign bit of a float64, as int64
