@@ -226,12 +226,13 @@ def test_auto_fits_what_split4_cannot_reassemble_and_says_so(tmp_path: Path, mon
 
 def test_step_reals_always_carry_their_decimal_point() -> None:
     """ISO 10303-21 reals need the point ('1.E-05', not '1E-05'); 15 significant digits: relative error ≤ 5e-15."""
-    from g1patch.io.cad import _step_real
+    from g1patch.io.cad import _step_reals
 
-    assert [_step_real(x) for x in (1.0, -2.0, 1e-5, 1.5e20, 0.1 + 0.2)] == [
-        b"1.", b"-2.", b"1.E-05", b"1.5E+20", b"0.3"]
+    assert _step_reals(np.array([1.0, -2.0, 1e-5, 1.5e20, 0.1 + 0.2, -0.0, 123456789012345.0, -3e-300])) == [
+        b"1.", b"-2.", b"1.E-05", b"1.5E+20", b"0.3", b"-0.", b"123456789012345.", b"-3.E-300"]
     value = -0.039181315715812345
-    assert abs(float(_step_real(value)) - value) <= 5e-15 * abs(value)
+    assert abs(float(_step_reals(np.array([value]))[0]) - value) <= 5e-15 * abs(value)
+    assert _step_reals(np.zeros(0)) == []
 
 
 @requires_ocp

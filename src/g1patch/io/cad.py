@@ -20,10 +20,14 @@ and the file is compacted (:func:`compact_step`): equal points written once, pol
 significant digits instead of OCC's 12.
 
 The faces are sewn into shells (``BRepBuilderAPI_Sewing``, tolerance ``SEWING_RTOL`` × the
-bounding-box diagonal); a closed shell becomes a solid (``BRepBuilderAPI_MakeSolid``, oriented
-outwards by ``BRepLib::OrientClosedSolid``). The exported surfaces' G1 angles are measured by
-OCC itself: ``BRepAdaptor_Surface::D1`` on the sewn faces at K points of every shared edge,
-``n = ±(S_u × S_v)`` with the sign of the face's orientation, angle ``atan2(|n_L × n_R|, n_L · n_R)``.
+bounding-box diagonal); a closed shell becomes a solid (``BRepBuilderAPI_MakeSolid``), reversed
+where its volume (``BRepGProp::VolumeProperties``, signed) is negative: oriented outwards. The
+exported surfaces' G1 angles are measured on the surfaces OCC holds, at K points of every shared
+edge: ``n = ±(S_u × S_v)`` with the sign of the face's orientation, angle
+``atan2(|n_L × n_R|, n_L · n_R)``. Each sewn face's poles, knots and orientation are read back from
+OCC and its B-spline evaluated vectorised along the edges; one point per face is evaluated by OCC
+itself (``BRepAdaptor_Surface::D1``) as a check, and any face that disagrees, or is not a plain
+B-spline, is evaluated by OCC at every point (:func:`_shape_normals`).
 
 Seams (``network.seam``: edges sharp on purpose) are sewn like every shared edge: one B-rep edge
 between two faces that meet at an angle, which is all a sharp edge is. Nothing here smooths or
@@ -103,7 +107,7 @@ CadMethod = Literal["auto", "split4", "fit"]
 CAD_METHODS: tuple[CadMethod, ...] = ("auto", "split4", "fit")
 #: file extensions of each format
 CAD_FORMATS: dict[CadFormat, tuple[str, ...]] = {"step": (".step", ".stp"), "iges": (".iges", ".igs")}
-#: ``progress(stage, done, total)``; stages: fit, faces, sew, solid, g1, write
+#: ``progress(stage, done, total)``; stages: split4, deviation, fit, faces, sew, solid, check, g1, write
 Progress = Callable[[str, int, int], None]
 
 #: default fit tolerance, relative to the bounding-box diagonal
@@ -341,7 +345,6 @@ _OCC_NAMES: dict[str, tuple[str, ...]] = {
     "BRepBuilderAPI": ("BRepBuilderAPI_MakeFace", "BRepBuilderAPI_MakeSolid", "BRepBuilderAPI_Sewing"),
     "BRepCheck": ("BRepCheck_Analyzer",),
     "BRepGProp": ("BRepGProp",),
-    "BRepLib": ("BRepLib",),
     "collections": ("Array1_double", "Array1_int", "Array2_gp_Pnt"),
     "Geom": ("Geom_BSplineSurface",),
     "GeomAbs": ("GeomAbs_SurfaceType",),
@@ -516,29 +519,38 @@ def _sew(occ: SimpleNamespace, faces: Sequence[Any], tolerance: float) -> tuple[
     return sewing.SewedShape(), sewn, int(sewing.NbFreeEdges())
 
 
-def _solids(occ: SimpleNamespace, shape: Any) -> tuple[Any, bool]:
-    """Each closed shell made a solid oriented outwards; ``(shape, every shell closed)``."""
+def _solids(occ: SimpleNamespace, shape: Any) -> tuple[Any, float | None]:
+    """Each closed shell made a solid oriented outwards; ``(shape, volume)``, the volume None
+    unless every shell closed.
+
+    A solid's orientation is the sign of its volume (``BRepGProp::VolumeProperties``, signed by
+    the faces' orientation: negative inside out), so the volume reported is measured once and no
+    point classification (``BRepLib::OrientClosedSolid``) is needed."""
     shells, explorer = [], occ.TopExp_Explorer(shape, occ.TopAbs_SHELL)
     while explorer.More():
         shells.append(occ.TopoDS.Shell(explorer.Current()))
         explorer.Next()
     if not shells or not all(occ.BRep_Tool.IsClosed_s(shell) for shell in shells):
-        return shape, False
-    solids = []
+        return shape, None
+    solids, volume = [], 0.0
     for shell in shells:
         solid = occ.BRepBuilderAPI_MakeSolid(shell).Solid()
-        occ.BRepLib.OrientClosedSolid_s(solid)
+        signed = _volume(occ, solid)
+        if signed < 0:
+            solid.Reverse()
         solids.append(solid)
+        volume += abs(signed)
     if len(solids) == 1:
-        return solids[0], True
+        return solids[0], volume
     compound, builder = occ.TopoDS_Compound(), occ.BRep_Builder()
     builder.MakeCompound(compound)
     for solid in solids:
         builder.Add(compound, solid)
-    return compound, True
+    return compound, volume
 
 
 def _volume(occ: SimpleNamespace, shape: Any) -> float:
+    """OCC's (signed) volume of a shape (``BRepGProp::VolumeProperties``)."""
     props = occ.GProp_GProps()
     occ.BRepGProp.VolumeProperties_s(shape, props)
     return float(props.Mass())
@@ -554,6 +566,181 @@ def _face_normals(occ: SimpleNamespace, face: Any, uv: NDArray[np.float64]) -> N
         out.append(d_u.Crossed(d_v).Coord())
     normals = np.array(out, dtype=np.float64).reshape(-1, 3)
     return -normals if face.Orientation() == occ.TopAbs_REVERSED else normals
+
+
+class _OccBSpline(NamedTuple):
+    """A face's surface as OCC holds it (``BRep_Tool::Surface``, location applied): a non-rational,
+    non-periodic B-spline's poles (nu, nv, 3), full knot sequences and degrees; ``sign`` −1 for a
+    reversed face."""
+
+    poles: NDArray[np.float64]
+    knots_u: tuple[float, ...]
+    knots_v: tuple[float, ...]
+    degree_u: int
+    degree_v: int
+    sign: float
+
+
+def _occ_bspline(occ: SimpleNamespace, face: Any) -> _OccBSpline | None:
+    """The B-spline data OCC holds for ``face`` (:class:`_OccBSpline`), None for any other surface."""
+    surface = occ.BRep_Tool.Surface_s(face)
+    if (not isinstance(surface, occ.Geom_BSplineSurface) or surface.IsURational() or surface.IsVRational()
+            or surface.IsUPeriodic() or surface.IsVPeriodic()):
+        return None
+    pole, count_u, count_v = surface.Pole, surface.NbUPoles(), surface.NbVPoles()
+    net = np.array([pole(i, j).Coord() for i in range(1, count_u + 1) for j in range(1, count_v + 1)],
+                   dtype=np.float64).reshape(count_u, count_v, 3)
+    knots = [tuple(sequence.Value(i) for i in range(sequence.Lower(), sequence.Upper() + 1))
+             for sequence in (surface.UKnotSequence(), surface.VKnotSequence())]
+    sign = -1.0 if face.Orientation() == occ.TopAbs_REVERSED else 1.0
+    return _OccBSpline(net, knots[0], knots[1], surface.UDegree(), surface.VDegree(), sign)
+
+
+def _basis_d1(knots: NDArray[np.float64], degree: int, x: NDArray[np.float64]) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+    """The ``degree + 1`` B-spline basis functions that are nonzero at each ``x`` and their first
+    derivatives (Cox–de Boor, The NURBS Book A2.2/A2.3, over all x at once): the index of the
+    first one (n,), values (n, p+1), derivatives (n, p+1). ``x`` is clamped into the knots' range."""
+    p = degree
+    x = np.clip(x, knots[p], knots[-p - 1])
+    span = np.clip(np.searchsorted(knots, x, side="right") - 1, p, len(knots) - p - 2)
+    steps = np.arange(1, p + 1)[:, None]
+    left = x - knots[span + 1 - steps]  # left[j-1] = x − t[span + 1 − j], (p, n)
+    right = knots[span + steps] - x  # right[j-1] = t[span + j] − x
+    level = [np.ones_like(x)]
+    for j in range(1, p + 1):
+        lower, saved, level = level, np.zeros_like(x), []
+        for r in range(j):
+            temp = lower[r] / (right[r] + left[j - 1 - r])
+            level.append(saved + right[r] * temp)
+            saved = left[j - 1 - r] * temp
+        level.append(saved)
+    # N'_{i,p} = p N_{i,p-1} / (t[i+p] − t[i]) − p N_{i+1,p-1} / (t[i+p+1] − t[i+1]), i = span − p + k
+    below = np.stack([np.zeros_like(x), *lower, np.zeros_like(x)], axis=1)  # N_{span-p+k, p-1}, k = 0 … p+1
+    k = np.arange(p + 2)
+    width = knots[span[:, None] + k] - knots[span[:, None] + k - p]
+    scaled = np.divide(p * below, width, out=np.zeros_like(below), where=width > 0)
+    return span - p, np.stack(level, axis=1), scaled[:, :-1] - scaled[:, 1:]
+
+
+def _dense_basis(knots: tuple[float, ...], degree: int, count: int, x: NDArray[np.float64]
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """All ``count`` basis functions and their derivatives at ``x`` (any shape): (…, count) each."""
+    first, values, derivatives = _basis_d1(np.asarray(knots), degree, x.reshape(-1))
+    rows, columns = np.arange(x.size)[:, None], first[:, None] + np.arange(degree + 1)
+    dense_values, dense_derivatives = np.zeros((x.size, count)), np.zeros((x.size, count))
+    dense_values[rows, columns], dense_derivatives[rows, columns] = values, derivatives
+    return dense_values.reshape(*x.shape, count), dense_derivatives.reshape(*x.shape, count)
+
+
+def _distinct_rows(rows: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """The distinct rows of a 2-D array (first seen first) and each row's index among them."""
+    rows = np.ascontiguousarray(rows)
+    seen: dict[bytes, int] = {}
+    which = np.array([seen.setdefault(row.tobytes(), len(seen)) for row in rows], dtype=np.int64)
+    first = np.zeros(len(seen), dtype=np.int64)
+    first[which[::-1]] = np.arange(len(rows) - 1, -1, -1)
+    return rows[first], which
+
+
+def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``a × b`` for coordinates on axis 1, (n, 3, …)."""
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
+
+
+#: a normal ``S_u × S_v`` shorter than this share of ``|S_u| |S_v|`` is rounding (its tangents are
+#: parallel: a degenerate point) and counts as zero, as OCC's exact cancellation there gives
+DEGENERATE_NORMAL_RTOL = 64 * float(np.finfo(np.float64).eps)
+#: rows (iso-line samples) :func:`_bspline_iso_normals` evaluates at once
+_ROW_CHUNK = 1 << 14
+
+
+def _bspline_iso_normals(surfaces: Sequence[_OccBSpline], face_of: NDArray[np.int64], uv: NDArray[np.float64],
+                         iso_u: NDArray[np.bool_]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``±(S_u × S_v)`` of ``surfaces[face_of[r]]`` at ``uv[r, k]``, (R, K, 3), and ``|S_u| |S_v|``
+    (the scale of its rounding), (R, K), for rows on iso-lines: u constant along row r where
+    ``iso_u[r]``, else v. Vectorised over rows of faces with equal knots, degrees and pole counts:
+    each row's curve ``C(s) = Σ_a N_a(s) Σ_c N_c(c) P_ac`` and cross-derivative curve (``N'_c``)
+    in one product with the constant parameter's basis, then both evaluated at the row's samples."""
+    normals, scale = np.empty(uv.shape[:2] + (3,)), np.empty(uv.shape[:2])
+    groups: dict[tuple[Any, ...], list[int]] = {}
+    for f, s in enumerate(surfaces):
+        groups.setdefault((s.knots_u, s.knots_v, s.degree_u, s.degree_v, s.poles.shape), []).append(f)
+    for (knots_u, knots_v, p, q, _), members in groups.items():
+        nets = np.stack([surfaces[f].poles for f in members])  # (F, nu, nv, 3)
+        signs = np.array([surfaces[f].sign for f in members])
+        slot = np.full(len(surfaces), -1)
+        slot[members] = np.arange(len(members))
+        for constant_u in (True, False):
+            # along the row runs v (u constant: poles transposed to (along, cross)) or u
+            poles = nets.transpose(0, 2, 1, 3) if constant_u else nets
+            along, cross = (1, 0) if constant_u else (0, 1)
+            (knots_a, p_a), (knots_c, p_c) = ((knots_v, q), (knots_u, p)) if constant_u else ((knots_u, p), (knots_v, q))
+            rows = np.flatnonzero((slot[face_of] >= 0) & (iso_u == constant_u))
+            for chunk in np.array_split(rows, -(-len(rows) // _ROW_CHUNK)) if rows.size else ():
+                member = slot[face_of[chunk]]
+                n_c, d_c = _dense_basis(knots_c, p_c, poles.shape[2], uv[chunk, 0, cross])
+                curve = np.einsum("rc,racd->rda", n_c, poles[member])  # (rows, 3, along poles)
+                cross_curve = np.einsum("rc,racd->rda", d_c, poles[member])
+                samples, which = _distinct_rows(uv[chunk, :, along])
+                n_a, d_a = _dense_basis(knots_a, p_a, poles.shape[1], samples)
+                # (rows, 3, K): coordinates first, so that the cross product runs on contiguous rows
+                s_along = np.matmul(curve, d_a.transpose(0, 2, 1)[which])
+                s_cross = np.matmul(cross_curve, n_a.transpose(0, 2, 1)[which])
+                normal = _cross(s_cross, s_along) if constant_u else _cross(s_along, s_cross)
+                size = np.sqrt(np.einsum("rdk,rdk->rk", s_along, s_along) * np.einsum("rdk,rdk->rk", s_cross, s_cross))
+                # a degenerate point (tangents parallel to rounding): no direction, the zero normal
+                degenerate = np.sqrt(np.einsum("rdk,rdk->rk", normal, normal)) <= DEGENERATE_NORMAL_RTOL * size
+                normal = np.where(degenerate[:, None], 0.0, normal * signs[member, None, None])  # +0: angle 0 to any normal
+                normals[chunk] = normal.transpose(0, 2, 1)
+                scale[chunk] = size
+    return normals, scale
+
+
+#: vectorised and OCC's own normals agree to this share of ``|S_u| |S_v|`` (:func:`_shape_normals`)
+NORMAL_AGREEMENT_RTOL = 1e-9
+
+
+def _shape_normals(occ: SimpleNamespace, faces: Sequence[Any], face_of: NDArray[np.int64], uv: NDArray[np.float64],
+                   progress: Progress | None) -> NDArray[np.float64]:
+    """``±(S_u × S_v)`` of ``faces[face_of[r]]`` at ``uv[r, k]`` (R rows of K points), (R, K, 3), on
+    the surfaces OCC holds.
+
+    Rows on iso-lines (u or v constant along the row, as every edge is) of B-spline faces: the
+    faces' poles, knots and orientation are read from OCC (:func:`_occ_bspline`) and evaluated
+    vectorised (:func:`_bspline_iso_normals`); on every such face one point (the middle of its first
+    row) is evaluated by OCC too
+    (``BRepAdaptor_Surface::D1``, :func:`_face_normals`). A face where the two disagree beyond
+    :data:`NORMAL_AGREEMENT_RTOL` of ``|S_u| |S_v|``, a face on another kind of surface, and any
+    other row are evaluated by OCC at every point."""
+    used = np.unique(face_of)
+    surfaces = [_occ_bspline(occ, faces[f]) for f in used.tolist()]
+    index = np.full(len(faces), -1)
+    index[used] = np.arange(len(used))
+    known = np.array([s is not None for s in surfaces])
+    iso_u = (uv[:, :, 0] == uv[:, :1, 0]).all(axis=1)
+    fast = known[index[face_of]] & (iso_u | (uv[:, :, 1] == uv[:, :1, 1]).all(axis=1))
+    normals = np.empty(uv.shape[:2] + (3,))
+    if fast.any():
+        rows = np.flatnonzero(fast)
+        kept = [s for s in surfaces if s is not None]
+        local = np.cumsum(known) - 1  # index among the kept surfaces
+        normals[rows], scale = _bspline_iso_normals(kept, local[index[face_of[rows]]], uv[rows], iso_u[rows])
+        checked, first = np.unique(face_of[rows], return_index=True)  # one row per face: its middle point
+        middle = uv.shape[1] // 2
+        by_occ = np.concatenate([_face_normals(occ, faces[f], uv[rows[r], middle:middle + 1])
+                                 for f, r in zip(checked.tolist(), first.tolist())])
+        off = np.linalg.norm(by_occ - normals[rows[first], middle], axis=-1) > NORMAL_AGREEMENT_RTOL * scale[first, middle]
+        fast &= ~np.isin(face_of, checked[off])
+    slow = np.flatnonzero(~fast)
+    order = slow[np.argsort(face_of[slow], kind="stable")]
+    starts = np.flatnonzero(np.diff(face_of[order], prepend=-1))
+    for n, (start, end) in enumerate(zip(starts.tolist(), [*starts[1:].tolist(), len(order)])):
+        chosen = order[start:end]
+        normals[chosen] = _face_normals(occ, faces[int(face_of[chosen[0]])], uv[chosen].reshape(-1, 2)).reshape(len(chosen), -1, 3)
+        if progress is not None and n % 256 == 0:
+            progress("g1", n, len(starts))
+    return normals
 
 
 def _occ_g1_angles(
@@ -576,24 +763,13 @@ def _occ_g1_angles(
     if quads:
         uv_a, uv_b = 0.5 * (uv_a + _QUARTER[patch % 4, None]), 0.5 * (uv_b + _QUARTER[other % 4, None])
         face_a, face_b = patch // 4, other // 4
-    # one adaptor per face: gather every face's samples, evaluate, scatter back
-    face_of = np.concatenate([np.repeat(face_a, samples), np.repeat(face_b, samples)])
-    uv = np.concatenate([uv_a.reshape(-1, 2), uv_b.reshape(-1, 2)])
-    order = np.argsort(face_of, kind="stable")
-    bounds = np.searchsorted(face_of[order], np.arange(len(faces) + 1))
-    normals = np.empty((len(uv), 3))
-    for f in np.nonzero(np.diff(bounds))[0]:
-        chosen = order[bounds[f]:bounds[f + 1]]
-        normals[chosen] = _face_normals(occ, faces[f], uv[chosen])
-        if progress is not None and f % 256 == 0:
-            progress("g1", int(f), len(faces))
-    half = len(patch) * samples
-    return angle_between(normals[:half], normals[half:]).reshape(len(patch), samples)
+    normals = _shape_normals(occ, faces, np.concatenate([face_a, face_b]), np.concatenate([uv_a, uv_b]), progress)
+    return angle_between(normals[:len(patch)], normals[len(patch):])
 
 
 # ----------------------------------------------------------------------------------- guards
 #: the stage export_cad enters after each lap, for a failure's message
-_NEXT_STAGE = {"split4": "fitting the surfaces", "fit": "making the faces", "faces": "sewing", "sew": "making solids", "solid": "checking the shape",
+_NEXT_STAGE = {"split4": "measuring the deviation", "deviation": "fitting the surfaces", "fit": "making the faces", "faces": "sewing", "sew": "making solids", "solid": "checking the shape",
                "check": "measuring G1 angles", "g1": "writing the file"}
 
 
@@ -753,7 +929,9 @@ class ExportResult:
     #: whether OCC measured the G1 angles; if not, why (``g1_note``)
     g1_measured: bool
     g1_note: str
-    #: seconds per stage: split4 (a Gregory network re-assembled), fit, faces, sew, solid, check, g1, write
+    #: seconds per stage: split4 (a Gregory network re-assembled) and deviation (its distance to the
+    #: Gregory surface), fit (or the split4 quads read off), faces, sew, solid (with its volume),
+    #: check, g1, write (with the STEP compaction)
     seconds: dict[str, float] = field(default_factory=dict)
 
     def __repr__(self) -> str:
@@ -892,20 +1070,17 @@ def _cad_method(target: Path, network: PatchNetwork, method: CadMethod) -> str:
 
 _ENTITY_END = re.compile(rb";[ \t\r]*\n(?=#\d)")
 _REFERENCE = re.compile(rb"#(\d+)")
-_POINT = re.compile(rb"#\d+\s*=\s*CARTESIAN_POINT\(")
 _NAMED_FACE = re.compile(rb"ADVANCED_FACE\('face (\d+)',\([^)]*\),#(\d+),")
 _POLE_GRID = re.compile(rb"B_SPLINE_SURFACE_WITH_KNOTS\('[^']*',\d+,\d+,\(\((.*?)\)\),")
-_BLANKS = re.compile(rb"\n\s*")
+_BLANKS = re.compile(rb"\n[ \t\r\n\f\v]*")
 #: significant digits of the coordinates :func:`compact_step` writes (OCC's writer: 12)
 STEP_DIGITS = 15
 
 
-def _step_real(value: float) -> bytes:
-    """A STEP real with :data:`STEP_DIGITS` significant digits (always with its decimal point)."""
-    text = f"{value:.{STEP_DIGITS}G}"
-    if "." not in text:
-        text = text.replace("E", ".E") if "E" in text else text + "."
-    return text.encode()
+def _step_reals(values: NDArray[np.float64]) -> list[bytes]:
+    """STEP reals with :data:`STEP_DIGITS` significant digits, each with its decimal point (``1.``, ``1.E+20``)."""
+    texts = (f"%.{STEP_DIGITS}G," * values.size % tuple(values.tolist())).encode().split(b",")[:-1]
+    return [text if b"." in text else text.replace(b"E", b".E") if b"E" in text else text + b"." for text in texts]
 
 
 #: a file's 12-digit pole and the exact one agree to this share of the model's size (:func:`compact_step`)
@@ -936,18 +1111,16 @@ def compact_step(path: Path, nets: Sequence[NDArray[np.float64]] = (), tolerance
     text = path.read_bytes()
     start = text.index(b"\nDATA;") + len(b"\nDATA;")
     end = text.index(b"\nENDSEC;", start)
-    entities = [_BLANKS.sub(b"", entity) for entity in _ENTITY_END.split(text[start:end].strip())]
+    # one pass each over the whole section: entity ends marked, line breaks removed, split
+    entities = _BLANKS.sub(b"", _ENTITY_END.sub(b"\0", text[start:end].strip())).split(b"\0")
     entities[-1] = entities[-1].rstrip(b";")
-    bodies: dict[bytes, bytes] = {}
-    canonical: dict[bytes, bytes] = {}  # point number → the number of the first equal point
+    heads = [entity.partition(b"=") for entity in entities]
+    bodies = {name.strip()[1:]: body.strip() for name, _, body in heads}
     first: dict[bytes, bytes] = {}
-    for entity in entities:
-        name, _, body = entity.partition(b"=")
-        number, body = name.strip()[1:], body.strip()
-        bodies[number] = body
-        if _POINT.match(entity):
-            canonical[number] = first.setdefault(body, number)
-    exact: dict[bytes, bytes] = {}
+    # point number → the number of the first equal point
+    canonical = {number: first.setdefault(body, number) for number, body in bodies.items() if body.startswith(b"CARTESIAN_POINT(")}
+    points: list[bytes] = []  # every surface pole of a named face, as its canonical point …
+    poles: list[NDArray[np.float64]] = []  # … and the exact net it belongs to
     for face, surface in _NAMED_FACE.findall(b"".join(body for body in bodies.values() if b"ADVANCED_FACE" in body)):
         grid = _POLE_GRID.match(bodies.get(surface, b""))
         if grid is None or int(face) >= len(nets):
@@ -956,17 +1129,25 @@ def compact_step(path: Path, nets: Sequence[NDArray[np.float64]] = (), tolerance
         net = nets[int(face)]
         if [len(row) for row in rows] != [net.shape[1]] * net.shape[0]:
             continue
-        for row, poles in zip(rows, net.tolist()):
-            for number, pole in zip(row, poles):
-                point = canonical[number]
-                written = [float(x) for x in bodies[point].split(b"(")[-1].rstrip(b")").split(b",")]
-                if max(abs(x - y) for x, y in zip(written, pole)) <= tolerance:
-                    exact[point] = b"CARTESIAN_POINT('',(" + b",".join(_step_real(x) for x in pole) + b"))"
+        points.extend(canonical[number] for row in rows for number in row)
+        poles.append(np.asarray(net, dtype=np.float64).reshape(-1, 3))
+    exact: dict[bytes, bytes] = {}
+    if points:
+        distinct = list(dict.fromkeys(points))
+        where = {point: n for n, point in enumerate(distinct)}
+        written = np.array(b",".join(bodies[point].split(b"(")[-1].rstrip(b")") for point in distinct).split(b","),
+                           dtype=np.float64).reshape(len(distinct), 3)
+        pole = np.concatenate(poles)
+        close = np.abs(written[[where[point] for point in points]] - pole).max(axis=1) <= tolerance
+        chosen = {points[k]: k for k in np.flatnonzero(close).tolist()}  # the last matching pole of each point
+        reals = _step_reals(pole[list(chosen.values())].reshape(-1))
+        exact = {point: b"CARTESIAN_POINT('',(" + b",".join(reals[3 * n:3 * n + 3]) + b"))" for n, point in enumerate(chosen)}
     kept = [(number, exact.get(number, body)) for number, body in bodies.items() if canonical.get(number, number) == number]
     renumber = {number: str(n).encode() for n, (number, _) in enumerate(kept, start=1)}
     renumber.update({number: renumber[point] for number, point in canonical.items()})
-    data = _REFERENCE.sub(lambda match: b"#" + renumber[match.group(1)],
-                          b"".join(b"#" + number + b"=" + body + b";\n" for number, body in kept))
+    parts = _REFERENCE.split(b"".join(b"#" + number + b"=" + body + b";\n" for number, body in kept))
+    parts[1::2] = [b"#" + renumber[number] for number in parts[1::2]]  # every reference (and entity number) renumbered
+    data = b"".join(parts)
     path.write_bytes(text[:start] + b"\n" + data.rstrip(b"\n") + text[end:])
 
 
@@ -1021,16 +1202,18 @@ def export_cad(
     if chosen == "split4":
         from ..construct.polynomial import split4_of_gregory, surface_deviation
 
+        converted: PatchNetwork | None = None
         try:
             converted = split4_of_gregory(network)
         except (ConstructionError, MeshError) as error:
             if method != "auto":
                 raise
             chosen, method_note = "fit", f"split4 could not re-assemble it ({error}): fitted"
-        else:
+        lap("split4")
+        if converted is not None:
             deviation = surface_deviation(network, converted)[1]
             network = converted
-        lap("split4")
+            lap("deviation")
     exact = isinstance(network.patches, PatchSet)
     fit_tolerance = _tolerance(tolerance, diagonal)
     quads = split4_quad_faces(network) if exact else None
@@ -1055,10 +1238,10 @@ def export_cad(
         sewn, sewn_faces, free_edges = _sew(occ, faces, sewing_tolerance)
         _check_sewn(target, sewn_faces)
         lap("sew")
-        shape, solid = _solids(occ, sewn)
+        shape, volume = _solids(occ, sewn)
+        solid = volume is not None
         lap("solid")
         valid = bool(occ.BRepCheck_Analyzer(shape).IsValid())
-        volume = _volume(occ, shape) if solid else None
         lap("check")
         angles = (_occ_g1_angles(occ, sewn_faces, network, g1_samples, progress, quads is not None) if g1_samples
                   else np.zeros((0, 0)))
