@@ -280,13 +280,15 @@ def surface_deviation(network: PatchNetwork, split4: PatchNetwork, samples: int 
     patch = np.repeat(np.arange(len(local)), 4 * len(uv))
 
     def value(du: int = 0, dv: int = 0) -> FloatArray:
-        return np.einsum("nm,nmd->nd", gregory_weights(at[:, 0], at[:, 1], du, dv), local[patch], optimize=True)
+        return np.einsum("nm,nmd->nd", gregory_weights(at[:, 0], at[:, 1], du, dv), nets, optimize=True)
 
+    nets = local[patch]  # each sample's patch points, gathered once per patch assignment
     parametric = float(np.linalg.norm(points - value(), axis=-1).max())
     t = np.linspace(0.0, 1.0, SEARCH_SAMPLES)
     grid = gregory.local().evaluate_grid(t, t).reshape(-1, 3)
     nearest = cKDTree(grid).query(points)[1]
     patch, rest = np.divmod(nearest, SEARCH_SAMPLES**2)
+    nets = local[patch]
     at = np.stack([t[rest // SEARCH_SAMPLES], t[rest % SEARCH_SAMPLES]], axis=-1)
     best = np.linalg.norm(points - value(), axis=-1)
     for _ in range(FOOT_STEPS):
