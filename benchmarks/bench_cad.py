@@ -15,12 +15,20 @@ its fit deviation; split4: the foot-point distance); OCC's max angle across shar
 the written shape and on the file read back (:func:`g1patch.io.cad.file_g1_angles`); ratios
 split4 / fit of bytes and time. Times drift on a shared machine; the ratios are of the same run.
 
-Run:  .venv/bin/python benchmarks/bench_cad.py [--data DIR] [--meshes NAME ...] [--out DIR]
+Then where the default export's time goes: per mesh, ``--repeats`` more runs of ``export_step``
+(default method), the best wall time and, per stage, its best time (:attr:`ExportResult.seconds`:
+split4 = the re-assembly, deviation = its distance to the Gregory surface, fit = the split4 quads
+read off, faces = the OCC faces, sew, solid = the solid and its volume, check = BRepCheck, g1 =
+OCC's G1 angles on every shared edge, write = OCC's writer and the STEP compaction), with the
+load average (1 min) at the start of each mesh's runs.
+
+Run:  .venv/bin/python benchmarks/bench_cad.py [--data DIR] [--meshes NAME ...] [--out DIR] [--repeats N]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import platform
 import tempfile
 import time
@@ -50,6 +58,7 @@ def main() -> None:
     parser.add_argument("--data", type=Path, default=DATA)
     parser.add_argument("--meshes", nargs="*", help="mesh names (file stems); default: every .obj in --data")
     parser.add_argument("--out", type=Path, help="folder for the STEP files (default: a temporary one, removed)")
+    parser.add_argument("--repeats", type=int, default=3, help="runs of the default export per mesh for the stage breakdown (0: none)")
     args = parser.parse_args()
     paths = sorted(args.data.glob("*.obj"))
     if args.meshes:
@@ -58,11 +67,12 @@ def main() -> None:
     header = (f"{'mesh':26} {'method':12} {'faces':>6} {'solid':>5} {'valid':>5} {'bytes':>11} {'time s':>7} {'dev/diag':>9} "
               f"{'OCC max° (shape)':>17} {'OCC max° (file)':>16} {'bytes ratio':>11} {'time ratio':>10}")
     print(header)
+    networks = {path.stem: build_network(read_mesh(path)) for path in paths}
     with tempfile.TemporaryDirectory() as scratch:
         folder = args.out or Path(scratch)
         folder.mkdir(parents=True, exist_ok=True)
         for path in paths:
-            network = build_network(read_mesh(path))
+            network = networks[path.stem]
             diagonal = network.bounding_box_diagonal()
             rows: dict[str, tuple[ExportResult, float, float]] = {}
             for method in METHODS:
@@ -79,6 +89,28 @@ def main() -> None:
                 print(f"{path.stem:26} {shown:12} {result.faces:6d} {result.solid!s:>5} {result.valid!s:>5} "
                       f"{result.file_bytes:11,d} {seconds:7.2f} "
                       f"{result.deviation / diagonal:9.2e} {result.max_g1_angle_deg:17.2e} {angle:16.2e} {ratios}")
+        if args.repeats > 0:
+            stage_breakdown(networks, folder, args.repeats)
+
+
+def stage_breakdown(networks: dict[str, PatchNetwork], folder: Path, repeats: int) -> None:
+    """Per mesh, the best of ``repeats`` default exports: wall time and each stage's best time."""
+    print(f"\n# stages of export_step (default method), best of {repeats}; seconds")
+    rows = []
+    for name, network in networks.items():
+        load = os.getloadavg()[0]
+        walls, stages = [], {}
+        for _ in range(repeats):
+            start = time.perf_counter()
+            result = export_step(folder / f"{name}.stages.step", network)
+            walls.append(time.perf_counter() - start)
+            for stage, seconds in result.seconds.items():
+                stages[stage] = min(seconds, stages.get(stage, seconds))
+        rows.append((name, load, min(walls), stages))
+    names = list(dict.fromkeys(stage for *_, stages in rows for stage in stages))
+    print(f"{'mesh':26} {'load':>5} {'total':>7} " + " ".join(f"{stage:>9}" for stage in names))
+    for name, load, wall, stages in rows:
+        print(f"{name:26} {load:5.2f} {wall:7.2f} " + " ".join(f"{stages[s]:9.3f}" if s in stages else f"{'':>9}" for s in names))
 
 
 if __name__ == "__main__":
