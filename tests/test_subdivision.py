@@ -137,3 +137,45 @@ def test_sharp_creases_follow_the_crease_rule() -> None:
     np.testing.assert_allclose(refine(mesh, 2, semi).vertices, refine(mesh, 2, sharpness).vertices, atol=1e-14)
     with pytest.raises(InputError, match="sharpness"):
         refine(mesh, 1, np.where(crease, -1.0, 0.0))
+
+
+def _stencil_cages(shared_data) -> list[QuadMesh]:
+    """Shared meshes (creases, darts, corners, boundaries) and generated cages with valences 3 to 7."""
+    from g1patch import shapes
+
+    meshes = [read_mesh(path) for path in sorted(shared_data.glob("*.obj"))]
+    torus = grid_torus(noise=0.05)
+    corner_tag = Tag("corner", (3, 20), (10.0, 2.5))
+    return meshes + [
+        refine(shapes.genus2(), 1), shapes.fan(7, 2), shapes.boundary_fan(3), shapes.noisy_sphere(2),
+        QuadMesh(torus.vertices, torus.topology, (corner_tag, Tag("crease", (0, 1, 1, 2, 2, 3), (10.0, 10.0, 0.5))), torus.source),
+    ]
+
+
+def test_stencil_kernels_equal_the_numpy_reference_bit_for_bit(shared_data) -> None:
+    """The numba kernels of the smooth vertices' limit stencils add in the reference's order, so
+    positions, stars, slot tangents and sector normals are the same floats, not merely close."""
+    from g1patch.subdivision import _level_of, _limit_frames, _limit_positions
+
+    for mesh in _stencil_cages(shared_data):
+        level = _level_of(mesh)
+        if level.semi_sharp:  # the masks hold on the decayed refinement
+            level = _level_of(refine(mesh, 3))
+        np.testing.assert_array_equal(_limit_positions(level, compiled=True), _limit_positions(level, compiled=False))
+        kernel, numpy = _limit_frames(level, corners=True, compiled=True), _limit_frames(level, corners=True, compiled=False)
+        for name in ("tangents", "a", "b", "ring_normals"):
+            np.testing.assert_array_equal(getattr(kernel, name), getattr(numpy, name), err_msg=name)
+
+
+def test_public_limits_with_kernels_equal_those_without(shared_data, monkeypatch) -> None:
+    """:func:`limit_data` and :func:`limit_corner_normals` above and below the kernels' size threshold,
+    semi-sharp meshes included (their refined neighbourhood takes the same path)."""
+    import g1patch.subdivision as subdivision
+
+    for mesh in _stencil_cages(shared_data):
+        monkeypatch.setattr(subdivision, "KERNEL_VERTICES", 10**9)
+        before = subdivision.limit_data(mesh), subdivision.limit_corner_normals(mesh)
+        monkeypatch.setattr(subdivision, "KERNEL_VERTICES", 0)
+        after = subdivision.limit_data(mesh), subdivision.limit_corner_normals(mesh)
+        for name, old, new in zip((*before[0]._fields, "corner normals"), (*before[0], before[1]), (*after[0], after[1])):
+            np.testing.assert_array_equal(new, old, err_msg=name)

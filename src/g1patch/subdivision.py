@@ -1,7 +1,10 @@
 """Catmull–Clark subdivision of quad meshes: refinement and limit stencils (OpenSubdiv's rules).
 
 Every rule is a gather and a segmented sum (``np.bincount``) over half-edges or edges; the only
-Python loops run over refinement levels or coordinates. With ``n`` faces at a smooth vertex V,
+Python loops run over refinement levels or coordinates. From :data:`KERNEL_VERTICES` vertices on,
+the smooth vertices' limit stencils (positions, stars, slot tangents) run as numba kernels, vertex
+by vertex, that add the same terms in the same order: the same floats as the NumPy code, which
+stays as the reference (and does the crease and corner vertices). With ``n`` faces at a smooth vertex V,
 ring neighbours ``E_i`` (counter-clockwise, ring order of :class:`~g1patch.mesh.QuadTopology`),
 ``D_i`` the corner of face i (between ``E_i`` and ``E_{i+1}``) opposite V, and face points ``F_i``:
 
@@ -79,7 +82,8 @@ from .errors import InputError, MeshError, as_float_array
 from .mesh import QuadMesh, QuadTopology, Tag, refine_polygons
 
 __all__ = [
-    "BOUNDARY_MODES", "BoundaryMode", "INFINITE_SHARPNESS", "RULE_CORNER", "RULE_CREASE", "RULE_SMOOTH", "boundary_mode",
+    "BOUNDARY_MODES", "BoundaryMode", "INFINITE_SHARPNESS", "KERNEL_VERTICES", "RULE_CORNER", "RULE_CREASE", "RULE_SMOOTH",
+    "boundary_mode",
     "LimitData", "catmull_clark_points", "corner_vertices", "limit_corner_normals", "limit_data", "limit_normals", "limit_points", "limit_stars",
     "limit_tangents", "refine", "refine_grids", "sharp_edges", "vertex_rules",
 ]
@@ -96,6 +100,9 @@ IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 
 _SMOOTH, _CREASE, _CORNER = RULE_SMOOTH, RULE_CREASE, RULE_CORNER
+#: from this many vertices on, the smooth vertices' limit stencils run as numba kernels (bit for
+#: bit the NumPy reference's values); below it the compile, once per install, would cost more
+KERNEL_VERTICES = 20_000
 #: tags that :func:`refine` rebuilds from the child sharpness
 _FEATURE_TAGS = frozenset({"crease", "corner", "hole"})
 
@@ -378,10 +385,22 @@ def vertex_rules(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> IntArray
     return _limit_rules(_level_of(mesh, sharpness))
 
 
-def _limit_positions(level: _Level) -> FloatArray:
+def _limit_positions(level: _Level, compiled: bool | None = None) -> FloatArray:
+    """Limit positions (module docstring). ``compiled`` (None: from :data:`KERNEL_VERTICES` vertices
+    on): the smooth vertices by :func:`_positions_kernel`, bit for bit the NumPy reference's values."""
     topology, x = level.topology, level.x
     nv = topology.n_vertices
     rule = _limit_rules(level)
+    if _kernel_wanted(compiled, nv):
+        from .targets.local import jit_kernel  # numba, imported on first use
+
+        points = x.copy()  # corners stay
+        crease = np.flatnonzero(rule == _CREASE)
+        if crease.size:
+            sharp = level.edge >= INFINITE_SHARPNESS
+            points[crease] = ((4.0 * x + _end_sums(x, topology.edges, sharp, sharp, nv)) / 6.0)[crease]
+        jit_kernel(_positions_kernel)(x, topology.faces, topology.ring_offsets, topology.ring_halfedges, rule == _SMOOTH, points)
+        return points
     h = np.arange(topology.n_halfedges)
     origin = topology.origin(h)
     neighbours = _segment_sum(origin, x[topology.target(h)], nv)
@@ -391,6 +410,46 @@ def _limit_positions(level: _Level) -> FloatArray:
     sharp = level.edge >= INFINITE_SHARPNESS
     crease = (4.0 * x + _end_sums(x, topology.edges, sharp, sharp, nv)) / 6.0
     return np.select([rule[:, None] == _SMOOTH, rule[:, None] == _CREASE], [smooth, crease], x)
+
+
+def _kernel_wanted(compiled: bool | None, count: int) -> bool:
+    """Whether the limit stencils run as numba kernels: ``compiled`` when given, else from :data:`KERNEL_VERTICES` on."""
+    return count >= KERNEL_VERTICES if compiled is None else compiled
+
+
+def _positions_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray,
+                      smooth: BoolArray, points: FloatArray) -> None:
+    """``points[v] = (n² V + 4ΣE_i + ΣD_i)/(n(n + 5))`` at the smooth vertices, the sums in half-edge
+    order as :func:`_segment_sum` adds them (the ring sorted), so the values are the reference's."""
+    order = np.empty(max(1, int(np.max(ring_offsets[1:] - ring_offsets[:-1]))), dtype=np.int64)
+    for v in range(smooth.size):
+        if not smooth[v]:
+            continue
+        r0 = ring_offsets[v]
+        k = ring_offsets[v + 1] - r0
+        for i in range(k):  # insertion sort: rings are short
+            h = ring_halfedges[r0 + i]
+            j = i
+            while j > 0 and order[j - 1] > h:
+                order[j] = order[j - 1]
+                j -= 1
+            order[j] = h
+        n0 = n1 = n2 = o0 = o1 = o2 = 0.0
+        for i in range(k):
+            h = order[i]
+            f, c = h >> 2, h & 3
+            e, d = faces[f, (c + 1) & 3], faces[f, (c + 2) & 3]
+            n0 += x[e, 0]
+            n1 += x[e, 1]
+            n2 += x[e, 2]
+            o0 += x[d, 0]
+            o1 += x[d, 1]
+            o2 += x[d, 2]
+        n = float(k)
+        scale = n * (n + 5.0)
+        points[v, 0] = (n * n * x[v, 0] + 4.0 * n0 + o0) / scale
+        points[v, 1] = (n * n * x[v, 1] + 4.0 * n1 + o1) / scale
+        points[v, 2] = (n * n * x[v, 2] + 4.0 * n2 + o2) / scale
 
 
 def _by_valence(n: IntArray, i: IntArray, table: Callable[[IntArray, IntArray], tuple[FloatArray, ...]]) -> tuple[FloatArray, ...]:
@@ -484,9 +543,11 @@ def _unit(v: FloatArray) -> FloatArray:
     return np.divide(v, length, out=np.zeros_like(v), where=length > 0)
 
 
-def _limit_frames(level: _Level, corners: bool = False) -> _Limit:
+def _limit_frames(level: _Level, corners: bool = False, compiled: bool | None = None) -> _Limit:
     """Slot tangents, stars and (``corners``) sector normals of a level without fractional sharpness
-    (module docstring)."""
+    (module docstring). ``compiled`` (None: from :data:`KERNEL_VERTICES` vertices on): the smooth
+    vertices' stars and tangents by :func:`_stars_kernel` (bit for bit the NumPy values), the
+    NumPy code then only at the crease and corner vertices."""
     topology, x = level.topology, level.x
     nv = topology.n_vertices
     offsets = topology.neighbor_offsets
@@ -494,22 +555,31 @@ def _limit_frames(level: _Level, corners: bool = False) -> _Limit:
     boundary = topology.is_boundary_vertex
     rule = _limit_rules(level)
     slot_count = np.diff(offsets)
-    slot_vertex = np.repeat(np.arange(nv), slot_count)
-    slot = np.arange(len(slot_vertex)) - offsets[slot_vertex]
-    ring_vertex = np.repeat(np.arange(nv), k)
-    h = topology.ring_halfedges
-    i = np.arange(len(h)) - topology.ring_offsets[ring_vertex]
+    smooth = rule == _SMOOTH
+    tangents = np.zeros((int(offsets[-1]), 3))
+    a = np.zeros((nv, 3))
+    b = np.zeros((nv, 3))
+    kernel = _kernel_wanted(compiled, nv)
+    # the vertices the NumPy code below handles (all, or those the kernel leaves), their slots and ring entries
+    chosen = np.flatnonzero(~smooth) if kernel else np.arange(nv)
+    slot_vertex = np.repeat(chosen, slot_count[chosen])
+    slot = np.arange(len(slot_vertex)) - np.repeat(np.cumsum(slot_count[chosen]) - slot_count[chosen], slot_count[chosen])
+    slot_index = offsets[slot_vertex] + slot
+    ring_vertex = np.repeat(chosen, k[chosen])
+    i = np.arange(len(ring_vertex)) - np.repeat(np.cumsum(k[chosen]) - k[chosen], k[chosen])
+    ring_index = topology.ring_offsets[ring_vertex] + i
+    h = topology.ring_halfedges[ring_index]
     ring_slot = offsets[ring_vertex] + i
     e_i = x[topology.target(h)]
     d_i = x[topology.origin(QuadTopology.next(QuadTopology.next(h)))]
-    e_slot = x[topology.neighbors]
 
-    slot_edge = np.empty(len(slot_vertex), dtype=np.int64)
+    slot_edge = np.empty(len(tangents), dtype=np.int64)  # written and read at the chosen slots only
     slot_edge[ring_slot] = topology.halfedge_edge[h]
-    rims = np.flatnonzero(boundary)
-    slot_edge[offsets[rims + 1] - 1] = topology.halfedge_edge[QuadTopology.prev(h[topology.ring_offsets[rims + 1] - 1])]
-    slot_sharp = level.edge[slot_edge] >= INFINITE_SHARPNESS
-    sharp_slots = np.flatnonzero(slot_sharp)
+    rims = chosen[boundary[chosen]]
+    slot_edge[offsets[rims + 1] - 1] = topology.halfedge_edge[QuadTopology.prev(topology.ring_halfedges[topology.ring_offsets[rims + 1] - 1])]
+    slot_sharp = np.zeros(len(tangents), dtype=bool)
+    slot_sharp[slot_index] = level.edge[slot_edge[slot_index]] >= INFINITE_SHARPNESS
+    sharp_slots = np.flatnonzero(slot_sharp[slot_index])  # positions in the chosen slots
     first = np.zeros(nv, dtype=np.int64)
     last = np.zeros(nv, dtype=np.int64)
     owners, at_first = np.unique(slot_vertex[sharp_slots], return_index=True)
@@ -517,13 +587,20 @@ def _limit_frames(level: _Level, corners: bool = False) -> _Limit:
     owners, at_last = np.unique(slot_vertex[sharp_slots[::-1]], return_index=True)
     last[owners] = slot[sharp_slots[::-1][at_last]]
 
-    tangents = np.zeros((len(slot_vertex), 3))
-    a = np.zeros((nv, 3))
-    b = np.zeros((nv, 3))
-
     # smooth: the eigen tangents
-    smooth = rule == _SMOOTH
-    if smooth.any():
+    if kernel and smooth.any():
+        from .targets.local import jit_kernel  # numba, imported on first use
+
+        valences = np.unique(k[smooth])
+        starts = np.concatenate([[0], np.cumsum(valences)])
+        keys = np.repeat(valences, valences), np.arange(starts[-1]) - np.repeat(starts[:-1], valences)
+        start_of = np.zeros(int(valences[-1]) + 1, dtype=np.int64)
+        start_of[valences] = starts[:-1]
+        jit_kernel(_stars_kernel)(
+            x, topology.faces, topology.ring_offsets, topology.ring_halfedges, offsets, smooth, start_of,
+            np.stack(_interior_mask_weights(*keys)), np.stack(_slot_rotation(*keys)), a, b, tangents,
+        )
+    elif smooth.any():
         on_ring = _where(smooth[ring_vertex])
         rv = ring_vertex[on_ring]
         ea, da, eb, db = _by_valence(k[rv], i[on_ring], _interior_mask_weights)
@@ -532,52 +609,54 @@ def _limit_frames(level: _Level, corners: bool = False) -> _Limit:
         at = _where(smooth[slot_vertex])
         sv = slot_vertex[at]
         cos_phi, sin_phi = _by_valence(k[sv], slot[at], _slot_rotation)
-        tangents[at] = cos_phi[:, None] * a[sv] + sin_phi[:, None] * b[sv]
+        tangents[slot_index[at]] = cos_phi[:, None] * a[sv] + sin_phi[:, None] * b[sv]
 
     # crease: sector 0 from the first sharp slot p to the second q, sector 1 from q round to p
     crease = rule == _CREASE
-    if crease.any():
+    cv = np.flatnonzero(crease)
+    along = np.zeros((nv, 3))
+    across = np.zeros((2 * cv.size, 3))  # sectors 2c, 2c + 1 of the c-th crease vertex
+    if cv.size:
         p, q = first, last
         span = q - p  # faces in sector 0
-        along = 0.5 * (x[topology.neighbors[offsets[:-1] + p]] - x[topology.neighbors[offsets[:-1] + q]])
-        across = np.zeros((2 * nv, 3))
+        along[cv] = 0.5 * (x[topology.neighbors[offsets[cv] + p[cv]]] - x[topology.neighbors[offsets[cv] + q[cv]]])
         at = crease[ring_vertex]
         rv, ri = ring_vertex[at], i[at]
         second = (ri < p[rv]) | (ri >= q[rv])
-        sector = 2 * rv + second
+        sector = 2 * np.searchsorted(cv, rv) + second
         start = np.where(second, q[rv], p[rv])
         size = np.where(second, k[rv] - span[rv], span[rv])
         offset = (ri - start) % k[rv]
-        ends = np.stack([q, p], axis=1).ravel()  # the closing slot of sectors 2v, 2v + 1
-        sector_size = np.stack([span, k - span], axis=1).ravel()
+        ends = np.stack([q[cv], p[cv]], axis=1).ravel()  # the closing slot of sectors 2c, 2c + 1
+        sector_size = np.stack([span[cv], k[cv] - span[cv]], axis=1).ravel()
         for count in np.unique(size):
             vertex_weight, spoke, face = _cross_mask(int(count))
             sel = size == count
             o = offset[sel]
-            across += _segment_sum(sector[sel], spoke[o, None] * e_i[at][sel] + face[o, None] * d_i[at][sel], 2 * nv)
-            closing = np.flatnonzero(np.repeat(crease, 2) & (sector_size == count))
-            cv = closing // 2
-            across[closing] += vertex_weight * x[cv] + spoke[count] * x[topology.neighbors[offsets[cv] + ends[closing]]]
-        a[crease] = along[crease]
-        b[crease] = across[0::2][crease]
+            across += _segment_sum(sector[sel], spoke[o, None] * e_i[at][sel] + face[o, None] * d_i[at][sel], 2 * cv.size)
+            closing = np.flatnonzero(sector_size == count)
+            owner = cv[closing // 2]
+            across[closing] += vertex_weight * x[owner] + spoke[count] * x[topology.neighbors[offsets[owner] + ends[closing]]]
+        a[cv] = along[cv]
+        b[cv] = across[0::2]
         at = crease[slot_vertex]
         sv, sj = slot_vertex[at], slot[at]
         second = (sj < p[sv]) | (sj > q[sv])
         sector_along = np.where(second[:, None], -along[sv], along[sv])
-        sector_across = across[2 * sv + second]
+        sector_across = across[2 * np.searchsorted(cv, sv) + second]
         angle = np.pi * np.where(second, (sj - q[sv]) % k[sv] / np.maximum(k[sv] - span[sv], 1), (sj - p[sv]) / np.maximum(span[sv], 1))
         t = np.cos(angle)[:, None] * sector_along + np.sin(angle)[:, None] * sector_across
         t = np.where((sj == p[sv])[:, None], along[sv], np.where((sj == q[sv])[:, None], -along[sv], t))
-        tangents[at] = t
+        tangents[slot_index[at]] = t
 
     # corner: the chords, a and b on the first sharp slot and the next one
     corner = rule == _CORNER
     if corner.any():
         at = corner[slot_vertex]
-        tangents[at] = e_slot[at] - x[slot_vertex[at]]
-        cv = np.flatnonzero(corner)
-        a[cv] = tangents[offsets[cv] + first[cv]]
-        b[cv] = tangents[offsets[cv] + (first[cv] + 1) % slot_count[cv]]
+        tangents[slot_index[at]] = x[topology.neighbors[slot_index[at]]] - x[slot_vertex[at]]
+        corners_at = np.flatnonzero(corner)
+        a[corners_at] = tangents[offsets[corners_at] + first[corners_at]]
+        b[corners_at] = tangents[offsets[corners_at] + (first[corners_at] + 1) % slot_count[corners_at]]
 
     if not corners:
         return _Limit(None, tangents, a, b)
@@ -589,16 +668,54 @@ def _limit_frames(level: _Level, corners: bool = False) -> _Limit:
     starts = slot_sharp[ring_slot]
     label = np.empty(len(h), dtype=np.int64)
     label[order] = np.cumsum(starts[order] | (shifted[order] == 0)) - 1
-    ring_normals = _unit(_segment_sum(label, cross, int(label.max()) + 1 if len(label) else 0))[label]
+    ring_normals = _unit(_segment_sum(label, cross, int(label.max()) + 1) if len(label) else np.zeros((0, 3)))[label]
     star_normals = _unit(np.cross(a, b))
-    one_star = (rule == _SMOOTH)[ring_vertex]
+    one_star = smooth[ring_vertex]
     ring_normals[one_star] = star_normals[ring_vertex[one_star]]
-    if crease.any():  # each sector's own star (a one-face sector has no second slot tangent off the crease)
+    if cv.size:  # each sector's own star (a one-face sector has no second slot tangent off the crease)
         at = crease[ring_vertex]
         rv, ri = ring_vertex[at], i[at]
         second = (ri < first[rv]) | (ri >= last[rv])
-        ring_normals[at] = _unit(np.cross(np.where(second[:, None], -along[rv], along[rv]), across[2 * rv + second]))
-    return _Limit(None, tangents, a, b, ring_normals)
+        ring_normals[at] = _unit(np.cross(np.where(second[:, None], -along[rv], along[rv]), across[2 * np.searchsorted(cv, rv) + second]))
+    if not kernel:
+        return _Limit(None, tangents, a, b, ring_normals)
+    every = star_normals[np.repeat(np.arange(nv), k)]  # the kernel's smooth vertices: one star each
+    every[ring_index] = ring_normals
+    return _Limit(None, tangents, a, b, every)
+
+
+def _stars_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray, offsets: IntArray,
+                  smooth: BoolArray, start_of: IntArray, weights: FloatArray, rotation: FloatArray,
+                  a: FloatArray, b: FloatArray, tangents: FloatArray) -> None:
+    """At each smooth vertex the stars ``A = Σ w_E,i E_i + w_D,i D_i`` (``weights[0:2]``), B
+    (``weights[2:4]``), in ring order as :func:`_segment_sum` adds them, and slot j's tangent
+    ``cos φ_j A + sin φ_j B`` (``rotation``); the tables' row for valence n, entry i, is ``start_of[n] + i``."""
+    for v in range(smooth.size):
+        if not smooth[v]:
+            continue
+        r0 = ring_offsets[v]
+        k = ring_offsets[v + 1] - r0
+        base = start_of[k]
+        a0 = a1 = a2 = b0 = b1 = b2 = 0.0
+        for i in range(k):
+            h = ring_halfedges[r0 + i]
+            f, c = h >> 2, h & 3
+            e, d = faces[f, (c + 1) & 3], faces[f, (c + 2) & 3]
+            ea, da, eb, db = weights[0, base + i], weights[1, base + i], weights[2, base + i], weights[3, base + i]
+            a0 += ea * x[e, 0] + da * x[d, 0]
+            a1 += ea * x[e, 1] + da * x[d, 1]
+            a2 += ea * x[e, 2] + da * x[d, 2]
+            b0 += eb * x[e, 0] + db * x[d, 0]
+            b1 += eb * x[e, 1] + db * x[d, 1]
+            b2 += eb * x[e, 2] + db * x[d, 2]
+        a[v, 0], a[v, 1], a[v, 2] = a0, a1, a2
+        b[v, 0], b[v, 1], b[v, 2] = b0, b1, b2
+        s0 = offsets[v]
+        for j in range(k):
+            cj, sj = rotation[0, base + j], rotation[1, base + j]
+            tangents[s0 + j, 0] = cj * a0 + sj * b0
+            tangents[s0 + j, 1] = cj * a1 + sj * b1
+            tangents[s0 + j, 2] = cj * a2 + sj * b2
 
 
 def _affected(level: _Level) -> BoolArray:
