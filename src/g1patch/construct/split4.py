@@ -25,30 +25,24 @@ so G1 is a star plus a twist system at every refined vertex:
 Even-valence twist cycles are singular: at valence 4 they need equal λ from opposite ring
 edges, so μ is carried along grid lines (:func:`_chain_shears`); at even valence ≥ 6 they need
 ``Σ_j (−1)^j P2_j = Σ_j (−1)^j m_j t_j / (6 λ_v)``, met by moving whole midpoints
-(:func:`_even_vertex_shifts`). Every twist is the minimum-norm change of a bilinear target
+(:func:`_even_vertex_shifts`). Every twist is the minimum-norm change of its target (below)
 that solves its vertex system (a pseudo-inverse per system size). Work is done in centred,
 unit-scaled coordinates and mapped back.
 
-The free parameters that keep G1 exact are chosen so the sub-patches stay regular on thin or
-skewed faces (a 1° wedge of a 360-valent disk, 1 : 4 neighbouring edges): the centre sits at the
-bilinear Coons point of the split curves in the tangent directions (its height from the targets),
-the seam tangents at a midpoint take the two faces' own width across the edge and their own lean
-along it (:func:`_seam_tangents`), and the star is shrunk where it is much longer than its target
-or its chord (:func:`split4_star`).
-
-Reproduction: the assembly moves the targets only as far as G1 requires (DESIGN §1). Each face's
-targets are one bicubic (corners, slot tangents, :attr:`~g1patch.targets.Targets.corner_interior`,
-:func:`target_nets`); where they already meet the conditions above to rounding
-(:data:`REPRODUCE_RTOL` of their extent) its halves are taken instead of the free choices: at an
-edge whose split4 curve is the targets' own curve halved, and whose targets' seam tangents at M
-satisfy the midpoint star ``t_L + t_R = μ t_X`` (what rounding leaves of the gap is split equally),
-those seam tangents and the twists next to M; on a face whose every edge is kept so (a boundary edge
-needs only its curve), the bicubic's centre, its cross and its centre twists. Targets that are a C1
-bicubic B-spline with μ = 0 (closed grid lines: a regular torus under ``limit``) then give that
-B-spline subdivided at ½, the min-norm twist changes vanish, and each quad is one bicubic. Elsewhere
-(fitted or shrunk stars, sheared or shifted curves, targets that do not meet the star) the heuristics
-above stay. The star length safeguard stays everywhere: a star longer than it allows (B-spline
-tangents on a strongly graded cage) is shrunk even where its targets are consistent.
+Shape: the assembly moves the targets only as far as G1 requires (DESIGN §1). Each face's targets
+are one bicubic (corners, slot tangents, :attr:`~g1patch.targets.Targets.corner_interior`,
+:func:`target_nets`), subdivided at ½ into a 7×7 net (or a ``guide`` net instead). The free
+choices take that net's *detail over what its boundary predicts*, added to what the split curves
+predict (:data:`_QUANTITIES`): the centre ``ΣM/2 − ΣV/4 + (C° − ΣM°/2 + ΣV/4)``, the cross arms
+over ``(M_k − M_{k+2})/6``, the seam tangents at M over ``C − M`` (their star gap ``t_L + t_R − μ t_X``
+split equally), and every twist target the parallelogram of its three neighbours plus the net's
+twist offset. So where the star, the shear or an even-valence shift moves a curve point, the
+interior moves with it and keeps the targets' shape; where the split curves are the targets'
+own (a C1 bicubic B-spline with μ = 0: a regular torus under ``limit``) the targets are
+reproduced, the min-norm twist changes vanish and each quad is one bicubic. The star length
+safeguard stays everywhere: a star longer than it allows (B-spline tangents on a strongly graded
+cage, a 1 : 4 box) is shrunk, and a face with a shrunk corner takes the net's detail scaled by the
+smallest factor (its curves are that much shorter than the net's).
 """
 
 from __future__ import annotations
@@ -69,7 +63,7 @@ from ..patches import PatchSet
 from ..targets import Targets, halfedge_slots
 
 __all__ = [
-    "BSPLINE_KNOTS", "REPRODUCE_RTOL", "STAR_LENGTH_LIMIT", "SplitStar", "bspline_nets", "macro_nets",
+    "BSPLINE_KNOTS", "STAR_LENGTH_LIMIT", "SplitStar", "bspline_nets", "macro_nets",
     "split4_network_from_targets", "split4_patches", "split4_star", "target_nets",
 ]
 
@@ -86,12 +80,6 @@ _LOCAL = np.stack(
     [np.stack([_P, _Q], -1), np.stack([3 - _Q, _P], -1), np.stack([3 - _P, 3 - _Q], -1), np.stack([_Q, 3 - _P], -1)]
 )
 _SUB_ORIGIN = np.array([[0, 0], [3, 0], [3, 3], [0, 3]])  # (s, t)·3: where sub-patch k sits in the 7×7 net
-
-
-def _extent(points: FloatArray) -> float:
-    """The bounding-box diagonal of ``points`` (1 where they are all one point)."""
-    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) if len(points) else 0.0
-    return diagonal if diagonal > 0 else 1.0
 
 
 def _unit(v: FloatArray) -> FloatArray:
@@ -207,53 +195,6 @@ def _even_vertex_shifts(
     return moved, shift
 
 
-#: the seam tangents' shared width across the edge is at least this share of the narrower face's
-#: extent across it, and at least :data:`_MIN_WIDTH` × the curve tangent (a seam never lies along the edge)
-_WIDTH_FLOOR = 0.25
-_MIN_WIDTH = 1e-3
-
-
-def _seam_tangents(
-    m: FloatArray, t_x: FloatArray, n_m: FloatArray, mu: FloatArray, c_l: FloatArray, c_r: FloatArray,
-    far_l: FloatArray, far_r: FloatArray, interior: NDArray[np.bool_],
-) -> tuple[FloatArray, FloatArray]:
-    """Seam tangents ``t_L, t_R`` at each edge midpoint M (into faces L and R), with ``t_L + t_R = μ t_X``.
-
-    Each face's natural seam tangent is ``C − M`` in the tangent plane at M: its component across
-    the edge is the face's own width there, its component along t_X its own lean. The star leaves
-    one width α (shared: the across parts must cancel) and how the sum μ t_X of the along parts is
-    split: both faces keep their lean and share the mismatch ``μ |t_X| − lean_L − lean_R`` equally,
-    and α is the mean of the two widths. So on a thin wedge the seams stay inside it, however large
-    μ is, and seams follow the faces' own skew. α is kept ≥ :data:`_WIDTH_FLOOR` × the narrower
-    face's extent across the edge (the largest across distance of its centre, far midpoint and far
-    corners, ``far_*`` (E, 3, 3)) and ≥ :data:`_MIN_WIDTH` |t_X|. A boundary edge has no star there:
-    ``t_L = C_L − M`` in the plane, its width floored the same way.
-    """
-    unit_n = _unit(n_m)
-    across = _unit(np.cross(t_x, unit_n))  # towards face L
-    along = _unit(t_x)
-
-    def planar(v: FloatArray) -> FloatArray:
-        return v - _dot(v, unit_n)[:, None] * unit_n
-
-    def extent(points: FloatArray, direction: FloatArray) -> FloatArray:
-        return _dot(points - m[:, None], direction[:, None]).max(axis=1)  # direction ⊥ N_M: in-plane distance
-
-    nat_l, nat_r = planar(c_l - m), planar(c_r - m)
-    w_l, w_r = _dot(nat_l, across), -_dot(nat_r, across)
-    lean_l, lean_r = _dot(nat_l, along), _dot(nat_r, along)
-    ext_l = extent(np.concatenate([c_l[:, None], far_l], axis=1), across)
-    ext_r = extent(np.concatenate([c_r[:, None], far_r], axis=1), -across)
-    length_x = np.linalg.norm(t_x, axis=1)
-    narrow = np.where(interior, np.minimum(ext_l, ext_r), ext_l)
-    floor = np.maximum(_WIDTH_FLOOR * narrow, _MIN_WIDTH * length_x)
-    width = np.maximum(np.where(interior, 0.5 * (w_l + w_r), w_l), floor)
-    share = np.where(interior, 0.5 * (mu * length_x - lean_l - lean_r), 0.0)
-    t_l = width[:, None] * across + (lean_l + share)[:, None] * along
-    t_r = -width[:, None] * across + (lean_r + share)[:, None] * along
-    return t_l, t_r
-
-
 _GROUPS = 32768  # systems per block in _min_norm
 
 
@@ -281,17 +222,27 @@ def _cycle(n: int, closed: bool) -> FloatArray:
 
 _MIDPOINT = np.array([[1.0, 1, 0, 0], [0, 0, 1, 1], [1, 0, 1, 0], [0, 1, 0, 1]])  # (LX, RX, LY, RY)
 
-#: targets that meet split4's G1 conditions to within this share of their extent (the bounding-box
-#: diagonal of the positions) are reproduced: rounding, far below any shape difference
-REPRODUCE_RTOL = 1e-12
-
 # de Casteljau halving of a cubic at ½: the 7 × 4 matrix from Bézier points to the two halves'
 _HALVE = np.array([[8.0, 0, 0, 0], [4, 4, 0, 0], [2, 4, 2, 0], [1, 3, 3, 1], [0, 2, 4, 2], [0, 0, 4, 4], [0, 0, 0, 8]]) / 8.0
-# the points (p, q) of the subdivided target bicubic, in the frame of corner k, that the assembly
-# takes over where the targets are consistent: seam point e (3,1), b (3,2), the twists at MID[k]
-# (2,1), MID[k−1] (1,2) and C (2,2), the centre (3,3)
-_SEAM, _CROSS, _TWIST_MID, _TWIST_PREV, _TWIST_CENTRE, _CENTRE = range(6)
-_TARGET_POINTS = ((3, 1), (3, 2), (2, 1), (1, 2), (2, 2), (3, 3))
+# What the assembly takes over from a face's macro net (the targets' bicubic subdivided at ½, or a
+# guide), per half-edge h = 4f + k in the frame of corner k (points (p, q) of :func:`_macro_index`),
+# each as the net's detail over what its own boundary predicts, so that where G1 moves a curve
+# point the interior moves with it:
+# * the centre over the bilinear Coons centre ``ΣM/2 − ΣV/4``: ``(3,3) − 2 (3,0) + (0,0)`` (its mean over k);
+# * the cross arm ``b_k − C`` over ``(M_k − M_{k+2})/6``: ``(3,2) − (3,0)/3`` (taken as ``(a_k − a_{k+2})/2``);
+# * the seam tangent ``3 (e − M)`` at M_k into the face over ``C − M``: ``3 (3,1) − 2 (3,0) − (3,3)``;
+# * the twist offsets, each twist point minus the parallelogram of its three neighbours, at
+#   MID[k] (2,1), MID[k−1] (1,2), C (2,2) and V (1,1).
+_CENTRE, _CROSS, _SEAM, _TWIST_MID, _TWIST_PREV, _TWIST_CENTRE, _TWIST_VERTEX = range(7)
+_QUANTITIES: tuple[dict[tuple[int, int], float], ...] = (
+    {(3, 3): 1.0, (3, 0): -2.0, (0, 0): 1.0},
+    {(3, 2): 1.0, (3, 0): -1.0 / 3.0},
+    {(3, 1): 3.0, (3, 0): -2.0, (3, 3): -1.0},
+    {(2, 1): 1.0, (2, 0): -1.0, (3, 1): -1.0, (3, 0): 1.0},
+    {(1, 2): 1.0, (0, 2): -1.0, (1, 3): -1.0, (0, 3): 1.0},
+    {(2, 2): 1.0, (3, 2): -1.0, (2, 3): -1.0, (3, 3): 1.0},
+    {(1, 1): 1.0, (1, 0): -1.0, (0, 1): -1.0, (0, 0): 1.0},
+)
 
 
 def _macro_index(k: int, p: int, q: int) -> tuple[int, int]:
@@ -299,10 +250,21 @@ def _macro_index(k: int, p: int, q: int) -> tuple[int, int]:
     return [(p, q), (6 - q, p), (6 - p, 6 - q), (q, 6 - p)][k]
 
 
-#: [k, point, 4 i + j]: weights of the face's 4×4 Bézier net for each of :data:`_TARGET_POINTS` in the frame of corner k
-_TARGET_WEIGHTS = np.array(
-    [[np.outer(_HALVE[i], _HALVE[j]).ravel() for i, j in (_macro_index(k, p, q) for p, q in _TARGET_POINTS)] for k in range(4)]
-)
+def _quantity_weights() -> FloatArray:
+    """[k, quantity, 7 i + j]: weights of :data:`_QUANTITIES` over the 7×7 macro net, frame of corner k."""
+    weights = np.zeros((4, len(_QUANTITIES), 49))
+    for k in range(4):
+        for c, terms in enumerate(_QUANTITIES):
+            for (p, q), weight in terms.items():
+                i, j = _macro_index(k, p, q)
+                weights[k, c, 7 * i + j] += weight
+    return weights
+
+
+#: [k, quantity, 7 i + j] over the macro net and [k, quantity, 4 i + j] over a bicubic's 4×4 net
+#: (its de Casteljau halves at ½ in u and v)
+_MACRO_WEIGHTS = _quantity_weights()
+_NET_WEIGHTS = _MACRO_WEIGHTS @ np.kron(_HALVE, _HALVE)
 
 
 def target_nets(targets: Targets) -> FloatArray:
@@ -323,25 +285,14 @@ def target_nets(targets: Targets) -> FloatArray:
     return net
 
 
-#: the twist point (1, 1) next to V, in the frame of corner k: the guide's vertex twist target
-_VERTEX_TWIST = ((1, 1),)
-
-
-def _guide_points(guide: FloatArray, points: tuple[tuple[int, int], ...] = _TARGET_POINTS) -> FloatArray:
-    """Per half-edge h = 4f + k the (4F, len(points), 3) ``points`` (p, q) of face f's macro net
-    ``guide`` (F, 7, 7, 3), in the frame of corner k (:func:`_macro_index`)."""
-    index = np.array([[_macro_index(k, p, q) for p, q in points] for k in range(4)])  # (4, n, 2)
-    return np.ascontiguousarray(guide[:, index[..., 0], index[..., 1]]).reshape(-1, len(points), 3)
-
-
-def _target_points(targets: Targets) -> FloatArray:
-    """Per half-edge h = 4f + k the (4F, 6, 3) points :data:`_TARGET_POINTS` of face f's target
-    bicubic subdivided at ½ (:func:`target_nets`), in the frame of corner k."""
-    nets = target_nets(targets).reshape(-1, 16, 3)
-    out = np.empty((len(nets), 4, len(_TARGET_POINTS), 3))
+def _own_quantities(targets: Targets, guide: FloatArray | None) -> FloatArray:
+    """Per half-edge h = 4f + k the (4F, 7, 3) :data:`_QUANTITIES` of face f's macro net: the
+    ``guide`` (F, 7, 7, 3), or the targets' bicubic (:func:`target_nets`) subdivided at ½."""
+    nets, weights = (target_nets(targets).reshape(-1, 16, 3), _NET_WEIGHTS) if guide is None else (guide.reshape(-1, 49, 3), _MACRO_WEIGHTS)
+    out = np.empty((len(nets), 4, len(_QUANTITIES), 3))
     for f0 in range(0, len(nets), _GROUPS):
-        out[f0:f0 + _GROUPS] = np.einsum("kpn,fnd->fkpd", _TARGET_WEIGHTS, nets[f0:f0 + _GROUPS])
-    return out.reshape(-1, len(_TARGET_POINTS), 3)
+        out[f0:f0 + _GROUPS] = np.einsum("kpn,fnd->fkpd", weights, nets[f0:f0 + _GROUPS])
+    return out.reshape(-1, len(_QUANTITIES), 3)
 
 
 # Sources of the assembly, per half-edge h = 4f + k: 0 V, 1..7 the points of _assemble's
@@ -446,18 +397,16 @@ def split4_patches(
 ) -> tuple[PatchSet, FloatArray, FloatArray, SplitStar]:
     """The 4 F Bézier sub-patches (sub-patch ``4 f + k`` at corner k of face f), and the positions
     and unit surface normals of the edge midpoints and face centres, each stacked as (E + F, 3).
-    The normal at M is N_M (the seam and curve tangents there are ⊥ N_M; at a kept midpoint it is
-    ``t_L × t_X``); at C it is ``(b_0 − b_2) × (b_1 − b_3)``, the cross of the centre's star. Also returns the star
+    The normal at M is ``t_L × t_X`` (⊥ the curve and seam tangents of its star); at C it is ``(b_0 − b_2) × (b_1 − b_3)``, the cross of the centre's star. Also returns the star
     (:func:`split4_star`: which vertices were refitted or shrunk).
 
     ``targets`` are in local coordinates ``(x − centre) / scale``; the sub-patches are mapped
     back and their corners at mesh vertices set to ``corners`` (the input positions, (V, 3)) exactly.
 
     ``guide`` (F, 7, 7, 3), local coordinates: a macro net per face (:func:`macro_nets`) whose
-    interior the split should follow, e.g. a fit of another surface (:mod:`g1patch.construct.polynomial`).
-    With it every face is treated as kept (module docstring, "Reproduction") with the guide's
-    subdivided points in place of the targets' bicubic, and the vertex twist targets are the
-    guide's: the min-norm G1 corrections then move the guide only as far as G1 requires.
+    interior the split should follow instead of the targets' bicubic, e.g. a fit of another surface
+    (:mod:`g1patch.construct.polynomial`): its detail over its own boundary is taken (module
+    docstring, "Shape"), and the min-norm G1 corrections move it only as far as G1 requires.
     ``star``: the vertex stars to use instead of :func:`split4_star`'s (regular per vertex, each
     ``c_v`` its angle step's cosine).
     """
@@ -466,7 +415,6 @@ def split4_patches(
     topology = targets.topology
     n_faces = topology.n_faces
     pos = targets.positions
-    normals = targets.normals
     stars = split4_star(targets) if star is None else star
     star, cosine = stars.star, stars.cosine
     slot_out, slot_in = halfedge_slots(topology)
@@ -502,90 +450,51 @@ def split4_patches(
     d1, d2 = on_side(0, 4, ~canonical), on_side(1, 3, ~canonical)  # from the target of h
     del near
 
-    # -- where the targets already meet the G1 conditions they are kept (module docstring,
-    # "Reproduction"): an edge whose split4 curve is the targets' own, halved; an interior edge
-    # whose targets' seam tangents at M satisfy the midpoint star; a face whose edges all are
-    tolerance = REPRODUCE_RTOL * _extent(pos)
-    own = _target_points(targets) if guide is None else _guide_points(guide)  # (4F, 6, 3) per half-edge, frame of its corner
-    unsheared = np.zeros(len(mu))
-    target_curve = np.stack(_edge_curves(
-        pos[x_of], pos[y_of], targets.tangents[slot_out[h_l]], targets.tangents[slot_in[h_l]], unsheared, unsheared, unsheared,
-    ), axis=1)
-    same_curve = np.abs(curve - target_curve).max(axis=(1, 2)) <= tolerance
-    del target_curve, unsheared
-    t_x = 3.0 * (p2 - m)
-    own_seam = 3.0 * (own[:, _SEAM] - m[edge_of])  # the targets' seam tangent at M into the face of h
-    star_gap = own_seam[h_l] + np.where(interior[:, None], own_seam[h_r], 0.0) - mu[:, None] * t_x
-    kept_edge = same_curve & interior & (np.abs(star_gap).max(axis=1) <= tolerance)
-    kept_face = np.where(interior, kept_edge, same_curve)[edge_of].reshape(n_faces, 4).all(axis=1)
-    kept_mid = kept_edge | (~interior & kept_face[h_l >> 2])  # the seam tangents and twists at M are the targets'
-    if guide is not None:
-        kept_edge, kept_face, kept_mid = interior, np.ones(n_faces, dtype=bool), np.ones(len(mu), dtype=bool)
-
-    # -- centres (any C keeps G1: its star is a plain cross), and its cross b_k = C + (M_k − M_{k+2}) / 6;
-    # the middle of the targets' bicubic is (Σ corners + 3 Σ edge points + 9 Σ interior) / 64
-    # = (7 Σ V + Σ (t_next + t_prev) + 9 Σ Ft) / 64
-    mids = m[edge_of].reshape(n_faces, 4, 3)
+    # -- the free choices follow the face's own macro net (the targets' bicubic subdivided at ½, or the
+    # guide): what its boundary predicts from the split curves plus the net's detail over that
+    # (:data:`_QUANTITIES`); G1 then moves them as little as it requires. A face whose corners' stars
+    # the safeguard shrank takes the detail scaled by the smallest factor: its curves are that much
+    # shorter than the net's, so the net's full detail would overhang them
+    own = _own_quantities(targets, guide)  # (4F, 7, 3) per half-edge, frame of its corner
+    own[:, :_TWIST_VERTEX] *= np.repeat(stars.factor[topology.faces].min(axis=1), 4)[:, None, None]
+    own[:, _TWIST_VERTEX] *= stars.factor[topology.faces.reshape(-1), None]  # the twist at V shrinks with its star
     prev = QuadTopology.prev(halfedges)
-    target_next = targets.tangents[slot_out].reshape(n_faces, 4, 3)  # t(V → next corner)
-    target_prev = targets.tangents[slot_in[prev]].reshape(n_faces, 4, 3)  # t(V → previous corner)
-    face_corners = pos[topology.faces]
-    interior_targets = targets.corner_interior
-    centres = (
-        7.0 * face_corners.sum(axis=1) + (target_next + target_prev).sum(axis=1) + 9.0 * interior_targets.sum(axis=1)
-    ) / 64.0
-    # in-plane position from the split4 curves (the bilinear Coons centre ΣM/2 − ΣV/4, inside the
-    # face whatever its shape), height along the centre's normal from the targets' bicubic
-    coons = 0.5 * mids.sum(axis=1) - 0.25 * face_corners.sum(axis=1)
-    cross = np.cross(mids[:, 0] - mids[:, 2], mids[:, 1] - mids[:, 3])
-    size = np.linalg.norm(cross, axis=1, keepdims=True)
-    n_c = cross / np.where(size > 0, size, 1.0)
-    centres = coons + _dot(centres - coons, n_c)[:, None] * n_c
-    b = centres[:, None] + (mids - np.roll(mids, -2, axis=1)) / 6.0
-    # a kept face: the centre and its cross of the targets' bicubic (opposite arms, so still a plain cross)
-    own_face = own.reshape(n_faces, 4, -1, 3)[kept_face]
-    centres[kept_face] = own_face[:, 0, _CENTRE]
-    arms = own_face[:, :, _CROSS]
-    b[kept_face] = centres[kept_face, None] + 0.5 * (arms - np.roll(arms, -2, axis=1))
+    t_x = 3.0 * (p2 - m)
+
+    # -- centres (any C keeps G1: its star is a plain cross): the bilinear Coons centre ΣM/2 − ΣV/4
+    # plus the net's detail; its cross b_k = C + (M_k − M_{k+2})/6 plus the net's (opposite arms
+    # stay opposite)
+    mids = m[edge_of].reshape(n_faces, 4, 3)
+    own_face = own.reshape(n_faces, 4, -1, 3)
+    centres = 0.5 * mids.sum(axis=1) - 0.25 * pos[topology.faces].sum(axis=1) + own_face[:, :, _CENTRE].mean(axis=1)
+    arms = mids / 6.0 + 0.5 * own_face[:, :, _CROSS]
+    b = centres[:, None] + arms - np.roll(arms, -2, axis=1)
     del own_face, arms
 
-    # -- midpoint stars: t_L + t_R = μ t_X, seam points e = M + t/3
-    n_m = normals[x_of] + normals[y_of]
-    n_m -= (_dot(n_m, t_x) / _dot(t_x, t_x))[:, None] * t_x
-    h_other = np.where(interior, h_r, h_l)
-    corner_of = halfedges & 3
-    far = np.concatenate(  # per half-edge: its face's far corners and far midpoint
-        [face_corners[halfedges >> 2, (corner_of + 2) & 3, None], face_corners[halfedges >> 2, (corner_of + 3) & 3, None],
-         mids[halfedges >> 2, (corner_of + 2) & 3, None]], axis=1)
-    t_l, t_r = _seam_tangents(m, t_x, n_m, mu, centres[h_l >> 2], centres[h_other >> 2], far[h_l], far[h_other], interior)
-    # kept midpoints: the targets' seam tangents, the rounding-level gap of the star split equally
-    t_l[kept_mid] = own_seam[h_l[kept_mid]] - 0.5 * star_gap[kept_mid]
-    t_r[kept_edge] = own_seam[h_r[kept_edge]] - 0.5 * star_gap[kept_edge]
-    n_m[kept_mid] = np.cross(t_l[kept_mid], t_x[kept_mid])  # ⊥ both tangents of the star at M
+    # -- midpoint stars t_L + t_R = μ t_X: C − M plus the net's detail on either side, the gap of the
+    # star split equally (the least change); a boundary midpoint keeps its own; seam points e = M + t/3
+    own_seam = np.repeat(centres, 4, axis=0) - m[edge_of] + own[:, _SEAM]
+    star_gap = own_seam[h_l] + np.where(interior[:, None], own_seam[h_r], 0.0) - mu[:, None] * t_x
+    t_l = own_seam[h_l] - np.where(interior, 0.5, 0.0)[:, None] * star_gap
+    t_r = np.where(interior[:, None], own_seam[h_r] - 0.5 * star_gap, 0.0)
+    n_m = np.cross(t_l, t_x)  # ⊥ both tangents of the star at M
     e_l = m + t_l / 3.0
     e_r = m + t_r / 3.0
     seam = np.where(canonical[:, None], e_l[edge_of], e_r[edge_of])  # into the face of h
-    del t_x, far, t_l, t_r, own_seam, star_gap
+    del t_x, t_l, t_r, own_seam, star_gap
 
-    # -- twist targets τ = e1 + e2 − c ± w at the corners V, MID[k], MID[k−1], C of each sub-patch,
-    # w = (V − M_k + C − M_{k−1}) / 9 (the bilinear term, + at V and C, − at the midpoints); at V the
-    # targets' own twist p_uv = 9 (Ft − V) − 3 (t_next + t_prev), a quarter of it on the half-size
-    # sub-patch: w_V = p_uv / 36; at kept midpoints and centres the targets' own subdivided twists
+    # -- twist targets at the corners V, MID[k], MID[k−1], C of each sub-patch: the parallelogram
+    # of the twist point's three neighbours (as G1 left them) plus the net's offset
     m_h = m[edge_of]
     b_flat = b.reshape(-1, 3)
     corner_points = pos[topology.faces.reshape(-1)]
     centre_points = np.repeat(centres, 4, axis=0)
-    m_prev = m_h[prev]
-    w = (corner_points - m_h + centre_points - m_prev) / 9.0
     twist = np.empty((4 * n_faces, 4, 3))  # targets, replaced in place by the solved twists
-    vertex_twist = (9.0 * (interior_targets - face_corners) - 3.0 * (target_next + target_prev)).reshape(-1, 3) / 36.0
-    vertex_twist *= stars.factor[topology.faces.reshape(-1), None]  # a shrunk star: the twist shrinks with it
-    twist[:, 0] = o1 + d1[prev] - corner_points + vertex_twist if guide is None else _guide_points(guide, _VERTEX_TWIST)[:, 0]
-    del vertex_twist, target_next, target_prev
-    twist[:, 1] = np.where(kept_mid[edge_of, None], own[:, _TWIST_MID], o2 + seam - m_h - w)
-    twist[:, 2] = np.where(kept_mid[edge_of[prev], None], own[:, _TWIST_PREV], d2[prev] + seam[prev] - m_prev - w)
-    twist[:, 3] = np.where(np.repeat(kept_face, 4)[:, None], own[:, _TWIST_CENTRE], b_flat + b_flat[prev] - centre_points + w)
-    del w, m_prev, centre_points, own
+    twist[:, 0] = o1 + d1[prev] - corner_points + own[:, _TWIST_VERTEX]
+    twist[:, 1] = o2 + seam - m_h + own[:, _TWIST_MID]
+    twist[:, 2] = d2[prev] + seam[prev] - m_h[prev] + own[:, _TWIST_PREV]
+    twist[:, 3] = b_flat + b_flat[prev] - centre_points + own[:, _TWIST_CENTRE]
+    del centre_points, own
 
     # -- original vertices: F_{j−1} + F_j = R_j over the interior ring edges
     origin = topology.faces.reshape(-1)
