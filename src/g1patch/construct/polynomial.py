@@ -290,15 +290,17 @@ def surface_deviation(network: PatchNetwork, split4: PatchNetwork, samples: int 
     patch, rest = np.divmod(nearest, SEARCH_SAMPLES**2)
     nets = local[patch]
     at = np.stack([t[rest // SEARCH_SAMPLES], t[rest % SEARCH_SAMPLES]], axis=-1)
-    best = np.linalg.norm(points - value(), axis=-1)
+    residual = points - value()  # at the current foot points, kept from step to step
+    best = np.linalg.norm(residual, axis=-1)
     for _ in range(FOOT_STEPS):
-        residual, g_u, g_v = points - value(), value(1, 0), value(0, 1)
+        g_u, g_v = value(1, 0), value(0, 1)
         a, b, c = (np.einsum("nd,nd->n", x, y) for x, y in ((g_u, g_u), (g_u, g_v), (g_v, g_v)))
         r_u, r_v = np.einsum("nd,nd->n", g_u, residual), np.einsum("nd,nd->n", g_v, residual)
         det = a * c - b * b
         regular = det > 1e-300
         step = np.stack([c * r_u - b * r_v, a * r_v - b * r_u], axis=-1) / np.where(regular, det, 1.0)[:, None]
         at = np.clip(at + np.where(regular[:, None], step, 0.0), 0.0, 1.0)
-        best = np.minimum(best, np.linalg.norm(points - value(), axis=-1))  # a clamped step may lead away
+        residual = points - value()
+        best = np.minimum(best, np.linalg.norm(residual, axis=-1))  # a clamped step may lead away
     geometric = float(best.max())
     return parametric * frame.scale, min(geometric, parametric) * frame.scale
