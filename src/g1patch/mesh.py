@@ -551,7 +551,8 @@ def _connect_kernel(corners: IntArray, sizes: IntArray, n_vertices: int) -> tupl
 
     face_count = np.zeros(n_vertices, dtype=np.int64)
     is_boundary_vertex = np.zeros(n_vertices, dtype=np.bool_)
-    start = np.full(n_vertices, nh, dtype=np.int64)
+    start = fill  # its memory: where each ring starts
+    start[:] = nh
     for h in range(nh if valid else 0):
         v = corners[h]
         face_count[v] += 1
@@ -567,7 +568,7 @@ def _connect_kernel(corners: IntArray, sizes: IntArray, n_vertices: int) -> tupl
         valid = valid and (is_boundary_vertex[v] or face_count[v] == 0 or valence[v] >= 3)
         ring_offsets[v + 1] = ring_offsets[v] + face_count[v]
         neighbor_offsets[v + 1] = neighbor_offsets[v] + face_count[v] + is_boundary_vertex[v]
-    ring = np.empty(nh, dtype=np.int64)
+    ring = order  # its memory: order is read no more
     neighbors = np.empty(neighbor_offsets[n_vertices], dtype=np.int64)
     for v in range(n_vertices if valid else 0):
         h = start[v]
