@@ -99,3 +99,23 @@ def test_limit_samples_of_a_neighbourhood_equal_the_whole_mesh_refined() -> None
     fine, grid = refine_grids(mesh, 3)
     np.testing.assert_allclose(local_points, limit_points(fine)[grid[faces]], rtol=0, atol=1e-14)
     np.testing.assert_allclose(local_normals, limit_normals(fine)[grid[faces]], rtol=0, atol=1e-13)
+
+
+def test_kernels_give_the_numpy_targets_bit_for_bit(shared_data, monkeypatch) -> None:
+    """Above the kernels' size threshold (subdivision.KERNEL_VERTICES) the stencils, the plane
+    projection of the stars, the chords and the B-spline interior points run as numba kernels in the
+    NumPy code's order of operations: every target is the same float. Shared meshes (creases, darts,
+    corners, boundaries, semi-sharp), a noisy cage whose fit moves many slots, a fan of valence 7."""
+    from g1patch import shapes, subdivision
+
+    tagged = read_mesh(shared_data / "catmark_torus_creases0.obj")
+    meshes = [read_mesh(path) for path in sorted(shared_data.glob("*.obj"))]
+    meshes += [shapes.noisy_sphere(2, noise=0.3), shapes.fan(7, 2), refine(tagged, 1), refine(shapes.genus2(), 1)]
+    fields = ("positions", "normals", "tangents", "interior", "corner_normals", "seams", "fallback")
+    for mesh in meshes:
+        monkeypatch.setattr(subdivision, "KERNEL_VERTICES", 10**9)
+        numpy = limit_targets(mesh)
+        monkeypatch.setattr(subdivision, "KERNEL_VERTICES", 0)
+        kernels = limit_targets(mesh)
+        for name in fields:
+            np.testing.assert_array_equal(getattr(kernels, name), getattr(numpy, name), err_msg=f"{mesh.source}: {name}")

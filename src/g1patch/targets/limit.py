@@ -36,10 +36,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .local import fan_normals
+from .local import cross, fan_normals, jit_kernel, slot_tables
 from ..gregory import INTERIOR_INDEX
 from ..errors import MeshError
 from ..mesh import QuadMesh, QuadTopology, Sectors, Tag, sectors
+from .. import subdivision
 from ..subdivision import (
     boundary_mode, corner_vertices, limit_corner_normals, limit_data, limit_normals, limit_points, refine_grids,
 )
@@ -120,9 +121,10 @@ def _plane_bases(normals: FloatArray, a: FloatArray) -> tuple[FloatArray, FloatA
     return e1, np.cross(normals, e1)
 
 
-def _fitted_edges(topology: QuadTopology, free: BoolArray) -> IntArray:
-    """Canonical half-edges of the interior edges with a free end (their tangents are fitted)."""
-    slot_out, slot_in = halfedge_slots(topology)
+def _fitted_edges(topology: QuadTopology, free: BoolArray, slots: tuple[IntArray, IntArray]) -> IntArray:
+    """Canonical half-edges of the interior edges with a free end (their tangents are fitted);
+    ``slots``: :func:`~g1patch.targets.halfedge_slots`."""
+    slot_out, slot_in = slots
     h = topology.edge_halfedges[:, 0]
     return h[~topology.is_boundary_edge & (free[slot_out[h]] | free[slot_in[h]])]
 
@@ -175,21 +177,23 @@ def _limit_samples(mesh: QuadMesh, faces: IntArray, levels: int) -> tuple[FloatA
 
 
 def _fit_tangents(
-    mesh: QuadMesh, x: FloatArray, t: FloatArray, free: BoolArray, planes: FloatArray,
-    samples: FloatArray, sample_normals: FloatArray, row: IntArray, m: int,
+    mesh: QuadMesh, x: FloatArray, t: FloatArray, free: BoolArray, planes: FloatArray, plane_of: IntArray | None,
+    samples: FloatArray, sample_normals: FloatArray, row: IntArray, m: int, slots: tuple[IntArray, IntArray], h: IntArray,
 ) -> FloatArray:
     """The free slot tangents fitted in their tangent planes: per interior edge A → B with a free end
     the least-squares fit of ``H(s) = B0 A + B1 (A + t_A/3) + B2 (B + t_B/3) + B3 B`` to the limit
     curve samples, ``t = α e1 + β e2`` at a free end (a 4 × 4 solve per edge; ``(e1, e2)`` per
-    slot, :func:`_plane_bases` of ``planes``, the normal of the slot's sector), the other end
-    fixed; ``samples[row[f]]`` holds face f's grid of limit samples."""
+    slot, :func:`_plane_bases` of the normal of the slot's sector, ``planes[plane_of[s]]``, or
+    ``planes[s]`` without ``plane_of``), the other end
+    fixed; ``samples[row[f]]`` holds face f's grid of limit samples; ``slots``: :func:`~g1patch.targets.halfedge_slots`,
+    ``h``: :func:`_fitted_edges`."""
     topology = mesh.topology
-    slot_out, slot_in = halfedge_slots(topology)
-    h = _fitted_edges(topology, free)
+    slot_out, slot_in = slots
     out = t.copy()
     if not h.size:
         return out
     sa, sb = slot_out[h], slot_in[h]
+    plane_a, plane_b = (planes[sa], planes[sb]) if plane_of is None else (planes[plane_of[sa]], planes[plane_of[sb]])
     face, k = row[h >> 2], h & 3
     s = np.arange(m + 1)
     positions = np.stack([np.stack(edge(s, m), axis=0) for edge in _EDGE_GRID])  # (4, 2, m + 1)
@@ -198,7 +202,7 @@ def _fit_tangents(
     w = _bernstein(s / m)
     va, vb = topology.origin(h), topology.target(h)
     base = (w[:, 0] + w[:, 1])[None, :, None] * x[va][:, None] + (w[:, 2] + w[:, 3])[None, :, None] * x[vb][:, None] - curve
-    (e1a, e2a), (e1b, e2b) = _plane_bases(planes[sa], t[sa]), _plane_bases(planes[sb], t[sb])
+    (e1a, e2a), (e1b, e2b) = _plane_bases(plane_a, t[sa]), _plane_bases(plane_b, t[sb])
     columns = np.stack([  # ∂H/∂(α_A, β_A, α_B, β_B): (E, 4, m + 1, 3)
         w[None, :, 1, None] * e1a[:, None] / 3.0, w[None, :, 1, None] * e2a[:, None] / 3.0,
         w[None, :, 2, None] * e1b[:, None] / 3.0, w[None, :, 2, None] * e2b[:, None] / 3.0,
@@ -221,10 +225,11 @@ def _fit_tangents(
     return out
 
 
-def _boundary_nets(mesh: QuadMesh, x: FloatArray, t: FloatArray, faces: IntArray) -> FloatArray:
-    """The 4 × 4 Bézier nets ``b[f, i, j]`` of ``faces`` with corners and edge points set, interior zero."""
+def _boundary_nets(mesh: QuadMesh, x: FloatArray, t: FloatArray, faces: IntArray, slots: tuple[IntArray, IntArray]) -> FloatArray:
+    """The 4 × 4 Bézier nets ``b[f, i, j]`` of ``faces`` with corners and edge points set, interior
+    zero; ``slots``: :func:`~g1patch.targets.halfedge_slots`."""
     topology = mesh.topology
-    slot_out, slot_in = halfedge_slots(topology)
+    slot_out, slot_in = slots
     h = 4 * faces[:, None] + np.arange(4)
     corner = x[topology.faces[faces]]  # (F, 4, 3)
     near = corner + t[slot_out[h]] / 3.0  # edge k's point next to corner k
@@ -257,10 +262,12 @@ def _fit_interior(net: FloatArray, samples: FloatArray, sample_normals: FloatArr
 def _limit_normals(mesh: QuadMesh, a: FloatArray, b: FloatArray) -> tuple[FloatArray, BoolArray]:
     """Unit ``a × b`` of the limit stars ``(a, b)``; the fan normal where the plane is degenerate
     (:data:`_DEGENERATE`), flagged."""
-    a_cross_b = np.cross(a, b)
+    a_cross_b = cross(a, b)
     length = np.linalg.norm(a_cross_b, axis=1)
     degenerate = ~(length > _DEGENERATE * (_dot(a, a) + _dot(b, b)))
-    normals = np.where(degenerate[:, None], fan_normals(mesh), a_cross_b / np.where(degenerate, 1.0, length)[:, None])
+    normals = a_cross_b / np.where(degenerate, 1.0, length)[:, None]
+    if degenerate.any():
+        normals[degenerate] = fan_normals(mesh)[degenerate]
     return normals, degenerate
 
 
@@ -273,10 +280,16 @@ def _guarded(
     own) keep their fitted tangents."""
     topology = mesh.topology
     slot_vertex = slot_vertices(topology)
-    chord = np.linalg.norm(mesh.vertices[topology.neighbors] - mesh.vertices[slot_vertex], axis=1)
+    if _kernels_wanted(topology):
+        chord = np.empty(slot_vertex.size)
+        jit_kernel(_chord_kernel)(mesh.vertices, topology.neighbors, topology.neighbor_offsets, chord)
+    else:
+        chord = np.linalg.norm(mesh.vertices[topology.neighbors] - mesh.vertices[slot_vertex], axis=1)
     _, fitted_bad = safeguarded_fans(topology, normals, fitted, chord)
-    guarded_star, star_bad = safeguarded_fans(topology, normals, star, chord)
     fitted_bad &= ~(topology.is_boundary_vertex & (topology.face_count == 1)) & ~keep
+    if not fitted_bad.any():
+        return fitted, fitted_bad
+    guarded_star, star_bad = safeguarded_fans(topology, normals, star, chord)
     out = np.where(fitted_bad[slot_vertex, None], np.where(star_bad[slot_vertex, None], guarded_star, star), fitted)
     return out, fitted_bad & star_bad
 
@@ -319,30 +332,44 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
     x = limit.points
     normals, degenerate = _limit_normals(mesh, limit.a, limit.b)
     seams = seam_edges(mesh)
-    found, bound, inner_exact = _sector_slots(mesh, seams)
-    creased = found.creased
+    star = limit.tangents
+    touched = _touched(mesh)
+    if seams.any():
+        found, bound, inner_exact = _sector_slots(mesh, seams)
+        creased = found.creased
+    else:  # one sector at every vertex (a boundary cuts its ring once)
+        creased = np.zeros(topology.n_vertices, dtype=bool)
     corner_normals = normals[topology.faces]
     if creased.any():
         corner_normals = np.where(creased[topology.faces][..., None], limit_corner_normals(mesh), corner_normals)
-    plane = Targets(topology, x, normals, np.zeros((slot_vertex.size, 3)), np.zeros((topology.n_faces, 4, 2, 3)),
-                    seams, corner_normals=corner_normals)
-    n = slot_sector_normals(plane)[1]  # each slot's sector plane (the right-hand face's)
-    star = limit.tangents
-    projected = star - _dot(star, n)[:, None] * n
-    star = np.where(bound[:, None], star, projected)  # crease tangents lie in both sectors' planes already
-    touched = _touched(mesh)
-    exact = np.where(creased[slot_vertex], bound | inner_exact, bspline_slots(mesh) & ~touched[slot_vertex])
+        plane = Targets(topology, x, normals, np.zeros((slot_vertex.size, 3)), np.zeros((topology.n_faces, 4, 2, 3)),
+                        seams, corner_normals=corner_normals)
+        n, plane_of = slot_sector_normals(plane)[1], None  # each slot's sector plane (the right-hand face's)
+        projected = star - _dot(star, n)[:, None] * n
+        star = np.where(bound[:, None], star, projected)  # crease tangents lie in both sectors' planes already
+        exact = np.where(creased[slot_vertex], bound | inner_exact, bspline_slots(mesh) & ~touched[slot_vertex])
+    else:  # every slot's sector plane is its vertex's
+        n, plane_of = normals, slot_vertex
+        if _kernels_wanted(topology):
+            star = np.empty_like(star)
+            jit_kernel(_plane_kernel)(limit.tangents, normals, topology.neighbor_offsets, star)
+        else:
+            slot_normals = normals[slot_vertex]
+            star = star - _dot(star, slot_normals)[:, None] * slot_normals
+        exact = bspline_slots(mesh) & ~touched[slot_vertex]
     free = ~exact & ~degenerate[slot_vertex]
     regular = regular_faces(topology) & ~touched[topology.faces].any(axis=1)
     fitted = star
     irregular = np.flatnonzero(~regular)
+    slots = slot_tables(topology) if _kernels_wanted(topology) else halfedge_slots(topology)
     if free.any() or irregular.size:
-        needed = np.unique(np.concatenate([_fitted_edges(topology, free) >> 2, irregular]))
+        fitted_edges = _fitted_edges(topology, free, slots)
+        needed = np.unique(np.concatenate([fitted_edges >> 2, irregular]))
         row = np.full(topology.n_faces, -1, dtype=np.int64)
         row[needed] = np.arange(needed.size)
         samples, sample_normals = _limit_samples(mesh, needed, levels)
         m = 2**levels
-        fitted = _fit_tangents(mesh, x, star, free, n, samples, sample_normals, row, m)
+        fitted = _fit_tangents(mesh, x, star, free, n, plane_of, samples, sample_normals, row, m, slots, fitted_edges)
     t, guarded = _guarded(mesh, normals, fitted, star, creased)
     spread = np.zeros(topology.n_vertices, dtype=bool)
     if creased.any():
@@ -351,12 +378,62 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
         chord = mesh.vertices[topology.neighbors] - mesh.vertices[slot_vertex]
         spread = spread_sectors(topology, found, t, n_sector, creased, chord)
 
-    corner = mesh.vertices[topology.faces]
-    interior = (4.0 * corner + 2.0 * corner[:, [1, 2, 3, 0]] + 2.0 * corner[:, [3, 0, 1, 2]] + corner[:, [2, 3, 0, 1]]) / 9.0
+    interior = _bspline_interior(mesh)
     if irregular.size:
-        net = _boundary_nets(mesh, x, t, irregular)
-        interior[irregular] = _fit_interior(net, samples[row[irregular]], sample_normals[row[irregular]], m)
-    return Targets(
-        topology, x, normals, t, np.stack([interior, interior], axis=2), seams, guarded | degenerate | spread, "limit",
-        corner_normals,
-    )
+        net = _boundary_nets(mesh, x, t, irregular, slots)
+        interior[irregular] = _fit_interior(net, samples[row[irregular]], sample_normals[row[irregular]], m)[:, :, None]
+    return Targets(topology, x, normals, t, interior, seams, guarded | degenerate | spread, "limit", corner_normals)
+
+
+def _bspline_interior(mesh: QuadMesh) -> FloatArray:
+    """The uniform B-spline's interior Bézier points of every face as both edges' targets, (F, 4, 2, 3):
+    ``b11 = (4A + 2B + 2D + C)/9`` at corner A of face (A, B, C, D); by :func:`_interior_kernel` on large meshes."""
+    topology = mesh.topology
+    out = np.empty((topology.n_faces, 4, 2, 3))
+    if _kernels_wanted(topology):
+        jit_kernel(_interior_kernel)(mesh.vertices, topology.faces, out)
+        return out
+    corner = [mesh.vertices[topology.faces[:, c]] for c in range(4)]
+    for c in range(4):
+        out[:, c, 0] = (4.0 * corner[c] + 2.0 * corner[(c + 1) % 4] + 2.0 * corner[(c + 3) % 4] + corner[(c + 2) % 4]) / 9.0
+    out[:, :, 1] = out[:, :, 0]
+    return out
+
+
+def _kernels_wanted(topology: QuadTopology) -> bool:
+    """Whether the passes over every slot and face run as numba kernels: as the limit stencils', from
+    :data:`~g1patch.subdivision.KERNEL_VERTICES` vertices on (their compile, once per install, costs more below)."""
+    return topology.n_vertices >= subdivision.KERNEL_VERTICES
+
+
+def _interior_kernel(x: FloatArray, faces: IntArray, out: FloatArray) -> None:
+    """:func:`_bspline_interior` face by face, the same operations in the same order."""
+    for f in range(faces.shape[0]):
+        for c in range(4):
+            p, q, r, s = faces[f, c], faces[f, (c + 1) % 4], faces[f, (c + 2) % 4], faces[f, (c + 3) % 4]
+            for d in range(3):
+                value = (4.0 * x[p, d] + 2.0 * x[q, d] + 2.0 * x[s, d] + x[r, d]) / 9.0
+                out[f, c, 0, d] = value
+                out[f, c, 1, d] = value
+
+
+def _chord_kernel(x: FloatArray, neighbors: IntArray, offsets: IntArray, out: FloatArray) -> None:
+    """``|E_j − V|`` per slot as ``np.linalg.norm`` adds it, ``√((d₀² + d₁²) + d₂²)``."""
+    for v in range(offsets.size - 1):
+        for j in range(offsets[v], offsets[v + 1]):
+            e = neighbors[j]
+            d0, d1, d2 = x[e, 0] - x[v, 0], x[e, 1] - x[v, 1], x[e, 2] - x[v, 2]
+            out[j] = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+
+
+def _plane_kernel(t: FloatArray, normals: FloatArray, offsets: IntArray, out: FloatArray) -> None:
+    """``t − (N·t) N`` per slot with N its vertex's normal, the dot product in the order ``_dot``
+    (``np.einsum``) adds a 3-vector's terms, ``(t₀N₀ + t₂N₂) + t₁N₁``."""
+    for v in range(offsets.size - 1):
+        n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
+        for j in range(offsets[v], offsets[v + 1]):
+            t0, t1, t2 = t[j, 0], t[j, 1], t[j, 2]
+            height = (t0 * n0 + t2 * n2) + t1 * n1
+            out[j, 0] = t0 - height * n0
+            out[j, 1] = t1 - height * n1
+            out[j, 2] = t2 - height * n2
