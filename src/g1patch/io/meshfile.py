@@ -505,24 +505,25 @@ def _decimal(w: np.uint64, q: int, powers: NDArray[np.uint64]) -> int:
     return np.int64((mantissa & ~(one << np.uint64(52))) | (np.uint64(power2) << np.uint64(52)))  # int64 as every return
 
 
-def _number(data: NDArray[np.uint8], first: int, end: int, powers: NDArray[np.uint64]) -> int:
-    """The float64 bits (as int64) of the number ``data[first:end]`` spelt ``[+-]digits[.digits][(e|E)[+-]digits]``
-    (or ``.digits``), correctly rounded as ``float`` rounds it; -1 for any other spelling, more than
-    19 significant digits, or a number :func:`_decimal` cannot settle: ``float`` must convert it."""
-    at, negative = first, False
+def _number(data: NDArray[np.uint8], classes: NDArray[np.uint8], first: int, powers: NDArray[np.uint64]) -> tuple[int, int]:
+    """The float64 bits (as int64) of the token at ``first`` and where it ends, read in one pass: a
+    token spelt ``[+-]digits[.digits][(e|E)[+-]digits]`` (or ``.digits``) correctly rounded as
+    ``float`` rounds it; -1 for any other spelling, more than 19 significant digits, or a number
+    :func:`_decimal` cannot settle: ``float`` must convert it."""
+    n, at, negative = data.size, first, False
     if data[at] == 43 or data[at] == 45:
         negative = data[at] == 45
         at += 1
     w, digits, fraction, seen = np.uint64(0), 0, 0, False
-    while at < end and 48 <= data[at] <= 57:
+    while at < n and 48 <= data[at] <= 57:
         seen = True
         if w != np.uint64(0) or data[at] != 48:  # leading zeros are not significant
             w = w * np.uint64(10) + np.uint64(data[at] - 48)
             digits += 1
         at += 1
-    if at < end and data[at] == 46:
+    if at < n and data[at] == 46:
         at += 1
-        while at < end and 48 <= data[at] <= 57:
+        while at < n and 48 <= data[at] <= 57:
             seen = True
             fraction += 1
             if w != np.uint64(0) or data[at] != 48:
@@ -530,21 +531,25 @@ def _number(data: NDArray[np.uint8], first: int, end: int, powers: NDArray[np.ui
                 digits += 1
             at += 1
     exponent = 0
-    if seen and at < end and (data[at] == 101 or data[at] == 69):
+    if seen and at < n and (data[at] == 101 or data[at] == 69):
         at += 1
         sign = 1
-        if at < end and (data[at] == 43 or data[at] == 45):
+        if at < n and (data[at] == 43 or data[at] == 45):
             sign = -1 if data[at] == 45 else 1
             at += 1
-        seen = at < end
-        while at < end and 48 <= data[at] <= 57:
+        seen = at < n and 48 <= data[at] <= 57
+        while at < n and 48 <= data[at] <= 57:
             exponent = min(exponent * 10 + data[at] - 48, 100_000)
             at += 1
         exponent *= sign
-    if not seen or at != end or digits > 19:
-        return -1
+    if at < n and classes[data[at]] == _TOKEN:  # more of the token: another spelling
+        seen = False
+        while at < n and classes[data[at]] == _TOKEN:
+            at += 1
+    if not seen or digits > 19:
+        return -1, at
     bits = 0 if w == np.uint64(0) else _decimal(w, exponent - fraction, powers)
-    return -1 if bits < 0 else bits | (_SIGN_BIT if negative else 0)  # -1: a NaN's bits, never a number's
+    return (-1 if bits < 0 else bits | (_SIGN_BIT if negative else 0)), at  # -1: a NaN's bits, never a number's
 
 
 #: byte classes of the OBJ kernel: 0 a token's, 1 space or tab, 2 LF or CR, 3 '#', 4 any other (not
@@ -593,11 +598,9 @@ def _obj_kernel(
             if i >= n or classes[data[i]] != _TOKEN:
                 break
             first = i
-            while i < n and classes[data[i]] == _TOKEN:
-                i += 1
             tokens += 1
             if kind == 1 and tokens <= 3:
-                bits = _number(data, first, i, powers)
+                bits, i = _number(data, classes, first, powers)
                 if bits == -1:
                     if n_hard < hard.shape[0]:
                         hard[n_hard, 0], hard[n_hard, 1], hard[n_hard, 2] = first, i, n_points + tokens - 1
@@ -605,7 +608,10 @@ def _obj_kernel(
                     bits = 0
                 if n_points + 3 <= points.size:
                     points[n_points + tokens - 1] = np.uint64(bits)
-            elif kind == 2:
+                continue
+            while i < n and classes[data[i]] == _TOKEN:
+                i += 1
+            if kind == 2:
                 at, negative, value = first, False, 0
                 if data[at] == 43 or data[at] == 45:
                     negative = data[at] == 45
@@ -663,9 +669,7 @@ def _floats_kernel(
         if kind != _TOKEN:
             return False, count, n_hard
         first = i
-        while i < n and classes[data[i]] == _TOKEN:
-            i += 1
-        bits = _number(data, first, i, powers)
+        bits, i = _number(data, classes, first, powers)
         if bits == -1:
             if n_hard < hard.shape[0]:
                 hard[n_hard, 0], hard[n_hard, 1], hard[n_hard, 2] = first, i, count
