@@ -596,7 +596,8 @@ def _occ_bspline(occ: SimpleNamespace, face: Any) -> _OccBSpline | None:
     return _OccBSpline(net, knots[0], knots[1], surface.UDegree(), surface.VDegree(), sign)
 
 
-def _basis_d1(knots: NDArray[np.float64], degree: int, x: NDArray[np.float64]) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+def _basis_d1(knots: NDArray[np.float64], degree: int, x: NDArray[np.float64]
+              ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
     """The ``degree + 1`` B-spline basis functions that are nonzero at each ``x`` and their first
     derivatives (Cox–de Boor, The NURBS Book A2.2/A2.3, over all x at once): the index of the
     first one (n,), values (n, p+1), derivatives (n, p+1). ``x`` is clamped into the knots' range."""
@@ -737,7 +738,8 @@ def _shape_normals(occ: SimpleNamespace, faces: Sequence[Any], face_of: NDArray[
     starts = np.flatnonzero(np.diff(face_of[order], prepend=-1))
     for n, (start, end) in enumerate(zip(starts.tolist(), [*starts[1:].tolist(), len(order)])):
         chosen = order[start:end]
-        normals[chosen] = _face_normals(occ, faces[int(face_of[chosen[0]])], uv[chosen].reshape(-1, 2)).reshape(len(chosen), -1, 3)
+        face = faces[int(face_of[chosen[0]])]
+        normals[chosen] = _face_normals(occ, face, uv[chosen].reshape(-1, 2)).reshape(len(chosen), -1, 3)
         if progress is not None and n % 256 == 0:
             progress("g1", n, len(starts))
     return normals
@@ -769,8 +771,9 @@ def _occ_g1_angles(
 
 # ----------------------------------------------------------------------------------- guards
 #: the stage export_cad enters after each lap, for a failure's message
-_NEXT_STAGE = {"split4": "measuring the deviation", "deviation": "fitting the surfaces", "fit": "making the faces", "faces": "sewing", "sew": "making solids", "solid": "checking the shape",
-               "check": "measuring G1 angles", "g1": "writing the file"}
+_NEXT_STAGE = {"split4": "measuring the deviation", "deviation": "fitting the surfaces", "fit": "making the faces",
+               "faces": "sewing", "sew": "making solids", "solid": "checking the shape", "check": "measuring G1 angles",
+               "g1": "writing the file"}
 
 
 def _raised_by_occ(error: BaseException) -> bool:
