@@ -752,6 +752,7 @@ def _obj_compiled(data: bytes) -> _Parsed | None:
         return None
     return _Parsed(vertices, _polygon_list(corners, sizes), tuple(tags))
 
+
 # -- OFF ---------------------------------------------------------------------------------------
 
 OFF_HEADERS = frozenset({"OFF", "COFF", "NOFF", "CNOFF", "STOFF", "STCOFF", "STNOFF", "STCNOFF"})
