@@ -4,12 +4,14 @@ Workload: ``shapes.large_torus(n)`` for each ``--quads`` (default 100,000 and 1,
 Gregory network built (``build_gregory_network``) once untimed (faulting its memory in), then, in
 the same run and process:
 
-* build: the median of ``--repeats`` builds of the same network;
-* check: ``check(network)`` (the numba kernels) and its ratio to the build (target ≤ 1×), wall
-  time and CPU time (both cores: CPU / wall ≈ 2 where the kernels run in parallel);
+* build: the best of ``--repeats`` builds of the same network;
+* check: the best of ``--repeats`` ``check(network)`` (the numba kernels) and its ratio to the
+  build (target ≤ 1×), wall time and CPU time (both cores: CPU / wall ≈ 2 where the kernels run in parallel);
 * folded_patches: ``folded_patches(patches, 9)``, the guard's call, per patch and against the build;
 * the NumPy reference (``compiled=False``) of both, unless ``--no-reference`` (at 1 M quads the
-  reference check takes minutes: ``--reference-max`` quads, default 100,000).
+  reference check takes minutes: ``--reference-max`` quads, default 100,000);
+* peak memory of one more (untimed) build and check: the largest NumPy memory traced
+  (``tracemalloc``; the kernels' per-thread scratch is a few hundred KB and not traced), in MB.
 
 Before anything is timed: the one-time compile cost of the check kernels from an empty cache (a
 subprocess with its own ``NUMBA_CACHE_DIR``), then one small check in process (loading the cached
@@ -24,8 +26,8 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import time
+import tracemalloc
 from collections.abc import Callable
 from typing import TypeVar
 
@@ -56,6 +58,16 @@ def timed(run: Callable[[], T]) -> tuple[T, float, float]:
     wall, cpu = time.perf_counter(), time.process_time()
     result = run()
     return result, time.perf_counter() - wall, time.process_time() - cpu
+
+
+def peak_mb(run: Callable[[], object]) -> float:
+    """The peak of the memory traced by ``tracemalloc`` (NumPy arrays included) while ``run()`` runs, in MB."""
+    tracemalloc.start()
+    try:
+        run()
+        return tracemalloc.get_traced_memory()[1] / 1e6
+    finally:
+        tracemalloc.stop()
 
 
 def compile_seconds() -> float | None:
@@ -93,9 +105,8 @@ def main() -> None:
     for quads in args.quads:
         mesh = shapes.large_torus(quads)
         network = build_gregory_network(mesh)
-        builds = [timed(lambda: build_gregory_network(mesh))[1] for _ in range(args.repeats)]
-        build = statistics.median(builds)
-        report, check_wall, check_cpu = timed(lambda: check(network))
+        build = min(timed(lambda: build_gregory_network(mesh))[1] for _ in range(args.repeats))
+        report, check_wall, check_cpu = min((timed(lambda: check(network)) for _ in range(args.repeats)), key=lambda run: run[1])
         _, fold_wall, fold_cpu = timed(lambda: folded_patches(network.patches, 9))
         row = {"quads": quads, "patches": len(network.patches), "build": build, "check": check_wall, "check_cpu": check_cpu,
                "fold": fold_wall, "fold_cpu": fold_cpu, "g1": report.max_edge_angle_deg, "folds": report.folds}
@@ -103,10 +114,12 @@ def main() -> None:
             reference, row["check_ref"], _ = timed(lambda: check(network, compiled=False))
             _, row["fold_ref"], _ = timed(lambda: folded_patches(network.patches, 9, compiled=False))
             row["same"] = (reference.folds, reference.degenerate_normals, reference.turn_max_deg) == (report.folds, report.degenerate_normals, report.turn_max_deg)
+        row["build_mb"], row["check_mb"] = peak_mb(lambda: build_gregory_network(mesh)), peak_mb(lambda: check(network))
         rows.append(row)
 
     print(f"\nload average {' '.join(f'{x:.2f}' for x in os.getloadavg())}, {os.cpu_count()} cores")
-    print(f"{'quads':>9} {'build s':>8} {'check s':>8} {'/build':>7} {'cpu/wall':>8} {'fold9 s':>8} {'µs/patch':>8} {'/build':>7}"
+    print(f"{'quads':>9} {'build s':>8} {'check s':>8} {'/build':>7} {'cpu/wall':>8} {'build MB':>9} {'check MB':>9}"
+          f" {'fold9 s':>8} {'µs/patch':>8} {'/build':>7}"
           f" {'ref check':>10} {'/build':>7} {'ref fold9':>10} {'speed-up':>8} {'same':>5}")
     for row in rows:
         reference = ""
@@ -114,7 +127,7 @@ def main() -> None:
             reference = (f" {row['check_ref']:10.2f} {row['check_ref'] / row['build']:7.2f} {row['fold_ref']:10.3f}"
                          f" {row['fold_ref'] / row['fold']:8.1f} {row['same']!s:>5}")
         print(f"{row['quads']:9d} {row['build']:8.2f} {row['check']:8.2f} {row['check'] / row['build']:7.2f}"
-              f" {row['check_cpu'] / row['check']:8.2f} {row['fold']:8.3f} {row['fold'] / row['patches'] * 1e6:8.2f}"
+              f" {row['check_cpu'] / row['check']:8.2f} {row['build_mb']:9.0f} {row['check_mb']:9.0f} {row['fold']:8.3f} {row['fold'] / row['patches'] * 1e6:8.2f}"
               f" {row['fold'] / row['build']:7.3f}{reference}")
 
 

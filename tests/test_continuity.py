@@ -162,3 +162,17 @@ def test_angle_between_broadcasts_and_keeps_the_batch_shape() -> None:
     np.testing.assert_array_equal(angles[2], angle_between(a[2], b))
     assert angle_between(np.array([1.0, 0, 0]), np.array([0, 2.0, 0])).shape == ()
     assert float(angle_between(np.array([1.0, 0, 0]), np.array([0, 2.0, 0]))) == 90.0
+
+
+def test_corner_points_and_world_diagonal_as_the_evaluation() -> None:
+    """The check reads a Gregory patch's corners from its points 0–3 and maps them to world for the
+    reported diagonal: bit for bit the evaluation at the corners and the network's own diagonal."""
+    from g1patch.build import build_gregory_network
+    from g1patch.continuity import _corner_points, _world_diagonal
+    from g1patch.patches import CORNER_PARAMETERS
+
+    network = build_gregory_network(shapes.noisy_sphere(2, 0.3))
+    local = network.patches.local()
+    assert network.patches.frame is not None  # the world map is exercised
+    np.testing.assert_array_equal(_corner_points(local), local.evaluate(CORNER_PARAMETERS))
+    assert _world_diagonal(network, _corner_points(local)) == network.bounding_box_diagonal()

@@ -339,7 +339,7 @@ def check(
         network = as_network(network, "network")
     patches = network.patches
     local = _local(patches)
-    corners = local.evaluate(CORNER_PARAMETERS)
+    corners = _corner_points(local)
     diagonal = _diagonal(corners) or 1.0
     degenerate_level = degenerate_rtol * diagonal**2
 
@@ -413,7 +413,7 @@ def check(
         degenerate_normals=grid.degenerate,
         folds=int(folded.sum()),
         inconsistent_orientation_edges=int(same.sum()),
-        bounding_box_diagonal=float(diagonal if local is patches else network.bounding_box_diagonal()),
+        bounding_box_diagonal=float(diagonal if local is patches else _world_diagonal(network, corners)),
         max_vertex_deviation=max_vertex_deviation,
         fold_samples=fold_samples,
         fold_locations=tuple(locations),
@@ -464,7 +464,7 @@ def _grid_measures(
     in local coordinates, and the bounding-box diagonal."""
     _check_count("samples", samples, 2)
     local = _local(patches)
-    diagonal = _diagonal(local.evaluate(CORNER_PARAMETERS)) or 1.0
+    diagonal = _diagonal(_corner_points(local)) or 1.0
     grid = _GridMeasures(len(local), samples, degenerate_rtol * diagonal**2, fairness)
     form = _evaluation_form(local) if _kernels_wanted(compiled, len(local)) else None
     if form is not None:
@@ -522,9 +522,30 @@ def _local(patches: Patches) -> Patches:
 
 
 def _diagonal(points: NDArray[np.float64]) -> float:
-    """Length of the diagonal of the bounding box of ``points`` (..., 3)."""
+    """Length of the diagonal of the bounding box of ``points`` (..., 3) (each coordinate's extremes
+    over its strided column: NumPy reduces ``axis=0`` of ``(M, 3)`` 3 values at a time, 20× slower)."""
     flat = points.reshape(-1, 3)
-    return float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0))) if len(flat) else 0.0
+    if not len(flat):
+        return 0.0
+    extent = np.array([flat[:, d].max() - flat[:, d].min() for d in range(3)])
+    return float(np.linalg.norm(extent))
+
+
+def _corner_points(patches: Patches) -> NDArray[np.float64]:
+    """``patches.evaluate(CORNER_PARAMETERS)``, ``(N, 4, 3)``: a Gregory patch's corners are its
+    points 0–3 (weights 1 and 0, so the evaluation returns them exactly)."""
+    if isinstance(patches, GregoryPatchSet) and patches.frame is None:
+        return np.ascontiguousarray(patches.points[:, :4])
+    return patches.evaluate(CORNER_PARAMETERS)
+
+
+def _world_diagonal(network: PatchNetwork, corners: NDArray[np.float64]) -> float:
+    """:meth:`PatchNetwork.bounding_box_diagonal` from the local ``corners`` of its patches (the same
+    ``c + s x`` that the patches' world evaluation applies)."""
+    patches = network.patches
+    if isinstance(patches, GregoryPatchSet) and patches.frame is not None:
+        return _diagonal(patches.frame.to_world(corners))
+    return network.bounding_box_diagonal()
 
 
 def _blocks(count: int, size: int) -> list[slice]:
@@ -793,7 +814,7 @@ class _GridMeasures:
             return
         self.histogram += histogram.sum(axis=0)
         if form == "gregory":
-            self._exact_turns(points, best, block)
+            self._exact_turns(points, best)
         blocks = -(-count // block)
         padded = np.full((blocks * block, 4), -1.0)
         padded[:count] = best
@@ -806,20 +827,19 @@ class _GridMeasures:
         angle = np.where(use_v, along_v[:, 1], along_u[:, 1])[chord2 > -1.0]
         self.max_turn_deg = max(self.max_turn_deg, float(angle.max(initial=0.0)))
 
-    def _exact_turns(self, points: NDArray[np.float64], best: NDArray[np.float64], block: int) -> None:
+    def _exact_turns(self, points: NDArray[np.float64], best: NDArray[np.float64]) -> None:
         """Replace the largest chords of Gregory patches (tensor sums in the kernel) by the
-        reference's (:func:`_turn_kernel`) where a patch's could be the largest of its block: its
-        chord ``√chord²`` within :data:`_TURN_CANDIDATE_ATOL` of the block's largest (the two
-        evaluations' chords differ by rounding, ~1e-15); the other patches' are set to −1 (they
-        are smaller than the block's largest either way)."""
-        count = len(points)
-        blocks = -(-count // block)
-        padded = np.full(blocks * block, -1.0)
+        reference's (:func:`_turn_kernel`) where a patch's could decide the maximum turn: its chord
+        ``√chord²`` within :data:`_TURN_CANDIDATE_ATOL` of the largest of all patches (the two
+        evaluations' chords differ by rounding, ~1e-15). The other patches' are set to −1: their
+        blocks' pairs turn less than the largest either way, and a patch that wins its block
+        among the candidates is its block's winner whenever that block can hold the maximum. (A
+        threshold per block, as before, recomputed nearly every patch of a regular mesh, whose
+        patches tie within rounding: 29 s of a 1 M-patch check.)"""
+        largest = np.sqrt(max(float(best[:, [0, 2]].max(initial=0.0)), 0.0))
         for axis in (0, 1):
-            padded[:count] = best[:, 2 * axis]
-            largest = np.repeat(padded.reshape(blocks, block).max(axis=1), block)[:count]
             chord = np.sqrt(np.maximum(best[:, 2 * axis], 0.0))
-            candidate = (best[:, 2 * axis] > -1.0) & (chord >= np.sqrt(np.maximum(largest, 0.0)) - _TURN_CANDIDATE_ATOL)
+            candidate = (best[:, 2 * axis] > -1.0) & (chord >= largest - _TURN_CANDIDATE_ATOL)
             patches = np.flatnonzero(candidate)
             chord2, angle = np.empty(len(patches)), np.empty(len(patches))
             if len(patches):
@@ -907,7 +927,7 @@ prange = range  # numba.prange once a kernel is compiled
 
 #: patches the grid kernel measures side by side, its vector lanes (a run-time argument: a
 #: constant trip count is unrolled before the loop vectoriser sees it, and left scalar)
-_LANES = 8
+_LANES = 16
 
 #: functions the kernels call, compiled (and rebound) with the first kernel
 _KERNEL_HELPERS = ("_pair_angle", "_hull_corners")
@@ -1245,154 +1265,193 @@ def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDAr
                  degenerate: NDArray[np.int64], histogram: NDArray[np.int64], best: NDArray[np.float64],
                  energy: NDArray[np.float64]) -> None:
     """:meth:`_GridMeasures.add` for ``lanes`` patches at a time (the lanes, last axis of
-    every scratch array, so the arithmetic vectorises across patches), their grids in the cache:
+    every scratch array, so the arithmetic vectorises across patches), row by row of their grids:
     tangents (fused multiply-adds: one u contraction of the net per row, 4 products and 4 blends
-    per point), normals, the corner-cell and 90° tests (``location``: the first offending sample
-    ``G i + j``, −1 if none), degenerate normals and, if ``fairness``, the histogram of the turns
-    (a row per chunk), the thin-plate energy, and per axis (u, v) the first largest squared chord
-    with the angle of its pair (``best (N, 4)``: chord², angle, chord², angle; chord² −1 without
-    pairs). Samples are flat, ``s = G i + j``."""
+    per point; rows a − 1 and a kept), normals (the whole grid), the corner-cell and 90° tests
+    (``location``: the first offending sample ``G i + j``, −1 if none), degenerate normals and, if
+    ``fairness``, the histogram of the turns (a row per chunk), the thin-plate energy, and per axis
+    (u, v) the first largest squared chord with the angle of its pair (``best (N, 4)``: chord²,
+    angle, chord², angle; chord² −1 without pairs). Each inner loop stores to one array and indexes
+    it by loop variables only: LLVM vectorises such loops (several stores, or computed indices
+    whose sign it cannot prove, left the previous kernel scalar: 2× slower). Outputs are bitwise
+    those of the sample-major formulation (same operations in the same order per value)."""
     patches, g, blends, bins = points.shape[0], bu.shape[0], fn.size, histogram.shape[1]
-    gg, last = g * g, g - 1
+    last, gl, run = g - 1, g * lanes, (g - 1) * lanes
     groups = (patches + lanes - 1) // lanes
     for chunk in prange(chunks):
-        tangent, normal, unit = np.empty((6, gg, lanes)), np.empty((3, gg, lanes)), np.empty((3, gg, lanes))
-        usable, offending = np.empty((gg, lanes), dtype=np.bool_), np.empty((gg, lanes), dtype=np.bool_)
-        narrow, paired = np.empty(lanes, dtype=np.float32), np.empty(lanes, dtype=np.bool_)
-        top, top_at = np.empty(lanes), np.empty(lanes, dtype=np.int64)
         net, blend = np.zeros((3, 16, lanes)), np.zeros((3, 4, lanes))
         row_u, row_v = np.empty((4, lanes)), np.empty((4, lanes))
-        column, row, total = np.empty((g, lanes)), np.empty(lanes), np.empty(lanes)
+        tu, tv = np.empty((2, 3, gl)), np.empty((2, 3, gl))  # p_u, p_v of rows a − 1, a (by parity), [row, xyz, g b + lane]
+        tu4, tv4 = tu.reshape((2, 3, g, lanes)), tv.reshape((2, 3, g, lanes))
+        tu_ahead, tv_ahead = tu[:, :, lanes:], tv[:, :, lanes:]  # the sample at b + 1
+        normal, usable, offending = np.empty((3, g, gl)), np.empty((g, gl), dtype=np.bool_), np.empty((g, gl), dtype=np.bool_)
+        unit = np.empty((2, 3, gl))
+        unit_ahead, usable_ahead = unit[:, :, lanes:], usable[:, lanes:]
+        length, inverse, chord, together = np.empty(gl), np.empty(gl), np.empty(gl), np.empty(gl, dtype=np.bool_)
+        chord2, together2 = chord.reshape((g, lanes)), together.reshape((g, lanes))
+        narrow, code = np.empty(gl, dtype=np.float32), np.empty(gl, dtype=np.int64)
+        code2, bits = code.reshape((g, lanes)), narrow.view(np.int32)
+        row_top, row_at = np.empty(lanes), np.empty(lanes, dtype=np.int64)
+        top, top_at = np.empty((2, lanes)), np.empty((2, lanes), dtype=np.int64)
+        along_u, along_v = np.empty((2, gl)), np.empty((2, g, lanes))
         pair = np.empty((2, 3))
-        code = narrow.view(np.int32)
         for group in range(chunk * groups // chunks, (chunk + 1) * groups // chunks):
             first = group * lanes
             count = min(lanes, patches - first)
-            for d in range(3):
-                for lane in range(count):
+            for lane in range(count):
+                for d in range(3):
                     for m in range(16):
                         net[d, m, lane] = points[first + lane, index[m], d]
                     for k in range(blends):
                         blend[d, k, lane] = points[first + lane, fn[k], d] - points[first + lane, fp[k], d]
-            for d in range(3):
-                c, e = net[d], blend[d]
-                for a in range(g):
+            top[:] = -1.0
+            top_at[:] = -1
+            along_u[:] = 0.0
+            lost = 0
+            for a in range(g):
+                r, p = a & 1, 1 - (a & 1)
+                for d in range(3):  # tangents: the u contraction of the net, then 4 products and 4 blends a point
                     w0, w1, w2, w3 = dbu[a, 0], dbu[a, 1], dbu[a, 2], dbu[a, 3]
                     x0, x1, x2, x3 = bu[a, 0], bu[a, 1], bu[a, 2], bu[a, 3]
                     for j in range(4):
                         for lane in range(lanes):
-                            row_u[j, lane] = _fma(w3, c[12 + j, lane], _fma(w2, c[8 + j, lane], _fma(w1, c[4 + j, lane], w0 * c[j, lane])))
-                            row_v[j, lane] = _fma(x3, c[12 + j, lane], _fma(x2, c[8 + j, lane], _fma(x1, c[4 + j, lane], x0 * c[j, lane])))
+                            row_u[j, lane] = _fma(w3, net[d, 12 + j, lane], _fma(w2, net[d, 8 + j, lane], _fma(w1, net[d, 4 + j, lane], w0 * net[d, j, lane])))
+                        for lane in range(lanes):
+                            row_v[j, lane] = _fma(x3, net[d, 12 + j, lane], _fma(x2, net[d, 8 + j, lane], _fma(x1, net[d, 4 + j, lane], x0 * net[d, j, lane])))
                     for b in range(g):
-                        out_u, out_v = tangent[d, a * g + b], tangent[3 + d, a * g + b]
                         y0, y1, y2, y3 = bv[0, b], bv[1, b], bv[2, b], bv[3, b]
                         z0, z1, z2, z3 = dbv[0, b], dbv[1, b], dbv[2, b], dbv[3, b]
-                        for lane in range(lanes):
-                            out_u[lane] = _fma(row_u[3, lane], y3, _fma(row_u[2, lane], y2, _fma(row_u[1, lane], y1, row_u[0, lane] * y0)))
-                            out_v[lane] = _fma(row_v[3, lane], z3, _fma(row_v[2, lane], z2, _fma(row_v[1, lane], z1, row_v[0, lane] * z0)))
                         if blends:
                             s0, s1, s2, s3 = su[0, a, b], su[1, a, b], su[2, a, b], su[3, a, b]
                             t0, t1, t2, t3 = sv[0, a, b], sv[1, a, b], sv[2, a, b], sv[3, a, b]
                             for lane in range(lanes):
-                                out_u[lane] = _fma(s3, e[3, lane], _fma(s2, e[2, lane], _fma(s1, e[1, lane], _fma(s0, e[0, lane], out_u[lane]))))
-                                out_v[lane] = _fma(t3, e[3, lane], _fma(t2, e[2, lane], _fma(t1, e[1, lane], _fma(t0, e[0, lane], out_v[lane]))))
-            for s in range(gg):
-                pu0, pu1, pu2, pv0, pv1, pv2 = tangent[0, s], tangent[1, s], tangent[2, s], tangent[3, s], tangent[4, s], tangent[5, s]
-                n0, n1, n2, h0, h1, h2 = normal[0, s], normal[1, s], normal[2, s], unit[0, s], unit[1, s], unit[2, s]
-                ok, bad = usable[s], offending[s]
-                for lane in range(lanes):
-                    x = pu1[lane] * pv2[lane] - pu2[lane] * pv1[lane]
-                    y = pu2[lane] * pv0[lane] - pu0[lane] * pv2[lane]
-                    z = pu0[lane] * pv1[lane] - pu1[lane] * pv0[lane]
-                    length = np.sqrt((x * x + y * y) + z * z)
-                    inverse = 1.0 / max(length, _TINY)
-                    n0[lane], n1[lane], n2[lane] = x, y, z
-                    h0[lane], h1[lane], h2[lane] = x * inverse, y * inverse, z * inverse
-                    ok[lane] = length > level
-                    bad[lane] = False
+                                value = _fma(row_u[3, lane], y3, _fma(row_u[2, lane], y2, _fma(row_u[1, lane], y1, row_u[0, lane] * y0)))
+                                tu4[r, d, b, lane] = _fma(s3, blend[d, 3, lane], _fma(s2, blend[d, 2, lane], _fma(s1, blend[d, 1, lane], _fma(s0, blend[d, 0, lane], value))))
+                            for lane in range(lanes):
+                                value = _fma(row_v[3, lane], z3, _fma(row_v[2, lane], z2, _fma(row_v[1, lane], z1, row_v[0, lane] * z0)))
+                                tv4[r, d, b, lane] = _fma(t3, blend[d, 3, lane], _fma(t2, blend[d, 2, lane], _fma(t1, blend[d, 1, lane], _fma(t0, blend[d, 0, lane], value))))
+                        else:
+                            for lane in range(lanes):
+                                tu4[r, d, b, lane] = _fma(row_u[3, lane], y3, _fma(row_u[2, lane], y2, _fma(row_u[1, lane], y1, row_u[0, lane] * y0)))
+                            for lane in range(lanes):
+                                tv4[r, d, b, lane] = _fma(row_v[3, lane], z3, _fma(row_v[2, lane], z2, _fma(row_v[1, lane], z1, row_v[0, lane] * z0)))
+                # normals, unit normals, usable (one store per loop, so that each loop vectorises)
+                for s in range(gl):
+                    normal[0, a, s] = tu[r, 1, s] * tv[r, 2, s] - tu[r, 2, s] * tv[r, 1, s]
+                for s in range(gl):
+                    normal[1, a, s] = tu[r, 2, s] * tv[r, 0, s] - tu[r, 0, s] * tv[r, 2, s]
+                for s in range(gl):
+                    normal[2, a, s] = tu[r, 0, s] * tv[r, 1, s] - tu[r, 1, s] * tv[r, 0, s]
+                for s in range(gl):
+                    length[s] = np.sqrt((normal[0, a, s] * normal[0, a, s] + normal[1, a, s] * normal[1, a, s]) + normal[2, a, s] * normal[2, a, s])
+                for s in range(gl):
+                    inverse[s] = 1.0 / max(length[s], _TINY)
+                for d in range(3):
+                    for s in range(gl):
+                        unit[r, d, s] = normal[d, a, s] * inverse[s]
+                for s in range(gl):
+                    usable[a, s] = length[s] > level
+                offending[a, :] = False
+                for b in range(g):
+                    for lane in range(count):
+                        lost += 0 if usable[a, b * lanes + lane] else 1
+                for axis in range(2):  # neighbours along u: (a − 1, b), (a, b); along v: (a, b), (a, b + 1)
+                    if axis == 0 and a == 0:
+                        continue
+                    behind, span = (a - 1, gl) if axis == 0 else (a, run)
+                    if axis == 0:
+                        for s in range(gl):
+                            c0, c1, c2 = unit[r, 0, s] - unit[p, 0, s], unit[r, 1, s] - unit[p, 1, s], unit[r, 2, s] - unit[p, 2, s]
+                            chord[s] = (c0 * c0 + c2 * c2) + c1 * c1  # |n̂_a − n̂_b|² = 4 sin²(θ/2): > 2 where θ > 90°
+                        for s in range(gl):
+                            together[s] = usable[a - 1, s] & usable[a, s]
+                    else:
+                        for s in range(run):
+                            c0, c1, c2 = unit_ahead[r, 0, s] - unit[r, 0, s], unit_ahead[r, 1, s] - unit[r, 1, s], unit_ahead[r, 2, s] - unit[r, 2, s]
+                            chord[s] = (c0 * c0 + c2 * c2) + c1 * c1
+                        for s in range(run):
+                            together[s] = usable[a, s] & usable_ahead[a, s]
+                    for s in range(span):
+                        offending[behind, s] = offending[behind, s] | (together[s] & (chord[s] > 2.0))
+                    if not fairness:
+                        continue
+                    row_top[:] = -1.0
+                    row_at[:] = -1
+                    for b in range(span // lanes):  # the first largest chord of the row, per lane
+                        for lane in range(lanes):
+                            better = together2[b, lane] & (chord2[b, lane] > row_top[lane])
+                            row_top[lane] = chord2[b, lane] if better else row_top[lane]
+                    for b in range(span // lanes):
+                        for lane in range(lanes):
+                            better = together2[b, lane] & (chord2[b, lane] == row_top[lane]) & (row_at[lane] < 0)
+                            row_at[lane] = b if better else row_at[lane]
+                    for lane in range(lanes):
+                        if row_top[lane] > top[axis, lane]:
+                            top[axis, lane], top_at[axis, lane] = row_top[lane], behind * g + row_at[lane]
+                    for s in range(span):
+                        narrow[s] = chord[s]
+                    for s in range(span):
+                        code[s] = min(max((bits[s] >> _SHIFT) - (code_min - 1), 0), bins - 1)
+                    for b in range(span // lanes):
+                        for lane in range(count):
+                            if together2[b, lane]:
+                                histogram[chunk, code2[b, lane]] += 1
+                if not fairness:
+                    continue
+                for plane in range(2):  # thin plate: squared differences of p_u, p_v along u (per column), along v (per row)
+                    t, ahead = (tu, tu_ahead) if plane == 0 else (tv, tv_ahead)
+                    if a > 0:
+                        for s in range(gl):
+                            c0, c1, c2 = t[r, 0, s] - t[p, 0, s], t[r, 1, s] - t[p, 1, s], t[r, 2, s] - t[p, 2, s]
+                            along_u[plane, s] += (c0 * c0 + c2 * c2) + c1 * c1
+                    for s in range(run):
+                        c0, c1, c2 = ahead[r, 0, s] - t[r, 0, s], ahead[r, 1, s] - t[r, 1, s], ahead[r, 2, s] - t[r, 2, s]
+                        chord[s] = (c0 * c0 + c2 * c2) + c1 * c1
+                    along_v[plane, a, :] = 0.0
+                    for b in range(last):
+                        for lane in range(lanes):
+                            along_v[plane, a, lane] += chord2[b, lane]
+            degenerate[chunk] += lost
             for lane in range(count):
-                lost = 0
-                for s in range(gg):
-                    lost += 0 if usable[s, lane] else 1
-                degenerate[chunk] += lost
                 for corner in range(4):  # the corner's grid cell: a patch turned over at its corner
                     cu = 0 if corner == 0 or corner == 3 else last
                     cv = 0 if corner < 2 else last
-                    o = cu * g + cv
-                    if not usable[o, lane]:
+                    o = cv * lanes + lane
+                    if not usable[cu, o]:
                         continue
-                    step_u, step_v = (g if cu == 0 else -g), (1 if cv == 0 else -1)
+                    step_u, step_v = (1 if cu == 0 else -1), (lanes if cv == 0 else -lanes)
                     for cell in range(3):
-                        s = o + (0 if cell == 1 else step_u) + (0 if cell == 0 else step_v)
-                        dot = (normal[0, s, lane] * normal[0, o, lane] + normal[2, s, lane] * normal[2, o, lane]) + normal[1, s, lane] * normal[1, o, lane]
-                        if usable[s, lane] and dot < 0.0:
-                            offending[s, lane] = True
-            for axis in range(2):  # neighbours along u (s, s + G), along v (s, s + 1)
-                step = g if axis == 0 else 1
-                top[:] = -1.0
-                top_at[:] = -1
-                for a in range(g - 1 + axis):
-                    for b in range(g - axis):
-                        s = a * g + b
-                        ahead = s + step
-                        for lane in range(lanes):
-                            c0 = unit[0, ahead, lane] - unit[0, s, lane]
-                            c1 = unit[1, ahead, lane] - unit[1, s, lane]
-                            c2 = unit[2, ahead, lane] - unit[2, s, lane]
-                            value = (c0 * c0 + c2 * c2) + c1 * c1  # |n̂_a − n̂_b|² = 4 sin²(θ/2): > 2 where θ > 90°
-                            together = usable[s, lane] & usable[ahead, lane]
-                            offending[s, lane] = offending[s, lane] | (together & (value > 2.0))
-                            paired[lane] = together
-                            narrow[lane] = value
-                            better = together & (value > top[lane])
-                            top[lane] = value if better else top[lane]
-                            top_at[lane] = s if better else top_at[lane]
-                        if fairness:
-                            for lane in range(count):
-                                if paired[lane]:
-                                    histogram[chunk, min(max((code[lane] >> _SHIFT) - (code_min - 1), 0), bins - 1)] += 1
-                if fairness:
-                    for lane in range(count):
-                        n, s = first + lane, top_at[lane]
-                        best[n, 2 * axis], best[n, 2 * axis + 1] = top[lane], 0.0
-                        if s >= 0:
-                            for d in range(3):
-                                pair[0, d], pair[1, d] = normal[d, s, lane], normal[d, s + step, lane]
-                            best[n, 2 * axis + 1] = _pair_angle(pair[0], pair[1], True)
-            for lane in range(count):
+                        i, s = cu + (0 if cell == 1 else step_u), o + (0 if cell == 0 else step_v)
+                        dot = (normal[0, i, s] * normal[0, cu, o] + normal[2, i, s] * normal[2, cu, o]) + normal[1, i, s] * normal[1, cu, o]
+                        if usable[i, s] and dot < 0.0:
+                            offending[i, s] = True
                 location[first + lane] = -1
-                for s in range(gg):
-                    if offending[s, lane]:
-                        location[first + lane] = s
+                for i in range(g * g):
+                    if offending[i // g, (i % g) * lanes + lane]:
+                        location[first + lane] = i
                         break
             if not fairness:
                 continue
-            total[:] = 0.0
-            for plane in range(2):
-                q0, q1, q2 = tangent[3 * plane], tangent[3 * plane + 1], tangent[3 * plane + 2]
-                column[:] = 0.0  # along u: Σ_i per column j, then the trapezoid weights
-                for a in range(last):
-                    for b in range(g):
-                        s = a * g + b
-                        for lane in range(lanes):
-                            c0, c1, c2 = q0[s + g, lane] - q0[s, lane], q1[s + g, lane] - q1[s, lane], q2[s + g, lane] - q2[s, lane]
-                            column[b, lane] += (c0 * c0 + c2 * c2) + c1 * c1
-                row[:] = 0.0
-                for b in range(g):
-                    for lane in range(lanes):
-                        row[lane] += weights[b] * column[b, lane]
-                total += row
-                column[:] = 0.0  # along v: Σ_j per row i
-                for a in range(g):
-                    for b in range(last):
-                        s = a * g + b
-                        for lane in range(lanes):
-                            c0, c1, c2 = q0[s + 1, lane] - q0[s, lane], q1[s + 1, lane] - q1[s, lane], q2[s + 1, lane] - q2[s, lane]
-                            column[a, lane] += (c0 * c0 + c2 * c2) + c1 * c1
-                row[:] = 0.0
-                for a in range(g):
-                    for lane in range(lanes):
-                        row[lane] += weights[a] * column[a, lane]
-                total += row
             for lane in range(count):
-                energy[first + lane] = total[lane]
+                n = first + lane
+                for axis in range(2):
+                    best[n, 2 * axis], best[n, 2 * axis + 1] = top[axis, lane], 0.0
+                    s = top_at[axis, lane]
+                    if s >= 0:
+                        i, j = s // g, s % g
+                        k, l = (i + 1, j) if axis == 0 else (i, j + 1)
+                        for d in range(3):
+                            pair[0, d], pair[1, d] = normal[d, i, j * lanes + lane], normal[d, k, l * lanes + lane]
+                        best[n, 2 * axis + 1] = _pair_angle(pair[0], pair[1], True)
+            for lane in range(count):
+                total = 0.0
+                for plane in range(2):
+                    row = 0.0
+                    for b in range(g):
+                        row += weights[b] * along_u[plane, b * lanes + lane]
+                    total += row
+                    row = 0.0
+                    for a in range(g):
+                        row += weights[a] * along_v[plane, a, lane]
+                    total += row
+                energy[first + lane] = total
