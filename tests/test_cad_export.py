@@ -197,7 +197,7 @@ def test_export_prints_the_figures_and_json_gives_the_same(tmp_path: Path, capsy
     assert f"wrote 6 exact B-spline faces of the split4 re-assembly (exact G1), a closed solid, " in text
     assert f"{figures['file_bytes'] / 1e3:.3g} kB" in text
     assert f"{figures['deviation']:.3e} ({figures['relative_deviation']:.2e} of the bbox diagonal" in text
-    assert f"measured by OpenCASCADE: {figures['max_g1_angle_deg']:.3e}°" in text
+    assert f"measured on OpenCASCADE's surfaces: {figures['max_g1_angle_deg']:.3e}°" in text
     save_network(tmp_path / "corner.npz", build_corner_network(shapes.cube()))
     assert main(["export", str(tmp_path / "corner.npz"), "-o", str(tmp_path / "c.step"), "-q"]) == 0
     assert "G1 at its corners only (method corner): its edges kink by design" in capsys.readouterr().out

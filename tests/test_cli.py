@@ -91,7 +91,7 @@ def test_step_export_reports_its_accuracy(tmp_path: Path, cube_obj: Path) -> Non
         result = g1patch("export", network, "-o", tmp_path / f"{method}.step")
         assert result.returncode == 0, result.stderr
         assert kind in result.stdout and "max deviation from the network's surface" in result.stdout
-        assert "closed solid" in result.stdout and "measured by OpenCASCADE" in result.stdout
+        assert "closed solid" in result.stdout and "measured on OpenCASCADE's surfaces" in result.stdout
 
 
 @pytest.mark.parametrize("mode", [(), ("--zebra",), ("--deviation",)])

@@ -379,7 +379,7 @@ def _cad_export_text(result: Any, corner_only: bool) -> str:
     if result.method_note:
         lines.append(result.method_note)
     if result.g1_measured:
-        lines.append(f"max G1 angle across shared edges, measured by OpenCASCADE: {result.max_g1_angle_deg:.3e}°")
+        lines.append(f"max G1 angle across shared edges, measured on OpenCASCADE's surfaces: {result.max_g1_angle_deg:.3e}°")
     else:
         lines.append(f"G1 angle across shared edges: {result.g1_note}")
     if corner_only:

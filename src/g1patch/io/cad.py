@@ -1260,7 +1260,7 @@ def export_cad(
                 compact_step(temporary, nets, STEP_MATCH_RTOL * max(diagonal, max(float(np.abs(net).max()) for net in nets)))
             file_bytes = temporary.stat().st_size
         lap("write")
-    note = ("measured by OpenCASCADE on the written shape" if smooth.size else
+    note = ("measured on the surfaces OpenCASCADE holds (its poles and knots, each face checked against its own evaluator)" if smooth.size else
             "not measured: g1_samples=0" if not g1_samples else "not measured: no shared edges but seams")
     return ExportResult(
         path=target,
