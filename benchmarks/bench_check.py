@@ -47,8 +47,8 @@ from g1patch.build import build_gregory_network
 from g1patch.continuity import check, folded_patches
 network = build_gregory_network(shapes.torus(6, 4))
 built = time.perf_counter()
-check(network)
-folded_patches(network.patches)
+check(network, compiled=True)
+folded_patches(network.patches, compiled=True)
 print(time.perf_counter() - built)
 """
 
@@ -98,7 +98,7 @@ def main() -> None:
         seconds = compile_seconds()
         print(f"compile (empty cache, subprocess): {'failed' if seconds is None else f'{seconds:.1f} s'}")
     small = build_gregory_network(shapes.torus(6, 4))
-    _, load, _ = timed(lambda: (check(small), folded_patches(small.patches)))
+    _, load, _ = timed(lambda: (check(small, compiled=True), folded_patches(small.patches, compiled=True)))
     print(f"load cached kernels (in process): {load:.2f} s; huge-page advice {'on' if args.huge_pages else 'off'}")
 
     rows = []
