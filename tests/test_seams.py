@@ -44,6 +44,11 @@ def flat_patches(mesh: QuadMesh) -> PatchSet:
     return PatchSet(bilinear_nets(mesh.vertices[mesh.faces]), "bezier")
 
 
+#: a seam's G0 gap where both sides share the curve exactly, of the diagonal: 4 ε (the same cubic
+#: evaluated from its two ends rounds differently; 0.07 ε measured)
+SEAM_ROUNDING = 4 * np.finfo(float).eps
+
+
 def seamed_cube(shift: float = 0.0) -> PatchNetwork:
     """The cube [-1, 1]³ as 6 flat bicubic patches, all 12 edges seams; face 0 moved out by ``shift``."""
     mesh = shapes.cube()
@@ -157,7 +162,8 @@ def test_the_seamed_cube_passes_with_12_seams_at_90_degrees() -> None:
     assert report.seam_edges == 12 and report.shared_edges == 12
     assert report.seam_angle_min_deg == pytest.approx(90.0, abs=1e-12)
     assert report.seam_angle_max_deg == pytest.approx(90.0, abs=1e-12)
-    assert report.seam_g0_max == 0.0 and report.max_g0_gap == 0.0
+    # both sides evaluate the same cubic, from opposite ends: its Bernstein weights round apart
+    assert report.seam_g0_max <= SEAM_ROUNDING and report.max_g0_gap <= SEAM_ROUNDING
     assert report.max_edge_angle_deg == 0.0 and report.mean_edge_angle_deg == 0.0
     assert report.max_corner_angle_deg == 0.0  # three sectors of one patch at every cube corner
     assert report.folds == 0 and report.worst_edge is None
@@ -175,9 +181,9 @@ def test_seams_in_the_text_and_json_report() -> None:
     rows = dict(report.rows())
     assert rows["seams (sharp on purpose)"] == "12"
     assert rows["seam angle min / max"] == "90° / 90°"
-    assert rows["seam max G0 gap (of bbox diag)"] == "0.000e+00"
+    assert float(rows["seam max G0 gap (of bbox diag)"]) <= SEAM_ROUNDING
     data = json.loads(json.dumps(report.to_dict()))
-    assert data["seams"]["count"] == 12 and data["seams"]["g0_max"] == 0.0
+    assert data["seams"]["count"] == 12 and data["seams"]["g0_max"] <= SEAM_ROUNDING
     assert data["seams"]["angle_min_deg"] == pytest.approx(90.0) and data["seams"]["angle_max_deg"] == pytest.approx(90.0)
     assert data["worst_edge"] is None
     plain = check(bspline_torus()).to_dict()

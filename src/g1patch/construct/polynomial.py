@@ -58,6 +58,23 @@ def _topology_of(network: PatchNetwork, cut: bool) -> QuadTopology:
     return QuadTopology.from_faces(faces.reshape(-1, 4), len(labels))
 
 
+#: where a patch corner is degenerate (its two edge tangents parallel: the corner of a face between
+#: two creases that run on smoothly through a vertex) its normal is the limit of the normals along
+#: the corner's diagonal, taken this far inside (in parameter)
+CORNER_INSET = 1e-6
+
+
+def _corner_normals(patches: GregoryPatchSet) -> FloatArray:
+    """(F, 4, 3) unit normals of the patches at their corners; at a degenerate corner (normal of zero
+    length) the normal at :data:`CORNER_INSET` along its diagonal instead."""
+    normals = patches.normals(CORNER_PARAMETERS)
+    face, corner = np.nonzero(np.linalg.norm(normals, axis=-1) < 0.5)
+    if face.size:
+        inset = CORNER_PARAMETERS + CORNER_INSET * (0.5 - CORNER_PARAMETERS) * 2.0
+        normals[face, corner] = patches.take(face).normals(inset[corner][:, None])[:, 0]
+    return normals
+
+
 def gregory_targets(network: PatchNetwork, *, cut: bool = False) -> tuple[Targets, Frame]:
     """The :class:`Targets` a Gregory network interpolates (module docstring), in the local
     coordinates of its frame (``Frame.of_points`` of the corners where the patches carry none).
@@ -74,7 +91,7 @@ def gregory_targets(network: PatchNetwork, *, cut: bool = False) -> tuple[Target
     tangents = np.zeros((int(topology.neighbor_offsets[-1]), 3))
     tangents[slot_in] = (3.0 * (points[:, 5 + 2 * ((np.arange(4) + 1) % 4)] - np.roll(corners, -1, axis=1))).reshape(-1, 3)
     tangents[slot_out] = (3.0 * (points[:, 4:12:2] - corners)).reshape(-1, 3)
-    corner_normals = patches.normals(CORNER_PARAMETERS)
+    corner_normals = _corner_normals(patches)
     if not cut and network.vertex_normals is not None and len(network.vertex_normals) == topology.n_vertices:
         normals = network.vertex_normals
     else:
