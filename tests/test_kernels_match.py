@@ -79,7 +79,7 @@ def test_targets_kernels(mesh: QuadMesh) -> None:
     without the shape operator, and the coarse-face turn."""
     from g1patch.targets import interpolate
     from g1patch.targets.frames import vertex_frames
-    from g1patch.targets.local import jit_kernel
+    from g1patch.kernels import jit_kernel
 
     frames = vertex_frames(mesh)
     topology, n = mesh.topology, frames.normals

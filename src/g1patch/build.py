@@ -94,7 +94,7 @@ def _faces_at_risk(targets: Targets, *, compiled: bool = True) -> np.ndarray:
     topology = targets.topology
     faces = topology.faces
     if compiled:
-        from .targets.local import jit_kernel
+        from .kernels import jit_kernel
 
         risky = np.zeros(topology.n_faces, dtype=bool)
         jit_kernel(_risk_kernel)(faces, topology.ring_offsets, topology.ring_halfedges, topology.neighbor_offsets,

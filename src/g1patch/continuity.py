@@ -942,7 +942,7 @@ def _fma(a: float, b: float, c: float) -> float:
 def _compiled(kernel: Callable[..., Any]) -> Callable[..., Any]:
     """``kernel`` compiled by numba, cached on disk, with float64 IEEE arithmetic as NumPy's (no
     fastmath) and ``parallel=True`` (its ``prange`` loop runs on every core), which
-    :func:`g1patch.targets.local.jit_kernel` does not offer. numba is imported here, so that
+    :func:`g1patch.kernels.jit_kernel` does not offer. numba is imported here, so that
     ``import g1patch`` stays fast."""
     global _fma, prange
     import numba

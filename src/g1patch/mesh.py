@@ -411,7 +411,7 @@ def _connect(corners: IntArray, sizes: IntArray, n_vertices: int, *, compiled: b
     _check_index_range(corners, sizes, n_vertices)
     _check_repeated_vertices(corners, sizes, n_vertices)
     if corners.size >= KERNEL_HALFEDGES if compiled is None else compiled:
-        from .targets.local import jit_kernel  # numba, imported on first use
+        from .kernels import jit_kernel  # numba, imported on first use
 
         valid, *arrays = jit_kernel(_connect_kernel)(corners, sizes, n_vertices)
         if valid:
@@ -473,7 +473,7 @@ _KERNEL_BUCKET = 256
 
 
 def _connect_kernel(corners: IntArray, sizes: IntArray, n_vertices: int) -> tuple:
-    """:func:`_connect`'s arrays, compiled by :func:`~g1patch.targets.local.jit_kernel`, with
+    """:func:`_connect`'s arrays, compiled by :func:`~g1patch.kernels.jit_kernel`, with
     ``valid`` first: False (the other arrays unset) where a check of :func:`_connect` fails or a
     vertex is the smaller end of more than :data:`_KERNEL_BUCKET` half-edges.
 
@@ -771,7 +771,7 @@ def _check_face_areas(vertices: FloatArray, faces: IntArray, *, compiled: bool |
     any rounding of the two computations); otherwise the NumPy code below, the reference, decides.
     """
     if faces.shape[0] >= KERNEL_FACES if compiled is None else compiled:
-        from .targets.local import jit_kernel  # numba, imported on first use
+        from .kernels import jit_kernel  # numba, imported on first use
 
         if jit_kernel(_face_area_kernel)(vertices, faces, DEGENERATE_AREA_TOLERANCE * (1.0 + _AREA_MARGIN)):
             return
@@ -791,7 +791,7 @@ def _check_face_areas(vertices: FloatArray, faces: IntArray, *, compiled: bool |
 
 def _face_area_kernel(vertices: FloatArray, faces: IntArray, tolerance: float) -> bool:
     """Whether every face has ``|d1 × d2|² > (tolerance · max(|d1|², |d2|²))²`` (NaN fails), face
-    by face; compiled by :func:`~g1patch.targets.local.jit_kernel`."""
+    by face; compiled by :func:`~g1patch.kernels.jit_kernel`."""
     for f in range(faces.shape[0]):
         a, b, c, d = faces[f, 0], faces[f, 1], faces[f, 2], faces[f, 3]
         u0, u1, u2 = vertices[c, 0] - vertices[a, 0], vertices[c, 1] - vertices[a, 1], vertices[c, 2] - vertices[a, 2]

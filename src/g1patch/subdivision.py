@@ -392,7 +392,7 @@ def _limit_positions(level: _Level, compiled: bool | None = None) -> FloatArray:
     nv = topology.n_vertices
     rule = _limit_rules(level)
     if _kernel_wanted(compiled, nv):
-        from .targets.local import jit_kernel  # numba, imported on first use
+        from .kernels import jit_kernel  # numba, imported on first use
 
         points = x.copy()  # corners stay
         crease = np.flatnonzero(rule == _CREASE)
@@ -589,7 +589,7 @@ def _limit_frames(level: _Level, corners: bool = False, compiled: bool | None = 
 
     # smooth: the eigen tangents
     if kernel and smooth.any():
-        from .targets.local import jit_kernel  # numba, imported on first use
+        from .kernels import jit_kernel  # numba, imported on first use
 
         valences = np.unique(k[smooth])
         starts = np.concatenate([[0], np.cumsum(valences)])

@@ -38,7 +38,8 @@ vertex the corner split of an edge uses the normal of the edge's sector
 (:func:`tangent_plane_tangents`), so each sector is G1 at the corner by itself.
 
 The assembly runs in one numba kernel, half-edge by half-edge and edge by edge, writing the
-(F, 20, 3) points directly (:func:`_assemble_kernel`); the NumPy reference
+(F, 20, 3) points directly (:func:`_assemble_kernel`; on large meshes in ranges side by side,
+:func:`~g1patch.kernels.in_chunks`); the NumPy reference
 (``assemble_gregory(targets, compiled=False)``) does the same with gathers, scatters and
 closed-form solves batched over edges. No Python loop over vertices, edges or faces either way.
 """
@@ -52,7 +53,8 @@ from ..errors import ConstructionError
 from ..gregory import GregoryPatchSet
 from ..mesh import QuadTopology
 from ..targets import Targets, halfedge_slots, slot_sector_normals
-from ..targets.local import in_vertex_planes, jit_kernel, slot_tables
+from ..kernels import in_chunks, jit_kernel
+from ..targets.local import in_vertex_planes, slot_tables
 
 __all__ = ["assemble_gregory", "corner_split", "tangent_plane_tangents"]
 
@@ -154,11 +156,21 @@ def assemble_gregory(targets: Targets, *, compiled: bool = True) -> GregoryPatch
         return GregoryPatchSet(points)
     sectors = targets.has_sectors
     slot_out, slot_in = slot_tables(topology)
-    bad, first_origin, origin_margin, first_target, target_margin = jit_kernel(_assemble_kernel)(
-        targets.positions, tangent_plane_tangents(targets) if sectors else targets.tangents, targets.normals, not sectors,
-        topology.faces.reshape(-1), slot_out, slot_in, targets.corner_normals.reshape(-1, 3), targets.interior,
-        topology.edge_halfedges, targets.seams, SYMMETRIC_TOLERANCE, RIDGE, points,
-    )
+    kernel = jit_kernel(_assemble_kernel)
+    tangents = tangent_plane_tangents(targets) if sectors else targets.tangents
+    origin, corner_normals = topology.faces.reshape(-1), targets.corner_normals.reshape(-1, 3)
+
+    def run(halfedges: tuple[int, int], edges: tuple[int, int]) -> tuple[int, int, float, int, float]:
+        return kernel(targets.positions, tangents, targets.normals, not sectors, origin, slot_out, slot_in, corner_normals,
+                      targets.interior, topology.edge_halfedges, targets.seams, SYMMETRIC_TOLERANCE, RIDGE, points,
+                      *halfedges, *edges)
+
+    # the corners and targets of every face first, then the edges overwrite the interior points they solve
+    in_chunks(lambda lo, hi: run((lo, hi), (0, 0)), origin.size)
+    ranges = in_chunks(lambda lo, hi: run((0, 0), (lo, hi)), topology.n_edges)
+    bad = sum(found[0] for found in ranges)
+    first_origin, origin_margin = next(((e, m) for _, e, m, _, _ in ranges if e >= 0), (-1, 0.0))
+    first_target, target_margin = next(((e, m) for _, _, _, e, m in ranges if e >= 0), (-1, 0.0))
     if first_origin >= 0:
         _raise_invalid(topology, bad, 0, first_origin, origin_margin)
     _raise_invalid(topology, bad, 1, first_target, target_margin)
@@ -281,7 +293,7 @@ def _kh_fit(
 
 
 # ----------------------------------------------------------------------------------------------
-# the numba kernel (compiled on first use by :func:`g1patch.targets.local.jit_kernel`): the formulas
+# the numba kernel (compiled on first use by :func:`g1patch.kernels.jit_kernel`): the formulas
 # and operation order of the NumPy code above, one half-edge or one edge at a time
 
 
@@ -289,8 +301,11 @@ def _assemble_kernel(
     x: FloatArray, t: FloatArray, normals: FloatArray, project: bool, origin: NDArray[np.int64], slot_out: NDArray[np.int32],
     slot_in: NDArray[np.int32], corner_normals: FloatArray, interior: FloatArray, edge_halfedges: NDArray[np.int64],
     seams: NDArray[np.bool_], symmetric_tolerance: float, ridge: float, points: FloatArray,
+    first_halfedge: int, stop_halfedge: int, first_edge: int, stop_edge: int,
 ) -> tuple[int, int, float, int, float]:
-    """:func:`_assemble_numpy` one half-edge, then one edge at a time, straight into ``points`` (F, 20, 3).
+    """:func:`_assemble_numpy` one half-edge, then one edge at a time, straight into ``points`` (F, 20, 3),
+    for the half-edges ``first_halfedge ≤ i < stop_halfedge`` and the edges ``first_edge ≤ e < stop_edge``
+    (an edge's interior points overwrite its half-edges' targets: all half-edges go first).
 
     Each slot tangent is read as ``t − (N·t) N`` with its vertex's normal N when ``project`` (the
     seam-free :func:`tangent_plane_tangents`, same operations), else as given. Per half-edge:
@@ -300,7 +315,7 @@ def _assemble_kernel(
     end (the origin, then the target of the edge's first half-edge), the first such edge (−1 if
     none) and its margin.
     """
-    for i in range(origin.size):
+    for i in range(first_halfedge, stop_halfedge):
         f, k = i >> 2, i & 3
         prev = (i & ~3) | ((k + 3) & 3)
         v, s_out, s_in = origin[i], slot_out[i], slot_in[prev]
@@ -328,7 +343,7 @@ def _assemble_kernel(
     bad = 0
     first = np.full(2, -1)
     first_margin = np.zeros(2)
-    for e in range(edge_halfedges.shape[0]):
+    for e in range(first_edge, stop_edge):
         h, g = edge_halfedges[e, 0], edge_halfedges[e, 1]
         if g < 0 or seams[e]:
             continue

@@ -683,8 +683,8 @@ def _floats_kernel(
 
 @cache
 def _compiled(kernel: Callable[..., tuple]) -> Callable[..., tuple]:
-    """``kernel`` compiled by :func:`~g1patch.targets.local.jit_kernel`, the helpers first."""
-    from ..targets.local import jit_kernel  # numba, imported on first use
+    """``kernel`` compiled by :func:`~g1patch.kernels.jit_kernel`, the helpers first."""
+    from ..kernels import jit_kernel  # numba, imported on first use
 
     for name in _KERNEL_HELPERS:
         if not hasattr(globals()[name], "py_func"):

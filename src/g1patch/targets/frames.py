@@ -78,7 +78,8 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from .local import cross, fan_normals, jit_kernel
+from ..kernels import in_chunks, jit_kernel
+from .local import cross, fan_normals
 from ..mesh import QuadMesh
 
 __all__ = ["VertexFrames", "vertex_frames", "RESIDUAL", "MAX_TILT", "MAX_STEEPNESS", "MIN_PIVOT"]
@@ -428,7 +429,7 @@ def _rows_kernel(faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArr
 def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_offsets: IntArray, neighbors: IntArray,
                 vertices: IntArray, start: FloatArray, tilt: bool, lanes: int, out_normals: FloatArray,
                 out_shape: FloatArray, out_residual: FloatArray, out_pivot: FloatArray) -> None:
-    """:func:`_circle_fit` of ``vertices``, compiled by :func:`~g1patch.targets.local.jit_kernel`: each
+    """:func:`_circle_fit` of ``vertices``, compiled by :func:`~g1patch.kernels.jit_kernel`: each
     vertex goes through the same formulas and steps, in the same order, as in the NumPy reference
     one vertex at a time; ``lanes`` vertices (of one column count) are fitted side by side, so
     that the innermost loops run over them and vectorise, while each lane's arithmetic is that of
@@ -823,11 +824,14 @@ def _face_ring_rows(mesh: QuadMesh) -> tuple[IntArray, IntArray]:
 
 
 def _fit_compiled(mesh: QuadMesh, rows: tuple[IntArray, IntArray], vertices: IntArray, n: FloatArray, tilt: bool) -> _Fit:
-    """:func:`_fit_kernel` of ``vertices`` (row i for ``vertices[i]``) with start normals ``n`` (V, 3)."""
+    """:func:`_fit_kernel` of ``vertices`` (row i for ``vertices[i]``) with start normals ``n`` (V, 3), in
+    ranges of rows side by side (:func:`~g1patch.kernels.in_chunks`)."""
     topo = mesh.topology
     out = _Fit.empty(vertices.size)
-    jit_kernel(_fit_kernel)(mesh.vertices, rows[0], rows[1], topo.neighbor_offsets, topo.neighbors, vertices, n, tilt, LANES,
-                            out.normals, out.shape_operator, out.residual, out.pivot)
+    kernel = jit_kernel(_fit_kernel)
+    in_chunks(lambda lo, hi: kernel(mesh.vertices, rows[0], rows[1], topo.neighbor_offsets, topo.neighbors, vertices[lo:hi], n,
+                                    tilt, LANES, out.normals[lo:hi], out.shape_operator[lo:hi], out.residual[lo:hi],
+                                    out.pivot[lo:hi]), vertices.size)
     return out
 
 

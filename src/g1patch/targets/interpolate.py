@@ -39,7 +39,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .creases import INTERPOLATE_SHARPNESS, crease_tangents, seam_edges, sharp_vertices
-from .local import TANGENTS, TangentRule, corner_tangents, cross, fan_normals, in_vertex_planes, jit_kernel, slot_tables
+from .local import TANGENTS, TangentRule, corner_tangents, cross, fan_normals, in_vertex_planes, slot_tables
+from ..kernels import in_chunks, jit_kernel
 from ..errors import ConstructionError, check_choice
 from ..mesh import QuadMesh, QuadTopology
 from . import Targets
@@ -404,8 +405,8 @@ def _interior_targets(
     operator S = dN (:class:`~g1patch.targets.frames.VertexFrames`) the normal part of w is replaced by
     the second fundamental form, ``N·p_uv = −t_ABᵀ S t_AD``: ``w ← P_A w − (t_ABᵀ S t_AD) N_A``,
     by the weight :func:`_local_twist_weights` of ``|P_A w| / (|t_AB| + |t_AD|)``.
-    ``compiled``: corner by corner in :func:`_interior_kernel`, into ``out`` (F, 4, 3) if given;
-    else NumPy."""
+    ``compiled``: corner by corner in :func:`_interior_kernel` (ranges of vertices side by side,
+    :func:`~g1patch.kernels.in_chunks`), into ``out`` (F, 4, 3) if given; else NumPy."""
     from . import halfedge_slots
 
     faces = topology.faces
@@ -413,8 +414,10 @@ def _interior_targets(
     if compiled:
         out = np.empty((count, 4, 3)) if out is None else out
         curved = shape_operator is not None
-        jit_kernel(_interior_kernel)(positions, faces, topology.ring_offsets, topology.ring_halfedges, topology.neighbor_offsets,
-                                     tangents, normals, shape_operator if curved else np.zeros((1, 3, 3)), curved, out)
+        kernel = jit_kernel(_interior_kernel)
+        operator = shape_operator if curved else np.zeros((1, 3, 3))
+        in_chunks(lambda lo, hi: kernel(positions, faces, topology.ring_offsets, topology.ring_halfedges, topology.neighbor_offsets,
+                                        tangents, normals, operator, curved, out, lo, hi), topology.n_vertices)
         return out
     slot_out, slot_in = halfedge_slots(topology)
     x = positions[faces]  # (F, 4, 3): A at corner k
@@ -435,11 +438,12 @@ def _interior_targets(
 
 def _interior_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray, slot_offsets: IntArray,
                      tangents: FloatArray, normals: FloatArray, shape_operator: FloatArray, curved: bool,
-                     out: FloatArray) -> None:
-    """:func:`_interior_targets` vertex by vertex, over its ring: the corner of ring face i is
-    between slots i (A → B) and i + 1 (A → D, cyclic inside), so no slot table is needed."""
+                     out: FloatArray, first: int, stop: int) -> None:
+    """:func:`_interior_targets` of the vertices ``first ≤ a < stop``, vertex by vertex, over its ring:
+    the corner of ring face i is between slots i (A → B) and i + 1 (A → D, cyclic inside), so no
+    slot table is needed."""
     w = np.empty(3)
-    for a in range(ring_offsets.size - 1):
+    for a in range(first, stop):
         slots = slot_offsets[a + 1] - slot_offsets[a]
         for i in range(ring_offsets[a + 1] - ring_offsets[a]):
             h = ring_halfedges[ring_offsets[a] + i]

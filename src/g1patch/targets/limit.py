@@ -36,7 +36,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .local import cross, fan_normals, jit_kernel, slot_tables
+from ..kernels import jit_kernel
+from .local import cross, fan_normals, slot_tables
 from ..gregory import INTERIOR_INDEX
 from ..errors import MeshError
 from ..mesh import QuadMesh, QuadTopology, Sectors, Tag, sectors

@@ -5,24 +5,23 @@
 * ``corner_tangents``: a mesh edge projected onto the tangent plane, ``s = d − (n·d) n``, with the
   chord length or the circle-aware arc length ``2|d|²/(|d| + |s|)``.
 
-``jit_kernel`` compiles the numba kernels of the targets and the assembly (plain functions with
-loops, kept beside the NumPy code they replace, which stays as the reference).
+The numba kernels beside the NumPy code they replace are compiled by
+:func:`g1patch.kernels.jit_kernel`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from functools import cache
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ConstructionError, check_choice
+from ..kernels import jit_kernel
 from ..mesh import QuadMesh, QuadTopology
 
 __all__ = [
-    "NORMALS", "TANGENTS", "NormalRule", "TangentRule", "corner_tangents", "cross", "fan_normals", "in_vertex_planes", "jit_kernel",
+    "NORMALS", "TANGENTS", "NormalRule", "TangentRule", "corner_tangents", "cross", "fan_normals", "in_vertex_planes",
     "least_squares_normals", "slot_tables",
 ]
 
@@ -30,16 +29,6 @@ NormalRule = Literal["fan", "paper"]
 TangentRule = Literal["chord", "arc"]
 NORMALS: tuple[NormalRule, ...] = ("fan", "paper")
 TANGENTS: tuple[TangentRule, ...] = ("chord", "arc")
-
-
-@cache
-def jit_kernel(kernel: Callable[..., object]) -> Callable[..., object]:
-    """``kernel`` compiled by numba on first use: ``njit(cache=True)`` (cached on disk), float64
-    IEEE arithmetic as NumPy's (no fastmath, NumPy's division semantics). numba is imported here, so
-    that ``import g1patch`` stays fast."""
-    import numba
-
-    return numba.njit(cache=True, error_model="numpy")(kernel)
 
 
 def cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -1,0 +1,69 @@
+"""Compiled kernels: how they are compiled, and how a large one runs on every core.
+
+``jit_kernel`` compiles the numba kernels of the readers, the topology, the targets and the
+assembly (plain functions with loops, each kept beside the NumPy code it replaces, which stays as
+the reference). A layer-neutral module: the mesh, the subdivision and the targets all use it.
+
+``in_chunks`` runs a kernel over ``[0, count)`` in contiguous ranges, one per core, on threads:
+the kernels are compiled with ``nogil``, so the ranges run at the same time. A kernel run this
+way writes each item's results in its own place (no two items share an output), so the result is
+bit for bit that of one call over the whole range, in any order.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from functools import cache
+from typing import TypeVar
+
+__all__ = ["CHUNK_ITEMS", "in_chunks", "jit_kernel", "workers"]
+
+T = TypeVar("T")
+
+#: fewest items per range: below this a kernel runs in one call (threads cost ~50 µs to start,
+#: and small builds should not pay them)
+CHUNK_ITEMS = 50_000
+
+_pool: ThreadPoolExecutor | None = None
+
+
+@cache
+def jit_kernel(kernel: Callable[..., object]) -> Callable[..., object]:
+    """``kernel`` compiled by numba on first use: ``njit(cache=True, nogil=True)`` (cached on disk;
+    without the GIL so that :func:`in_chunks` can run ranges side by side), float64 IEEE arithmetic
+    as NumPy's (no fastmath, NumPy's division semantics). numba is imported here, so that
+    ``import g1patch`` stays fast."""
+    import numba
+
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(kernel)
+
+
+def workers() -> int:
+    """Cores this process may run on."""
+    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
+
+
+def _forget_pool() -> None:
+    """A forked child has none of its parent's threads: it starts its own pool when it needs one."""
+    global _pool
+    _pool = None
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pool)
+
+
+def in_chunks(call: Callable[[int, int], T], count: int, minimum: int = CHUNK_ITEMS) -> list[T]:
+    """``[call(lo, hi) for each range]`` over ``[0, count)`` cut into ``min(workers(), count // minimum)``
+    contiguous ranges (at least one), run on threads, results in range order."""
+    global _pool
+    parts = max(1, min(workers(), count // max(minimum, 1)))
+    bounds = [count * i // parts for i in range(parts + 1)]
+    if parts == 1:
+        return [call(0, count)]
+    if _pool is None:
+        _pool = ThreadPoolExecutor(max_workers=workers(), thread_name_prefix="g1patch-kernel")
+    futures = [_pool.submit(call, lo, hi) for lo, hi in zip(bounds[:-1], bounds[1:])]
+    return [future.result() for future in futures]
