@@ -55,11 +55,11 @@ if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_forget_pool)
 
 
-def in_chunks(call: Callable[[int, int], T], count: int, minimum: int = CHUNK_ITEMS) -> list[T]:
-    """``[call(lo, hi) for each range]`` over ``[0, count)`` cut into ``min(workers(), count // minimum)``
+def in_chunks(call: Callable[[int, int], T], count: int) -> list[T]:
+    """``[call(lo, hi) for each range]`` over ``[0, count)`` cut into ``min(workers(), count //`` :data:`CHUNK_ITEMS` ``)``
     contiguous ranges (at least one), run on threads, results in range order."""
     global _pool
-    parts = max(1, min(workers(), count // max(minimum, 1)))
+    parts = max(1, min(workers(), count // max(CHUNK_ITEMS, 1)))
     bounds = [count * i // parts for i in range(parts + 1)]
     if parts == 1:
         return [call(0, count)]
