@@ -72,6 +72,9 @@ BLOCK_POINTS = 16384
 #: a few ms at most, and a first use should not pay the kernels' one-time compile
 KERNEL_POINTS = 1 << 20
 
+#: ranges of patches per core a compiled kernel's call is cut into (see :func:`_in_ranges`)
+RANGES_PER_WORKER = 8
+
 _TINY = np.finfo(np.float64).tiny
 
 #: (d, i, l) cyclic: (a × b)_d = a_i b_l − a_l b_i.
@@ -122,8 +125,8 @@ def contract(
         return out
     if _use_kernels(out.size // 3, compiled):
         kernel = _compiled(_contract_kernel)
-        control, wu, wv_t = np.ascontiguousarray(control), np.ascontiguousarray(weights_u), np.ascontiguousarray(weights_v.T)
-        _in_ranges(lambda lo, hi: kernel(control, wu, wv_t, out, lo, hi), n)
+        control, wu_t, wv_t = np.ascontiguousarray(control), np.ascontiguousarray(weights_u.T), np.ascontiguousarray(weights_v.T)
+        _in_ranges(lambda lo, hi: kernel(control, wu_t, wv_t, out, lo, hi), n)
     else:
         _run(control, weights_u, None, weights_v, None, out, None)
     return out
@@ -174,10 +177,10 @@ def _normals_into(
     wv, dwv = basis_values(form, v), basis_values(form, v, 1)
     if _use_kernels(normals_out.size // 3, compiled):
         kernel = _compiled(_normals_kernel)
-        control, wu, dwu = np.ascontiguousarray(control), np.ascontiguousarray(wu), np.ascontiguousarray(dwu)
-        wv_t, dwv_t = np.ascontiguousarray(wv.T), np.ascontiguousarray(dwv.T)
+        control = np.ascontiguousarray(control)
+        wu_t, dwu_t, wv_t, dwv_t = (np.ascontiguousarray(w.T) for w in (wu, dwu, wv, dwv))
         into = np.empty((0, 0, 0, 3)) if positions is None else positions
-        _in_ranges(lambda lo, hi: kernel(control, wu, dwu, wv_t, dwv_t, into, normals_out, lo, hi), control.shape[0])
+        _in_ranges(lambda lo, hi: kernel(control, wu_t, dwu_t, wv_t, dwv_t, into, normals_out, lo, hi), control.shape[0])
     else:
         _run(control, wu, dwu, wv, dwv, positions, normals_out)
     return normals_out
@@ -264,10 +267,15 @@ _pool: ThreadPoolExecutor | None = None
 def _compiled(kernel: Callable[..., Any]) -> Callable[..., Any]:
     """``kernel`` compiled by numba on first use: cached on disk, without the GIL (ranges run on
     threads side by side), float64 IEEE arithmetic as NumPy's (no fastmath: no contraction into
-    fused multiply-adds). numba is imported here, so that ``import g1patch`` stays fast."""
+    fused multiply-adds). The helper :func:`_row_curves` is compiled (and rebound) with the first
+    kernel. numba is imported here, so that ``import g1patch`` stays fast."""
+    global _row_curves
     import numba
 
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(kernel)  # type: ignore[no-any-return]
+    options = {"cache": True, "nogil": True, "error_model": "numpy"}
+    if not isinstance(_row_curves, numba.core.dispatcher.Dispatcher):
+        _row_curves = numba.njit(**options)(_row_curves)
+    return numba.njit(**options)(kernel)  # type: ignore[no-any-return]
 
 
 def _workers() -> int:
@@ -286,50 +294,67 @@ if hasattr(os, "register_at_fork"):
 
 
 def _in_ranges(call: Callable[[int, int], object], count: int) -> None:
-    """``call(lo, hi)`` over ``[0, count)`` cut into one contiguous range per core, on threads."""
+    """``call(lo, hi)`` over ``[0, count)`` on one thread per core, in :data:`RANGES_PER_WORKER` contiguous
+    ranges per thread taken in turn (a core shared with another process then takes fewer of them
+    instead of holding up the whole call)."""
     global _pool
-    parts = max(1, min(_workers(), count))
-    if parts == 1:
+    workers = _workers()
+    parts = max(1, min(RANGES_PER_WORKER * workers, count))
+    if workers == 1 or parts == 1:
         call(0, count)
         return
     if _pool is None:
-        _pool = ThreadPoolExecutor(max_workers=parts, thread_name_prefix="g1patch-grid")
+        _pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="g1patch-grid")
     bounds = [count * k // parts for k in range(parts + 1)]
     for future in [_pool.submit(call, lo, hi) for lo, hi in zip(bounds[:-1], bounds[1:])]:
         future.result()
 
 
+def _row_curves(
+    control: NDArray[np.float64], n: int, weights_t: NDArray[np.float64], rows: NDArray[np.float64], first: int
+) -> None:
+    """``rows[first + 3 j + e, a] = Σ_i weights_t[i, a] P[n, i, j, e]``: patch n's row curves at every u, vectorised over a."""
+    for k in range(12):
+        j, e = k // 3, k % 3
+        p0, p1, p2, p3 = control[n, 0, j, e], control[n, 1, j, e], control[n, 2, j, e], control[n, 3, j, e]
+        for a in range(weights_t.shape[1]):
+            rows[first + k, a] = weights_t[0, a] * p0 + weights_t[1, a] * p1 + weights_t[2, a] * p2 + weights_t[3, a] * p3
+
+
 def _contract_kernel(
     control: NDArray[np.float64],
-    wu: NDArray[np.float64],
+    wu_t: NDArray[np.float64],
     wv_t: NDArray[np.float64],
     out: NDArray[np.float64],
     lo: int,
     hi: int,
 ) -> None:
-    """``out[n, a, b, e] = Σ_j (Σ_i wu[a, i] P[n, i, j, e]) wv_t[j, b]`` for patches ``lo ≤ n < hi``."""
-    gu, gv = wu.shape[0], wv_t.shape[1]
-    row = np.empty((3, gv))
+    """``out[n, a, b, e] = Σ_j r_j[e] wv_t[j, b]`` with ``r_j = Σ_i wu_t[i, a] P[n, i, j]``, patches ``lo ≤ n < hi``."""
+    gu, gv = wu_t.shape[1], wv_t.shape[1]
+    rows = np.empty((12, gu))
+    line = np.empty((3, gv))
     for n in range(lo, hi):
+        _row_curves(control, n, wu_t, rows, 0)
         for a in range(gu):
-            w0, w1, w2, w3 = wu[a, 0], wu[a, 1], wu[a, 2], wu[a, 3]
-            for e in range(3):
-                r0 = w0 * control[n, 0, 0, e] + w1 * control[n, 1, 0, e] + w2 * control[n, 2, 0, e] + w3 * control[n, 3, 0, e]
-                r1 = w0 * control[n, 0, 1, e] + w1 * control[n, 1, 1, e] + w2 * control[n, 2, 1, e] + w3 * control[n, 3, 1, e]
-                r2 = w0 * control[n, 0, 2, e] + w1 * control[n, 1, 2, e] + w2 * control[n, 2, 2, e] + w3 * control[n, 3, 2, e]
-                r3 = w0 * control[n, 0, 3, e] + w1 * control[n, 1, 3, e] + w2 * control[n, 2, 3, e] + w3 * control[n, 3, 3, e]
-                for b in range(gv):
-                    row[e, b] = r0 * wv_t[0, b] + r1 * wv_t[1, b] + r2 * wv_t[2, b] + r3 * wv_t[3, b]
+            r0x, r0y, r0z = rows[0, a], rows[1, a], rows[2, a]
+            r1x, r1y, r1z = rows[3, a], rows[4, a], rows[5, a]
+            r2x, r2y, r2z = rows[6, a], rows[7, a], rows[8, a]
+            r3x, r3y, r3z = rows[9, a], rows[10, a], rows[11, a]
             for b in range(gv):
-                out[n, a, b, 0] = row[0, b]
-                out[n, a, b, 1] = row[1, b]
-                out[n, a, b, 2] = row[2, b]
+                v0, v1, v2, v3 = wv_t[0, b], wv_t[1, b], wv_t[2, b], wv_t[3, b]
+                line[0, b] = r0x * v0 + r1x * v1 + r2x * v2 + r3x * v3
+                line[1, b] = r0y * v0 + r1y * v1 + r2y * v2 + r3y * v3
+                line[2, b] = r0z * v0 + r1z * v1 + r2z * v2 + r3z * v3
+            for b in range(gv):
+                out[n, a, b, 0] = line[0, b]
+                out[n, a, b, 1] = line[1, b]
+                out[n, a, b, 2] = line[2, b]
 
 
 def _normals_kernel(
     control: NDArray[np.float64],
-    wu: NDArray[np.float64],
-    dwu: NDArray[np.float64],
+    wu_t: NDArray[np.float64],
+    dwu_t: NDArray[np.float64],
     wv_t: NDArray[np.float64],
     dwv_t: NDArray[np.float64],
     positions: NDArray[np.float64],
@@ -338,43 +363,50 @@ def _normals_kernel(
     hi: int,
 ) -> None:
     """Unit normals ``c / sqrt(max(|c|², tiny))``, ``c = p_u × p_v``, for patches ``lo ≤ n < hi``, and the
-    positions as :func:`_contract_kernel` computes them unless ``positions`` is empty."""
-    gu, gv = wu.shape[0], wv_t.shape[1]
+    positions as :func:`_contract_kernel` computes them unless ``positions`` is empty. Row curves
+    ``r_j`` (weights wu) and ``s_j`` (dwu); along a row ``p = Σ r_j wv_j``, ``p_u = Σ s_j wv_j``,
+    ``p_v = Σ r_j dwv_j``."""
+    gu, gv = wu_t.shape[1], wv_t.shape[1]
     with_positions = positions.shape[0] > 0
     tiny = 2.2250738585072014e-308  # the smallest normal float64
-    row = np.empty((12, gv))  # p, p_u, p_v, unit normal; 3 coordinates each
+    rows = np.empty((24, gu))
+    line = np.empty((6, gv))  # positions, unit normals
     for n in range(lo, hi):
+        _row_curves(control, n, wu_t, rows, 0)
+        _row_curves(control, n, dwu_t, rows, 12)
         for a in range(gu):
-            w0, w1, w2, w3 = wu[a, 0], wu[a, 1], wu[a, 2], wu[a, 3]
-            d0, d1, d2, d3 = dwu[a, 0], dwu[a, 1], dwu[a, 2], dwu[a, 3]
-            for e in range(3):
-                r0 = w0 * control[n, 0, 0, e] + w1 * control[n, 1, 0, e] + w2 * control[n, 2, 0, e] + w3 * control[n, 3, 0, e]
-                r1 = w0 * control[n, 0, 1, e] + w1 * control[n, 1, 1, e] + w2 * control[n, 2, 1, e] + w3 * control[n, 3, 1, e]
-                r2 = w0 * control[n, 0, 2, e] + w1 * control[n, 1, 2, e] + w2 * control[n, 2, 2, e] + w3 * control[n, 3, 2, e]
-                r3 = w0 * control[n, 0, 3, e] + w1 * control[n, 1, 3, e] + w2 * control[n, 2, 3, e] + w3 * control[n, 3, 3, e]
-                s0 = d0 * control[n, 0, 0, e] + d1 * control[n, 1, 0, e] + d2 * control[n, 2, 0, e] + d3 * control[n, 3, 0, e]
-                s1 = d0 * control[n, 0, 1, e] + d1 * control[n, 1, 1, e] + d2 * control[n, 2, 1, e] + d3 * control[n, 3, 1, e]
-                s2 = d0 * control[n, 0, 2, e] + d1 * control[n, 1, 2, e] + d2 * control[n, 2, 2, e] + d3 * control[n, 3, 2, e]
-                s3 = d0 * control[n, 0, 3, e] + d1 * control[n, 1, 3, e] + d2 * control[n, 2, 3, e] + d3 * control[n, 3, 3, e]
-                for b in range(gv):
-                    row[e, b] = r0 * wv_t[0, b] + r1 * wv_t[1, b] + r2 * wv_t[2, b] + r3 * wv_t[3, b]
-                    row[3 + e, b] = s0 * wv_t[0, b] + s1 * wv_t[1, b] + s2 * wv_t[2, b] + s3 * wv_t[3, b]
-                    row[6 + e, b] = r0 * dwv_t[0, b] + r1 * dwv_t[1, b] + r2 * dwv_t[2, b] + r3 * dwv_t[3, b]
+            r0x, r0y, r0z = rows[0, a], rows[1, a], rows[2, a]
+            r1x, r1y, r1z = rows[3, a], rows[4, a], rows[5, a]
+            r2x, r2y, r2z = rows[6, a], rows[7, a], rows[8, a]
+            r3x, r3y, r3z = rows[9, a], rows[10, a], rows[11, a]
+            s0x, s0y, s0z = rows[12, a], rows[13, a], rows[14, a]
+            s1x, s1y, s1z = rows[15, a], rows[16, a], rows[17, a]
+            s2x, s2y, s2z = rows[18, a], rows[19, a], rows[20, a]
+            s3x, s3y, s3z = rows[21, a], rows[22, a], rows[23, a]
             for b in range(gv):
-                cx = row[4, b] * row[8, b] - row[5, b] * row[7, b]
-                cy = row[5, b] * row[6, b] - row[3, b] * row[8, b]
-                cz = row[3, b] * row[7, b] - row[4, b] * row[6, b]
+                v0, v1, v2, v3 = wv_t[0, b], wv_t[1, b], wv_t[2, b], wv_t[3, b]
+                d0, d1, d2, d3 = dwv_t[0, b], dwv_t[1, b], dwv_t[2, b], dwv_t[3, b]
+                line[0, b] = r0x * v0 + r1x * v1 + r2x * v2 + r3x * v3
+                line[1, b] = r0y * v0 + r1y * v1 + r2y * v2 + r3y * v3
+                line[2, b] = r0z * v0 + r1z * v1 + r2z * v2 + r3z * v3
+                ux = s0x * v0 + s1x * v1 + s2x * v2 + s3x * v3
+                uy = s0y * v0 + s1y * v1 + s2y * v2 + s3y * v3
+                uz = s0z * v0 + s1z * v1 + s2z * v2 + s3z * v3
+                vx = r0x * d0 + r1x * d1 + r2x * d2 + r3x * d3
+                vy = r0y * d0 + r1y * d1 + r2y * d2 + r3y * d3
+                vz = r0z * d0 + r1z * d1 + r2z * d2 + r3z * d3
+                cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
                 square = cx * cx + cy * cy + cz * cz
                 length = np.sqrt(square if square > tiny else tiny)
-                row[9, b] = cx / length
-                row[10, b] = cy / length
-                row[11, b] = cz / length
+                line[3, b] = cx / length
+                line[4, b] = cy / length
+                line[5, b] = cz / length
             if with_positions:
                 for b in range(gv):
-                    positions[n, a, b, 0] = row[0, b]
-                    positions[n, a, b, 1] = row[1, b]
-                    positions[n, a, b, 2] = row[2, b]
+                    positions[n, a, b, 0] = line[0, b]
+                    positions[n, a, b, 1] = line[1, b]
+                    positions[n, a, b, 2] = line[2, b]
             for b in range(gv):
-                normals[n, a, b, 0] = row[9, b]
-                normals[n, a, b, 1] = row[10, b]
-                normals[n, a, b, 2] = row[11, b]
+                normals[n, a, b, 0] = line[3, b]
+                normals[n, a, b, 1] = line[4, b]
+                normals[n, a, b, 2] = line[5, b]
