@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from typing import Literal
+from typing import Literal, TypeVar
 
 import numpy as np
 
@@ -38,6 +38,8 @@ from .targets.local import TANGENTS, TangentRule
 
 __all__ = ["METHODS", "Method", "build_gregory_network", "build_network", "build_split4_network"]
 
+#: whatever an assembly returns (its patches, or its patches and more)
+A = TypeVar("A")
 logger = logging.getLogger(__name__)
 
 Method = Literal["gregory", "split4", "corner"]
@@ -145,10 +147,11 @@ def _risk_kernel(faces: np.ndarray, ring_offsets: np.ndarray, ring_halfedges: np
 
 
 def _guarded(
-    targets: Targets, assemble: Callable[[Targets], Patches], patches_per_face: int
-) -> tuple[Patches, Targets]:
+    targets: Targets, assemble: Callable[[Targets], A], patches_per_face: int, patches_of: Callable[[A], Patches] = lambda a: a,
+) -> tuple[A, Targets]:
     """Assemble, and where faces fold retreat their vertices' targets (module docstring). Only the
-    faces at risk (:func:`_faces_at_risk`) are tested; the retreated set only grows, each step
+    faces at risk (:func:`_faces_at_risk`) of ``patches_of(assemble(targets))`` are tested (an
+    assembly may return more than the patches: the caller gets the best attempt's whole result); the retreated set only grows, each step
     starts again from the rule's own targets, and from the second step on it takes in the faces'
     1-rings too (a face depends on its corners' targets only, but a fully retreated corner next to
     an untouched one can fold the face between). The guard returns the attempt with the fewest
@@ -157,21 +160,21 @@ def _guarded(
     a surface worse than the rule's own. Faces a step does not test kept their corners' targets
     (every retreated corner is a fallback, so its faces are at risk), hence their state."""
     topology = targets.topology
-    patches = assemble(targets)
+    assembled = assemble(targets)
     retreated = np.zeros(topology.n_vertices, dtype=bool)
     applied = 0.0
     guarded = targets
     folded_faces = np.zeros(topology.n_faces, dtype=bool)
-    best: tuple[int, Patches, Targets] | None = None
+    best: tuple[int, A, Targets] | None = None
     for step, weight in enumerate((*GUARD_STEPS, None)):
         tested = _faces_at_risk(guarded)
         rows = (patches_per_face * tested[:, None] + np.arange(patches_per_face)).ravel()
-        folded = rows[folded_patches(patches.take(rows), GUARD_SAMPLES)] if rows.size else rows
+        folded = rows[folded_patches(patches_of(assembled).take(rows), GUARD_SAMPLES)] if rows.size else rows
         folded_faces[tested] = False
         folded_faces[folded // patches_per_face] = True
         count = int(folded_faces.sum())
         if best is None or count < best[0]:
-            best = (count, patches, guarded)
+            best = (count, assembled, guarded)
         if not count or weight is None:
             break
         corners = np.zeros(topology.n_vertices, dtype=bool)
@@ -184,7 +187,7 @@ def _guarded(
         retreated |= corners
         applied = weight
         guarded = retreat(targets, np.flatnonzero(retreated), weight)
-        patches = assemble(guarded)
+        assembled = assemble(guarded)
     assert best is not None
     return best[1], best[2]
 
@@ -225,12 +228,13 @@ def build_network(
     surface = mesh if shape != "limit" else mesh.with_vertices(frame.to_world(targets.positions))  # the points passed through
     provenance = _provenance(mesh, method, shape, tangents, targets, refine, repairs)
     if method == "split4":
-        from .construct.split4 import split4_network_from_targets
+        from .construct.split4 import split4_network_from_targets, split4_patches
 
-        if guard:
-            targets = _guarded(targets, lambda t: _split4_local(local, t), 4)[1]
+        parts = None
+        if guard:  # the guard's best assembly is the network's: built once (interpolate's positions are the vertices)
+            parts, targets = _guarded(targets, lambda t: split4_patches(t, t.positions, np.zeros(3), 1.0), 4, lambda p: p[0])
             provenance["fallback_vertices"] = str(targets.n_fallback)
-        network = split4_network_from_targets(surface, targets, frame, provenance)
+        network = split4_network_from_targets(surface, targets, frame, provenance, parts=parts)
         # said once the network exists: a build that then fails says one thing, its error
         if mesh.features.sharp_edges.any():
             logger.warning("split4 does not keep sharp edges yet: the %d tagged sharp edges come out smooth "
@@ -285,13 +289,6 @@ def _without_creases(mesh: QuadMesh) -> QuadMesh:
     if corners.size:
         tags.append(Tag("corner", tuple(corners.tolist()), tuple(features.vertex_sharpness[corners].tolist())))
     return QuadMesh(mesh.vertices, topology, tuple(tags), mesh.source, mesh.repairs)
-
-
-def _split4_local(local: QuadMesh, targets: Targets) -> PatchSet:
-    """split4's sub-patches in the working coordinates, for the fold guard."""
-    from .construct.split4 import split4_patches
-
-    return split4_patches(targets, local.vertices, np.zeros(3), 1.0)[0]
 
 
 def build_gregory_network(mesh: QuadMesh, *, shape: ShapeRule = "interpolate", tangents: TangentRule = "arc") -> PatchNetwork:

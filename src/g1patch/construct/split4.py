@@ -391,10 +391,14 @@ def split4_star(targets: Targets) -> SplitStar:
     return SplitStar(star, cosine, ~valid, shrink < 1.0, shrink)
 
 
+#: what :func:`split4_patches` returns: sub-patches, edge-midpoint and centre positions, their normals, the stars
+Split4Parts = tuple[PatchSet, FloatArray, FloatArray, SplitStar]
+
+
 def split4_patches(
     targets: Targets, corners: FloatArray, centre: FloatArray, scale: float, guide: FloatArray | None = None,
     star: SplitStar | None = None,
-) -> tuple[PatchSet, FloatArray, FloatArray, SplitStar]:
+) -> Split4Parts:
     """The 4 F Bézier sub-patches (sub-patch ``4 f + k`` at corner k of face f), and the positions
     and unit surface normals of the edge midpoints and face centres, each stacked as (E + F, 3).
     The normal at M is ``t_L × t_X`` (⊥ the curve and seam tangents of its star); at C it is ``(b_0 − b_2) × (b_1 − b_3)``, the cross of the centre's star. Also returns the star
@@ -623,7 +627,7 @@ def _split4_network(
 
 def split4_network_from_targets(
     mesh: QuadMesh, targets: Targets, frame: Frame, provenance: dict[str, str], seam_edges: ArrayLike | None = None,
-    guide: FloatArray | None = None,
+    guide: FloatArray | None = None, parts: Split4Parts | None = None,
 ) -> PatchNetwork:
     """The 2×2-split bicubic network of ``targets`` (in the local coordinates of ``frame``):
     polynomial, exactly G1 on mesh edges and seams, C1 inside each quad, interpolating the mesh
@@ -633,8 +637,11 @@ def split4_network_from_targets(
 
     ``seam_edges`` (E,) bool, in ``mesh.topology.edges`` order: mesh edges sharp on purpose; both
     halves of each (edge ids 2e, 2e + 1) become :attr:`PatchNetwork.seam` edges on both sides (the
-    split's own inner seams M–C never are). ``guide``: per-face macro nets to follow (:func:`split4_patches`)."""
-    patches, extra, extra_normals, stars = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide)
+    split's own inner seams M–C never are). ``guide``: per-face macro nets to follow (:func:`split4_patches`).
+    ``parts``: ``split4_patches(targets, targets.positions, 0, 1)`` when the caller has it already."""
+    if parts is None:
+        parts = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide)
+    patches, extra, extra_normals, stars = parts
     patches = patches.with_frame(frame)
     extra = frame.to_world(extra)
     provenance = dict(
