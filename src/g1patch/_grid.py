@@ -68,9 +68,11 @@ __all__ = ["BLOCK_POINTS", "KERNEL_POINTS", "contract", "normals", "positions_an
 #: Grid points per block (rows of several patches, or part of one patch's grid).
 BLOCK_POINTS = 16384
 
-#: grid points (N Gu Gv) from which the compiled kernels run by default: below, the NumPy code takes
-#: a few ms at most, and a first use should not pay the kernels' one-time compile
-KERNEL_POINTS = 1 << 20
+#: grid points (N Gu Gv) from which the compiled kernels run by default (4096 patches at 32²). Their
+#: first use costs ~2.5 s once per install (compile into numba's disk cache) and ~0.5 s once per
+#: process (numba's import and cache load); a call this size takes ~70 ms in NumPy for positions +
+#: normals and ~20 ms for positions, the kernels about a third to a half of that
+KERNEL_POINTS = 1 << 22
 
 #: ranges of patches per core a compiled kernel's call is cut into (see :func:`_in_ranges`)
 RANGES_PER_WORKER = 8
