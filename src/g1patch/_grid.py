@@ -35,17 +35,18 @@ cross product shorter than ``sqrt(tiny) ≈ 1.5e-154`` comes out shorter than un
 Compiled kernels. From :data:`KERNEL_POINTS` grid points on (``compiled=None``; ``True`` always,
 ``False`` never) numba kernels do the same work, compiled on first use and cached on disk; the
 NumPy code stays as their reference (tests/test_grid_kernels.py holds them to it). They are the
-tensor-product evaluation one grid row at a time: for row ``a`` of patch ``n`` and coordinate ``e``
-the row curve ``r_j = Σ_i wu[a, i] P[n, i, j, e]`` (and ``s_j`` with ``dwu``), then along the row
+tensor-product evaluation, a patch at a time: first its row curves at every u (vectorised over u),
+``r_j[a] = Σ_i wu[a, i] P[n, i, j]`` and ``s_j[a]`` with ``dwu``; then along each grid row
 
     p = Σ_j r_j wv[b, j],   p_u = Σ_j s_j wv[b, j],   p_v = Σ_j r_j dwv[b, j]
 
-(4 products and 3 sums each, vectorised over b into an L1-sized planar scratch), the unit normal
-``c / sqrt(max(|c|², tiny))`` with ``c = p_u × p_v`` (one square root), and one pass interleaving
-the row into the ``(N, Gu, Gv, 3)`` outputs. The same 16-term sums as the reference, associated
-the same way (u first, then v), with a cross product of evaluated tangents instead of the
-reference's expanded coefficients: tests/test_grid_kernels.py states the ULP bound. The patches are
-split into contiguous ranges, one per core, run on threads (the kernels release the GIL); every
+(4 products and 3 sums each, the 24 row coefficients held in registers), the unit normal
+``c / sqrt(max(|c|², tiny))`` with ``c = p_u × p_v`` (one square root), all in one pass vectorised
+over b into an L1-sized planar scratch, and one pass interleaving the row into the
+``(N, Gu, Gv, 3)`` outputs. The same 16-term sums as the reference, associated the same way (u
+first, then v), with a cross product of evaluated tangents instead of the reference's expanded
+coefficients: tests/test_grid_kernels.py states the ULP bound. The patches are cut into contiguous
+ranges, a few per core, taken in turn by one thread per core (the kernels release the GIL); every
 point is written by exactly one range, so the result does not depend on the split.
 """
 
