@@ -289,10 +289,7 @@ def _own_quantities(targets: Targets, guide: FloatArray | None) -> FloatArray:
     """Per half-edge h = 4f + k the (4F, 7, 3) :data:`_QUANTITIES` of face f's macro net: the
     ``guide`` (F, 7, 7, 3), or the targets' bicubic (:func:`target_nets`) subdivided at ½."""
     nets, weights = (target_nets(targets).reshape(-1, 16, 3), _NET_WEIGHTS) if guide is None else (guide.reshape(-1, 49, 3), _MACRO_WEIGHTS)
-    out = np.empty((len(nets), 4, len(_QUANTITIES), 3))
-    for f0 in range(0, len(nets), _GROUPS):
-        out[f0:f0 + _GROUPS] = np.einsum("kpn,fnd->fkpd", weights, nets[f0:f0 + _GROUPS])
-    return out.reshape(-1, len(_QUANTITIES), 3)
+    return np.matmul(weights.reshape(-1, weights.shape[-1]), nets).reshape(-1, len(_QUANTITIES), 3)  # (F, 4·7, 3)
 
 
 # Sources of the assembly, per half-edge h = 4f + k: 0 V, 1..7 the points of _assemble's
