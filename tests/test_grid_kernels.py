@@ -242,13 +242,16 @@ def test_compiled_kernels_match_the_numpy_reference(count, gu, gv, form, seed):
 
 
 def test_compiled_ranges_cover_every_patch(monkeypatch):
-    """Split over one range per worker (here 3, more than the patches of a short batch): every patch
+    """Split over several ranges per worker (more than the patches of a short batch): every patch
     written, by exactly one range, so the result equals one range over all of them bit for bit."""
+    from g1patch import kernels
+
     control = make_control(7, seed=21)
     u, v = parameters(13, 22), parameters(17, 23)
+    monkeypatch.setattr(kernels, "workers", lambda: 1)
     one = _grid.positions_and_normals(control, "bezier", u, v, compiled=True)
     for workers in (2, 3, 8):
-        monkeypatch.setattr(_grid, "_workers", lambda: workers)
+        monkeypatch.setattr(kernels, "workers", lambda: workers)
         split = _grid.positions_and_normals(control, "bezier", u, v, compiled=True)
         np.testing.assert_array_equal(split[0], one[0])
         np.testing.assert_array_equal(split[1], one[1])

@@ -52,9 +52,7 @@ point is written by exactly one range, so the result does not depend on the spli
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 from functools import cache
 from typing import Any
 
@@ -63,6 +61,7 @@ from numpy.typing import NDArray
 
 from .basis import Form, basis_values
 from .errors import InputError
+from .kernels import in_chunks, jit_kernel
 
 __all__ = ["BLOCK_POINTS", "KERNEL_POINTS", "contract", "normals", "positions_and_normals"]
 
@@ -74,9 +73,6 @@ BLOCK_POINTS = 16384
 #: process (numba's import and cache load); a call this size takes ~70 ms in NumPy for positions +
 #: normals and ~20 ms for positions, the kernels about a third to a half of that
 KERNEL_POINTS = 1 << 22
-
-#: ranges of patches per core a compiled kernel's call is cut into (see :func:`_in_ranges`)
-RANGES_PER_WORKER = 8
 
 _TINY = np.finfo(np.float64).tiny
 
@@ -129,7 +125,7 @@ def contract(
     if _use_kernels(out.size // 3, compiled):
         kernel = _compiled(_contract_kernel)
         control, wu_t, wv_t = np.ascontiguousarray(control), np.ascontiguousarray(weights_u.T), np.ascontiguousarray(weights_v.T)
-        _in_ranges(lambda lo, hi: kernel(control, wu_t, wv_t, out, lo, hi), n)
+        in_chunks(lambda lo, hi: kernel(control, wu_t, wv_t, out, lo, hi), n, least=1)
     else:
         _run(control, weights_u, None, weights_v, None, out, None)
     return out
@@ -183,7 +179,7 @@ def _normals_into(
         control = np.ascontiguousarray(control)
         wu_t, dwu_t, wv_t, dwv_t = (np.ascontiguousarray(w.T) for w in (wu, dwu, wv, dwv))
         into = np.empty((0, 0, 0, 3)) if positions is None else positions
-        _in_ranges(lambda lo, hi: kernel(control, wu_t, dwu_t, wv_t, dwv_t, into, normals_out, lo, hi), control.shape[0])
+        in_chunks(lambda lo, hi: kernel(control, wu_t, dwu_t, wv_t, dwv_t, into, normals_out, lo, hi), control.shape[0], least=1)
     else:
         _run(control, wu, dwu, wv, dwv, positions, normals_out)
     return normals_out
@@ -263,54 +259,16 @@ def _run(
 # ---------------------------------------------------------------------------------------------
 # Compiled kernels (see the module docstring); ``_run`` above is their reference.
 
-_pool: ThreadPoolExecutor | None = None
-
 
 @cache
 def _compiled(kernel: Callable[..., Any]) -> Callable[..., Any]:
-    """``kernel`` compiled by numba on first use: cached on disk, without the GIL (ranges run on
-    threads side by side), float64 IEEE arithmetic as NumPy's (no fastmath: no contraction into
-    fused multiply-adds). The helper :func:`_row_curves` is compiled (and rebound) with the first
-    kernel. numba is imported here, so that ``import g1patch`` stays fast."""
+    """``kernel`` by :func:`~g1patch.kernels.jit_kernel` (cached on disk, without the GIL, no
+    fastmath: no contraction into fused multiply-adds); the helper :func:`_row_curves` is compiled
+    (and rebound) with the first kernel."""
     global _row_curves
-    import numba
-
-    options = {"cache": True, "nogil": True, "error_model": "numpy"}
-    if not isinstance(_row_curves, numba.core.dispatcher.Dispatcher):
-        _row_curves = numba.njit(**options)(_row_curves)
-    return numba.njit(**options)(kernel)  # type: ignore[no-any-return]
-
-
-def _workers() -> int:
-    """Cores this process may run on."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-
-
-def _forget_pool() -> None:
-    """A forked child has none of its parent's threads: it starts its own pool when it needs one."""
-    global _pool
-    _pool = None
-
-
-if hasattr(os, "register_at_fork"):
-    os.register_at_fork(after_in_child=_forget_pool)
-
-
-def _in_ranges(call: Callable[[int, int], object], count: int) -> None:
-    """``call(lo, hi)`` over ``[0, count)`` on one thread per core, in :data:`RANGES_PER_WORKER` contiguous
-    ranges per thread taken in turn (a core shared with another process then takes fewer of them
-    instead of holding up the whole call)."""
-    global _pool
-    workers = _workers()
-    parts = max(1, min(RANGES_PER_WORKER * workers, count))
-    if workers == 1 or parts == 1:
-        call(0, count)
-        return
-    if _pool is None:
-        _pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="g1patch-grid")
-    bounds = [count * k // parts for k in range(parts + 1)]
-    for future in [_pool.submit(call, lo, hi) for lo, hi in zip(bounds[:-1], bounds[1:])]:
-        future.result()
+    if not hasattr(_row_curves, "py_func"):
+        _row_curves = jit_kernel(_row_curves)
+    return jit_kernel(kernel)
 
 
 def _row_curves(

@@ -4,10 +4,12 @@
 assembly (plain functions with loops, each kept beside the NumPy code it replaces, which stays as
 the reference). A layer-neutral module: the mesh, the subdivision and the targets all use it.
 
-``in_chunks`` runs a kernel over ``[0, count)`` in contiguous ranges, one per core, on threads:
-the kernels are compiled with ``nogil``, so the ranges run at the same time. A kernel run this
-way writes each item's results in its own place (no two items share an output), so the result is
-bit for bit that of one call over the whole range, in any order.
+``in_chunks`` runs a kernel over ``[0, count)`` in contiguous ranges on one thread per core: the
+kernels are compiled with ``nogil``, so the ranges run at the same time. Each core takes
+:data:`RANGES_PER_WORKER` ranges in turn, so a core shared with another process takes fewer of
+them instead of holding up the whole call. A kernel run this way writes each item's results in its
+own place (no two items share an output), so the result is bit for bit that of one call over the
+whole range, in any order.
 """
 
 from __future__ import annotations
@@ -18,13 +20,16 @@ from concurrent.futures import ThreadPoolExecutor
 from functools import cache
 from typing import TypeVar
 
-__all__ = ["CHUNK_ITEMS", "in_chunks", "jit_kernel", "workers"]
+__all__ = ["CHUNK_ITEMS", "RANGES_PER_WORKER", "in_chunks", "jit_kernel", "workers"]
 
 T = TypeVar("T")
 
 #: fewest items per range: below this a kernel runs in one call (threads cost ~50 µs to start,
 #: and small builds should not pay them)
 CHUNK_ITEMS = 50_000
+#: ranges per core a call is cut into at most (with one range per core, a call waits for the
+#: core another process is using: 2× slower on a loaded 2-core machine)
+RANGES_PER_WORKER = 8
 
 _pool: ThreadPoolExecutor | None = None
 
@@ -55,14 +60,17 @@ if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_forget_pool)
 
 
-def in_chunks(call: Callable[[int, int], T], count: int) -> list[T]:
-    """``[call(lo, hi) for each range]`` over ``[0, count)`` cut into ``min(workers(), count //`` :data:`CHUNK_ITEMS` ``)``
-    contiguous ranges (at least one), run on threads, results in range order."""
+def in_chunks(call: Callable[[int, int], T], count: int, least: int | None = None) -> list[T]:
+    """``[call(lo, hi) for each range]`` over ``[0, count)`` cut into contiguous ranges of at least
+    ``least`` items (default :data:`CHUNK_ITEMS`), at most :data:`RANGES_PER_WORKER` per core, run
+    on one thread per core; one call on one core or for fewer than two ranges' worth. Results in
+    range order."""
     global _pool
-    parts = max(1, min(workers(), count // max(CHUNK_ITEMS, 1)))
-    bounds = [count * i // parts for i in range(parts + 1)]
-    if parts == 1:
+    cores = workers()
+    parts = max(1, min(RANGES_PER_WORKER * cores, count // max(CHUNK_ITEMS if least is None else least, 1)))
+    if cores == 1 or parts == 1:
         return [call(0, count)]
+    bounds = [count * i // parts for i in range(parts + 1)]
     if _pool is None:
         _pool = ThreadPoolExecutor(max_workers=workers(), thread_name_prefix="g1patch-kernel")
     futures = [_pool.submit(call, lo, hi) for lo, hi in zip(bounds[:-1], bounds[1:])]
