@@ -133,6 +133,28 @@ def test_default_export_of_a_gregory_network_is_g1_in_opencascade(name: str, sha
         assert result.relative_deviation <= 1e-3 and result.file_bytes <= 50_000  # measured 1.5e-4, 19.3 KB
 
 
+def test_a_degenerate_corner_takes_the_normal_just_inside_it() -> None:
+    """A corner whose two edge tangents are opposite (a face between two creases that run on
+    smoothly) has no normal of its own; the re-assembly's sector normals must not turn NaN there:
+    the normal along the corner's diagonal, here the plane's, and every other corner's unchanged."""
+    from g1patch.construct.polynomial import _corner_normals
+    from g1patch.gregory import GregoryPatchSet
+
+    i, j = np.meshgrid(np.arange(4.0), np.arange(4.0), indexing="ij")
+    net = np.stack([i, j, np.zeros_like(i)], axis=-1)
+    net[0, 1] = (-1.0, 0.0, 0.0)  # p_v(0, 0) = 3 (b01 − b00) opposite p_u(0, 0) = 3 (b10 − b00)
+    points = np.zeros((1, 20, 3))
+    points[0, :12] = net[BEZIER_INDEX[:, 0], BEZIER_INDEX[:, 1]]
+    points[0, 12:] = np.repeat(net[[1, 2, 2, 1], [1, 1, 2, 2]], 2, axis=0)
+    patches = GregoryPatchSet(points)
+    plain = patches.normals(CORNER_PARAMETERS)
+    assert np.linalg.norm(plain[0, 0]) == 0.0  # degenerate: the case this guards
+    normals = _corner_normals(patches)
+    assert np.all(np.isfinite(normals))
+    np.testing.assert_allclose(np.abs(normals[0, 0]), [0.0, 0.0, 1.0], atol=1e-12)
+    np.testing.assert_array_equal(normals[0, 1:], plain[0, 1:])
+
+
 def test_seams_stay_seams_and_close(shared_data: Path) -> None:
     """A seamed network cut open for split4: exactly G1 off the seams, the seams closed (G0 to
     rounding: both sides share each seam curve) and marked, crease angles as the Gregory network's."""

@@ -251,7 +251,7 @@ def test_compiled_ranges_cover_every_patch(monkeypatch):
     monkeypatch.setattr(kernels, "workers", lambda: 1)
     one = _grid.positions_and_normals(control, "bezier", u, v, compiled=True)
     for workers in (2, 3, 8):
-        monkeypatch.setattr(kernels, "workers", lambda: workers)
+        monkeypatch.setattr(kernels, "workers", lambda workers=workers: workers)
         split = _grid.positions_and_normals(control, "bezier", u, v, compiled=True)
         np.testing.assert_array_equal(split[0], one[0])
         np.testing.assert_array_equal(split[1], one[1])

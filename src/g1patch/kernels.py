@@ -18,6 +18,7 @@ import os
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from functools import cache
+from itertools import pairwise
 from typing import TypeVar
 
 __all__ = ["CHUNK_ITEMS", "RANGES_PER_WORKER", "in_chunks", "jit_kernel", "workers"]
@@ -73,5 +74,5 @@ def in_chunks(call: Callable[[int, int], T], count: int, least: int | None = Non
     bounds = [count * i // parts for i in range(parts + 1)]
     if _pool is None:
         _pool = ThreadPoolExecutor(max_workers=workers(), thread_name_prefix="g1patch-kernel")
-    futures = [_pool.submit(call, lo, hi) for lo, hi in zip(bounds[:-1], bounds[1:])]
+    futures = [_pool.submit(call, lo, hi) for lo, hi in pairwise(bounds)]
     return [future.result() for future in futures]

@@ -51,9 +51,9 @@ from numpy.typing import NDArray
 
 from ..errors import ConstructionError
 from ..gregory import GregoryPatchSet
+from ..kernels import in_chunks, jit_kernel
 from ..mesh import QuadTopology
 from ..targets import Targets, halfedge_slots, slot_sector_normals
-from ..kernels import in_chunks, jit_kernel
 from ..targets.local import in_vertex_planes, slot_tables
 
 __all__ = ["assemble_gregory", "corner_split", "tangent_plane_tangents"]
