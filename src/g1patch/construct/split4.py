@@ -158,14 +158,15 @@ def _edge_curves(
 
 
 def _even_vertex_shifts(
-    topology: QuadTopology, lam: FloatArray, points: FloatArray, slope: FloatArray, v_pos: FloatArray
+    topology: QuadTopology, lam: FloatArray, curve: FloatArray, mu: FloatArray, v_pos: FloatArray
 ) -> tuple[IntArray, FloatArray]:
     """Midpoint shifts s_e (min-norm) so that every interior vertex of even valence n ≥ 6 satisfies
     ``Σ_j (−1)^j (P2_j + s_{e_j}) = Σ_j (−1)^j m_j t_j / (6 λ_v)``, ``t_j = 3 (P1_j − v)``.
 
-    ``points[h]`` = (P1, P2) of ring half-edge h from its origin, ``slope[h]`` = m. With the
-    sign matrix A (vertices × edges), ``s = Aᵀ (A Aᵀ)⁻¹ r``: one sparse solve, block-diagonal over
-    clusters of adjacent even vertices. Returns the moved edges and their shifts.
+    (P1, P2) of ring half-edge h from its origin are read from ``curve`` (E, 5, 3), and
+    m = λ(M → origin) = ±μ_e. With the sign matrix A (vertices × edges), ``s = Aᵀ (A Aᵀ)⁻¹ r``: one
+    sparse solve, block-diagonal over clusters of adjacent even vertices. Returns the moved edges
+    and their shifts.
     """
     even = ~topology.is_boundary_vertex & (topology.valence >= 6) & (topology.valence % 2 == 0)
     vs = np.flatnonzero(even)
@@ -178,10 +179,12 @@ def _even_vertex_shifts(
     row = np.repeat(np.arange(vs.size), counts)
     alternating = 1.0 - 2.0 * ((slot - topology.ring_offsets[vs][row]) % 2)
     origin = v_pos[vs][row]
-    p1, p2 = points[ring, 0], points[ring, 1]
-    terms = alternating[:, None] * (slope[ring, None] * 3.0 * (p1 - origin) / (6.0 * lam[vs][row, None]) - p2)
-    residual = np.add.reduceat(terms, np.r_[0, np.cumsum(counts[:-1])])
     edge = topology.halfedge_edge[ring]
+    canonical = topology.edge_halfedges[edge, 0] == ring
+    p1, p2 = curve[edge, np.where(canonical, 0, 4)], curve[edge, np.where(canonical, 1, 3)]
+    slope = np.where(canonical, mu[edge], -mu[edge])
+    terms = alternating[:, None] * (slope[:, None] * 3.0 * (p1 - origin) / (6.0 * lam[vs][row, None]) - p2)
+    residual = np.add.reduceat(terms, np.r_[0, np.cumsum(counts[:-1])])
     moved, column = np.unique(edge, return_inverse=True)
     a = csc_matrix((alternating, (row, column)), shape=(vs.size, moved.size))
     normal = (a @ a.T).tocsc()
@@ -198,11 +201,17 @@ def _even_vertex_shifts(
 _GROUPS = 32768  # systems per block in _min_norm
 
 
+def _operator(matrix: FloatArray) -> FloatArray:
+    """``[I − B⁺B, B⁺]`` (n, n + m) of B (m, n): the min-norm change of a target τ onto ``B x = b`` is
+    this matrix times ``[τ; b]``."""
+    inverse = np.linalg.pinv(matrix)
+    return np.concatenate([np.eye(matrix.shape[1]) - inverse @ matrix, inverse], axis=1)
+
+
 def _min_norm(matrix: FloatArray, rhs: FloatArray, target: FloatArray) -> FloatArray:
     """``τ + B⁺ (b − B τ) = [I − B⁺B, B⁺] [τ; b]`` for batches: target (g, n, 3), rhs (g, m, 3),
     B (m, n); one matrix product over all coordinates of the batch."""
-    inverse = np.linalg.pinv(matrix)
-    operator = np.concatenate([np.eye(matrix.shape[1]) - inverse @ matrix, inverse], axis=1)
+    operator = _operator(matrix)
     out = np.empty(target.shape)
     for g0 in range(0, len(target), _GROUPS):  # in blocks of groups: the temporaries stay in cache
         g1 = g0 + _GROUPS
@@ -444,12 +453,10 @@ def split4_patches(
         """Per half-edge, curve point ``at_x`` of its edge when ``origin_side`` is the X side, else ``at_y``."""
         return flat_curve[5 * edge_of + np.where(origin_side, at_x, at_y)]
 
-    near = np.stack([on_side(0, 4, canonical), on_side(1, 3, canonical)], axis=1)
-    moved, shift = _even_vertex_shifts(topology, lam, near, slope, pos)
+    moved, shift = _even_vertex_shifts(topology, lam, curve, mu, pos)
     curve[moved, 1:4] += shift[:, None]
     o1, o2 = on_side(0, 4, canonical), on_side(1, 3, canonical)  # from the origin of h
     d1, d2 = on_side(0, 4, ~canonical), on_side(1, 3, ~canonical)  # from the target of h
-    del near
 
     # -- the free choices follow the face's own macro net (the targets' bicubic subdivided at ½, or the
     # guide): what its boundary predicts from the split curves plus the net's detail over that
