@@ -302,3 +302,140 @@ def test_public_methods_write_into_given_arrays() -> None:
     assert patches.evaluate_grid(u, out=positions) is positions
     with pytest.raises(InputError, match="out"):
         patches.evaluate_grid(u, out=np.empty((5, 7, 6, 3)))
+
+
+# ----------------------------------------------------------------------------- fresh outputs
+HUGE = 2 << 20
+ON_LINUX_WITH_MADVISE = pytest.mark.skipif(not hasattr(__import__("mmap"), "MADV_HUGEPAGE"),
+                                           reason="no madvise(MADV_HUGEPAGE) on this platform")
+
+
+@pytest.fixture
+def huge_outputs(monkeypatch):
+    """Outputs from one byte on mapped on huge pages, as where THP is ``madvise`` with free huge blocks."""
+    monkeypatch.setattr(_grid, "HUGE_OUTPUT_BYTES", 1)
+    monkeypatch.setattr(_grid, "_huge_page_size", lambda: HUGE)
+    monkeypatch.setattr(_grid, "_free_huge_bytes", lambda huge: 1 << 62)
+
+
+def mapped(array):
+    """Whether ``array`` is a view of a mapping of its own (not NumPy's allocation)."""
+    while isinstance(array, np.ndarray) and array.base is not None:
+        array = array.base
+    return not isinstance(array, np.ndarray)
+
+
+@ON_LINUX_WITH_MADVISE
+@COMPILED
+def test_fresh_outputs_on_huge_pages_are_plain_arrays_with_the_same_bits(huge_outputs, monkeypatch, compiled):
+    """A mapped output: right shape and dtype, C-contiguous, writable, on a huge-page boundary, and
+    bit for bit the np.empty output (only where the memory comes from changes)."""
+    import gc
+
+    control = make_control(6, seed=31)
+    u, v = parameters(9, 32), parameters(11, 33)
+    wu, wv = basis_values("bspline", u), basis_values("bspline", v)
+    positions, normals = _grid.positions_and_normals(control, "bspline", u, v, compiled=compiled)
+    contracted = _grid.contract(control, wu, wv, compiled=compiled)
+    alone = _grid.normals(control, "bspline", u, v, compiled=compiled)
+    for array in (positions, normals, contracted, alone):
+        assert mapped(array) and not array.flags.owndata
+        assert array.shape == (6, 9, 11, 3) and array.dtype == np.float64
+        assert array.flags.c_contiguous and array.flags.writeable and array.flags.aligned
+        assert array.ctypes.data % HUGE == 0
+    monkeypatch.setattr(_grid, "HUGE_OUTPUT_BYTES", 0)
+    plain = _grid.positions_and_normals(control, "bspline", u, v, compiled=compiled)
+    assert not mapped(plain[0]) and plain[0].flags.owndata
+    np.testing.assert_array_equal(positions, plain[0])
+    np.testing.assert_array_equal(normals, plain[1])
+    np.testing.assert_array_equal(contracted, plain[0])
+    np.testing.assert_array_equal(alone, plain[1])
+    # the mapping lives as long as a view of it: write and read after everything else is gone
+    expected = positions[2, 3].copy()
+    del plain, normals, contracted, alone
+    gc.collect()
+    row = positions[2, 3]
+    del positions
+    gc.collect()
+    np.testing.assert_array_equal(row, expected)
+    row[:] = 7.0
+    assert np.all(row == 7.0)
+
+
+@ON_LINUX_WITH_MADVISE
+def test_public_methods_return_mapped_outputs(huge_outputs):
+    """PatchSet's grid methods allocate through the same path; a frame is still applied in place."""
+    from g1patch.frame import Frame
+
+    control = make_control(3, seed=34)
+    u = parameters(6, 35)
+    centre = np.array([1.0, -2.0, 0.5])
+    results = []
+    for patches in (PatchSet(control, "bezier"), PatchSet(control, "bezier", Frame(centre, 2.0))):
+        positions, normals = patches.evaluate_grid_with_normals(u)
+        grid = patches.evaluate_grid(u)
+        assert mapped(positions) and mapped(normals) and mapped(grid) and mapped(patches.normals_grid(u))
+        np.testing.assert_array_equal(positions, grid)
+        results.append((positions, normals))
+    (local, local_normals), (world, world_normals) = results
+    np.testing.assert_allclose(world, centre + 2.0 * local, rtol=0, atol=8 * EPS * np.abs(world).max())
+    np.testing.assert_array_equal(world_normals, local_normals)
+
+
+def test_fresh_falls_back_to_numpy(monkeypatch):
+    """np.empty below HUGE_OUTPUT_BYTES, where huge pages are not offered on request, without free
+    huge blocks for twice the array, or when the mapping fails."""
+    shape = (4, 8, 8, 3)
+    nbytes = 8 * 4 * 8 * 8 * 3
+    monkeypatch.setattr(_grid, "_huge_page_size", lambda: HUGE)
+    monkeypatch.setattr(_grid, "_free_huge_bytes", lambda huge: 2 * nbytes)
+    monkeypatch.setattr(_grid, "HUGE_OUTPUT_BYTES", nbytes + 1)
+    assert not mapped(_grid._fresh(shape))
+    monkeypatch.setattr(_grid, "HUGE_OUTPUT_BYTES", 0)
+    assert not mapped(_grid._fresh(shape))
+    monkeypatch.setattr(_grid, "HUGE_OUTPUT_BYTES", nbytes)
+    monkeypatch.setattr(_grid, "_free_huge_bytes", lambda huge: 2 * nbytes - 1)
+    assert not mapped(_grid._fresh(shape))
+    monkeypatch.setattr(_grid, "_huge_page_size", lambda: 0)
+    monkeypatch.setattr(_grid, "_free_huge_bytes", lambda huge: 1 << 62)
+    assert not mapped(_grid._fresh(shape))
+
+    def no_mapping(*args, **kwargs):
+        raise OSError(12, "Cannot allocate memory")
+
+    monkeypatch.setattr(_grid, "_huge_page_size", lambda: HUGE)
+    monkeypatch.setattr(_grid.mmap, "mmap", no_mapping)
+    array = _grid._fresh(shape)
+    assert not mapped(array) and array.shape == shape and array.dtype == np.float64 and array.flags.c_contiguous
+    positions, normals = _grid.positions_and_normals(make_control(4, seed=36), "bezier", parameters(8, 37), parameters(8, 38))
+    assert not mapped(positions) and not mapped(normals) and np.isfinite(normals).all()
+
+
+@pytest.mark.parametrize(("enabled", "size", "expected"), [
+    ("always [madvise] never\n", "2097152\n", HUGE),
+    ("[always] madvise never\n", "2097152\n", 0),  # np.empty gets huge pages already
+    ("always madvise [never]\n", "2097152\n", 0),
+    ("always [madvise] never\n", "536870912\n", 0),  # arm64 with 64 KiB pages: 512 MiB huge pages
+    ("always [madvise] never\n", "garbage\n", 0),
+    (None, None, 0),  # no THP in this kernel
+])
+def test_huge_page_size_reads_the_thp_mode(tmp_path, enabled, size, expected):
+    if enabled is not None:
+        (tmp_path / "enabled").write_text(enabled)
+        (tmp_path / "hpage_pmd_size").write_text(size)
+    linux = hasattr(__import__("mmap"), "MADV_HUGEPAGE") and __import__("sys").platform.startswith("linux")
+    assert _grid._huge_page_size.__wrapped__(str(tmp_path)) == (expected if linux else 0)
+
+
+def test_free_huge_bytes_sums_free_blocks_of_huge_page_order_and_up(tmp_path):
+    import mmap
+
+    page = mmap.PAGESIZE
+    order = (HUGE // page).bit_length() - 1
+    counts = [0] * (order + 2)
+    counts[0], counts[order - 1], counts[order], counts[order + 1] = 1000, 7, 3, 2
+    text = "".join(f"Node {node}, zone {zone:>8} " + " ".join(f"{c:6d}" for c in counts) + "\n"
+                   for node in (0, 1) for zone in ("DMA32", "Normal"))
+    (tmp_path / "buddyinfo").write_text(text)
+    assert _grid._free_huge_bytes(HUGE, str(tmp_path / "buddyinfo")) == 4 * (3 + 2 * 2) * HUGE
+    assert _grid._free_huge_bytes(HUGE, str(tmp_path / "missing")) == 0
