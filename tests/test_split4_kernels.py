@@ -130,3 +130,46 @@ def test_the_default_is_numpy_below_the_threshold_and_kernels_above(monkeypatch:
     monkeypatch.setattr(split4, "KERNEL_FACES", mesh.topology.n_faces)
     np.testing.assert_array_equal(split4_patches(targets, mesh.vertices, frame.centre, frame.scale)[0].control,
                                   compiled[0].control)
+
+
+@pytest.mark.parametrize("name", MESHES)
+def test_the_line_walk_gives_the_shears_bit_for_bit(name: str) -> None:
+    mesh = MESHES[name]()
+    targets, _ = local_targets(mesh)
+    topology, cosine = targets.topology, split4_star(targets, compiled=False).cosine
+    h = topology.edge_halfedges[:, 0]
+    x_of, y_of = topology.origin(h), topology.target(h)
+    reference = split4._chain_shears(topology, cosine, x_of, y_of)
+    np.testing.assert_array_equal(split4._chain_shears(topology, cosine, x_of, y_of, compiled=True), reference)
+
+
+@pytest.mark.parametrize("name", MESHES)
+def test_the_star_kernel_gives_the_reference_stars(name: str) -> None:
+    """The fit and the safeguard as NumPy's, to rounding (sums in another order); the same shrunk
+    vertices. A shrunk star is tested on the fan whose tangents are made 3× too long at one vertex."""
+    mesh = MESHES[name]()
+    targets, _ = local_targets(mesh)
+    long = targets.tangents.copy()
+    long[targets.topology.neighbor_offsets[0]:targets.topology.neighbor_offsets[1]] *= 3.0
+    for wanted in (targets, Targets(targets.topology, targets.positions, targets.normals, long, targets.interior)):
+        reference, compiled = split4_star(wanted, compiled=False), split4_star(wanted, compiled=True)
+        np.testing.assert_array_equal(compiled.cosine, reference.cosine)
+        np.testing.assert_array_equal(compiled.shrunk, reference.shrunk)
+        np.testing.assert_array_equal(compiled.refitted, reference.refitted)
+        np.testing.assert_allclose(compiled.factor, reference.factor, rtol=POINT_ULPS * EPS, atol=0)
+        size = np.abs(reference.star).max()
+        np.testing.assert_array_less(np.abs(compiled.star - reference.star), POINT_ULPS * EPS * size)
+    assert split4_star(Targets(targets.topology, targets.positions, targets.normals, long, targets.interior),
+                       compiled=True).shrunk[0]
+
+
+@pytest.mark.parametrize("name", MESHES)
+def test_the_network_kernel_gives_the_reference_connectivity(name: str) -> None:
+    mesh = MESHES[name]()
+    targets, _ = local_targets(mesh)
+    patches, extra, normals, _ = split4_patches(targets, targets.positions, np.zeros(3), 1.0)
+    points, point_normals = np.concatenate([targets.positions, extra]), np.concatenate([targets.normals, normals])
+    reference = split4._split4_network(targets.topology, patches, points, point_normals, {}, compiled=False)
+    compiled = split4._split4_network(targets.topology, patches, points, point_normals, {}, compiled=True)
+    for field in ("corner_ids", "edge_ids", "edge_reversed", "neighbor", "neighbor_edge", "same_direction", "edge_collapsed"):
+        np.testing.assert_array_equal(getattr(compiled, field), getattr(reference, field))

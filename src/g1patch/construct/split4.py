@@ -90,7 +90,9 @@ def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
     return np.einsum("...d,...d->...", a, b)
 
 
-def _chain_shears(topology: QuadTopology, cosine: FloatArray, x_of: IntArray, y_of: IntArray) -> FloatArray:
+def _chain_shears(
+    topology: QuadTopology, cosine: FloatArray, x_of: IntArray, y_of: IntArray, *, compiled: bool = False
+) -> FloatArray:
     """μ_e = λ(M_e → X_e) per edge, constant in size and alternating in sign along grid lines.
 
     Nodes ``2e + s`` are the ends of interior edge e (s = 0 at X, 1 at Y) and carry
@@ -100,12 +102,21 @@ def _chain_shears(topology: QuadTopology, cosine: FloatArray, x_of: IntArray, y_
     equal link joins like copies, an opposite link unlike ones), which also labels the lines in
     linear time. The size is set at a line's dominant end, the end with the largest
     ``|c_end − c_next|``, to λ = −(c_end − c_next), making δ = ½ there and δ ∈ [⅓, ½] everywhere.
-    Closed lines (all valence 4) get μ = 0.
+    Closed lines (all valence 4) get μ = 0. ``compiled``: by walking the lines (:func:`_chain_kernel`,
+    the same values bit for bit).
     """
     n_edges = topology.n_edges
     nodes = 2 * n_edges
     interior = ~topology.is_boundary_edge
     through = ~topology.is_boundary_vertex & (topology.valence == 4)
+    if compiled:
+        from ..kernels import jit_kernel
+
+        lam = np.zeros(nodes)
+        jit_kernel(_chain_kernel)(np.ascontiguousarray(cosine, dtype=np.float64), x_of, y_of, interior, through,
+                                  topology.ring_offsets, topology.ring_halfedges, topology.halfedge_edge,
+                                  topology.edge_halfedges, lam)
+        return lam[0::2]
     ring = topology.ring_halfedges
     ring_edge = topology.halfedge_edge[ring]
     ring_node = 2 * ring_edge + (topology.edge_halfedges[ring_edge, 0] != ring)
@@ -366,19 +377,35 @@ class SplitStar(NamedTuple):
     factor: FloatArray
 
 
-def split4_star(targets: Targets) -> SplitStar:
+def split4_star(targets: Targets, *, compiled: bool | None = None) -> SplitStar:
     """The regular star split4 needs (its twist systems are solvable only for affine-regular
     stars), fitted to the target fan: ``t_j = a cos θ_j + b sin θ_j``, ``c_v = cos`` of the angle
     step. A star that does not turn counter-clockwise is refitted to evenly spread target
     directions (a fallback). Length safeguard: each vertex's star is scaled down uniformly (it stays
     regular) until no tangent is longer than :data:`STAR_LENGTH_LIMIT` × the shorter of its target's
     and the circle-aware Hermite length of its edge (``2|d|²/(|d| + |P d|)``, P the projection onto
-    the tangent plane: what the interpolate rule's tangents are).
+    the tangent plane: what the interpolate rule's tangents are). ``compiled``: vertex by vertex in
+    :func:`_star_kernel` (ranges side by side), default from :data:`KERNEL_FACES` faces on; where
+    a fan needs the refit, the NumPy reference.
     """
     from ..targets.interpolate import fit_regular_star, slot_vertices, spread_fan
 
     topology = targets.topology
     wanted = targets.tangents
+    if (topology.n_faces >= KERNEL_FACES) if compiled is None else compiled:
+        from ..kernels import in_chunks, jit_kernel
+
+        star = np.empty(wanted.shape)
+        valid = np.empty(topology.n_vertices, dtype=bool)
+        factor = np.empty(topology.n_vertices)
+        kernel = jit_kernel(_star_kernel)
+        arrays = [np.ascontiguousarray(a, dtype=np.float64) for a in (targets.normals, wanted, targets.positions)]
+        in_chunks(lambda lo, hi: kernel(*arrays, topology.neighbor_offsets, topology.neighbors, topology.face_count,
+                                        topology.valence, topology.is_boundary_vertex, STAR_LENGTH_LIMIT, star, valid,
+                                        factor, lo, hi), topology.n_vertices)
+        if valid.all():
+            return SplitStar(star, np.cos(np.where(topology.is_boundary_vertex, np.pi / topology.face_count,
+                                                   2.0 * np.pi / topology.valence)), ~valid, factor < 1.0, factor)
     star, cosine, valid = fit_regular_star(topology, targets.normals, wanted)
     if not valid.all():
         chord = np.linalg.norm(wanted, axis=1)
@@ -429,9 +456,9 @@ def split4_patches(
     topology = targets.topology
     n_faces = topology.n_faces
     pos = targets.positions
-    stars = split4_star(targets) if star is None else star
+    compiled = (n_faces >= KERNEL_FACES) if compiled is None else compiled
+    stars = split4_star(targets, compiled=compiled) if star is None else star
     star, cosine = stars.star, stars.cosine
-    slot_out, slot_in = halfedge_slots(topology)
     lam = 2.0 * cosine
 
     # -- edges: canonical half-edge X → Y (face L), twin Y → X (face R)
@@ -439,10 +466,11 @@ def split4_patches(
     h_r = topology.edge_halfedges[:, 1]
     interior = h_r >= 0
     x_of, y_of = topology.origin(h_l), topology.target(h_l)
-    mu = _chain_shears(topology, cosine, x_of, y_of)
-    if (n_faces >= KERNEL_FACES) if compiled is None else compiled:
+    mu = _chain_shears(topology, cosine, x_of, y_of, compiled=compiled)
+    if compiled:
         control, extra, extra_normals = _compiled_patches(targets, corners, centre, scale, guide, stars, mu)
         return PatchSet(control.reshape(-1, 4, 4, 3)), extra, extra_normals, stars
+    slot_out, slot_in = halfedge_slots(topology)
     curve = np.stack(
         _edge_curves(pos[x_of], pos[y_of], star[slot_out[h_l]], star[slot_in[h_l]], mu, cosine[x_of], cosine[y_of]), axis=1
     )  # (E, 5, 3): P1, P2, M, P4, P5
@@ -579,14 +607,27 @@ def bspline_nets(source: PatchNetwork | PatchSet) -> FloatArray:
 
 
 def _split4_network(
-    topology: QuadTopology, patches: PatchSet, points: FloatArray, point_normals: FloatArray, provenance: dict[str, str]
+    topology: QuadTopology, patches: PatchSet, points: FloatArray, point_normals: FloatArray, provenance: dict[str, str],
+    *, compiled: bool | None = None,
 ) -> PatchNetwork:
     """Connectivity of the 4 F sub-patches. Sub-patch k of face f has local corner k at V_k,
     k+1 at MID[k], k+2 at C, k+3 at MID[k−1]; its local edge k is the first half of half-edge
     h = 4f+k, edge k+1 seam k (M_k → C), edge k+2 seam k−1 reversed, edge k+3 the second half of
     prev(h). Edge ids: 2e (X half), 2e+1 (Y half) of mesh edge e, then 2E + 4f + k for seams.
+    ``compiled``: face by face in :func:`_network_kernel` (the same integers), default from
+    :data:`KERNEL_FACES` faces on.
     """
     n_faces, n_edges, nv = topology.n_faces, topology.n_edges, topology.n_vertices
+    if (n_faces >= KERNEL_FACES) if compiled is None else compiled:
+        from ..kernels import in_chunks, jit_kernel
+
+        corner, edge_id, neighbor, neighbor_edge = (np.empty((n_faces, 4, 4), dtype=np.int64) for _ in range(4))
+        reversed_ = np.empty((n_faces, 4, 4), dtype=bool)
+        kernel = jit_kernel(_network_kernel)
+        in_chunks(lambda lo, hi: kernel(topology.faces, topology.halfedge_edge, topology.edge_halfedges, topology.twin,
+                                        nv, corner, edge_id, reversed_, neighbor, neighbor_edge, lo, hi), n_faces)
+        return _network_of(patches, n_edges, n_faces, corner, edge_id, reversed_, neighbor, neighbor_edge, points,
+                           point_normals, provenance)
     h = np.arange(4 * n_faces).reshape(n_faces, 4)  # half-edge k = sub-patch k of face f
     k = np.arange(4)
     prev = QuadTopology.prev(h)
@@ -620,6 +661,15 @@ def _split4_network(
         reversed_[:, rows[0], rows[1]] = rev[:, rows[0]]
         neighbor[:, rows[0], rows[1]] = np.where(other >= 0, other, -1)[:, rows[0]]
         neighbor_edge[:, rows[0], rows[1]] = np.where(other >= 0, other_edge, -1)[:, rows[0]]
+    return _network_of(patches, n_edges, n_faces, corner, edge_id, reversed_, neighbor, neighbor_edge, points,
+                       point_normals, provenance)
+
+
+def _network_of(
+    patches: PatchSet, n_edges: int, n_faces: int, corner: IntArray, edge_id: IntArray, reversed_: NDArray[np.bool_],
+    neighbor: IntArray, neighbor_edge: IntArray, points: FloatArray, point_normals: FloatArray, provenance: dict[str, str],
+) -> PatchNetwork:
+    """The :class:`PatchNetwork` of the (F, 4, 4) connectivity arrays (sub-patch rows 4f + k)."""
     shape = (4 * n_faces, 4)
     return PatchNetwork(
         patches=patches,
@@ -654,13 +704,14 @@ def split4_network_from_targets(
         parts = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide)
     patches, extra, extra_normals, stars = parts
     patches = patches.with_frame(frame)
-    extra = frame.to_world(extra)
     provenance = dict(
         provenance,
         fallback_vertices=str(int((targets.fallback | stars.refitted).sum())),
         star_safeguard_vertices=str(int(stars.shrunk.sum())),
     )
-    points = np.concatenate([mesh.vertices, extra])
+    points = np.empty((mesh.topology.n_vertices + len(extra), 3))
+    points[:mesh.topology.n_vertices] = mesh.vertices
+    frame.to_world(extra, out=points[mesh.topology.n_vertices:])  # the midpoints and centres, without a copy
     point_normals = np.concatenate([targets.normals, extra_normals])
     network = _split4_network(mesh.topology, patches, points, point_normals, provenance)
     if seam_edges is None:
@@ -1016,3 +1067,145 @@ def _compiled_patches(
     kernel = jit_kernel(_centre_kernel)
     in_chunks(lambda lo, hi: kernel(corners, topology.faces, face_operator, _LOCAL, scale, centre, control, lo, hi), n_faces)
     return control, extra, extra_normals
+
+
+def _network_kernel(faces: IntArray, halfedge_edge: IntArray, edge_halfedges: IntArray, twin: IntArray, n_vertices: int,
+                    corner: IntArray, edge_id: IntArray, reversed_: NDArray[np.bool_], neighbor: IntArray,
+                    neighbor_edge: IntArray, lo: int, hi: int) -> None:
+    """:func:`_split4_network`'s connectivity of faces ``lo:hi`` into the (F, 4, 4) arrays: local
+    edge l of sub-patch k has role r = (l − k) mod 4 (0: first half of h, 1: seam k, 2: seam k − 1
+    reversed, 3: second half of prev(h)), and its corner l is, by role, V_k, MID[k], C, MID[k−1]."""
+    n_edges = edge_halfedges.shape[0]
+    for f in range(lo, hi):
+        for k in range(4):
+            h, hp = 4 * f + k, 4 * f + ((k + 3) & 3)
+            e, ep = halfedge_edge[h], halfedge_edge[hp]
+            canonical, canonical_prev = edge_halfedges[e, 0] == h, edge_halfedges[ep, 0] == hp
+            for r in range(4):
+                l = (k + r) & 3
+                if r == 0:
+                    corner[f, k, l] = faces[f, k]
+                    edge_id[f, k, l] = 2 * e + (0 if canonical else 1)
+                    reversed_[f, k, l] = not canonical
+                    other = twin[h]
+                    neighbor[f, k, l] = (other & ~3) | ((other + 1) & 3) if other >= 0 else -1
+                    neighbor_edge[f, k, l] = other & 3 if other >= 0 else -1
+                elif r == 1:
+                    corner[f, k, l] = n_vertices + e
+                    edge_id[f, k, l] = 2 * n_edges + h
+                    reversed_[f, k, l] = False
+                    neighbor[f, k, l] = 4 * f + ((k + 1) & 3)
+                    neighbor_edge[f, k, l] = (k + 3) & 3
+                elif r == 2:
+                    corner[f, k, l] = n_vertices + n_edges + f
+                    edge_id[f, k, l] = 2 * n_edges + hp
+                    reversed_[f, k, l] = True
+                    neighbor[f, k, l] = hp
+                    neighbor_edge[f, k, l] = k
+                else:
+                    corner[f, k, l] = n_vertices + ep
+                    edge_id[f, k, l] = 2 * ep + (1 if canonical_prev else 0)
+                    reversed_[f, k, l] = not canonical_prev
+                    other = twin[hp]
+                    neighbor[f, k, l] = other if other >= 0 else -1
+                    neighbor_edge[f, k, l] = other & 3 if other >= 0 else -1
+
+
+def _star_kernel(normals: FloatArray, wanted: FloatArray, positions: FloatArray, offsets: IntArray, neighbors: IntArray,
+                 face_count: IntArray, valence: IntArray, boundary: NDArray[np.bool_], limit: float, star: FloatArray,
+                 valid: NDArray[np.bool_], factor: FloatArray, lo: int, hi: int) -> None:
+    """:func:`~g1patch.targets.interpolate.fit_regular_star` and :func:`split4_star`'s length
+    safeguard for vertices ``lo:hi``: ``[a b] = Σ_j s_j [cos θ_j, sin θ_j] G⁻¹``, ``t_j = a cos θ_j + b sin θ_j``
+    (a boundary corner keeps ``s``), valid where ``(a × b)·n > 1e-12 (|a|² + |b|²)``; then the
+    star scaled by ``min(1, 1 / max_j |t_j| / allowed_j)``, ``allowed = limit · min(|s|, 2|d|²/(|d| + |P d|))``."""
+    for v in range(lo, hi):
+        start, stop = offsets[v], offsets[v + 1]
+        step = np.pi / face_count[v] if boundary[v] else 2.0 * np.pi / valence[v]
+        corner = boundary[v] and face_count[v] == 1
+        a = np.zeros(3)
+        b = np.zeros(3)
+        for s in range(start, stop):
+            theta = (s - start) * step
+            cos, sin = np.cos(theta), np.sin(theta)
+            for d in range(3):
+                a[d] += cos * wanted[s, d]
+                b[d] += sin * wanted[s, d]
+        half = 0.5 * (face_count[v] if boundary[v] else valence[v])
+        a /= half + 1.0 if boundary[v] else half
+        b /= 1.0 if corner else half
+        n = normals[v]
+        area = (a[1] * b[2] - a[2] * b[1]) * n[0] + (a[2] * b[0] - a[0] * b[2]) * n[1] + (a[0] * b[1] - a[1] * b[0]) * n[2]
+        valid[v] = corner or area > 1e-12 * ((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) + (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]))
+        worst = 0.0
+        for s in range(start, stop):
+            theta = (s - start) * step
+            cos, sin = np.cos(theta), np.sin(theta)
+            for d in range(3):
+                star[s, d] = wanted[s, d] if corner else a[d] * cos + b[d] * sin
+            e = positions[neighbors[s]] - positions[v]
+            chord = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
+            along = e[0] * n[0] + e[1] * n[1] + e[2] * n[2]
+            p0, p1, p2 = e[0] - along * n[0], e[1] - along * n[1], e[2] - along * n[2]
+            in_plane = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+            arc = 2.0 * chord ** 2 / (chord + in_plane if chord > 0 else 1.0)
+            length = np.sqrt(wanted[s, 0] * wanted[s, 0] + wanted[s, 1] * wanted[s, 1] + wanted[s, 2] * wanted[s, 2])
+            allowed = limit * min(length, arc)
+            ratio = np.sqrt(star[s, 0] * star[s, 0] + star[s, 1] * star[s, 1] + star[s, 2] * star[s, 2]) / (
+                allowed if allowed > 0 else np.inf)
+            if ratio > worst or np.isnan(ratio):
+                worst = ratio
+        shrink = min(1.0, 1.0 / (worst if worst > 0 else 1.0))
+        factor[v] = shrink
+        for s in range(start, stop):
+            for d in range(3):
+                star[s, d] *= shrink
+
+
+def _chain_kernel(cosine: FloatArray, x_of: IntArray, y_of: IntArray, interior: NDArray[np.bool_],
+                  through: NDArray[np.bool_], ring_offsets: IntArray, ring_halfedges: IntArray, halfedge_edge: IntArray,
+                  edge_halfedges: IntArray, lam: FloatArray) -> None:
+    """:func:`_chain_shears` by walking each grid line from its first end (node ``2e + s``, s = 1
+    at Y): across an edge λ changes sign, through a valence-4 vertex (``partner``) it keeps it. The
+    line's dominant end is the one with the larger ``|c_end − c_next|`` (the smaller node on a tie),
+    where λ = −(c_end − c_next); λ per node into ``lam`` (2E,), zero on closed lines."""
+    nodes = lam.size
+    partner = np.full(nodes, -1, dtype=np.int64)  # the node through the valence-4 vertex: ring edge j ↔ j + 2
+    for v in range(through.size):
+        if through[v]:
+            ring = np.empty(4, dtype=np.int64)
+            for j in range(4):
+                h = ring_halfedges[ring_offsets[v] + j]
+                ring[j] = 2 * halfedge_edge[h] + (0 if edge_halfedges[halfedge_edge[h], 0] == h else 1)
+            for j in range(4):
+                partner[ring[j]] = ring[(j + 2) & 3]
+    done = np.zeros(nodes, dtype=np.bool_)
+    for first in range(nodes):
+        e = first >> 1
+        v, o = (x_of[e], y_of[e]) if first & 1 == 0 else (y_of[e], x_of[e])
+        if done[first] or not interior[e] or through[v]:
+            continue
+        gap_first = cosine[v] - cosine[o]
+        last, sign = first, 1.0
+        for _ in range(nodes):  # to the other end: across the edge, then through the vertex, if any
+            last, sign = last ^ 1, -sign
+            if partner[last] < 0:
+                break
+            last = partner[last]
+        e = last >> 1
+        v, o = (x_of[e], y_of[e]) if last & 1 == 0 else (y_of[e], x_of[e])
+        gap_last = cosine[v] - cosine[o]
+        # λ(last) = sign · λ(first); the dominant end takes −gap
+        if abs(gap_first) > abs(gap_last) or (abs(gap_first) == abs(gap_last) and first < last):
+            at_first = -gap_first
+        else:
+            at_first = sign * -gap_last
+        node, current = first, at_first
+        for _ in range(nodes):
+            lam[node] = current
+            done[node] = True
+            node, current = node ^ 1, -current
+            lam[node] = current
+            done[node] = True
+            if partner[node] < 0:
+                break
+            node = partner[node]
