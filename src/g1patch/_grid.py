@@ -48,26 +48,10 @@ first, then v), with a cross product of evaluated tangents instead of the refere
 coefficients: tests/test_grid_kernels.py states the ULP bound. The patches are cut into contiguous
 ranges, a few per core, taken in turn by one thread per core (the kernels release the GIL); every
 point is written by exactly one range, so the result does not depend on the split.
-
-Fresh outputs. Into arrays the caller gives, a call costs its writes; into arrays it allocates, it
-also pays the first touch of every new page (a fault, and the kernel zeroing the page). With 4 KiB
-pages that dominated: 10,000 patches at 32² with normals (491 MB) took 215 ms fresh against 43 ms
-into given arrays on the 2-core VM of benchmarks/bench_evaluate.py, whose 4 KiB faults run at
-~2.6 GB/s and no faster from two threads. So from :data:`HUGE_OUTPUT_BYTES` on, where Linux gives
-transparent huge pages on request (``enabled`` = ``madvise``), :func:`_fresh` maps each output on
-its own with ``madvise(MADV_HUGEPAGE)``: one fault per 2 MiB, zeroed at ~8 GB/s, taken by the
-threads of the compiled kernels in the ranges they write. Only these outputs are advised, not every
-large array as NumPy's default advice does (DESIGN §6: with ``defrag`` = ``madvise`` a huge-page
-fault without a free huge block at hand reclaims and compacts memory first, which once stalled a
-build by seconds), and only while ``/proc/buddyinfo`` shows free huge blocks for twice the array;
-else, and on other systems, ``np.empty``. The values are the same bits either way.
 """
 
 from __future__ import annotations
 
-import math
-import mmap
-import sys
 from collections.abc import Callable
 from functools import cache
 from typing import Any
@@ -79,7 +63,7 @@ from .basis import Form, basis_values
 from .errors import InputError
 from .kernels import in_chunks, jit_kernel
 
-__all__ = ["BLOCK_POINTS", "HUGE_OUTPUT_BYTES", "KERNEL_POINTS", "contract", "normals", "positions_and_normals"]
+__all__ = ["BLOCK_POINTS", "KERNEL_POINTS", "contract", "normals", "positions_and_normals"]
 
 #: Grid points per block (rows of several patches, or part of one patch's grid).
 BLOCK_POINTS = 16384
@@ -89,10 +73,6 @@ BLOCK_POINTS = 16384
 #: process (numba's import and cache load); a call this size takes ~70 ms in NumPy for positions +
 #: normals and ~20 ms for positions, the kernels about a third to a half of that
 KERNEL_POINTS = 1 << 22
-
-#: bytes from which an output the functions allocate themselves is mapped on transparent huge
-#: pages where the kernel offers them on request (:func:`_fresh`); 0 turns that off
-HUGE_OUTPUT_BYTES = 8 << 20
 
 _TINY = np.finfo(np.float64).tiny
 
@@ -111,70 +91,10 @@ def _interleaving_weights(weights_v: NDArray[np.float64]) -> NDArray[np.float64]
 
 def _check_out(name: str, out: NDArray[np.float64] | None, shape: tuple[int, ...]) -> NDArray[np.float64]:
     if out is None:
-        return _fresh(shape)
+        return np.empty(shape)
     if out.shape != shape or out.dtype != np.float64 or not out.flags.c_contiguous:
         raise InputError(f"{name}: expected a C-contiguous float64 array of shape {shape}, got {out.dtype} {out.shape}")
     return out
-
-
-def _fresh(shape: tuple[int, ...]) -> NDArray[np.float64]:
-    """A new C-contiguous float64 array of ``shape`` for an output: ``np.empty``, or, from
-    :data:`HUGE_OUTPUT_BYTES` on where :func:`_huge_page_size` offers huge pages and the kernel holds
-    free huge blocks for twice the array (:func:`_free_huge_bytes`), an anonymous private mapping of
-    its own advised ``MADV_HUGEPAGE``, the array starting on a huge-page boundary. The array is
-    a view of the mapping (``np.frombuffer``), which it keeps alive; the mapping is unmapped when
-    the last view goes. Same values, same layout: only where the memory comes from changes."""
-    count = math.prod(shape)
-    nbytes = 8 * count
-    huge = _huge_page_size() if HUGE_OUTPUT_BYTES and nbytes >= HUGE_OUTPUT_BYTES else 0
-    if not huge or _free_huge_bytes(huge) < 2 * nbytes:
-        return np.empty(shape)
-    try:
-        mapping = mmap.mmap(-1, -(-nbytes // huge) * huge + huge, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
-    except OSError:
-        return np.empty(shape)
-    try:
-        mapping.madvise(mmap.MADV_HUGEPAGE)
-    except OSError:  # pragma: no cover - a kernel built without THP: plain pages, still a fine array
-        pass
-    start = -np.frombuffer(mapping, np.uint8, 1).ctypes.data % huge
-    return np.frombuffer(mapping, np.float64, count, start).reshape(shape)
-
-
-@cache
-def _huge_page_size(sysfs: str = "/sys/kernel/mm/transparent_hugepage") -> int:
-    """Bytes of a transparent huge page where asking for them pays, else 0: Linux, THP ``enabled``
-    is ``madvise`` (``always`` gives ``np.empty`` huge pages already, ``never`` none), and the huge
-    page is 2-32 MiB (arm64 with 64 KiB pages has 512 MiB ones)."""
-    if not sys.platform.startswith("linux") or not hasattr(mmap, "MADV_HUGEPAGE"):
-        return 0
-    try:
-        with open(f"{sysfs}/enabled") as enabled:
-            if "[madvise]" not in enabled.read():
-                return 0
-        with open(f"{sysfs}/hpage_pmd_size") as size_file:
-            size = int(size_file.read())
-    except (OSError, ValueError):
-        return 0
-    return size if 2 * mmap.PAGESIZE <= size <= 32 << 20 and size & (size - 1) == 0 else 0
-
-
-def _free_huge_bytes(huge: int, buddyinfo_path: str = "/proc/buddyinfo") -> int:
-    """Bytes in free blocks of at least ``huge`` bytes (``/proc/buddyinfo``, all zones; 0 when
-    unreadable). A huge-page fault with such a block free takes it at once; without one, under
-    ``transparent_hugepage/defrag`` ``madvise`` (or ``always``) it would reclaim and compact
-    memory first, the stall the command line avoids (DESIGN §6)."""
-    try:
-        with open(buddyinfo_path) as buddyinfo:
-            lines = buddyinfo.read().splitlines()
-    except OSError:
-        return 0
-    least = (huge // mmap.PAGESIZE).bit_length() - 1  # the buddy order of a huge page
-    total = 0
-    for line in lines:
-        counts = line.split(",", 1)[-1].split()[2:]  # "Node 0, zone Normal c0 c1 ..."
-        total += sum(int(c) << order for order, c in enumerate(counts) if order >= least and c.isdigit())
-    return total * mmap.PAGESIZE
 
 
 def _layout(n: int, gu: int, gv: int) -> tuple[int, int]:
