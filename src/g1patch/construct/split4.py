@@ -734,6 +734,8 @@ _NET_CORNER = np.array([0, 12, 15, 3])
 _NET_OUT = np.array([4, 13, 11, 2])
 _NET_IN = np.array([8, 14, 7, 1])
 _NET_INTERIOR = np.array([5, 9, 10, 6])
+#: [k, p, q]: where point (p, q) of corner k's frame sits in sub-patch k's 48 coordinates, 3 (4 i + j)
+_PLACE = 3 * (4 * _LOCAL[..., 0] + _LOCAL[..., 1])
 
 
 def _sparse(weights: FloatArray) -> tuple[IntArray, IntArray, FloatArray]:
@@ -775,8 +777,8 @@ def _curve_kernel(pos: FloatArray, star: FloatArray, cosine: FloatArray, mu: Flo
 def _face_kernel(pos: FloatArray, tangents: FloatArray, interior: FloatArray, faces: IntArray, halfedge_edge: IntArray,
                  edge_halfedges: IntArray, slot_out: NDArray[np.int32], slot_in: NDArray[np.int32], curve: FloatArray,
                  factor: FloatArray, counts: IntArray, terms: IntArray, weights: FloatArray, guide: FloatArray,
-                 use_guide: bool, local: IntArray,
-                 net_corner: IntArray, net_out: IntArray, net_in: IntArray, net_interior: IntArray, n_edges: int,
+                 use_guide: bool, place: IntArray, net_corner: IntArray, net_out: IntArray, net_in: IntArray,
+                 net_interior: IntArray, n_edges: int,
                  scale: float, centre: FloatArray, control: FloatArray, extra: FloatArray, extra_normals: FloatArray,
                  lo: int, hi: int) -> None:
     """Faces ``lo:hi``: the net's quantities ``Σ_n w[k, c, n] net_n`` (the targets' bicubic, or the
@@ -828,22 +830,21 @@ def _face_kernel(pos: FloatArray, tangents: FloatArray, interior: FloatArray, fa
             e, ep = halfedge_edge[h], halfedge_edge[hp]
             near = 0 if edge_halfedges[e, 0] == h else 4  # P1 from the origin of h: 0 on the X side
             far = 4 if edge_halfedges[ep, 0] == hp else 0  # P1 of prev(h) from its target
-            sub = control[f, k]
             for d in range(3):
-                sub[local[k, 1, 0, 0], local[k, 1, 0, 1], d] = curve[e, near, d]
-                sub[local[k, 2, 0, 0], local[k, 2, 0, 1], d] = curve[e, 1 + near // 2, d]
-                sub[local[k, 3, 0, 0], local[k, 3, 0, 1], d] = curve[e, 2, d]
-                sub[local[k, 0, 1, 0], local[k, 0, 1, 1], d] = curve[ep, far, d]
-                sub[local[k, 0, 2, 0], local[k, 0, 2, 1], d] = curve[ep, 1 + far // 2, d]
-                sub[local[k, 0, 3, 0], local[k, 0, 3, 1], d] = curve[ep, 2, d]
-                sub[local[k, 3, 2, 0], local[k, 3, 2, 1], d] = b[k, d]
-                sub[local[k, 2, 3, 0], local[k, 2, 3, 1], d] = b[(k + 3) & 3, d]
-                sub[local[k, 3, 3, 0], local[k, 3, 3, 1], d] = c[d]
-                sub[local[k, 3, 1, 0], local[k, 3, 1, 1], d] = c[d] - curve[e, 2, d] + own[k, 2, d]
-                sub[local[k, 2, 1, 0], local[k, 2, 1, 1], d] = own[k, 3, d]
-                sub[local[k, 1, 2, 0], local[k, 1, 2, 1], d] = own[k, 4, d]
-                sub[local[k, 2, 2, 0], local[k, 2, 2, 1], d] = own[k, 5, d]
-                sub[local[k, 1, 1, 0], local[k, 1, 1, 1], d] = own[k, 6, d]
+                control[h, place[k, 1, 0] + d] = curve[e, near, d]
+                control[h, place[k, 2, 0] + d] = curve[e, 1 + near // 2, d]
+                control[h, place[k, 3, 0] + d] = curve[e, 2, d]
+                control[h, place[k, 0, 1] + d] = curve[ep, far, d]
+                control[h, place[k, 0, 2] + d] = curve[ep, 1 + far // 2, d]
+                control[h, place[k, 0, 3] + d] = curve[ep, 2, d]
+                control[h, place[k, 3, 2] + d] = b[k, d]
+                control[h, place[k, 2, 3] + d] = b[(k + 3) & 3, d]
+                control[h, place[k, 3, 3] + d] = c[d]
+                control[h, place[k, 3, 1] + d] = c[d] - curve[e, 2, d] + own[k, 2, d]
+                control[h, place[k, 2, 1] + d] = own[k, 3, d]
+                control[h, place[k, 1, 2] + d] = own[k, 4, d]
+                control[h, place[k, 2, 2] + d] = own[k, 5, d]
+                control[h, place[k, 1, 1] + d] = own[k, 6, d]
         n0 = (b[0, 1] - b[2, 1]) * (b[1, 2] - b[3, 2]) - (b[0, 2] - b[2, 2]) * (b[1, 1] - b[3, 1])
         n1 = (b[0, 2] - b[2, 2]) * (b[1, 0] - b[3, 0]) - (b[0, 0] - b[2, 0]) * (b[1, 2] - b[3, 2])
         n2 = (b[0, 0] - b[2, 0]) * (b[1, 1] - b[3, 1]) - (b[0, 1] - b[2, 1]) * (b[1, 0] - b[3, 0])
@@ -856,7 +857,7 @@ def _face_kernel(pos: FloatArray, tangents: FloatArray, interior: FloatArray, fa
 
 
 def _edge_kernel(curve: FloatArray, mu: FloatArray, cosine: FloatArray, origin: IntArray, edge_halfedges: IntArray,
-                 local: IntArray, inner_operator: FloatArray, outer_operator: FloatArray, scale: float,
+                 place: IntArray, inner_operator: FloatArray, outer_operator: FloatArray, scale: float,
                  centre: FloatArray, control: FloatArray, extra: FloatArray, extra_normals: FloatArray,
                  lo: int, hi: int) -> None:
     """Edges ``lo:hi``: the star at M, ``t_L + t_R = μ t_X`` with ``t_X = 3 (P2 − M)``, each side
@@ -882,8 +883,8 @@ def _edge_kernel(curve: FloatArray, mu: FloatArray, cosine: FloatArray, origin: 
         x, y = origin[hl], origin[nl]
         for d in range(3):
             p1, p2, m, p4, p5 = curve[e, 0, d], curve[e, 1, d], curve[e, 2, d], curve[e, 3, d], curve[e, 4, d]
-            seam_l = control[fl, kl, local[kl, 3, 1, 0], local[kl, 3, 1, 1], d]
-            seam_r = control[fr, kr, local[kr, 3, 1, 0], local[kr, 3, 1, 1], d] if inside else 0.0
+            seam_l = control[hl, place[kl, 3, 1] + d]
+            seam_r = control[hr, place[kr, 3, 1] + d] if inside else 0.0
             t_x[d] = 3.0 * (p2 - m)
             gap = seam_l + seam_r - mu[e] * t_x[d]
             t_l[d] = seam_l - (0.5 if inside else 0.0) * gap
@@ -891,17 +892,17 @@ def _edge_kernel(curve: FloatArray, mu: FloatArray, cosine: FloatArray, origin: 
             e_l[d] = m + t_l[d] / 3.0
             e_r[d] = m + t_r / 3.0
             extra[e, d] = m * scale + centre[d]
-            stacked[0, d] = p2 + e_l[d] - m + control[fl, kl, local[kl, 2, 1, 0], local[kl, 2, 1, 1], d]
+            stacked[0, d] = p2 + e_l[d] - m + control[hl, place[kl, 2, 1] + d]
             if inside:
-                stacked[1, d] = p2 + e_r[d] - m + control[fnr, knr, local[knr, 1, 2, 0], local[knr, 1, 2, 1], d]
-                stacked[2, d] = p4 + e_l[d] - m + control[fnl, knl, local[knl, 1, 2, 0], local[knl, 1, 2, 1], d]
-                stacked[3, d] = p4 + e_r[d] - m + control[fr, kr, local[kr, 2, 1, 0], local[kr, 2, 1, 1], d]
+                stacked[1, d] = p2 + e_r[d] - m + control[nr, place[knr, 1, 2] + d]
+                stacked[2, d] = p4 + e_l[d] - m + control[nl, place[knl, 1, 2] + d]
+                stacked[3, d] = p4 + e_r[d] - m + control[hr, place[kr, 2, 1] + d]
                 stacked[4, d] = 2.0 * p2 + (2.0 * cosine[x] * (m - p2) - 2.0 * mu[e] * (p2 - p1)) / 3.0
                 stacked[5, d] = 2.0 * p4 + (2.0 * cosine[y] * (m - p4) + 2.0 * mu[e] * (p4 - p5)) / 3.0
                 stacked[6, d] = 2.0 * e_l[d]
                 stacked[7, d] = 2.0 * e_r[d]
             else:
-                stacked[1, d] = p4 + e_l[d] - m + control[fnl, knl, local[knl, 1, 2, 0], local[knl, 1, 2, 1], d]
+                stacked[1, d] = p4 + e_l[d] - m + control[nl, place[knl, 1, 2] + d]
                 stacked[2, d] = 2.0 * e_l[d]
         n0 = t_l[1] * t_x[2] - t_l[2] * t_x[1]
         n1 = t_l[2] * t_x[0] - t_l[0] * t_x[2]
@@ -911,29 +912,29 @@ def _edge_kernel(curve: FloatArray, mu: FloatArray, cosine: FloatArray, origin: 
         extra_normals[e, 1] = n1 / length
         extra_normals[e, 2] = n2 / length
         for d in range(3):
-            control[fl, kl, local[kl, 3, 1, 0], local[kl, 3, 1, 1], d] = e_l[d]
-            control[fnl, knl, local[knl, 1, 3, 0], local[knl, 1, 3, 1], d] = e_l[d]
+            control[hl, place[kl, 3, 1] + d] = e_l[d]
+            control[nl, place[knl, 1, 3] + d] = e_l[d]
             if inside:
-                control[fr, kr, local[kr, 3, 1, 0], local[kr, 3, 1, 1], d] = e_r[d]
-                control[fnr, knr, local[knr, 1, 3, 0], local[knr, 1, 3, 1], d] = e_r[d]
+                control[hr, place[kr, 3, 1] + d] = e_r[d]
+                control[nr, place[knr, 1, 3] + d] = e_r[d]
             operator = inner_operator if inside else outer_operator
             for j in range(operator.shape[0]):
                 total = 0.0
                 for i in range(operator.shape[1]):
                     total += operator[j, i] * stacked[i, d]
                 solved[j] = total
-            control[fl, kl, local[kl, 2, 1, 0], local[kl, 2, 1, 1], d] = solved[0]
+            control[hl, place[kl, 2, 1] + d] = solved[0]
             if inside:
-                control[fnr, knr, local[knr, 1, 2, 0], local[knr, 1, 2, 1], d] = solved[1]
-                control[fnl, knl, local[knl, 1, 2, 0], local[knl, 1, 2, 1], d] = solved[2]
-                control[fr, kr, local[kr, 2, 1, 0], local[kr, 2, 1, 1], d] = solved[3]
+                control[nr, place[knr, 1, 2] + d] = solved[1]
+                control[nl, place[knl, 1, 2] + d] = solved[2]
+                control[hr, place[kr, 2, 1] + d] = solved[3]
             else:
-                control[fnl, knl, local[knl, 1, 2, 0], local[knl, 1, 2, 1], d] = solved[1]
+                control[nl, place[knl, 1, 2] + d] = solved[1]
 
 
 def _vertex_kernel(pos: FloatArray, curve: FloatArray, mu: FloatArray, cosine: FloatArray, halfedge_edge: IntArray,
                    edge_halfedges: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray,
-                   is_boundary: NDArray[np.bool_], table: IntArray, operators: FloatArray, local: IntArray,
+                   is_boundary: NDArray[np.bool_], table: IntArray, operators: FloatArray, place: IntArray,
                    control: FloatArray, lo: int, hi: int) -> None:
     """Vertices ``lo:hi``: the twist targets at V of their ring's sub-patches (``P1 + P1' − V`` plus
     the net's offset in the slot) moved onto ``F_{j−1} + F_j = R_j``,
@@ -954,28 +955,28 @@ def _vertex_kernel(pos: FloatArray, curve: FloatArray, mu: FloatArray, cosine: F
             near = 0 if edge_halfedges[e, 0] == h else 4
             far = 4 if edge_halfedges[ep, 0] == hp else 0
             slope = mu[e] if near == 0 else -mu[e]
-            slot = control[h >> 2, h & 3, local[h & 3, 1, 1, 0], local[h & 3, 1, 1, 1]]
+            slot = place[h & 3, 1, 1]
             for d in range(3):
                 o1, o2 = curve[e, near, d], curve[e, 1 + near // 2, d]
-                stacked[j, d] = o1 + curve[ep, far, d] - pos[v, d] + slot[d]
+                stacked[j, d] = o1 + curve[ep, far, d] - pos[v, d] + control[h, slot + d]
                 if j >= is_open:
                     stacked[n + j - is_open, d] = 2.0 * o1 + (2.0 * lam * (o2 - o1) - slope * (o1 - pos[v, d])) / 3.0
         offset = table[is_open, n]
         columns = 2 * n - is_open
         for j in range(n):
             h = ring_halfedges[start + j]
-            slot = control[h >> 2, h & 3, local[h & 3, 1, 1, 0], local[h & 3, 1, 1, 1]]
+            slot = place[h & 3, 1, 1]
             for d in range(3):
                 if offset < 0:
-                    slot[d] = stacked[j, d]
+                    control[h, slot + d] = stacked[j, d]
                     continue
                 total = 0.0
                 for i in range(columns):
                     total += operators[offset + j * columns + i] * stacked[i, d]
-                slot[d] = total
+                control[h, slot + d] = total
 
 
-def _centre_kernel(corners: FloatArray, faces: IntArray, operator: FloatArray, local: IntArray, scale: float,
+def _centre_kernel(corners: FloatArray, faces: IntArray, operator: FloatArray, place: IntArray, scale: float,
                    centre: FloatArray, control: FloatArray, lo: int, hi: int) -> None:
     """Faces ``lo:hi``: the twists at C (``b_k + b_{k−1} − C`` plus the net's offset in the slot)
     moved onto ``K_k + K_{k+1} = 2 b_k`` by the min-norm operator; then every point to
@@ -983,31 +984,31 @@ def _centre_kernel(corners: FloatArray, faces: IntArray, operator: FloatArray, l
     stacked = np.empty((8, 3))
     for f in range(lo, hi):
         for k in range(4):
-            sub = control[f, k]
+            h = 4 * f + k
             for d in range(3):
-                b_prev = sub[local[k, 2, 3, 0], local[k, 2, 3, 1], d]
-                stacked[k, d] = (sub[local[k, 3, 2, 0], local[k, 3, 2, 1], d] + b_prev
-                                 - sub[local[k, 3, 3, 0], local[k, 3, 3, 1], d] + sub[local[k, 2, 2, 0], local[k, 2, 2, 1], d])
+                b_prev = control[h, place[k, 2, 3] + d]
+                stacked[k, d] = (control[h, place[k, 3, 2] + d] + b_prev
+                                 - control[h, place[k, 3, 3] + d] + control[h, place[k, 2, 2] + d])
                 stacked[4 + k, d] = 2.0 * b_prev
         for k in range(4):
+            h = 4 * f + k
             for d in range(3):
                 total = 0.0
                 for i in range(8):
                     total += operator[k, i] * stacked[i, d]
-                control[f, k, local[k, 2, 2, 0], local[k, 2, 2, 1], d] = total
-            for i in range(4):
-                for j in range(4):
-                    for d in range(3):
-                        control[f, k, i, j, d] = control[f, k, i, j, d] * scale + centre[d]
+                control[4 * f + k, place[k, 2, 2] + d] = total
+            for i in range(16):
+                for d in range(3):
+                    control[h, 3 * i + d] = control[h, 3 * i + d] * scale + centre[d]
             for d in range(3):
-                control[f, k, local[k, 0, 0, 0], local[k, 0, 0, 1], d] = corners[faces[f, k], d]
+                control[h, place[k, 0, 0] + d] = corners[faces[f, k], d]
 
 
 def _compiled_patches(
     targets: Targets, corners: FloatArray, centre: FloatArray, scale: float, guide: FloatArray | None, stars: SplitStar,
     mu: FloatArray,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """:func:`split4_patches`' controls (F, 4, 4, 4, 3), extra points and normals by the kernels
+    """:func:`split4_patches`' controls (4F, 48), extra points and normals by the kernels
     above, ranges side by side (:func:`~g1patch.kernels.in_chunks`)."""
     from ..kernels import in_chunks, jit_kernel
     from ..targets.local import slot_tables
@@ -1027,7 +1028,7 @@ def _compiled_patches(
     moved, shift = _even_vertex_shifts(topology, 2.0 * cosine, curve, mu, pos)
     curve[moved, 1:4] += shift[:, None]
 
-    control = np.empty((n_faces, 4, 4, 4, 3))
+    control = np.empty((4 * n_faces, 48))  # row h = 4f + k: sub-patch k's 4×4×3 points
     extra = np.empty((n_edges + n_faces, 3))
     extra_normals = np.empty((n_edges + n_faces, 3))
     counts, terms, weights = _sparse(_NET_WEIGHTS if guide is None else _MACRO_WEIGHTS)
@@ -1036,12 +1037,12 @@ def _compiled_patches(
     factor = np.ascontiguousarray(stars.factor)
     kernel = jit_kernel(_face_kernel)
     in_chunks(lambda lo, hi: kernel(pos, tangents, interior, topology.faces, halfedge_edge, edge_halfedges, slot_out, slot_in,
-                                    curve, factor, counts, terms, weights, nets, guide is not None, _LOCAL, _NET_CORNER, _NET_OUT, _NET_IN,
+                                    curve, factor, counts, terms, weights, nets, guide is not None, _PLACE, _NET_CORNER, _NET_OUT, _NET_IN,
                                     _NET_INTERIOR, n_edges, scale, centre, control, extra, extra_normals, lo, hi), n_faces)
 
     inner, outer = _operator(_MIDPOINT), _operator(np.ones((1, 2)))
     kernel = jit_kernel(_edge_kernel)
-    in_chunks(lambda lo, hi: kernel(curve, mu, cosine, origin, edge_halfedges, _LOCAL, inner, outer, scale, centre,
+    in_chunks(lambda lo, hi: kernel(curve, mu, cosine, origin, edge_halfedges, _PLACE, inner, outer, scale, centre,
                                     control, extra, extra_normals, lo, hi), n_edges)
 
     boundary = topology.is_boundary_vertex
@@ -1058,14 +1059,14 @@ def _compiled_patches(
     flat = np.concatenate(operators)
     kernel = jit_kernel(_vertex_kernel)
     in_chunks(lambda lo, hi: kernel(pos, curve, mu, cosine, halfedge_edge, edge_halfedges, topology.ring_offsets,
-                                    topology.ring_halfedges, boundary, table, flat, _LOCAL, control, lo, hi),
+                                    topology.ring_halfedges, boundary, table, flat, _PLACE, control, lo, hi),
               topology.n_vertices)
     del curve
 
     corners = np.ascontiguousarray(corners, dtype=np.float64)
     face_operator = _operator(_cycle(4, closed=True))
     kernel = jit_kernel(_centre_kernel)
-    in_chunks(lambda lo, hi: kernel(corners, topology.faces, face_operator, _LOCAL, scale, centre, control, lo, hi), n_faces)
+    in_chunks(lambda lo, hi: kernel(corners, topology.faces, face_operator, _PLACE, scale, centre, control, lo, hi), n_faces)
     return control, extra, extra_normals
 
 
