@@ -843,8 +843,9 @@ class _GridMeasures:
             patches = np.flatnonzero(candidate)
             chord2, angle = np.empty(len(patches)), np.empty(len(patches))
             if len(patches):
-                _compiled(_turn_kernel)(points, _gregory_grid_weights(self.grid), self.degenerate_level, patches,
-                                        np.full(len(patches), axis), chord2, angle)
+                exact = np.ascontiguousarray(np.swapaxes(_gregory_grid_weights(self.grid), 1, 2))  # (2, 20, G²)
+                _compiled(_turn_kernel)(points, exact, self.degenerate_level, patches, np.full(len(patches), axis),
+                                        _chunks(len(patches)), chord2, angle)
             best[:, 2 * axis] = -1.0
             best[patches, 2 * axis], best[patches, 2 * axis + 1] = chord2, angle
 
@@ -1218,44 +1219,62 @@ def _gregory_grid_weights(grid: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _turn_kernel(points: NDArray[np.float64], exact: NDArray[np.float64], level: float, patches: NDArray[np.int64],
-                 axes: NDArray[np.int64], chord2: NDArray[np.float64], angle: NDArray[np.float64]) -> None:
+                 axes: NDArray[np.int64], chunks: int, chord2: NDArray[np.float64], angle: NDArray[np.float64]) -> None:
     """For Gregory patches ``patches[c]`` and ``axes[c]`` (0: along u): the first largest squared
     chord between neighbouring unit normals along that axis and the angle of its pair, from the
-    tangents summed as the reference's matrix product sums them (``exact (2, G², 20)``: the point
-    weights of p_u and p_v, a sequential fused multiply-add over the points), so the reference's
-    values (chord² −1 without pairs)."""
-    samples = exact.shape[1]
+    tangents summed as the reference's matrix product sums them (``exact (2, 20, G²)``: the point
+    weights of p_u and p_v, a sequential fused multiply-add over the points, each sample's sum in
+    its own lane: the loops over the samples vectorise), so the reference's values (chord² −1
+    without pairs)."""
+    samples, candidates = exact.shape[2], patches.size
     g = int(round(np.sqrt(samples)))
-    for c in prange(patches.size):
-        n, axis = patches[c], axes[c]
-        normal, unit = np.empty((samples, 3)), np.empty((samples, 3))
+    for chunk in prange(chunks):
+        tangent, normal = np.empty((2, 3, samples)), np.empty((3, samples))
+        unit, length = np.empty((3, samples)), np.empty(samples)
         usable = np.empty(samples, dtype=np.bool_)
-        tangent = np.empty((2, 3))
-        for s in range(samples):
+        pair = np.empty((2, 3))
+        for c in range(chunk * candidates // chunks, (chunk + 1) * candidates // chunks):
+            n, axis = patches[c], axes[c]
             for q in range(2):
                 for d in range(3):
-                    acc = 0.0
+                    acc = tangent[q, d]
+                    for s in range(samples):
+                        acc[s] = 0.0
                     for m in range(20):
-                        acc = _fma(points[n, m, d], exact[q, s, m], acc)
-                    tangent[q, d] = acc
+                        p, w = points[n, m, d], exact[q, m]
+                        for s in range(samples):
+                            acc[s] = _fma(p, w[s], acc[s])
             a, b = tangent[0], tangent[1]
-            n0, n1, n2 = a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
-            length = np.sqrt((n0 * n0 + n1 * n1) + n2 * n2)
-            usable[s] = length > level
-            inverse = 1.0 / max(length, _TINY)
-            normal[s, 0], normal[s, 1], normal[s, 2] = n0, n1, n2
-            unit[s, 0], unit[s, 1], unit[s, 2] = n0 * inverse, n1 * inverse, n2 * inverse
-        top, top_at, step = -1.0, -1, g if axis == 0 else 1
-        for a in range(g - 1 + axis):
-            for b in range(g - axis):
-                s = a * g + b
-                if usable[s] and usable[s + step]:
-                    c0, c1, c2 = unit[s + step, 0] - unit[s, 0], unit[s + step, 1] - unit[s, 1], unit[s + step, 2] - unit[s, 2]
-                    value = (c0 * c0 + c2 * c2) + c1 * c1
-                    if value > top:
-                        top, top_at = value, s
-        chord2[c] = top
-        angle[c] = _pair_angle(normal[top_at], normal[top_at + step], True) if top_at >= 0 else 0.0
+            for s in range(samples):
+                normal[0, s] = a[1, s] * b[2, s] - a[2, s] * b[1, s]
+            for s in range(samples):
+                normal[1, s] = a[2, s] * b[0, s] - a[0, s] * b[2, s]
+            for s in range(samples):
+                normal[2, s] = a[0, s] * b[1, s] - a[1, s] * b[0, s]
+            for s in range(samples):
+                length[s] = np.sqrt((normal[0, s] * normal[0, s] + normal[1, s] * normal[1, s]) + normal[2, s] * normal[2, s])
+            for s in range(samples):
+                usable[s] = length[s] > level
+            for s in range(samples):
+                length[s] = 1.0 / max(length[s], _TINY)
+            for d in range(3):
+                for s in range(samples):
+                    unit[d, s] = normal[d, s] * length[s]
+            top, top_at, step = -1.0, -1, g if axis == 0 else 1
+            for i in range(g - 1 + axis):
+                for j in range(g - axis):
+                    s = i * g + j
+                    if usable[s] and usable[s + step]:
+                        c0, c1, c2 = unit[0, s + step] - unit[0, s], unit[1, s + step] - unit[1, s], unit[2, s + step] - unit[2, s]
+                        value = (c0 * c0 + c2 * c2) + c1 * c1
+                        if value > top:
+                            top, top_at = value, s
+            chord2[c] = top
+            angle[c] = 0.0
+            if top_at >= 0:
+                for d in range(3):
+                    pair[0, d], pair[1, d] = normal[d, top_at], normal[d, top_at + step]
+                angle[c] = _pair_angle(pair[0], pair[1], True)
 
 
 def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDArray[np.int64], fp: NDArray[np.int64],
