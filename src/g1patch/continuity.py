@@ -41,6 +41,7 @@ so the figures are the same wherever the model sits and whatever its size.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cache
@@ -930,6 +931,9 @@ prange = range  # numba.prange once a kernel is compiled
 #: constant trip count is unrolled before the loop vectoriser sees it, and left scalar)
 _LANES = 16
 
+#: shared edges the edge kernel measures side by side (its vector lanes; a run-time argument, as _LANES)
+_EDGE_LANES = 32
+
 #: functions the kernels call, compiled (and rebound) with the first kernel
 _KERNEL_HELPERS = ("_pair_angle", "_hull_corners")
 
@@ -1006,72 +1010,135 @@ def _edge_measures_compiled(
                    for edge in range(4)])  # (edge, reversed, K, 2)
     table = np.stack([_weights(form, uv, du, dv) for du, dv in ((0, 0), (1, 0), (0, 1))], axis=2)
     weights, index, count = _sparse(table)  # (edge, reversed, derivative, M, K)
+    blocks = (count + 3) // 4
+    padded = np.full((*index.shape[:-1], 4 * max(int(blocks.max()), 1)), index.shape[-1], dtype=np.int64)
+    for key in np.ndindex(count.shape):
+        padded[key][:count[key]] = index[key][:count[key]]
+    weights = np.concatenate([weights, np.zeros((*weights.shape[:-2], 1, samples))], axis=-2)  # point M: weight +0
     edges = len(left_patch)
     angle, least, gap = np.empty(edges), np.empty(edges), np.empty(edges)
     worst = np.empty(edges, dtype=np.int64)
     if edges:
-        _compiled(_edge_kernel)(points, left_patch, left_edge, right_patch, right_edge, same, weights, index, count,
-                                degenerate_level, _CANDIDATE_RTOL, _chunks(edges), angle, least, worst, gap)
+        key = (left_edge * 4 + right_edge) * 2 + same  # the sides' edges and directions: the weights an edge takes
+        order = np.argsort(key, kind="stable")
+        starts = np.flatnonzero(np.r_[True, key[order][1:] != key[order][:-1], True])
+        groups = np.unique(np.concatenate([np.arange(a, b, _EDGE_LANES) for a, b in itertools.pairwise(starts)] + [[edges]]))
+        _compiled(_edge_kernel)(points, left_patch, left_edge, right_patch, right_edge, same, order, groups, weights, padded,
+                                blocks, degenerate_level, _CANDIDATE_RTOL, _EDGE_LANES, _chunks(len(groups) - 1), angle, least,
+                                worst, gap)
     return angle, least, worst, gap
 
 
 def _edge_kernel(points: NDArray[np.float64], left_patch: NDArray[np.int64], left_edge: NDArray[np.int64],
                  right_patch: NDArray[np.int64], right_edge: NDArray[np.int64], same: NDArray[np.bool_],
-                 weights: NDArray[np.float64], index: NDArray[np.int64], count: NDArray[np.int64], level: float,
-                 rtol: float, chunks: int, angle: NDArray[np.float64], least: NDArray[np.float64],
-                 worst: NDArray[np.int64], gap: NDArray[np.float64]) -> None:
+                 order: NDArray[np.int64], groups: NDArray[np.int64], weights: NDArray[np.float64],
+                 index: NDArray[np.int64], blocks: NDArray[np.int64], level: float, rtol: float, lanes: int, chunks: int,
+                 angle: NDArray[np.float64], least: NDArray[np.float64], worst: NDArray[np.int64],
+                 gap: NDArray[np.float64]) -> None:
     """Per edge: both sides' points and normals at the K samples, then the reference's max and min
-    angle, worst sample and max gap; ``atan2`` only at the candidates (:data:`_CANDIDATE_RTOL`)."""
-    samples, edges = weights.shape[-1], left_patch.size
+    angle, worst sample and max gap; ``atan2`` only at the candidates (:data:`_CANDIDATE_RTOL`).
+
+    ``lanes`` edges at a time, ``order[groups[i]:groups[i + 1]]`` for group i, whose edges share
+    their sides' edge numbers and directions, so their weights: the lanes are the last axis of
+    every scratch array, and the arithmetic vectorises across edges, sample by sample. A sum
+    ``Σ_m P_m W_m`` runs over ``index[edge, backwards, q]`` four terms at a time (``blocks``
+    of them), padded with the point ``M`` (−1 in every lane) of weight +0: ``fma(−1, +0, acc)``
+    is ``acc`` exactly (``acc + (−0)``), so every value is the sequential sum of the edge-by-edge
+    formulation, bit for bit."""
+    samples, padded, group_count = weights.shape[-1], points.shape[1] + 1, groups.size - 1
     for chunk in prange(chunks):
-        values = np.empty((2, 3, 3, samples))  # side, derivative (p, p_u, p_v), coordinate, sample
-        y, x, pseudo = np.empty(samples), np.empty(samples), np.empty(samples)
-        usable = np.empty(samples, dtype=np.bool_)
-        for e in range(chunk * edges // chunks, (chunk + 1) * edges // chunks):
-            values[:] = 0.0
-            for side in range(2):
-                patch = left_patch[e] if side == 0 else right_patch[e]
-                edge = left_edge[e] if side == 0 else right_edge[e]
-                backwards = 0 if side == 0 or same[e] else 1
-                for q in range(3):
-                    for r in range(count[edge, backwards, q]):
-                        m = index[edge, backwards, q, r]
-                        w = weights[edge, backwards, q, m]
+        net = np.zeros((2, 3, padded, lanes))
+        net[:, :, padded - 1] = -1.0
+        values = np.empty((2, 3, 3, lanes))  # side, derivative (p, p_u, p_v), coordinate, lane
+        normal, cross = np.empty((2, 3, lanes)), np.empty((3, lanes))
+        distance, y, x = np.empty(lanes), np.empty((samples, lanes)), np.empty((samples, lanes))
+        pseudo, usable = np.empty((samples, lanes)), np.empty((samples, lanes), dtype=np.bool_)
+        candidate = np.empty((samples, lanes), dtype=np.bool_)
+        top, bottom, gap2 = np.empty(lanes), np.empty(lanes), np.empty(lanes)
+        for group in range(chunk * group_count // chunks, (chunk + 1) * group_count // chunks):
+            first, stop = groups[group], groups[group + 1]
+            lead = order[first]
+            flip = -1.0 if same[lead] else 1.0
+            for lane in range(stop - first):
+                e = order[first + lane]
+                for side in range(2):
+                    patch = left_patch[e] if side == 0 else right_patch[e]
+                    for d in range(3):
+                        for m in range(padded - 1):
+                            net[side, d, m, lane] = points[patch, m, d]
+            top[:] = -1.0
+            bottom[:] = np.inf
+            gap2[:] = 0.0
+            for k in range(samples):
+                for side in range(2):
+                    edge = left_edge[lead] if side == 0 else right_edge[lead]
+                    back = 1 if side == 1 and not same[lead] else 0
+                    for q in range(3):
                         for d in range(3):
-                            p = points[patch, m, d]
-                            out = values[side, q, d]
-                            for k in range(samples):
-                                out[k] = _fma(p, w[k], out[k])
-            flip = -1.0 if same[e] else 1.0
-            gap2, top, bottom = 0.0, -1.0, np.inf
+                            out, p = values[side, q, d], net[side, d]
+                            if blocks[edge, back, q] == 0:
+                                out[:] = 0.0
+                            for block in range(blocks[edge, back, q]):
+                                m0, m1 = index[edge, back, q, 4 * block], index[edge, back, q, 4 * block + 1]
+                                m2, m3 = index[edge, back, q, 4 * block + 2], index[edge, back, q, 4 * block + 3]
+                                w0, w1 = weights[edge, back, q, m0, k], weights[edge, back, q, m1, k]
+                                w2, w3 = weights[edge, back, q, m2, k], weights[edge, back, q, m3, k]
+                                p0, p1, p2, p3 = p[m0], p[m1], p[m2], p[m3]
+                                if block == 0:
+                                    for lane in range(lanes):
+                                        out[lane] = _fma(p3[lane], w3, _fma(p2[lane], w2, _fma(p1[lane], w1, _fma(p0[lane], w0, 0.0))))
+                                else:
+                                    for lane in range(lanes):
+                                        out[lane] = _fma(p3[lane], w3, _fma(p2[lane], w2, _fma(p1[lane], w1, _fma(p0[lane], w0, out[lane]))))
+                for side in range(2):  # normals p_u × p_v (side R's flipped where both sides run the same way)
+                    u, v, n = values[side, 1], values[side, 2], normal[side]
+                    sign = flip if side == 1 else 1.0
+                    for lane in range(lanes):
+                        n[0, lane] = (u[1, lane] * v[2, lane] - u[2, lane] * v[1, lane]) * sign
+                    for lane in range(lanes):
+                        n[1, lane] = (u[2, lane] * v[0, lane] - u[0, lane] * v[2, lane]) * sign
+                    for lane in range(lanes):
+                        n[2, lane] = (u[0, lane] * v[1, lane] - u[1, lane] * v[0, lane]) * sign
+                a, b = normal[0], normal[1]
+                for lane in range(lanes):
+                    usable[k, lane] = (np.sqrt((a[0, lane] * a[0, lane] + a[1, lane] * a[1, lane]) + a[2, lane] * a[2, lane]) > level) & (np.sqrt((b[0, lane] * b[0, lane] + b[1, lane] * b[1, lane]) + b[2, lane] * b[2, lane]) > level)
+                for lane in range(lanes):
+                    cross[0, lane] = a[1, lane] * b[2, lane] - a[2, lane] * b[1, lane]
+                for lane in range(lanes):
+                    cross[1, lane] = a[2, lane] * b[0, lane] - a[0, lane] * b[2, lane]
+                for lane in range(lanes):
+                    cross[2, lane] = a[0, lane] * b[1, lane] - a[1, lane] * b[0, lane]
+                for lane in range(lanes):
+                    y[k, lane] = np.sqrt((cross[0, lane] * cross[0, lane] + cross[1, lane] * cross[1, lane]) + cross[2, lane] * cross[2, lane])
+                for lane in range(lanes):
+                    x[k, lane] = (a[0, lane] * b[0, lane] + a[2, lane] * b[2, lane]) + a[1, lane] * b[1, lane]
+                for lane in range(lanes):
+                    total = y[k, lane] + abs(x[k, lane])
+                    ratio = y[k, lane] / total if total > 0.0 else 0.0
+                    pseudo[k, lane] = ratio if x[k, lane] >= 0.0 else 2.0 - ratio
+                q0, q1 = values[0, 0], values[1, 0]
+                for lane in range(lanes):
+                    g0, g1, g2 = q0[0, lane] - q1[0, lane], q0[1, lane] - q1[1, lane], q0[2, lane] - q1[2, lane]
+                    distance[lane] = (g0 * g0 + g1 * g1) + g2 * g2
+                for lane in range(lanes):
+                    gap2[lane] = max(gap2[lane], distance[lane])
+                for lane in range(lanes):
+                    top[lane] = max(top[lane], pseudo[k, lane]) if usable[k, lane] else top[lane]
+                for lane in range(lanes):
+                    bottom[lane] = min(bottom[lane], pseudo[k, lane]) if usable[k, lane] else bottom[lane]
             for k in range(samples):
-                u0, u1, u2 = values[0, 1, 0, k], values[0, 1, 1, k], values[0, 1, 2, k]
-                v0, v1, v2 = values[0, 2, 0, k], values[0, 2, 1, k], values[0, 2, 2, k]
-                l0, l1, l2 = u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0
-                u0, u1, u2 = values[1, 1, 0, k], values[1, 1, 1, k], values[1, 1, 2, k]
-                v0, v1, v2 = values[1, 2, 0, k], values[1, 2, 1, k], values[1, 2, 2, k]
-                r0, r1, r2 = (u1 * v2 - u2 * v1) * flip, (u2 * v0 - u0 * v2) * flip, (u0 * v1 - u1 * v0) * flip
-                g0, g1, g2 = values[0, 0, 0, k] - values[1, 0, 0, k], values[0, 0, 1, k] - values[1, 0, 1, k], values[0, 0, 2, k] - values[1, 0, 2, k]
-                gap2 = max(gap2, (g0 * g0 + g1 * g1) + g2 * g2)
-                usable[k] = np.sqrt((l0 * l0 + l1 * l1) + l2 * l2) > level and np.sqrt((r0 * r0 + r1 * r1) + r2 * r2) > level
-                if not usable[k]:
-                    continue
-                c0, c1, c2 = l1 * r2 - l2 * r1, l2 * r0 - l0 * r2, l0 * r1 - l1 * r0
-                y[k] = np.sqrt((c0 * c0 + c1 * c1) + c2 * c2)
-                x[k] = (l0 * r0 + l2 * r2) + l1 * r1
-                total = y[k] + abs(x[k])
-                ratio = y[k] / total if total > 0.0 else 0.0
-                pseudo[k] = ratio if x[k] >= 0.0 else 2.0 - ratio
-                top, bottom = max(top, pseudo[k]), min(bottom, pseudo[k])
-            gap[e] = np.sqrt(gap2)
-            best, best_at, low = 0.0, 0, np.inf
-            for k in range(samples):
-                if usable[k] and (pseudo[k] >= top * (1.0 - rtol) or pseudo[k] <= bottom * (1.0 + rtol)):
-                    value = np.degrees(np.arctan2(y[k], x[k]))
-                    if value > best:
-                        best, best_at = value, k
-                    low = min(low, value)
-            angle[e], worst[e], least[e] = best, best_at, low
+                for lane in range(lanes):
+                    candidate[k, lane] = usable[k, lane] & ((pseudo[k, lane] >= top[lane] * (1.0 - rtol)) | (pseudo[k, lane] <= bottom[lane] * (1.0 + rtol)))
+            for lane in range(stop - first):
+                e = order[first + lane]
+                best, best_at, low = 0.0, 0, np.inf
+                for k in range(samples):
+                    if candidate[k, lane]:
+                        value = np.degrees(np.arctan2(y[k, lane], x[k, lane]))
+                        if value > best:
+                            best, best_at = value, k
+                        low = min(low, value)
+                angle[e], worst[e], least[e], gap[e] = best, best_at, low, np.sqrt(gap2[lane])
 
 
 def _corner_normals_compiled(points: NDArray[np.float64], form: str) -> NDArray[np.float64]:
