@@ -16,15 +16,23 @@ ratios hold):
 * "% bound" — against the memory-bandwidth bound: ``np.copyto`` on a 1 GiB array, in GB/s (bytes
   copied), divided by the bytes written per point (24 for positions, 48 for positions + normals).
 
-Rows "fresh output" call the public PatchSet methods, which allocate their results (first touch of
-new pages included, as a user sees it); rows "out=" run the same public methods into preallocated
-arrays, the situation the copyto bound describes. At this size the methods run the compiled kernels
-(``g1patch._grid.KERNEL_POINTS``); the rows "NumPy path" run the same functions with
-``compiled=False``, the NumPy code the kernels replace above that size (and their reference). The
-summary sets the fresh row beside the time ``np.empty`` + ``fill`` takes on one core for the bytes
-of its outputs: the first touch of new 4 KiB pages (huge-page advice off, as the CLI runs), which
-the fresh rows pay on top of the writes the copyto bound describes. Before timing, every tool's output is checked
-against the baseline with ``np.allclose`` (tolerances in :func:`check`).
+Rows "fresh output" call the public PatchSet methods, which allocate their results with ``np.empty``
+(first touch of new pages included, as a user sees it); rows "out=" run the same public methods into
+preallocated arrays, the situation the copyto bound describes. At this size the methods run the
+compiled kernels (``g1patch._grid.KERNEL_POINTS``); the rows "NumPy path" run the same functions with
+``compiled=False``, the NumPy code the kernels replace above that size (and their reference).
+
+What a fresh row pays on top of the writes: the kernel's threads fault in each new 4 KiB page of the
+outputs as they first write it, and the kernel zeroes it (NumPy's huge-page advice is off, as the
+CLI runs it: ``NUMPY_MADVISE_HUGEPAGE=0``, DESIGN §6). The summary sets the fresh row beside the
+time ``np.empty`` + ``fill`` takes for the bytes of its outputs, on one thread and split over two,
+and the share of the bound a call could reach if first touch were all it did. Mapping the outputs
+on 2 MiB pages instead (``madvise(MADV_HUGEPAGE)`` on each output alone) was measured for issue 13
+and dropped: ~8 GB/s of first touch on memory freed moments before, but the VM these benchmarks run
+on hands free 2 MiB blocks back to the hypervisor within seconds (virtio-balloon free page
+reporting), re-backing one cost 2-12 ms, and the fresh row, which runs seconds after the last one,
+got 1.5-3× slower. Before timing, every tool's output is checked against the baseline with
+``np.allclose`` (tolerances in :func:`check`).
 
 Each figure is the median of ``--repeats`` rounds; within a round every tool (and the copyto) runs
 once, round-robin, so that load from other processes on a shared machine falls on all of them
@@ -44,6 +52,7 @@ import platform
 import statistics
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -142,6 +151,16 @@ def check(name: str, control: np.ndarray, u: np.ndarray, got: tuple, expected: t
 
 
 # ---------------------------------------------------------------------------------- timing
+_halves = ThreadPoolExecutor(max_workers=2, thread_name_prefix="bench-fill")
+
+
+def fill_in_halves(array: np.ndarray) -> None:
+    """``array.fill(1.0)`` as two threads filling a half each (``np.copyto`` releases the GIL)."""
+    half = array.size // 2
+    for future in [_halves.submit(np.copyto, part, 1.0) for part in (array[:half], array[half:])]:
+        future.result()
+
+
 class Timings:
     """Wall-clock and CPU seconds per label, collected round-robin so that load from other processes
     on a shared machine falls on every tool alike."""
@@ -223,6 +242,7 @@ def main() -> None:
         record = round_ > 0
         timings.run("copyto", lambda: np.copyto(target, source), record)
         timings.run("fresh fill", lambda: np.empty(2**27).fill(1.0), record)
+        timings.run("fresh fill, 2 threads", lambda: fill_in_halves(np.empty(2**27)), record)
         for kind, entries in tools.items():
             for label, call, factor, _ in entries:
                 if record or label.startswith("g1patch"):
@@ -232,12 +252,13 @@ def main() -> None:
     copy_gbs = source.nbytes / timings.median("copyto") / 1e9
     copy_cpu_gbs = source.nbytes / timings.cpu_median("copyto") / 1e9
     fresh_gbs = source.nbytes / timings.median("fresh fill") / 1e9
+    fresh2_gbs = source.nbytes / timings.median("fresh fill, 2 threads") / 1e9
     print(f"# bench_evaluate: {n:,} bicubic Bézier patches on a {g}×{g} grid = {points / 1e6:.2f} M points, float64 output")
     print(f"# {platform.machine()}, {os.cpu_count()} CPUs, numpy {np.__version__}; median of {repeats} rounds after a warm-up round,")
     print("# tools run round-robin within each round; wall-clock times (CPU time alongside: on a shared machine the gap is load)")
     print(
         f"# np.copyto 1 GiB: {copy_gbs:.1f} GB/s copied (median; best {source.nbytes / timings.best('copyto') / 1e9:.1f}); "
-        f"fresh pages, np.empty + fill: {fresh_gbs:.1f} GB/s"
+        f"fresh pages, np.empty + fill: {fresh_gbs:.1f} GB/s, split over 2 threads {fresh2_gbs:.1f} GB/s"
     )
     print(f"# by CPU time instead of wall-clock: np.copyto {copy_cpu_gbs:.1f} GB/s; the column 'CPU % of bound' uses that")
     print(f"# load average (1, 5, 15 min) at the start {load_start[0]:.2f} {load_start[1]:.2f} {load_start[2]:.2f}, "
@@ -265,8 +286,10 @@ def main() -> None:
                 cpu_share = points / cpu / (copy_cpu_gbs * 1e9 / bytes_per_point)
                 fresh = ""
                 if "fresh" in label:
-                    pages = points * bytes_per_point / fresh_gbs / 1e9
-                    fresh = f"; first touch of the outputs' fresh pages alone takes {pages * 1e3:.0f} ms on one core (np.empty + fill)"
+                    pages = points * bytes_per_point / np.array([fresh_gbs, fresh2_gbs]) / 1e9
+                    fresh = (f"; first touch of the outputs' new 4 KiB pages alone takes {pages[0] * 1e3:.0f} ms on one thread, "
+                             f"{pages[1] * 1e3:.0f} ms on two (np.empty + fill): a fresh row reaches at most "
+                             f"{100 * points / pages.min() / bound:.0f} % of the bound here")
                 summary.append(
                     f"# positions + normals, {label}: {100 * points / median / bound:.0f} % of the bandwidth bound "
                     f"({100 * cpu_share:.0f} % by CPU time), {splipy / median:.0f}× splipy "
