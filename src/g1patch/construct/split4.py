@@ -43,6 +43,14 @@ reproduced, the min-norm twist changes vanish and each quad is one bicubic. The 
 safeguard stays everywhere: a star longer than it allows (B-spline tangents on a strongly graded
 cage, a 1 : 4 box) is shrunk, and a face with a shrunk corner takes the net's detail scaled by the
 smallest factor (its curves are that much shorter than the net's).
+
+From :data:`KERNEL_FACES` faces on, the stars, the grid-line shears, the assembly and the network's
+connectivity run in numba kernels (:func:`_compiled_patches`: the curves edge by edge, the net's
+quantities and the centre face by face, the midpoint stars and twists edge by edge, the ring twists
+vertex by vertex, the centre twists face by face, each writing straight into the controls; ranges
+side by side, :func:`~g1patch.kernels.in_chunks`), so a large build makes no (4F, ·, 3) temporaries.
+The NumPy code is the reference: the same formulas, batched; the two agree to rounding
+(tests/test_split4_kernels.py: points within 16 ε · max|x|).
 """
 
 from __future__ import annotations
