@@ -1127,18 +1127,23 @@ def _star_kernel(normals: FloatArray, wanted: FloatArray, positions: FloatArray,
     safeguard for vertices ``lo:hi``: ``[a b] = Σ_j s_j [cos θ_j, sin θ_j] G⁻¹``, ``t_j = a cos θ_j + b sin θ_j``
     (a boundary corner keeps ``s``), valid where ``(a × b)·n > 1e-12 (|a|² + |b|²)``; then the
     star scaled by ``min(1, 1 / max_j |t_j| / allowed_j)``, ``allowed = limit · min(|s|, 2|d|²/(|d| + |P d|))``."""
+    width = 1
+    for v in range(lo, hi):
+        width = max(width, offsets[v + 1] - offsets[v])
+    cos, sin = np.empty(width), np.empty(width)
+    a, b = np.empty(3), np.empty(3)
     for v in range(lo, hi):
         start, stop = offsets[v], offsets[v + 1]
         step = np.pi / face_count[v] if boundary[v] else 2.0 * np.pi / valence[v]
         corner = boundary[v] and face_count[v] == 1
-        a = np.zeros(3)
-        b = np.zeros(3)
+        a[:] = 0.0
+        b[:] = 0.0
         for s in range(start, stop):
             theta = (s - start) * step
-            cos, sin = np.cos(theta), np.sin(theta)
+            cos[s - start], sin[s - start] = np.cos(theta), np.sin(theta)
             for d in range(3):
-                a[d] += cos * wanted[s, d]
-                b[d] += sin * wanted[s, d]
+                a[d] += cos[s - start] * wanted[s, d]
+                b[d] += sin[s - start] * wanted[s, d]
         half = 0.5 * (face_count[v] if boundary[v] else valence[v])
         a /= half + 1.0 if boundary[v] else half
         b /= 1.0 if corner else half
@@ -1147,10 +1152,8 @@ def _star_kernel(normals: FloatArray, wanted: FloatArray, positions: FloatArray,
         valid[v] = corner or area > 1e-12 * ((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) + (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]))
         worst = 0.0
         for s in range(start, stop):
-            theta = (s - start) * step
-            cos, sin = np.cos(theta), np.sin(theta)
             for d in range(3):
-                star[s, d] = wanted[s, d] if corner else a[d] * cos + b[d] * sin
+                star[s, d] = wanted[s, d] if corner else a[d] * cos[s - start] + b[d] * sin[s - start]
             e = positions[neighbors[s]] - positions[v]
             chord = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
             along = e[0] * n[0] + e[1] * n[1] + e[2] * n[2]
@@ -1179,9 +1182,9 @@ def _chain_kernel(cosine: FloatArray, x_of: IntArray, y_of: IntArray, interior: 
     where λ = −(c_end − c_next); λ per node into ``lam`` (2E,), zero on closed lines."""
     nodes = lam.size
     partner = np.full(nodes, -1, dtype=np.int64)  # the node through the valence-4 vertex: ring edge j ↔ j + 2
+    ring = np.empty(4, dtype=np.int64)
     for v in range(through.size):
         if through[v]:
-            ring = np.empty(4, dtype=np.int64)
             for j in range(4):
                 h = ring_halfedges[ring_offsets[v] + j]
                 ring[j] = 2 * halfedge_edge[h] + (0 if edge_halfedges[halfedge_edge[h], 0] == h else 1)
