@@ -340,8 +340,18 @@ def check(
         network = as_network(network, "network")
     patches = network.patches
     local = _local(patches)
-    corners = _corner_points(local)
-    diagonal = _diagonal(corners) or 1.0
+    form = _evaluation_form(local) if _kernels_wanted(compiled, len(local)) else None
+    frame = getattr(patches, "frame", None)
+    vertices = None
+    if network.vertices is not None:
+        vertices = network.vertices if frame is None else frame.to_local(network.vertices)
+    if form is None:
+        corners = _corner_points(local)
+        diagonal = _diagonal(corners) or 1.0
+    else:  # the same figures from one pass over the corners in place (4 M corners: 0.5 s -> 0.03 s)
+        corner_points = form[0] if isinstance(local, GregoryPatchSet) else np.ascontiguousarray(_corner_points(local))
+        low, high, farthest = _corner_extent_compiled(corner_points, vertices, np.ascontiguousarray(network.corner_ids, dtype=np.int64))
+        diagonal = (float(np.linalg.norm(high - low)) if len(local) else 0.0) or 1.0
     degenerate_level = degenerate_rtol * diagonal**2
 
     left_patch, left_edge = network.shared_edges()
@@ -355,7 +365,6 @@ def check(
     edge_worst = np.zeros(len(left_patch), dtype=np.int64)
     patch_block = min(chunk, _patch_block(fold_samples))
     total = len(left_patch) + len(local)
-    form = _evaluation_form(local) if _kernels_wanted(compiled, len(local)) else None
     grid = _GridMeasures(len(local), fold_samples, degenerate_level)
     if form is not None:
         sides = (left_patch, left_edge, right_patch, right_edge, same)
@@ -388,9 +397,9 @@ def check(
     locations = _first_per_patch(grid.locations + _edge_fold_locations(edge_sides, folded_edges, edge_worst, samples))
 
     max_vertex_deviation = None
-    if network.vertices is not None:
-        frame = getattr(patches, "frame", None)
-        vertices = network.vertices if frame is None else frame.to_local(network.vertices)
+    if vertices is not None and form is not None:
+        max_vertex_deviation = float(np.sqrt(farthest) / diagonal) if len(local) else 0.0
+    elif vertices is not None:
         deviation = np.linalg.norm(corners - vertices[network.corner_ids], axis=-1)
         max_vertex_deviation = float(deviation.max() / diagonal) if deviation.size else 0.0
 
@@ -414,7 +423,8 @@ def check(
         degenerate_normals=grid.degenerate,
         folds=int(folded.sum()),
         inconsistent_orientation_edges=int(same.sum()),
-        bounding_box_diagonal=float(diagonal if local is patches else _world_diagonal(network, corners)),
+        bounding_box_diagonal=float(diagonal if local is patches else
+                                    _world_diagonal(network, corners) if form is None else _world_extent_diagonal(network, low, high)),
         max_vertex_deviation=max_vertex_deviation,
         fold_samples=fold_samples,
         fold_locations=tuple(locations),
@@ -546,6 +556,17 @@ def _world_diagonal(network: PatchNetwork, corners: NDArray[np.float64]) -> floa
     patches = network.patches
     if isinstance(patches, GregoryPatchSet) and patches.frame is not None:
         return _diagonal(patches.frame.to_world(corners))
+    return network.bounding_box_diagonal()
+
+
+def _world_extent_diagonal(network: PatchNetwork, low: NDArray[np.float64], high: NDArray[np.float64]) -> float:
+    """:func:`_world_diagonal` from the local corners' box ``low``, ``high``: ``c + s x`` is monotone in
+    each coordinate (both roundings are), so the world corners' extremes are the images of the
+    local ones, exactly."""
+    patches = network.patches
+    if isinstance(patches, GregoryPatchSet) and patches.frame is not None:
+        ends = patches.frame.to_world(np.stack([low, high]))
+        return float(np.linalg.norm(ends.max(axis=0) - ends.min(axis=0)))
     return network.bounding_box_diagonal()
 
 
@@ -1141,6 +1162,47 @@ def _edge_kernel(points: NDArray[np.float64], left_patch: NDArray[np.int64], lef
                             best, best_at = value, k
                         low = min(low, value)
                 angle[e], worst[e], least[e], gap[e] = best, best_at, low, np.sqrt(gap2[lane])
+
+
+def _corner_extent_compiled(points: NDArray[np.float64], vertices: NDArray[np.float64] | None,
+                            corner_ids: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
+    """The low and high corner of the box around the patch corners (the first four points of
+    ``points (N, M, 3)``: a Gregory patch's corners, or evaluated corners ``(N, 4, 3)``), and the
+    largest squared distance ``(d₀² + d₁²) + d₂²`` of a corner to its vertex ``vertices[corner_ids]``
+    (0 without vertices), in one pass over the corners without copying them: what
+    :func:`_diagonal` and ``np.linalg.norm(corners - vertices[ids], axis=-1)`` read (each
+    coordinate's extremes are exact; the norm is monotone in its square, so its maximum is the
+    root of the largest square)."""
+    chunks = _chunks(len(points))
+    low, high, far = np.empty((chunks, 3)), np.empty((chunks, 3)), np.empty(chunks)
+    _compiled(_corner_extent_kernel)(points, np.zeros((0, 3)) if vertices is None else np.ascontiguousarray(vertices, dtype=np.float64),
+                                     corner_ids, chunks, low, high, far)
+    return low.min(axis=0), high.max(axis=0), float(far.max())
+
+
+def _corner_extent_kernel(points: NDArray[np.float64], vertices: NDArray[np.float64], corner_ids: NDArray[np.int64],
+                          chunks: int, low: NDArray[np.float64], high: NDArray[np.float64], far: NDArray[np.float64]) -> None:
+    """Per chunk of patches: each coordinate's least and greatest corner value and the largest
+    squared distance of a corner to its vertex (NaN where one is NaN, as NumPy's extremes)."""
+    patches, measure = points.shape[0], vertices.shape[0] > 0
+    for chunk in prange(chunks):
+        least, most = np.full(3, np.inf), np.full(3, -np.inf)
+        farthest = 0.0
+        for n in range(chunk * patches // chunks, (chunk + 1) * patches // chunks):
+            for k in range(4):
+                for d in range(3):
+                    x = points[n, k, d]
+                    if least[d] == least[d] and (x < least[d] or x != x):
+                        least[d] = x
+                    if most[d] == most[d] and (x > most[d] or x != x):
+                        most[d] = x
+                if measure:
+                    vertex = corner_ids[n, k]
+                    d0, d1, d2 = points[n, k, 0] - vertices[vertex, 0], points[n, k, 1] - vertices[vertex, 1], points[n, k, 2] - vertices[vertex, 2]
+                    square = (d0 * d0 + d1 * d1) + d2 * d2
+                    if farthest == farthest and (square > farthest or square != square):
+                        farthest = square
+        low[chunk], high[chunk], far[chunk] = least, most, farthest
 
 
 def _corner_normals_compiled(points: NDArray[np.float64], form: str) -> NDArray[np.float64]:
