@@ -110,6 +110,20 @@ def perturbed(network: PatchNetwork, scale: float, seed: int, moved: slice = sli
     return dataclasses.replace(network, patches=GregoryPatchSet(points, patches.frame))
 
 
+def test_flipped_patches_report_as_the_reference() -> None:
+    # every third patch transposed (u <-> v): its edges run the same way as their neighbours', so
+    # the edge kernel takes them in classes of their own (flipped normals) beside the others, in
+    # lane groups that are not full
+    patches = build_split4_network(shapes.torus(12, 8)).patches
+    assert isinstance(patches, PatchSet)
+    control = patches.control.copy()
+    control[::3] = control[::3].transpose(0, 2, 1, 3)
+    flipped = PatchSet(control, patches.form, patches.frame)
+    compiled, reference = check(flipped, compiled=True), check(flipped, compiled=False)
+    assert 0 < reference.inconsistent_orientation_edges < reference.shared_edges
+    assert_same_report(compiled, reference)
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_folds_and_their_locations_as_the_reference(seed: int) -> None:
     network = perturbed(build_gregory_network(shapes.torus(10, 6)), 0.2, seed)
