@@ -1065,16 +1065,18 @@ def _edge_kernel(points: NDArray[np.float64], left_patch: NDArray[np.int64], lef
 
     ``lanes`` edges at a time, ``order[groups[i]:groups[i + 1]]`` for group i, whose edges share
     their sides' edge numbers and directions, so their weights: the lanes are the last axis of
-    every scratch array, and the arithmetic vectorises across edges, sample by sample. A sum
+    every scratch array, and the arithmetic vectorises across edges (the three coordinates of
+    every lane in one loop, as the weights do not depend on them), sample by sample. A sum
     ``Σ_m P_m W_m`` runs over ``index[edge, backwards, q]`` four terms at a time (``blocks``
     of them), padded with the point ``M`` (−1 in every lane) of weight +0: ``fma(−1, +0, acc)``
     is ``acc`` exactly (``acc + (−0)``), so every value is the sequential sum of the edge-by-edge
     formulation, bit for bit."""
     samples, padded, group_count = weights.shape[-1], points.shape[1] + 1, groups.size - 1
     for chunk in prange(chunks):
-        net = np.zeros((2, 3, padded, lanes))
-        net[:, :, padded - 1] = -1.0
+        net = np.zeros((2, padded, 3 * lanes))  # side, point, (coordinate, lane)
+        net[:, padded - 1] = -1.0
         values = np.empty((2, 3, 3, lanes))  # side, derivative (p, p_u, p_v), coordinate, lane
+        sums = values.reshape((2, 3, 3 * lanes))
         normal, cross = np.empty((2, 3, lanes)), np.empty((3, lanes))
         distance, y, x = np.empty(lanes), np.empty((samples, lanes)), np.empty((samples, lanes))
         pseudo, usable = np.empty((samples, lanes)), np.empty((samples, lanes), dtype=np.bool_)
@@ -1088,9 +1090,9 @@ def _edge_kernel(points: NDArray[np.float64], left_patch: NDArray[np.int64], lef
                 e = order[first + lane]
                 for side in range(2):
                     patch = left_patch[e] if side == 0 else right_patch[e]
-                    for d in range(3):
-                        for m in range(padded - 1):
-                            net[side, d, m, lane] = points[patch, m, d]
+                    for m in range(padded - 1):
+                        for d in range(3):
+                            net[side, m, d * lanes + lane] = points[patch, m, d]
             top[:] = -1.0
             bottom[:] = np.inf
             gap2[:] = 0.0
@@ -1098,23 +1100,23 @@ def _edge_kernel(points: NDArray[np.float64], left_patch: NDArray[np.int64], lef
                 for side in range(2):
                     edge = left_edge[lead] if side == 0 else right_edge[lead]
                     back = 1 if side == 1 and not same[lead] else 0
-                    for q in range(3):
-                        for d in range(3):
-                            out, p = values[side, q, d], net[side, d]
-                            if blocks[edge, back, q] == 0:
-                                out[:] = 0.0
-                            for block in range(blocks[edge, back, q]):
-                                m0, m1 = index[edge, back, q, 4 * block], index[edge, back, q, 4 * block + 1]
-                                m2, m3 = index[edge, back, q, 4 * block + 2], index[edge, back, q, 4 * block + 3]
-                                w0, w1 = weights[edge, back, q, m0, k], weights[edge, back, q, m1, k]
-                                w2, w3 = weights[edge, back, q, m2, k], weights[edge, back, q, m3, k]
-                                p0, p1, p2, p3 = p[m0], p[m1], p[m2], p[m3]
-                                if block == 0:
-                                    for lane in range(lanes):
-                                        out[lane] = _fma(p3[lane], w3, _fma(p2[lane], w2, _fma(p1[lane], w1, _fma(p0[lane], w0, 0.0))))
-                                else:
-                                    for lane in range(lanes):
-                                        out[lane] = _fma(p3[lane], w3, _fma(p2[lane], w2, _fma(p1[lane], w1, _fma(p0[lane], w0, out[lane]))))
+                    p = net[side]
+                    for q in range(3):  # the three coordinates of every lane in one loop (the weights are the same)
+                        out = sums[side, q]
+                        if blocks[edge, back, q] == 0:
+                            out[:] = 0.0
+                        for block in range(blocks[edge, back, q]):
+                            m0, m1 = index[edge, back, q, 4 * block], index[edge, back, q, 4 * block + 1]
+                            m2, m3 = index[edge, back, q, 4 * block + 2], index[edge, back, q, 4 * block + 3]
+                            w0, w1 = weights[edge, back, q, m0, k], weights[edge, back, q, m1, k]
+                            w2, w3 = weights[edge, back, q, m2, k], weights[edge, back, q, m3, k]
+                            p0, p1, p2, p3 = p[m0], p[m1], p[m2], p[m3]
+                            if block == 0:
+                                for t in range(3 * lanes):
+                                    out[t] = _fma(p3[t], w3, _fma(p2[t], w2, _fma(p1[t], w1, _fma(p0[t], w0, 0.0))))
+                            else:
+                                for t in range(3 * lanes):
+                                    out[t] = _fma(p3[t], w3, _fma(p2[t], w2, _fma(p1[t], w1, _fma(p0[t], w0, out[t]))))
                 for side in range(2):  # normals p_u × p_v (side R's flipped where both sides run the same way)
                     u, v, n = values[side, 1], values[side, 2], normal[side]
                     sign = flip if side == 1 else 1.0
