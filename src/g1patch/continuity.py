@@ -54,7 +54,7 @@ from ._grid import BLOCK_POINTS
 from .basis import basis_values
 from .errors import InputError
 from .gregory import BEZIER_INDEX, INTERIOR_INDEX, GregoryPatchSet, gregory_weights
-from .network import PatchNetwork, Patches, edge_parameters
+from .network import Patches, PatchNetwork, edge_parameters
 from .patches import CORNER_PARAMETERS, PatchSet
 
 __all__ = ["SEAM_G0_RTOL", "ContinuityReport", "check", "fairness", "folded_patches", "angle_between", "format_reports"]
@@ -988,6 +988,14 @@ def _compiled(kernel: Callable[..., Any]) -> Callable[..., Any]:
     return numba.njit(cache=True, error_model="numpy", parallel=True)(kernel)  # type: ignore[no-any-return]
 
 
+@cache
+def _serial(kernel: Callable[..., Any]) -> Callable[..., Any]:
+    """A kernel without a parallel loop, compiled once per process (:func:`g1patch.kernels.jit_kernel`)."""
+    from .kernels import jit_kernel
+
+    return jit_kernel(kernel)  # type: ignore[return-value]
+
+
 def _chunks(count: int) -> int:
     """Chunks of a kernel's parallel loop: a few per core (the cores share the machine)."""
     import numba
@@ -1196,15 +1204,15 @@ def _corner_extent_kernel(points: NDArray[np.float64], vertices: NDArray[np.floa
             for k in range(4):
                 for d in range(3):
                     x = points[n, k, d]
-                    if least[d] == least[d] and (x < least[d] or x != x):
+                    if not np.isnan(least[d]) and (x < least[d] or np.isnan(x)):
                         least[d] = x
-                    if most[d] == most[d] and (x > most[d] or x != x):
+                    if not np.isnan(most[d]) and (x > most[d] or np.isnan(x)):
                         most[d] = x
                 if measure:
                     vertex = corner_ids[n, k]
                     d0, d1, d2 = points[n, k, 0] - vertices[vertex, 0], points[n, k, 1] - vertices[vertex, 1], points[n, k, 2] - vertices[vertex, 2]
                     square = (d0 * d0 + d1 * d1) + d2 * d2
-                    if farthest == farthest and (square > farthest or square != square):
+                    if not np.isnan(farthest) and (square > farthest or np.isnan(square)):
                         farthest = square
         low[chunk], high[chunk], far[chunk] = least, most, farthest
 
@@ -1247,11 +1255,25 @@ def _max_corner_angle_compiled(network: PatchNetwork, normals: NDArray[np.float6
     ids = network.corner_sectors().reshape(-1).astype(np.int64)
     if not len(ids):
         return 0.0
-    order = np.argsort(ids, kind="stable")
-    starts = np.flatnonzero(np.r_[True, ids[order][1:] != ids[order][:-1], True])
+    # the corners by sector, in order within each (a counting sort: the stable argsort's
+    # permutation; 4 M corners 0.1 s -> 0.03 s), and where each sector starts
+    counts = np.bincount(ids)
+    cursor = np.r_[0, np.cumsum(counts)[:-1]]
+    starts = np.r_[cursor[counts > 0], len(ids)]
+    order = np.empty(len(ids), dtype=np.int64)
+    _serial(_counting_sort_kernel)(ids, cursor, order)
     worst = np.zeros(len(starts) - 1)
     _compiled(_corner_kernel)(normals, order, starts, degenerate_level, oriented, _PAIRWISE_SECTOR, _chunks(len(worst)), worst)
     return float(worst.max(initial=0.0))
+
+
+def _counting_sort_kernel(keys: NDArray[np.int64], cursor: NDArray[np.int64], order: NDArray[np.int64]) -> None:
+    """``order``: the items by key, in their order within a key (``cursor[k]``: where key k's first
+    goes; advanced as items are placed). Serial: the placement is what makes it stable."""
+    for item in range(keys.size):
+        key = keys[item]
+        order[cursor[key]] = item
+        cursor[key] += 1
 
 
 def _pair_angle(a: NDArray[np.float64], b: NDArray[np.float64], oriented: bool) -> float:
