@@ -1,7 +1,9 @@
 """The compiled check (numba kernels) against its NumPy reference (``compiled=False``).
 
-Counts, folds, their locations and the turn histogram must be equal; so must the turn maximum (the
-kernels recompute its pair as the reference sums it). Angles and gaps may differ by the rounding
+Counts, folds, their locations and the turn histogram must be equal; the turn maximum to
+:data:`TURN_RTOL` (the kernels recompute its pair as the reference sums it, but the reference's
+products go through BLAS, whose tail kernels round a row differently: one ULP on the coarse
+torus's largest turn once its tangents ran straight along the mesh lines). Angles and gaps may differ by the rounding
 of the tangents: the kernels sum the edge and corner samples as OpenBLAS's dgemm micro-kernel does
 (a sequential fused multiply-add), which equals the reference except on the rows OpenBLAS gives
 its tail kernels; there a tangent differs by a few ULP of ``Σ |w_m| |P_m|``, and so does a normal,
@@ -48,8 +50,11 @@ def energy_atol(report: ContinuityReport) -> float:
 EXACT = (
     "patches", "shared_edges", "open_edges", "collapsed_edges", "collapsed_patch_edges", "samples_per_edge",
     "degenerate_normals", "folds", "inconsistent_orientation_edges", "bounding_box_diagonal", "max_vertex_deviation",
-    "fold_samples", "fold_locations", "turn_median_deg", "turn_p99_deg", "turn_max_deg", "seam_edges",
+    "fold_samples", "fold_locations", "turn_median_deg", "turn_p99_deg", "seam_edges",
 )
+#: the turn maximum, relative: the angle of one pair of normals, each a few ULP off where BLAS
+#: sums its row in a tail kernel (measured 1 ULP)
+TURN_RTOL = 8 * EPS
 ANGLES = ("max_edge_angle_deg", "mean_edge_angle_deg", "max_corner_angle_deg", "seam_angle_min_deg", "seam_angle_max_deg")
 
 
@@ -57,6 +62,7 @@ def assert_same_report(compiled: ContinuityReport, reference: ContinuityReport) 
     """The kernels' report equals the reference's: exactly, or within the bounds above."""
     for name in EXACT:
         assert getattr(compiled, name) == getattr(reference, name), name
+    assert compiled.turn_max_deg == pytest.approx(reference.turn_max_deg, rel=TURN_RTOL, abs=0.0)
     for name in ("edge_patches", "edge_sides", "edge_seam"):
         np.testing.assert_array_equal(getattr(compiled, name), getattr(reference, name), err_msg=name)
     for name in ANGLES:

@@ -75,7 +75,7 @@ def test_assembly_of_a_random_fan_takes_the_kh_fit() -> None:
 
 
 def test_targets_kernels(mesh: QuadMesh) -> None:
-    """Projected tangents, fan validity (on the raw fans, valid or not), interior targets with and
+    """Projected tangents, their turn along smooth mesh lines, fan validity (on the raw fans, valid or not), interior targets with and
     without the shape operator, and the coarse-face turn."""
     from g1patch.targets import interpolate
     from g1patch.targets.frames import vertex_frames
@@ -87,6 +87,11 @@ def test_targets_kernels(mesh: QuadMesh) -> None:
     for a, b in zip(fast, reference, strict=True):
         assert_close(a, b)
     raw = fast[0]
+    lines = interpolate._along_smooth_lines(mesh, n, raw, compiled=False)
+    assert_close(interpolate._along_smooth_lines(mesh, n, raw), lines)
+    in_place = raw.copy()
+    assert interpolate._along_smooth_lines(mesh, n, in_place, out=in_place) is in_place
+    assert_close(in_place, lines)
     twisted = raw * np.where(np.arange(len(raw)) % 3 == 0, -1.0, 1.0)[:, None]  # folded fans fail
     for t in (raw, twisted):
         assert_close(interpolate._valid_fans(topology, n, t), interpolate._valid_fans(topology, n, t, compiled=False))
