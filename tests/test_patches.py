@@ -759,6 +759,20 @@ def test_non_finite_control_is_named(value):
         PatchSet(control, "hermite")
 
 
+def test_all_finite_tells_overflow_from_non_finite_entries():
+    """The fast test sums: finite entries that overflow the sum are still finite; one NaN or ±inf anywhere is not."""
+    from g1patch.errors import all_finite
+
+    huge = np.full(1000, np.finfo(float).max)
+    assert all_finite(huge) and all_finite(-huge) and all_finite(np.zeros(0))
+    for value in (np.nan, np.inf, -np.inf):
+        spoiled = huge.copy()
+        spoiled[617] = value
+        assert not all_finite(spoiled) and not all_finite(np.where(np.arange(1000) == 3, value, 1.0))
+    mixed = np.array([np.inf, -np.inf, 1.0])  # a NaN sum
+    assert not all_finite(mixed)
+
+
 def test_non_numeric_control_is_named():
     with pytest.raises(InputError, match=r"^control: expected an array of numbers, got str"):
         PatchSet("not an array")

@@ -382,20 +382,20 @@ def _circle_fit(q: FloatArray, mask: BoolArray, edges: FloatArray, edge_mask: Bo
 
 
 def _rows_kernel(faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray, offsets: IntArray,
-                 points: IntArray, fill: bool) -> None:
+                 points: IntArray, fill: bool, lo: int, hi: int) -> None:
     """The rows of ``I Iᵀ`` (I the vertex–face incidence, :func:`_face_rings`) in scipy's order: per
     vertex the corners of its faces, the faces in increasing order and each face's corners in
     increasing order, each point once, reversed (scipy's sparse product lists a row's columns in
     reverse order of first encounter). ``fill=False`` writes the row sizes to ``offsets[v + 1]``,
-    then ``fill=True`` the points, from ``offsets[v]``."""
+    then ``fill=True`` the points, from ``offsets[v]``; vertices ``lo`` to ``hi`` (a point already
+    in the row is found by a scan of the row: ranges run side by side without shared state)."""
     most = 1
-    for u in range(ring_offsets.size - 1):
+    for u in range(lo, hi):
         most = max(most, ring_offsets[u + 1] - ring_offsets[u])
     ring_faces = np.empty(most, dtype=np.int64)
     ring = np.empty(4 * most, dtype=np.int64)
     corners = np.empty(4, dtype=np.int64)
-    seen = np.full(ring_offsets.size - 1, -1)
-    for v in range(ring_offsets.size - 1):
+    for v in range(lo, hi):
         first, count = ring_offsets[v], ring_offsets[v + 1] - ring_offsets[v]
         for r in range(count):  # insertion sort of the faces at v
             f = ring_halfedges[first + r] >> 2
@@ -415,8 +415,10 @@ def _rows_kernel(faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArr
                 corners[j] = p
             for corner in range(4):
                 p = corners[corner]
-                if seen[p] != v:
-                    seen[p] = v
+                known = False
+                for j in range(size):
+                    known = known or ring[j] == p
+                if not known:
                     ring[size] = p
                     size += 1
         if fill:
@@ -816,10 +818,12 @@ def _face_ring_rows(mesh: QuadMesh) -> tuple[IntArray, IntArray]:
     topo = mesh.topology
     offsets = np.zeros(mesh.n_vertices + 1, dtype=np.int64)
     kernel = jit_kernel(_rows_kernel)
-    kernel(topo.faces, topo.ring_offsets, topo.ring_halfedges, offsets, np.empty(0, dtype=np.int32), False)
+    in_chunks(lambda lo, hi: kernel(topo.faces, topo.ring_offsets, topo.ring_halfedges, offsets, np.empty(0, dtype=np.int32),
+                                    False, lo, hi), mesh.n_vertices)
     np.cumsum(offsets, out=offsets)
     points = np.empty(int(offsets[-1]), dtype=np.int32)
-    kernel(topo.faces, topo.ring_offsets, topo.ring_halfedges, offsets, points, True)
+    in_chunks(lambda lo, hi: kernel(topo.faces, topo.ring_offsets, topo.ring_halfedges, offsets, points, True, lo, hi),
+              mesh.n_vertices)
     return offsets, points
 
 
