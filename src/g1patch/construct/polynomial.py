@@ -36,7 +36,7 @@ from ..mesh import QuadMesh, QuadTopology
 from ..network import PatchNetwork
 from ..patches import CORNER_PARAMETERS
 from ..targets import Targets, halfedge_slots
-from .split4 import SplitStar
+from .split4 import SplitStar, fan_walk
 
 __all__ = ["gregory_targets", "seam_stars", "split4_of_gregory", "surface_deviation"]
 
@@ -169,15 +169,7 @@ def seam_stars(targets: Targets, seam_halfedges: NDArray[np.bool_]) -> SplitStar
     copies, k, first, last = copies[many], k[many], first[many], last[many]
     if not copies.size:
         return SplitStar(star, cosine, base.refitted, base.shrunk & (factor < 1.0), factor)
-    owner = np.repeat(np.arange(copies.size), k + 1)
-    j = np.arange(owner.size) - np.repeat(np.cumsum(k + 1) - (k + 1), k + 1)
-    slot = first[owner] + j
-    t = targets.tangents[slot]
-    n = targets.normals[copies][owner]
-    previous = np.where(j > 0, slot - 1, slot)
-    turn = np.arctan2(np.einsum("sd,sd->s", np.cross(targets.tangents[previous], t), n),
-                      np.einsum("sd,sd->s", targets.tangents[previous], t))
-    total = np.bincount(owner, turn, minlength=copies.size)
+    owner, j, slot, t, total = fan_walk(targets, copies)
     theta = total / k
     anchor_last = ~seam_at[first] & seam_at[last]  # the seam is slot k only
     e = np.where(anchor_last, k, 0)

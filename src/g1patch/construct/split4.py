@@ -71,7 +71,7 @@ from ..patches import PatchSet
 from ..targets import Targets, halfedge_slots
 
 __all__ = [
-    "BSPLINE_KNOTS", "STAR_LENGTH_LIMIT", "SplitStar", "bspline_nets", "macro_nets",
+    "BSPLINE_KNOTS", "STAR_LENGTH_LIMIT", "FanWalk", "SplitStar", "bspline_nets", "fan_walk", "macro_nets",
     "split4_network_from_targets", "split4_patches", "split4_star", "target_nets",
 ]
 
@@ -420,16 +420,17 @@ def split4_star(targets: Targets, *, compiled: bool | None = None) -> SplitStar:
         wanted = spread_fan(topology, targets.normals, wanted, chord, np.flatnonzero(~valid))
         star, cosine, _ = fit_regular_star(topology, targets.normals, wanted)
     slot_vertex = slot_vertices(topology)
-    shrink = _length_shrink(targets, star, wanted, np.arange(len(star)), slot_vertex, topology.n_vertices)
+    shrink = _length_shrink(targets, star, wanted, np.arange(len(star)), slot_vertex, slot_vertex, topology.n_vertices)
     star *= shrink[slot_vertex, None]
     return _rim_stars(targets, SplitStar(star, cosine, ~valid, shrink < 1.0, shrink))
 
 
-def _length_shrink(targets: Targets, star: FloatArray, wanted: FloatArray, slots: IntArray, owner: IntArray, count: int) -> FloatArray:
+def _length_shrink(targets: Targets, star: FloatArray, wanted: FloatArray, slots: IntArray, vertex: IntArray,
+                   owner: IntArray, count: int) -> FloatArray:
     """:func:`split4_star`'s length safeguard: per owner (``count`` of them) ``min(1, 1 / max_j |t_j| / allowed_j)``
-    over its ``slots`` (star rows ``t_j``, target rows ``wanted``), ``allowed = limit · min(|s|, 2|d|²/(|d| + |P d|))``."""
+    over its ``slots`` at their ``vertex`` (star rows ``t_j``, target rows ``wanted``),
+    ``allowed = limit · min(|s|, 2|d|²/(|d| + |P d|))``."""
     topology = targets.topology
-    vertex = topology.neighbor_offsets.searchsorted(slots, side="right") - 1
     edge = targets.positions[topology.neighbors[slots]] - targets.positions[vertex]
     normal = targets.normals[vertex]
     chord = np.linalg.norm(edge, axis=1)
@@ -440,6 +441,33 @@ def _length_shrink(targets: Targets, star: FloatArray, wanted: FloatArray, slots
     worst = np.zeros(count)
     np.maximum.at(worst, owner, ratio)
     return np.minimum(1.0, 1.0 / np.where(worst > 0, worst, 1.0))
+
+
+class FanWalk(NamedTuple):
+    """The k + 1 slots of each of some boundary fans in ring order: per slot its fan (``owner``),
+    its place in the fan (``j``), its slot index, its target tangent; per fan the total turn ``Φ``
+    from the first slot to the last about the vertex normal (the sum of the turns between
+    consecutive slots, ``atan2(n·(t_{j−1} × t_j), t_{j−1}·t_j)``)."""
+
+    owner: IntArray
+    j: IntArray
+    slot: IntArray
+    tangent: FloatArray
+    turn: FloatArray
+
+
+def fan_walk(targets: Targets, vertices: IntArray) -> FanWalk:
+    """:class:`FanWalk` of the fans of ``vertices`` (boundary vertices, k = face count slots + 1)."""
+    topology = targets.topology
+    k = topology.face_count[vertices]
+    owner = np.repeat(np.arange(vertices.size), k + 1)
+    j = np.arange(owner.size) - np.repeat(np.cumsum(k + 1) - (k + 1), k + 1)
+    slot = topology.neighbor_offsets[vertices][owner] + j
+    t = targets.tangents[slot]
+    previous = targets.tangents[np.where(j > 0, slot - 1, slot)]
+    normal = targets.normals[vertices][owner]
+    turn = np.arctan2(_dot(np.cross(previous, t), normal), _dot(previous, t))
+    return FanWalk(owner, j, slot, t, np.bincount(owner, turn, minlength=vertices.size))
 
 
 #: a boundary fan turning by at least this (and at most 2π minus it) gets a star of its own turn
@@ -468,13 +496,7 @@ def _rim_stars(targets: Targets, base: SplitStar) -> SplitStar:
     if not rims.size:
         return base
     k = topology.face_count[rims]
-    owner = np.repeat(np.arange(rims.size), k + 1)
-    j = np.arange(owner.size) - np.repeat(np.cumsum(k + 1) - (k + 1), k + 1)
-    slot = topology.neighbor_offsets[rims][owner] + j
-    t, normal = targets.tangents[slot], targets.normals[rims]
-    previous = targets.tangents[np.where(j > 0, slot - 1, slot)]
-    turn = np.arctan2(_dot(np.cross(previous, t), normal[owner]), _dot(previous, t))
-    own = np.bincount(owner, turn, minlength=rims.size)
+    owner, j, slot, t, own = fan_walk(targets, rims)
     narrow = np.clip((np.minimum(own, 2.0 * np.pi - own) - _RIM_TURN_NONE) / (_RIM_TURN_FULL - _RIM_TURN_NONE), 0.0, 1.0)
     weight = narrow * narrow * (3.0 - 2.0 * narrow)
     total = weight * own + (1.0 - weight) * np.pi
@@ -487,10 +509,10 @@ def _rim_stars(targets: Targets, base: SplitStar) -> SplitStar:
     safe = np.where(det > 0, det, 1.0)[:, None]
     a = (ss[:, None] * moment_c - cs[:, None] * moment_s) / safe
     b = (cc[:, None] * moment_s - cs[:, None] * moment_c) / safe
-    area = _dot(np.cross(a, b), normal)
+    area = _dot(np.cross(a, b), targets.normals[rims])
     good = (own > 0) & (own < 2.0 * np.pi) & (det > 0) & (area > 1e-12 * (_dot(a, a) + _dot(b, b)))
     fitted = c[:, None] * a[owner] + s[:, None] * b[owner]
-    shrink = _length_shrink(targets, fitted, t, slot, owner, rims.size)
+    shrink = _length_shrink(targets, fitted, t, slot, rims[owner], owner, rims.size)
     keep = good[owner]
     star, cosine, factor = base.star.copy(), base.cosine.copy(), base.factor.copy()
     star[slot[keep]] = fitted[keep] * shrink[owner[keep], None]
