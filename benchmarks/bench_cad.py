@@ -6,8 +6,10 @@ some), built with the defaults (Gregory, interpolate; not timed). Per mesh and m
 * ``fit`` (the baseline: the previous default): each Gregory patch fitted on adaptive knots within
   1e-6 of the diagonal (:func:`g1patch.io.cad.fit_bspline_surfaces`);
 * ``split4`` (the default): the split4 re-assembly of the network's targets, written exactly
-  (:mod:`g1patch.construct.polynomial`; seams: on the mesh cut open along them); a network whose
-  Gregory patches are bicubics already is written as they are (shown ``split4>exact``).
+  (:mod:`g1patch.construct.polynomial`; seams: on the mesh cut open along them), each patch as
+  n × n quads where n = 1 leaves it further than 1e-3 of the diagonal from the Gregory surface
+  (column ``cells``: n); a network whose Gregory patches are bicubics already is written as they
+  are (shown ``split4>exact``).
 
 Columns: faces; a closed solid, OCC's validity (``BRepCheck_Analyzer``); the file's bytes; the export's wall time (``export_step``, one run, the G1
 measurement included); the deviation from the Gregory surface over the bounding-box diagonal (fit:
@@ -64,7 +66,7 @@ def main() -> None:
     if args.meshes:
         paths = [p for p in paths if p.stem in args.meshes]
     print(f"# {platform.processor() or platform.machine()}, Python {platform.python_version()}; export_step of the default network")
-    header = (f"{'mesh':26} {'method':12} {'faces':>6} {'solid':>5} {'valid':>5} {'bytes':>11} {'time s':>7} {'dev/diag':>9} "
+    header = (f"{'mesh':26} {'method':12} {'cells':>5} {'faces':>6} {'solid':>5} {'valid':>5} {'bytes':>11} {'time s':>7} {'dev/diag':>9} "
               f"{'OCC max° (shape)':>17} {'OCC max° (file)':>16} {'bytes ratio':>11} {'time ratio':>10}")
     print(header)
     networks = {path.stem: build_network(read_mesh(path)) for path in paths}
@@ -79,14 +81,14 @@ def main() -> None:
                 start = time.perf_counter()
                 result = export_step(folder / f"{path.stem}.{method}.step", network, method=method)
                 seconds = time.perf_counter() - start
-                written = split4_of_gregory(network) if result.method == "split4" else network
+                written = split4_of_gregory(network, refine=result.refine) if result.method == "split4" else network
                 rows[method] = (result, seconds, file_angle(result, written))
             base = rows["fit"]
             for method, (result, seconds, angle) in rows.items():
                 ratios = (f"{result.file_bytes / base[0].file_bytes:11.3f} {seconds / base[1]:10.3f}"
                           if method != "fit" else f"{'1':>11} {'1':>10}")
                 shown = method if result.method in (method, "fit") else f"{method}>{result.method}"
-                print(f"{path.stem:26} {shown:12} {result.faces:6d} {result.solid!s:>5} {result.valid!s:>5} "
+                print(f"{path.stem:26} {shown:12} {result.refine or '':>5} {result.faces:6d} {result.solid!s:>5} {result.valid!s:>5} "
                       f"{result.file_bytes:11,d} {seconds:7.2f} "
                       f"{result.deviation / diagonal:9.2e} {result.max_g1_angle_deg:17.2e} {angle:16.2e} {ratios}")
         if args.repeats > 0:

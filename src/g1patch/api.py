@@ -523,7 +523,8 @@ class Surface:
         * ``.step``/``.stp``, ``.iges``/``.igs``: a B-rep, one B-spline face per patch (split4:
           per quad), exact for polynomial patches; a Gregory network by ``method`` (``auto``:
           its split4 re-assembly, exact G1 in CAD; ``fit``: fitted within ``tolerance``, model
-          units, default 1e-6 × the bbox diagonal); also ``progress``, ``g1_samples``
+          units, default 1e-6 × the bbox diagonal); ``max_deviation`` (the re-assembly's bound,
+          relative to the diagonal, default 1e-3); also ``progress``, ``g1_samples``
           (:func:`g1patch.io.cad.export_cad`, needs ``pip install 'g1patch[cad]'``);
         * ``.bpt``: Newell's Bézier patches (polynomial networks only: corner, split4, files).
 
@@ -539,7 +540,7 @@ class Surface:
             raise FormatError(target, f"unsupported extension {target.suffix or '(none)'!r}; expected one of "
                                       f"{', '.join(EXPORT_SUFFIXES)}")
         if suffix in CAD_SUFFIXES:
-            _check_options(target, options, ("tolerance", "progress", "g1_samples", "method"))
+            _check_options(target, options, ("tolerance", "progress", "g1_samples", "method", "max_deviation"))
             from .io.cad import export_cad
 
             return export_cad(target, self.network, **options)

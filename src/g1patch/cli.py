@@ -76,7 +76,7 @@ _EXAMPLES = {
 
 def _parser() -> argparse.ArgumentParser:
     from .construct.corner import TWISTS
-    from .io.cad import CAD_METHODS
+    from .io.cad import CAD_METHODS, DEVIATION_RTOL
     from .targets.local import NORMALS, TANGENTS
     from .targets.interpolate import SHAPES
 
@@ -140,6 +140,9 @@ def _parser() -> argparse.ArgumentParser:
                         help="CAD, Gregory networks: split4 = re-assemble their targets polynomially (exact G1 in CAD), "
                              "fit = fit each patch (closest, but CAD sees kinks); auto (default): split4, or fit where "
                              "split4 cannot re-assemble the network")
+    export.add_argument("--max-deviation", type=float, metavar="REL", default=DEVIATION_RTOL,
+                        help="CAD, split4 re-assembly of Gregory networks: cut each patch into n × n quads (n = 2, 4, 8) "
+                             "until the exact surface lies within REL × the bbox diagonal of the network's (default: %(default)g)")
     export.add_argument("--json", action="store_true", help="CAD: print the figures as one JSON object")
 
     render = command("render", "draw a network as a PNG: shaded, zebra stripes or a map of G1 angles")
@@ -333,6 +336,7 @@ def _export(args: argparse.Namespace) -> int:
         with _progress("export", args.quiet or args.json) as progress:
             tolerance = None if args.tolerance is None else args.tolerance * network.bounding_box_diagonal()
             result = export_cad(args.output, network, tolerance=tolerance, method=args.cad_method,
+                                max_deviation=args.max_deviation,
                                 progress=lambda stage, done, total: progress(done, total))
         corner_only = network.provenance.get("method") == "corner"
         if args.json:
@@ -370,7 +374,8 @@ def _cad_export_text(result: Any, corner_only: bool) -> str:
     """The lines ``export`` prints for a CAD file: faces, size, deviation, OCC's G1 angle, seams."""
     from .tessellate import _size_text
 
-    kind = {"exact": "exact B-spline faces", "split4": "exact B-spline faces of the split4 re-assembly (exact G1)",
+    cells = f", each Gregory patch as {result.refine} × {result.refine} quads" if result.refine > 1 else ""
+    kind = {"exact": "exact B-spline faces", "split4": f"exact B-spline faces of the split4 re-assembly (exact G1{cells})",
             "fit": "fitted B-spline faces"}[result.method]
     lines = [f"wrote {result.faces} {kind}{', a closed solid' if result.solid else ''}, "
              f"{_size_text(result.file_bytes, 'B')} -> {result.path}",

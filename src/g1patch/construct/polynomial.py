@@ -21,30 +21,42 @@ tangent exactly (:func:`seam_stars`; a nearly straight crease first gets opposit
 :func:`_straight_creases`): both sides of a seam then compute the same boundary curve, bit for bit,
 and the sub-patches are connected on the uncut mesh with those edges marked as seams.
 
-The result is compared with the Gregory surface itself (:func:`surface_deviation`).
+The result is compared with the Gregory surface itself (:func:`surface_deviation`). split4's
+stars cannot hold every Gregory fan (a V-shaped fan at a dart's end, unequal opposite tangents),
+and the difference lives within a quad's size of those vertices, so the network's surface can also
+be re-assembled on its mesh with every patch cut into n × n cells (:func:`grid_refinement`,
+:func:`refined_gregory_targets`: the targets read off the Gregory patches at the cell corners):
+the export takes the fewest cells that bring it within its bound.
 """
 
 from __future__ import annotations
+
+import math
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ConstructionError, InputError
 from ..frame import Frame
-from ..gregory import GregoryPatchSet
+from ..gregory import INTERIOR_INDEX, GregoryPatchSet
 from ..mesh import QuadMesh, QuadTopology
 from ..network import PatchNetwork
 from ..patches import CORNER_PARAMETERS
 from ..targets import Targets, halfedge_slots
 from .split4 import SplitStar, fan_walk
 
-__all__ = ["gregory_targets", "seam_stars", "split4_of_gregory", "surface_deviation"]
+__all__ = [
+    "GridRefinement", "grid_refinement", "gregory_targets", "refined_gregory_targets", "seam_stars", "split4_of_gregory",
+    "surface_deviation",
+]
 
 #: a sector between two seams takes its star's second axis from both seam tangents when the
 #: sine of its turn is at least this (else, a straight crease or a dart's end, by least squares)
 SIN_FLOOR = 0.2
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 
 def _topology_of(network: PatchNetwork, cut: bool) -> QuadTopology:
@@ -104,6 +116,99 @@ def gregory_targets(network: PatchNetwork, *, cut: bool = False) -> tuple[Target
     targets = Targets(topology, positions, normals, tangents, points[:, 12:].reshape(-1, 4, 2, 3),
                       seams=seams, rule="gregory network", corner_normals=corner_normals)
     return targets, frame
+
+
+class GridRefinement(NamedTuple):
+    """Each quad of a topology cut into an n × n grid in its own parameters: refined face
+    ``r = f n² + a n + b`` covers ``u ∈ [a/n, (a+1)/n]``, ``v ∈ [b/n, (b+1)/n]`` of face f, its corners
+    in f's order (so it turns the same way); ``grid[f, a, b]`` is the vertex at ``(a/n, b/n)`` of face f."""
+
+    topology: QuadTopology
+    grid: NDArray[np.int64]
+    n: int
+
+
+def grid_refinement(topology: QuadTopology, n: int) -> GridRefinement:
+    """:class:`GridRefinement` of ``topology``: vertices are the mesh's, then n − 1 per edge (from the
+    origin of its first half-edge on), then (n − 1)² per face; an edge's points are shared by its faces."""
+    faces, count = topology.faces, topology.n_faces
+    grid = np.empty((count, n + 1, n + 1), dtype=np.int64)
+    grid[:, [0, n, n, 0], [0, 0, n, n]] = faces
+    k = np.arange(1, n)
+    first = topology.edge_halfedges[topology.halfedge_edge, 0] == np.arange(topology.n_halfedges)
+    h = 4 * np.arange(count)[:, None] + np.arange(4)  # (F, 4)
+    base = topology.n_vertices + (n - 1) * topology.halfedge_edge[h]
+    along = np.where(first[h][..., None], k - 1, n - 1 - k) + base[..., None]  # (F, 4, n − 1): point k/n from corner i
+    grid[:, k, 0], grid[:, n, k], grid[:, n - k, n], grid[:, 0, n - k] = (along[:, i] for i in range(4))
+    inner = topology.n_vertices + (n - 1) * topology.n_edges
+    grid[:, 1:n, 1:n] = inner + np.arange(count * (n - 1) ** 2).reshape(count, n - 1, n - 1)
+    cells = np.stack([grid[:, :-1, :-1], grid[:, 1:, :-1], grid[:, 1:, 1:], grid[:, :-1, 1:]], axis=-1)
+    return GridRefinement(QuadTopology.from_faces(cells.reshape(-1, 4), inner + count * (n - 1) ** 2), grid, n)
+
+
+def _refined_seams(topology: QuadTopology, seam_halfedges: NDArray[np.bool_], n: int) -> NDArray[np.bool_]:
+    """(R, 4) which half-edges of the :func:`grid_refinement` lie on the ``seam_halfedges`` (4F,) of ``topology``."""
+    seam = seam_halfedges.reshape(-1, 4)
+    refined = np.zeros((topology.n_faces, n, n, 4), dtype=bool)
+    refined[:, :, 0, 0] = seam[:, 0, None]
+    refined[:, n - 1, :, 1] = seam[:, 1, None]
+    refined[:, :, n - 1, 2] = seam[:, 2, None]
+    refined[:, 0, :, 3] = seam[:, 3, None]
+    return refined.reshape(-1, 4)
+
+
+def refined_gregory_targets(network: PatchNetwork, refinement: GridRefinement, *, cut: bool = False
+                            ) -> tuple[Targets, Frame, FloatArray]:
+    """The targets of a Gregory network's own surface on a :func:`grid_refinement` of its mesh (cut
+    or not: ``refinement.topology``'s faces are the patches' n × n cells), with the guide nets of
+    the cells (:func:`guide_nets` of each cell's piece of its patch), in the local coordinates of
+    the patches' frame: positions and unit normals ``p_u × p_v`` of the patch at each grid point (a
+    point on an edge from one of its faces: the network is G0), the slot tangent of each cell edge
+    the patch's derivative along it over n (its Hermite tangent), corner normals per cell corner
+    (:func:`_corner_normals`' inset where a patch corner is degenerate), interior targets the
+    interior points of each cell's least-squares bicubic. The mesh vertices keep the network's
+    vertex normals unless ``cut``."""
+    topology, grid, n = refinement
+    patches: GregoryPatchSet = network.patches  # type: ignore[assignment]
+    frame = patches.frame or Frame.of_points(patches.points[:, :4])
+    local = patches.local() if patches.frame is not None else GregoryPatchSet(frame.to_local(patches.points))
+    steps = np.linspace(0.0, 1.0, n + 1)
+    uv = np.stack(np.meshgrid(steps, steps, indexing="ij"), axis=-1).reshape(-1, 2)  # (a, b) → a (n + 1) + b
+    count = len(local)
+    at = local.evaluate(uv).reshape(count, n + 1, n + 1, 3)
+    d_u = local.evaluate(uv, 1, 0).reshape(count, n + 1, n + 1, 3) / n
+    d_v = local.evaluate(uv, 0, 1).reshape(count, n + 1, n + 1, 3) / n
+    normal = np.cross(d_u, d_v)
+    length = np.linalg.norm(normal, axis=-1, keepdims=True)
+    normal = normal / np.where(length > 0, length, 1.0)
+    normal[:, [0, n, n, 0], [0, 0, n, n]] = _corner_normals(local)
+    positions = np.empty((topology.n_vertices, 3))
+    positions[grid.reshape(-1)] = at.reshape(-1, 3)
+    cell = np.stack(np.meshgrid(np.arange(n), np.arange(n), indexing="ij"), axis=-1).reshape(-1, 2)  # (n², 2)
+    corner_ab = cell[:, None] + np.array([[0, 0], [1, 0], [1, 1], [0, 1]])  # (n², 4, 2)
+    face = np.repeat(np.arange(count), n * n)[:, None]
+    a, b = np.tile(corner_ab[..., 0], (count, 1)), np.tile(corner_ab[..., 1], (count, 1))  # (R, 4)
+    corner_normals = normal[face, a, b]
+    # edge k of a cell runs +u, +v, −u, −v from corner k to corner k + 1
+    nxt = (np.arange(4) + 1) % 4
+    sign = np.array([1.0, 1.0, -1.0, -1.0])[:, None]
+    along_u = np.array([True, False, True, False])
+    derivative = np.where(along_u[None, :, None], d_u[face, a, b], d_v[face, a, b])  # at corner k, along edge k's axis
+    derivative_next = np.where(along_u[None, :, None], d_u[face, a[:, nxt], b[:, nxt]], d_v[face, a[:, nxt], b[:, nxt]])
+    slot_out, slot_in = halfedge_slots(topology)
+    tangents = np.zeros((int(topology.neighbor_offsets[-1]), 3))
+    tangents[slot_out.reshape(-1, 4)] = sign * derivative
+    tangents[slot_in.reshape(-1, 4)] = -sign * derivative_next
+    normals = np.zeros((topology.n_vertices, 3))
+    np.add.at(normals, topology.faces.reshape(-1), corner_normals.reshape(-1, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    if not cut and network.vertex_normals is not None and len(network.vertex_normals) == network.n_corners:
+        normals[:network.n_corners] = network.vertex_normals
+    guide, bicubic = _cell_fits(local, n)
+    interior = np.repeat(bicubic[:, INTERIOR_INDEX[:, 0], INTERIOR_INDEX[:, 1], None], 2, axis=2)  # (R, 4, 2, 3)
+    targets = Targets(topology, positions, normals, tangents, interior, rule=f"gregory network, {n}×{n} per patch",
+                      corner_normals=corner_normals)
+    return targets, frame, guide
 
 
 #: a vertex whose two seams' tangents are at least this far apart (degrees) is a straight crease
@@ -196,10 +301,10 @@ def seam_stars(targets: Targets, seam_halfedges: NDArray[np.bool_]) -> SplitStar
 GUIDE_SAMPLES = 13
 
 
-def guide_nets(patches: GregoryPatchSet, samples: int = GUIDE_SAMPLES) -> FloatArray:
-    """Per patch the (F, 7, 7, 3) macro net of its least-squares C1 2×2 bicubic B-spline (knots
-    ``[0,0,0,0,½,½,1,1,1,1]``) on a ``samples``² grid: ``X = B⁺ S B⁺ᵀ``, then the double knot at ½
-    written out (row and column 3 the midpoints of their neighbours). Local coordinates."""
+def _fit_operators(samples: int) -> tuple[FloatArray, FloatArray]:
+    """Least-squares operators on ``samples`` equally spaced parameters of [0, 1]: (7, samples) to
+    the macro row of the C1 2×2 cubic B-spline (knots ``[0,0,0,0,½,½,1,1,1,1]``, the double knot at ½
+    written out: row 3 the midpoint of its neighbours), and (4, samples) to one cubic's Bézier row."""
     from scipy.interpolate import BSpline
 
     from .split4 import BSPLINE_KNOTS
@@ -209,30 +314,69 @@ def guide_nets(patches: GregoryPatchSet, samples: int = GUIDE_SAMPLES) -> FloatA
     expand = np.zeros((7, 6))
     expand[[0, 1, 2, 4, 5, 6], [0, 1, 2, 3, 4, 5]] = 1.0
     expand[3, 2:4] = 0.5
-    operator = expand @ inverse  # (7, samples)
+    bernstein = np.linalg.pinv(BSpline.design_matrix(t, np.r_[np.zeros(4), np.ones(4)], 3).toarray())
+    return expand @ inverse, bernstein
+
+
+def guide_nets(patches: GregoryPatchSet, samples: int = GUIDE_SAMPLES) -> FloatArray:
+    """Per patch the (F, 7, 7, 3) macro net of its least-squares C1 2×2 bicubic B-spline (knots
+    ``[0,0,0,0,½,½,1,1,1,1]``) on a ``samples``² grid: ``X = B⁺ S B⁺ᵀ``, then the double knot at ½
+    written out (row and column 3 the midpoints of their neighbours). Local coordinates."""
+    operator = _fit_operators(samples)[0]
+    t = np.linspace(0.0, 1.0, samples)
     return np.einsum("ia,fabd,jb->fijd", operator, patches.local().evaluate_grid(t, t), operator, optimize=True)
 
 
-def split4_of_gregory(network: PatchNetwork, *, guided: bool = True) -> PatchNetwork:
+def _cell_fits(local: GregoryPatchSet, n: int, samples: int = GUIDE_SAMPLES) -> tuple[FloatArray, FloatArray]:
+    """Per cell r = f n² + a n + b of an n × n grid over each patch (local coordinates), the
+    :func:`guide_nets` macro net (R, 7, 7, 3) and the least-squares bicubic Bézier net (R, 4, 4, 3)
+    of the patch's piece over the cell, from ``samples``² points of the piece."""
+    guide, bicubic = _fit_operators(samples)
+    t = np.linspace(0.0, 1.0, n * (samples - 1) + 1)
+    values = local.evaluate_grid(t, t)  # (F, m, m, 3)
+    window = np.arange(n)[:, None] * (samples - 1) + np.arange(samples)  # (n, samples)
+    pieces = values[:, window[:, None, :, None], window[None, :, None, :]]  # (F, n, n, samples, samples, 3)
+    pieces = pieces.reshape(-1, samples, samples, 3)
+    return (np.einsum("ia,rabd,jb->rijd", guide, pieces, guide, optimize=True),
+            np.einsum("ia,rabd,jb->rijd", bicubic, pieces, bicubic, optimize=True))
+
+
+def split4_of_gregory(network: PatchNetwork, *, guided: bool = True, refine: int = 1) -> PatchNetwork:
     """The split4 network (:func:`~g1patch.construct.split4.split4_network_from_targets`) of a
     Gregory network's targets (:func:`gregory_targets`): exactly G1, polynomial, through the same
     corners; with ``guided`` its interiors follow the Gregory surface (:func:`guide_nets`).
+    ``refine`` n > 1: of the targets of the network's surface on its mesh with each quad cut into
+    n × n (:func:`refined_gregory_targets`, always guided): split4's stars differ from the Gregory
+    fans they replace only near the vertices, so the distance to the Gregory surface shrinks about
+    as 1/n; quad ``r = f n² + a n + b`` of the result covers cell (a, b) of patch f.
     Seams: assembled on the topology cut along them (each side a boundary, :func:`seam_stars`
     keeping the seam tangents, so both sides get the same boundary curve), connected on the
     uncut one with the seams marked. Provenance ``from = gregory``."""
     from .split4 import _split4_network, split4_network_from_targets, split4_patches
 
+    if not (isinstance(refine, (int, np.integer)) and refine >= 1):
+        raise InputError(f"refine: expected an integer ≥ 1, got {refine!r}")
     provenance = {**network.provenance, "method": "split4", "from": "gregory"}
-    guide = guide_nets(network.patches) if guided else None  # type: ignore[arg-type]
-    if not network.seam.any():
-        targets, frame = gregory_targets(network)
+    if refine > 1:
+        provenance["refine"] = str(refine)
+    topology = _topology_of(network, cut=False)
+    seams = network.seam.reshape(-1)
+    cut = seams.any()
+    if refine == 1:
+        guide = guide_nets(network.patches) if guided else None  # type: ignore[arg-type]
+        targets, frame = gregory_targets(network, cut=cut)
+    else:
+        uncut = grid_refinement(topology, refine)
+        seams = _refined_seams(topology, seams, refine).reshape(-1)
+        cells = grid_refinement(_topology_of(network, cut=True), refine) if cut else uncut
+        targets, frame, guide = refined_gregory_targets(network, cells, cut=cut)
+        topology = uncut.topology
+    if not cut:
         mesh = QuadMesh(frame.to_world(targets.positions), targets.topology)
         return split4_network_from_targets(mesh, targets, frame, provenance, guide=guide)
-    topology = _topology_of(network, cut=False)
-    targets, frame = gregory_targets(network, cut=True)
-    cut = targets.topology
-    seam_halfedges = (cut.twin < 0) & (topology.twin >= 0)
-    if not np.array_equal(network.seam.reshape(-1), seam_halfedges):
+    cut_topology = targets.topology
+    seam_halfedges = (cut_topology.twin < 0) & (topology.twin >= 0)
+    if not np.array_equal(seams, seam_halfedges):
         raise ConstructionError("split4: cutting the network along its seams leaves a seam uncut "
                                 "(a seam edge whose both ends have one sector)")
     targets = _straight_creases(targets, topology, seam_halfedges)
@@ -240,20 +384,20 @@ def split4_of_gregory(network: PatchNetwork, *, guided: bool = True) -> PatchNet
                                                           seam_stars(targets, seam_halfedges))
     patches = patches.with_frame(frame)
     edge_of = np.empty(topology.n_edges, dtype=np.int64)
-    edge_of[topology.halfedge_edge] = cut.halfedge_edge
-    points = np.concatenate([frame.to_world(extra[edge_of]), frame.to_world(extra[cut.n_edges:])])
-    point_normals = np.concatenate([extra_normals[edge_of], extra_normals[cut.n_edges:]])
+    edge_of[topology.halfedge_edge] = cut_topology.halfedge_edge
+    points = np.concatenate([frame.to_world(extra[edge_of]), frame.to_world(extra[cut_topology.n_edges:])])
+    point_normals = np.concatenate([extra_normals[edge_of], extra_normals[cut_topology.n_edges:]])
     vertices = np.zeros((topology.n_vertices, 3))
-    vertices[topology.faces.reshape(-1)] = frame.to_world(targets.positions[cut.faces.reshape(-1)])
+    vertices[topology.faces.reshape(-1)] = frame.to_world(targets.positions[cut_topology.faces.reshape(-1)])
     vertex_normals = np.zeros((topology.n_vertices, 3))
-    vertex_normals[topology.faces.reshape(-1)] = targets.normals[cut.faces.reshape(-1)]  # one sector's
-    if network.vertex_normals is not None and len(network.vertex_normals) == topology.n_vertices:
-        vertex_normals = network.vertex_normals
+    vertex_normals[topology.faces.reshape(-1)] = targets.normals[cut_topology.faces.reshape(-1)]  # one sector's
+    if network.vertex_normals is not None and len(network.vertex_normals) == network.n_corners:
+        vertex_normals[:network.n_corners] = network.vertex_normals
     result = _split4_network(topology, patches, np.concatenate([vertices, points]),
                              np.concatenate([vertex_normals, point_normals]), provenance)
-    seams = np.zeros(topology.n_edges, dtype=bool)
-    seams[topology.halfedge_edge] = network.seam.reshape(-1)
-    return result.with_seams(np.concatenate([np.repeat(seams, 2), np.zeros(4 * topology.n_faces, dtype=bool)]))
+    seam_edges = np.zeros(topology.n_edges, dtype=bool)
+    seam_edges[topology.halfedge_edge] = seams
+    return result.with_seams(np.concatenate([np.repeat(seam_edges, 2), np.zeros(4 * topology.n_faces, dtype=bool)]))
 
 
 #: Gauss–Newton steps of :func:`surface_deviation`'s foot points
@@ -266,18 +410,23 @@ FOOT_STARTS = 4
 SEARCH_SAMPLES = 17
 
 
-def _foot_distances(points: FloatArray, local: FloatArray, tree: object, t: FloatArray, starts: int) -> FloatArray:
+def _foot_distances(points: FloatArray, local: FloatArray, tree: object, t: FloatArray, starts: int,
+                    own_patch: IntArray, own_at: FloatArray) -> FloatArray:
     """Per point an upper bound of its distance to the Gregory surface of nets ``local`` (F, 20, 3):
     from each of its ``starts`` nearest grid samples (``tree`` over the :data:`SEARCH_SAMPLES`² grid
-    ``t`` × ``t`` of every patch) :data:`FOOT_STEPS` Gauss–Newton steps ``(JᵀJ) δ = Jᵀ (p − g)``,
-    ``J = [g_u g_v]``, clamped to that patch; the nearest point seen."""
+    ``t`` × ``t`` of every patch) and from its own place (``own_patch``, ``own_at``: where the split4
+    point's parameter lies; it may drift along the surface by more than a grid step)
+    :data:`FOOT_STEPS` Gauss–Newton steps ``(JᵀJ) δ = Jᵀ (p − g)``, ``J = [g_u g_v]``, clamped to
+    that patch; the nearest point seen."""
     from ..gregory import gregory_weights
 
-    nearest = tree.query(points, k=starts)[1].reshape(-1)  # type: ignore[attr-defined]
-    points = np.repeat(points, starts, axis=0)
+    starts += 1
+    nearest = tree.query(points, k=starts - 1)[1].reshape(len(points), -1)  # type: ignore[attr-defined]
     patch, rest = np.divmod(nearest, len(t) ** 2)
+    patch = np.concatenate([patch, own_patch[:, None]], axis=1).reshape(-1)
+    at = np.concatenate([np.stack([t[rest // len(t)], t[rest % len(t)]], axis=-1), own_at[:, None]], axis=1).reshape(-1, 2)
+    points = np.repeat(points, starts, axis=0)
     nets = local[patch]
-    at = np.stack([t[rest // len(t)], t[rest % len(t)]], axis=-1)
 
     def value(du: int = 0, dv: int = 0) -> FloatArray:
         return np.einsum("nm,nmd->nd", gregory_weights(at[:, 0], at[:, 1], du, dv), nets, optimize=True)
@@ -300,7 +449,8 @@ def _foot_distances(points: FloatArray, local: FloatArray, tree: object, t: Floa
 def surface_deviation(network: PatchNetwork, split4: PatchNetwork, samples: int = 5) -> tuple[float, float]:
     """How far the split4 surface ``s`` lies from the Gregory surface ``g``, model units:
     ``(parametric, geometric)``, maxima over a ``samples``² grid per quad (``samples`` odd;
-    sub-patch ``4f + k`` covers ``(uv + corner_k) / 2`` of patch f).
+    sub-patch ``4r + k`` covers ``((a, b) + (uv + corner_k) / 2) / n`` of patch f, for quad
+    ``r = f n² + a n + b`` of a split4 network refined n × n, :func:`split4_of_gregory`).
 
     ``parametric = max |g(u, v) − s(u, v)|``. ``geometric`` = max distance of the samples of ``s``
     to their foot points on ``g`` (:func:`_foot_distances`): from the nearest of
@@ -319,9 +469,11 @@ def surface_deviation(network: PatchNetwork, split4: PatchNetwork, samples: int 
     half = np.linspace(0.0, 1.0, (samples + 1) // 2)
     uv = np.stack(np.meshgrid(half, half, indexing="ij"), axis=-1).reshape(-1, 2)  # (K, 2)
     corner = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
-    points = frame.to_local(split4.patches.evaluate(uv).reshape(-1, 3))  # sub-patch by sub-patch: (4F K, 3)
-    at = np.tile(0.5 * (uv[None] + corner[:, None]), (len(local), 1, 1)).reshape(-1, 2)
-    patch = np.repeat(np.arange(len(local)), 4 * len(uv))
+    points = frame.to_local(split4.patches.evaluate(uv).reshape(-1, 3))  # sub-patch by sub-patch: (4R K, 3)
+    n = math.isqrt(len(split4.patches) // (4 * len(local)))
+    cell = np.stack(np.meshgrid(np.arange(n), np.arange(n), indexing="ij"), axis=-1).reshape(-1, 1, 1, 2)
+    at = np.tile((cell + 0.5 * (uv[None, None] + corner[None, :, None])) / n, (len(local), 1, 1, 1)).reshape(-1, 2)
+    patch = np.repeat(np.arange(len(local)), 4 * n * n * len(uv))
 
     def value(du: int = 0, dv: int = 0) -> FloatArray:
         return np.einsum("nm,nmd->nd", gregory_weights(at[:, 0], at[:, 1], du, dv), nets, optimize=True)
@@ -330,10 +482,11 @@ def surface_deviation(network: PatchNetwork, split4: PatchNetwork, samples: int 
     parametric = float(np.linalg.norm(points - value(), axis=-1).max())
     t = np.linspace(0.0, 1.0, SEARCH_SAMPLES)
     tree = cKDTree(gregory.local().evaluate_grid(t, t).reshape(-1, 3))
-    best = _foot_distances(points, local, tree, t, 1)
+    best = _foot_distances(points, local, tree, t, 1, patch, at)
     refined = np.zeros(len(points), dtype=bool)
     while (chosen := ~refined & (best >= 0.5 * best.max())).any():  # the largest, from more starts
-        best[chosen] = np.minimum(best[chosen], _foot_distances(points[chosen], local, tree, t, FOOT_STARTS))
+        best[chosen] = np.minimum(best[chosen], _foot_distances(points[chosen], local, tree, t, FOOT_STARTS,
+                                                                patch[chosen], at[chosen]))
         refined |= chosen
     geometric = float(best.max())
     return parametric * frame.scale, min(geometric, parametric) * frame.scale

@@ -79,6 +79,7 @@ from .atomic import atomic_path
 __all__ = [
     "CAD_FORMATS",
     "CAD_METHODS",
+    "DEVIATION_RTOL",
     "BSplineFit",
     "ExportResult",
     "CadFace",
@@ -112,6 +113,13 @@ Progress = Callable[[str, int, int], None]
 
 #: default fit tolerance, relative to the bounding-box diagonal
 FIT_RTOL = 1e-6
+#: default largest distance of a split4 re-assembly from its Gregory surface, relative to the
+#: bounding-box diagonal: above it each patch is re-assembled as n × n cells (n = 2, 4, …,
+#: :data:`REFINE_LIMIT`; :func:`~g1patch.construct.polynomial.split4_of_gregory`)
+DEVIATION_RTOL = 1e-3
+#: the finest cut of a patch for the re-assembly, and the most quads it may make
+REFINE_LIMIT = 8
+REFINE_QUADS = 200_000
 #: sewing tolerance, relative to the bounding-box diagonal: shared boundaries coincide to rounding
 #: (exact export, ~1e-16) or bit for bit (fitted export); mesh edges are many orders longer.
 SEWING_RTOL = 1e-7
@@ -908,6 +916,9 @@ class ExportResult:
     method_note: str
     #: knot spans per direction (1 for exact export; 2 where split4 quads keep their two spans)
     spans: int
+    #: cells per patch side of the split4 re-assembly (1: one quad per patch; n: n × n, face
+    #: ``r = f n² + a n + b`` covers cell (a, b) of patch f), 0 for other methods
+    refine: int
     #: max |surface − patch| of the fit, measured on a grid twice as fine as its samples; 0.0 when exact
     fit_deviation: float
     fit_tolerance: float
@@ -1154,6 +1165,38 @@ def compact_step(path: Path, nets: Sequence[NDArray[np.float64]] = (), tolerance
     path.write_bytes(text[:start] + b"\n" + data.rstrip(b"\n") + text[end:])
 
 
+def _split4_within(network: PatchNetwork, allowed: float, fallback: bool, lap: Callable[[str], None]
+                   ) -> tuple[PatchNetwork, float, int, str] | str:
+    """The split4 re-assembly of a Gregory network (:func:`~g1patch.construct.polynomial.split4_of_gregory`)
+    with n = 1, 2, 4, … cells per patch side until its distance to the Gregory surface is at most
+    ``allowed`` (split4's stars differ from the Gregory fans near the vertices, over a cell's size),
+    or n reaches :data:`REFINE_LIMIT` or :data:`REFINE_QUADS`: ``(network, deviation, n, note)``,
+    the closest one tried (the note says when none was within ``allowed``). A network split4 cannot
+    re-assemble raises, or with ``fallback`` returns the note for a fit instead."""
+    from ..construct.polynomial import split4_of_gregory, surface_deviation
+
+    best: tuple[PatchNetwork, float, int] | None = None
+    refine = 1
+    while True:
+        try:
+            converted = split4_of_gregory(network, refine=refine)
+        except (ConstructionError, MeshError) as error:
+            if not fallback:
+                raise
+            return f"split4 could not re-assemble it ({error}): fitted"
+        lap("split4")
+        deviation = surface_deviation(network, converted)[1]
+        lap("deviation")
+        if best is None or deviation < best[1]:
+            best = (converted, deviation, refine)
+        refine *= 2
+        if best[1] <= allowed or refine > REFINE_LIMIT or refine * refine * network.n_patches > REFINE_QUADS:
+            break
+    note = "" if best[1] <= allowed else (f"the re-assembly stays {best[1]:.2e} from the Gregory surface, above "
+                                          f"--max-deviation ({allowed:.2e}), at {best[2]} × {best[2]} cells per patch")
+    return (*best, note)
+
+
 def export_cad(
     path: PathLike,
     network: PatchNetwork | PatchSet,
@@ -1163,6 +1206,7 @@ def export_cad(
     progress: Progress | None = None,
     g1_samples: int = G1_SAMPLES,
     method: CadMethod = "auto",
+    max_deviation: float = DEVIATION_RTOL,
 ) -> ExportResult:
     """Write a network as a STEP or IGES B-rep, chosen by the extension (``.step .stp .iges .igs``).
 
@@ -1172,7 +1216,9 @@ def export_cad(
     (exact G1 in CAD; its distance to the Gregory surface is the reported deviation), ``fit`` fits
     each patch within ``tolerance`` (default 1e-6 × the bounding-box diagonal; OCC then sees kinks),
     ``auto`` is split4 (seams kept: the network is cut open along them, both sides share each seam
-    curve), or fit where split4 raises. The G1 angles of the written surfaces are
+    curve), or fit where split4 raises. The re-assembly lies within ``max_deviation`` × the
+    bounding-box diagonal of the Gregory surface, by cutting each patch into n × n cells where
+    needed (:func:`_split4_within`). The G1 angles of the written surfaces are
     measured by OCC on ``g1_samples`` points per shared edge (0: skip), seams apart.
     The extension and OCP are checked before anything is computed or written.
     """
@@ -1183,6 +1229,9 @@ def export_cad(
     network = _as_network(network)
     if not (isinstance(g1_samples, (int, np.integer)) and (g1_samples == 0 or g1_samples >= 2)):
         raise InputError(f"g1_samples: expected 0 or an integer ≥ 2, got {g1_samples!r}")
+    if not (isinstance(max_deviation, (int, float, np.floating)) and 0.0 < max_deviation < np.inf):
+        raise InputError(f"max_deviation: expected a positive number (relative to the bounding-box diagonal), "
+                         f"got {max_deviation!r}")
     chosen = _cad_method(target, network, method)
     if chosen != "fit" and not isinstance(network.patches, PatchSet) and _bicubic(network.patches):
         network, chosen = replace(network, patches=_as_bicubics(network.patches)), "exact"
@@ -1193,7 +1242,7 @@ def export_cad(
     def lap(stage: str) -> None:
         nonlocal clock
         now = time.perf_counter()
-        seconds[stage] = now - clock
+        seconds[stage] = seconds.get(stage, 0.0) + now - clock  # split4 and deviation: every n tried
         clock = now
         doing[0] = _NEXT_STAGE.get(stage, stage)
         if progress is not None:
@@ -1201,22 +1250,13 @@ def export_cad(
 
     diagonal = network.bounding_box_diagonal()
     _check_diagonal(target, diagonal)
-    deviation, method_note = 0.0, ""
+    deviation, method_note, refine = 0.0, "", 0
     if chosen == "split4":
-        from ..construct.polynomial import split4_of_gregory, surface_deviation
-
-        converted: PatchNetwork | None = None
-        try:
-            converted = split4_of_gregory(network)
-        except (ConstructionError, MeshError) as error:
-            if method != "auto":
-                raise
-            chosen, method_note = "fit", f"split4 could not re-assemble it ({error}): fitted"
-        lap("split4")
-        if converted is not None:
-            deviation = surface_deviation(network, converted)[1]
-            network = converted
-            lap("deviation")
+        converted = _split4_within(network, max_deviation * diagonal, method == "auto", lap)
+        if isinstance(converted, str):
+            chosen, method_note = "fit", converted
+        else:
+            network, deviation, refine, method_note = converted
     exact = isinstance(network.patches, PatchSet)
     fit_tolerance = _tolerance(tolerance, diagonal)
     quads = split4_quad_faces(network) if exact else None
@@ -1273,6 +1313,7 @@ def export_cad(
         method=chosen,
         method_note=method_note,
         spans=len(np.unique(fit.knots_u)) - 1,
+        refine=refine,
         fit_deviation=fit.deviation,
         fit_tolerance=0.0 if exact else fit_tolerance,
         sewing_tolerance=sewing_tolerance,
@@ -1294,19 +1335,21 @@ def export_cad(
 def export_step(
     path: PathLike, network: PatchNetwork | PatchSet, *, tolerance: float | None = None,
     progress: Progress | None = None, g1_samples: int = G1_SAMPLES, method: CadMethod = "auto",
+    max_deviation: float = DEVIATION_RTOL,
 ) -> ExportResult:
     """Write a STEP file (``.step`` / ``.stp``, AP214); see :func:`export_cad`."""
     return export_cad(path, network, format="step", tolerance=tolerance, progress=progress, g1_samples=g1_samples,
-                      method=method)
+                      method=method, max_deviation=max_deviation)
 
 
 def export_iges(
     path: PathLike, network: PatchNetwork | PatchSet, *, tolerance: float | None = None,
     progress: Progress | None = None, g1_samples: int = G1_SAMPLES, method: CadMethod = "auto",
+    max_deviation: float = DEVIATION_RTOL,
 ) -> ExportResult:
     """Write an IGES file (``.iges`` / ``.igs``, B-rep mode); see :func:`export_cad`."""
     return export_cad(path, network, format="iges", tolerance=tolerance, progress=progress, g1_samples=g1_samples,
-                      method=method)
+                      method=method, max_deviation=max_deviation)
 
 
 # ----------------------------------------------------------------------------------- reading
