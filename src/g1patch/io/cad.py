@@ -119,7 +119,7 @@ FIT_RTOL = 1e-6
 DEVIATION_RTOL = 1e-3
 #: the finest cut of a patch for the re-assembly, and the most quads it may make
 REFINE_LIMIT = 8
-REFINE_QUADS = 200_000
+REFINE_QUADS = 20_000
 #: sewing tolerance, relative to the bounding-box diagonal: shared boundaries coincide to rounding
 #: (exact export, ~1e-16) or bit for bit (fitted export); mesh edges are many orders longer.
 SEWING_RTOL = 1e-7
@@ -1165,19 +1165,21 @@ def compact_step(path: Path, nets: Sequence[NDArray[np.float64]] = (), tolerance
     path.write_bytes(text[:start] + b"\n" + data.rstrip(b"\n") + text[end:])
 
 
-def _split4_within(network: PatchNetwork, allowed: float, fallback: bool, lap: Callable[[str], None]
-                   ) -> tuple[PatchNetwork, float, int, str] | str:
+def _split4_within(network: PatchNetwork, max_deviation: float, diagonal: float, fallback: bool,
+                   lap: Callable[[str], None]) -> tuple[PatchNetwork, float, int, str] | str:
     """The split4 re-assembly of a Gregory network (:func:`~g1patch.construct.polynomial.split4_of_gregory`)
     with n = 1, 2, 4, … cells per patch side until its distance to the Gregory surface is at most
-    ``allowed`` (split4's stars differ from the Gregory fans near the vertices, over a cell's size),
-    or n reaches :data:`REFINE_LIMIT` or :data:`REFINE_QUADS`: ``(network, deviation, n, note)``,
-    the closest one tried (the note says when none was within ``allowed``). A network split4 cannot
-    re-assemble raises, or with ``fallback`` returns the note for a fit instead."""
+    ``max_deviation × diagonal`` (split4's stars differ from the Gregory fans near the vertices, over a cell's size),
+    or n reaches :data:`REFINE_LIMIT` or :data:`REFINE_QUADS`: ``(network, deviation, n, note)``.
+    A cut that folds more sub-patches than n = 1 (small cells of a coarse cage can) is not taken;
+    of those tried the closest one that does not, and the note says when it is above the bound.
+    A network split4 cannot re-assemble raises, or with ``fallback`` returns the note for a fit."""
     from ..construct.polynomial import split4_of_gregory, surface_deviation
+    from ..continuity import folded_patches
 
-    best: tuple[PatchNetwork, float, int] | None = None
-    refine = 1
-    while True:
+    tried: list[tuple[bool, float, int, PatchNetwork]] = []  # (folds more than n = 1, deviation, n, result)
+    refine, base_folds, allowed = 1, 0, max_deviation * diagonal
+    while refine <= REFINE_LIMIT and (refine == 1 or refine * refine * network.n_patches <= REFINE_QUADS):
         try:
             converted = split4_of_gregory(network, refine=refine)
         except (ConstructionError, MeshError) as error:
@@ -1186,15 +1188,19 @@ def _split4_within(network: PatchNetwork, allowed: float, fallback: bool, lap: C
             return f"split4 could not re-assemble it ({error}): fitted"
         lap("split4")
         deviation = surface_deviation(network, converted)[1]
+        folds = int(folded_patches(converted.patches).sum())
+        base_folds = folds if refine == 1 else base_folds
         lap("deviation")
-        if best is None or deviation < best[1]:
-            best = (converted, deviation, refine)
-        refine *= 2
-        if best[1] <= allowed or refine > REFINE_LIMIT or refine * refine * network.n_patches > REFINE_QUADS:
+        tried.append((folds > base_folds, deviation, refine, converted))
+        if deviation <= allowed and not tried[-1][0]:
             break
-    note = "" if best[1] <= allowed else (f"the re-assembly stays {best[1]:.2e} from the Gregory surface, above "
-                                          f"--max-deviation ({allowed:.2e}), at {best[2]} × {best[2]} cells per patch")
-    return (*best, note)
+        refine *= 2
+    folded, deviation, refine, converted = min(tried, key=lambda attempt: attempt[:2])
+    note = "" if deviation <= allowed else (
+        f"the re-assembly stays {deviation / diagonal:.2e} of the diagonal from the Gregory surface, above "
+        f"--max-deviation {max_deviation:g}, at {refine} × {refine} cells per patch"
+        + (" (finer cells folded)" if any(attempt[0] for attempt in tried) else ""))
+    return converted, deviation, refine, note
 
 
 def export_cad(
@@ -1252,7 +1258,7 @@ def export_cad(
     _check_diagonal(target, diagonal)
     deviation, method_note, refine = 0.0, "", 0
     if chosen == "split4":
-        converted = _split4_within(network, max_deviation * diagonal, method == "auto", lap)
+        converted = _split4_within(network, max_deviation, diagonal, method == "auto", lap)
         if isinstance(converted, str):
             chosen, method_note = "fit", converted
         else:
