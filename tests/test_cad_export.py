@@ -350,6 +350,17 @@ def test_auto_fits_what_split4_cannot_reassemble_and_says_so(tmp_path: Path, mon
     with pytest.raises(ConstructionError, match="simulated"):
         export_step(tmp_path / "split4.step", gregory("cube", None), method="split4")
     assert [p.name for p in tmp_path.iterdir()] == ["auto.step"]
+    monkeypatch.undo()
+    original = polynomial.split4_of_gregory
+
+    def whole_patches_only(network: PatchNetwork, *, refine: int = 1, **options: object) -> PatchNetwork:
+        if refine > 1:
+            raise ConstructionError("split4: simulated")
+        return original(network, **options)
+
+    monkeypatch.setattr(polynomial, "split4_of_gregory", whole_patches_only)
+    kept = export_step(tmp_path / "kept.step", gregory("cube", None), method="split4", max_deviation=1e-9, g1_samples=0)
+    assert kept.method == "split4" and kept.refine == 1 and "above --max-deviation" in kept.method_note
 
 
 def test_step_reals_always_carry_their_decimal_point() -> None:

@@ -1173,7 +1173,8 @@ def _split4_within(network: PatchNetwork, max_deviation: float, diagonal: float,
     or n reaches :data:`REFINE_LIMIT` or :data:`REFINE_QUADS`: ``(network, deviation, n, note)``.
     A cut that folds more sub-patches than n = 1 (small cells of a coarse cage can) is not taken;
     of those tried the closest one that does not, and the note says when it is above the bound.
-    A network split4 cannot re-assemble raises, or with ``fallback`` returns the note for a fit."""
+    A network split4 cannot re-assemble raises, or with ``fallback`` returns the note for a fit (where
+    only its cells cannot be, the fewer cells are kept)."""
     from ..construct.polynomial import split4_of_gregory, surface_deviation
     from ..continuity import folded_patches
 
@@ -1183,6 +1184,8 @@ def _split4_within(network: PatchNetwork, max_deviation: float, diagonal: float,
         try:
             converted = split4_of_gregory(network, refine=refine)
         except (ConstructionError, MeshError) as error:
+            if tried:  # the cells failed where the whole patches did not: keep those
+                break
             if not fallback:
                 raise
             return f"split4 could not re-assemble it ({error}): fitted"
@@ -1195,7 +1198,7 @@ def _split4_within(network: PatchNetwork, max_deviation: float, diagonal: float,
         if deviation <= allowed and not tried[-1][0]:
             break
         refine *= 2
-    folded, deviation, refine, converted = min(tried, key=lambda attempt: attempt[:2])
+    _, deviation, refine, converted = min(tried, key=lambda attempt: attempt[:2])
     note = "" if deviation <= allowed else (
         f"the re-assembly stays {deviation / diagonal:.2e} of the diagonal from the Gregory surface, above "
         f"--max-deviation {max_deviation:g}, at {refine} × {refine} cells per patch"
