@@ -336,6 +336,17 @@ def test_cells_that_fold_are_not_taken(tmp_path: Path) -> None:
 
 
 @requires_ocp
+@pytest.mark.parametrize("build", [build_corner_network, build_network], ids=["corner", "gregory"])
+def test_a_single_patch_exports_with_no_shared_edge_to_measure(build: object, tmp_path: Path) -> None:
+    """One quad: nothing to measure across (the OCC normals of no rows once raised a TypeError)."""
+    from g1patch.io.cad import export_step
+
+    result = export_step(tmp_path / "one.step", build(shapes.grid(1, 1)))  # type: ignore[operator]
+    assert result.faces == 1 and result.valid and not result.g1_measured
+    assert result.g1_note == "not measured: no shared edges but seams"
+
+
+@requires_ocp
 def test_auto_fits_what_split4_cannot_reassemble_and_says_so(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from g1patch.construct import polynomial
     from g1patch.errors import ConstructionError

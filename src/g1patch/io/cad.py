@@ -726,7 +726,7 @@ def _shape_normals(occ: SimpleNamespace, faces: Sequence[Any], face_of: NDArray[
     surfaces = [_occ_bspline(occ, faces[f]) for f in used.tolist()]
     index = np.full(len(faces), -1)
     index[used] = np.arange(len(used))
-    known = np.array([s is not None for s in surfaces])
+    known = np.array([s is not None for s in surfaces], dtype=bool)
     iso_u = (uv[:, :, 0] == uv[:, :1, 0]).all(axis=1)
     fast = known[index[face_of]] & (iso_u | (uv[:, :, 1] == uv[:, :1, 1]).all(axis=1))
     normals = np.empty(uv.shape[:2] + (3,))
