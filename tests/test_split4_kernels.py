@@ -136,11 +136,10 @@ def test_the_default_is_numpy_below_the_threshold_and_kernels_above(monkeypatch:
 def test_the_line_walk_gives_the_shears_bit_for_bit(name: str) -> None:
     mesh = MESHES[name]()
     targets, _ = local_targets(mesh)
-    topology, cosine = targets.topology, split4_star(targets, compiled=False).cosine
-    h = topology.edge_halfedges[:, 0]
-    x_of, y_of = topology.origin(h), topology.target(h)
-    reference = split4._chain_shears(topology, cosine, x_of, y_of)
-    np.testing.assert_array_equal(split4._chain_shears(topology, cosine, x_of, y_of, compiled=True), reference)
+    topology = targets.topology
+    ends = split4.edge_end_cosines(topology, split4_star(targets, compiled=False).cosine)
+    reference = split4._chain_shears(topology, ends)
+    np.testing.assert_array_equal(split4._chain_shears(topology, ends, compiled=True), reference)
 
 
 @pytest.mark.parametrize("name", MESHES)

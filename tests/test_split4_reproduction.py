@@ -151,7 +151,8 @@ def test_faces_on_closed_lines_of_an_irregular_cage_give_the_bspline() -> None:
     np.logical_or.at(at_vertex, topology.faces, ~around[:, None])
     calm = ~at_vertex[topology.faces].any(axis=1)  # ... whose corners' faces all have four too
     h = topology.edge_halfedges[:, 0]
-    mu = _chain_shears(topology, np.where(regular, 0.0, np.cos(2.0 * np.pi / topology.face_count)), topology.origin(h), topology.target(h))
+    cosine = np.where(regular, 0.0, np.cos(2.0 * np.pi / topology.face_count))
+    mu = _chain_shears(topology, cosine[np.stack([topology.origin(h), topology.target(h)], axis=1)])
     unsheared = (mu[topology.halfedge_edge] == 0.0).reshape(-1, 4).all(axis=1)
     faces = np.flatnonzero(calm & unsheared)
     assert 30 <= len(faces) < topology.n_faces

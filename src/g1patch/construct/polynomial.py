@@ -292,7 +292,7 @@ def seam_stars(targets: Targets, seam_halfedges: NDArray[np.bool_]) -> SplitStar
     fitted = c[:, None] * anchor[owner] + sn[:, None] * b[owner]
     fitted[seam_at[slot]] = t[seam_at[slot]]  # the seams' own tangents, bit for bit: both sides share them
     star[slot] = fitted
-    cosine[copies] = np.cos(theta)
+    cosine[slot] = np.cos(theta)[owner]
     factor[copies] = 1.0
     return SplitStar(star, cosine, base.refitted, base.shrunk & (factor < 1.0), factor)
 

@@ -98,9 +98,7 @@ def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
     return np.einsum("...d,...d->...", a, b)
 
 
-def _chain_shears(
-    topology: QuadTopology, cosine: FloatArray, x_of: IntArray, y_of: IntArray, *, compiled: bool = False
-) -> FloatArray:
+def _chain_shears(topology: QuadTopology, ends: FloatArray, *, compiled: bool = False) -> FloatArray:
     """μ_e = λ(M_e → X_e) per edge, constant in size and alternating in sign along grid lines.
 
     Nodes ``2e + s`` are the ends of interior edge e (s = 0 at X, 1 at Y) and carry
@@ -109,7 +107,8 @@ def _chain_shears(
     connected components of the signed double cover (copy n carries +, copy n + 2E carries −; an
     equal link joins like copies, an opposite link unlike ones), which also labels the lines in
     linear time. The size is set at a line's dominant end, the end with the largest
-    ``|c_end − c_next|``, to λ = −(c_end − c_next), making δ = ½ there and δ ∈ [⅓, ½] everywhere.
+    ``|c_end − c_next|``, to λ = −(c_end − c_next), making δ = ½ there and δ ∈ [⅓, ½] everywhere;
+    ``ends`` (E, 2) holds each edge's c at X and at Y (:func:`edge_end_cosines`).
     Closed lines (all valence 4) get μ = 0. ``compiled``: by walking the lines (:func:`_chain_kernel`,
     the same values bit for bit).
     """
@@ -117,11 +116,14 @@ def _chain_shears(
     nodes = 2 * n_edges
     interior = ~topology.is_boundary_edge
     through = ~topology.is_boundary_vertex & (topology.valence == 4)
+    h = topology.edge_halfedges[:, 0]
+    x_of, y_of = topology.origin(h), topology.target(h)
+    node_cosine = np.ascontiguousarray(ends, dtype=np.float64).reshape(-1)  # c of node 2e + s at its own end
     if compiled:
         from ..kernels import jit_kernel
 
         lam = np.zeros(nodes)
-        jit_kernel(_chain_kernel)(np.ascontiguousarray(cosine, dtype=np.float64), x_of, y_of, interior, through,
+        jit_kernel(_chain_kernel)(node_cosine, x_of, y_of, interior, through,
                                   topology.ring_offsets, topology.ring_halfedges, topology.halfedge_edge,
                                   topology.edge_halfedges, lam)
         return lam[0::2]
@@ -139,9 +141,8 @@ def _chain_shears(
     chain = np.minimum(cover[:nodes], cover[nodes:])
 
     vertex = np.stack([x_of, y_of], axis=1).reshape(-1)  # vertex of node 2e + s
-    other = np.stack([y_of, x_of], axis=1).reshape(-1)
     ends = np.flatnonzero(np.repeat(interior, 2) & ~through[vertex])
-    gap = cosine[vertex[ends]] - cosine[other[ends]]
+    gap = node_cosine[ends] - node_cosine[ends ^ 1]
     order = np.lexsort((ends, -np.abs(gap), chain[ends]))
     _, first = np.unique(chain[ends[order]], return_index=True)
     dominant = ends[order[first]]
@@ -374,15 +375,30 @@ STAR_LENGTH_LIMIT = 1.5
 
 
 class SplitStar(NamedTuple):
-    """The regular star of :func:`split4_star`: tangents per ring slot (S, 3), ``c_v`` per vertex,
-    the vertices whose fan was refitted to spread directions (``refitted``: a real fallback),
-    those whose star the length safeguard scaled down (``shrunk``) and the scale factor (≤ 1) per vertex."""
+    """The stars of :func:`split4_star`: tangents per ring slot (S, 3); per slot j the half ``c_j`` of
+    its star coefficient, ``t_{j−1} + t_{j+1} = 2 c_j t_j`` (S,) (a regular star's slots all have the
+    cosine of its angle step); the vertices whose fan was refitted to spread directions
+    (``refitted``: a real fallback), those whose star the length safeguard scaled down (``shrunk``)
+    and the scale factor (≤ 1) per vertex."""
 
     star: FloatArray
     cosine: FloatArray
     refitted: NDArray[np.bool_]
     shrunk: NDArray[np.bool_]
     factor: FloatArray
+
+
+def _per_slot(topology: QuadTopology, values: FloatArray) -> FloatArray:
+    """A value per vertex repeated on each of its ring slots (S,)."""
+    return np.repeat(values, np.diff(topology.neighbor_offsets))
+
+
+def edge_end_cosines(topology: QuadTopology, cosine: FloatArray) -> FloatArray:
+    """(E, 2): the star's ``c`` (:class:`SplitStar`, per slot) of each edge at X and at Y (its first
+    half-edge X → Y)."""
+    slot_out, slot_in = halfedge_slots(topology)
+    h = topology.edge_halfedges[:, 0]
+    return np.stack([cosine[slot_out[h]], cosine[slot_in[h]]], axis=1)
 
 
 def split4_star(targets: Targets, *, compiled: bool | None = None) -> SplitStar:
@@ -412,8 +428,8 @@ def split4_star(targets: Targets, *, compiled: bool | None = None) -> SplitStar:
                                         topology.valence, topology.is_boundary_vertex, STAR_LENGTH_LIMIT, star, valid,
                                         factor, lo, hi), topology.n_vertices)
         if valid.all():
-            return _rim_stars(targets, SplitStar(star, np.cos(np.where(topology.is_boundary_vertex, np.pi / topology.face_count,
-                                                 2.0 * np.pi / topology.valence)), ~valid, factor < 1.0, factor))
+            step = np.where(topology.is_boundary_vertex, np.pi / topology.face_count, 2.0 * np.pi / topology.valence)
+            return _rim_stars(targets, SplitStar(star, _per_slot(topology, np.cos(step)), ~valid, factor < 1.0, factor))
     star, cosine, valid = fit_regular_star(topology, targets.normals, wanted)
     if not valid.all():
         chord = np.linalg.norm(wanted, axis=1)
@@ -422,7 +438,7 @@ def split4_star(targets: Targets, *, compiled: bool | None = None) -> SplitStar:
     slot_vertex = slot_vertices(topology)
     shrink = _length_shrink(targets, star, wanted, np.arange(len(star)), slot_vertex, slot_vertex, topology.n_vertices)
     star *= shrink[slot_vertex, None]
-    return _rim_stars(targets, SplitStar(star, cosine, ~valid, shrink < 1.0, shrink))
+    return _rim_stars(targets, SplitStar(star, cosine[slot_vertex], ~valid, shrink < 1.0, shrink))
 
 
 def _length_shrink(targets: Targets, star: FloatArray, wanted: FloatArray, slots: IntArray, vertex: IntArray,
@@ -516,7 +532,7 @@ def _rim_stars(targets: Targets, base: SplitStar) -> SplitStar:
     keep = good[owner]
     star, cosine, factor = base.star.copy(), base.cosine.copy(), base.factor.copy()
     star[slot[keep]] = fitted[keep] * shrink[owner[keep], None]
-    cosine[rims[good]] = np.cos(total[good] / k[good])
+    cosine[slot[keep]] = np.cos(total / k)[owner[keep]]
     factor[rims[good]] = shrink[good]
     return SplitStar(star, cosine, base.refitted, factor < 1.0, factor)
 
@@ -553,21 +569,21 @@ def split4_patches(
     pos = targets.positions
     compiled = (n_faces >= KERNEL_FACES) if compiled is None else compiled
     stars = split4_star(targets, compiled=compiled) if star is None else star
-    star, cosine = stars.star, stars.cosine
-    lam = 2.0 * cosine
+    star = stars.star
+    ends = edge_end_cosines(topology, stars.cosine)  # (E, 2): c at X and at Y
 
     # -- edges: canonical half-edge X → Y (face L), twin Y → X (face R)
     h_l = topology.edge_halfedges[:, 0]
     h_r = topology.edge_halfedges[:, 1]
     interior = h_r >= 0
     x_of, y_of = topology.origin(h_l), topology.target(h_l)
-    mu = _chain_shears(topology, cosine, x_of, y_of, compiled=compiled)
+    mu = _chain_shears(topology, ends, compiled=compiled)
     if compiled:
         control, extra, extra_normals = _compiled_patches(targets, corners, centre, scale, guide, stars, mu)
         return PatchSet(control.reshape(-1, 4, 4, 3)), extra, extra_normals, stars
     slot_out, slot_in = halfedge_slots(topology)
     curve = np.stack(
-        _edge_curves(pos[x_of], pos[y_of], star[slot_out[h_l]], star[slot_in[h_l]], mu, cosine[x_of], cosine[y_of]), axis=1
+        _edge_curves(pos[x_of], pos[y_of], star[slot_out[h_l]], star[slot_in[h_l]], mu, ends[:, 0], ends[:, 1]), axis=1
     )  # (E, 5, 3): P1, P2, M, P4, P5
     p1, p2, m, p4, p5 = (curve[:, i] for i in range(5))
     del star
@@ -583,7 +599,7 @@ def split4_patches(
         """Per half-edge, curve point ``at_x`` of its edge when ``origin_side`` is the X side, else ``at_y``."""
         return flat_curve[5 * edge_of + np.where(origin_side, at_x, at_y)]
 
-    moved, shift = _even_vertex_shifts(topology, lam, curve, mu, pos)
+    moved, shift = _even_vertex_shifts(topology, 2.0 * stars.cosine[topology.neighbor_offsets[:-1]], curve, mu, pos)
     curve[moved, 1:4] += shift[:, None]
     o1, o2 = on_side(0, 4, canonical), on_side(1, 3, canonical)  # from the origin of h
     d1, d2 = on_side(0, 4, ~canonical), on_side(1, 3, ~canonical)  # from the target of h
@@ -636,7 +652,8 @@ def split4_patches(
 
     # -- original vertices: F_{j−1} + F_j = R_j over the interior ring edges
     origin = topology.faces.reshape(-1)
-    rhs = 2.0 * o1 + (2.0 * lam[origin, None] * (o2 - o1) - slope[:, None] * (o1 - pos[origin])) / 3.0
+    lam = 2.0 * np.where(canonical, ends[edge_of, 0], ends[edge_of, 1])  # λ_j of the slot of h at its origin
+    rhs = 2.0 * o1 + (2.0 * lam[:, None] * (o2 - o1) - slope[:, None] * (o1 - pos[origin])) / 3.0
     del corner_points
     boundary = topology.is_boundary_vertex
     base = int(topology.face_count.max()) + 1
@@ -651,8 +668,8 @@ def split4_patches(
 
     # -- midpoints: G_LX + G_RX = A_X, G_LY + G_RY = A_Y, G_LX + G_LY = 2 e_L, G_RX + G_RY = 2 e_R
     inner = np.flatnonzero(interior)
-    a_x = 2.0 * p2 + (lam[x_of, None] * (m - p2) - 2.0 * mu[:, None] * (p2 - p1)) / 3.0
-    a_y = 2.0 * p4 + (lam[y_of, None] * (m - p4) + 2.0 * mu[:, None] * (p4 - p5)) / 3.0
+    a_x = 2.0 * p2 + (2.0 * ends[:, 0, None] * (m - p2) - 2.0 * mu[:, None] * (p2 - p1)) / 3.0
+    a_y = 2.0 * p4 + (2.0 * ends[:, 1, None] * (m - p4) + 2.0 * mu[:, None] * (p4 - p5)) / 3.0
     hl, hr = h_l[inner], h_r[inner]
     sides_h = (hl, QuadTopology.next(hr), QuadTopology.next(hl), hr)
     kinds = (1, 2, 2, 1)
@@ -845,7 +862,7 @@ def _sparse(weights: FloatArray) -> tuple[IntArray, IntArray, FloatArray]:
     return counts, terms, values
 
 
-def _curve_kernel(pos: FloatArray, star: FloatArray, cosine: FloatArray, mu: FloatArray, edge_halfedges: IntArray,
+def _curve_kernel(pos: FloatArray, star: FloatArray, ends: FloatArray, mu: FloatArray, edge_halfedges: IntArray,
                   origin: IntArray, slot_out: NDArray[np.int32], slot_in: NDArray[np.int32], curve: FloatArray,
                   lo: int, hi: int) -> None:
     """:func:`_edge_curves` of edges ``lo:hi`` into ``curve`` (E, 5, 3): ``P1 = X + T_XY/6``,
@@ -856,7 +873,7 @@ def _curve_kernel(pos: FloatArray, star: FloatArray, cosine: FloatArray, mu: Flo
         sx, sy = slot_out[h], slot_in[h]
         delta = 0.5
         if mu[e] != 0.0:
-            delta = 2.0 * mu[e] / (5.0 * mu[e] + cosine[x] - cosine[y])
+            delta = 2.0 * mu[e] / (5.0 * mu[e] + ends[e, 0] - ends[e, 1])
         for d in range(3):
             p1 = pos[x, d] + star[sx, d] / 6.0
             p5 = pos[y, d] + star[sy, d] / 6.0
@@ -951,7 +968,7 @@ def _face_kernel(pos: FloatArray, tangents: FloatArray, interior: FloatArray, fa
             extra[n_edges + f, d] = c[d] * scale + centre[d]
 
 
-def _edge_kernel(curve: FloatArray, mu: FloatArray, cosine: FloatArray, origin: IntArray, edge_halfedges: IntArray,
+def _edge_kernel(curve: FloatArray, mu: FloatArray, ends: FloatArray, edge_halfedges: IntArray,
                  place: IntArray, inner_operator: FloatArray, outer_operator: FloatArray, scale: float,
                  centre: FloatArray, control: FloatArray, extra: FloatArray, extra_normals: FloatArray,
                  lo: int, hi: int) -> None:
@@ -975,7 +992,6 @@ def _edge_kernel(curve: FloatArray, mu: FloatArray, cosine: FloatArray, origin: 
         fr, kr = hr >> 2, hr & 3
         nr = (hr & ~3) | ((hr + 1) & 3)
         fnr, knr = nr >> 2, nr & 3
-        x, y = origin[hl], origin[nl]
         for d in range(3):
             p1, p2, m, p4, p5 = curve[e, 0, d], curve[e, 1, d], curve[e, 2, d], curve[e, 3, d], curve[e, 4, d]
             seam_l = control[hl, place[kl, 3, 1] + d]
@@ -992,8 +1008,8 @@ def _edge_kernel(curve: FloatArray, mu: FloatArray, cosine: FloatArray, origin: 
                 stacked[1, d] = p2 + e_r[d] - m + control[nr, place[knr, 1, 2] + d]
                 stacked[2, d] = p4 + e_l[d] - m + control[nl, place[knl, 1, 2] + d]
                 stacked[3, d] = p4 + e_r[d] - m + control[hr, place[kr, 2, 1] + d]
-                stacked[4, d] = 2.0 * p2 + (2.0 * cosine[x] * (m - p2) - 2.0 * mu[e] * (p2 - p1)) / 3.0
-                stacked[5, d] = 2.0 * p4 + (2.0 * cosine[y] * (m - p4) + 2.0 * mu[e] * (p4 - p5)) / 3.0
+                stacked[4, d] = 2.0 * p2 + (2.0 * ends[e, 0] * (m - p2) - 2.0 * mu[e] * (p2 - p1)) / 3.0
+                stacked[5, d] = 2.0 * p4 + (2.0 * ends[e, 1] * (m - p4) + 2.0 * mu[e] * (p4 - p5)) / 3.0
                 stacked[6, d] = 2.0 * e_l[d]
                 stacked[7, d] = 2.0 * e_r[d]
             else:
@@ -1027,13 +1043,13 @@ def _edge_kernel(curve: FloatArray, mu: FloatArray, cosine: FloatArray, origin: 
                 control[nl, place[knl, 1, 2] + d] = solved[1]
 
 
-def _vertex_kernel(pos: FloatArray, curve: FloatArray, mu: FloatArray, cosine: FloatArray, halfedge_edge: IntArray,
+def _vertex_kernel(pos: FloatArray, curve: FloatArray, mu: FloatArray, ends: FloatArray, halfedge_edge: IntArray,
                    edge_halfedges: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray,
                    is_boundary: NDArray[np.bool_], table: IntArray, operators: FloatArray, place: IntArray,
                    control: FloatArray, lo: int, hi: int) -> None:
     """Vertices ``lo:hi``: the twist targets at V of their ring's sub-patches (``P1 + P1' − V`` plus
     the net's offset in the slot) moved onto ``F_{j−1} + F_j = R_j``,
-    ``R_j = 2 P1_j + (2 λ_v (P2_j − P1_j) − m_j (P1_j − v))/3`` (rows j ≥ 1 at a boundary vertex),
+    ``R_j = 2 P1_j + (2 λ_j (P2_j − P1_j) − m_j (P1_j − v))/3`` (rows j ≥ 1 at a boundary vertex),
     by the min-norm operator at ``operators[table[open, n]:]`` (none where ``table`` is −1)."""
     width = 1
     for v in range(lo, hi):
@@ -1042,7 +1058,6 @@ def _vertex_kernel(pos: FloatArray, curve: FloatArray, mu: FloatArray, cosine: F
     for v in range(lo, hi):
         start, n = ring_offsets[v], ring_offsets[v + 1] - ring_offsets[v]
         is_open = 1 if is_boundary[v] else 0
-        lam = 2.0 * cosine[v]
         for j in range(n):
             h = ring_halfedges[start + j]
             hp = (h & ~3) | ((h + 3) & 3)
@@ -1050,6 +1065,7 @@ def _vertex_kernel(pos: FloatArray, curve: FloatArray, mu: FloatArray, cosine: F
             near = 0 if edge_halfedges[e, 0] == h else 4
             far = 4 if edge_halfedges[ep, 0] == hp else 0
             slope = mu[e] if near == 0 else -mu[e]
+            lam = 2.0 * ends[e, near // 4]  # λ_j of this ring slot
             slot = place[h & 3, 1, 1]
             for d in range(3):
                 o1, o2 = curve[e, near, d], curve[e, 1 + near // 2, d]
@@ -1111,7 +1127,8 @@ def _compiled_patches(
     topology = targets.topology
     n_faces, n_edges = topology.n_faces, topology.n_edges
     pos = np.ascontiguousarray(targets.positions, dtype=np.float64)
-    star, cosine = np.ascontiguousarray(stars.star), np.ascontiguousarray(stars.cosine)
+    star = np.ascontiguousarray(stars.star)
+    ends = np.ascontiguousarray(edge_end_cosines(topology, stars.cosine))
     origin, edge_halfedges, halfedge_edge = topology.faces.reshape(-1), topology.edge_halfedges, topology.halfedge_edge
     slot_out, slot_in = slot_tables(topology)
     centre = np.asarray(centre, dtype=np.float64).reshape(3)
@@ -1119,8 +1136,8 @@ def _compiled_patches(
 
     curve = np.empty((n_edges, 5, 3))
     kernel = jit_kernel(_curve_kernel)
-    in_chunks(lambda lo, hi: kernel(pos, star, cosine, mu, edge_halfedges, origin, slot_out, slot_in, curve, lo, hi), n_edges)
-    moved, shift = _even_vertex_shifts(topology, 2.0 * cosine, curve, mu, pos)
+    in_chunks(lambda lo, hi: kernel(pos, star, ends, mu, edge_halfedges, origin, slot_out, slot_in, curve, lo, hi), n_edges)
+    moved, shift = _even_vertex_shifts(topology, 2.0 * stars.cosine[topology.neighbor_offsets[:-1]], curve, mu, pos)
     curve[moved, 1:4] += shift[:, None]
 
     control = np.empty((4 * n_faces, 48))  # row h = 4f + k: sub-patch k's 4×4×3 points
@@ -1137,7 +1154,7 @@ def _compiled_patches(
 
     inner, outer = _operator(_MIDPOINT), _operator(np.ones((1, 2)))
     kernel = jit_kernel(_edge_kernel)
-    in_chunks(lambda lo, hi: kernel(curve, mu, cosine, origin, edge_halfedges, _PLACE, inner, outer, scale, centre,
+    in_chunks(lambda lo, hi: kernel(curve, mu, ends, edge_halfedges, _PLACE, inner, outer, scale, centre,
                                     control, extra, extra_normals, lo, hi), n_edges)
 
     boundary = topology.is_boundary_vertex
@@ -1153,7 +1170,7 @@ def _compiled_patches(
                 size += operators[-1].size
     flat = np.concatenate(operators)
     kernel = jit_kernel(_vertex_kernel)
-    in_chunks(lambda lo, hi: kernel(pos, curve, mu, cosine, halfedge_edge, edge_halfedges, topology.ring_offsets,
+    in_chunks(lambda lo, hi: kernel(pos, curve, mu, ends, halfedge_edge, edge_halfedges, topology.ring_offsets,
                                     topology.ring_halfedges, boundary, table, flat, _PLACE, control, lo, hi),
               topology.n_vertices)
     del curve
@@ -1260,7 +1277,7 @@ def _star_kernel(normals: FloatArray, wanted: FloatArray, positions: FloatArray,
                 star[s, d] *= shrink
 
 
-def _chain_kernel(cosine: FloatArray, x_of: IntArray, y_of: IntArray, interior: NDArray[np.bool_],
+def _chain_kernel(node_cosine: FloatArray, x_of: IntArray, y_of: IntArray, interior: NDArray[np.bool_],
                   through: NDArray[np.bool_], ring_offsets: IntArray, ring_halfedges: IntArray, halfedge_edge: IntArray,
                   edge_halfedges: IntArray, lam: FloatArray) -> None:
     """:func:`_chain_shears` by walking each grid line from its first end (node ``2e + s``, s = 1
@@ -1280,19 +1297,17 @@ def _chain_kernel(cosine: FloatArray, x_of: IntArray, y_of: IntArray, interior: 
     done = np.zeros(nodes, dtype=np.bool_)
     for first in range(nodes):
         e = first >> 1
-        v, o = (x_of[e], y_of[e]) if first & 1 == 0 else (y_of[e], x_of[e])
+        v = x_of[e] if first & 1 == 0 else y_of[e]
         if done[first] or not interior[e] or through[v]:
             continue
-        gap_first = cosine[v] - cosine[o]
+        gap_first = node_cosine[first] - node_cosine[first ^ 1]
         last, sign = first, 1.0
         for _ in range(nodes):  # to the other end: across the edge, then through the vertex, if any
             last, sign = last ^ 1, -sign
             if partner[last] < 0:
                 break
             last = partner[last]
-        e = last >> 1
-        v, o = (x_of[e], y_of[e]) if last & 1 == 0 else (y_of[e], x_of[e])
-        gap_last = cosine[v] - cosine[o]
+        gap_last = node_cosine[last] - node_cosine[last ^ 1]
         # λ(last) = sign · λ(first); the dominant end takes −gap
         if abs(gap_first) > abs(gap_last) or (abs(gap_first) == abs(gap_last) and first < last):
             at_first = -gap_first
