@@ -15,9 +15,12 @@ In Bézier coefficients (``δ_k`` cross row − curve point, ``d_k`` curve diffe
 
 so G1 is a star plus a twist system at every refined vertex:
 
-* original vertex v: the regular star of :func:`~g1patch.construct.gregory.tangent_stars`
-  (λ_v = 2 c_v), half-edge points ``P1 = v + T/6``; twists ``F_{j−1} + F_j = R_j`` with
-  ``R_j = 2 P1_j + (2 λ_v (P2_j − P1_j) − m_j (P1_j − v))/3``, ``m_j = λ(M_j → v)``;
+* original vertex v: a star ``t_{j−1} + t_{j+1} = λ_j t_j`` per slot (λ_j = 2 c_j), half-edge points
+  ``P1 = v + T/6``; twists ``F_{j−1} + F_j = R_j`` with
+  ``R_j = 2 P1_j + (2 λ_j (P2_j − P1_j) − m_j (P1_j − v))/3``, ``m_j = λ(M_j → v)``. Where that
+  twist system has compatibility conditions (even valence: valence 4 and ≥ 6 below) the star is
+  regular (one λ_v); on the boundary and at odd valence any fan whose sectors have equal areas
+  will do, and split4 takes the nearest to the target fan (:func:`_equal_area_fans`);
 * midpoint M of edge X → Y: sheared star ``t_L + t_R = μ t_X`` (μ = λ(M → X), λ(M → Y) = −μ),
   compatible iff ``D (5 μ + c_X − c_Y) = 2 μ (P1 − P5)`` for ``D = P2 − P4`` (:func:`_edge_curves`);
 * centre C: a plain cross (λ = 0), so every seam is C1.
@@ -402,9 +405,10 @@ def edge_end_cosines(topology: QuadTopology, cosine: FloatArray) -> FloatArray:
 
 
 def split4_star(targets: Targets, *, compiled: bool | None = None) -> SplitStar:
-    """The regular star split4 needs (its twist systems are solvable only for affine-regular
-    stars), fitted to the target fan: ``t_j = a cos θ_j + b sin θ_j``, ``c_v = cos`` of the angle
-    step. A star that does not turn counter-clockwise is refitted to evenly spread target
+    """The stars split4 needs, fitted to the target fans: at even interior valence the regular
+    star (its twist systems are solvable only for affine-regular stars) ``t_j = a cos θ_j + b sin θ_j``,
+    ``c_v = cos`` of the angle step; on the boundary and at odd valence the nearest fan of equal
+    sectors (:func:`_equal_area_fans`; the regular star where it is not found). A star that does not turn counter-clockwise is refitted to evenly spread target
     directions (a fallback). Length safeguard: each vertex's star is scaled down uniformly (it stays
     regular) until no tangent is longer than :data:`STAR_LENGTH_LIMIT` × the shorter of its target's
     and the circle-aware Hermite length of its edge (``2|d|²/(|d| + |P d|)``, P the projection onto
@@ -429,7 +433,8 @@ def split4_star(targets: Targets, *, compiled: bool | None = None) -> SplitStar:
                                         factor, lo, hi), topology.n_vertices)
         if valid.all():
             step = np.where(topology.is_boundary_vertex, np.pi / topology.face_count, 2.0 * np.pi / topology.valence)
-            return _rim_stars(targets, SplitStar(star, _per_slot(topology, np.cos(step)), ~valid, factor < 1.0, factor))
+            return _equal_area_fans(targets, _rim_stars(targets, SplitStar(star, _per_slot(topology, np.cos(step)), ~valid,
+                                                                           factor < 1.0, factor)))
     star, cosine, valid = fit_regular_star(topology, targets.normals, wanted)
     if not valid.all():
         chord = np.linalg.norm(wanted, axis=1)
@@ -438,7 +443,7 @@ def split4_star(targets: Targets, *, compiled: bool | None = None) -> SplitStar:
     slot_vertex = slot_vertices(topology)
     shrink = _length_shrink(targets, star, wanted, np.arange(len(star)), slot_vertex, slot_vertex, topology.n_vertices)
     star *= shrink[slot_vertex, None]
-    return _rim_stars(targets, SplitStar(star, cosine[slot_vertex], ~valid, shrink < 1.0, shrink))
+    return _equal_area_fans(targets, _rim_stars(targets, SplitStar(star, cosine[slot_vertex], ~valid, shrink < 1.0, shrink)))
 
 
 def _length_shrink(targets: Targets, star: FloatArray, wanted: FloatArray, slots: IntArray, vertex: IntArray,
@@ -534,6 +539,76 @@ def _rim_stars(targets: Targets, base: SplitStar) -> SplitStar:
     star[slot[keep]] = fitted[keep] * shrink[owner[keep], None]
     cosine[slot[keep]] = np.cos(total / k)[owner[keep]]
     factor[rims[good]] = shrink[good]
+    return SplitStar(star, cosine, base.refitted, factor < 1.0, factor)
+
+
+#: Gauss–Newton steps of :func:`_equal_area_fans`' projection, and the largest relative difference
+#: of its sectors' areas that is taken as equal (to rounding: G1 depends on it)
+EQUAL_AREA_STEPS = 12
+EQUAL_AREA_RTOL = 1e-13
+#: :func:`_equal_area_fans` keeps ``base`` where a sector of its fan turns by less than this (sine)
+EQUAL_AREA_SINE = 0.05
+
+
+def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
+    """``base`` with the fans of boundary vertices (k ≥ 2 faces) and of interior vertices of odd
+    valence replaced by the nearest fan (least squares over its tangents, in the tangent plane) whose
+    sectors all have the same area ``t_j × t_{j+1}``: then ``t_{j−1} + t_{j+1} = λ_j t_j`` at every
+    slot (cross both sides with t_j), ``λ_j = (t_{j−1} + t_{j+1})·t_j / |t_j|²``, which is all
+    split4's G1 needs there, their twist systems having no compatibility condition (a path, an odd
+    cycle). Regular stars are such fans, so this is never further from the targets than they are;
+    most target fans are not regular (a coarse cage's boundary corner, a valence-3 or 5 vertex with
+    unequal angles), and a regular star turned their tangents by degrees. The nearest fan is the
+    projection onto ``A_j − A_{j+1} = 0`` by Gauss–Newton from the targets (:data:`EQUAL_AREA_STEPS`
+    steps ``δ = r − Jᵀ (J Jᵀ)⁻¹ (J r + h)``, r the way back to the targets). The same length safeguard
+    as the regular stars. ``base`` is kept where the areas do not agree to :data:`EQUAL_AREA_RTOL`,
+    a sector turns by less than :data:`EQUAL_AREA_SINE`, or the vertex was refitted."""
+    topology = targets.topology
+    boundary = topology.is_boundary_vertex
+    eligible = ~base.refitted & np.where(boundary, topology.face_count >= 2, topology.valence % 2 == 1)
+    star, cosine, factor = base.star.copy(), base.cosine.copy(), base.factor.copy()
+    size = topology.face_count + boundary  # slots in the fan: k + 1 on the boundary, n inside
+    for is_open, m in sorted({(bool(boundary[v]), int(size[v])) for v in np.flatnonzero(eligible)}):
+        vs = np.flatnonzero(eligible & (boundary == is_open) & (size == m))
+        slots = topology.neighbor_offsets[vs][:, None] + np.arange(m)  # (g, m)
+        normal = targets.normals[vs]
+        first = targets.tangents[slots[:, 0]]
+        e1 = _unit(first - _dot(first, normal)[:, None] * normal)
+        e2 = np.cross(normal, e1)
+        wanted = targets.tangents[slots]
+        goal = np.stack([_dot(wanted, e1[:, None]), _dot(wanted, e2[:, None])], axis=-1)  # (g, m, 2) in the plane
+        sectors = m - 1 if is_open else m
+        j = np.arange(sectors)
+        nxt = (j + 1) % m
+        fan = goal.copy()
+        for _ in range(EQUAL_AREA_STEPS):
+            u, w = fan[..., 0], fan[..., 1]
+            area = u[:, j] * w[:, nxt] - w[:, j] * u[:, nxt]  # (g, sectors)
+            grad = np.zeros((len(vs), sectors, m, 2))  # ∂A_j / ∂(u, w)
+            grad[:, j, j, 0], grad[:, j, j, 1] = w[:, nxt], -u[:, nxt]
+            grad[:, j, nxt, 0], grad[:, j, nxt, 1] = -w[:, j], u[:, j]
+            jac = (grad[:, :-1] - grad[:, 1:]).reshape(len(vs), sectors - 1, 2 * m)  # rows: A_j − A_{j+1}
+            gap = area[:, :-1] - area[:, 1:]
+            back = (goal - fan).reshape(len(vs), 2 * m)
+            normal_matrix = jac @ jac.transpose(0, 2, 1) + 1e-300 * np.eye(sectors - 1)
+            rhs = np.einsum("gcz,gz->gc", jac, back) + gap
+            multiplier = np.linalg.solve(normal_matrix, rhs[..., None])[..., 0]
+            fan = fan + (back - np.einsum("gcz,gc->gz", jac, multiplier)).reshape(len(vs), m, 2)
+        u, w = fan[..., 0], fan[..., 1]
+        area = u[:, j] * w[:, nxt] - w[:, j] * u[:, nxt]
+        length = np.linalg.norm(fan, axis=-1)
+        turn = area / np.maximum(length[:, j] * length[:, nxt], 1e-300)
+        good = ((np.abs(area - area.mean(axis=1, keepdims=True)) <= EQUAL_AREA_RTOL * np.abs(area).mean(axis=1, keepdims=True))
+                .all(axis=1) & (turn >= EQUAL_AREA_SINE).all(axis=1))
+        tangents = fan[..., :1] * e1[:, None] + fan[..., 1:] * e2[:, None]  # (g, m, 3)
+        lam = _dot(np.roll(tangents, 1, axis=1) + np.roll(tangents, -1, axis=1), tangents) / _dot(tangents, tangents)
+        shrink = _length_shrink(targets, tangents.reshape(-1, 3), wanted.reshape(-1, 3), slots.reshape(-1),
+                                np.repeat(vs, m), np.repeat(np.arange(len(vs)), m), len(vs))
+        keep = np.flatnonzero(good)
+        star[slots[keep]] = tangents[keep] * shrink[keep, None, None]
+        inner = slice(1, m - 1) if is_open else slice(0, m)  # a boundary fan's rim slots have no relation
+        cosine[slots[keep, inner]] = 0.5 * lam[keep, inner]
+        factor[vs[keep]] = shrink[keep]
     return SplitStar(star, cosine, base.refitted, factor < 1.0, factor)
 
 
