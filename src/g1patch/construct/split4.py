@@ -568,7 +568,8 @@ def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
     eligible = ~base.refitted & np.where(boundary, topology.face_count >= 2, topology.valence % 2 == 1)
     star, cosine, factor = base.star.copy(), base.cosine.copy(), base.factor.copy()
     size = topology.face_count + boundary  # slots in the fan: k + 1 on the boundary, n inside
-    for is_open, m in sorted({(bool(boundary[v]), int(size[v])) for v in np.flatnonzero(eligible)}):
+    keys = np.unique(2 * size[eligible] + boundary[eligible])  # one group per (fan size, boundary)
+    for m, is_open in zip((keys // 2).tolist(), (keys % 2 == 1).tolist()):
         vs = np.flatnonzero(eligible & (boundary == is_open) & (size == m))
         slots = topology.neighbor_offsets[vs][:, None] + np.arange(m)  # (g, m)
         normal = targets.normals[vs]
