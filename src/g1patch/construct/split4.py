@@ -562,7 +562,8 @@ def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
     projection onto ``A_j − A_{j+1} = 0`` by Gauss–Newton from the targets (:data:`EQUAL_AREA_STEPS`
     steps ``δ = r − Jᵀ (J Jᵀ)⁻¹ (J r + h)``, r the way back to the targets). The same length safeguard
     as the regular stars. ``base`` is kept where the areas do not agree to :data:`EQUAL_AREA_RTOL`,
-    a sector turns by less than :data:`EQUAL_AREA_SINE`, or the vertex was refitted."""
+    a sector of the target fan or of the result turns by less than :data:`EQUAL_AREA_SINE` (sine),
+    or the vertex was refitted."""
     topology = targets.topology
     boundary = topology.is_boundary_vertex
     eligible = ~base.refitted & np.where(boundary, topology.face_count >= 2, topology.valence % 2 == 1)
@@ -581,6 +582,13 @@ def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
         sectors = m - 1 if is_open else m
         j = np.arange(sectors)
         nxt = (j + 1) % m
+        start_area = goal[:, j, 0] * goal[:, nxt, 1] - goal[:, j, 1] * goal[:, nxt, 0]
+        start_length = np.linalg.norm(goal, axis=-1)
+        posed = (start_area >= EQUAL_AREA_SINE * start_length[:, j] * start_length[:, nxt]).all(axis=1)
+        posed &= (start_length > 0).all(axis=1)  # every sector turns forward: the projection is well posed
+        vs, slots, wanted, goal, e1, e2 = vs[posed], slots[posed], wanted[posed], goal[posed], e1[posed], e2[posed]
+        if not vs.size:
+            continue
         fan = goal.copy()
         for _ in range(EQUAL_AREA_STEPS):
             u, w = fan[..., 0], fan[..., 1]
@@ -591,7 +599,8 @@ def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
             jac = (grad[:, :-1] - grad[:, 1:]).reshape(len(vs), sectors - 1, 2 * m)  # rows: A_j − A_{j+1}
             gap = area[:, :-1] - area[:, 1:]
             back = (goal - fan).reshape(len(vs), 2 * m)
-            normal_matrix = jac @ jac.transpose(0, 2, 1) + 1e-300 * np.eye(sectors - 1)
+            normal_matrix = jac @ jac.transpose(0, 2, 1)
+            normal_matrix += 1e-14 * np.trace(normal_matrix, axis1=1, axis2=2)[:, None, None] * np.eye(sectors - 1)
             rhs = np.einsum("gcz,gz->gc", jac, back) + gap
             multiplier = np.linalg.solve(normal_matrix, rhs[..., None])[..., 0]
             fan = fan + (back - np.einsum("gcz,gc->gz", jac, multiplier)).reshape(len(vs), m, 2)
