@@ -381,11 +381,12 @@ def test_blocked_assembly_does_not_depend_on_the_block_size(monkeypatch: pytest.
 @pytest.mark.parametrize("k", [2, 3, 5])
 def test_a_turning_rim_gets_the_nearest_fan_of_equal_sectors(k: int) -> None:
     """A boundary vertex whose rim turns (``boundary_fan(k)``: its k quads span kπ/(k + 1), lifted
-    onto z = r²/4): split4's fan there is the nearest one whose sectors have equal areas (all split4
-    needs on a boundary), so the rim keeps its turn; the network stays exactly G1, and split4's
-    re-assembly of the Gregory network lies within 6e-4 of the diagonal of it (measured 3.5e-5,
-    4.5e-4, 4.4e-4; with regular stars of the rim's own turn 3.2e-4, 4.6e-3, 5.4e-3, with straight
-    rim stars 1.4e-2, 7.5e-3, 8.4e-3)."""
+    onto z = r²/4). A split4 build's star there steps by Φ/k, Φ the turn of the target fan, not π/k
+    (a straight rim); the re-assembly of a Gregory network takes the nearest fan whose sectors have
+    equal areas (all split4 needs on a boundary), so the rim keeps its turn and spacing; both are
+    exactly G1, and the re-assembly lies within 6e-4 of the diagonal of the Gregory surface
+    (measured 3.5e-5, 4.5e-4, 4.4e-4; with regular stars of the rim's own turn 3.2e-4, 4.6e-3,
+    5.4e-3, with straight rim stars 1.4e-2, 7.5e-3, 8.4e-3)."""
     from g1patch.construct.polynomial import split4_of_gregory, surface_deviation
     from g1patch.construct.split4 import split4_star
     from g1patch.targets.interpolate import interpolate_targets
@@ -395,12 +396,14 @@ def test_a_turning_rim_gets_the_nearest_fan_of_equal_sectors(k: int) -> None:
     lifted[:, 2] = 0.25 * (lifted[:, 0] ** 2 + lifted[:, 1] ** 2)
     mesh = mesh.with_vertices(lifted)
     targets = interpolate_targets(mesh)
-    stars = split4_star(targets)
-    fan, n = stars.star[: k + 1], targets.normals[0]  # vertex 0, the hub
+    n = targets.normals[0]
+    wanted = sum(np.arctan2(np.cross(a, b) @ n, a @ b) for a, b in itertools.pairwise(targets.tangents[: k + 1]))
+    assert split4_star(targets).cosine[: k + 1] == pytest.approx(np.cos(wanted / k), abs=1e-12)  # a build: regular
+    stars = split4_star(targets, equal_sectors=True)
+    fan = stars.star[: k + 1]  # vertex 0, the hub
     areas = np.array([np.cross(a, b) @ n for a, b in itertools.pairwise(fan)])
     assert np.abs(areas - areas.mean()).max() <= 1e-13 * areas.mean()
     turn = sum(np.arctan2(np.cross(a, b) @ n, a @ b) for a, b in itertools.pairwise(fan))
-    wanted = sum(np.arctan2(np.cross(a, b) @ n, a @ b) for a, b in itertools.pairwise(targets.tangents[: k + 1]))
     assert turn == pytest.approx(wanted, abs=np.radians(12.0))  # not π: the rim turns
     assert_exact_g1(check(build_split4_network(mesh)))
     gregory = build_gregory_network(mesh)
@@ -410,15 +413,17 @@ def test_a_turning_rim_gets_the_nearest_fan_of_equal_sectors(k: int) -> None:
 @pytest.mark.parametrize("mesh", [shapes.box_cage(), shapes.genus2(), shapes.noisy_sphere(1), shapes.boundary_fan(4)],
                          ids=["box_cage", "genus2", "noisy_sphere", "boundary_fan"])
 def test_equal_sector_fans_are_nearer_than_regular_stars(mesh: QuadMesh) -> None:
-    """At boundary vertices and odd valences the fan is one of equal sectors (the nearest to the
-    targets): its sectors' areas agree to 1e-12, each relation ``t_{j−1} + t_{j+1} = 2 c_j t_j``
-    holds to rounding, and the network is exactly G1."""
+    """With ``equal_sectors``, at boundary vertices and odd valences the fan is one of equal sectors
+    (the nearest to the targets): its sectors' areas agree to 1e-12, each relation
+    ``t_{j−1} + t_{j+1} = 2 c_j t_j`` holds to rounding, and the re-assembly of the Gregory network
+    that uses them is exactly G1."""
     from g1patch.construct import split4
+    from g1patch.construct.polynomial import split4_of_gregory
     from g1patch.targets.interpolate import interpolate_targets
 
     targets = interpolate_targets(mesh)
     topology = targets.topology
-    stars = split4.split4_star(targets)
+    stars = split4.split4_star(targets, equal_sectors=True)
     boundary = topology.is_boundary_vertex
     chosen = np.flatnonzero(np.where(boundary, topology.face_count >= 2, topology.valence % 2 == 1) & ~stars.shrunk)
     assert chosen.size
@@ -432,7 +437,7 @@ def test_equal_sector_fans_are_nearer_than_regular_stars(mesh: QuadMesh) -> None
         for j in inner:
             relation = fan[j - 1] + fan[(j + 1) % len(fan)] - 2.0 * stars.cosine[lo + j] * fan[j]
             assert np.linalg.norm(relation) <= 1e-13 * np.linalg.norm(fan[j])
-    assert_exact_g1(check(build_split4_network(mesh)))
+    assert_exact_g1(check(split4_of_gregory(build_gregory_network(mesh))))
 
 
 def test_the_deviation_finds_foot_points_in_the_next_patch() -> None:

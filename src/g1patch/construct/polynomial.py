@@ -242,11 +242,11 @@ def _straight_creases(targets: Targets, topology: QuadTopology, seam_halfedges: 
     return targets.with_changes(tangents=tangents)
 
 
-def seam_stars(targets: Targets, seam_halfedges: NDArray[np.bool_]) -> SplitStar:
+def seam_stars(targets: Targets, seam_halfedges: NDArray[np.bool_], *, equal_sectors: bool = False) -> SplitStar:
     """split4's stars on a topology cut along seams (``seam_halfedges``: the cut's boundary
     half-edges that were seams), where both sides of a seam must keep its tangents exactly.
 
-    Elsewhere :func:`~g1patch.construct.split4.split4_star`. At a vertex copy with k ≥ 2 faces
+    Elsewhere :func:`~g1patch.construct.split4.split4_star` (``equal_sectors`` passed on). At a vertex copy with k ≥ 2 faces
     and a seam slot e (0 or k): the regular star ``t_j = t_e cos φ_j + b sin φ_j``, ``φ_j = |j − e| θ``,
     ``θ = Φ / k`` (Φ the fan's turn from slot 0 to slot k about the sector normal), b by least
     squares over the other slots, or from the other end's seam tangent,
@@ -256,7 +256,7 @@ def seam_stars(targets: Targets, seam_halfedges: NDArray[np.bool_]) -> SplitStar
     from .split4 import split4_star
 
     topology = targets.topology
-    base = split4_star(targets)
+    base = split4_star(targets, equal_sectors=equal_sectors)
     star, cosine, factor = base.star.copy(), base.cosine.copy(), base.factor.copy()
     offsets = topology.neighbor_offsets
     origin = topology.faces.reshape(-1)
@@ -344,7 +344,9 @@ def _cell_fits(local: GregoryPatchSet, n: int, samples: int = GUIDE_SAMPLES) -> 
 def split4_of_gregory(network: PatchNetwork, *, guided: bool = True, refine: int = 1) -> PatchNetwork:
     """The split4 network (:func:`~g1patch.construct.split4.split4_network_from_targets`) of a
     Gregory network's targets (:func:`gregory_targets`): exactly G1, polynomial, through the same
-    corners; with ``guided`` its interiors follow the Gregory surface (:func:`guide_nets`).
+    corners; with ``guided`` its interiors follow the Gregory surface (:func:`guide_nets`). Its
+    fans on the boundary and at odd valence are the nearest of equal sectors to the Gregory fans
+    (``split4_star(equal_sectors=True)``), the regular stars elsewhere.
     ``refine`` n > 1: of the targets of the network's surface on its mesh with each quad cut into
     n × n (:func:`refined_gregory_targets`, always guided): split4's stars differ from the Gregory
     fans they replace only near the vertices, so the distance to the Gregory surface shrinks about
@@ -352,7 +354,7 @@ def split4_of_gregory(network: PatchNetwork, *, guided: bool = True, refine: int
     Seams: assembled on the topology cut along them (each side a boundary, :func:`seam_stars`
     keeping the seam tangents, so both sides get the same boundary curve), connected on the
     uncut one with the seams marked. Provenance ``from = gregory``."""
-    from .split4 import _split4_network, split4_network_from_targets, split4_patches
+    from .split4 import _split4_network, split4_network_from_targets, split4_patches, split4_star
 
     if not (isinstance(refine, (int, np.integer)) and refine >= 1):
         raise InputError(f"refine: expected an integer ≥ 1, got {refine!r}")
@@ -373,7 +375,8 @@ def split4_of_gregory(network: PatchNetwork, *, guided: bool = True, refine: int
         topology = uncut.topology
     if not cut:
         mesh = QuadMesh(frame.to_world(targets.positions), targets.topology)
-        return split4_network_from_targets(mesh, targets, frame, provenance, guide=guide)
+        parts = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide, split4_star(targets, equal_sectors=True))
+        return split4_network_from_targets(mesh, targets, frame, provenance, guide=guide, parts=parts)
     cut_topology = targets.topology
     seam_halfedges = (cut_topology.twin < 0) & (topology.twin >= 0)
     if not np.array_equal(seams, seam_halfedges):
@@ -381,7 +384,7 @@ def split4_of_gregory(network: PatchNetwork, *, guided: bool = True, refine: int
                                 "(a seam edge whose both ends have one sector)")
     targets = _straight_creases(targets, topology, seam_halfedges)
     patches, extra, extra_normals, stars = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide,
-                                                          seam_stars(targets, seam_halfedges))
+                                                          seam_stars(targets, seam_halfedges, equal_sectors=True))
     patches = patches.with_frame(frame)
     edge_of = np.empty(topology.n_edges, dtype=np.int64)
     edge_of[topology.halfedge_edge] = cut_topology.halfedge_edge

@@ -20,7 +20,8 @@ so G1 is a star plus a twist system at every refined vertex:
   ``R_j = 2 P1_j + (2 λ_j (P2_j − P1_j) − m_j (P1_j − v))/3``, ``m_j = λ(M_j → v)``. Where that
   twist system has compatibility conditions (even valence: valence 4 and ≥ 6 below) the star is
   regular (one λ_v); on the boundary and at odd valence any fan whose sectors have equal areas
-  will do, and split4 takes the nearest to the target fan (:func:`_equal_area_fans`);
+  will do (the re-assembly of a Gregory network takes the nearest to its fan, :func:`_equal_area_fans`;
+  a build the regular star);
 * midpoint M of edge X → Y: sheared star ``t_L + t_R = μ t_X`` (μ = λ(M → X), λ(M → Y) = −μ),
   compatible iff ``D (5 μ + c_X − c_Y) = 2 μ (P1 − P5)`` for ``D = P2 − P4`` (:func:`_edge_curves`);
 * centre C: a plain cross (λ = 0), so every seam is C1.
@@ -404,11 +405,15 @@ def edge_end_cosines(topology: QuadTopology, cosine: FloatArray) -> FloatArray:
     return np.stack([cosine[slot_out[h]], cosine[slot_in[h]]], axis=1)
 
 
-def split4_star(targets: Targets, *, compiled: bool | None = None) -> SplitStar:
-    """The stars split4 needs, fitted to the target fans: at even interior valence the regular
-    star (its twist systems are solvable only for affine-regular stars) ``t_j = a cos θ_j + b sin θ_j``,
-    ``c_v = cos`` of the angle step; on the boundary and at odd valence the nearest fan of equal
-    sectors (:func:`_equal_area_fans`; the regular star where it is not found). A star that does not turn counter-clockwise is refitted to evenly spread target
+def split4_star(targets: Targets, *, compiled: bool | None = None, equal_sectors: bool = False) -> SplitStar:
+    """The stars split4 needs, fitted to the target fans: the regular star (at even interior
+    valence the twist systems are solvable only for affine-regular stars) ``t_j = a cos θ_j + b sin θ_j``,
+    ``c_v = cos`` of the angle step. With ``equal_sectors``, on the boundary and at odd valence
+    the nearest fan of equal sectors instead (:func:`_equal_area_fans`): for reproducing a surface
+    whose fans are given (a Gregory network's, :mod:`~g1patch.construct.polynomial`); a build keeps
+    the regular stars, which are fairer where the targets' angles are uneven (a genus-2 cage's
+    odd vertices: turn p99 5.2° against 6.4°) and closer to the Catmull–Clark limit (Spot, limit:
+    3.8e-4 of the diagonal against 5.0e-4). A star that does not turn counter-clockwise is refitted to evenly spread target
     directions (a fallback). Length safeguard: each vertex's star is scaled down uniformly (it stays
     regular) until no tangent is longer than :data:`STAR_LENGTH_LIMIT` × the shorter of its target's
     and the circle-aware Hermite length of its edge (``2|d|²/(|d| + |P d|)``, P the projection onto
@@ -433,8 +438,8 @@ def split4_star(targets: Targets, *, compiled: bool | None = None) -> SplitStar:
                                         factor, lo, hi), topology.n_vertices)
         if valid.all():
             step = np.where(topology.is_boundary_vertex, np.pi / topology.face_count, 2.0 * np.pi / topology.valence)
-            return _equal_area_fans(targets, _rim_stars(targets, SplitStar(star, _per_slot(topology, np.cos(step)), ~valid,
-                                                                           factor < 1.0, factor)))
+            stars = _rim_stars(targets, SplitStar(star, _per_slot(topology, np.cos(step)), ~valid, factor < 1.0, factor))
+            return _equal_area_fans(targets, stars) if equal_sectors else stars
     star, cosine, valid = fit_regular_star(topology, targets.normals, wanted)
     if not valid.all():
         chord = np.linalg.norm(wanted, axis=1)
@@ -443,7 +448,8 @@ def split4_star(targets: Targets, *, compiled: bool | None = None) -> SplitStar:
     slot_vertex = slot_vertices(topology)
     shrink = _length_shrink(targets, star, wanted, np.arange(len(star)), slot_vertex, slot_vertex, topology.n_vertices)
     star *= shrink[slot_vertex, None]
-    return _equal_area_fans(targets, _rim_stars(targets, SplitStar(star, cosine[slot_vertex], ~valid, shrink < 1.0, shrink)))
+    stars = _rim_stars(targets, SplitStar(star, cosine[slot_vertex], ~valid, shrink < 1.0, shrink))
+    return _equal_area_fans(targets, stars) if equal_sectors else stars
 
 
 def _length_shrink(targets: Targets, star: FloatArray, wanted: FloatArray, slots: IntArray, vertex: IntArray,
