@@ -141,7 +141,7 @@ def _parser() -> argparse.ArgumentParser:
                              "fit = fit each patch (closest, but CAD sees kinks); auto (default): split4, or fit where "
                              "split4 cannot re-assemble the network")
     export.add_argument("--max-deviation", type=float, metavar="REL", default=DEVIATION_RTOL,
-                        help="CAD, split4 re-assembly of Gregory networks: cut each patch into n × n quads (n = 2, 4, 8) "
+                        help="CAD, split4 re-assembly of Gregory networks: cut each patch into n × n quads (n = 2, 3, 4, 6, 8) "
                              "until the exact surface lies within REL × the bbox diagonal of the network's (default: %(default)g)")
     export.add_argument("--json", action="store_true", help="CAD: print the figures as one JSON object")
 

@@ -114,11 +114,12 @@ Progress = Callable[[str, int, int], None]
 #: default fit tolerance, relative to the bounding-box diagonal
 FIT_RTOL = 1e-6
 #: default largest distance of a split4 re-assembly from its Gregory surface, relative to the
-#: bounding-box diagonal: above it each patch is re-assembled as n × n cells (n = 2, 4, …,
-#: :data:`REFINE_LIMIT`; :func:`~g1patch.construct.polynomial.split4_of_gregory`)
+#: bounding-box diagonal: above it each patch is re-assembled as n × n cells (n from
+#: :data:`REFINE_STEPS`; :func:`~g1patch.construct.polynomial.split4_of_gregory`)
 DEVIATION_RTOL = 1e-3
-#: the finest cut of a patch for the re-assembly, and the most quads it may make
-REFINE_LIMIT = 8
+#: the cuts of a patch the re-assembly tries, in order (the distance falls about as 1/n), and the
+#: most quads a cut may make
+REFINE_STEPS = (1, 2, 3, 4, 6, 8)
 REFINE_QUADS = 20_000
 #: sewing tolerance, relative to the bounding-box diagonal: shared boundaries coincide to rounding
 #: (exact export, ~1e-16) or bit for bit (fitted export); mesh edges are many orders longer.
@@ -1168,9 +1169,9 @@ def compact_step(path: Path, nets: Sequence[NDArray[np.float64]] = (), tolerance
 def _split4_within(network: PatchNetwork, max_deviation: float, diagonal: float, fallback: bool,
                    lap: Callable[[str], None]) -> tuple[PatchNetwork, float, int, str] | str:
     """The split4 re-assembly of a Gregory network (:func:`~g1patch.construct.polynomial.split4_of_gregory`)
-    with n = 1, 2, 4, … cells per patch side until its distance to the Gregory surface is at most
+    with n = 1, 2, 3, … (:data:`REFINE_STEPS`) cells per patch side until its distance to the Gregory surface is at most
     ``max_deviation × diagonal`` (split4's stars differ from the Gregory fans near the vertices, over a cell's size),
-    or n reaches :data:`REFINE_LIMIT` or :data:`REFINE_QUADS`: ``(network, deviation, n, note)``.
+    or a cut would make more than :data:`REFINE_QUADS` quads: ``(network, deviation, n, note)``.
     A cut that folds more sub-patches than n = 1 (small cells of a coarse cage can) is not taken;
     of those tried the closest one that does not, and the note says when it is above the bound.
     A network split4 cannot re-assemble raises, or with ``fallback`` returns the note for a fit (where
@@ -1179,8 +1180,10 @@ def _split4_within(network: PatchNetwork, max_deviation: float, diagonal: float,
     from ..continuity import folded_patches
 
     tried: list[tuple[bool, float, int, PatchNetwork]] = []  # (folds more than n = 1, deviation, n, result)
-    refine, base_folds, allowed = 1, 0, max_deviation * diagonal
-    while refine <= REFINE_LIMIT and (refine == 1 or refine * refine * network.n_patches <= REFINE_QUADS):
+    base_folds, allowed = 0, max_deviation * diagonal
+    for refine in REFINE_STEPS:
+        if refine > 1 and refine * refine * network.n_patches > REFINE_QUADS:
+            break
         try:
             converted = split4_of_gregory(network, refine=refine)
         except (ConstructionError, MeshError) as error:
@@ -1197,7 +1200,6 @@ def _split4_within(network: PatchNetwork, max_deviation: float, diagonal: float,
         tried.append((folds > base_folds, deviation, refine, converted))
         if deviation <= allowed and not tried[-1][0]:
             break
-        refine *= 2
     _, deviation, refine, converted = min(tried, key=lambda attempt: attempt[:2])
     note = "" if deviation <= allowed else (
         f"the re-assembly stays {deviation / diagonal:.2e} of the diagonal from the Gregory surface, above "
