@@ -423,8 +423,9 @@ def _foot_distances(points: FloatArray, local: FloatArray, tree: object, t: Floa
     that patch; the nearest point seen."""
     from ..gregory import gregory_weights
 
+    nearest = (tree.query(points, k=starts)[1].reshape(len(points), -1) if starts  # type: ignore[attr-defined]
+               else np.zeros((len(points), 0), dtype=np.int64))
     starts += 1
-    nearest = tree.query(points, k=starts - 1)[1].reshape(len(points), -1)  # type: ignore[attr-defined]
     patch, rest = np.divmod(nearest, len(t) ** 2)
     patch = np.concatenate([patch, own_patch[:, None]], axis=1).reshape(-1)
     at = np.concatenate([np.stack([t[rest // len(t)], t[rest % len(t)]], axis=-1), own_at[:, None]], axis=1).reshape(-1, 2)
@@ -456,9 +457,9 @@ def surface_deviation(network: PatchNetwork, split4: PatchNetwork, samples: int 
     ``r = f n² + a n + b`` of a split4 network refined n × n, :func:`split4_of_gregory`).
 
     ``parametric = max |g(u, v) − s(u, v)|``. ``geometric`` = max distance of the samples of ``s``
-    to their foot points on ``g`` (:func:`_foot_distances`): from the nearest of
-    :data:`SEARCH_SAMPLES`² samples per Gregory patch (any patch); then, while a sample searched
-    from one start is at least half the largest distance, from its :data:`FOOT_STARTS` nearest.
+    to their foot points on ``g`` (:func:`_foot_distances`): from the sample's own parameter;
+    then, while a sample searched so is at least half the largest distance, also from its
+    :data:`FOOT_STARTS` nearest of :data:`SEARCH_SAMPLES`² samples per Gregory patch (any patch).
     Each distance is an upper bound, so is their maximum."""
     from scipy.spatial import cKDTree
 
@@ -485,7 +486,7 @@ def surface_deviation(network: PatchNetwork, split4: PatchNetwork, samples: int 
     parametric = float(np.linalg.norm(points - value(), axis=-1).max())
     t = np.linspace(0.0, 1.0, SEARCH_SAMPLES)
     tree = cKDTree(gregory.local().evaluate_grid(t, t).reshape(-1, 3))
-    best = _foot_distances(points, local, tree, t, 1, patch, at)
+    best = _foot_distances(points, local, tree, t, 0, patch, at)
     refined = np.zeros(len(points), dtype=bool)
     while (chosen := ~refined & (best >= 0.5 * best.max())).any():  # the largest, from more starts
         best[chosen] = np.minimum(best[chosen], _foot_distances(points[chosen], local, tree, t, FOOT_STARTS,
