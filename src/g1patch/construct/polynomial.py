@@ -413,22 +413,23 @@ FOOT_STARTS = 4
 SEARCH_SAMPLES = 17
 
 
-def _foot_distances(points: FloatArray, local: FloatArray, tree: object, t: FloatArray, starts: int,
-                    own_patch: IntArray, own_at: FloatArray) -> FloatArray:
+def _grid_starts(points: FloatArray, tree: object, t: FloatArray, count: int) -> tuple[IntArray, FloatArray]:
+    """Each point's ``count`` nearest samples of the :data:`SEARCH_SAMPLES`² grid ``t`` × ``t`` of
+    every patch (``tree`` over them): their patches (P, count) and parameters (P, count, 2)."""
+    nearest = tree.query(points, k=count)[1].reshape(len(points), count)  # type: ignore[attr-defined]
+    patch, rest = np.divmod(nearest, len(t) ** 2)
+    return patch, np.stack([t[rest // len(t)], t[rest % len(t)]], axis=-1)
+
+
+def _foot_distances(points: FloatArray, local: FloatArray, patch: IntArray, at: FloatArray) -> FloatArray:
     """Per point an upper bound of its distance to the Gregory surface of nets ``local`` (F, 20, 3):
-    from each of its ``starts`` nearest grid samples (``tree`` over the :data:`SEARCH_SAMPLES`² grid
-    ``t`` × ``t`` of every patch) and from its own place (``own_patch``, ``own_at``: where the split4
-    point's parameter lies; it may drift along the surface by more than a grid step)
+    from each of its starts (patches ``patch`` (P, S), parameters ``at`` (P, S, 2))
     :data:`FOOT_STEPS` Gauss–Newton steps ``(JᵀJ) δ = Jᵀ (p − g)``, ``J = [g_u g_v]``, clamped to
     that patch; the nearest point seen."""
     from ..gregory import gregory_weights
 
-    nearest = (tree.query(points, k=starts)[1].reshape(len(points), -1) if starts  # type: ignore[attr-defined]
-               else np.zeros((len(points), 0), dtype=np.int64))
-    starts += 1
-    patch, rest = np.divmod(nearest, len(t) ** 2)
-    patch = np.concatenate([patch, own_patch[:, None]], axis=1).reshape(-1)
-    at = np.concatenate([np.stack([t[rest // len(t)], t[rest % len(t)]], axis=-1), own_at[:, None]], axis=1).reshape(-1, 2)
+    starts = patch.shape[1]
+    patch, at = patch.reshape(-1), at.reshape(-1, 2)
     points = np.repeat(points, starts, axis=0)
     nets = local[patch]
 
@@ -457,10 +458,11 @@ def surface_deviation(network: PatchNetwork, split4: PatchNetwork, samples: int 
     ``r = f n² + a n + b`` of a split4 network refined n × n, :func:`split4_of_gregory`).
 
     ``parametric = max |g(u, v) − s(u, v)|``. ``geometric`` = max distance of the samples of ``s``
-    to their foot points on ``g`` (:func:`_foot_distances`): from the sample's own parameter;
-    then, while a sample searched so is at least half the largest distance, also from its
-    :data:`FOOT_STARTS` nearest of :data:`SEARCH_SAMPLES`² samples per Gregory patch (any patch).
-    Each distance is an upper bound, so is their maximum."""
+    to their foot points on ``g`` (:func:`_foot_distances`): from the sample's own parameter (it
+    may drift along the surface by more than a grid step); then, while a sample is at least half
+    the largest distance, also from its :data:`FOOT_STARTS` nearest of :data:`SEARCH_SAMPLES`²
+    samples per Gregory patch (any patch). Each distance is an upper bound, so is their maximum,
+    and none is above its sample's parametric distance (the first start)."""
     from scipy.spatial import cKDTree
 
     from ..gregory import gregory_weights
@@ -486,11 +488,10 @@ def surface_deviation(network: PatchNetwork, split4: PatchNetwork, samples: int 
     parametric = float(np.linalg.norm(points - value(), axis=-1).max())
     t = np.linspace(0.0, 1.0, SEARCH_SAMPLES)
     tree = cKDTree(gregory.local().evaluate_grid(t, t).reshape(-1, 3))
-    best = _foot_distances(points, local, tree, t, 0, patch, at)
+    best = _foot_distances(points, local, patch[:, None], at[:, None])
     refined = np.zeros(len(points), dtype=bool)
     while (chosen := ~refined & (best >= 0.5 * best.max())).any():  # the largest, from more starts
-        best[chosen] = np.minimum(best[chosen], _foot_distances(points[chosen], local, tree, t, FOOT_STARTS,
-                                                                patch[chosen], at[chosen]))
+        starts = _grid_starts(points[chosen], tree, t, FOOT_STARTS)
+        best[chosen] = np.minimum(best[chosen], _foot_distances(points[chosen], local, *starts))
         refined |= chosen
-    geometric = float(best.max())
-    return parametric * frame.scale, min(geometric, parametric) * frame.scale
+    return parametric * frame.scale, float(best.max()) * frame.scale

@@ -562,9 +562,9 @@ def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
     sectors all have the same area ``t_j × t_{j+1}``: then ``t_{j−1} + t_{j+1} = λ_j t_j`` at every
     slot (cross both sides with t_j), ``λ_j = (t_{j−1} + t_{j+1})·t_j / |t_j|²``, which is all
     split4's G1 needs there, their twist systems having no compatibility condition (a path, an odd
-    cycle). Regular stars are such fans, so this is never further from the targets than they are;
-    most target fans are not regular (a coarse cage's boundary corner, a valence-3 or 5 vertex with
-    unequal angles), and a regular star turned their tangents by degrees. The nearest fan is the
+    cycle). Regular stars are such fans too, but most target fans are not regular (a coarse
+    cage's boundary corner, a valence-3 or 5 vertex with unequal angles), and a regular star
+    turned their tangents by degrees. The nearest fan is the
     projection onto ``A_j − A_{j+1} = 0`` by Gauss–Newton from the targets (:data:`EQUAL_AREA_STEPS`
     steps ``δ = r − Jᵀ (J Jᵀ)⁻¹ (J r + h)``, r the way back to the targets). The same length safeguard
     as the regular stars. ``base`` is kept where the areas do not agree to :data:`EQUAL_AREA_RTOL`,
@@ -588,7 +588,11 @@ def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
         sectors = m - 1 if is_open else m
         j = np.arange(sectors)
         nxt = (j + 1) % m
-        start_area = goal[:, j, 0] * goal[:, nxt, 1] - goal[:, j, 1] * goal[:, nxt, 0]
+        def areas(fan: FloatArray) -> FloatArray:
+            """(g, sectors): ``t_j × t_{j+1}`` of plane fans (g, m, 2)."""
+            return fan[:, j, 0] * fan[:, nxt, 1] - fan[:, j, 1] * fan[:, nxt, 0]
+
+        start_area = areas(goal)
         start_length = np.linalg.norm(goal, axis=-1)
         posed = (start_area >= EQUAL_AREA_SINE * start_length[:, j] * start_length[:, nxt]).all(axis=1)
         posed &= (start_length > 0).all(axis=1)  # every sector turns forward: the projection is well posed
@@ -598,7 +602,7 @@ def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
         fan = goal.copy()
         for _ in range(EQUAL_AREA_STEPS):
             u, w = fan[..., 0], fan[..., 1]
-            area = u[:, j] * w[:, nxt] - w[:, j] * u[:, nxt]  # (g, sectors)
+            area = areas(fan)
             grad = np.zeros((len(vs), sectors, m, 2))  # ∂A_j / ∂(u, w)
             grad[:, j, j, 0], grad[:, j, j, 1] = w[:, nxt], -u[:, nxt]
             grad[:, j, nxt, 0], grad[:, j, nxt, 1] = -w[:, j], u[:, j]
@@ -610,8 +614,7 @@ def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
             rhs = np.einsum("gcz,gz->gc", jac, back) + gap
             multiplier = np.linalg.solve(normal_matrix, rhs[..., None])[..., 0]
             fan = fan + (back - np.einsum("gcz,gc->gz", jac, multiplier)).reshape(len(vs), m, 2)
-        u, w = fan[..., 0], fan[..., 1]
-        area = u[:, j] * w[:, nxt] - w[:, j] * u[:, nxt]
+        area = areas(fan)
         length = np.linalg.norm(fan, axis=-1)
         turn = area / np.maximum(length[:, j] * length[:, nxt], 1e-300)
         good = ((np.abs(area - area.mean(axis=1, keepdims=True)) <= EQUAL_AREA_RTOL * np.abs(area).mean(axis=1, keepdims=True))
