@@ -36,6 +36,7 @@ import numpy as np
 from g1patch import shapes
 from g1patch.build import build_gregory_network
 from g1patch.continuity import check, folded_patches
+from g1patch.memory import tune_for_large_arrays
 
 T = TypeVar("T")
 
@@ -92,7 +93,7 @@ def main() -> None:
     parser.add_argument("--no-compile", action="store_true", help="skip the empty-cache compile subprocess")
     args = parser.parse_args()
     if not args.huge_pages:
-        np._core.multiarray._set_madvise_hugepage(False)  # as the command line does (cli._without_huge_page_advice)
+        tune_for_large_arrays()  # as the command line does
 
     if not args.no_compile:
         seconds = compile_seconds()

@@ -16,22 +16,23 @@ ratios hold):
 * "% bound" — against the memory-bandwidth bound: ``np.copyto`` on a 1 GiB array, in GB/s (bytes
   copied), divided by the bytes written per point (24 for positions, 48 for positions + normals).
 
-Rows "fresh output" call the public PatchSet methods, which allocate their results with ``np.empty``
-(first touch of new pages included, as a user sees it); rows "out=" run the same public methods into
-preallocated arrays, the situation the copyto bound describes. At this size the methods run the
-compiled kernels (``g1patch._grid.KERNEL_POINTS``); the rows "NumPy path" run the same functions with
-``compiled=False``, the NumPy code the kernels replace above that size (and their reference).
+Rows "fresh output" call the public PatchSet methods, which allocate their results with ``np.empty``;
+rows "out=" run the same public methods into preallocated arrays, the situation the copyto bound
+describes. At this size the methods run the compiled kernels (``g1patch._grid.KERNEL_POINTS``); the
+rows "NumPy path" run the same functions with ``compiled=False``, the NumPy code the kernels replace
+above that size (and their reference).
 
-What a fresh row pays on top of the writes: the kernel's threads fault in each new 4 KiB page of the
-outputs as they first write it, and the kernel zeroes it (NumPy's huge-page advice is off, as the
-CLI runs it: ``NUMPY_MADVISE_HUGEPAGE=0``, DESIGN §6). The summary sets the fresh row beside the
-time ``np.empty`` + ``fill`` takes for the bytes of its outputs, on one thread and split over two,
-and the share of the bound a call could reach if first touch were all it did. Mapping the outputs
-on 2 MiB pages instead (``madvise(MADV_HUGEPAGE)`` on each output alone) was measured for issue 13
-and dropped: ~8 GB/s of first touch on memory freed moments before, but the VM these benchmarks run
-on hands free 2 MiB blocks back to the hypervisor within seconds (virtio-balloon free page
-reporting), re-backing one cost 2-12 ms, and the fresh row, which runs seconds after the last one,
-got 1.5-3× slower. Before timing, every tool's output is checked against the baseline with
+This process runs as the command line does (:func:`g1patch.memory.tune_for_large_arrays`: no
+huge-page advice, freed memory kept by glibc's malloc), so a fresh output reuses pages an earlier
+array freed. With glibc's defaults every fresh output is a new mapping whose 4 KiB pages the
+kernel faults in and zeroes on first write (0.2-2 GB/s on this VM): a child process
+(``--glibc-defaults``) times the fresh rows that way too, and the summary sets them beside the time
+``np.empty`` + ``fill`` takes for the same bytes of new pages, on one thread and split over two.
+Mapping the outputs on 2 MiB pages instead (``madvise(MADV_HUGEPAGE)`` on each output alone) was
+measured for issue 13 and dropped: ~8 GB/s of first touch on memory freed moments before, but the
+VM these benchmarks run on hands free 2 MiB blocks back to the hypervisor within seconds
+(virtio-balloon free page reporting), re-backing one cost 2-12 ms, and the fresh row, which runs
+seconds after the last one, got 1.5-3× slower. Before timing, every tool's output is checked against the baseline with
 ``np.allclose`` (tolerances in :func:`check`).
 
 Each figure is the median of ``--repeats`` rounds; within a round every tool (and the copyto) runs
@@ -47,9 +48,12 @@ Run:  .venv/bin/python benchmarks/bench_evaluate.py [--patches N] [--grid G] [--
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import statistics
+import subprocess
+import sys
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
@@ -58,6 +62,7 @@ import numpy as np
 
 from g1patch import _grid
 from g1patch.basis import basis_values
+from g1patch.memory import tune_for_large_arrays, without_huge_page_advice
 from g1patch.patches import PatchSet
 
 EPS = np.finfo(np.float64).eps
@@ -187,14 +192,47 @@ class Timings:
         return statistics.median(self.cpu[label])
 
 
+def glibc_defaults_fresh(n: int, g: int, repeats: int) -> dict[str, float]:
+    """Median seconds of the fresh-output calls and of ``np.empty`` + fill (1 GiB, one thread and
+    two) with glibc's allocator defaults, huge-page advice off: run in a child process
+    (``--glibc-defaults``) because this one keeps freed memory, as the command line does."""
+    command = [sys.executable, __file__, "--glibc-defaults", "--patches", str(n), "--grid", str(g), "--repeats", str(repeats)]
+    result = subprocess.run(command, capture_output=True, text=True, env={**os.environ, "NUMPY_MADVISE_HUGEPAGE": "0"})
+    if result.returncode:
+        raise SystemExit(f"the glibc-defaults child failed:\n{result.stderr[-2000:]}")
+    return json.loads(result.stdout.strip().splitlines()[-1])
+
+
+def _glibc_defaults_child(n: int, g: int, repeats: int) -> None:
+    without_huge_page_advice()
+    u = np.linspace(0.0, 1.0, g)
+    patches = PatchSet(make_patches(n), "bezier")
+    calls = {
+        "positions": lambda: patches.evaluate_grid(u),
+        "positions + normals": lambda: patches.evaluate_grid_with_normals(u),
+        "fresh fill": lambda: np.empty(2**27).fill(1.0),
+        "fresh fill, 2 threads": lambda: fill_in_halves(np.empty(2**27)),
+    }
+    timings = Timings()
+    for round_ in range(repeats + 1):
+        for label, call in calls.items():
+            timings.run(label, call, round_ > 0)
+    print(json.dumps({label: timings.median(label) for label in calls}))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--patches", type=int, default=10_000)
     parser.add_argument("--grid", type=int, default=32)
     parser.add_argument("--splipy-patches", type=int, default=250)
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--glibc-defaults", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     n, g, repeats = args.patches, args.grid, args.repeats
+    if args.glibc_defaults:
+        _glibc_defaults_child(n, g, repeats)
+        return
+    tune_for_large_arrays()  # as the command line does (g1patch.memory)
     points = n * g * g
     control = make_patches(n)
     u = np.linspace(0.0, 1.0, g)
@@ -248,17 +286,20 @@ def main() -> None:
                 if record or label.startswith("g1patch"):
                     timings.run(f"{kind}: {label}", call, record)
     rounds = time.perf_counter() - rounds_started
+    defaults = glibc_defaults_fresh(n, g, repeats)
 
     copy_gbs = source.nbytes / timings.median("copyto") / 1e9
     copy_cpu_gbs = source.nbytes / timings.cpu_median("copyto") / 1e9
     fresh_gbs = source.nbytes / timings.median("fresh fill") / 1e9
     fresh2_gbs = source.nbytes / timings.median("fresh fill, 2 threads") / 1e9
+    new_gbs = np.array([source.nbytes / defaults[label] / 1e9 for label in ("fresh fill", "fresh fill, 2 threads")])
     print(f"# bench_evaluate: {n:,} bicubic Bézier patches on a {g}×{g} grid = {points / 1e6:.2f} M points, float64 output")
     print(f"# {platform.machine()}, {os.cpu_count()} CPUs, numpy {np.__version__}; median of {repeats} rounds after a warm-up round,")
     print("# tools run round-robin within each round; wall-clock times (CPU time alongside: on a shared machine the gap is load)")
     print(
         f"# np.copyto 1 GiB: {copy_gbs:.1f} GB/s copied (median; best {source.nbytes / timings.best('copyto') / 1e9:.1f}); "
-        f"fresh pages, np.empty + fill: {fresh_gbs:.1f} GB/s, split over 2 threads {fresh2_gbs:.1f} GB/s"
+        f"np.empty + fill: {fresh_gbs:.1f} GB/s, split over 2 threads {fresh2_gbs:.1f} GB/s (freed memory kept, as the "
+        f"command line runs); with glibc's defaults (new pages): {new_gbs[0]:.1f} GB/s, over 2 threads {new_gbs[1]:.1f} GB/s"
     )
     print(f"# by CPU time instead of wall-clock: np.copyto {copy_cpu_gbs:.1f} GB/s; the column 'CPU % of bound' uses that")
     print(f"# load average (1, 5, 15 min) at the start {load_start[0]:.2f} {load_start[1]:.2f} {load_start[2]:.2f}, "
@@ -286,10 +327,12 @@ def main() -> None:
                 cpu_share = points / cpu / (copy_cpu_gbs * 1e9 / bytes_per_point)
                 fresh = ""
                 if "fresh" in label:
-                    pages = points * bytes_per_point / np.array([fresh_gbs, fresh2_gbs]) / 1e9
-                    fresh = (f"; first touch of the outputs' new 4 KiB pages alone takes {pages[0] * 1e3:.0f} ms on one thread, "
-                             f"{pages[1] * 1e3:.0f} ms on two (np.empty + fill): a fresh row reaches at most "
-                             f"{100 * points / pages.min() / bound:.0f} % of the bound here")
+                    pages = points * bytes_per_point / new_gbs / 1e9
+                    untuned = defaults[kind]
+                    fresh = (f" (freed memory kept, as the command line runs); with glibc's defaults {untuned * 1e3:.0f} ms, "
+                             f"{100 * points / untuned / bound:.0f} % of the bound: the first touch of the outputs' new 4 KiB "
+                             f"pages alone takes {pages[0] * 1e3:.0f} ms on one thread, {pages[1] * 1e3:.0f} ms on two "
+                             f"(np.empty + fill), at most {100 * points / pages.min() / bound:.0f} % of the bound")
                 summary.append(
                     f"# positions + normals, {label}: {100 * points / median / bound:.0f} % of the bandwidth bound "
                     f"({100 * cpu_share:.0f} % by CPU time), {splipy / median:.0f}× splipy "

@@ -37,6 +37,7 @@ import numpy as np
 from g1patch import shapes
 from g1patch.build import build_network
 from g1patch.io.network_file import FORMAT_VERSION, load_network, save_network
+from g1patch.memory import tune_for_large_arrays
 from g1patch.network import PatchNetwork
 
 
@@ -109,6 +110,7 @@ def main() -> None:
     parser.add_argument("--formats", default=",".join(FORMATS), help=f"comma-separated, of: {', '.join(FORMATS)}")
     parser.add_argument("--dir", type=Path, default=None, help="where to write the files (default: a temporary folder)")
     args = parser.parse_args()
+    tune_for_large_arrays()  # as the command line does (g1patch.memory)
     chosen = [name.strip() for name in args.formats.split(",") if name.strip()]
     unknown = [name for name in chosen if name not in FORMATS]
     if unknown:

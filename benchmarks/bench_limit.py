@@ -63,6 +63,7 @@ from g1patch import compare, shapes
 from g1patch.build import build_network
 from g1patch.continuity import check
 from g1patch.io.meshfile import read_mesh
+from g1patch.memory import tune_for_large_arrays
 from g1patch.mesh import QuadMesh
 from g1patch.network import PatchNetwork
 from g1patch.subdivision import refine
@@ -203,6 +204,7 @@ def main() -> None:
     parser.add_argument("--xv-levels", type=int, default=7, help="refinements of genus2 in table 2 (default 7: 819,200 quads)")
     parser.add_argument("--repeat", type=int, default=3, help="untraced builds per row of table 2, the best one reported (default 3)")
     args = parser.parse_args()
+    tune_for_large_arrays()  # as the command line does (g1patch.memory)
     logging.disable(logging.INFO)
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}\n")
     warm = refine(shapes.genus2(), 5)  # warm-up: numba loads (or compiles) its kernels once per process, above their thresholds too

@@ -29,6 +29,7 @@ import numpy as np
 
 from g1patch.build import build_network
 from g1patch.continuity import folded_patches
+from g1patch.memory import tune_for_large_arrays
 from g1patch.mesh import QuadMesh
 
 
@@ -42,7 +43,7 @@ def main() -> None:
     parser.add_argument("--sides", type=int, default=100_000)
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
-    np._core.multiarray._set_madvise_hugepage(False)  # as the command line does
+    tune_for_large_arrays()  # as the command line does
     points, face = wavy_polygon(args.sides), [list(range(args.sides))]
 
     network = build_network(QuadMesh.from_arrays(points, face))  # loads the kernels

@@ -43,10 +43,10 @@ import meshio
 import numpy as np
 
 from g1patch import shapes
-from g1patch.cli import _without_huge_page_advice
 from g1patch import mesh as meshmodule
 from g1patch.io import meshfile
 from g1patch.io.meshfile import read_mesh, write_quads
+from g1patch.memory import tune_for_large_arrays
 from g1patch.mesh import QuadMesh
 
 
@@ -114,8 +114,8 @@ def numpy_references() -> Iterator[None]:
 
 COLD = """
 import sys, time
-from g1patch.cli import _without_huge_page_advice
-_without_huge_page_advice()
+from g1patch.memory import tune_for_large_arrays
+tune_for_large_arrays()
 from g1patch.io.meshfile import read_mesh
 times = []
 for _ in range(2):
@@ -143,7 +143,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--dir", type=Path, default=None, help="where to write the files (default: a temporary directory)")
     args = parser.parse_args()
-    _without_huge_page_advice()  # as the command line does
+    tune_for_large_arrays()  # as the command line does
 
     mesh = shapes.large_torus(args.quads)
     print(f"python {platform.python_version()}, numpy {np.__version__}, meshio {meshio.__version__}, "

@@ -42,6 +42,8 @@ from typing import TypeVar
 
 import numpy as np
 
+from g1patch.memory import TUNED_ENVIRONMENT
+
 T = TypeVar("T")
 
 
@@ -66,8 +68,9 @@ def _warm_up() -> None:
     from g1patch import shapes
     from g1patch.build import build_network
     from g1patch.continuity import check
+    from g1patch.memory import tune_for_large_arrays
 
-    np._core.multiarray._set_madvise_hugepage(False)
+    tune_for_large_arrays()  # as the command line does
     small = shapes.large_torus(30_000)  # above continuity.KERNEL_PATCHES: the check's kernels too
     check(build_network(small))
 
@@ -121,7 +124,7 @@ def _in_subprocess(function: str, quads: int) -> dict[str, float]:
     code = (f"import json, sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); import bench_scaling as b; "
             f"print(json.dumps(b.{function}({quads})))")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                            env={**os.environ, "NUMPY_MADVISE_HUGEPAGE": "0"})
+                            env={**os.environ, **TUNED_ENVIRONMENT})
     if result.returncode:
         raise SystemExit(f"{function}({quads}) failed:\n{result.stderr[-2000:]}")
     return json.loads(result.stdout.strip().splitlines()[-1])

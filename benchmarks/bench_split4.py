@@ -41,6 +41,7 @@ from g1patch.build import build_gregory_network
 from g1patch.build import build_split4_network
 from g1patch.construct import split4
 from g1patch.continuity import check
+from g1patch.memory import tune_for_large_arrays
 from g1patch.mesh import QuadMesh, subdivide
 from g1patch.network import PatchNetwork
 
@@ -70,6 +71,7 @@ def main() -> None:
     parser.add_argument("--numpy", action="store_true", help="also time one split4 build on the NumPy path (kernels off)")
     parser.add_argument("--check", action="store_true", help="also run continuity.check on the split4 network")
     args = parser.parse_args()
+    tune_for_large_arrays()  # as the command line does (g1patch.memory)
 
     mesh = irregular_mesh(args.quads)
     topology = mesh.topology

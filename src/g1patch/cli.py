@@ -29,6 +29,7 @@ import numpy as np
 
 from . import __version__
 from .errors import FormatError, G1PatchError
+from .memory import tune_for_large_arrays
 
 EXIT_OK, EXIT_CHECK_FAILED, EXIT_ERROR = 0, 1, 2
 #: 128 + the signal's number, as a shell reports a process the signal ended
@@ -589,24 +590,9 @@ def _quiet_stdout() -> None:
         pass
 
 
-def _without_huge_page_advice() -> None:
-    """Stop NumPy asking the kernel for huge pages for its large arrays (``madvise(MADV_HUGEPAGE)``).
-
-    Where the kernel's ``transparent_hugepage/defrag`` is ``madvise`` (a common default) each such
-    request may compact memory first: first writes to fresh arrays then ran at ~80 MB/s instead
-    of ~1.7 GB/s (48 MB: 0.6 s against 0.03 s), and a 100,000-gon's build took 11.9 s instead
-    of 8.6 s. A build's arrays live briefly, so the TLB gain of huge pages never pays for that.
-    Only the command line does this: a library does not change its host process's NumPy."""
-    try:
-        from numpy._core.multiarray import _set_madvise_hugepage  # NumPy ≥ 2
-    except ImportError:  # pragma: no cover - NumPy 1.26
-        from numpy.core.multiarray import _set_madvise_hugepage
-    _set_madvise_hugepage(False)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code (see the module docstring)."""
-    _without_huge_page_advice()
+    tune_for_large_arrays()
     handlers = {"build": _build, "check": _check, "export": _export, "render": _render, "view": _view, "demo": _demo,
                 "batch": _batch}
     with _signal_handlers():
