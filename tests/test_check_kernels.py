@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from g1patch import shapes
+from g1patch import continuity, shapes
 from g1patch.api import as_network, read
 from g1patch.build import build_gregory_network, build_split4_network
 from g1patch.continuity import ContinuityReport, check, fairness, folded_patches
@@ -102,6 +102,18 @@ def test_shared_meshes_report_as_the_reference(shared_data: Path) -> None:
         networks = [source] if isinstance(source, PatchNetwork) else [build_gregory_network(source), build_split4_network(source)]
         for network in networks:
             assert_same_report(check(network, compiled=True), check(network, compiled=False))
+
+
+@pytest.mark.parametrize("name", ["torus", "noisy_sphere", "filleted_box"])
+def test_turn_maximum_of_many_tied_candidates_from_the_tensor_sums(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Above ``EXACT_TURN_CANDIDATES`` candidates (here: any) the turn maximum is the tensor
+    evaluation's, within ``TENSOR_TURN_ATOL`` of the reference's; everything else as before."""
+    network = build_gregory_network(MESHES[name]())
+    reference = check(network, compiled=False)
+    monkeypatch.setattr(continuity, "EXACT_TURN_CANDIDATES", 0)
+    compiled = check(network, compiled=True)
+    assert abs(compiled.turn_max_deg - reference.turn_max_deg) <= continuity.TENSOR_TURN_ATOL
+    assert_same_report(dataclasses.replace(compiled, turn_max_deg=reference.turn_max_deg), reference)
 
 
 def perturbed(network: PatchNetwork, scale: float, seed: int, moved: slice = slice(12, 20)) -> PatchNetwork:

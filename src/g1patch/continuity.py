@@ -857,11 +857,15 @@ class _GridMeasures:
         blocks' pairs turn less than the largest either way, and a patch that wins its block
         among the candidates is its block's winner whenever that block can hold the maximum. (A
         threshold per block, as before, recomputed nearly every patch of a regular mesh, whose
-        patches tie within rounding: 29 s of a 1 M-patch check.)"""
+        patches tie within rounding: 29 s of a 1 M-patch check.) Where more than
+        :data:`EXACT_TURN_CANDIDATES` patches are candidates along an axis, their tensor chords and
+        angles stand for that axis."""
         largest = np.sqrt(max(float(best[:, [0, 2]].max(initial=0.0)), 0.0))
         for axis in (0, 1):
             chord = np.sqrt(np.maximum(best[:, 2 * axis], 0.0))
             candidate = (best[:, 2 * axis] > -1.0) & (chord >= largest - _TURN_CANDIDATE_ATOL)
+            if np.count_nonzero(candidate) > EXACT_TURN_CANDIDATES:
+                continue
             patches = np.flatnonzero(candidate)
             chord2, angle = np.empty(len(patches)), np.empty(len(patches))
             if len(patches):
@@ -941,6 +945,18 @@ _TURN_CANDIDATE_ATOL = 1e-10
 """Patches whose largest chord between neighbouring unit normals (tensor evaluation) is within
 this distance of their block's largest have it recomputed as the reference computes it (see
 :meth:`_GridMeasures._exact_turns`): 10⁵ times the rounding of a unit normal (~1e-15)."""
+
+EXACT_TURN_CANDIDATES = 100_000
+"""At most this many candidates per axis are recomputed as the reference computes them (~4 µs
+each). Above it the patches tie within rounding by the hundred thousand, as every patch of a
+large regular torus does along its tube (4 M patches: 16 s recomputing, twice the rest of the
+check), and the turn maximum is the tensor evaluation's: the angle of a pair of normals that tie
+with the reference's within their rounding, so within :data:`TENSOR_TURN_ATOL` of its value."""
+
+TENSOR_TURN_ATOL = 2048 * float(np.finfo(np.float64).eps) * 180.0 / np.pi
+"""Degrees: how far a turn maximum taken from the tensor evaluation may be from the reference's,
+two normals each a few hundred ULP off the reference's (the tensor sums round differently:
+measured ≤ 454 ε on the shared meshes' edge angles), so their angle by 2 × 1024 ε radians."""
 
 _PAIRWISE_SECTOR = 64
 """Sectors of at most this many corners compare all pairs of corner normals; larger ones only the
