@@ -11,8 +11,8 @@ single cost of the split4 build (DESIGN §6). Two settings change that for the w
   is ``madvise`` (first writes ran ~20× slower);
 * :func:`keep_freed_memory`: glibc's malloc serves every block from its heap
   (``mallopt(M_MMAP_MAX, 0)``) and keeps freed blocks there for the next allocation
-  (``mallopt(M_TRIM_THRESHOLD, 2³¹ − 1)``), so a later array reuses pages that are already
-  mapped. The process keeps its peak footprint until it exits.
+  (``mallopt(M_TRIM_THRESHOLD, −1)``: never trimmed), so a later array reuses pages that are
+  already mapped. The process keeps its peak footprint until it exits.
 
 Both change the host process, so the library never applies them on its own: the command line
 calls :func:`tune_for_large_arrays` at start-up, the benchmarks call it to measure what the
@@ -32,8 +32,9 @@ _M_MMAP_THRESHOLD = -3
 _M_MMAP_MAX = -4
 #: glibc's defaults for them (mallopt(3)): 128 KiB, 128 KiB (raised dynamically up to 32 MiB), 65,536 maps
 _DEFAULTS = {_M_TRIM_THRESHOLD: 128 * 1024, _M_MMAP_THRESHOLD: 128 * 1024, _M_MMAP_MAX: 65_536}
-#: the largest trim threshold ``mallopt`` takes (an ``int``)
-_KEEP = 2**31 - 1
+#: the trim threshold that disables trimming (mallopt(3)); as an environment variable, any value above every heap
+_NEVER_TRIM = -1
+_NEVER_TRIM_ENVIRONMENT = str(2**62)
 
 
 def without_huge_page_advice() -> None:
@@ -69,7 +70,7 @@ def keep_freed_memory(keep: bool = True) -> bool:
     mallopt = _mallopt()
     if mallopt is None:
         return False
-    settings = {_M_MMAP_MAX: 0, _M_TRIM_THRESHOLD: _KEEP} if keep else _DEFAULTS
+    settings = {_M_MMAP_MAX: 0, _M_TRIM_THRESHOLD: _NEVER_TRIM} if keep else _DEFAULTS
     return all(mallopt(parameter, value) == 1 for parameter, value in settings.items())
 
 
@@ -81,4 +82,4 @@ def tune_for_large_arrays() -> None:
 
 
 #: the same settings as environment variables, for a child process (NumPy and glibc read them at start-up)
-TUNED_ENVIRONMENT = {"NUMPY_MADVISE_HUGEPAGE": "0", "MALLOC_MMAP_MAX_": "0", "MALLOC_TRIM_THRESHOLD_": str(_KEEP)}
+TUNED_ENVIRONMENT = {"NUMPY_MADVISE_HUGEPAGE": "0", "MALLOC_MMAP_MAX_": "0", "MALLOC_TRIM_THRESHOLD_": _NEVER_TRIM_ENVIRONMENT}
