@@ -293,3 +293,17 @@ def test_cad_exports_record_what_opencascade_measured(meshes: Path, tmp_path: Pa
     assert step["faces"] == 6 and step["max_g1_angle_deg"] <= 1e-9 and step["path"] == str(tmp_path / "cube.step")
     json.dumps(_json_ready(record), allow_nan=False)  # summary.json holds it as it is
     assert _json_ready({"a": float("nan"), "b": (1, float("inf"))}) == {"a": None, "b": [1, None]}
+
+
+def test_embedded_workers_are_set_up_like_the_command_line(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The embedded cluster's workers ignore SIGINT and keep freed memory (g1patch.memory)."""
+    pytest.importorskip("distributed", reason="dask.distributed is not installed: pip install 'g1patch[batch]'")
+    import signal
+
+    from g1patch import batch
+
+    calls: list[object] = []
+    monkeypatch.setattr(batch, "tune_for_large_arrays", lambda: calls.append("tuned"))
+    monkeypatch.setattr(signal, "signal", lambda *arguments: calls.append(arguments))
+    batch._embedded_worker_setup().setup(worker=None)
+    assert calls == [(signal.SIGINT, signal.SIG_IGN), "tuned"]

@@ -41,6 +41,7 @@ import numpy as np
 
 from .api import CAD_SUFFIXES, EXPORT_SUFFIXES, MESH_SUFFIXES, PathLike
 from .errors import G1PatchError, InputError, MissingDependencyError, check_choice
+from .memory import tune_for_large_arrays
 
 __all__ = ["FORMATS", "SUMMARY_NAME", "BuildOptions", "Job", "collect_inputs", "convert", "parse_formats", "plan",
            "run_batch", "summary_table"]
@@ -308,19 +309,22 @@ def _distributed() -> Any:
     return distributed
 
 
-def _ignoring_interrupts() -> Any:
-    """A worker plugin: the embedded cluster's worker processes ignore SIGINT. Ctrl-C reaches the
-    whole process group; the command handles it and closes the cluster (each worker would print
-    its own KeyboardInterrupt traceback)."""
+def _embedded_worker_setup() -> Any:
+    """A worker plugin for the embedded cluster's worker processes, set up like the command line's:
+    they ignore SIGINT (Ctrl-C reaches the whole process group; the command handles it and closes
+    the cluster, where each worker would print its own KeyboardInterrupt traceback) and keep freed
+    memory for their next job (:func:`g1patch.memory.tune_for_large_arrays`). The workers of a
+    cluster given by ``scheduler`` are someone else's processes and are left as they are."""
     from distributed.diagnostics.plugin import WorkerPlugin
 
-    class IgnoreInterrupts(WorkerPlugin):
-        name = "g1patch-ignore-interrupts"
+    class EmbeddedWorkerSetup(WorkerPlugin):
+        name = "g1patch-embedded-worker"
 
         def setup(self, worker: Any) -> None:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
+            tune_for_large_arrays()
 
-    return IgnoreInterrupts()
+    return EmbeddedWorkerSetup()
 
 
 def _client(stack: ExitStack, scheduler: str | None, workers: int | None, n_jobs: int) -> tuple[Any, str]:
@@ -333,7 +337,7 @@ def _client(stack: ExitStack, scheduler: str | None, workers: int | None, n_jobs
             silence_logs=logging.CRITICAL,  # a record says what failed; no shutdown races on stderr
         ))
         client = stack.enter_context(Client(cluster))
-        client.register_plugin(_ignoring_interrupts())
+        client.register_plugin(_embedded_worker_setup())
         return client, f"{count} local worker{'s' if count > 1 else ''}"
     try:
         client = stack.enter_context(Client(scheduler))
