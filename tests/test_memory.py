@@ -4,17 +4,15 @@ from __future__ import annotations
 
 import ctypes
 import os
-import platform
 import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from g1patch import cli, memory
 
-GLIBC = platform.system() == "Linux" and platform.libc_ver()[0] == "glibc"
+GLIBC = memory._glibc()
 
 
 class _MallInfo2(ctypes.Structure):
@@ -29,23 +27,29 @@ def _mapped_blocks() -> int:
     return int(function().hblks)
 
 
-@pytest.mark.skipif(not GLIBC or not hasattr(ctypes.CDLL(None), "mallinfo2"), reason="needs glibc ≥ 2.33 (mallinfo2)")
+NEEDS_MALLINFO2 = pytest.mark.skipif(not GLIBC or not hasattr(ctypes.CDLL(None), "mallinfo2"), reason="needs glibc ≥ 2.33 (mallinfo2)")
+
+
+def _in_child(code: str, environment: dict[str, str] | None = None) -> str:
+    """``code``'s standard output in a fresh interpreter (its allocator untouched by earlier tests), with
+    this folder importable and ``environment`` added."""
+    prologue = f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); import numpy as np; from test_memory import _mapped_blocks; "
+    return subprocess.run([sys.executable, "-c", prologue + code], capture_output=True, text=True, check=True,
+                          env={**os.environ, **(environment or {})}).stdout.strip()
+
+
+@NEEDS_MALLINFO2
 def test_kept_memory_serves_large_arrays_from_the_heap_and_defaults_map_them() -> None:
-    try:
-        assert memory.keep_freed_memory()
-        before = _mapped_blocks()
-        kept = np.ones(2**23)  # 64 MiB: above glibc's largest mmap threshold
-        assert _mapped_blocks() == before
-        assert memory.keep_freed_memory(False)
-        mapped = np.ones(2**23)
-        assert _mapped_blocks() == before + 1
-        del kept, mapped
-    finally:
-        memory.keep_freed_memory(False)
+    code = (
+        "from g1patch import memory; before = _mapped_blocks(); assert memory.keep_freed_memory(); "
+        "kept = np.ones(2**23); print(_mapped_blocks() - before); assert memory.keep_freed_memory(False); "
+        "mapped = np.ones(2**24); print(_mapped_blocks() - before)"  # 64 and 128 MiB: above every mmap threshold
+    )
+    assert _in_child(code).split() == ["0", "1"]
 
 
 def test_other_c_libraries_are_left_alone(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(platform, "libc_ver", lambda: ("musl", "1.2"))
+    monkeypatch.setattr(os, "confstr", lambda name: None)  # musl: no GNU libc version
     assert memory.keep_freed_memory() is False
 
 
@@ -57,16 +61,8 @@ def test_the_command_line_tunes_its_process(monkeypatch: pytest.MonkeyPatch) -> 
     assert calls == [True]
 
 
-@pytest.mark.skipif(not GLIBC or not hasattr(ctypes.CDLL(None), "mallinfo2"), reason="needs glibc ≥ 2.33 (mallinfo2)")
+@NEEDS_MALLINFO2
 def test_a_child_started_with_the_environment_keeps_large_arrays_in_the_heap() -> None:
-    code = (
-        "import ctypes, sys, numpy as np; sys.path.insert(0, sys.argv[1]); from test_memory import _mapped_blocks; "
-        "before = _mapped_blocks(); a = np.ones(2**23); print(_mapped_blocks() - before)"
-    )
-
-    def mapped_in_child(environment: dict[str, str]) -> str:
-        return subprocess.run([sys.executable, "-c", code, str(Path(__file__).parent)], capture_output=True, text=True,
-                              check=True, env={**os.environ, **environment}).stdout.strip()
-
-    assert mapped_in_child(memory.TUNED_ENVIRONMENT) == "0"
-    assert mapped_in_child({}) == "1"
+    code = "before = _mapped_blocks(); a = np.ones(2**23); print(_mapped_blocks() - before)"
+    assert _in_child(code, memory.TUNED_ENVIRONMENT) == "0"
+    assert _in_child(code) == "1"

@@ -22,7 +22,7 @@ command line does, and a program that embeds g1patch may call it too.
 from __future__ import annotations
 
 import ctypes
-import platform
+import os
 
 __all__ = ["TUNED_ENVIRONMENT", "keep_freed_memory", "tune_for_large_arrays", "without_huge_page_advice"]
 
@@ -51,9 +51,17 @@ def without_huge_page_advice() -> None:
     _set_madvise_hugepage(False)
 
 
+def _glibc() -> bool:
+    """Whether this process runs on glibc (``confstr(_CS_GNU_LIBC_VERSION)``: musl, macOS and Windows have none)."""
+    try:
+        return os.confstr("CS_GNU_LIBC_VERSION").startswith("glibc ")
+    except (AttributeError, ValueError, OSError):
+        return False
+
+
 def _mallopt() -> ctypes._CFuncPtr | None:
-    """glibc's ``mallopt``, or None on another C library (musl, macOS, Windows)."""
-    if platform.system() != "Linux" or platform.libc_ver()[0] != "glibc":
+    """glibc's ``mallopt``, or None on another C library."""
+    if not _glibc():
         return None
     try:
         function = ctypes.CDLL(None).mallopt
