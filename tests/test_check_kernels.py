@@ -1,7 +1,8 @@
 """The compiled check (numba kernels) against its NumPy reference (``compiled=False``).
 
 Counts, folds, their locations and the turn histogram must be equal; the turn maximum to
-:data:`TURN_RTOL` (the kernels recompute its pair as the reference sums it, but the reference's
+:data:`TURN_RTOL`, or to ``continuity.TENSOR_TURN_ATOL`` where more than
+``continuity.EXACT_TURN_CANDIDATES`` patches tie for it (the kernels recompute its pair as the reference sums it, but the reference's
 products go through BLAS, whose tail kernels round a row differently: one ULP on the coarse
 torus's largest turn once its tangents ran straight along the mesh lines). Angles and gaps may differ by the rounding
 of the tangents: the kernels sum the edge and corner samples as OpenBLAS's dgemm micro-kernel does
