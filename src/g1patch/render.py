@@ -18,7 +18,8 @@ when it has a long horizontal axis, framed to its silhouette):
   decades). Seams (edges sharp on purpose, ``network.seam``) are drawn in a colour of their own,
   outside the colour map, named in a legend; their angles do not enter the colour scale. Bands are
   drawn only where they can be told apart: a patch whose opposite edges lie less than
-  :data:`EDGE_SPACING_PX` pixels apart on the screen is filled instead with the colour of its
+  :data:`EDGE_SPACING_PX` pixels apart at the picture's scale (in 3-D: a patch seen edge-on at
+  the silhouette keeps its bands) is filled instead with the colour of its
   worst edge (a seam colour if one of its sides is a seam), so a network of a million patches
   becomes a map of its G1 angles instead of a moiré of bands. Without a report only the edge
   angles are measured (not check's folds and fairness), at 33 samples per edge (check's default)
@@ -509,8 +510,10 @@ def choose_resolution(n_patches: int, panels: int = 1, budget: int = TRIANGLE_BU
 class _Footprint:
     """How big a network's patches come out in its panel, from their corner quads: the panel's
     pixels per model unit, every patch's largest side in pixels (3-D chords, at most what a side
-    can cover on the screen), and the projected distance in pixels between its opposite edges (the
-    smaller of the two pairs; ~0 for a patch seen edge-on)."""
+    can cover on the screen), and the distance in pixels between its opposite edges (the smaller
+    of the two pairs) at the panel's scale in 3-D, without foreshortening: a patch seen edge-on at
+    the silhouette is as far across as the same patch facing the camera. (Projected, such patches
+    measured ~0 and a coarse sphere's rim filled with their colour: crescents, not edges.)"""
 
     pixels_per_unit: float
     side_px: NDArray[np.float64]
@@ -524,13 +527,11 @@ def _footprint(network: PatchNetwork, camera: _Camera, size: tuple[int, int], pa
     extent = np.maximum(flat.max(axis=0) - flat.min(axis=0), 1e-300) / FILL
     pixels_per_unit = float(zoom * min(size[0] / panels / extent[0], size[1] / extent[1]))
     side = np.linalg.norm(np.roll(corners, -1, axis=1) - corners, axis=-1)  # side k: corner k to k + 1
-    projected = np.linalg.norm(np.roll(screen, -1, axis=1) - screen, axis=-1)
-    x, y = screen[..., 0], screen[..., 1]
-    area = 0.5 * np.abs((x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y).sum(axis=1))
-    # the sides 0, 2 run along u, 1, 3 along v: the distance between sides 1 and 3 is the area
-    # over their mean length, and so on
-    across_u = area / np.maximum(0.5 * (projected[:, 1] + projected[:, 3]), 1e-300)
-    across_v = area / np.maximum(0.5 * (projected[:, 0] + projected[:, 2]), 1e-300)
+    # the quad's area, half the cross product of its diagonals; the sides 0, 2 run along u, 1, 3
+    # along v: the distance between sides 1 and 3 is the area over their mean length, and so on
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 2] - corners[:, 0], corners[:, 3] - corners[:, 1]), axis=-1)
+    across_u = area / np.maximum(0.5 * (side[:, 1] + side[:, 3]), 1e-300)
+    across_v = area / np.maximum(0.5 * (side[:, 0] + side[:, 2]), 1e-300)
     return _Footprint(pixels_per_unit, side.max(axis=1) * pixels_per_unit,
                       np.minimum(across_u, across_v) * pixels_per_unit)
 
