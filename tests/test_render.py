@@ -309,3 +309,20 @@ def test_a_failed_render_leaves_the_old_file_and_no_partial_one(
         render(path, corner_cube, resolution=5)
     assert path.read_bytes() == b"old picture"
     assert [p.name for p in tmp_path.iterdir()] == ["picture.png"]
+
+
+def test_deviation_map_keeps_the_edges_of_patches_seen_edge_on(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A coarse sphere's patches at the silhouette are seen edge-on but are large: their edges stay
+    lines, none is filled (their projected spacing is ~0; their spacing at the picture's scale is not)."""
+    from g1patch.build import build_split4_network
+
+    filled_counts: list[int] = []
+    original = render_module._sample
+
+    def spy(network, resolution, band, filled=None):  # type: ignore[no-untyped-def]
+        filled_counts.append(0 if filled is None else int(np.count_nonzero(filled)))
+        return original(network, resolution, band, filled)
+
+    monkeypatch.setattr(render_module, "_sample", spy)
+    render_module.render(tmp_path / "sphere.png", build_split4_network(shapes.cube()), mode="deviation", size=(600, 600))
+    assert filled_counts == [0]
