@@ -36,7 +36,7 @@ import numpy as np
 from g1patch import shapes
 from g1patch.build import build_gregory_network
 from g1patch.continuity import check, folded_patches
-from g1patch.memory import tune_for_large_arrays
+from g1patch.memory import keep_freed_memory, tune_for_large_arrays
 
 T = TypeVar("T")
 
@@ -92,7 +92,9 @@ def main() -> None:
     parser.add_argument("--huge-pages", action="store_true", help="keep NumPy's huge-page advice")
     parser.add_argument("--no-compile", action="store_true", help="skip the empty-cache compile subprocess")
     args = parser.parse_args()
-    if not args.huge_pages:
+    if args.huge_pages:
+        keep_freed_memory()  # as the command line does, but with NumPy's huge-page advice
+    else:
         tune_for_large_arrays()  # as the command line does
 
     if not args.no_compile:

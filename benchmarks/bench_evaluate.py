@@ -32,8 +32,8 @@ Mapping the outputs on 2 MiB pages instead (``madvise(MADV_HUGEPAGE)`` on each o
 measured for issue 13 and dropped: ~8 GB/s of first touch on memory freed moments before, but the
 VM these benchmarks run on hands free 2 MiB blocks back to the hypervisor within seconds
 (virtio-balloon free page reporting), re-backing one cost 2-12 ms, and the fresh row, which runs
-seconds after the last one, got 1.5-3× slower. Before timing, every tool's output is checked against the baseline with
-``np.allclose`` (tolerances in :func:`check`).
+seconds after the last one, got 1.5-3× slower. Before timing, every tool's output is checked
+against the baseline with ``np.allclose`` (tolerances in :func:`check`).
 
 Each figure is the median of ``--repeats`` rounds; within a round every tool (and the copyto) runs
 once, round-robin, so that load from other processes on a shared machine falls on all of them

@@ -16,8 +16,9 @@ every shared mesh with a reference (``../shared/data/reference/NAME.limit.npz``)
   shape of the faired cage (4 patches per face).
 
 All built with the Gregory assembly. Columns: the network's median / p99 / max normal turn over the
-reference's on grids of the same step (``compare.compare_fairness``), and the largest distance of
-the mesh's vertices from the surface's corner points (of the diagonal). Bars: p99 ≤ 1.5× (issues 9,
+reference's on grids of the same step (``compare.compare_fairness``), the largest distance of a mesh
+vertex from the point the surface passes through for it (of the diagonal; 0 by construction for
+the first two, the KKT solve's residual for the faired ones), and the folds. Bars: p99 ≤ 1.5× (issues 9,
 10). A construction whose median is already 1.5× the limit's can meet the p99 bar only by turning
 more evenly than the limit itself.
 

@@ -38,7 +38,7 @@ so that cost stays the same as the cage grows. The load average is printed with 
 times are only comparable within a run; the ratios hold). The numba kernels' one-time compile is
 not in the figures: warm-up builds of both sizes' paths precede the tables.
 
-Run:  NUMPY_MADVISE_HUGEPAGE=0 .venv/bin/python benchmarks/bench_limit.py [--quick] [--quads N] [--xv-levels L] [--repeat R]
+Run:  .venv/bin/python benchmarks/bench_limit.py [--quick] [--quads N] [--xv-levels L] [--repeat R]
 """
 
 from __future__ import annotations

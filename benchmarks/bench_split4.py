@@ -20,7 +20,7 @@ anything is timed. In the same run:
 Load averages (1, 5, 15 min) are printed before and after: the machine is shared, compare ratios.
 Issue 13's targets: split4 build ≤ 6 s and ≤ 2 KB per quad at 1 M quads.
 
-Run:  NUMPY_MADVISE_HUGEPAGE=0 .venv/bin/python benchmarks/bench_split4.py [--quads N] [--repeats R] [--numpy] [--check]
+Run:  .venv/bin/python benchmarks/bench_split4.py [--quads N] [--repeats R] [--numpy] [--check]
 """
 
 from __future__ import annotations
