@@ -15,8 +15,8 @@ the same run and process:
 
 Before anything is timed: the one-time compile cost of the check kernels from an empty cache (a
 subprocess with its own ``NUMBA_CACHE_DIR``), then one small check in process (loading the cached
-kernels). ``--huge-pages`` keeps NumPy's huge-page advice (off by default, as in the command line:
-on this VM its memory compaction made first writes to fresh arrays ~20× slower). The machine's
+kernels). The process runs as the command line does (:func:`g1patch.memory.tune_for_large_arrays`);
+``--no-huge-page-advice`` also turns NumPy's huge-page advice off, for comparison. The machine's
 load average is printed with the table: absolute times drift on a shared machine, ratios hold.
 
 Run:  .venv/bin/python benchmarks/bench_check.py [--quads 100000 1000000] [--repeats 3]
@@ -36,7 +36,7 @@ import numpy as np
 from g1patch import shapes
 from g1patch.build import build_gregory_network
 from g1patch.continuity import check, folded_patches
-from g1patch.memory import keep_freed_memory, tune_for_large_arrays
+from g1patch.memory import tune_for_large_arrays, without_huge_page_advice
 
 T = TypeVar("T")
 
@@ -89,20 +89,19 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--reference-max", type=int, default=100_000, help="largest network also checked by the NumPy reference")
     parser.add_argument("--no-reference", action="store_true")
-    parser.add_argument("--huge-pages", action="store_true", help="keep NumPy's huge-page advice")
+    parser.add_argument("--no-huge-page-advice", action="store_true", help="also turn NumPy's huge-page advice off")
     parser.add_argument("--no-compile", action="store_true", help="skip the empty-cache compile subprocess")
     args = parser.parse_args()
-    if args.huge_pages:
-        keep_freed_memory()  # as the command line does, but with NumPy's huge-page advice
-    else:
-        tune_for_large_arrays()  # as the command line does
+    tune_for_large_arrays()  # as the command line does
+    if args.no_huge_page_advice:
+        without_huge_page_advice()
 
     if not args.no_compile:
         seconds = compile_seconds()
         print(f"compile (empty cache, subprocess): {'failed' if seconds is None else f'{seconds:.1f} s'}")
     small = build_gregory_network(shapes.torus(6, 4))
     _, load, _ = timed(lambda: (check(small, compiled=True), folded_patches(small.patches, compiled=True)))
-    print(f"load cached kernels (in process): {load:.2f} s; huge-page advice {'on' if args.huge_pages else 'off'}")
+    print(f"load cached kernels (in process): {load:.2f} s; huge-page advice {'off' if args.no_huge_page_advice else 'as NumPy sets it'}")
 
     rows = []
     for quads in args.quads:

@@ -22,17 +22,16 @@ describes. At this size the methods run the compiled kernels (``g1patch._grid.KE
 rows "NumPy path" run the same functions with ``compiled=False``, the NumPy code the kernels replace
 above that size (and their reference).
 
-This process runs as the command line does (:func:`g1patch.memory.tune_for_large_arrays`: no
-huge-page advice, freed memory kept by glibc's malloc), so a fresh output reuses pages an earlier
-array freed. With glibc's defaults every fresh output is a new mapping whose 4 KiB pages the
-kernel faults in and zeroes on first write (0.2-2 GB/s on this VM): a child process
-(``--glibc-defaults``) times the fresh rows that way too, and the summary sets them beside the time
-``np.empty`` + ``fill`` takes for the same bytes of new pages, on one thread and split over two.
-Mapping the outputs on 2 MiB pages instead (``madvise(MADV_HUGEPAGE)`` on each output alone) was
-measured for issue 13 and dropped: ~8 GB/s of first touch on memory freed moments before, but the
-VM these benchmarks run on hands free 2 MiB blocks back to the hypervisor within seconds
-(virtio-balloon free page reporting), re-backing one cost 2-12 ms, and the fresh row, which runs
-seconds after the last one, got 1.5-3× slower. Before timing, every tool's output is checked
+This process runs as the command line does (:func:`g1patch.memory.tune_for_large_arrays`: freed
+memory kept by glibc's malloc, NumPy's huge-page advice as NumPy sets it), so a fresh output reuses
+pages an earlier array freed. With glibc's defaults every fresh output is a new mapping whose pages
+the kernel faults in and zeroes on first write (0.2-2 GB/s on this VM): a child process
+(``--glibc-defaults``, the same but for the allocator) times the fresh rows that way too, and the
+summary sets them beside the time ``np.empty`` + ``fill`` takes for the same bytes of new pages, on
+one thread and split over two. Those new pages do not stay fast however they are mapped: the VM
+these benchmarks run on hands free 2 MiB blocks back to the hypervisor within seconds
+(virtio-balloon free page reporting), and re-backing one cost 2-12 ms, which is why the command
+line keeps freed memory instead. Before timing, every tool's output is checked
 against the baseline with ``np.allclose`` (tolerances in :func:`check`).
 
 Each figure is the median of ``--repeats`` rounds; within a round every tool (and the copyto) runs
@@ -62,7 +61,7 @@ import numpy as np
 
 from g1patch import _grid
 from g1patch.basis import basis_values
-from g1patch.memory import tune_for_large_arrays, without_huge_page_advice
+from g1patch.memory import tune_for_large_arrays
 from g1patch.patches import PatchSet
 
 EPS = np.finfo(np.float64).eps
@@ -194,17 +193,16 @@ class Timings:
 
 def glibc_defaults_fresh(n: int, g: int, repeats: int) -> dict[str, float]:
     """Median seconds of the fresh-output calls and of ``np.empty`` + fill (1 GiB, one thread and
-    two) with glibc's allocator defaults, huge-page advice off: run in a child process
+    two) with glibc's allocator defaults: run in a child process
     (``--glibc-defaults``) because this one keeps freed memory, as the command line does."""
     command = [sys.executable, __file__, "--glibc-defaults", "--patches", str(n), "--grid", str(g), "--repeats", str(repeats)]
-    result = subprocess.run(command, capture_output=True, text=True, env={**os.environ, "NUMPY_MADVISE_HUGEPAGE": "0"})
+    result = subprocess.run(command, capture_output=True, text=True)
     if result.returncode:
         raise SystemExit(f"the glibc-defaults child failed:\n{result.stderr[-2000:]}")
     return json.loads(result.stdout.strip().splitlines()[-1])
 
 
 def _glibc_defaults_child(n: int, g: int, repeats: int) -> None:
-    without_huge_page_advice()
     u = np.linspace(0.0, 1.0, g)
     patches = PatchSet(make_patches(n), "bezier")
     calls = {

@@ -18,8 +18,8 @@ binary PLY (untimed), then one process reads it (``read_mesh``), builds, checks 
 network (``save_network``), timed stage by stage, with the process peak (``ru_maxrss``). Issue
 bar at 4M: ≤ 30 s and ≤ 8 GB.
 
-The workers run as the command line does (``g1patch.memory.tune_for_large_arrays``: no huge-page
-advice, freed memory kept for the next array).
+The workers run as the command line does (``g1patch.memory.tune_for_large_arrays``: freed memory
+kept for the next array, NumPy's huge-page advice as NumPy sets it).
 
 Run:  .venv/bin/python benchmarks/bench_scaling.py [--sizes 10000 100000 1000000 4000000] [--end-to-end N]
 """
