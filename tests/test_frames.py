@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from g1patch import shapes
 from g1patch.targets.local import fan_normals
 from g1patch.mesh import QuadMesh
-from g1patch.targets.frames import MAX_TILT, VertexFrames, vertex_frames
+from g1patch.targets.frames import MAX_TILT, SMALL_RING, VertexFrames, _face_ring_rows, vertex_frames
 
 AXES = np.array([1.0, 0.7, 0.5])
 
@@ -215,3 +216,16 @@ def test_compiled_kernel_matches_the_numpy_reference_around_a_hub() -> None:
     inner = ~mesh.topology.is_boundary_vertex
     difference = np.abs(fast.shape_operator[inner] - reference.shape_operator[inner]).max()
     assert difference <= 2.0**14 * np.finfo(np.float64).eps * np.abs(reference.shape_operator).max()
+
+
+@pytest.mark.parametrize("mesh", [split_polygon(SMALL_RING), split_polygon(SMALL_RING + 1), split_polygon(1000), shapes.torus(6, 4)],
+                         ids=["hub at the limit", "hub above it", "hub of 1000", "torus"])
+def test_face_ring_rows_are_scipys_rows_of_the_incidence_product(mesh: QuadMesh) -> None:
+    """The kernel's rows of ``I Iᵀ`` are scipy's, point for point and in its order, on both of its
+    paths: rings up to SMALL_RING faces (insertion sort, row scan), larger ones (sort, marks)."""
+    nv, nf = mesh.n_vertices, mesh.n_faces
+    incidence = sp.csr_matrix((np.ones(4 * nf, dtype=bool), (mesh.faces.ravel(), np.repeat(np.arange(nf), 4))), shape=(nv, nf))
+    product = (incidence @ incidence.T).tocsr()
+    offsets, points = _face_ring_rows(mesh)
+    np.testing.assert_array_equal(offsets, product.indptr)
+    np.testing.assert_array_equal(points, product.indices)

@@ -381,29 +381,41 @@ def _circle_fit(q: FloatArray, mask: BoolArray, edges: FloatArray, edge_mask: Bo
     return out
 
 
+#: faces around a vertex up to which :func:`_rows_kernel` sorts them by insertion and finds repeated
+#: points by scanning the row (a valence-4 row holds 9 points); beyond it, in time linear in the ring
+SMALL_RING = 16
+
+
 def _rows_kernel(faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray, offsets: IntArray,
                  points: IntArray, fill: bool, lo: int, hi: int) -> None:
     """The rows of ``I Iᵀ`` (I the vertex–face incidence, :func:`_face_rings`) in scipy's order: per
     vertex the corners of its faces, the faces in increasing order and each face's corners in
     increasing order, each point once, reversed (scipy's sparse product lists a row's columns in
     reverse order of first encounter). ``fill=False`` writes the row sizes to ``offsets[v + 1]``,
-    then ``fill=True`` the points, from ``offsets[v]``; vertices ``lo`` to ``hi`` (a point already
-    in the row is found by a scan of the row: ranges run side by side without shared state)."""
+    then ``fill=True`` the points, from ``offsets[v]``; vertices ``lo`` to ``hi``. A ring of at
+    most :data:`SMALL_RING` faces is sorted by insertion and a point already in its row found by a
+    scan of the row; a larger one (a hub of a split polygon: 100,000 faces took 40 s that way) is
+    sorted by ``ndarray.sort`` and its points marked per vertex in an array over all points, which
+    each range allocates for itself, so ranges run side by side without shared state."""
     most = 1
     for u in range(lo, hi):
         most = max(most, ring_offsets[u + 1] - ring_offsets[u])
     ring_faces = np.empty(most, dtype=np.int64)
     ring = np.empty(4 * most, dtype=np.int64)
     corners = np.empty(4, dtype=np.int64)
+    in_row = np.full(offsets.size - 1 if most > SMALL_RING else 0, -1, dtype=np.int64)  # the last vertex whose row holds a point
     for v in range(lo, hi):
         first, count = ring_offsets[v], ring_offsets[v + 1] - ring_offsets[v]
-        for r in range(count):  # insertion sort of the faces at v
+        small = count <= SMALL_RING
+        for r in range(count):  # the faces at v, sorted
             f = ring_halfedges[first + r] >> 2
             j = r
-            while j > 0 and ring_faces[j - 1] > f:
+            while small and j > 0 and ring_faces[j - 1] > f:
                 ring_faces[j] = ring_faces[j - 1]
                 j -= 1
             ring_faces[j] = f
+        if not small:
+            ring_faces[:count].sort()
         size = 0
         for r in range(count):
             for corner in range(4):
@@ -416,8 +428,12 @@ def _rows_kernel(faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArr
             for corner in range(4):
                 p = corners[corner]
                 known = False
-                for j in range(size):
-                    known = known or ring[j] == p
+                if small:
+                    for j in range(size):
+                        known = known or ring[j] == p
+                else:
+                    known = in_row[p] == v
+                    in_row[p] = v
                 if not known:
                     ring[size] = p
                     size += 1
