@@ -57,6 +57,19 @@ def test_default_build_is_exactly_g1(tmp_path: Path, cube_obj: Path) -> None:
     assert json.loads(result.stdout)["max_edge_angle_deg"] <= 1e-9
 
 
+def test_build_with_check_writes_the_same_file_and_prints_the_check(tmp_path: Path, cube_obj: Path) -> None:
+    """``build --check``: the file written while the check runs is the one ``build`` writes, and the
+    report printed after the build line is the one ``check`` prints for that file."""
+    alone, checked = tmp_path / "alone.npz", tmp_path / "checked.npz"
+    assert g1patch("build", cube_obj, "-o", alone, "-q").returncode == 0
+    result = g1patch("build", cube_obj, "-o", checked, "-q", "--check")
+    assert result.returncode == 0, result.stderr
+    assert checked.read_bytes() == alone.read_bytes()
+    built, *report = result.stdout.splitlines()
+    assert built.startswith("built 6 gregory patches")
+    assert report == g1patch("check", checked, "-q").stdout.splitlines()[1:]  # after the file's name
+
+
 def test_build_check_export(tmp_path: Path, cube_obj: Path) -> None:
     network = tmp_path / "cube.npz"
     result = g1patch("build", cube_obj, "-o", network, "--method", "corner", "--tangents", "chord", "--twist", "coons")

@@ -12,7 +12,7 @@ from g1patch.construct.corner import build_corner_network
 from g1patch.continuity import check
 from g1patch.errors import FormatError
 from g1patch.io.bpt import read_bpt, write_bpt
-from g1patch.io.network_file import load_network, save_network
+from g1patch.io.network_file import load_network, save_network, save_network_in_background
 from g1patch.patches import PatchSet
 
 MALFORMED_BPT = Path(__file__).parent / "data" / "malformed_bpt"
@@ -61,6 +61,29 @@ def test_network_round_trip_keeps_the_report(tmp_path: Path) -> None:
     for name in ("corner_ids", "edge_ids", "edge_reversed", "neighbor", "neighbor_edge", "vertices", "vertex_normals"):
         np.testing.assert_array_equal(getattr(loaded, name), getattr(network, name))
     assert check(loaded).to_dict() == check(network).to_dict()
+
+
+def test_saving_in_background_writes_the_same_file(tmp_path: Path) -> None:
+    network = build_corner_network(shapes.cube())
+    save_network(tmp_path / "now.npz", network)
+    saving = save_network_in_background(tmp_path / "later.npz", network)
+    assert saving.result() is None
+    assert (tmp_path / "later.npz").read_bytes() == (tmp_path / "now.npz").read_bytes()
+
+
+def test_saving_in_background_refuses_at_once_and_writes_nothing(tmp_path: Path) -> None:
+    network = build_corner_network(shapes.cube())
+    with pytest.raises(FormatError, match="must end in .npz"):
+        save_network_in_background(tmp_path / "n.obj", network)
+    assert not list(tmp_path.iterdir())
+
+
+def test_saving_in_background_raises_what_writing_raised_from_its_result(tmp_path: Path) -> None:
+    target = tmp_path / "missing" / "n.npz"
+    saving = save_network_in_background(target, build_corner_network(shapes.cube()))
+    with pytest.raises(FileNotFoundError) as raised:
+        saving.result()
+    assert raised.value.filename == str(target)
 
 
 def test_network_file_errors(tmp_path: Path) -> None:

@@ -42,6 +42,7 @@ CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
 _EXAMPLES = {
     "build": """examples:
   g1patch build mesh.obj -o surface.npz                  # exact G1 (Gregory), the default
+  g1patch build mesh.ply -o surface.npz --check          # and the continuity report, measured while the file is written
   g1patch build cube.obj -o cube.npz --method corner     # the paper's corner-G1 patches
   g1patch build mesh.obj -o cad.npz --method split4      # exact G1, polynomial: exact in STEP
   g1patch build cage.obj -o limit.npz --shape limit      # the Catmull–Clark limit of a control cage, exactly G1
@@ -119,6 +120,9 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("--sharp-angle", type=float, metavar="DEG",
                        help="keep edges whose faces' normals differ by more than DEG degrees sharp (creases), and "
                             "vertices with three such edges as corners (default: off; the file's own tags always count)")
+    build.add_argument("--check", action="store_true",
+                       help="also measure the network's continuity, as 'g1patch check' does, while the file is written, "
+                            "and print the report")
 
     check = command("check", "measure G0/G1 continuity of a network (.npz) or a Bézier patch file (.bpt)")
     check.add_argument("surface", type=Path, help="network (.npz) or patches (.bpt)")
@@ -269,7 +273,7 @@ def build_network(mesh: Any, method: str, *, shape: str = "interpolate", tangent
 
 def _build(args: argparse.Namespace) -> int:
     from .io.meshfile import read_mesh
-    from .io.network_file import save_network
+    from .io.network_file import save_network, save_network_in_background
     from .mesh import strict_meshes
 
     if args.output.suffix.lower() != ".npz":
@@ -282,13 +286,25 @@ def _build(args: argparse.Namespace) -> int:
         network = build_network(mesh, args.method, shape=args.shape, tangents=args.tangents, twist=args.twist,
                                 normals=args.normals, refine=args.refine)
         progress(2, 3)
-        save_network(args.output, network)
-        progress(3, 3)
+        if args.check:  # the file is written while the check runs
+            saving = save_network_in_background(args.output, network)
+        else:
+            save_network(args.output, network)
+            progress(3, 3)
+    report = None
+    if args.check:
+        from .continuity import check
+
+        with _progress("check", args.quiet) as progress:
+            report = check(network, progress=progress)
+        saving.result()
     if mesh.repairs:
         print(f"g1patch: {args.mesh}: {mesh.repair_note}", file=sys.stderr)
     fallback = int(network.provenance.get("fallback_vertices", "0"))
     note = f"; {fallback} vertices needed a fallback (degenerate or folded fans)" if fallback else ""
     print(f"built {network.n_patches} {args.method} patches from {args.mesh} -> {args.output}{note}")
+    if report is not None:
+        print(report.summary())
     return EXIT_OK
 
 

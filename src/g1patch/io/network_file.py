@@ -112,6 +112,7 @@ __all__ = [
     "PER_PATCH_BYTES",
     "MAX_HEADER_BYTES",
     "save_network",
+    "save_network_in_background",
     "load_network",
     "describe_file",
 ]
@@ -175,6 +176,28 @@ def save_network(path: str | os.PathLike[str], network: PatchNetwork) -> None:
 
     The arrays pass the checks :func:`load_network` makes first (a network whose coordinates exceed
     :data:`MAX_COORDINATE`, say, raises :class:`FormatError` and writes nothing)."""
+    _write_members(*_members(path, network))
+
+
+def save_network_in_background(path: str | os.PathLike[str], network: PatchNetwork) -> Future[None]:
+    """:func:`save_network` with the writing on a thread of its own: the checks run now (and raise
+    here, writing nothing), the file is written while the caller goes on, and the returned future's
+    ``result()`` waits for it and raises what writing raised. The arrays are written from the
+    network's own memory, so they must not change until then. What it is for: the file's bytes
+    reach the page cache at disk speed once it fills (4 M Gregory patches, 2.7 GB: 7 s alone), and
+    a check run meanwhile hides that (``g1patch build --check``; 4 M: 18–19 s one after the other,
+    11.5 s side by side). An interpreter exiting first still finishes the file: it waits for the
+    thread."""
+    members = _members(path, network)
+    writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="g1patch-save")
+    try:
+        return writer.submit(_write_members, *members)
+    finally:
+        writer.shutdown(wait=False)
+
+
+def _members(path: str | os.PathLike[str], network: PatchNetwork) -> tuple[Path, dict[str, NDArray[Any]]]:
+    """The target path and the file's members of ``network``, checked as :func:`load_network` checks them."""
     target = Path(path)
     if target.suffix.lower() != ".npz":
         raise FormatError(path, "a network file must end in .npz")
@@ -193,7 +216,10 @@ def save_network(path: str | os.PathLike[str], network: PatchNetwork) -> None:
     arrays = _Checker(target, "cannot store this network: ").check(arrays)
     provenance = {str(k): str(v) for k, v in network.provenance.items()}
     header = {"format": "g1patch-network", "version": FORMAT_VERSION, "provenance": provenance}
-    members = {"header": np.array(json.dumps(header)), **arrays}
+    return target, {"header": np.array(json.dumps(header)), **arrays}
+
+
+def _write_members(target: Path, members: dict[str, NDArray[Any]]) -> None:
     with atomic_path(target) as temporary:
         with open(temporary, "wb") as handle:
             _write_stored_zip(handle, members)
