@@ -1465,10 +1465,12 @@ def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDAr
     is counted in a register and added once), the thin-plate energy, and per axis (u, v) the first
     largest squared chord with the angle of its pair (``best (N, 4)``: chord², angle, chord², angle;
     chord² −1 without pairs; kept per grid column row by row, then the columns' largest, the lowest
-    ``G i + j`` among equals: the first in row-major order). Each inner loop stores to one array and indexes
-    it by loop variables only: LLVM vectorises such loops (several stores, or computed indices
-    whose sign it cannot prove, left the previous kernel scalar: 2× slower). Outputs are bitwise
-    those of the sample-major formulation (same operations in the same order per value)."""
+    ``G i + j`` among equals: the first in row-major order). Inner loops index one-dimensional views
+    taken before the loop by the loop variable only: LLVM vectorises such loops (computed indices
+    whose sign it cannot prove left the previous kernel scalar: 2× slower), also where they store
+    to several arrays, as the normals' pass does (normal, unit normal and usable in one pass: 8–14 %
+    less time than a pass per array). Outputs are bitwise those of the sample-major formulation
+    (same operations in the same order per value)."""
     patches, g, blends, bins = points.shape[0], bu.shape[0], fn.size, histogram.shape[1]
     last, gl, run = g - 1, g * lanes, (g - 1) * lanes
     groups = (patches + lanes - 1) // lanes
@@ -1481,7 +1483,7 @@ def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDAr
         normal, usable, offending = np.empty((3, g, gl)), np.empty((g, gl), dtype=np.bool_), np.empty((g, gl), dtype=np.bool_)
         unit = np.empty((2, 3, gl))
         unit_ahead, usable_ahead = unit[:, :, lanes:], usable[:, lanes:]
-        length, inverse, chord, together = np.empty(gl), np.empty(gl), np.empty(gl), np.empty(gl, dtype=np.bool_)
+        chord, together = np.empty(gl), np.empty(gl, dtype=np.bool_)
         chord2, together2 = chord.reshape((g, lanes)), together.reshape((g, lanes))
         narrow, code = np.empty(gl, dtype=np.float32), np.empty(gl, dtype=np.int64)
         code2, bits = code.reshape((g, lanes)), narrow.view(np.int32)
@@ -1519,33 +1521,40 @@ def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDAr
                         if blends:
                             s0, s1, s2, s3 = su[0, a, b], su[1, a, b], su[2, a, b], su[3, a, b]
                             t0, t1, t2, t3 = sv[0, a, b], sv[1, a, b], sv[2, a, b], sv[3, a, b]
+                            out_u, out_v = tu4[r, d, b], tv4[r, d, b]
+                            e0, e1, e2, e3 = blend[d, 0], blend[d, 1], blend[d, 2], blend[d, 3]
+                            ru0, ru1, ru2, ru3 = row_u[0], row_u[1], row_u[2], row_u[3]
+                            rv0, rv1, rv2, rv3 = row_v[0], row_v[1], row_v[2], row_v[3]
                             for lane in range(lanes):
-                                value = _fma(row_u[3, lane], y3, _fma(row_u[2, lane], y2, _fma(row_u[1, lane], y1, row_u[0, lane] * y0)))
-                                tu4[r, d, b, lane] = _fma(s3, blend[d, 3, lane], _fma(s2, blend[d, 2, lane], _fma(s1, blend[d, 1, lane], _fma(s0, blend[d, 0, lane], value))))
+                                value = _fma(ru3[lane], y3, _fma(ru2[lane], y2, _fma(ru1[lane], y1, ru0[lane] * y0)))
+                                out_u[lane] = _fma(s3, e3[lane], _fma(s2, e2[lane], _fma(s1, e1[lane], _fma(s0, e0[lane], value))))
                             for lane in range(lanes):
-                                value = _fma(row_v[3, lane], z3, _fma(row_v[2, lane], z2, _fma(row_v[1, lane], z1, row_v[0, lane] * z0)))
-                                tv4[r, d, b, lane] = _fma(t3, blend[d, 3, lane], _fma(t2, blend[d, 2, lane], _fma(t1, blend[d, 1, lane], _fma(t0, blend[d, 0, lane], value))))
+                                value = _fma(rv3[lane], z3, _fma(rv2[lane], z2, _fma(rv1[lane], z1, rv0[lane] * z0)))
+                                out_v[lane] = _fma(t3, e3[lane], _fma(t2, e2[lane], _fma(t1, e1[lane], _fma(t0, e0[lane], value))))
                         else:
                             for lane in range(lanes):
                                 tu4[r, d, b, lane] = _fma(row_u[3, lane], y3, _fma(row_u[2, lane], y2, _fma(row_u[1, lane], y1, row_u[0, lane] * y0)))
                             for lane in range(lanes):
                                 tv4[r, d, b, lane] = _fma(row_v[3, lane], z3, _fma(row_v[2, lane], z2, _fma(row_v[1, lane], z1, row_v[0, lane] * z0)))
-                # normals, unit normals, usable (one store per loop, so that each loop vectorises)
+                # normals, unit normals, usable: one pass over the row's samples
+                n0, n1, n2 = normal[0, a], normal[1, a], normal[2, a]
+                u0, u1, u2 = unit[r, 0], unit[r, 1], unit[r, 2]
+                ua = usable[a]
+                a0, a1, a2 = tu[r, 0], tu[r, 1], tu[r, 2]
+                b0, b1, b2 = tv[r, 0], tv[r, 1], tv[r, 2]
                 for s in range(gl):
-                    normal[0, a, s] = tu[r, 1, s] * tv[r, 2, s] - tu[r, 2, s] * tv[r, 1, s]
-                for s in range(gl):
-                    normal[1, a, s] = tu[r, 2, s] * tv[r, 0, s] - tu[r, 0, s] * tv[r, 2, s]
-                for s in range(gl):
-                    normal[2, a, s] = tu[r, 0, s] * tv[r, 1, s] - tu[r, 1, s] * tv[r, 0, s]
-                for s in range(gl):
-                    length[s] = np.sqrt((normal[0, a, s] * normal[0, a, s] + normal[1, a, s] * normal[1, a, s]) + normal[2, a, s] * normal[2, a, s])
-                for s in range(gl):
-                    inverse[s] = 1.0 / max(length[s], _TINY)
-                for d in range(3):
-                    for s in range(gl):
-                        unit[r, d, s] = normal[d, a, s] * inverse[s]
-                for s in range(gl):
-                    usable[a, s] = length[s] > level
+                    x = a1[s] * b2[s] - a2[s] * b1[s]
+                    y = a2[s] * b0[s] - a0[s] * b2[s]
+                    z = a0[s] * b1[s] - a1[s] * b0[s]
+                    n0[s] = x
+                    n1[s] = y
+                    n2[s] = z
+                    size = np.sqrt((x * x + y * y) + z * z)
+                    inverse = 1.0 / max(size, _TINY)
+                    u0[s] = x * inverse
+                    u1[s] = y * inverse
+                    u2[s] = z * inverse
+                    ua[s] = size > level
                 offending[a, :] = False
                 if count == lanes:
                     for s in range(gl):
