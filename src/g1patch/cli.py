@@ -290,7 +290,7 @@ def _build(args: argparse.Namespace) -> int:
             saving = save_network_in_background(args.output, network)
         else:
             save_network(args.output, network)
-            progress(3, 3)
+        progress(3, 3)
     report = None
     if args.check:
         from .continuity import check
