@@ -488,7 +488,12 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
     rhs = np.empty((9, lanes))
     pivot = np.empty((9, lanes))
     c = np.empty((9, lanes))
-    unit = np.empty(9)  # L⁻¹ e_j of one lane
+    unit = np.empty((9, lanes))  # L⁻¹ e_j
+    inverse = np.empty(lanes)  # |L⁻¹ e_j|²
+    smallest = np.empty(lanes)
+    stopped = np.empty(lanes, dtype=np.bool_)
+    finishing = np.empty(lanes, dtype=np.bool_)
+    sweeps = ITERATIONS if tilt else 1
     frame_h = np.empty((3, 3, lanes))
     active = np.empty(lanes, dtype=np.bool_)
     axis_e1 = np.empty(3)
@@ -569,7 +574,7 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                 for d in range(3):
                     n[d, l] = start[v, d]
                 active[l] = True
-            for _ in range(ITERATIONS if tilt else 1):
+            for sweep in range(sweeps):
                 # per lane: the frame (_frame: e1 = unit(n × axis), axis the first coordinate axis
                 # least aligned with n), h̄ from the ring edges, the scaled axes
                 for l in range(nl):
@@ -698,47 +703,63 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                     for l in range(nl):
                         quotient = total[l] / diagonal[l]
                         into[l] = quotient if kept[l] > DROP_PIVOT else 0.0
+                # a lane's residual, determination and H are those of its last fit: after the last
+                # sweep, or once its slope is below STOP (earlier sweeps' would be overwritten)
+                finishing_any = False
+                for l in range(nl):
+                    stopped[l] = tilt and np.hypot(c[0, l], c[1, l]) < STOP
+                    finishing[l] = active[l] and (sweep == sweeps - 1 or stopped[l])
+                    finishing_any |= finishing[l]
+                if finishing_any:  # the determination of _solve, 1 / (G_jj |L⁻¹ e_j|²) over g, h, in every lane
+                    for l in range(nl):
+                        smallest[l] = np.inf
+                    for j in range(h + 3):
+                        diagonal, unit_j = lower[j, j], unit[j]
+                        for l in range(nl):
+                            unit_j[l] = 1.0 / diagonal[l]
+                        for l in range(nl):
+                            inverse[l] = unit_j[l] * unit_j[l]
+                        for r in range(j + 1, k):
+                            for l in range(nl):
+                                total[l] = 0.0
+                            for s in range(j, r):
+                                left, right = lower[r, s], unit[s]
+                                for l in range(nl):
+                                    total[l] += left[l] * right[l]
+                            diagonal, kept, unit_r = lower[r, r], pivot[r], unit[r]
+                            for l in range(nl):
+                                quotient = -total[l] / diagonal[l]
+                                unit_r[l] = quotient if kept[l] > DROP_PIVOT else 0.0
+                            for l in range(nl):
+                                inverse[l] += unit_r[l] * unit_r[l]
+                        diagonal, kept = gram[j, j], pivot[j]
+                        for l in range(nl):
+                            column = 1.0 / (diagonal[l] * inverse[l]) if kept[l] > DROP_PIVOT else 0.0
+                            smallest[l] = min(smallest[l], -np.inf if np.isnan(column) else column)
                 going = False
                 for l in range(nl):
                     if not active[l]:
                         continue
-                    i = low + order[first + l]
-                    explained = 0.0
-                    for r in range(k):
-                        explained += c[r, l] * rhs[r, l]
-                    unexplained = sum_wzz[l] - explained
-                    out_residual[i] = np.sqrt((0.0 if unexplained < 0.0 else unexplained) / sum_w[l])
-                    smallest = np.inf  # the determination of _solve: 1 / (G_jj |L⁻¹ e_j|²) over g, h
-                    for j in range(h + 3):
-                        column = 0.0
-                        if pivot[j, l] > DROP_PIVOT:
-                            unit[j] = 1.0 / lower[j, j, l]
-                            inverse = unit[j] * unit[j]
-                            for r in range(j + 1, k):
-                                unit[r] = 0.0
-                                if pivot[r, l] > DROP_PIVOT:
-                                    acc = 0.0
-                                    for s in range(j, r):
-                                        acc += lower[r, s, l] * unit[s]
-                                    unit[r] = -acc / lower[r, r, l]
-                                inverse += unit[r] * unit[r]
-                            column = 1.0 / (gram[j, j, l] * inverse)
-                        if np.isnan(column):
-                            column = -np.inf
-                        smallest = min(smallest, column)
-                    out_pivot[i] = smallest
-                    h11, h12, h22 = c[h, l] / hbar[l], c[h + 1, l] / hbar[l], c[h + 2, l] / hbar[l]
-                    for r in range(3):
-                        for s in range(3):
-                            frame_h[r, s, l] = (h11 * e1[r, l] * e1[s, l] + h12 * (e1[r, l] * e2[s, l] + e2[r, l] * e1[s, l])
-                                                + h22 * e2[r, l] * e2[s, l])
+                    if finishing[l]:
+                        i = low + order[first + l]
+                        explained = 0.0
+                        for r in range(k):
+                            explained += c[r, l] * rhs[r, l]
+                        unexplained = sum_wzz[l] - explained
+                        out_residual[i] = np.sqrt((0.0 if unexplained < 0.0 else unexplained) / sum_w[l])
+                        out_pivot[i] = smallest[l]
+                        h11, h12, h22 = c[h, l] / hbar[l], c[h + 1, l] / hbar[l], c[h + 2, l] / hbar[l]
+                        for r in range(3):
+                            for s in range(3):
+                                frame_h[r, s, l] = (h11 * e1[r, l] * e1[s, l] + h12 * (e1[r, l] * e2[s, l] + e2[r, l] * e1[s, l])
+                                                    + h22 * e2[r, l] * e2[s, l])
                     if tilt:
                         for d in range(3):
                             n[d, l] = n[d, l] - c[0, l] * e1[d, l] - c[1, l] * e2[d, l]
                         length = np.sqrt(n[0, l] * n[0, l] + n[1, l] * n[1, l] + n[2, l] * n[2, l])
                         for d in range(3):
                             n[d, l] /= length
-                        if np.hypot(c[0, l], c[1, l]) < STOP:
+                        if stopped[l]:
                             active[l] = False
                     going |= active[l]
                 if not going:
