@@ -228,13 +228,19 @@ def build_network(
     surface = mesh if shape != "limit" else mesh.with_vertices(frame.to_world(targets.positions))  # the points passed through
     provenance = _provenance(mesh, method, shape, tangents, targets, refine, repairs)
     if method == "split4":
-        from .construct.split4 import split4_network_from_targets, split4_patches
+        from .construct.split4 import Split4Parts, split4_network_from_parts, split4_patches, split4_provenance
 
-        parts = None
+        def assemble_split4(t: Targets) -> Split4Parts:
+            return split4_patches(t, t.positions, np.zeros(3), 1.0)
+
         if guard:  # the guard's best assembly is the network's: built once (interpolate's positions are the vertices)
-            parts, targets = _guarded(targets, lambda t: split4_patches(t, t.positions, np.zeros(3), 1.0), 4, lambda p: p[0])
-            provenance["fallback_vertices"] = str(targets.n_fallback)
-        network = split4_network_from_targets(surface, targets, frame, provenance, parts=parts)
+            parts, targets = _guarded(targets, assemble_split4, 4, lambda p: p[0])
+        else:
+            parts = assemble_split4(targets)
+        sub_patches, extra, extra_normals, stars = parts
+        provenance, normals = split4_provenance(provenance, targets, stars), targets.normals
+        del parts, stars, targets, local  # the network needs none of the rest: freed before its arrays are made (DESIGN §5)
+        network = split4_network_from_parts(surface, sub_patches, extra, extra_normals, normals, frame, provenance)
         # said once the network exists: a build that then fails says one thing, its error
         if mesh.features.sharp_edges.any():
             logger.warning("split4 does not keep sharp edges yet: the %d tagged sharp edges come out smooth "
@@ -249,15 +255,18 @@ def build_network(
         provenance["fallback_vertices"] = str(targets.n_fallback)
     else:
         patches = assemble(targets)
+    normals, seams = targets.normals, targets.seams
+    del targets, local  # the network needs none of the rest: freed before its arrays are made (DESIGN §5)
     framed: PatchSet | GregoryPatchSet = patches.with_frame(frame)  # type: ignore[attr-defined]
     holes = mesh.features.holes
     if holes.any():
-        return _without_holes(mesh.topology, framed, surface.vertices, targets, provenance, ~holes)
-    return network_from_mesh(mesh.topology, framed, surface.vertices, targets.normals, provenance, seam_edges=targets.seams)
+        return _without_holes(mesh.topology, framed, surface.vertices, normals, seams, provenance, ~holes)
+    return network_from_mesh(mesh.topology, framed, surface.vertices, normals, provenance, seam_edges=seams)
 
 
 def _without_holes(
-    topology: QuadTopology, patches: Patches, vertices: np.ndarray, targets: Targets, provenance: dict[str, str], keep: np.ndarray
+    topology: QuadTopology, patches: Patches, vertices: np.ndarray, normals: np.ndarray, seams: np.ndarray,
+    provenance: dict[str, str], keep: np.ndarray,
 ) -> PatchNetwork:
     """The network of the faces ``keep`` only: hole faces take part in every rule around them
     (OpenSubdiv's semantics), but get no patch, so their edges become open boundaries."""
@@ -270,10 +279,10 @@ def _without_holes(
     sub = QuadTopology.from_faces(index[faces], int(used.sum()))
     # an edge of the sub-mesh is a seam where its parent edge was
     parent = topology.halfedge_edge[(4 * np.flatnonzero(keep)[:, None] + np.arange(4)).ravel()]
-    seams = np.zeros(sub.n_edges, dtype=bool)
-    seams[sub.halfedge_edge] = targets.seams[parent]
+    sub_seams = np.zeros(sub.n_edges, dtype=bool)
+    sub_seams[sub.halfedge_edge] = seams[parent]
     provenance = {**provenance, "holes": str(int((~keep).sum()))}
-    return network_from_mesh(sub, patches.take(np.flatnonzero(keep)), vertices[used], targets.normals[used], provenance, seam_edges=seams)
+    return network_from_mesh(sub, patches.take(np.flatnonzero(keep)), vertices[used], normals[used], provenance, seam_edges=sub_seams)
 
 
 def _without_creases(mesh: QuadMesh) -> QuadMesh:

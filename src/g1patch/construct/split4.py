@@ -76,7 +76,7 @@ from ..targets import Targets, halfedge_slots
 
 __all__ = [
     "BSPLINE_KNOTS", "STAR_LENGTH_LIMIT", "FanWalk", "SplitStar", "bspline_nets", "fan_walk", "macro_nets",
-    "split4_network_from_targets", "split4_patches", "split4_star", "target_nets",
+    "split4_network_from_parts", "split4_network_from_targets", "split4_patches", "split4_provenance", "split4_star", "target_nets",
 ]
 
 #: knots of each quad's B-spline patch, in u and in v
@@ -909,16 +909,34 @@ def split4_network_from_targets(
     if parts is None:
         parts = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide)
     patches, extra, extra_normals, stars = parts
-    patches = patches.with_frame(frame)
-    provenance = dict(
+    return split4_network_from_parts(mesh, patches, extra, extra_normals, targets.normals, frame,
+                                     split4_provenance(provenance, targets, stars), seam_edges)
+
+
+def split4_provenance(provenance: dict[str, str], targets: Targets, stars: SplitStar) -> dict[str, str]:
+    """``provenance`` with split4's counts: ``fallback_vertices``, the vertices whose rule fell back
+    or whose fan was refitted to spread directions, and ``star_safeguard_vertices``, those whose
+    star the length safeguard scaled down."""
+    return dict(
         provenance,
         fallback_vertices=str(int((targets.fallback | stars.refitted).sum())),
         star_safeguard_vertices=str(int(stars.shrunk.sum())),
     )
+
+
+def split4_network_from_parts(
+    mesh: QuadMesh, patches: PatchSet, extra: FloatArray, extra_normals: FloatArray, normals: FloatArray, frame: Frame,
+    provenance: dict[str, str], seam_edges: ArrayLike | None = None,
+) -> PatchNetwork:
+    """:func:`split4_network_from_targets` of assembled parts (:func:`split4_patches`: ``patches``,
+    the midpoints and centres ``extra`` and their normals, in the local coordinates of ``frame``)
+    and the unit ``normals`` at the mesh vertices, without the targets: a caller that drops its
+    targets and stars first builds the network's arrays without them (the build's peak, DESIGN §5)."""
+    patches = patches.with_frame(frame)
     points = np.empty((mesh.topology.n_vertices + len(extra), 3))
     points[:mesh.topology.n_vertices] = mesh.vertices
     frame.to_world(extra, out=points[mesh.topology.n_vertices:])  # the midpoints and centres, without a copy
-    point_normals = np.concatenate([targets.normals, extra_normals])
+    point_normals = np.concatenate([normals, extra_normals])
     network = _split4_network(mesh.topology, patches, points, point_normals, provenance)
     if seam_edges is None:
         return network
