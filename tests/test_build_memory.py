@@ -1,4 +1,4 @@
-"""The build frees what the network does not keep before it makes the network's arrays (DESIGN §5).
+"""The build frees what the network does not keep before it makes the network's arrays (DESIGN §6).
 
 The targets (tangents, twists, corner normals: ~460 B a quad) and split4's stars were still held
 while the connectivity was built, which set both builds' peaks (Gregory 1044 -> 972 B a quad,

@@ -239,7 +239,7 @@ def build_network(
             parts = assemble_split4(targets)
         sub_patches, extra, extra_normals, stars = parts
         provenance, normals = split4_provenance(provenance, targets, stars), targets.normals
-        del parts, stars, targets, local  # the network needs none of the rest: freed before its arrays are made (DESIGN §5)
+        del parts, stars, targets, local  # the network needs none of the rest: freed before its arrays are made (DESIGN §6)
         network = split4_network_from_parts(surface, sub_patches, extra, extra_normals, normals, frame, provenance)
         # said once the network exists: a build that then fails says one thing, its error
         if mesh.features.sharp_edges.any():
@@ -256,7 +256,7 @@ def build_network(
     else:
         patches = assemble(targets)
     normals, seams = targets.normals, targets.seams
-    del targets, local  # the network needs none of the rest: freed before its arrays are made (DESIGN §5)
+    del targets, local  # the network needs none of the rest: freed before its arrays are made (DESIGN §6)
     framed: PatchSet | GregoryPatchSet = patches.with_frame(frame)  # type: ignore[attr-defined]
     holes = mesh.features.holes
     if holes.any():

@@ -931,7 +931,7 @@ def split4_network_from_parts(
     """:func:`split4_network_from_targets` of assembled parts (:func:`split4_patches`: ``patches``,
     the midpoints and centres ``extra`` and their normals, in the local coordinates of ``frame``)
     and the unit ``normals`` at the mesh vertices, without the targets: a caller that drops its
-    targets and stars first builds the network's arrays without them (the build's peak, DESIGN §5)."""
+    targets and stars first builds the network's arrays without them (the build's peak, DESIGN §6)."""
     patches = patches.with_frame(frame)
     points = np.empty((mesh.topology.n_vertices + len(extra), 3))
     points[:mesh.topology.n_vertices] = mesh.vertices
