@@ -192,11 +192,9 @@ class PatchNetwork:
 
     def shared_edges(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
         """Each interior edge once: ``(patch, edge)`` of its first side, arrays of shape (E,)."""
-        patch, edge = np.nonzero(self.neighbor >= 0)
-        first = (patch < self.neighbor[patch, edge]) | (
-            (patch == self.neighbor[patch, edge]) & (edge < self.neighbor_edge[patch, edge])
-        )
-        return patch[first], edge[first]
+        patch = np.arange(len(self.neighbor))[:, None]
+        first = (self.neighbor > patch) | ((self.neighbor == patch) & (self.neighbor_edge > np.arange(4)))
+        return np.nonzero(first)
 
     def open_edges(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
         """``(patch, edge)`` of every edge with no neighbour that is not collapsed."""
