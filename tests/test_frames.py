@@ -9,7 +9,9 @@ import scipy.sparse as sp
 from g1patch import shapes
 from g1patch.targets.local import fan_normals
 from g1patch.mesh import QuadMesh
-from g1patch.targets.frames import MAX_TILT, SMALL_RING, VertexFrames, _face_ring_rows, vertex_frames
+from g1patch.targets.frames import (
+    CUBIC_POINTS, MAX_TILT, SMALL_RING, VertexFrames, _face_ring_rows, _face_rings, _fit_all, _fit_compiled, _Ring, vertex_frames,
+)
 
 AXES = np.array([1.0, 0.7, 0.5])
 
@@ -229,3 +231,29 @@ def test_face_ring_rows_are_scipys_rows_of_the_incidence_product(mesh: QuadMesh)
     offsets, points = _face_ring_rows(mesh)
     np.testing.assert_array_equal(offsets, product.indptr)
     np.testing.assert_array_equal(points, product.indices)
+
+
+@pytest.mark.parametrize(("mesh", "drops"), [(split_polygon(16), False), (split_polygon(100), True), (shapes.grid(6, 5), True),
+                                              (shapes.strip(4), True)], ids=["hub of 16", "hub of 100", "flat grid", "strip"])
+def test_fit_kernel_residual_and_determination_match_the_numpy_reference(mesh: QuadMesh, drops: bool) -> None:
+    """The kernel computes a vertex's residual and determination (pivot) once, on its last refit,
+    as vectors across lanes; they are the reference's, which computes them on every refit: squared
+    residual within 2¹⁴ ε of the largest, pivot (a sin²) within 2¹⁴ ε, and the same dropped columns
+    (pivot 0 where a ring has fewer points than unknowns: the grid's corners, the strip, the
+    100-gon's rim)."""
+    start = fan_normals(mesh)
+    everything = np.arange(mesh.n_vertices)
+    fast = _fit_compiled(mesh, _face_ring_rows(mesh), everything, start, True)
+    residual, pivot = np.empty(mesh.n_vertices), np.empty(mesh.n_vertices)
+    one, two = _face_rings(mesh)
+    large = two.sizes >= CUBIC_POINTS
+    for hood, cubic in ((two, True), (one, False)):
+        vertices = np.flatnonzero(large == cubic)
+        fit = _fit_all(mesh, _Ring.of(mesh), hood, vertices, start, cubic, True)
+        residual[vertices], pivot[vertices] = fit.residual, fit.pivot
+    eps = 2.0**14 * np.finfo(np.float64).eps
+    np.testing.assert_array_equal(fast.pivot == 0.0, pivot == 0.0)
+    np.testing.assert_allclose(fast.pivot, pivot, rtol=0.0, atol=eps)  # a sin² in [0, 1]; near-dropped columns differ ~1e-15
+    # residual² is a difference of sums (exact fits: rounding either side of 0, clipped), so compared squared
+    np.testing.assert_allclose(fast.residual**2, residual**2, rtol=0.0, atol=eps * max(1.0, float((residual**2).max())))
+    assert (fast.pivot == 0.0).any() == drops
