@@ -39,8 +39,12 @@ SPOT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "spot_qu
 def command(*args: str | Path) -> tuple[float, float, str]:
     """Seconds, peak RSS (MB) and stdout of ``g1patch args`` in a subprocess."""
     start = time.perf_counter()
-    process = subprocess.Popen([sys.executable, "-m", "g1patch.cli", *map(str, args)], stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "g1patch.cli", *map(str, args)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     _, status, usage = os.wait4(process.pid, 0)
     seconds = time.perf_counter() - start
     stdout = process.stdout.read() if process.stdout else ""
@@ -57,11 +61,16 @@ def bench_export(folder: Path) -> None:
     network = folder / "spot_split4.npz"
     command("build", SPOT, "-o", network, "--method", "split4", "--quiet")
     print(f"{'Spot split4 → OBJ':<28}{'triangles':>11}{'MB':>8}{'s':>7}{'RSS MB':>8}")
-    for label, extra in (("default (budget)", ()), ("--resolution 17 (old)", ("--resolution", "17"))):
+    for label, extra in (
+        ("default (budget)", ()),
+        ("--resolution 17 (old)", ("--resolution", "17")),
+    ):
         output = folder / "spot.obj"
         seconds, rss, stdout = command("export", network, "-o", output, *extra)
         triangles = int(re.search(r"wrote (\d+) triangles", stdout).group(1))  # type: ignore[union-attr]
-        print(f"{label:<28}{triangles:>11,}{output.stat().st_size / 1e6:>8.0f}{seconds:>7.1f}{rss:>8.0f}")
+        print(
+            f"{label:<28}{triangles:>11,}{output.stat().st_size / 1e6:>8.0f}{seconds:>7.1f}{rss:>8.0f}"
+        )
         output.unlink()
 
 
@@ -87,18 +96,31 @@ def bench_check(valence: int) -> None:
     seconds = time.perf_counter() - start
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    print(f"\ncheck, one vertex of valence {valence:,}: peak {peak / 1e6:.0f} MB (bar: 500 MB), {seconds:.1f} s, "
-          f"max corner angle {report.max_corner_angle_deg:.4g}°")
+    print(
+        f"\ncheck, one vertex of valence {valence:,}: peak {peak / 1e6:.0f} MB (bar: 500 MB), {seconds:.1f} s, "
+        f"max corner angle {report.max_corner_angle_deg:.4g}°"
+    )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--patches", type=int, default=1_000_000, help="patches of the render workload (default 1,000,000)")
-    parser.add_argument("--valence", type=int, default=10_000, help="valence of the check workload (default 10,000)")
-    parser.add_argument("--skip", default="", help="comma-separated parts to skip: export, render, check")
+    parser.add_argument(
+        "--patches",
+        type=int,
+        default=1_000_000,
+        help="patches of the render workload (default 1,000,000)",
+    )
+    parser.add_argument(
+        "--valence", type=int, default=10_000, help="valence of the check workload (default 10,000)"
+    )
+    parser.add_argument(
+        "--skip", default="", help="comma-separated parts to skip: export, render, check"
+    )
     args = parser.parse_args()
     skip = set(filter(None, args.skip.split(",")))
-    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}\n")
+    print(
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}\n"
+    )
     with tempfile.TemporaryDirectory() as name:
         folder = Path(name)
         if "export" not in skip:

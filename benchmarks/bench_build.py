@@ -78,12 +78,25 @@ def baseline_build(commit: str, quads: int, repeats: int) -> float | None:
 
     root = Path(__file__).resolve().parents[1]
     with tempfile.TemporaryDirectory() as folder:
-        archive = subprocess.run(["git", "-C", str(root), "archive", commit, "src"], capture_output=True)
+        archive = subprocess.run(
+            ["git", "-C", str(root), "archive", commit, "src"], capture_output=True
+        )
         if archive.returncode:
             return None
         subprocess.run(["tar", "-x", "-C", folder], input=archive.stdout, check=True)
-        result = subprocess.run([sys.executable, "-c", _BASELINE_SCRIPT, str(Path(folder) / "src"), str(quads), str(repeats)],
-                                capture_output=True, text=True, env={**os.environ, **TUNED_ENVIRONMENT})  # as this process runs
+        result = subprocess.run(
+            [
+                sys.executable,
+                "-c",
+                _BASELINE_SCRIPT,
+                str(Path(folder) / "src"),
+                str(quads),
+                str(repeats),
+            ],
+            capture_output=True,
+            text=True,
+            env={**os.environ, **TUNED_ENVIRONMENT},
+        )  # as this process runs
         return float(result.stdout.strip()) if result.returncode == 0 else None
 
 
@@ -105,8 +118,12 @@ def compile_time() -> float | None:
     import tempfile
 
     with tempfile.TemporaryDirectory() as cache:
-        result = subprocess.run([sys.executable, "-c", _COMPILE_SCRIPT], capture_output=True, text=True,
-                                env={**os.environ, "NUMBA_CACHE_DIR": cache})
+        result = subprocess.run(
+            [sys.executable, "-c", _COMPILE_SCRIPT],
+            capture_output=True,
+            text=True,
+            env={**os.environ, "NUMBA_CACHE_DIR": cache},
+        )
         return float(result.stdout.strip()) if result.returncode == 0 else None
 
 
@@ -126,53 +143,91 @@ def traced(function: Callable[[], T]) -> tuple[float, int, T]:
         tracemalloc.stop()
 
 
-def measure_build(build: Callable[[QuadMesh], PatchNetwork], mesh: QuadMesh, repeats: int) -> dict[str, float]:
+def measure_build(
+    build: Callable[[QuadMesh], PatchNetwork], mesh: QuadMesh, repeats: int
+) -> dict[str, float]:
     first = timed(lambda: build(mesh))[0]
     times = [timed(lambda: build(mesh))[0] for _ in range(repeats)]
-    return {"first_s": first, "build_s": statistics.median(times), "build_peak": traced(lambda: build(mesh))[1]}
+    return {
+        "first_s": first,
+        "build_s": statistics.median(times),
+        "build_peak": traced(lambda: build(mesh))[1],
+    }
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quads", type=int, default=1_000_000, help="quads of the generated torus (default 1,000,000)")
-    parser.add_argument("--repeats", type=int, default=3, help="timed builds per construction, median reported (default 3)")
+    parser.add_argument(
+        "--quads",
+        type=int,
+        default=1_000_000,
+        help="quads of the generated torus (default 1,000,000)",
+    )
+    parser.add_argument(
+        "--repeats",
+        type=int,
+        default=3,
+        help="timed builds per construction, median reported (default 3)",
+    )
     parser.add_argument("--no-check", action="store_true", help="skip the checks")
-    parser.add_argument("--baseline", default=BASELINE, help=f"git commit of the previous release (default {BASELINE}); '' skips it")
+    parser.add_argument(
+        "--baseline",
+        default=BASELINE,
+        help=f"git commit of the previous release (default {BASELINE}); '' skips it",
+    )
     args = parser.parse_args()
     tune_for_large_arrays()  # as the command line does (g1patch.memory)
 
     cold = compile_time()
     warm, _ = timed(lambda: build_network(shapes.large_torus(1000)))
-    print(f"numba kernels: compile from an empty cache {cold if cold is None else round(cold, 1)} s (first build of a "
-          f"1000-quad torus in a fresh process); warm-up here (import + cached kernels) {warm:.1f} s, not timed below")
+    print(
+        f"numba kernels: compile from an empty cache {cold if cold is None else round(cold, 1)} s (first build of a "
+        f"1000-quad torus in a fresh process); warm-up here (import + cached kernels) {warm:.1f} s, not timed below"
+    )
     seconds, mesh = timed(lambda: shapes.large_torus(args.quads))
     quads = mesh.n_faces
-    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}")
-    print(f"mesh: large_torus({args.quads}) → {quads:,} quads, {mesh.n_vertices:,} vertices (made in {seconds:.1f} s)\n")
+    print(
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}"
+    )
+    print(
+        f"mesh: large_torus({args.quads}) → {quads:,} quads, {mesh.n_vertices:,} vertices (made in {seconds:.1f} s)\n"
+    )
 
     rows = {name: measure_build(build, mesh, args.repeats) for name, build in BUILDERS.items()}
     print(f"{'construction':<16}{'build s':>9}{'peak MB':>9}{'B/quad':>8}{'first s':>9}")
     for name, row in rows.items():
-        print(f"{name:<16}{row['build_s']:>9.2f}{row['build_peak'] / 1e6:>9.0f}{row['build_peak'] / quads:>8.0f}"
-              f"{row['first_s']:>9.2f}")
+        print(
+            f"{name:<16}{row['build_s']:>9.2f}{row['build_peak'] / 1e6:>9.0f}{row['build_peak'] / quads:>8.0f}"
+            f"{row['first_s']:>9.2f}"
+        )
     gregory, corner = rows["gregory"], rows["corner"]
-    print(f"{'gregory / corner':<16}{gregory['build_s'] / corner['build_s']:>9.2f}{gregory['build_peak'] / corner['build_peak']:>9.2f}")
+    print(
+        f"{'gregory / corner':<16}{gregory['build_s'] / corner['build_s']:>9.2f}{gregory['build_peak'] / corner['build_peak']:>9.2f}"
+    )
     legacy = rows["gregory·legacy"]
-    print(f"{'gregory / legacy':<16}{gregory['build_s'] / legacy['build_s']:>9.2f}{gregory['build_peak'] / legacy['build_peak']:>9.2f}")
+    print(
+        f"{'gregory / legacy':<16}{gregory['build_s'] / legacy['build_s']:>9.2f}{gregory['build_peak'] / legacy['build_peak']:>9.2f}"
+    )
     before = baseline_build(args.baseline, args.quads, args.repeats) if args.baseline else None
     if before is not None:
-        print(f"{'release ' + args.baseline:<16}{before:>9.2f}      (gregory / it: {gregory['build_s'] / before:.2f}, bar 1.5)")
+        print(
+            f"{'release ' + args.baseline:<16}{before:>9.2f}      (gregory / it: {gregory['build_s'] / before:.2f}, bar 1.5)"
+        )
     if not args.no_check:
         print()
         for name, build in BUILDERS.items():
             network = build(mesh)
             seconds, peak, report = traced(lambda: check(network))  # noqa: B023 (called at once)
-            print(f"check ({name}, traced): {seconds:.1f} s, peak {peak / 1e6:.0f} MB ({peak / quads:.0f} B/quad), "
-                  f"max G1 angle on edges {report.max_edge_angle_deg:.2e}°, at corners {report.max_corner_angle_deg:.2e}°, "
-                  f"max G0 gap {report.max_g0_gap:.1e}")
+            print(
+                f"check ({name}, traced): {seconds:.1f} s, peak {peak / 1e6:.0f} MB ({peak / quads:.0f} B/quad), "
+                f"max G1 angle on edges {report.max_edge_angle_deg:.2e}°, at corners {report.max_corner_angle_deg:.2e}°, "
+                f"max G0 gap {report.max_g0_gap:.1e}"
+            )
             del network
-    print(f"\ntargets: build ≤ 10 s (DESIGN bar 5 s), ≤ 1000 B/quad; process peak (ru_maxrss) "
-          f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3:.0f} MB")
+    print(
+        f"\ntargets: build ≤ 10 s (DESIGN bar 5 s), ≤ 1000 B/quad; process peak (ru_maxrss) "
+        f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3:.0f} MB"
+    )
 
 
 if __name__ == "__main__":

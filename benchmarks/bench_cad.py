@@ -36,7 +36,6 @@ import tempfile
 import time
 from pathlib import Path
 
-
 from g1patch.build import build_network
 from g1patch.construct.polynomial import split4_of_gregory
 from g1patch.io.cad import ExportResult, export_step, file_g1_angles
@@ -58,16 +57,29 @@ def file_angle(result: ExportResult, written: PatchNetwork) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=DATA)
-    parser.add_argument("--meshes", nargs="*", help="mesh names (file stems); default: every .obj in --data")
-    parser.add_argument("--out", type=Path, help="folder for the STEP files (default: a temporary one, removed)")
-    parser.add_argument("--repeats", type=int, default=3, help="runs of the default export per mesh for the stage breakdown (0: none)")
+    parser.add_argument(
+        "--meshes", nargs="*", help="mesh names (file stems); default: every .obj in --data"
+    )
+    parser.add_argument(
+        "--out", type=Path, help="folder for the STEP files (default: a temporary one, removed)"
+    )
+    parser.add_argument(
+        "--repeats",
+        type=int,
+        default=3,
+        help="runs of the default export per mesh for the stage breakdown (0: none)",
+    )
     args = parser.parse_args()
     paths = sorted(args.data.glob("*.obj"))
     if args.meshes:
         paths = [p for p in paths if p.stem in args.meshes]
-    print(f"# {platform.processor() or platform.machine()}, Python {platform.python_version()}; export_step of the default network")
-    header = (f"{'mesh':26} {'method':12} {'cells':>5} {'faces':>6} {'solid':>5} {'valid':>5} {'bytes':>11} {'time s':>7} {'dev/diag':>9} "
-              f"{'OCC max° (shape)':>17} {'OCC max° (file)':>16} {'bytes ratio':>11} {'time ratio':>10}")
+    print(
+        f"# {platform.processor() or platform.machine()}, Python {platform.python_version()}; export_step of the default network"
+    )
+    header = (
+        f"{'mesh':26} {'method':12} {'cells':>5} {'faces':>6} {'solid':>5} {'valid':>5} {'bytes':>11} {'time s':>7} {'dev/diag':>9} "
+        f"{'OCC max° (shape)':>17} {'OCC max° (file)':>16} {'bytes ratio':>11} {'time ratio':>10}"
+    )
     print(header)
     networks = {path.stem: build_network(read_mesh(path)) for path in paths}
     with tempfile.TemporaryDirectory() as scratch:
@@ -81,16 +93,25 @@ def main() -> None:
                 start = time.perf_counter()
                 result = export_step(folder / f"{path.stem}.{method}.step", network, method=method)
                 seconds = time.perf_counter() - start
-                written = split4_of_gregory(network, refine=result.refine) if result.method == "split4" else network
+                written = (
+                    split4_of_gregory(network, refine=result.refine)
+                    if result.method == "split4"
+                    else network
+                )
                 rows[method] = (result, seconds, file_angle(result, written))
             base = rows["fit"]
             for method, (result, seconds, angle) in rows.items():
-                ratios = (f"{result.file_bytes / base[0].file_bytes:11.3f} {seconds / base[1]:10.3f}"
-                          if method != "fit" else f"{'1':>11} {'1':>10}")
+                ratios = (
+                    f"{result.file_bytes / base[0].file_bytes:11.3f} {seconds / base[1]:10.3f}"
+                    if method != "fit"
+                    else f"{'1':>11} {'1':>10}"
+                )
                 shown = method if result.method in (method, "fit") else f"{method}>{result.method}"
-                print(f"{path.stem:26} {shown:12} {result.refine or '':>5} {result.faces:6d} {result.solid!s:>5} {result.valid!s:>5} "
-                      f"{result.file_bytes:11,d} {seconds:7.2f} "
-                      f"{result.deviation / diagonal:9.2e} {result.max_g1_angle_deg:17.2e} {angle:16.2e} {ratios}")
+                print(
+                    f"{path.stem:26} {shown:12} {result.refine or '':>5} {result.faces:6d} {result.solid!s:>5} {result.valid!s:>5} "
+                    f"{result.file_bytes:11,d} {seconds:7.2f} "
+                    f"{result.deviation / diagonal:9.2e} {result.max_g1_angle_deg:17.2e} {angle:16.2e} {ratios}"
+                )
         if args.repeats > 0:
             stage_breakdown(networks, folder, args.repeats)
 
@@ -112,7 +133,10 @@ def stage_breakdown(networks: dict[str, PatchNetwork], folder: Path, repeats: in
     names = list(dict.fromkeys(stage for *_, stages in rows for stage in stages))
     print(f"{'mesh':26} {'load':>5} {'total':>7} " + " ".join(f"{stage:>9}" for stage in names))
     for name, load, wall, stages in rows:
-        print(f"{name:26} {load:5.2f} {wall:7.2f} " + " ".join(f"{stages[s]:9.3f}" if s in stages else f"{'':>9}" for s in names))
+        print(
+            f"{name:26} {load:5.2f} {wall:7.2f} "
+            + " ".join(f"{stages[s]:9.3f}" if s in stages else f"{'':>9}" for s in names)
+        )
 
 
 if __name__ == "__main__":

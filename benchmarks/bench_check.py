@@ -78,8 +78,12 @@ def compile_seconds() -> float | None:
     import tempfile
 
     with tempfile.TemporaryDirectory() as cache:
-        result = subprocess.run([sys.executable, "-c", _COMPILE_SCRIPT], capture_output=True, text=True,
-                                env={**os.environ, "NUMBA_CACHE_DIR": cache})
+        result = subprocess.run(
+            [sys.executable, "-c", _COMPILE_SCRIPT],
+            capture_output=True,
+            text=True,
+            env={**os.environ, "NUMBA_CACHE_DIR": cache},
+        )
         return float(result.stdout.strip()) if result.returncode == 0 else None
 
 
@@ -87,10 +91,19 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quads", type=int, nargs="+", default=[100_000, 1_000_000])
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--reference-max", type=int, default=100_000, help="largest network also checked by the NumPy reference")
+    parser.add_argument(
+        "--reference-max",
+        type=int,
+        default=100_000,
+        help="largest network also checked by the NumPy reference",
+    )
     parser.add_argument("--no-reference", action="store_true")
-    parser.add_argument("--no-huge-page-advice", action="store_true", help="also turn NumPy's huge-page advice off")
-    parser.add_argument("--no-compile", action="store_true", help="skip the empty-cache compile subprocess")
+    parser.add_argument(
+        "--no-huge-page-advice", action="store_true", help="also turn NumPy's huge-page advice off"
+    )
+    parser.add_argument(
+        "--no-compile", action="store_true", help="skip the empty-cache compile subprocess"
+    )
     args = parser.parse_args()
     tune_for_large_arrays()  # as the command line does
     if args.no_huge_page_advice:
@@ -98,39 +111,71 @@ def main() -> None:
 
     if not args.no_compile:
         seconds = compile_seconds()
-        print(f"compile (empty cache, subprocess): {'failed' if seconds is None else f'{seconds:.1f} s'}")
+        print(
+            f"compile (empty cache, subprocess): {'failed' if seconds is None else f'{seconds:.1f} s'}"
+        )
     small = build_gregory_network(shapes.torus(6, 4))
-    _, load, _ = timed(lambda: (check(small, compiled=True), folded_patches(small.patches, compiled=True)))
-    print(f"load cached kernels (in process): {load:.2f} s; huge-page advice {'off' if args.no_huge_page_advice else 'as NumPy sets it'}")
+    _, load, _ = timed(
+        lambda: (check(small, compiled=True), folded_patches(small.patches, compiled=True))
+    )
+    print(
+        f"load cached kernels (in process): {load:.2f} s; huge-page advice {'off' if args.no_huge_page_advice else 'as NumPy sets it'}"
+    )
 
     rows = []
     for quads in args.quads:
         mesh = shapes.large_torus(quads)
         network = build_gregory_network(mesh)
         build = min(timed(lambda: build_gregory_network(mesh))[1] for _ in range(args.repeats))
-        report, check_wall, check_cpu = min((timed(lambda: check(network)) for _ in range(args.repeats)), key=lambda run: run[1])
+        report, check_wall, check_cpu = min(
+            (timed(lambda: check(network)) for _ in range(args.repeats)), key=lambda run: run[1]
+        )
         _, fold_wall, fold_cpu = timed(lambda: folded_patches(network.patches, 9))
-        row = {"quads": quads, "patches": len(network.patches), "build": build, "check": check_wall, "check_cpu": check_cpu,
-               "fold": fold_wall, "fold_cpu": fold_cpu, "g1": report.max_edge_angle_deg, "folds": report.folds}
+        row = {
+            "quads": quads,
+            "patches": len(network.patches),
+            "build": build,
+            "check": check_wall,
+            "check_cpu": check_cpu,
+            "fold": fold_wall,
+            "fold_cpu": fold_cpu,
+            "g1": report.max_edge_angle_deg,
+            "folds": report.folds,
+        }
         if not args.no_reference and quads <= args.reference_max:
             reference, row["check_ref"], _ = timed(lambda: check(network, compiled=False))
-            _, row["fold_ref"], _ = timed(lambda: folded_patches(network.patches, 9, compiled=False))
-            row["same"] = (reference.folds, reference.degenerate_normals, reference.turn_max_deg) == (report.folds, report.degenerate_normals, report.turn_max_deg)
-        row["build_mb"], row["check_mb"] = peak_mb(lambda: build_gregory_network(mesh)), peak_mb(lambda: check(network))
+            _, row["fold_ref"], _ = timed(
+                lambda: folded_patches(network.patches, 9, compiled=False)
+            )
+            row["same"] = (
+                reference.folds,
+                reference.degenerate_normals,
+                reference.turn_max_deg,
+            ) == (report.folds, report.degenerate_normals, report.turn_max_deg)
+        row["build_mb"], row["check_mb"] = (
+            peak_mb(lambda: build_gregory_network(mesh)),
+            peak_mb(lambda: check(network)),
+        )
         rows.append(row)
 
     print(f"\nload average {' '.join(f'{x:.2f}' for x in os.getloadavg())}, {os.cpu_count()} cores")
-    print(f"{'quads':>9} {'build s':>8} {'check s':>8} {'/build':>7} {'cpu/wall':>8} {'build MB':>9} {'check MB':>9}"
-          f" {'fold9 s':>8} {'µs/patch':>8} {'/build':>7}"
-          f" {'ref check':>10} {'/build':>7} {'ref fold9':>10} {'speed-up':>8} {'same':>5}")
+    print(
+        f"{'quads':>9} {'build s':>8} {'check s':>8} {'/build':>7} {'cpu/wall':>8} {'build MB':>9} {'check MB':>9}"
+        f" {'fold9 s':>8} {'µs/patch':>8} {'/build':>7}"
+        f" {'ref check':>10} {'/build':>7} {'ref fold9':>10} {'speed-up':>8} {'same':>5}"
+    )
     for row in rows:
         reference = ""
         if "check_ref" in row:
-            reference = (f" {row['check_ref']:10.2f} {row['check_ref'] / row['build']:7.2f} {row['fold_ref']:10.3f}"
-                         f" {row['fold_ref'] / row['fold']:8.1f} {row['same']!s:>5}")
-        print(f"{row['quads']:9d} {row['build']:8.2f} {row['check']:8.2f} {row['check'] / row['build']:7.2f}"
-              f" {row['check_cpu'] / row['check']:8.2f} {row['build_mb']:9.0f} {row['check_mb']:9.0f} {row['fold']:8.3f} {row['fold'] / row['patches'] * 1e6:8.2f}"
-              f" {row['fold'] / row['build']:7.3f}{reference}")
+            reference = (
+                f" {row['check_ref']:10.2f} {row['check_ref'] / row['build']:7.2f} {row['fold_ref']:10.3f}"
+                f" {row['fold_ref'] / row['fold']:8.1f} {row['same']!s:>5}"
+            )
+        print(
+            f"{row['quads']:9d} {row['build']:8.2f} {row['check']:8.2f} {row['check'] / row['build']:7.2f}"
+            f" {row['check_cpu'] / row['check']:8.2f} {row['build_mb']:9.0f} {row['check_mb']:9.0f} {row['fold']:8.3f} {row['fold'] / row['patches'] * 1e6:8.2f}"
+            f" {row['fold'] / row['build']:7.3f}{reference}"
+        )
 
 
 if __name__ == "__main__":

@@ -136,7 +136,9 @@ def check(name: str, control: np.ndarray, u: np.ndarray, got: tuple, expected: t
     """
     atol = 16 * EPS * np.abs(control).max()
     if not np.allclose(got[0], expected[0], rtol=0, atol=atol):
-        raise SystemExit(f"{name}: positions differ from the baseline by {np.abs(got[0] - expected[0]).max():.3g} > {atol:.3g}")
+        raise SystemExit(
+            f"{name}: positions differ from the baseline by {np.abs(got[0] - expected[0]).max():.3g} > {atol:.3g}"
+        )
     if len(got) == 1:
         return
     b, db = basis_values("bezier", u), basis_values("bezier", u, 1)
@@ -144,14 +146,22 @@ def check(name: str, control: np.ndarray, u: np.ndarray, got: tuple, expected: t
     p_v = np.einsum("ai,nijd,bj->nabd", b, control, db, optimize=True)
     a_u = np.einsum("ai,nijd,bj->nabd", np.abs(db), np.abs(control), b, optimize=True)
     a_v = np.einsum("ai,nijd,bj->nabd", b, np.abs(control), np.abs(db), optimize=True)
-    s = np.stack([a_u[..., i] * a_v[..., k] + a_u[..., k] * a_v[..., i] for i, k in ((1, 2), (2, 0), (0, 1))], -1)
+    s = np.stack(
+        [
+            a_u[..., i] * a_v[..., k] + a_u[..., k] * a_v[..., i]
+            for i, k in ((1, 2), (2, 0), (0, 1))
+        ],
+        -1,
+    )
     length = np.linalg.norm(np.cross(p_u, p_v), axis=-1)
     if not np.all(length > 0):
         raise SystemExit(f"{name}: the benchmark patches should have no degenerate normal")
     tol = 96 * EPS * np.linalg.norm(s, axis=-1) / length + 4 * EPS
     if not np.allclose(got[1], expected[1], rtol=0, atol=tol[..., None]):
         worst = np.abs(got[1] - expected[1]).max()
-        raise SystemExit(f"{name}: normals differ from the baseline by up to {worst:.3g} (tolerance ≥ {tol.min():.3g})")
+        raise SystemExit(
+            f"{name}: normals differ from the baseline by up to {worst:.3g} (tolerance ≥ {tol.min():.3g})"
+        )
 
 
 # ---------------------------------------------------------------------------------- timing
@@ -195,7 +205,17 @@ def glibc_defaults_fresh(n: int, g: int, repeats: int) -> dict[str, float]:
     """Median seconds of the fresh-output calls and of ``np.empty`` + fill (1 GiB, one thread and
     two) with glibc's allocator defaults: run in a child process
     (``--glibc-defaults``) because this one keeps freed memory, as the command line does."""
-    command = [sys.executable, __file__, "--glibc-defaults", "--patches", str(n), "--grid", str(g), "--repeats", str(repeats)]
+    command = [
+        sys.executable,
+        __file__,
+        "--glibc-defaults",
+        "--patches",
+        str(n),
+        "--grid",
+        str(g),
+        "--repeats",
+        str(repeats),
+    ]
     result = subprocess.run(command, capture_output=True, text=True)
     if result.returncode:
         raise SystemExit(f"the glibc-defaults child failed:\n{result.stderr[-2000:]}")
@@ -245,10 +265,28 @@ def main() -> None:
     base_pn = numpy_positions_normals(control, u)
     check("numpy positions", control, u, (base_p,), base_pn)
     check("g1patch evaluate_grid", control, u, (patches.evaluate_grid(u),), base_pn)
-    check("g1patch evaluate_grid_with_normals", control, u, patches.evaluate_grid_with_normals(u), base_pn)
+    check(
+        "g1patch evaluate_grid_with_normals",
+        control,
+        u,
+        patches.evaluate_grid_with_normals(u),
+        base_pn,
+    )
     reused_p, reused_n = np.empty((n, g, g, 3)), np.empty((n, g, g, 3))
-    check("g1patch evaluate_grid_with_normals, out=", control, u, patches.evaluate_grid_with_normals(u, out=reused_p, normals_out=reused_n), base_pn)
-    check("splipy", control[:subset], u, splipy_positions_normals(surfaces, u), (base_p[:subset], base_pn[1][:subset]))
+    check(
+        "g1patch evaluate_grid_with_normals, out=",
+        control,
+        u,
+        patches.evaluate_grid_with_normals(u, out=reused_p, normals_out=reused_n),
+        base_pn,
+    )
+    check(
+        "splipy",
+        control[:subset],
+        u,
+        splipy_positions_normals(surfaces, u),
+        (base_p[:subset], base_pn[1][:subset]),
+    )
     del base_p, base_pn
 
     scale = n / subset
@@ -259,22 +297,55 @@ def main() -> None:
         "positions": [
             ("numpy einsum baseline", lambda: numpy_positions(control, u), 1.0, ""),
             ("g1patch evaluate_grid, fresh output", lambda: patches.evaluate_grid(u), 1.0, ""),
-            ("g1patch evaluate_grid, out=", lambda: patches.evaluate_grid(u, out=reused_p), 1.0, ""),
-            ("g1patch NumPy path, out=", lambda: _grid.contract(control, b, b, out=reused_p, compiled=False), 1.0, "compiled=False"),
+            (
+                "g1patch evaluate_grid, out=",
+                lambda: patches.evaluate_grid(u, out=reused_p),
+                1.0,
+                "",
+            ),
+            (
+                "g1patch NumPy path, out=",
+                lambda: _grid.contract(control, b, b, out=reused_p, compiled=False),
+                1.0,
+                "compiled=False",
+            ),
             ("splipy Surface per patch", lambda: splipy_positions(surfaces, u), scale, note),
         ],
         "positions + normals": [
             ("numpy einsum + cross baseline", lambda: numpy_positions_normals(control, u), 1.0, ""),
-            ("g1patch evaluate_grid_with_normals, fresh", lambda: patches.evaluate_grid_with_normals(u), 1.0, ""),
-            ("g1patch evaluate_grid_with_normals, out=", lambda: patches.evaluate_grid_with_normals(u, out=reused_p, normals_out=reused_n), 1.0, ""),
-            ("g1patch NumPy path, out=", lambda: _grid.positions_and_normals(control, "bezier", u, u, reused_p, reused_n, compiled=False),
-             1.0, "compiled=False"),
-            ("splipy Surface + 2 derivatives + cross", lambda: splipy_positions_normals(surfaces, u), scale, note),
+            (
+                "g1patch evaluate_grid_with_normals, fresh",
+                lambda: patches.evaluate_grid_with_normals(u),
+                1.0,
+                "",
+            ),
+            (
+                "g1patch evaluate_grid_with_normals, out=",
+                lambda: patches.evaluate_grid_with_normals(u, out=reused_p, normals_out=reused_n),
+                1.0,
+                "",
+            ),
+            (
+                "g1patch NumPy path, out=",
+                lambda: _grid.positions_and_normals(
+                    control, "bezier", u, u, reused_p, reused_n, compiled=False
+                ),
+                1.0,
+                "compiled=False",
+            ),
+            (
+                "splipy Surface + 2 derivatives + cross",
+                lambda: splipy_positions_normals(surfaces, u),
+                scale,
+                note,
+            ),
         ],
     }
     timings = Timings()
     rounds_started = time.perf_counter()
-    for round_ in range(repeats + 1):  # round 0 warms up the fast tools (the slow ones need no warm-up)
+    for round_ in range(
+        repeats + 1
+    ):  # round 0 warms up the fast tools (the slow ones need no warm-up)
         record = round_ > 0
         timings.run("copyto", lambda: np.copyto(target, source), record)
         timings.run("fresh fill", lambda: np.empty(2**27).fill(1.0), record)
@@ -290,18 +361,30 @@ def main() -> None:
     copy_cpu_gbs = source.nbytes / timings.cpu_median("copyto") / 1e9
     fresh_gbs = source.nbytes / timings.median("fresh fill") / 1e9
     fresh2_gbs = source.nbytes / timings.median("fresh fill, 2 threads") / 1e9
-    new_gbs = np.array([source.nbytes / defaults[label] / 1e9 for label in ("fresh fill", "fresh fill, 2 threads")])
-    print(f"# bench_evaluate: {n:,} bicubic Bézier patches on a {g}×{g} grid = {points / 1e6:.2f} M points, float64 output")
-    print(f"# {platform.machine()}, {os.cpu_count()} CPUs, numpy {np.__version__}; median of {repeats} rounds after a warm-up round,")
-    print("# tools run round-robin within each round; wall-clock times (CPU time alongside: on a shared machine the gap is load)")
+    new_gbs = np.array(
+        [source.nbytes / defaults[label] / 1e9 for label in ("fresh fill", "fresh fill, 2 threads")]
+    )
+    print(
+        f"# bench_evaluate: {n:,} bicubic Bézier patches on a {g}×{g} grid = {points / 1e6:.2f} M points, float64 output"
+    )
+    print(
+        f"# {platform.machine()}, {os.cpu_count()} CPUs, numpy {np.__version__}; median of {repeats} rounds after a warm-up round,"
+    )
+    print(
+        "# tools run round-robin within each round; wall-clock times (CPU time alongside: on a shared machine the gap is load)"
+    )
     print(
         f"# np.copyto 1 GiB: {copy_gbs:.1f} GB/s copied (median; best {source.nbytes / timings.best('copyto') / 1e9:.1f}); "
         f"np.empty + fill: {fresh_gbs:.1f} GB/s, split over 2 threads {fresh2_gbs:.1f} GB/s (freed memory kept, as the "
         f"command line runs); with glibc's defaults (new pages): {new_gbs[0]:.1f} GB/s, over 2 threads {new_gbs[1]:.1f} GB/s"
     )
-    print(f"# by CPU time instead of wall-clock: np.copyto {copy_cpu_gbs:.1f} GB/s; the column 'CPU % of bound' uses that")
-    print(f"# load average (1, 5, 15 min) at the start {load_start[0]:.2f} {load_start[1]:.2f} {load_start[2]:.2f}, "
-          f"at the end {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
+    print(
+        f"# by CPU time instead of wall-clock: np.copyto {copy_cpu_gbs:.1f} GB/s; the column 'CPU % of bound' uses that"
+    )
+    print(
+        f"# load average (1, 5, 15 min) at the start {load_start[0]:.2f} {load_start[1]:.2f} {load_start[2]:.2f}, "
+        f"at the end {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}"
+    )
     summary = []
     for kind, bytes_per_point in (("positions", 24), ("positions + normals", 48)):
         bound = copy_gbs * 1e9 / bytes_per_point
@@ -309,13 +392,21 @@ def main() -> None:
         baseline = timings.median(f"{kind}: {entries[0][0]}")
         splipy = timings.median(f"{kind}: {entries[-1][0]}") * entries[-1][2]
         print()
-        print(f"## {kind}: {bytes_per_point} B/point written; bandwidth bound {bound / 1e6:.0f} M points/s")
+        print(
+            f"## {kind}: {bytes_per_point} B/point written; bandwidth bound {bound / 1e6:.0f} M points/s"
+        )
         print()
-        print("| tool | median time | CPU time | M points/s (median / best) | × numpy | × splipy | % of bound | CPU % of bound | note |")
+        print(
+            "| tool | median time | CPU time | M points/s (median / best) | × numpy | × splipy | % of bound | CPU % of bound | note |"
+        )
         print("|---|---:|---:|---:|---:|---:|---:|---:|---|")
         for label, _, factor, note in entries:
             key = f"{kind}: {label}"
-            median, best, cpu = timings.median(key) * factor, timings.best(key) * factor, timings.cpu_median(key) * factor
+            median, best, cpu = (
+                timings.median(key) * factor,
+                timings.best(key) * factor,
+                timings.cpu_median(key) * factor,
+            )
             print(
                 f"| {label} | {median * 1e3:.1f} ms | {cpu * 1e3:.1f} ms | {points / median / 1e6:.1f} / {points / best / 1e6:.1f} "
                 f"| {baseline / median:.2f} | {splipy / median:.1f} | {100 * points / median / bound:.1f} % "
@@ -327,10 +418,12 @@ def main() -> None:
                 if "fresh" in label:
                     pages = points * bytes_per_point / new_gbs / 1e9
                     untuned = defaults[kind]
-                    fresh = (f" (freed memory kept, as the command line runs); with glibc's defaults {untuned * 1e3:.0f} ms, "
-                             f"{100 * points / untuned / bound:.0f} % of the bound: the first touch of the outputs' new 4 KiB "
-                             f"pages alone takes {pages[0] * 1e3:.0f} ms on one thread, {pages[1] * 1e3:.0f} ms on two "
-                             f"(np.empty + fill), at most {100 * points / pages.min() / bound:.0f} % of the bound")
+                    fresh = (
+                        f" (freed memory kept, as the command line runs); with glibc's defaults {untuned * 1e3:.0f} ms, "
+                        f"{100 * points / untuned / bound:.0f} % of the bound: the first touch of the outputs' new 4 KiB "
+                        f"pages alone takes {pages[0] * 1e3:.0f} ms on one thread, {pages[1] * 1e3:.0f} ms on two "
+                        f"(np.empty + fill), at most {100 * points / pages.min() / bound:.0f} % of the bound"
+                    )
                 summary.append(
                     f"# positions + normals, {label}: {100 * points / median / bound:.0f} % of the bandwidth bound "
                     f"({100 * cpu_share:.0f} % by CPU time), {splipy / median:.0f}× splipy "
@@ -338,7 +431,9 @@ def main() -> None:
                 )
     print()
     print("\n".join(summary))
-    print(f"# total benchmark time {time.perf_counter() - started:.0f} s (timing rounds {rounds:.0f} s)")
+    print(
+        f"# total benchmark time {time.perf_counter() - started:.0f} s (timing rounds {rounds:.0f} s)"
+    )
 
 
 if __name__ == "__main__":

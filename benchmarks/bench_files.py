@@ -45,12 +45,30 @@ def members(network: PatchNetwork) -> dict[str, np.ndarray]:
     """The members save_network writes, for the other writers."""
     patches = network.patches
     arrays: dict[str, Any] = {
-        "header": np.array(json.dumps({"format": "g1patch-network", "version": FORMAT_VERSION, "provenance": network.provenance})),
+        "header": np.array(
+            json.dumps(
+                {
+                    "format": "g1patch-network",
+                    "version": FORMAT_VERSION,
+                    "provenance": network.provenance,
+                }
+            )
+        ),
         "patch_kind": np.array(getattr(patches, "kind", "bicubic")),
         **patches.to_arrays(),  # type: ignore[attr-defined]
     }
-    for name in ("corner_ids", "edge_ids", "edge_reversed", "neighbor", "neighbor_edge", "same_direction",
-                 "edge_collapsed", "seam", "vertices", "vertex_normals"):
+    for name in (
+        "corner_ids",
+        "edge_ids",
+        "edge_reversed",
+        "neighbor",
+        "neighbor_edge",
+        "same_direction",
+        "edge_collapsed",
+        "seam",
+        "vertices",
+        "vertex_normals",
+    ):
         if getattr(network, name) is not None:
             arrays[name] = getattr(network, name)
     return arrays
@@ -58,10 +76,13 @@ def members(network: PatchNetwork) -> dict[str, np.ndarray]:
 
 def zip_writer(compression: int, level: int | None) -> Callable[[Path, PatchNetwork], None]:
     def write(path: Path, network: PatchNetwork) -> None:
-        with zipfile.ZipFile(path, "w", compression=compression, compresslevel=level, allowZip64=True) as archive:
+        with zipfile.ZipFile(
+            path, "w", compression=compression, compresslevel=level, allowZip64=True
+        ) as archive:
             for name, array in members(network).items():
                 with archive.open(f"{name}.npy", "w", force_zip64=True) as stream:
                     np.lib.format.write_array(stream, np.asanyarray(array), allow_pickle=False)
+
     return write
 
 
@@ -69,6 +90,7 @@ def numpy_writer(compressed: bool) -> Callable[[Path, PatchNetwork], None]:
     def write(path: Path, network: PatchNetwork) -> None:
         with open(path, "wb") as handle:
             (np.savez_compressed if compressed else np.savez)(handle, **members(network))
+
     return write
 
 
@@ -96,19 +118,46 @@ def numpy_load(path: Path) -> dict[str, np.ndarray]:
 
 
 def same(a: PatchNetwork, b: PatchNetwork) -> bool:
-    arrays = ("corner_ids", "edge_ids", "edge_reversed", "neighbor", "neighbor_edge", "same_direction",
-              "edge_collapsed", "seam", "vertices", "vertex_normals")
-    return (np.array_equal(a.patches.points, b.patches.points)  # type: ignore[attr-defined]
-            and a.patches.frame == b.patches.frame  # type: ignore[attr-defined]
-            and all(np.array_equal(getattr(a, n), getattr(b, n)) for n in arrays) and a.provenance == b.provenance)
+    arrays = (
+        "corner_ids",
+        "edge_ids",
+        "edge_reversed",
+        "neighbor",
+        "neighbor_edge",
+        "same_direction",
+        "edge_collapsed",
+        "seam",
+        "vertices",
+        "vertex_normals",
+    )
+    return (
+        np.array_equal(a.patches.points, b.patches.points)  # type: ignore[attr-defined]
+        and a.patches.frame == b.patches.frame  # type: ignore[attr-defined]
+        and all(np.array_equal(getattr(a, n), getattr(b, n)) for n in arrays)
+        and a.provenance == b.provenance
+    )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quads", type=int, default=1_000_000, help="quads of the torus (default: 1,000,000)")
-    parser.add_argument("--repeats", type=int, default=3, help="runs per measurement, the best is reported (default: 3)")
-    parser.add_argument("--formats", default=",".join(FORMATS), help=f"comma-separated, of: {', '.join(FORMATS)}")
-    parser.add_argument("--dir", type=Path, default=None, help="where to write the files (default: a temporary folder)")
+    parser.add_argument(
+        "--quads", type=int, default=1_000_000, help="quads of the torus (default: 1,000,000)"
+    )
+    parser.add_argument(
+        "--repeats",
+        type=int,
+        default=3,
+        help="runs per measurement, the best is reported (default: 3)",
+    )
+    parser.add_argument(
+        "--formats", default=",".join(FORMATS), help=f"comma-separated, of: {', '.join(FORMATS)}"
+    )
+    parser.add_argument(
+        "--dir",
+        type=Path,
+        default=None,
+        help="where to write the files (default: a temporary folder)",
+    )
     args = parser.parse_args()
     tune_for_large_arrays()  # as the command line does (g1patch.memory)
     chosen = [name.strip() for name in args.formats.split(",") if name.strip()]
@@ -116,7 +165,9 @@ def main() -> None:
     if unknown:
         parser.error(f"unknown formats {unknown}; choose from {list(FORMATS)}")
 
-    print(f"python {platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} cores, {platform.machine()}")
+    print(
+        f"python {platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} cores, {platform.machine()}"
+    )
     start = time.perf_counter()
     mesh = shapes.large_torus(args.quads)
     mesh_seconds = time.perf_counter() - start
@@ -125,8 +176,10 @@ def main() -> None:
     build_seconds = time.perf_counter() - start
     del mesh
     raw = sum(np.asarray(a).nbytes for a in members(network).values())
-    print(f"mesh: {args.quads} quads in {mesh_seconds:.1f} s; build_network (gregory): {network.n_patches} patches in "
-          f"{build_seconds:.1f} s; {raw / 1e6:.1f} MB of arrays")
+    print(
+        f"mesh: {args.quads} quads in {mesh_seconds:.1f} s; build_network (gregory): {network.n_patches} patches in "
+        f"{build_seconds:.1f} s; {raw / 1e6:.1f} MB of arrays"
+    )
 
     folder = Path(tempfile.mkdtemp(prefix="bench_files.", dir=args.dir))
     rows = []
@@ -147,21 +200,30 @@ def main() -> None:
             loaded = None
             numpy_seconds, _ = best(lambda: numpy_load(path), args.repeats)
             rows.append((name, size, save_seconds, load_seconds, numpy_seconds))
-            print(f"  {name}: {size / 1e6:.1f} MB, save {save_seconds:.2f} s, load {load_seconds:.2f} s", flush=True)
+            print(
+                f"  {name}: {size / 1e6:.1f} MB, save {save_seconds:.2f} s, load {load_seconds:.2f} s",
+                flush=True,
+            )
             path.unlink()
     finally:
         shutil.rmtree(folder, ignore_errors=True)
 
     print()
-    print(f"{network.n_patches} Gregory patches (best of {args.repeats}; build {build_seconds:.1f} s in this run)")
+    print(
+        f"{network.n_patches} Gregory patches (best of {args.repeats}; build {build_seconds:.1f} s in this run)"
+    )
     header = f"{'format':22s} {'size MB':>9s} {'save s':>8s} {'load s':>8s} {'np.load s':>10s} {'build s':>8s} {'save+load / build':>18s}"
     print(header)
     print("-" * len(header))
     for name, size, save_seconds, load_seconds, numpy_seconds in rows:
         share = (save_seconds + load_seconds) / build_seconds
-        print(f"{name:22s} {size / 1e6:9.1f} {save_seconds:8.2f} {load_seconds:8.2f} {numpy_seconds:10.2f} "
-              f"{build_seconds:8.1f} {share:17.1%}")
-    print("load: load_network (validated); np.load: every member read, no checks. Target: save and load ≤ 1 s at 1 M quads.")
+        print(
+            f"{name:22s} {size / 1e6:9.1f} {save_seconds:8.2f} {load_seconds:8.2f} {numpy_seconds:10.2f} "
+            f"{build_seconds:8.1f} {share:17.1%}"
+        )
+    print(
+        "load: load_network (validated); np.load: every member read, no checks. Target: save and load ≤ 1 s at 1 M quads."
+    )
 
 
 if __name__ == "__main__":

@@ -44,7 +44,13 @@ from g1patch.subdivision import catmull_clark_points, limit_points, refine
 from g1patch.targets.limit_interpolate import limit_matrix
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-MESHES = ("catmark_cube", "catmark_torus", "catmark_xord_interior", "catmark_xord_boundary", "spot_quadrangulated")
+MESHES = (
+    "catmark_cube",
+    "catmark_torus",
+    "catmark_xord_interior",
+    "catmark_xord_boundary",
+    "spot_quadrangulated",
+)
 #: extra Catmull–Clark steps of the faired cage the fairness energy is measured on
 FAIRED_LEVELS = (0, 1, 2)
 #: largest refined cage the dense-by-columns step operator S is formed for
@@ -56,7 +62,9 @@ def umbrella(mesh: QuadMesh) -> sp.csr_matrix:
     topology = mesh.topology
     a, b = topology.edges.T
     along, boundary = topology.is_boundary_edge, topology.is_boundary_vertex
-    use = np.concatenate([~boundary[a] | along, ~boundary[b] | along])  # a boundary vertex: its boundary edges only
+    use = np.concatenate(
+        [~boundary[a] | along, ~boundary[b] | along]
+    )  # a boundary vertex: its boundary edges only
     rows, columns = np.concatenate([a, b])[use], np.concatenate([b, a])[use]
     adjacency = sp.csr_matrix((np.ones(rows.size), (rows, columns)), shape=(mesh.n_vertices,) * 2)
     degree = np.asarray(adjacency.sum(axis=1)).ravel()
@@ -94,24 +102,40 @@ def faired_cage(mesh: QuadMesh, levels: int) -> QuadMesh:
     return cage.with_vertices(solution[:count])
 
 
-def row(name: str, network: PatchNetwork, reference: compare.Reference, refined: int, vertex_error: float) -> str:
+def row(
+    name: str,
+    network: PatchNetwork,
+    reference: compare.Reference,
+    refined: int,
+    vertex_error: float,
+) -> str:
     """One table row: the turn ratios on grids of the reference's step, the vertex error, the folds."""
-    fairness = compare.compare_fairness(network, dataclasses.replace(reference, levels=reference.levels - refined))
-    ratio = {key: fairness.network[key] / fairness.reference[key] for key in ("median", "p99", "max")}
-    return (f"  {name:22s} {ratio['median']:7.2f} {ratio['p99']:7.2f} {ratio['max']:7.2f} {vertex_error:10.1e} "
-            f"{check(network).folds:6d}")
+    fairness = compare.compare_fairness(
+        network, dataclasses.replace(reference, levels=reference.levels - refined)
+    )
+    ratio = {
+        key: fairness.network[key] / fairness.reference[key] for key in ("median", "p99", "max")
+    }
+    return (
+        f"  {name:22s} {ratio['median']:7.2f} {ratio['p99']:7.2f} {ratio['max']:7.2f} {vertex_error:10.1e} "
+        f"{check(network).folds:6d}"
+    )
 
 
 def main() -> None:
-    print("median / p99 / max normal turn over the Catmull–Clark limit's; vertex = largest distance of a mesh vertex "
-          "from the point the surface passes through for it, of the diagonal (bar for the p99: ≤ 1.5)")
+    print(
+        "median / p99 / max normal turn over the Catmull–Clark limit's; vertex = largest distance of a mesh vertex "
+        "from the point the surface passes through for it, of the diagonal (bar for the p99: ≤ 1.5)"
+    )
     for name in MESHES:
         path, reference_path = SHARED / f"{name}.obj", SHARED / "reference" / f"{name}.limit.npz"
         if not (path.exists() and reference_path.exists()):
             print(f"{name}: skipped ({SHARED} has no such mesh or reference)")
             continue
         mesh, reference = read_mesh(path), compare.load_reference(reference_path)
-        print(f"{name} ({mesh.n_faces} faces)\n  {'construction':22s} {'median':>7s} {'p99':>7s} {'max':>7s} {'vertex':>10s} {'folds':>6s}")
+        print(
+            f"{name} ({mesh.n_faces} faces)\n  {'construction':22s} {'median':>7s} {'p99':>7s} {'max':>7s} {'vertex':>10s} {'folds':>6s}"
+        )
         diagonal = mesh.bounding_box_diagonal
         for shape in ("interpolate", "limit-interpolate"):
             print(row(shape, build_network(mesh, shape=shape), reference, 0, 0.0))
@@ -119,7 +143,14 @@ def main() -> None:
             if levels and refine(mesh).n_vertices > MAX_FAIRED_VERTICES:
                 continue  # S by columns: one Catmull–Clark step per cage vertex
             cage = faired_cage(mesh, levels)
-            error = float(np.linalg.norm(limit_points(cage)[: mesh.n_vertices] - mesh.vertices, axis=1).max()) / diagonal
+            error = (
+                float(
+                    np.linalg.norm(
+                        limit_points(cage)[: mesh.n_vertices] - mesh.vertices, axis=1
+                    ).max()
+                )
+                / diagonal
+            )
             print(row(f"faired {levels}", build_network(cage, shape="limit"), reference, 1, error))
 
 

@@ -73,7 +73,13 @@ T = TypeVar("T")
 FloatArray = NDArray[np.float64]
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-SHARED_MESHES = ("catmark_cube", "catmark_torus", "catmark_xord_interior", "catmark_xord_boundary", "spot_quadrangulated")
+SHARED_MESHES = (
+    "catmark_cube",
+    "catmark_torus",
+    "catmark_xord_interior",
+    "catmark_xord_boundary",
+    "spot_quadrangulated",
+)
 #: (shape, refine) rows of table 1, each built by both methods
 ROWS = (("limit", 0), ("limit", 1), ("limit", 2), ("limit-interpolate", 0))
 METHODS = ("gregory", "split4")
@@ -102,7 +108,9 @@ def traced(function: Callable[[], T]) -> int:
         tracemalloc.stop()
 
 
-def network_steps(cage_faces: int, cage_steps: int, refinements: int, split4: bool, budget: int) -> int:
+def network_steps(
+    cage_faces: int, cage_steps: int, refinements: int, split4: bool, budget: int
+) -> int:
     """Grid steps per network face for ``cage_steps`` per cage face after ``refinements`` steps,
     halved until ``cage_faces · (steps + 1)² ≤ budget``; at least 1, or 2 for split4 (even)."""
     steps = cage_steps
@@ -118,10 +126,12 @@ def distance_to_samples(points: FloatArray, samples: FloatArray, normals: FloatA
     cell diagonal (the farthest a surface point lies, tangentially, from its nearest sample):
     ``d = √((n·δ)² + max(0, |δ − (n·δ) n| − h)²)``: point-to-plane near the surface (error
     ~ h²κ/2), the Euclidean excess beyond its reach (past an open boundary)."""
-    diagonals = np.concatenate([
-        np.linalg.norm(samples[:, 1:, 1:] - samples[:, :-1, :-1], axis=-1).ravel(),
-        np.linalg.norm(samples[:, 1:, :-1] - samples[:, :-1, 1:], axis=-1).ravel(),
-    ])
+    diagonals = np.concatenate(
+        [
+            np.linalg.norm(samples[:, 1:, 1:] - samples[:, :-1, :-1], axis=-1).ravel(),
+            np.linalg.norm(samples[:, 1:, :-1] - samples[:, :-1, 1:], axis=-1).ravel(),
+        ]
+    )
     reach = 0.5 * float(diagonals.max())
     flat, flat_normals = samples.reshape(-1, 3), normals.reshape(-1, 3)
     nearest = cKDTree(flat).query(points, workers=-1)[1]
@@ -131,24 +141,35 @@ def distance_to_samples(points: FloatArray, samples: FloatArray, normals: FloatA
     return np.sqrt(normal_part**2 + np.maximum(tangential - reach, 0.0) ** 2)
 
 
-def distances(network: PatchNetwork, reference: compare.Reference, cage_faces: int, refinements: int) -> tuple[float, float, float, float]:
+def distances(
+    network: PatchNetwork, reference: compare.Reference, cage_faces: int, refinements: int
+) -> tuple[float, float, float, float]:
     """(max, mean) of samples → reference (exact, ``mesh_distance``) and of reference points → our
     surface (:func:`distance_to_samples`), of the reference's diagonal."""
     split4 = network.provenance.get("method") == "split4"
     diagonal = reference.bounding_box_diagonal
     steps = network_steps(cage_faces, SAMPLE_STEPS, refinements, split4, SAMPLE_BUDGET)
     samples, _ = compare.surface_samples(network, compare.patch_samples(network, steps))
-    to_reference = compare.mesh_distance(samples.reshape(-1, 3), reference.points, reference.faces) / diagonal
+    to_reference = (
+        compare.mesh_distance(samples.reshape(-1, 3), reference.points, reference.faces) / diagonal
+    )
     steps = network_steps(cage_faces, DENSE_STEPS, refinements, split4, DENSE_BUDGET)
     dense, normals = compare.surface_samples(network, compare.patch_samples(network, steps))
     to_ours = distance_to_samples(reference.points, dense, normals) / diagonal
-    return float(to_reference.max()), float(to_reference.mean()), float(to_ours.max()), float(to_ours.mean())
+    return (
+        float(to_reference.max()),
+        float(to_reference.mean()),
+        float(to_ours.max()),
+        float(to_ours.mean()),
+    )
 
 
 def table_shared() -> None:
     """Table 1 (module docstring)."""
-    header = (f"{'mesh':<22}{'shape':<18}{'r':>2} {'method':<8}{'S→R max':>9}{'mean':>9}{'R→S max':>9}{'mean':>9}"
-              f"{'G1 °':>9}{'folds':>6}{'p99×':>7}{'corner':>9}{'build s':>8}")
+    header = (
+        f"{'mesh':<22}{'shape':<18}{'r':>2} {'method':<8}{'S→R max':>9}{'mean':>9}{'R→S max':>9}{'mean':>9}"
+        f"{'G1 °':>9}{'folds':>6}{'p99×':>7}{'corner':>9}{'build s':>8}"
+    )
     print(header)
     print("-" * len(header))
     solves = []
@@ -158,15 +179,27 @@ def table_shared() -> None:
         reference = compare.load_reference(compare.reference_path(obj))
         for shape, refinements in ROWS:
             for method in METHODS:
-                seconds, network = timed(lambda: build_network(mesh, method, shape, refine=refinements))  # type: ignore[arg-type]  # noqa: B023
-                report = check(network, samples=max(9, 33 >> refinements))  # the same spacing along a cage edge
-                ratio = compare.compare_fairness(network, dataclasses.replace(reference, levels=reference.levels - refinements)).p99_ratio
-                s_max, s_mean, r_max, r_mean = distances(network, reference, mesh.n_faces, refinements)
+                seconds, network = timed(
+                    lambda: build_network(mesh, method, shape, refine=refinements)
+                )  # type: ignore[arg-type]  # noqa: B023
+                report = check(
+                    network, samples=max(9, 33 >> refinements)
+                )  # the same spacing along a cage edge
+                ratio = compare.compare_fairness(
+                    network, dataclasses.replace(reference, levels=reference.levels - refinements)
+                ).p99_ratio
+                s_max, s_mean, r_max, r_mean = distances(
+                    network, reference, mesh.n_faces, refinements
+                )
                 g1 = max(report.max_edge_angle_deg, report.max_corner_angle_deg)
-                print(f"{name:<22}{shape:<18}{refinements:>2} {method:<8}{s_max:>9.2e}{s_mean:>9.2e}{r_max:>9.2e}{r_mean:>9.2e}"
-                      f"{g1:>9.1e}{report.folds:>6}{ratio:>7.3f}{report.max_vertex_deviation:>9.1e}{seconds:>8.2f}")
+                print(
+                    f"{name:<22}{shape:<18}{refinements:>2} {method:<8}{s_max:>9.2e}{s_mean:>9.2e}{r_max:>9.2e}{r_mean:>9.2e}"
+                    f"{g1:>9.1e}{report.folds:>6}{ratio:>7.3f}{report.max_vertex_deviation:>9.1e}{seconds:>8.2f}"
+                )
         solution = interpolating_cage(mesh)
-        solves.append(f"{name}: {solution.solver}, condition ≈ {solution.condition:.1e}, relative residual {solution.residual:.1e}")
+        solves.append(
+            f"{name}: {solution.solver}, condition ≈ {solution.condition:.1e}, relative residual {solution.residual:.1e}"
+        )
         print()
     print("limit-interpolate cage solves (L C = V):")
     for line in solves:
@@ -178,11 +211,15 @@ def scale_row(label: str, mesh: QuadMesh, repeat: int) -> dict[str, tuple[float,
     limit / interpolate. Returns ``{shape: (seconds, peak bytes)}``."""
     figures = {}
     for shape in ("limit", "interpolate"):
-        seconds = min(timed(lambda: build_network(mesh, "gregory", shape))[0] for _ in range(repeat))  # type: ignore[arg-type]  # noqa: B023
+        seconds = min(
+            timed(lambda: build_network(mesh, "gregory", shape))[0] for _ in range(repeat)
+        )  # type: ignore[arg-type]  # noqa: B023
         load = os.getloadavg()[0]
         peak = traced(lambda: build_network(mesh, "gregory", shape))  # type: ignore[arg-type]  # noqa: B023
         figures[shape] = (seconds, peak)
-        print(f"{label:<34}{mesh.n_faces:>10,}  {shape:<12}{seconds:>8.2f}{peak / 1e6:>9.0f}{peak / mesh.n_faces:>8.0f}{load:>6.1f}")
+        print(
+            f"{label:<34}{mesh.n_faces:>10,}  {shape:<12}{seconds:>8.2f}{peak / 1e6:>9.0f}{peak / mesh.n_faces:>8.0f}{load:>6.1f}"
+        )
     (limit_s, limit_peak), (base_s, base_peak) = figures["limit"], figures["interpolate"]
     print(f"{'':<34}{'':>10}  {'ratio':<12}{limit_s / base_s:>8.2f}{limit_peak / base_peak:>9.2f}")
     return figures
@@ -194,20 +231,41 @@ def table_scale(quads: int, xv_levels: int, repeat: int) -> None:
     print(header)
     print("-" * len(header))
     scale_row(f"large_torus({quads:,}) (regular)", shapes.large_torus(quads), repeat)
-    scale_row(f"genus2 refined {xv_levels}× (valence 3/5)", refine(shapes.genus2(), xv_levels), repeat)
+    scale_row(
+        f"genus2 refined {xv_levels}× (valence 3/5)", refine(shapes.genus2(), xv_levels), repeat
+    )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="skip the large cages (table 2)")
-    parser.add_argument("--quads", type=int, default=1_000_000, help="quads of the regular torus in table 2 (default 1,000,000)")
-    parser.add_argument("--xv-levels", type=int, default=7, help="refinements of genus2 in table 2 (default 7: 819,200 quads)")
-    parser.add_argument("--repeat", type=int, default=3, help="untraced builds per row of table 2, the best one reported (default 3)")
+    parser.add_argument(
+        "--quads",
+        type=int,
+        default=1_000_000,
+        help="quads of the regular torus in table 2 (default 1,000,000)",
+    )
+    parser.add_argument(
+        "--xv-levels",
+        type=int,
+        default=7,
+        help="refinements of genus2 in table 2 (default 7: 819,200 quads)",
+    )
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=3,
+        help="untraced builds per row of table 2, the best one reported (default 3)",
+    )
     args = parser.parse_args()
     tune_for_large_arrays()  # as the command line does (g1patch.memory)
     logging.disable(logging.INFO)
-    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}\n")
-    warm = refine(shapes.genus2(), 5)  # warm-up: numba loads (or compiles) its kernels once per process, above their thresholds too
+    print(
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}\n"
+    )
+    warm = refine(
+        shapes.genus2(), 5
+    )  # warm-up: numba loads (or compiles) its kernels once per process, above their thresholds too
     for mesh in (shapes.genus2(), warm):
         build_network(mesh, "gregory", "limit")
         build_network(mesh, "gregory", "interpolate")
@@ -219,7 +277,9 @@ def main() -> None:
     if not args.quick:
         print()
         table_scale(args.quads, args.xv_levels, args.repeat)
-    print(f"\nprocess peak (ru_maxrss) {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3:.0f} MB")
+    print(
+        f"\nprocess peak (ru_maxrss) {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3:.0f} MB"
+    )
 
 
 if __name__ == "__main__":

@@ -61,30 +61,49 @@ def main() -> None:
     tracemalloc.stop()
     folds = int(folded_patches(network.patches, 9).sum())
     print(f"{args.sides:,}-gon, load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
-    print(f"  in process: split {min(splits):.2f} s + build {min(builds):.2f} s = {min(splits) + min(builds):.2f} s,"
-          f" tracemalloc peak {peak / 1e6:.0f} MB; {network.n_patches:,} patches, {folds} folded,"
-          f" {network.provenance['fallback_vertices']} fallback vertices")
+    print(
+        f"  in process: split {min(splits):.2f} s + build {min(builds):.2f} s = {min(splits) + min(builds):.2f} s,"
+        f" tracemalloc peak {peak / 1e6:.0f} MB; {network.n_patches:,} patches, {folds} folded,"
+        f" {network.provenance['fallback_vertices']} fallback vertices"
+    )
 
     with tempfile.TemporaryDirectory() as folder:
         obj, out = Path(folder) / "face.obj", Path(folder) / "face.npz"
         np.savetxt(obj, points, fmt="v %.17g %.17g %.17g")
         with obj.open("a") as stream:
             stream.write("f " + " ".join(str(i + 1) for i in range(args.sides)) + "\n")
-        command = [str(Path(sys.executable).with_name("g1patch")), "build", str(obj), "-o", str(out), "-q"]
+        command = [
+            str(Path(sys.executable).with_name("g1patch")),
+            "build",
+            str(obj),
+            "-o",
+            str(out),
+            "-q",
+        ]
         # the child's ru_maxrss counts this process's pages until the exec, so GNU time (a small
         # process) runs it and reports the peak; without it only the wall time is measured
         gnu_time = shutil.which("time", path="/usr/bin:/bin")
         walls, rss = [], []
-        for run in range(args.repeats + 1):  # the first run may compile the readers' kernels: not counted
+        for run in range(
+            args.repeats + 1
+        ):  # the first run may compile the readers' kernels: not counted
             start = time.perf_counter()
-            result = subprocess.run([gnu_time, "-f", "%M", *command] if gnu_time else command, capture_output=True, text=True)
+            result = subprocess.run(
+                [gnu_time, "-f", "%M", *command] if gnu_time else command,
+                capture_output=True,
+                text=True,
+            )
             if result.returncode:
                 raise SystemExit(f"{' '.join(command)} failed: {result.stderr.strip()}")
             if run:
                 walls.append(time.perf_counter() - start)
                 if gnu_time:
                     rss.append(int(result.stderr.strip().splitlines()[-1]) * 1024)
-    resident = f"maximum resident {max(rss) / 1e6:.0f} MB (imports and kernels included)" if rss else "no GNU time: resident peak not measured"
+    resident = (
+        f"maximum resident {max(rss) / 1e6:.0f} MB (imports and kernels included)"
+        if rss
+        else "no GNU time: resident peak not measured"
+    )
     print(f"  command line: {min(walls):.2f} s wall, {resident}")
 
 

@@ -42,8 +42,8 @@ from typing import Any
 import meshio
 import numpy as np
 
-from g1patch import shapes
 from g1patch import mesh as meshmodule
+from g1patch import shapes
 from g1patch.io import meshfile
 from g1patch.io.meshfile import read_mesh, write_quads
 from g1patch.memory import tune_for_large_arrays
@@ -62,11 +62,22 @@ def best(function: Callable[[], Any], repeats: int) -> float:
 
 def write_files(mesh: QuadMesh, directory: Path) -> dict[str, Path]:
     """The mesh as OBJ, OFF, ASCII PLY and binary PLY in ``directory``."""
-    paths = {name: directory / file for name, file in
-             [("OBJ", "torus.obj"), ("OFF", "torus.off"), ("PLY ascii", "torus_ascii.ply"), ("PLY binary", "torus.ply")]}
+    paths = {
+        name: directory / file
+        for name, file in [
+            ("OBJ", "torus.obj"),
+            ("OFF", "torus.off"),
+            ("PLY ascii", "torus_ascii.ply"),
+            ("PLY binary", "torus.ply"),
+        ]
+    }
     write_quads(paths["OBJ"], mesh.vertices, mesh.faces)
     write_quads(paths["PLY binary"], mesh.vertices, mesh.faces)
-    meshio.ply.write(str(paths["PLY ascii"]), meshio.Mesh(mesh.vertices, [("quad", mesh.faces.astype(np.int32))]), binary=False)
+    meshio.ply.write(
+        str(paths["PLY ascii"]),
+        meshio.Mesh(mesh.vertices, [("quad", mesh.faces.astype(np.int32))]),
+        binary=False,
+    )
     with open(paths["OFF"], "w", encoding="ascii") as handle:
         handle.write(f"OFF\n{mesh.n_vertices} {mesh.n_faces} 0\n")
         handle.write(("%r %r %r\n" * mesh.n_vertices) % tuple(mesh.vertices.ravel().tolist()))
@@ -98,6 +109,7 @@ def before(name: str, path: Path) -> Callable[[], meshfile._Parsed]:
     def meshio_path() -> meshfile._Parsed:
         points, corners, sizes, _, _ = meshfile._ply_meshio(path, meshfile._ply_header(path, data))
         return meshfile._Parsed(points, corners.reshape(-1, int(sizes[0])))
+
     return meshio_path
 
 
@@ -131,8 +143,13 @@ def cold_read(path: Path, directory: Path | None) -> tuple[float, float]:
     cache: the first read compiles every kernel the read uses."""
     with tempfile.TemporaryDirectory(dir=directory) as cache:
         environment = dict(os.environ, NUMBA_CACHE_DIR=cache)
-        output = subprocess.run([sys.executable, "-c", COLD, str(path)], env=environment, check=True,
-                                capture_output=True, text=True).stdout
+        output = subprocess.run(
+            [sys.executable, "-c", COLD, str(path)],
+            env=environment,
+            check=True,
+            capture_output=True,
+            text=True,
+        ).stdout
     first, second = map(float, output.split())
     return first, second
 
@@ -141,14 +158,23 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quads", type=int, default=1_000_000)
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--dir", type=Path, default=None, help="where to write the files (default: a temporary directory)")
+    parser.add_argument(
+        "--dir",
+        type=Path,
+        default=None,
+        help="where to write the files (default: a temporary directory)",
+    )
     args = parser.parse_args()
     tune_for_large_arrays()  # as the command line does
 
     mesh = shapes.large_torus(args.quads)
-    print(f"python {platform.python_version()}, numpy {np.__version__}, meshio {meshio.__version__}, "
-          f"{os.cpu_count()} cores; load average at start {os.getloadavg()[0]:.2f}")
-    print(f"mesh: shapes.large_torus({args.quads}): {mesh.n_vertices} vertices, {mesh.n_faces} quads; best of {args.repeats}")
+    print(
+        f"python {platform.python_version()}, numpy {np.__version__}, meshio {meshio.__version__}, "
+        f"{os.cpu_count()} cores; load average at start {os.getloadavg()[0]:.2f}"
+    )
+    print(
+        f"mesh: shapes.large_torus({args.quads}): {mesh.n_vertices} vertices, {mesh.n_faces} quads; best of {args.repeats}"
+    )
     coordinates, indices = numbers_text(mesh)
 
     def numbers() -> None:
@@ -163,17 +189,44 @@ def main() -> None:
             parse = parse_only(name, path)
             parsed = parse()
             again = QuadMesh.from_arrays(parsed.vertices, parsed.faces, source=str(path))
-            assert again.vertices.tobytes() == mesh.vertices.tobytes() and np.array_equal(again.faces, mesh.faces)
+            assert again.vertices.tobytes() == mesh.vertices.tobytes() and np.array_equal(
+                again.faces, mesh.faces
+            )
             parse_seconds = best(parse, args.repeats)
-            validate = best(lambda: QuadMesh.from_arrays(parsed.vertices, parsed.faces, source=str(path)), args.repeats)
+            validate = best(
+                lambda: QuadMesh.from_arrays(parsed.vertices, parsed.faces, source=str(path)),
+                args.repeats,
+            )
             with numpy_references():
-                numpy_valid = best(lambda: QuadMesh.from_arrays(parsed.vertices, parsed.faces, source=str(path)), args.repeats)
+                numpy_valid = best(
+                    lambda: QuadMesh.from_arrays(parsed.vertices, parsed.faces, source=str(path)),
+                    args.repeats,
+                )
             old = best(before(name, path), 1) + numpy_valid
             raw = best(path.read_bytes, args.repeats)
             fromfile = best(lambda: np.fromfile(path, dtype=np.uint8), args.repeats)
-            library = None if name == "OFF" else best(lambda: meshio.read(path), 1 if name == "PLY ascii" else args.repeats)
-            bound = best(numbers, args.repeats) if name != "PLY binary" else None  # next to parse: the load changes
-            rows.append((name, path.stat().st_size, old, read, parse_seconds, validate, raw, fromfile, library, bound))
+            library = (
+                None
+                if name == "OFF"
+                else best(lambda: meshio.read(path), 1 if name == "PLY ascii" else args.repeats)
+            )
+            bound = (
+                best(numbers, args.repeats) if name != "PLY binary" else None
+            )  # next to parse: the load changes
+            rows.append(
+                (
+                    name,
+                    path.stat().st_size,
+                    old,
+                    read,
+                    parse_seconds,
+                    validate,
+                    raw,
+                    fromfile,
+                    library,
+                    bound,
+                )
+            )
             print(f"  {name}: read_mesh {read:.2f} s", flush=True)
             if name == "OBJ":
                 data = path.read_bytes()
@@ -186,31 +239,51 @@ def main() -> None:
         return f"{seconds:8.2f}" if seconds is not None else f"{'-':>8s}"
 
     def ratio(numerator: float | None, denominator: float | None) -> str:
-        return f"{numerator / denominator:7.1f}×" if numerator is not None and denominator is not None else f"{'-':>8s}"
+        return (
+            f"{numerator / denominator:7.1f}×"
+            if numerator is not None and denominator is not None
+            else f"{'-':>8s}"
+        )
 
     print()
-    header = (f"{'format':11s} {'MB':>6s} {'before':>8s} {'read':>8s} {'parse':>8s} {'valid.':>8s} {'raw read':>8s} "
-              f"{'fromfile':>8s} {'meshio':>8s} {'numbers':>8s} {'before/':>8s} {'read/':>8s} {'parse/':>8s} {'parse/':>8s}")
+    header = (
+        f"{'format':11s} {'MB':>6s} {'before':>8s} {'read':>8s} {'parse':>8s} {'valid.':>8s} {'raw read':>8s} "
+        f"{'fromfile':>8s} {'meshio':>8s} {'numbers':>8s} {'before/':>8s} {'read/':>8s} {'parse/':>8s} {'parse/':>8s}"
+    )
     print(header)
-    print(f"{'':11s} {'':6s} {'':8s} {'':8s} {'':8s} {'':8s} {'':8s} {'':8s} {'':8s} {'':8s} {'read':>8s} {'meshio':>8s} {'numbers':>8s} {'fromfile':>8s}")
+    print(
+        f"{'':11s} {'':6s} {'':8s} {'':8s} {'':8s} {'':8s} {'':8s} {'':8s} {'':8s} {'':8s} {'read':>8s} {'meshio':>8s} {'numbers':>8s} {'fromfile':>8s}"
+    )
     print("-" * len(header))
     for name, size, old, read, parse_seconds, validate, raw, fromfile, library, bound in rows:
-        print(f"{name:11s} {size / 1e6:6.1f} {cell(old)} {cell(read)} {cell(parse_seconds)} {cell(validate)} {cell(raw)} "
-              f"{cell(fromfile)} {cell(library)} {cell(bound)} {ratio(old, read)} {ratio(read, library)} "
-              f"{ratio(parse_seconds, bound)} {ratio(parse_seconds, fromfile)}")
-    print("seconds. before: the replaced reader (line-by-line OBJ/OFF parser, meshio for PLY) + NumPy validation, once; "
-          "read: read_mesh; parse: the reader alone; valid.: QuadMesh.from_arrays on its arrays; numbers: np.fromstring "
-          "of the coordinates and indices alone.")
-    print(f"load average {os.getloadavg()[0]:.2f}. Targets: OBJ read ≤ 1 s, binary PLY read ≤ 0.5 s (1 M quads).")
+        print(
+            f"{name:11s} {size / 1e6:6.1f} {cell(old)} {cell(read)} {cell(parse_seconds)} {cell(validate)} {cell(raw)} "
+            f"{cell(fromfile)} {cell(library)} {cell(bound)} {ratio(old, read)} {ratio(read, library)} "
+            f"{ratio(parse_seconds, bound)} {ratio(parse_seconds, fromfile)}"
+        )
+    print(
+        "seconds. before: the replaced reader (line-by-line OBJ/OFF parser, meshio for PLY) + NumPy validation, once; "
+        "read: read_mesh; parse: the reader alone; valid.: QuadMesh.from_arrays on its arrays; numbers: np.fromstring "
+        "of the coordinates and indices alone."
+    )
+    print(
+        f"load average {os.getloadavg()[0]:.2f}. Targets: OBJ read ≤ 1 s, binary PLY read ≤ 0.5 s (1 M quads)."
+    )
 
     print()
     print(f"compiled paths against their NumPy references (best of {args.repeats}):")
-    print(f"  OBJ parse: kernel {kernel_parse:.2f} s, NumPy fast path {numpy_parse:.2f} s ({numpy_parse / kernel_parse:.1f}×)")
-    print(f"  from_arrays: kernels {kernel_valid:.2f} s, NumPy {numpy_obj_valid:.2f} s ({numpy_obj_valid / kernel_valid:.1f}×)")
+    print(
+        f"  OBJ parse: kernel {kernel_parse:.2f} s, NumPy fast path {numpy_parse:.2f} s ({numpy_parse / kernel_parse:.1f}×)"
+    )
+    print(
+        f"  from_arrays: kernels {kernel_valid:.2f} s, NumPy {numpy_obj_valid:.2f} s ({numpy_obj_valid / kernel_valid:.1f}×)"
+    )
     (obj_first, obj_warm), (ply_first, ply_warm) = cold
-    print(f"  cold compile (fresh process, empty numba cache): first read_mesh OBJ {obj_first:.2f} s, then {obj_warm:.2f} s "
-          f"(compile ≈ {obj_first - obj_warm:.1f} s); binary PLY {ply_first:.2f} s, then {ply_warm:.2f} s "
-          f"(≈ {ply_first - ply_warm:.1f} s)")
+    print(
+        f"  cold compile (fresh process, empty numba cache): first read_mesh OBJ {obj_first:.2f} s, then {obj_warm:.2f} s "
+        f"(compile ≈ {obj_first - obj_warm:.1f} s); binary PLY {ply_first:.2f} s, then {ply_warm:.2f} s "
+        f"(≈ {ply_first - ply_warm:.1f} s)"
+    )
     print(f"load average at end {os.getloadavg()[0]:.2f}")
 
 

@@ -90,7 +90,13 @@ def size_row(quads: int) -> dict[str, float]:
     build_peak = _peak(lambda: build_network(mesh))
     _, check_s = _timed(lambda: check(network))
     check_peak = _peak(lambda: check(network))
-    return {"quads": mesh.n_faces, "build_s": build_s, "build_peak": build_peak, "check_s": check_s, "check_peak": check_peak}
+    return {
+        "quads": mesh.n_faces,
+        "build_s": build_s,
+        "build_peak": build_peak,
+        "check_s": check_s,
+        "check_peak": check_peak,
+    }
 
 
 def end_to_end(quads: int) -> dict[str, float]:
@@ -121,16 +127,32 @@ def end_to_end(quads: int) -> dict[str, float]:
         out.unlink()
         _, alone_check_s = _timed(lambda: check(network))
         _, alone_save_s = _timed(lambda: save_network(out, network))
-    return {"quads": network.n_patches, "read_s": read_s, "build_s": build_s, "check_s": check_s, "wait_s": wait_s,
-            "total_s": total, "peak": peak, "baseline": baseline, "alone_check_s": alone_check_s, "alone_save_s": alone_save_s}
+    return {
+        "quads": network.n_patches,
+        "read_s": read_s,
+        "build_s": build_s,
+        "check_s": check_s,
+        "wait_s": wait_s,
+        "total_s": total,
+        "peak": peak,
+        "baseline": baseline,
+        "alone_check_s": alone_check_s,
+        "alone_save_s": alone_save_s,
+    }
 
 
 def _in_subprocess(function: str, quads: int) -> dict[str, float]:
     """``function(quads)`` of this file in a fresh interpreter, its result as JSON."""
-    code = (f"import json, sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); import bench_scaling as b; "
-            f"print(json.dumps(b.{function}({quads})))")
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                            env={**os.environ, **TUNED_ENVIRONMENT})
+    code = (
+        f"import json, sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); import bench_scaling as b; "
+        f"print(json.dumps(b.{function}({quads})))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env={**os.environ, **TUNED_ENVIRONMENT},
+    )
     if result.returncode:
         raise SystemExit(f"{function}({quads}) failed:\n{result.stderr[-2000:]}")
     return json.loads(result.stdout.strip().splitlines()[-1])
@@ -143,32 +165,55 @@ def exponent(quads: list[float], values: list[float]) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sizes", type=int, nargs="+", default=[10_000, 100_000, 1_000_000, 4_000_000])
-    parser.add_argument("--end-to-end", type=int, default=None, help="quads of the end-to-end run (default: the largest size; 0: skip)")
+    parser.add_argument(
+        "--sizes", type=int, nargs="+", default=[10_000, 100_000, 1_000_000, 4_000_000]
+    )
+    parser.add_argument(
+        "--end-to-end",
+        type=int,
+        default=None,
+        help="quads of the end-to-end run (default: the largest size; 0: skip)",
+    )
     args = parser.parse_args()
     print(f"{platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}")
 
     rows = [_in_subprocess("size_row", quads) for quads in args.sizes]
     print(f"\nload average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
-    print(f"{'quads':>9} {'build s':>8} {'build MB':>9} {'B/quad':>7} {'check s':>8} {'check MB':>9} {'B/quad':>7} {'check/build':>11}")
+    print(
+        f"{'quads':>9} {'build s':>8} {'build MB':>9} {'B/quad':>7} {'check s':>8} {'check MB':>9} {'B/quad':>7} {'check/build':>11}"
+    )
     for row in rows:
-        print(f"{row['quads']:9,.0f} {row['build_s']:8.2f} {row['build_peak'] / 1e6:9.0f} {row['build_peak'] / row['quads']:7.0f}"
-              f" {row['check_s']:8.2f} {row['check_peak'] / 1e6:9.0f} {row['check_peak'] / row['quads']:7.0f}"
-              f" {row['check_s'] / row['build_s']:11.2f}")
+        print(
+            f"{row['quads']:9,.0f} {row['build_s']:8.2f} {row['build_peak'] / 1e6:9.0f} {row['build_peak'] / row['quads']:7.0f}"
+            f" {row['check_s']:8.2f} {row['check_peak'] / 1e6:9.0f} {row['check_peak'] / row['quads']:7.0f}"
+            f" {row['check_s'] / row['build_s']:11.2f}"
+        )
     if len(rows) > 1:
         quads = [row["quads"] for row in rows]
-        fitted = {name: exponent(quads, [row[name] for row in rows]) for name in ("build_s", "build_peak", "check_s", "check_peak")}
-        print("exponents (t ∝ N^b, bar ≤ 1.1): " + ", ".join(f"{name} {value:.3f}" for name, value in fitted.items()))
+        fitted = {
+            name: exponent(quads, [row[name] for row in rows])
+            for name in ("build_s", "build_peak", "check_s", "check_peak")
+        }
+        print(
+            "exponents (t ∝ N^b, bar ≤ 1.1): "
+            + ", ".join(f"{name} {value:.3f}" for name, value in fitted.items())
+        )
 
     size = args.sizes[-1] if args.end_to_end is None else args.end_to_end
     if size:
         row = _in_subprocess("end_to_end", size)
-        print(f"\nend to end, {row['quads']:,.0f} quads (binary PLY → build → check → save), load average "
-              f"{' '.join(f'{x:.2f}' for x in os.getloadavg())}:")
-        print(f"  read {row['read_s']:.2f} s, build {row['build_s']:.2f} s, check {row['check_s']:.2f} s while the file is written,"
-              f" then {row['wait_s']:.2f} s until it is; total {row['total_s']:.2f} s (bar 30 s); process peak"
-              f" {row['peak'] / 1e9:.2f} GB (bar 8 GB; {row['baseline'] / 1e9:.2f} GB before reading)")
-        print(f"  one after the other instead: check {row['alone_check_s']:.2f} s, save {row['alone_save_s']:.2f} s")
+        print(
+            f"\nend to end, {row['quads']:,.0f} quads (binary PLY → build → check → save), load average "
+            f"{' '.join(f'{x:.2f}' for x in os.getloadavg())}:"
+        )
+        print(
+            f"  read {row['read_s']:.2f} s, build {row['build_s']:.2f} s, check {row['check_s']:.2f} s while the file is written,"
+            f" then {row['wait_s']:.2f} s until it is; total {row['total_s']:.2f} s (bar 30 s); process peak"
+            f" {row['peak'] / 1e9:.2f} GB (bar 8 GB; {row['baseline'] / 1e9:.2f} GB before reading)"
+        )
+        print(
+            f"  one after the other instead: check {row['alone_check_s']:.2f} s, save {row['alone_save_s']:.2f} s"
+        )
 
 
 if __name__ == "__main__":

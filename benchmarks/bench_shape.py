@@ -48,7 +48,13 @@ Builder = Callable[[QuadMesh], PatchNetwork]
 Measure = Callable[[PatchNetwork, int], compare.Deviation]
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-SHARED_MESHES = ("catmark_cube", "catmark_torus", "catmark_xord_boundary", "catmark_xord_interior", "spot_quadrangulated")
+SHARED_MESHES = (
+    "catmark_cube",
+    "catmark_torus",
+    "catmark_xord_boundary",
+    "catmark_xord_interior",
+    "spot_quadrangulated",
+)
 #: grid steps per mesh face for the distances to the exact surfaces (21 × 21 samples per face)
 FAMILY_STEPS = 20
 #: grid steps per mesh face for the distance to the Catmull–Clark limit
@@ -61,20 +67,35 @@ def builders(legacy: bool) -> tuple[dict[str, Builder], str]:
     if importlib.util.find_spec("g1patch.build") is None:
         from g1patch.cli import build_network as cli_build
 
-        rows = {f"{method}·legacy": partial(cli_build, method=method) for method in ("gregory", "split4", "corner")}
-        return rows, "builder: g1patch.cli.build_network (g1patch.build not found; legacy shape for every method)"
+        rows = {
+            f"{method}·legacy": partial(cli_build, method=method)
+            for method in ("gregory", "split4", "corner")
+        }
+        return (
+            rows,
+            "builder: g1patch.cli.build_network (g1patch.build not found; legacy shape for every method)",
+        )
     from g1patch.build import build_network
 
     if legacy:
-        rows = {f"{method}·legacy": partial(build_network, method=method, shape="legacy") for method in ("gregory", "split4", "corner")}
-        return rows, "builder: g1patch.build.build_network, shape 'legacy' for every method (--legacy)"
+        rows = {
+            f"{method}·legacy": partial(build_network, method=method, shape="legacy")
+            for method in ("gregory", "split4", "corner")
+        }
+        return (
+            rows,
+            "builder: g1patch.build.build_network, shape 'legacy' for every method (--legacy)",
+        )
     rows = {
         "default": partial(build_network, method="gregory", shape="interpolate"),
         "split4": partial(build_network, method="split4", shape="interpolate"),
         "corner": partial(build_network, method="corner", shape="interpolate"),
         "legacy": partial(build_network, method="gregory", shape="legacy"),
     }
-    return rows, "builder: g1patch.build.build_network (default = gregory/interpolate, legacy = gregory/legacy)"
+    return (
+        rows,
+        "builder: g1patch.build.build_network (default = gregory/interpolate, legacy = gregory/legacy)",
+    )
 
 
 def order(previous: float | None, current: float) -> str:
@@ -84,9 +105,16 @@ def order(previous: float | None, current: float) -> str:
     return f"{math.log2(previous / current):.2f}"
 
 
-def family_table(title: str, meshes: Sequence[tuple[str, QuadMesh]], measure: Measure, methods: dict[str, Builder]) -> None:
+def family_table(
+    title: str,
+    meshes: Sequence[tuple[str, QuadMesh]],
+    measure: Measure,
+    methods: dict[str, Builder],
+) -> None:
     print(f"\n{title}")
-    print(f"{'method':<16}{'level':>8}{'quads':>7}{'max dist':>11}{'order':>7}{'normal°':>10}{'order':>7}{'folds':>7}{'max G1°':>10}")
+    print(
+        f"{'method':<16}{'level':>8}{'quads':>7}{'max dist':>11}{'order':>7}{'normal°':>10}{'order':>7}{'folds':>7}{'max G1°':>10}"
+    )
     for name, build in methods.items():
         last_distance = last_normal = None
         for label, mesh in meshes:
@@ -99,8 +127,10 @@ def family_table(title: str, meshes: Sequence[tuple[str, QuadMesh]], measure: Me
             found = measure(network, compare.patch_samples(network, FAMILY_STEPS))
             report = check(network)
             g1 = max(report.max_edge_angle_deg, report.max_corner_angle_deg)
-            print(f"{name:<16}{label:>8}{mesh.n_faces:>7}{found.max_distance:>11.2e}{order(last_distance, found.max_distance):>7}"
-                  f"{found.max_normal_error_deg:>10.3g}{order(last_normal, found.max_normal_error_deg):>7}{report.folds:>7}{g1:>10.1e}")
+            print(
+                f"{name:<16}{label:>8}{mesh.n_faces:>7}{found.max_distance:>11.2e}{order(last_distance, found.max_distance):>7}"
+                f"{found.max_normal_error_deg:>10.3g}{order(last_normal, found.max_normal_error_deg):>7}{report.folds:>7}{g1:>10.1e}"
+            )
             last_distance, last_normal = found.max_distance, found.max_normal_error_deg
 
 
@@ -114,7 +144,9 @@ def families(methods: dict[str, Builder]) -> None:
     family_table(
         f"ellipsoid_quads, axes {ELLIPSOID_AXES} — distance from the ellipsoid",
         [(str(level), shapes.ellipsoid_quads(level, ELLIPSOID_AXES)) for level in range(1, 5)],
-        lambda network, samples: compare.distance_to_ellipsoid(network, ELLIPSOID_AXES, samples=samples),
+        lambda network, samples: compare.distance_to_ellipsoid(
+            network, ELLIPSOID_AXES, samples=samples
+        ),
         methods,
     )
     family_table(
@@ -126,22 +158,30 @@ def families(methods: dict[str, Builder]) -> None:
     family_table(
         f"icosa_ellipsoid (icosahedron → 3 quads per triangle), axes {ELLIPSOID_AXES} — distance from the ellipsoid",
         [(str(level), shapes.icosa_ellipsoid(level, ELLIPSOID_AXES)) for level in range(3)],
-        lambda network, samples: compare.distance_to_ellipsoid(network, ELLIPSOID_AXES, samples=samples),
+        lambda network, samples: compare.distance_to_ellipsoid(
+            network, ELLIPSOID_AXES, samples=samples
+        ),
         methods,
     )
 
 
 def shared_meshes(methods: dict[str, Builder]) -> None:
-    print("\nshared meshes — fairness against the Catmull–Clark limit (bar: p99 ratio ≤ 1.5 interpolating)")
+    print(
+        "\nshared meshes — fairness against the Catmull–Clark limit (bar: p99 ratio ≤ 1.5 interpolating)"
+    )
     if not SHARED.is_dir():
         print(f"skipped: {SHARED} not found (../shared/data beside the repository)")
         return
-    print(f"{'mesh':<24}{'method':<16}{'patches':>8}{'folds':>7}{'max G1°':>10}{'p99 turn°':>11}{'CC p99°':>9}{'ratio':>7}{'dist CC':>10}")
+    print(
+        f"{'mesh':<24}{'method':<16}{'patches':>8}{'folds':>7}{'max G1°':>10}{'p99 turn°':>11}{'CC p99°':>9}{'ratio':>7}{'dist CC':>10}"
+    )
     for name in SHARED_MESHES:
         path = SHARED / f"{name}.obj"
         reference_file = compare.reference_path(path)
         if not path.is_file() or not reference_file.is_file():
-            print(f"{name:<24}skipped: {path.name} or its reference {reference_file.name} not found")
+            print(
+                f"{name:<24}skipped: {path.name} or its reference {reference_file.name} not found"
+            )
             continue
         mesh, reference = read_mesh(path), compare.load_reference(reference_file)
         for method, build in methods.items():
@@ -152,16 +192,27 @@ def shared_meshes(methods: dict[str, Builder]) -> None:
                 continue
             report = check(network)
             fairness = compare.compare_fairness(network, reference)
-            positions, _ = compare.surface_samples(network, compare.patch_samples(network, LIMIT_STEPS))
-            distance = compare.mesh_distance(positions, reference.points, reference.faces).max() / reference.bounding_box_diagonal
+            positions, _ = compare.surface_samples(
+                network, compare.patch_samples(network, LIMIT_STEPS)
+            )
+            distance = (
+                compare.mesh_distance(positions, reference.points, reference.faces).max()
+                / reference.bounding_box_diagonal
+            )
             g1 = max(report.max_edge_angle_deg, report.max_corner_angle_deg)
-            print(f"{name:<24}{method:<16}{network.n_patches:>8}{report.folds:>7}{g1:>10.1e}{fairness.network['p99']:>11.2f}"
-                  f"{fairness.reference['p99']:>9.2f}{fairness.p99_ratio:>7.2f}{distance:>10.1e}")
+            print(
+                f"{name:<24}{method:<16}{network.n_patches:>8}{report.folds:>7}{g1:>10.1e}{fairness.network['p99']:>11.2f}"
+                f"{fairness.reference['p99']:>9.2f}{fairness.p99_ratio:>7.2f}{distance:>10.1e}"
+            )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--legacy", action="store_true", help="build every method with the legacy (previous default) shape")
+    parser.add_argument(
+        "--legacy",
+        action="store_true",
+        help="build every method with the legacy (previous default) shape",
+    )
     parser.add_argument("--no-shared", action="store_true", help="skip the shared meshes")
     args = parser.parse_args()
     methods, note = builders(args.legacy)

@@ -37,15 +37,17 @@ import numpy as np
 from bench_build import timed, traced  # the same timing and tracing helpers, from beside this file
 
 from g1patch import shapes
-from g1patch.build import build_gregory_network
-from g1patch.build import build_split4_network
+from g1patch.build import build_gregory_network, build_split4_network
 from g1patch.construct import split4
 from g1patch.continuity import check
 from g1patch.memory import tune_for_large_arrays
 from g1patch.mesh import QuadMesh, subdivide
 from g1patch.network import PatchNetwork
 
-BUILDERS: dict[str, Callable[[QuadMesh], PatchNetwork]] = {"split4": build_split4_network, "gregory": build_gregory_network}
+BUILDERS: dict[str, Callable[[QuadMesh], PatchNetwork]] = {
+    "split4": build_split4_network,
+    "gregory": build_gregory_network,
+}
 
 
 def irregular_mesh(quads: int) -> QuadMesh:
@@ -68,8 +70,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quads", type=int, default=1_000_000)
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--numpy", action="store_true", help="also time one split4 build on the NumPy path (kernels off)")
-    parser.add_argument("--check", action="store_true", help="also run continuity.check on the split4 network")
+    parser.add_argument(
+        "--numpy",
+        action="store_true",
+        help="also time one split4 build on the NumPy path (kernels off)",
+    )
+    parser.add_argument(
+        "--check", action="store_true", help="also run continuity.check on the split4 network"
+    )
     args = parser.parse_args()
     tune_for_large_arrays()  # as the command line does (g1patch.memory)
 
@@ -77,9 +85,13 @@ def main() -> None:
     topology = mesh.topology
     interior = ~topology.is_boundary_vertex
     valences = np.unique(topology.valence[interior], return_counts=True)
-    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
-    print(f"mesh: {topology.n_faces:,} quads, {topology.n_vertices:,} vertices; interior valences "
-          + ", ".join(f"{v}×{c}" for v, c in zip(*valences, strict=True)))
+    print(
+        f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    )
+    print(
+        f"mesh: {topology.n_faces:,} quads, {topology.n_vertices:,} vertices; interior valences "
+        + ", ".join(f"{v}×{c}" for v, c in zip(*valences, strict=True))
+    )
 
     print("load average before: " + ", ".join(f"{x:.2f}" for x in os.getloadavg()))
     times: dict[str, float] = {}
@@ -89,9 +101,12 @@ def main() -> None:
         runs = [timed(build)[0] for _ in range(args.repeats)]
         times[name] = statistics.median(runs)
         _, peak, network = traced(build)
-        print(f"{name:8s} build {times[name]:6.2f} s (median of {args.repeats}; runs "
-              + ", ".join(f"{r:.2f}" for r in runs) + f"; first {first:.2f})  peak {peak / 2**20:7.0f} MiB = "
-              f"{peak / topology.n_faces:6.0f} B/quad  patches {network.n_patches:,}")
+        print(
+            f"{name:8s} build {times[name]:6.2f} s (median of {args.repeats}; runs "
+            + ", ".join(f"{r:.2f}" for r in runs)
+            + f"; first {first:.2f})  peak {peak / 2**20:7.0f} MiB = "
+            f"{peak / topology.n_faces:6.0f} B/quad  patches {network.n_patches:,}"
+        )
         del network
     print(f"ratio split4 / gregory: {times['split4'] / times['gregory']:.2f}")
     if args.numpy:
@@ -100,16 +115,22 @@ def main() -> None:
             seconds = timed(lambda: build_split4_network(mesh))[0]
         finally:
             split4.KERNEL_FACES = kernel_faces
-        print(f"split4 NumPy path (kernels off) {seconds:.2f} s: kernels {seconds / times['split4']:.1f}x faster")
+        print(
+            f"split4 NumPy path (kernels off) {seconds:.2f} s: kernels {seconds / times['split4']:.1f}x faster"
+        )
     print("load average after: " + ", ".join(f"{x:.2f}" for x in os.getloadavg()))
 
     if args.check:
         network = build_split4_network(mesh)
         seconds, report = timed(lambda: check(network))
-        print(f"check split4: {seconds:.1f} s, max G1 {report.max_edge_angle_deg:.2e}°, corners "
-              f"{report.max_corner_angle_deg:.2e}°, G0 {report.max_g0_gap:.1e}, vertex deviation "
-              f"{report.max_vertex_deviation:.1e}, folds {report.folds}")
-    print(f"process peak (ru_maxrss): {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**10:.0f} MiB")
+        print(
+            f"check split4: {seconds:.1f} s, max G1 {report.max_edge_angle_deg:.2e}°, corners "
+            f"{report.max_corner_angle_deg:.2e}°, G0 {report.max_g0_gap:.1e}, vertex deviation "
+            f"{report.max_vertex_deviation:.1e}, folds {report.folds}"
+        )
+    print(
+        f"process peak (ru_maxrss): {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**10:.0f} MiB"
+    )
 
 
 if __name__ == "__main__":

@@ -59,7 +59,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=10_000)
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 2)
-    parser.add_argument("--memory-cap", type=float, default=4096.0, help="MB of resident memory per worker")
+    parser.add_argument(
+        "--memory-cap", type=float, default=4096.0, help="MB of resident memory per worker"
+    )
     args = parser.parse_args()
 
     _warm_up()
@@ -73,7 +75,9 @@ def main() -> None:
         # a fresh pool per chunk of TASKS_PER_WORKER cases a worker, so no worker's memory grows over
         # the run (max_tasks_per_child hangs the pool once a worker retires, on Python 3.11)
         chunk = pending[: args.workers * TASKS_PER_WORKER]
-        with ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        with ProcessPoolExecutor(
+            args.workers, mp_context=multiprocessing.get_context("spawn")
+        ) as pool:
             futures = {pool.submit(one_case, seed): seed for seed in chunk}
             done: set[int] = set()
             try:
@@ -84,19 +88,37 @@ def main() -> None:
                     findings += found
                     peak = max(peak, case_peak)
                     if case_peak > args.memory_cap:
-                        findings.append(f"seed {seed}: worker resident peak {case_peak:.0f} MB above {args.memory_cap:.0f} MB")
+                        findings.append(
+                            f"seed {seed}: worker resident peak {case_peak:.0f} MB above {args.memory_cap:.0f} MB"
+                        )
             except BrokenProcessPool:
                 running = [s for f, s in futures.items() if s not in done and not f.done()]
-                broken = [s for f, s in futures.items() if s not in done and f.done() and f.exception() is not None]
+                broken = [
+                    s
+                    for f, s in futures.items()
+                    if s not in done and f.done() and f.exception() is not None
+                ]
                 crashes += broken[:1] or running[:1]
-                findings.append(f"seed {(broken[:1] or running[:1])[0]}: a worker crashed (native crash or killed)")
+                findings.append(
+                    f"seed {(broken[:1] or running[:1])[0]}: a worker crashed (native crash or killed)"
+                )
                 done.update(crashes)
         pending = [seed for seed in pending if seed not in done]
-        print(f"fuzz: {args.cases - len(pending)} of {args.cases} cases, {time.perf_counter() - start:.0f} s", file=sys.stderr)
+        print(
+            f"fuzz: {args.cases - len(pending)} of {args.cases} cases, {time.perf_counter() - start:.0f} s",
+            file=sys.stderr,
+        )
 
-    categories = {"tracebacks": "traceback", "leftover files": ": left ", "NaN in reports": "NaN", "slow commands": " took ",
-                  "crashes": "crashed"}
-    counted = {name: sum(1 for line in findings if marker in line) for name, marker in categories.items()}
+    categories = {
+        "tracebacks": "traceback",
+        "leftover files": ": left ",
+        "NaN in reports": "NaN",
+        "slow commands": " took ",
+        "crashes": "crashed",
+    }
+    counted = {
+        name: sum(1 for line in findings if marker in line) for name, marker in categories.items()
+    }
     commands = sum(codes.values())
     elapsed = time.perf_counter() - start
     load = os.getloadavg()[0]

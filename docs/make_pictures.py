@@ -45,8 +45,9 @@ def save_small(draw: Callable[[Path], None], name: str) -> Path:
         full = Path(folder) / name
         draw(full)
         with Image.open(full) as image:
-            image.convert("RGB").quantize(256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE).save(
-                target, optimize=True)
+            image.convert("RGB").quantize(
+                256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE
+            ).save(target, optimize=True)
     size = target.stat().st_size
     if size > MAX_BYTES:
         raise SystemExit(f"{target}: {size} bytes, more than {MAX_BYTES}")
@@ -61,21 +62,36 @@ def flat_triangles(network: PatchNetwork, resolution: int) -> TriangleMesh:
     normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
     points = corners.reshape(-1, 3)
-    return TriangleMesh(points, np.repeat(normal, 3, axis=0), np.arange(len(points), dtype=np.int64).reshape(-1, 3))
+    return TriangleMesh(
+        points, np.repeat(normal, 3, axis=0), np.arange(len(points), dtype=np.int64).reshape(-1, 3)
+    )
 
 
 def generated() -> None:
     """Pictures of generated and packaged meshes: the paper's cube and a torus."""
     with resources.as_file(resources.files("g1patch") / "data" / "cube.obj") as path:
         cube = read_mesh(path)
-    three = [build_corner_network(cube, tangents="arc", twist="coons"), build_gregory_network(cube),
-             build_split4_network(cube)]
+    three = [
+        build_corner_network(cube, tangents="arc", twist="coons"),
+        build_gregory_network(cube),
+        build_split4_network(cube),
+    ]
     titles = ["paper: corner G1 (creased)", "Gregory (exact G1)", "split4 (exact G1)"]
     for mode in ("zebra", "deviation"):
-        save_small(lambda p, m=mode: render_side_by_side(p, three, titles, mode=m, size=WIDE), f"cube_three_ways_{mode}.png")
+        save_small(
+            lambda p, m=mode: render_side_by_side(p, three, titles, mode=m, size=WIDE),
+            f"cube_three_ways_{mode}.png",
+        )
     torus = build_gregory_network(shapes.torus(12, 6))
-    save_small(lambda p: render_surfaces(p, [flat_triangles(torus, 3), flat_triangles(torus, 9)],
-                                         ["resolution 3", "resolution 9"], size=(600, 300)), "torus_export.png")
+    save_small(
+        lambda p: render_surfaces(
+            p,
+            [flat_triangles(torus, 3), flat_triangles(torus, 9)],
+            ["resolution 3", "resolution 9"],
+            size=(600, 300),
+        ),
+        "torus_export.png",
+    )
 
 
 def shared() -> None:
@@ -85,8 +101,16 @@ def shared() -> None:
     for mode in ("shaded", "zebra", "deviation"):
         save_small(lambda p, m=mode: render(p, spot, mode=m, size=SIZE), f"spot_{mode}.png")
     corner = build_corner_network(spot_mesh)
-    save_small(lambda p: render_side_by_side(p, [corner, spot], ["paper: corner G1", "Gregory (exact G1)"],
-                                             mode="deviation", size=(800, 360)), "spot_corner_vs_gregory.png")
+    save_small(
+        lambda p: render_side_by_side(
+            p,
+            [corner, spot],
+            ["paper: corner G1", "Gregory (exact G1)"],
+            mode="deviation",
+            size=(800, 360),
+        ),
+        "spot_corner_vs_gregory.png",
+    )
     creased = build_gregory_network(read_mesh(SHARED / "catmark_cube_creases2.obj"))
     save_small(lambda p: render(p, creased, mode="deviation", size=SIZE), "creases_deviation.png")
     teapot = network_from_patch_points(read_bpt(SHARED / "teapot.bpt"), source="teapot")
@@ -98,7 +122,10 @@ def main() -> None:
     argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
     IMAGES.mkdir(parents=True, exist_ok=True)
     generated()
-    if all((SHARED / name).is_file() for name in ("spot_quadrangulated.obj", "catmark_cube_creases2.obj", "teapot.bpt")):
+    if all(
+        (SHARED / name).is_file()
+        for name in ("spot_quadrangulated.obj", "catmark_cube_creases2.obj", "teapot.bpt")
+    ):
         shared()
     else:
         print(f"skipped the pictures of the shared meshes: {SHARED} not found")

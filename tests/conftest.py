@@ -13,5 +13,7 @@ SHARED_DATA = Path(__file__).parents[1].parent / "shared" / "data"
 def shared_data() -> Path:
     """The directory ``../shared/data`` (relative to the repository); skips the test where it is absent."""
     if not SHARED_DATA.is_dir():
-        pytest.skip(f"external test data not found: expected the directory {SHARED_DATA} (../shared/data beside the repository)")
+        pytest.skip(
+            f"external test data not found: expected the directory {SHARED_DATA} (../shared/data beside the repository)"
+        )
     return SHARED_DATA

@@ -56,7 +56,10 @@ def assert_exact_g1(report: ContinuityReport, folds: bool = True) -> None:
     assert report.max_edge_angle_deg <= MAX_ANGLE_DEG, report.worst_edge
     assert report.max_corner_angle_deg <= MAX_ANGLE_DEG
     assert report.max_g0_gap <= MAX_GAP
-    assert report.max_vertex_deviation is not None and report.max_vertex_deviation <= MAX_VERTEX_DEVIATION
+    assert (
+        report.max_vertex_deviation is not None
+        and report.max_vertex_deviation <= MAX_VERTEX_DEVIATION
+    )
     assert report.degenerate_normals == 0
     if folds:
         assert report.folds == 0

@@ -72,14 +72,18 @@ def _base_mesh(rng: np.random.Generator) -> tuple[np.ndarray, list[list[int]]]:
         sides = int(rng.integers(3, 9))
         angle = np.linspace(0, 2 * np.pi, sides, endpoint=False)
         ring = np.stack([np.cos(angle), np.sin(angle)], axis=1)
-        vertices = np.concatenate([np.column_stack([ring, np.zeros(sides)]), np.column_stack([ring, np.ones(sides)])])
+        vertices = np.concatenate(
+            [np.column_stack([ring, np.zeros(sides)]), np.column_stack([ring, np.ones(sides)])]
+        )
         faces = [[i, (i + 1) % sides, sides + (i + 1) % sides, sides + i] for i in range(sides)]
         faces += [list(range(sides))[::-1], list(range(sides, 2 * sides))]
         return vertices, faces
     return mesh.vertices.copy(), mesh.faces.tolist()
 
 
-def _edit_mesh(rng: np.random.Generator, vertices: np.ndarray, faces: list[list[int]], edits: list[str]) -> tuple[np.ndarray, list[list[int]], list[str]]:
+def _edit_mesh(
+    rng: np.random.Generator, vertices: np.ndarray, faces: list[list[int]], edits: list[str]
+) -> tuple[np.ndarray, list[list[int]], list[str]]:
     """Random topology and coordinate edits, and OpenSubdiv tags (some of them invalid)."""
     tags: list[str] = []
     nv = len(vertices)
@@ -110,7 +114,9 @@ def _edit_mesh(rng: np.random.Generator, vertices: np.ndarray, faces: list[list[
             faces[f][0] = -int(rng.integers(1, 3))
             edits.append(f"negative index in face {f}")
         elif kind == 7:
-            vertices[int(rng.integers(len(vertices))), int(rng.integers(3))] = rng.choice([np.nan, np.inf, -np.inf])
+            vertices[int(rng.integers(len(vertices))), int(rng.integers(3))] = rng.choice(
+                [np.nan, np.inf, -np.inf]
+            )
             edits.append("non-finite coordinate")
         elif kind == 8:
             vertices = vertices * rng.choice([1e300, 1e-300, 1e150, 1e-150])
@@ -126,13 +132,17 @@ def _edit_mesh(rng: np.random.Generator, vertices: np.ndarray, faces: list[list[
             edits.append("noise")
         elif kind == 12 and faces:
             a, b = faces[f][0], faces[f][1]
-            tags.append(f"t crease 2/1/0 {a} {b} {rng.choice(['10', '2.5', '0.3', '-1', 'nan', '1e308'])}")
+            tags.append(
+                f"t crease 2/1/0 {a} {b} {rng.choice(['10', '2.5', '0.3', '-1', 'nan', '1e308'])}"
+            )
             edits.append("crease tag")
         elif kind == 13:
             tags.append(f"t crease 2/1/0 0 {int(rng.integers(nv + 3))} 10")
             edits.append("crease tag on a possible non-edge")
         elif kind == 14:
-            tags.append(f"t corner 1/1/0 {int(rng.integers(-2, nv + 3))} {rng.choice(['10', '3', 'inf'])}")
+            tags.append(
+                f"t corner 1/1/0 {int(rng.integers(-2, nv + 3))} {rng.choice(['10', '3', 'inf'])}"
+            )
             edits.append("corner tag")
         elif kind == 15 and faces:
             tags.append(f"t hole 1/0/0 {int(rng.integers(-1, len(faces) + 2))}")
@@ -148,6 +158,7 @@ def _edit_mesh(rng: np.random.Generator, vertices: np.ndarray, faces: list[list[
 
 def _mesh_text(suffix: str, vertices: np.ndarray, faces: list[list[int]], tags: list[str]) -> bytes:
     """The mesh as OBJ (1-based, tags at the end), ASCII PLY or OFF text."""
+
     def number(x: float) -> str:
         return repr(float(x))
 
@@ -160,8 +171,17 @@ def _mesh_text(suffix: str, vertices: np.ndarray, faces: list[list[int]], tags: 
         lines += [" ".join(map(number, v)) for v in vertices]
         lines += [f"{len(face)} " + " ".join(map(str, face)) for face in faces]
     else:
-        lines = ["ply", "format ascii 1.0", f"element vertex {len(vertices)}", "property float x", "property float y",
-                 "property float z", f"element face {len(faces)}", "property list uchar int vertex_indices", "end_header"]
+        lines = [
+            "ply",
+            "format ascii 1.0",
+            f"element vertex {len(vertices)}",
+            "property float x",
+            "property float y",
+            "property float z",
+            f"element face {len(faces)}",
+            "property list uchar int vertex_indices",
+            "end_header",
+        ]
         lines += [" ".join(map(number, v)) for v in vertices]
         lines += [f"{len(face)} " + " ".join(map(str, face)) for face in faces]
     return ("\n".join(lines) + "\n").encode()
@@ -182,7 +202,10 @@ def _damage_bytes(rng: np.random.Generator, data: bytes, edits: list[str]) -> by
         return bytes(buffer)
     if kind == 2:
         lines = data.split(b"\n")
-        lines.insert(int(rng.integers(len(lines) + 1)), rng.choice([b"f 1 2", b"v 1 2", b"v a b c", b"\x00\xff", b"f 1/2/3/4 x"]))
+        lines.insert(
+            int(rng.integers(len(lines) + 1)),
+            rng.choice([b"f 1 2", b"v 1 2", b"v a b c", b"\x00\xff", b"f 1/2/3/4 x"]),
+        )
         edits.append("garbage line")
         return b"\n".join(lines)
     if kind == 3:
@@ -202,7 +225,9 @@ def _network_bytes(rng: np.random.Generator, directory: Path, edits: list[str]) 
     from g1patch.build import build_network
     from g1patch.io.network_file import save_network
 
-    mesh = [shapes.cube, lambda: shapes.grid(2, 2), lambda: shapes.torus(4, 3)][int(rng.integers(3))]()
+    mesh = [shapes.cube, lambda: shapes.grid(2, 2), lambda: shapes.torus(4, 3)][
+        int(rng.integers(3))
+    ]()
     method = str(rng.choice(["gregory", "split4", "corner"]))
     clean = directory / "clean.npz"
     save_network(clean, build_network(mesh, method))  # type: ignore[arg-type]
@@ -233,7 +258,9 @@ def _network_bytes(rng: np.random.Generator, directory: Path, edits: list[str]) 
     return out.getvalue()
 
 
-def _mutated(rng: np.random.Generator, name: str, array: np.ndarray, kind: int, edits: list[str]) -> np.ndarray:
+def _mutated(
+    rng: np.random.Generator, name: str, array: np.ndarray, kind: int, edits: list[str]
+) -> np.ndarray:
     """One member's array changed one way (kind 1–7): a bad index, a bad float, a row short, bools
     as 2s, another dtype, a replaced header, another shape (unchanged where the kind does not apply)."""
     if kind == 1 and array.dtype.kind in "iu" and array.size:
@@ -254,10 +281,20 @@ def _mutated(rng: np.random.Generator, name: str, array: np.ndarray, kind: int, 
         array = array.astype(np.float32) if array.dtype.kind in "iub" else array.astype(np.int64)
         edits.append(f"{name}: dtype changed")
     elif kind == 6 and array.dtype.kind == "U":
-        array = np.array(rng.choice(['{"format": "g1patch-network", "version": 99}', "{not json", '{"version": 3}']))
+        array = np.array(
+            rng.choice(
+                ['{"format": "g1patch-network", "version": 99}', "{not json", '{"version": 3}']
+            )
+        )
         edits.append(f"{name}: header replaced")
     elif kind == 7:
-        array = array.reshape(-1) if array.ndim > 1 else array.reshape(1, -1) if array.ndim == 1 else np.array([array])
+        array = (
+            array.reshape(-1)
+            if array.ndim > 1
+            else array.reshape(1, -1)
+            if array.ndim == 1
+            else np.array([array])
+        )
         edits.append(f"{name}: reshaped")
     return array
 
@@ -307,7 +344,9 @@ def _run(argv: list[str], directory: Path) -> Outcome:
     return Outcome(argv, code, stdout.getvalue(), stderr.getvalue(), exception, leftovers, seconds)
 
 
-def run_case(case: Case, rng_seed: int | None = None, render: bool = True, cad: bool = False) -> list[Outcome]:
+def run_case(
+    case: Case, rng_seed: int | None = None, render: bool = True, cad: bool = False
+) -> list[Outcome]:
     """Drive the case through the commands that apply (module docstring)."""
     rng = np.random.default_rng(case.seed if rng_seed is None else rng_seed)
     directory = case.path.parent
@@ -315,9 +354,13 @@ def run_case(case: Case, rng_seed: int | None = None, render: bool = True, cad: 
     network = case.path
     if case.kind == "mesh":
         network = directory / "built.npz"
-        options = [["--method", str(rng.choice(["gregory", "split4", "corner"]))],
-                   ["--shape", str(rng.choice(["interpolate", "limit", "legacy"]))]]
-        argv = ["build", str(case.path), "-o", str(network), "-q"] + [x for option in options if rng.random() < 0.5 for x in option]
+        options = [
+            ["--method", str(rng.choice(["gregory", "split4", "corner"]))],
+            ["--shape", str(rng.choice(["interpolate", "limit", "legacy"]))],
+        ]
+        argv = ["build", str(case.path), "-o", str(network), "-q"] + [
+            x for option in options if rng.random() < 0.5 for x in option
+        ]
         if rng.random() < 0.2:
             argv += ["--sharp-angle", "30"]
         if rng.random() < 0.2:
@@ -326,11 +369,29 @@ def run_case(case: Case, rng_seed: int | None = None, render: bool = True, cad: 
         if outcomes[-1].code != 0:
             return outcomes
     outcomes.append(_run(["check", str(network), "--json", "-q"], directory))
-    outcomes.append(_run(["export", str(network), "-o", str(directory / "out.obj"), "-q"], directory))
+    outcomes.append(
+        _run(["export", str(network), "-o", str(directory / "out.obj"), "-q"], directory)
+    )
     if cad:
-        outcomes.append(_run(["export", str(network), "-o", str(directory / "out.step"), "-q"], directory))
+        outcomes.append(
+            _run(["export", str(network), "-o", str(directory / "out.step"), "-q"], directory)
+        )
     if render:
-        outcomes.append(_run(["render", str(network), "-o", str(directory / "out.png"), "--size", "96", "96", "-q"], directory))
+        outcomes.append(
+            _run(
+                [
+                    "render",
+                    str(network),
+                    "-o",
+                    str(directory / "out.png"),
+                    "--size",
+                    "96",
+                    "96",
+                    "-q",
+                ],
+                directory,
+            )
+        )
     return outcomes
 
 

@@ -64,7 +64,9 @@ def bspline_basis() -> list[sp.Expr]:
     for k in range(1, 4):
         basis = {
             i: sp.Rational(1, knots[i + k] - knots[i]) * (x - knots[i]) * basis[i]
-            + sp.Rational(1, knots[i + k + 1] - knots[i + 1]) * (knots[i + k + 1] - x) * basis[i + 1]
+            + sp.Rational(1, knots[i + k + 1] - knots[i + 1])
+            * (knots[i + k + 1] - x)
+            * basis[i + 1]
             for i in range(7 - k)
         }
     return [sp.expand(basis[i].subs(x, t + span)) for i in range(4)]
@@ -73,7 +75,10 @@ def bspline_basis() -> list[sp.Expr]:
 @cache
 def basis_polynomials(form: str) -> tuple[sp.Expr, ...]:
     if form == "hermite":
-        return tuple(sp.expand(sum(sp.Integer(c) * t ** (3 - k) for k, c in enumerate(row))) for row in PAPER_M_H)
+        return tuple(
+            sp.expand(sum(sp.Integer(c) * t ** (3 - k) for k, c in enumerate(row)))
+            for row in PAPER_M_H
+        )
     if form == "bezier":
         return tuple(bernstein_basis())
     if form == "bspline":
@@ -98,7 +103,8 @@ def derivative_basis_matrix(form: str, order: int) -> sp.Matrix:
 
 def as_fractions(matrix: sp.Matrix) -> tuple[tuple[Fraction, ...], ...]:
     return tuple(
-        tuple(Fraction(int(sp.fraction(x)[0]), int(sp.fraction(x)[1])) for x in matrix.row(i)) for i in range(matrix.rows)
+        tuple(Fraction(int(sp.fraction(x)[0]), int(sp.fraction(x)[1])) for x in matrix.row(i))
+        for i in range(matrix.rows)
     )
 
 
@@ -128,7 +134,9 @@ def rational(value) -> sp.Expr:
     return sp.Rational(value)
 
 
-def random_rationals(rng: np.random.Generator, shape, numerator: int = 40, denominators=(1, 2, 3, 4, 5, 6, 7, 9, 12)):
+def random_rationals(
+    rng: np.random.Generator, shape, numerator: int = 40, denominators=(1, 2, 3, 4, 5, 6, 7, 9, 12)
+):
     """Object array of Fractions n/d with |n| ≤ numerator and d from ``denominators``."""
     flat = [
         Fraction(int(rng.integers(-numerator, numerator + 1)), int(rng.choice(denominators)))
@@ -149,7 +157,8 @@ def curve_polynomials(form: str, control) -> list[sp.Expr]:
     control = np.asarray(control, dtype=object)
     basis = basis_polynomials(form)
     return [
-        sp.expand(sum(rational(control[i, d]) * basis[i] for i in range(4))) for d in range(control.shape[1])
+        sp.expand(sum(rational(control[i, d]) * basis[i] for i in range(4)))
+        for d in range(control.shape[1])
     ]
 
 
@@ -255,7 +264,9 @@ def abs_weights(form: str, order: int, params) -> np.ndarray:
     return powers @ M.T
 
 
-def abs_patch_sum(form: str, control: np.ndarray, uv: np.ndarray, du: int = 0, dv: int = 0) -> np.ndarray:
+def abs_patch_sum(
+    form: str, control: np.ndarray, uv: np.ndarray, du: int = 0, dv: int = 0
+) -> np.ndarray:
     """``S[n, k] = Σ_ij B_i(u_k) |P[n,i,j,:]| B_j(v_k)`` (per coordinate), shape (N, K, 3).
 
     The magnitude of every term of the evaluation sum (with the Horner terms of each basis

@@ -19,7 +19,9 @@ HAS_OCP = importlib.util.find_spec("OCP") is not None
 
 #: the cube [-1, 1]³, faces counter-clockwise seen from outside
 CUBE_VERTICES = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
-CUBE_QUADS = np.array([[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]])
+CUBE_QUADS = np.array(
+    [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+)
 
 
 @pytest.fixture(scope="module")
@@ -53,11 +55,23 @@ def _script(path: Path, out: Path, cad: bool) -> None:
     assert n.render(out / "m.png", mode="zebra", size=(200, 200)) == out / "m.png"
 
 
-@pytest.mark.parametrize("cad", [pytest.param(True, marks=pytest.mark.skipif(not HAS_OCP, reason="needs OCP (g1patch[cad])")), False])
-def test_script_on_a_cube_file(cube_obj: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], cad: bool) -> None:
+@pytest.mark.parametrize(
+    "cad",
+    [
+        pytest.param(
+            True, marks=pytest.mark.skipif(not HAS_OCP, reason="needs OCP (g1patch[cad])")
+        ),
+        False,
+    ],
+)
+def test_script_on_a_cube_file(
+    cube_obj: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], cad: bool
+) -> None:
     _script(cube_obj, tmp_path, cad)
     printed = capsys.readouterr().out
-    assert "max G1 angle on edges" in printed  # print(report) prints the table, not a dataclass dump
+    assert (
+        "max G1 angle on edges" in printed
+    )  # print(report) prints the table, not a dataclass dump
     assert (tmp_path / "m.png").read_bytes().startswith(PNG)
     if cad:
         assert (tmp_path / "m.step").read_text(errors="replace").startswith("ISO-10303-21")
@@ -66,7 +80,9 @@ def test_script_on_a_cube_file(cube_obj: Path, tmp_path: Path, capsys: pytest.Ca
     assert (tmp_path / "m.obj").read_text().count("\nf ") > 0
 
 
-def test_script_on_the_shared_torus(shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_script_on_the_shared_torus(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     torus = shared_data / "catmark_torus.obj"
     if not torus.is_file():
         pytest.skip(f"{torus} not found")
@@ -102,13 +118,18 @@ def test_the_cube_is_exactly_g1(cube: g1patch.Surface) -> None:
 
 @pytest.mark.parametrize("as_lists", [False, True])
 def test_arrays_of_quads(as_lists: bool) -> None:
-    source = (CUBE_VERTICES.tolist(), CUBE_QUADS.tolist()) if as_lists else (CUBE_VERTICES, CUBE_QUADS)
+    source = (
+        (CUBE_VERTICES.tolist(), CUBE_QUADS.tolist()) if as_lists else (CUBE_VERTICES, CUBE_QUADS)
+    )
     surface = g1patch.smooth(source)
     assert surface.n_patches == 6 and _exact(surface.check())
 
 
 def test_ragged_polygons_are_split() -> None:
-    faces = [list(face) for face in CUBE_QUADS[:5]] + [[1, 5, 7], [1, 7, 3]]  # one side as two triangles
+    faces = [list(face) for face in CUBE_QUADS[:5]] + [
+        [1, 5, 7],
+        [1, 7, 3],
+    ]  # one side as two triangles
     surface = g1patch.smooth((CUBE_VERTICES, faces))
     assert surface.n_patches == 4 * 5 + 3 * 2 and _exact(surface.check())
 
@@ -122,13 +143,18 @@ def test_planar_points_get_z_zero() -> None:
 def test_meshio_mesh_with_quads_triangles_polygons_and_lines() -> None:
     meshio = pytest.importorskip("meshio")
     # a prism: two triangles and three quads, with a polygon block (one quad as a 4-gon) and a line block
-    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]], dtype=float)
-    mesh = meshio.Mesh(vertices, [
-        ("triangle", np.array([[0, 2, 1], [3, 4, 5]])),
-        ("quad", np.array([[0, 1, 4, 3], [1, 2, 5, 4]])),
-        ("polygon", np.array([[2, 0, 3, 5]])),
-        ("line", np.array([[0, 1]])),
-    ])
+    vertices = np.array(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]], dtype=float
+    )
+    mesh = meshio.Mesh(
+        vertices,
+        [
+            ("triangle", np.array([[0, 2, 1], [3, 4, 5]])),
+            ("quad", np.array([[0, 1, 4, 3], [1, 2, 5, 4]])),
+            ("polygon", np.array([[2, 0, 3, 5]])),
+            ("line", np.array([[0, 1]])),
+        ],
+    )
     surface = g1patch.smooth(mesh)
     assert surface.n_patches == 2 * 3 + 3 * 4 and _exact(surface.check())
     quads = g1patch.smooth(meshio.Mesh(CUBE_VERTICES, [("quad", CUBE_QUADS)]))
@@ -160,7 +186,9 @@ class PolyDataLike:
 
 def test_trimesh_like_object() -> None:
     assert g1patch.smooth(TrimeshLike(CUBE_VERTICES, CUBE_QUADS)).n_patches == 6
-    triangles = np.array([face[[0, 1, 2]] for face in CUBE_QUADS] + [face[[0, 2, 3]] for face in CUBE_QUADS])
+    triangles = np.array(
+        [face[[0, 1, 2]] for face in CUBE_QUADS] + [face[[0, 2, 3]] for face in CUBE_QUADS]
+    )
     assert g1patch.smooth(TrimeshLike(CUBE_VERTICES, triangles)).n_patches == 3 * 12
 
 
@@ -184,15 +212,21 @@ def test_quad_mesh_and_options(cube_obj: Path) -> None:
         g1patch.smooth((CUBE_VERTICES, [[0, 1, 3]] + CUBE_QUADS[1:].tolist()), split=False)
 
 
-@pytest.mark.parametrize("bad, named", [
-    ({"vertices": 1}, r"a dict \(\{'vertices': 1\}\)"),
-    (42, r"an int \(42\)"),
-    (np.zeros((4, 3)), r"a numpy\.ndarray of shape \(4, 3\) and dtype float64"),
-    ((1, 2, 3), r"a tuple \(\(1, 2, 3\)\)"),
-    (None, r"a NoneType \(None\)"),
-])
+@pytest.mark.parametrize(
+    "bad, named",
+    [
+        ({"vertices": 1}, r"a dict \(\{'vertices': 1\}\)"),
+        (42, r"an int \(42\)"),
+        (np.zeros((4, 3)), r"a numpy\.ndarray of shape \(4, 3\) and dtype float64"),
+        ((1, 2, 3), r"a tuple \(\(1, 2, 3\)\)"),
+        (None, r"a NoneType \(None\)"),
+    ],
+)
 def test_bad_inputs_name_what_was_passed(bad: object, named: str) -> None:
-    with pytest.raises(g1patch.InputError, match=r"smooth: cannot make a mesh of " + named + r"; expected a mesh file path"):
+    with pytest.raises(
+        g1patch.InputError,
+        match=r"smooth: cannot make a mesh of " + named + r"; expected a mesh file path",
+    ):
         g1patch.smooth(bad)
 
 
@@ -207,7 +241,11 @@ def test_repairs_are_kept_and_shown() -> None:
     flipped = CUBE_QUADS.copy()
     flipped[0] = flipped[0][::-1]
     surface = g1patch.smooth((CUBE_VERTICES, flipped))
-    assert surface.repairs == ("1 face (0) reoriented",) and "repaired" in repr(surface) and "repaired" in repr(surface.mesh)
+    assert (
+        surface.repairs == ("1 face (0) reoriented",)
+        and "repaired" in repr(surface)
+        and "repaired" in repr(surface.mesh)
+    )
     assert _exact(surface.check())
     with pytest.raises(g1patch.MeshError, match="oriented consistently"):
         g1patch.smooth((CUBE_VERTICES, flipped), strict=True)
@@ -232,23 +270,31 @@ def test_bad_arrays_raise_the_mesh_checks() -> None:
 def bezier_patches(cube_obj: Path) -> g1patch.PatchSet:
     patches = g1patch.smooth(cube_obj, method="split4").patches
     assert isinstance(patches, g1patch.PatchSet)
-    return g1patch.PatchSet(patches.convert("bezier").world_control(), "bezier")  # bare: no network, no frame
+    return g1patch.PatchSet(
+        patches.convert("bezier").world_control(), "bezier"
+    )  # bare: no network, no frame
 
 
-def test_bare_patch_set_through_check_tessellate_export(bezier_patches: g1patch.PatchSet, tmp_path: Path) -> None:
+def test_bare_patch_set_through_check_tessellate_export(
+    bezier_patches: g1patch.PatchSet, tmp_path: Path
+) -> None:
     from g1patch.continuity import check
 
     assert _exact(check(bezier_patches))  # the deep function too
     assert _exact(g1patch.check(bezier_patches))
     surface = g1patch.Surface(bezier_patches)
     points, triangles = surface.tessellate(5)
-    assert triangles.shape == (24 * 2 * 16, 3) and len(points) == 24 * 16 + 2  # welded: a closed genus-0 mesh
+    assert (
+        triangles.shape == (24 * 2 * 16, 3) and len(points) == 24 * 16 + 2
+    )  # welded: a closed genus-0 mesh
     assert g1patch.export(bezier_patches, tmp_path / "p.obj") == tmp_path / "p.obj"
     assert g1patch.export(bezier_patches, tmp_path / "p.bpt") == tmp_path / "p.bpt"
     assert g1patch.read(tmp_path / "p.bpt").n_patches == 24
     if HAS_OCP:
         result = g1patch.export(bezier_patches, tmp_path / "p.iges", g1_samples=0)
-        assert result.faces == 6 and result.exact  # the 2×2 pieces of a quad are recognised: one B-spline face each
+        assert (
+            result.faces == 6 and result.exact
+        )  # the 2×2 pieces of a quad are recognised: one B-spline face each
 
 
 def test_bare_gregory_patch_set(cube: g1patch.Surface, tmp_path: Path) -> None:
@@ -267,7 +313,9 @@ def test_bare_gregory_patch_set(cube: g1patch.Surface, tmp_path: Path) -> None:
 def test_check_refuses_other_objects_by_name() -> None:
     from g1patch.continuity import check
 
-    with pytest.raises(g1patch.InputError, match=r"network: expected a Surface, PatchNetwork.*got a dict"):
+    with pytest.raises(
+        g1patch.InputError, match=r"network: expected a Surface, PatchNetwork.*got a dict"
+    ):
         check({})  # type: ignore[arg-type]
     with pytest.raises(g1patch.InputError, match=r"surface: expected a Surface.*got a list"):
         g1patch.check([1, 2])
@@ -278,7 +326,9 @@ def test_export_options_and_suffixes(cube: g1patch.Surface, tmp_path: Path) -> N
     assert (tmp_path / "fine.stl").stat().st_size == 84 + 50 * 6 * 8
     with pytest.raises(g1patch.InputError, match=r"export to \.obj: unknown option 'tolerance'"):
         cube.export(tmp_path / "m.obj", tolerance=1e-3)
-    with pytest.raises(g1patch.InputError, match=r"export to \.npz: unknown option 'resolution'.*no options"):
+    with pytest.raises(
+        g1patch.InputError, match=r"export to \.npz: unknown option 'resolution'.*no options"
+    ):
         cube.export(tmp_path / "m.npz", resolution=3)
     with pytest.raises(g1patch.FormatError, match=r"unsupported extension '\.xyz'"):
         cube.export(tmp_path / "m.xyz")
@@ -293,11 +343,18 @@ def test_render_to_bytes_and_view(cube: g1patch.Surface) -> None:
 # ----------------------------------------------------------------------------- reprs and displays
 
 
-def test_reprs_are_short(cube_obj: Path, cube: g1patch.Surface, bezier_patches: g1patch.PatchSet) -> None:
+def test_reprs_are_short(
+    cube_obj: Path, cube: g1patch.Surface, bezier_patches: g1patch.PatchSet
+) -> None:
     mesh = g1patch.read(cube_obj)
     objects = {
-        "QuadMesh": mesh, "QuadTopology": mesh.topology, "PatchSet": bezier_patches,
-        "GregoryPatchSet": cube.patches, "PatchNetwork": cube.network, "ContinuityReport": cube.check(), "Surface": cube,
+        "QuadMesh": mesh,
+        "QuadTopology": mesh.topology,
+        "PatchSet": bezier_patches,
+        "GregoryPatchSet": cube.patches,
+        "PatchNetwork": cube.network,
+        "ContinuityReport": cube.check(),
+        "Surface": cube,
     }
     for name, value in objects.items():
         text = repr(value)
@@ -307,10 +364,19 @@ def test_reprs_are_short(cube_obj: Path, cube: g1patch.Surface, bezier_patches: 
     assert repr(cube.network) == f"<PatchNetwork 6 gregory patches, interpolate, {sphere}>"
     assert repr(cube) == f"<Surface 6 gregory patches, interpolate, {sphere}>"
     assert repr(cube.patches) == f"<GregoryPatchSet 6 patches, {sphere}>"
-    assert repr(mesh) == "<QuadMesh 8 vertices, 6 quads, 12 edges, closed, bbox (-1, -1, -1)…(1, 1, 1), cube.obj>"
-    assert re.fullmatch(r"<ContinuityReport 6 patches, 12 shared edges: exact G1 \(max angle .*°\), no folds>", repr(cube.check()))
+    assert (
+        repr(mesh)
+        == "<QuadMesh 8 vertices, 6 quads, 12 edges, closed, bbox (-1, -1, -1)…(1, 1, 1), cube.obj>"
+    )
+    assert re.fullmatch(
+        r"<ContinuityReport 6 patches, 12 shared edges: exact G1 \(max angle .*°\), no folds>",
+        repr(cube.check()),
+    )
     assert repr(bezier_patches) == f"<PatchSet 24 bezier patches, {sphere}>"
-    assert repr(g1patch.Surface(bezier_patches)) == f"<Surface 24 bezier patches, from PatchSet, {sphere}>"
+    assert (
+        repr(g1patch.Surface(bezier_patches))
+        == f"<Surface 24 bezier patches, from PatchSet, {sphere}>"
+    )
 
 
 def test_jupyter_displays(cube_obj: Path, cube: g1patch.Surface) -> None:
@@ -321,7 +387,9 @@ def test_jupyter_displays(cube_obj: Path, cube: g1patch.Surface) -> None:
     assert html.startswith("<div>") and "<table>" in html and "max G1 angle on edges" in html
 
 
-def test_jupyter_skips_large_networks(cube: g1patch.Surface, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_jupyter_skips_large_networks(
+    cube: g1patch.Surface, monkeypatch: pytest.MonkeyPatch
+) -> None:
     import g1patch.api
 
     monkeypatch.setattr(g1patch.api, "PREVIEW_MAX_PATCHES", 5)
@@ -333,16 +401,40 @@ def test_jupyter_skips_large_networks(cube: g1patch.Surface, monkeypatch: pytest
 
 def test_import_is_fast_and_light() -> None:
     code = "import sys, g1patch; print(sorted(m for m in ('numpy', 'scipy', 'matplotlib', 'numba', 'meshio') if m in sys.modules))"
-    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    loaded = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout.strip()
     assert loaded == "[]"
-    timing = subprocess.run([sys.executable, "-X", "importtime", "-c", "import g1patch"], capture_output=True, text=True, check=True)
-    cumulative = [int(line.split("|")[1]) for line in timing.stderr.splitlines() if line.rstrip().endswith("| g1patch")]
+    timing = subprocess.run(
+        [sys.executable, "-X", "importtime", "-c", "import g1patch"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    cumulative = [
+        int(line.split("|")[1])
+        for line in timing.stderr.splitlines()
+        if line.rstrip().endswith("| g1patch")
+    ]
     assert cumulative and cumulative[0] < 500_000  # microseconds
 
 
 def test_public_names_and_deep_modules() -> None:
-    for name in ("read", "smooth", "Surface", "check", "export", "QuadMesh", "PatchNetwork", "PatchSet",
-                 "GregoryPatchSet", "ContinuityReport", "InputError", "G1PatchError", "__version__"):
+    for name in (
+        "read",
+        "smooth",
+        "Surface",
+        "check",
+        "export",
+        "QuadMesh",
+        "PatchNetwork",
+        "PatchSet",
+        "GregoryPatchSet",
+        "ContinuityReport",
+        "InputError",
+        "G1PatchError",
+        "__version__",
+    ):
         assert name in dir(g1patch) and getattr(g1patch, name) is not None
     from g1patch import __version__
     from g1patch.build import build_network
@@ -350,7 +442,9 @@ def test_public_names_and_deep_modules() -> None:
     from g1patch.render import render
     from g1patch.tessellate import tessellate
 
-    assert isinstance(__version__, str) and all(map(callable, (build_network, check, render, tessellate)))
+    assert isinstance(__version__, str) and all(
+        map(callable, (build_network, check, render, tessellate))
+    )
     assert g1patch.QuadMesh is __import__("g1patch.mesh").mesh.QuadMesh
     with pytest.raises(AttributeError, match="no attribute 'nonsense'"):
         g1patch.nonsense  # noqa: B018

@@ -13,9 +13,9 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+import reference as ref
 import sympy as sp
 
-import reference as ref
 from g1patch import basis
 from g1patch.errors import InputError
 
@@ -32,7 +32,9 @@ def fractions(matrix) -> tuple[tuple[Fraction, ...], ...]:
 def test_hermite_matrix_is_the_papers_eq_1():
     expected = tuple(tuple(Fraction(x) for x in row) for row in ref.PAPER_M_H)
     assert basis.exact_basis_matrix("hermite") == expected
-    np.testing.assert_array_equal(basis.basis_matrix("hermite"), np.array(ref.PAPER_M_H, dtype=float))
+    np.testing.assert_array_equal(
+        basis.basis_matrix("hermite"), np.array(ref.PAPER_M_H, dtype=float)
+    )
 
 
 def test_papers_hermite_matrix_interpolates_values_and_slopes():
@@ -51,7 +53,12 @@ def test_bspline_reference_is_a_partition_of_unity_with_known_knot_values():
     # Sanity of the Cox–de Boor reference itself: Σ b_i = 1, and b(0) = (1, 4, 1, 0)/6.
     polys = ref.basis_polynomials("bspline")
     assert sp.expand(sum(polys)) == 1
-    assert [p.subs(ref.t, 0) for p in polys] == [sp.Rational(1, 6), sp.Rational(2, 3), sp.Rational(1, 6), 0]
+    assert [p.subs(ref.t, 0) for p in polys] == [
+        sp.Rational(1, 6),
+        sp.Rational(2, 3),
+        sp.Rational(1, 6),
+        0,
+    ]
     assert sp.expand(sum(ref.basis_polynomials("bezier"))) == 1
 
 
@@ -81,7 +88,10 @@ def test_derivative_matrix_equals_sympy_derivative(form, order):
 @pytest.mark.parametrize("form", FORMS)
 @pytest.mark.parametrize("order", range(4))
 def test_basis_values_match_sympy_at_rational_parameters(form, order):
-    params = [Fraction(k, d) for d in (1, 3, 7, 8, 10) for k in range(d + 1)] + [Fraction(-1, 3), Fraction(5, 4)]
+    params = [Fraction(k, d) for d in (1, 3, 7, 8, 10) for k in range(d + 1)] + [
+        Fraction(-1, 3),
+        Fraction(5, 4),
+    ]
     t_float = np.array([float(x) for x in params])
     got = basis.basis_values(form, t_float, order)
     assert got.shape == (len(params), 4)
@@ -118,7 +128,11 @@ def test_conversion_keeps_the_polynomial_exactly(source, target):
     after = sum(y * b for y, b in zip(ys, ref.basis_polynomials(target)))
     assert sp.expand(after - before) == 0
     assert C == ref.conversion_matrix(source, target)
-    assert all(isinstance(x, Fraction) for row in basis.exact_conversion_matrix(source, target) for x in row)
+    assert all(
+        isinstance(x, Fraction)
+        for row in basis.exact_conversion_matrix(source, target)
+        for x in row
+    )
 
 
 @pytest.mark.parametrize("source,target", PAIRS)
@@ -204,7 +218,9 @@ def test_unknown_form_is_named(bad):
     }
     for name, functions in calls.items():
         for call in functions:
-            with pytest.raises(InputError, match="^" + re.escape(f"{name}: unknown value {bad!r}; expected one of")) as info:
+            with pytest.raises(
+                InputError, match="^" + re.escape(f"{name}: unknown value {bad!r}; expected one of")
+            ) as info:
                 call()
             assert "'hermite', 'bezier', 'bspline'" in str(info.value)
 

@@ -20,27 +20,39 @@ from g1patch import shapes
 from g1patch.targets import Targets
 
 
-def _watching(monkeypatch: pytest.MonkeyPatch, module: Any, name: str, seen: list[weakref.ref[np.ndarray]]) -> None:
+def _watching(
+    monkeypatch: pytest.MonkeyPatch, module: Any, name: str, seen: list[weakref.ref[np.ndarray]]
+) -> None:
     """Wrap ``module.name`` (returns Targets) so that weak references to its results' arrays land in ``seen``."""
     original: Callable[..., Targets] = getattr(module, name)
 
     def watched(*args: Any, **kwargs: Any) -> Targets:
         targets = original(*args, **kwargs)
-        seen.extend(weakref.ref(getattr(targets, field)) for field in ("tangents", "interior", "corner_normals"))
+        seen.extend(
+            weakref.ref(getattr(targets, field))
+            for field in ("tangents", "interior", "corner_normals")
+        )
         return targets
 
     monkeypatch.setattr(module, name, watched)
 
 
-def _asserting_freed(monkeypatch: pytest.MonkeyPatch, module: Any, name: str, seen: list[weakref.ref[np.ndarray]],
-                     calls: list[str]) -> None:
+def _asserting_freed(
+    monkeypatch: pytest.MonkeyPatch,
+    module: Any,
+    name: str,
+    seen: list[weakref.ref[np.ndarray]],
+    calls: list[str],
+) -> None:
     """Wrap ``module.name`` (makes the network's arrays) to assert that every array in ``seen`` is gone."""
     original = getattr(module, name)
 
     def checked(*args: Any, **kwargs: Any) -> Any:
         gc.collect()
         alive = [ref for ref in seen if ref() is not None]
-        assert seen and not alive, f"{len(alive)} of {len(seen)} targets arrays still alive when {name} runs"
+        assert seen and not alive, (
+            f"{len(alive)} of {len(seen)} targets arrays still alive when {name} runs"
+        )
         calls.append(name)
         return original(*args, **kwargs)
 
@@ -48,7 +60,9 @@ def _asserting_freed(monkeypatch: pytest.MonkeyPatch, module: Any, name: str, se
 
 
 @pytest.mark.parametrize("method", ["gregory", "split4", "corner"])
-def test_the_targets_are_freed_before_the_network_is_made(monkeypatch: pytest.MonkeyPatch, method: str) -> None:
+def test_the_targets_are_freed_before_the_network_is_made(
+    monkeypatch: pytest.MonkeyPatch, method: str
+) -> None:
     seen: list[weakref.ref[np.ndarray]] = []
     calls: list[str] = []
     _watching(monkeypatch, build_module, "shape_targets", seen)

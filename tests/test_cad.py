@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from numpy.typing import ArrayLike, NDArray
+from ocp_marks import HAVE_OCP, requires_ocp  # noqa: E402
 from scipy.interpolate import BSpline
 from scipy.spatial import cKDTree
 
@@ -37,8 +38,6 @@ from g1patch.io.cad import (
 from g1patch.io.meshfile import read_mesh
 from g1patch.network import PatchNetwork, network_from_patch_points
 from g1patch.patches import PatchSet
-
-from ocp_marks import HAVE_OCP, requires_ocp  # noqa: E402
 
 #: closed meshes of the acceptance: generated ones and the shared files
 CLOSED = {
@@ -85,7 +84,9 @@ class OnSphere:
         p = self.base.evaluate(uv)
         return self._push(p, self.base.evaluate(uv, du, dv) if du + dv else None)
 
-    def evaluate_grid(self, u: ArrayLike, v: ArrayLike | None = None, du: int = 0, dv: int = 0) -> NDArray[np.float64]:
+    def evaluate_grid(
+        self, u: ArrayLike, v: ArrayLike | None = None, du: int = 0, dv: int = 0
+    ) -> NDArray[np.float64]:
         assert du + dv <= 1
         p = self.base.evaluate_grid(u, v)
         return self._push(p, self.base.evaluate_grid(u, v, du, dv) if du + dv else None)
@@ -96,7 +97,9 @@ def sphere_network() -> PatchNetwork:
     return dataclasses.replace(network, patches=OnSphere(network.patches))
 
 
-def evaluate_fit(fit: cad.BSplineFit, u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
+def evaluate_fit(
+    fit: cad.BSplineFit, u: NDArray[np.float64], v: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """The fitted surfaces on the grid u × v, (N, len(u), len(v), 3), by SciPy's B-spline basis."""
     basis_u = BSpline.design_matrix(u, fit.knots_u, 3).toarray()
     basis_v = BSpline.design_matrix(v, fit.knots_v, 3).toarray()
@@ -105,7 +108,9 @@ def evaluate_fit(fit: cad.BSplineFit, u: NDArray[np.float64], v: NDArray[np.floa
 
 def boundary_rows(control: NDArray[np.float64]) -> NDArray[np.float64]:
     """Boundary control rows of nets (N, c, c, 3) per edge k, counter-clockwise: (N, 4, c, 3)."""
-    return np.stack([control[:, :, 0], control[:, -1, :], control[:, ::-1, -1], control[:, 0, ::-1]], axis=1)
+    return np.stack(
+        [control[:, :, 0], control[:, -1, :], control[:, ::-1, -1], control[:, 0, ::-1]], axis=1
+    )
 
 
 # ------------------------------------------------------------------------------------------------ fitting
@@ -133,7 +138,9 @@ def test_fit_of_a_non_polynomial_surface_reaches_the_tolerance() -> None:
     # measured independently, at parameters the fit never saw, including the borders
     rng = np.random.default_rng(7)
     u = np.sort(np.concatenate([[0.0, 1.0], rng.random(40)]))
-    error = np.linalg.norm(evaluate_fit(fit, u, u) - network.patches.evaluate_grid(u, u), axis=-1).max()
+    error = np.linalg.norm(
+        evaluate_fit(fit, u, u) - network.patches.evaluate_grid(u, u), axis=-1
+    ).max()
     assert error <= 1.5 * tolerance
     # a tighter tolerance needs more spans and meets it
     tighter = fit_bspline_surfaces(network, tolerance / 20)
@@ -183,8 +190,12 @@ def test_fit_reports_an_unreachable_tolerance() -> None:
 
 @pytest.mark.parametrize(
     ("kwargs", "match"),
-    [({"tolerance": -1.0}, "tolerance"), ({"tolerance": float("nan")}, "tolerance"),
-     ({"max_spans": 0}, "max_spans"), ({"refine": "random"}, "refine")],
+    [
+        ({"tolerance": -1.0}, "tolerance"),
+        ({"tolerance": float("nan")}, "tolerance"),
+        ({"max_spans": 0}, "max_spans"),
+        ({"refine": "random"}, "refine"),
+    ],
 )
 def test_fit_rejects_bad_arguments(kwargs: dict[str, object], match: str) -> None:
     with pytest.raises(InputError, match=match):
@@ -208,7 +219,9 @@ def flat_box(lower: ArrayLike, upper: ArrayLike) -> PatchSet:
     s = np.arange(4) / 3.0
     u, v = s[None, :, None, None], s[None, None, :, None]
     c0, c1, c2, c3 = (corners[:, k, None, None, :] for k in range(4))
-    return PatchSet((1 - u) * (1 - v) * c0 + u * (1 - v) * c1 + u * v * c2 + (1 - u) * v * c3, "bezier")
+    return PatchSet(
+        (1 - u) * (1 - v) * c0 + u * (1 - v) * c1 + u * v * c2 + (1 - u) * v * c3, "bezier"
+    )
 
 
 def test_volume_of_a_box_is_exact() -> None:
@@ -227,7 +240,9 @@ def test_volume_is_exact_for_bicubic_patches_in_every_form() -> None:
     for form in ("hermite", "bezier", "bspline"):
         assert network_volume(network.patches.convert(form)) == pytest.approx(reference, rel=1e-14)
     # translation changes nothing, scaling by 2 multiplies by 8
-    moved = PatchSet(network.patches.convert("bezier").world_control() * 2.0 + [10.0, -5.0, 3.0], "bezier")
+    moved = PatchSet(
+        network.patches.convert("bezier").world_control() * 2.0 + [10.0, -5.0, 3.0], "bezier"
+    )
     assert network_volume(moved) == pytest.approx(8.0 * reference, rel=1e-13)
 
 
@@ -236,7 +251,9 @@ def cad_free_quadrature(patches: PatchSet, points: int) -> float:
     nodes, weights = np.polynomial.legendre.leggauss(points)
     nodes, weights = (nodes + 1) / 2, weights / 2
     p = patches.evaluate_grid(nodes, nodes)
-    normal = np.cross(patches.evaluate_grid(nodes, nodes, 1, 0), patches.evaluate_grid(nodes, nodes, 0, 1))
+    normal = np.cross(
+        patches.evaluate_grid(nodes, nodes, 1, 0), patches.evaluate_grid(nodes, nodes, 0, 1)
+    )
     return float(np.einsum("a,b,nabd,nabd->", weights, weights, p, normal)) / 3.0
 
 
@@ -278,7 +295,9 @@ def occ_solid_figures(shape: object) -> tuple[bool, float, str]:
 
 @requires_ocp
 @pytest.mark.parametrize("name", list(CLOSED))
-def test_step_round_trip_of_closed_meshes(name: str, request: pytest.FixtureRequest, tmp_path: Path) -> None:
+def test_step_round_trip_of_closed_meshes(
+    name: str, request: pytest.FixtureRequest, tmp_path: Path
+) -> None:
     network = closed_network(name, request)
     diagonal = network.bounding_box_diagonal()
     result = export_step(tmp_path / f"{name}.step", network)
@@ -311,7 +330,9 @@ def test_step_round_trip_of_closed_meshes(name: str, request: pytest.FixtureRequ
 
 @requires_ocp
 @pytest.mark.parametrize("name", ["cube", "torus_8_6", "catmark_torus"])
-def test_occ_measures_the_same_g1_angles_as_check(name: str, request: pytest.FixtureRequest, tmp_path: Path) -> None:
+def test_occ_measures_the_same_g1_angles_as_check(
+    name: str, request: pytest.FixtureRequest, tmp_path: Path
+) -> None:
     network = closed_network(name, request)
     result = export_step(tmp_path / "out.stp", network)
     report = check(network)
@@ -340,7 +361,11 @@ def test_step_export_of_fitted_non_polynomial_patches(tmp_path: Path) -> None:
     network = sphere_network()
     diagonal = network.bounding_box_diagonal()
     progress: list[str] = []
-    result = export_step(tmp_path / "sphere.step", network, progress=lambda stage, done, total: progress.append(stage))
+    result = export_step(
+        tmp_path / "sphere.step",
+        network,
+        progress=lambda stage, done, total: progress.append(stage),
+    )
     assert not result.exact and result.spans > 1
     assert 0.0 < result.fit_deviation <= result.fit_tolerance == pytest.approx(1e-6 * diagonal)
     assert result.solid and result.valid and result.free_edges == 0
@@ -357,19 +382,26 @@ def test_step_export_of_fitted_non_polynomial_patches(tmp_path: Path) -> None:
     uv = np.random.default_rng(3).random((20, 2))
     expected = network.patches.evaluate(uv)
     for patch, face in enumerate(matched_faces(model, network)):
-        assert np.linalg.norm(model.faces[face].evaluate(uv) - expected[patch], axis=-1).max() <= 1.5 * result.fit_tolerance
+        assert (
+            np.linalg.norm(model.faces[face].evaluate(uv) - expected[patch], axis=-1).max()
+            <= 1.5 * result.fit_tolerance
+        )
 
 
 @requires_ocp
 @pytest.mark.parametrize("name", ["cube", "torus_8_6", "catmark_torus"])
-def test_step_round_trip_of_gregory_networks(name: str, request: pytest.FixtureRequest, tmp_path: Path) -> None:
+def test_step_round_trip_of_gregory_networks(
+    name: str, request: pytest.FixtureRequest, tmp_path: Path
+) -> None:
     """Rational Gregory patches fitted (method "fit"): a valid closed solid within the export tolerance."""
     from g1patch.build import build_gregory_network
 
     data = request.getfixturevalue("shared_data") if name in SHARED else None
     network = build_gregory_network(CLOSED[name](data))
     result = export_step(tmp_path / f"{name}.step", network, method="fit")
-    assert not result.exact and result.method == "fit" and result.fit_deviation <= result.fit_tolerance
+    assert (
+        not result.exact and result.method == "fit" and result.fit_deviation <= result.fit_tolerance
+    )
     assert result.deviation == result.fit_deviation
     assert result.solid and result.valid and result.free_edges == 0
     model = read_step_faces(result.path)
@@ -381,12 +413,17 @@ def test_step_round_trip_of_gregory_networks(name: str, request: pytest.FixtureR
     uv = np.random.default_rng(4).random((16, 2))
     expected = network.patches.evaluate(uv)
     for patch, face in enumerate(matched_faces(model, network)):
-        assert np.linalg.norm(model.faces[face].evaluate(uv) - expected[patch], axis=-1).max() <= 1.5 * result.fit_tolerance
+        assert (
+            np.linalg.norm(model.faces[face].evaluate(uv) - expected[patch], axis=-1).max()
+            <= 1.5 * result.fit_tolerance
+        )
 
 
 @requires_ocp
 @pytest.mark.parametrize("name", ["catmark_cube", "spot"])
-def test_split4_step_export_is_the_surface_itself(name: str, request: pytest.FixtureRequest, tmp_path: Path) -> None:
+def test_split4_step_export_is_the_surface_itself(
+    name: str, request: pytest.FixtureRequest, tmp_path: Path
+) -> None:
     """Polynomial exact G1 (split4) survives STEP exactly: OCC's own normals agree across faces."""
     from g1patch.build import build_split4_network
 
@@ -394,19 +431,29 @@ def test_split4_step_export_is_the_surface_itself(name: str, request: pytest.Fix
     diagonal = network.bounding_box_diagonal()
     result = export_step(tmp_path / f"{name}.step", network)
     # one face per cage quad (its four pieces as one B-spline), an exact, valid solid
-    assert result.faces == len(network.patches) // 4 and result.exact and result.solid and result.valid
+    assert (
+        result.faces == len(network.patches) // 4 and result.exact and result.solid and result.valid
+    )
     assert result.free_edges == 0
     # OCC evaluates D1 in double precision from the file's poles: its angles sit at rounding level
     assert result.max_g1_angle_deg <= 1e-7
     model = read_step_faces(result.path)
     middles = np.concatenate([face.evaluate(np.array([[0.5, 0.5]])) for face in model.faces])
-    distance, order = cKDTree(middles).query(network.patches.evaluate(np.array([[1.0, 1.0]]))[::4, 0])
+    distance, order = cKDTree(middles).query(
+        network.patches.evaluate(np.array([[1.0, 1.0]]))[::4, 0]
+    )
     assert distance.max() <= 1e-9 * diagonal and len(set(order.tolist())) == result.faces
     uv = np.random.default_rng(5).random((8, 2))
     quarter = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     worst = max(
-        float(np.abs(model.faces[i].evaluate(0.5 * (uv + quarter[k])) - network.patches.take([4 * f + k]).evaluate(uv)[0]).max())
-        for f, i in enumerate(order.tolist()) for k in range(4)
+        float(
+            np.abs(
+                model.faces[i].evaluate(0.5 * (uv + quarter[k]))
+                - network.patches.take([4 * f + k]).evaluate(uv)[0]
+            ).max()
+        )
+        for f, i in enumerate(order.tolist())
+        for k in range(4)
     )
     assert worst <= 1e-12 * diagonal
 
@@ -422,7 +469,9 @@ def test_open_networks_export_as_shells(shared_data: Path, tmp_path: Path) -> No
 
 
 @requires_ocp
-def test_patch_sets_export_through_their_shared_control_points(shared_data: Path, tmp_path: Path) -> None:
+def test_patch_sets_export_through_their_shared_control_points(
+    shared_data: Path, tmp_path: Path
+) -> None:
     teapot = read_bpt(shared_data / "teapot.bpt")
     result = export_step(tmp_path / "teapot.step", teapot)
     assert result.faces == len(teapot) and result.exact
@@ -450,7 +499,9 @@ def test_extension_must_match_the_format(tmp_path: Path) -> None:
     assert list(tmp_path.iterdir()) == []
 
 
-def test_missing_ocp_is_one_clear_error_before_writing(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+def test_missing_ocp_is_one_clear_error_before_writing(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
     monkeypatch.setitem(sys.modules, "OCP", None)  # `import OCP` now raises ImportError
     network = build_corner_network(shapes.cube())
     for export, name in ((export_step, "cube.step"), (export_iges, "cube.iges")):

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from ocp_marks import requires_ocp  # noqa: E402
 
 from g1patch import shapes
 from g1patch.build import build_network
@@ -21,8 +22,6 @@ from g1patch.construct.polynomial import split4_of_gregory
 from g1patch.io.meshfile import read_mesh
 from g1patch.network import PatchNetwork, edge_parameters
 from g1patch.patches import PatchSet
-
-from ocp_marks import requires_ocp  # noqa: E402
 
 pytestmark = requires_ocp
 
@@ -45,7 +44,9 @@ def sewn_faces(network: PatchNetwork) -> tuple[list[object], bool]:
     return cad._sew(occ, faces, tolerance)[1], quads is not None
 
 
-def occ_angles(network: PatchNetwork, faces: list[object], quads: bool, monkeypatch: pytest.MonkeyPatch) -> np.ndarray:
+def occ_angles(
+    network: PatchNetwork, faces: list[object], quads: bool, monkeypatch: pytest.MonkeyPatch
+) -> np.ndarray:
     """The G1 angles with every point evaluated by OCC (``BRepAdaptor_Surface::D1``), as before."""
     from g1patch.io import cad
 
@@ -67,12 +68,16 @@ NETWORKS = {
     "cube fitted (graded knots)": lambda data: build_network(shapes.cube()),
     "corner cube (Bézier faces)": lambda data: build_corner_network(shapes.cube()),
     "creased cube (degenerate corners)": creased_cube,
-    "torus with seams (split4)": lambda data: split4_of_gregory(build_network(read_mesh(data / "catmark_torus_creases0.obj"))),
+    "torus with seams (split4)": lambda data: split4_of_gregory(
+        build_network(read_mesh(data / "catmark_torus_creases0.obj"))
+    ),
 }
 
 
 @pytest.mark.parametrize("name", list(NETWORKS))
-def test_vectorised_g1_angles_are_occs_own(name: str, shared_data: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_vectorised_g1_angles_are_occs_own(
+    name: str, shared_data: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """On every shared edge and sample, the angle from the vectorised normals is OCC's per-point
     one to rounding; at degenerate points (the creased cube's corners, where OCC's S_u × S_v cancels
     to 0) both say 0, not a direction made of rounding."""
@@ -99,7 +104,10 @@ def test_normals_agree_with_occ_point_by_point_and_other_rows_go_to_occ() -> Non
     t = np.sort(rng.random(9))
     rows = []
     for constant in (0.0, 0.25, 0.5, 0.7, 1.0):  # on and off the double knot at ½
-        rows += [np.stack([np.full(9, constant), t], axis=-1), np.stack([t, np.full(9, constant)], axis=-1)]
+        rows += [
+            np.stack([np.full(9, constant), t], axis=-1),
+            np.stack([t, np.full(9, constant)], axis=-1),
+        ]
     face_of = np.repeat(np.arange(len(faces)), len(rows))
     uv = np.tile(np.stack(rows), (len(faces), 1, 1))
     uv[0] = rng.random((9, 2))  # a diagonal row: OCC's
@@ -109,8 +117,12 @@ def test_normals_agree_with_occ_point_by_point_and_other_rows_go_to_occ() -> Non
         if row == 0:
             np.testing.assert_array_equal(normals[row], expected)
         else:
-            np.testing.assert_allclose(normals[row], expected, rtol=0, atol=1e-12 * np.abs(expected).max())
-    np.testing.assert_allclose(normals[face_of == len(faces) - 1], -normals[face_of == 1], rtol=0, atol=1e-15)
+            np.testing.assert_allclose(
+                normals[row], expected, rtol=0, atol=1e-12 * np.abs(expected).max()
+            )
+    np.testing.assert_allclose(
+        normals[face_of == len(faces) - 1], -normals[face_of == 1], rtol=0, atol=1e-15
+    )
 
 
 def test_a_face_that_disagrees_with_occ_is_measured_by_occ(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -128,7 +140,9 @@ def test_a_face_that_disagrees_with_occ_is_measured_by_occ(monkeypatch: pytest.M
         return surface._replace(poles=surface.poles * 1.001)
 
     monkeypatch.setattr(cad, "_occ_bspline", misread)
-    np.testing.assert_array_equal(cad._occ_g1_angles(cad._occ(), faces, network, 17, None, quads), reference)
+    np.testing.assert_array_equal(
+        cad._occ_g1_angles(cad._occ(), faces, network, 17, None, quads), reference
+    )
 
 
 def test_an_inside_out_shell_becomes_an_outward_solid(tmp_path: Path) -> None:
@@ -140,8 +154,13 @@ def test_an_inside_out_shell_becomes_an_outward_solid(tmp_path: Path) -> None:
     from g1patch.io.cad import export_step, read_step_faces
 
     outward = build_corner_network(shapes.cube()).patches.convert("bezier")
-    inward = PatchSet(np.ascontiguousarray(outward.world_control().transpose(0, 2, 1, 3)), "bezier")  # u ↔ v
-    results = [export_step(tmp_path / f"{name}.step", patches, g1_samples=0) for name, patches in (("out", outward), ("in", inward))]
+    inward = PatchSet(
+        np.ascontiguousarray(outward.world_control().transpose(0, 2, 1, 3)), "bezier"
+    )  # u ↔ v
+    results = [
+        export_step(tmp_path / f"{name}.step", patches, g1_samples=0)
+        for name, patches in (("out", outward), ("in", inward))
+    ]
     for result in results:
         assert result.solid and result.valid and result.volume > 0
         props = GProp_GProps()

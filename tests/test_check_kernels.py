@@ -48,15 +48,35 @@ def energy_atol(report: ContinuityReport) -> float:
     patch 4 G² squared differences of tangents (~ diag) each off by up to 16 ε."""
     return report.patches * 4 * report.fold_samples**2 * (16 * EPS) ** 2
 
+
 EXACT = (
-    "patches", "shared_edges", "open_edges", "collapsed_edges", "collapsed_patch_edges", "samples_per_edge",
-    "degenerate_normals", "folds", "inconsistent_orientation_edges", "bounding_box_diagonal", "max_vertex_deviation",
-    "fold_samples", "fold_locations", "turn_median_deg", "turn_p99_deg", "seam_edges",
+    "patches",
+    "shared_edges",
+    "open_edges",
+    "collapsed_edges",
+    "collapsed_patch_edges",
+    "samples_per_edge",
+    "degenerate_normals",
+    "folds",
+    "inconsistent_orientation_edges",
+    "bounding_box_diagonal",
+    "max_vertex_deviation",
+    "fold_samples",
+    "fold_locations",
+    "turn_median_deg",
+    "turn_p99_deg",
+    "seam_edges",
 )
 #: the turn maximum, relative: the angle of one pair of normals, each a few ULP off where BLAS
 #: sums its row in a tail kernel (measured 1 ULP)
 TURN_RTOL = 8 * EPS
-ANGLES = ("max_edge_angle_deg", "mean_edge_angle_deg", "max_corner_angle_deg", "seam_angle_min_deg", "seam_angle_max_deg")
+ANGLES = (
+    "max_edge_angle_deg",
+    "mean_edge_angle_deg",
+    "max_corner_angle_deg",
+    "seam_angle_min_deg",
+    "seam_angle_max_deg",
+)
 
 
 def assert_same_report(compiled: ContinuityReport, reference: ContinuityReport) -> None:
@@ -65,17 +85,23 @@ def assert_same_report(compiled: ContinuityReport, reference: ContinuityReport) 
         assert getattr(compiled, name) == getattr(reference, name), name
     assert compiled.turn_max_deg == pytest.approx(reference.turn_max_deg, rel=TURN_RTOL, abs=0.0)
     for name in ("edge_patches", "edge_sides", "edge_seam"):
-        np.testing.assert_array_equal(getattr(compiled, name), getattr(reference, name), err_msg=name)
+        np.testing.assert_array_equal(
+            getattr(compiled, name), getattr(reference, name), err_msg=name
+        )
     for name in ANGLES:
         value, expected = getattr(compiled, name), getattr(reference, name)
         assert (value is None) == (expected is None), name
         if value is not None:
             assert abs(value - expected) <= ANGLE_ATOL, (name, value, expected)
-    np.testing.assert_allclose(compiled.edge_angle_deg, reference.edge_angle_deg, rtol=0, atol=ANGLE_ATOL)
+    np.testing.assert_allclose(
+        compiled.edge_angle_deg, reference.edge_angle_deg, rtol=0, atol=ANGLE_ATOL
+    )
     np.testing.assert_allclose(compiled.edge_gap, reference.edge_gap, rtol=0, atol=GAP_ATOL)
     assert abs(compiled.max_g0_gap - reference.max_g0_gap) <= GAP_ATOL
     assert abs(compiled.seam_g0_max - reference.seam_g0_max) <= GAP_ATOL
-    assert compiled.thin_plate == pytest.approx(reference.thin_plate, rel=ENERGY_RTOL, abs=energy_atol(reference))
+    assert compiled.thin_plate == pytest.approx(
+        reference.thin_plate, rel=ENERGY_RTOL, abs=energy_atol(reference)
+    )
 
 
 MESHES: dict[str, Callable[[], object]] = {
@@ -91,7 +117,9 @@ MESHES: dict[str, Callable[[], object]] = {
 
 @pytest.mark.parametrize("build", [build_gregory_network, build_split4_network])
 @pytest.mark.parametrize("name", sorted(MESHES))
-def test_generated_meshes_report_as_the_reference(name: str, build: Callable[..., PatchNetwork]) -> None:
+def test_generated_meshes_report_as_the_reference(
+    name: str, build: Callable[..., PatchNetwork]
+) -> None:
     network = build(MESHES[name]())
     assert_same_report(check(network, compiled=True), check(network, compiled=False))
 
@@ -100,13 +128,19 @@ def test_shared_meshes_report_as_the_reference(shared_data: Path) -> None:
     paths = sorted(shared_data.glob("*.obj")) + [shared_data / "teapot.bpt"]
     for path in paths:
         source = read(path)
-        networks = [source] if isinstance(source, PatchNetwork) else [build_gregory_network(source), build_split4_network(source)]
+        networks = (
+            [source]
+            if isinstance(source, PatchNetwork)
+            else [build_gregory_network(source), build_split4_network(source)]
+        )
         for network in networks:
             assert_same_report(check(network, compiled=True), check(network, compiled=False))
 
 
 @pytest.mark.parametrize("name", ["torus", "noisy_sphere", "filleted_box"])
-def test_turn_maximum_of_many_tied_candidates_from_the_tensor_sums(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_turn_maximum_of_many_tied_candidates_from_the_tensor_sums(
+    name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """Above ``EXACT_TURN_CANDIDATES`` candidates (here: any) the turn maximum is the tensor
     evaluation's, within ``TENSOR_TURN_ATOL`` of the reference's; everything else as before."""
     network = build_gregory_network(MESHES[name]())
@@ -114,10 +148,14 @@ def test_turn_maximum_of_many_tied_candidates_from_the_tensor_sums(name: str, mo
     monkeypatch.setattr(continuity, "EXACT_TURN_CANDIDATES", 0)
     compiled = check(network, compiled=True)
     assert abs(compiled.turn_max_deg - reference.turn_max_deg) <= continuity.TENSOR_TURN_ATOL
-    assert_same_report(dataclasses.replace(compiled, turn_max_deg=reference.turn_max_deg), reference)
+    assert_same_report(
+        dataclasses.replace(compiled, turn_max_deg=reference.turn_max_deg), reference
+    )
 
 
-def perturbed(network: PatchNetwork, scale: float, seed: int, moved: slice = slice(12, 20)) -> PatchNetwork:
+def perturbed(
+    network: PatchNetwork, scale: float, seed: int, moved: slice = slice(12, 20)
+) -> PatchNetwork:
     """``network`` with its Gregory points ``moved`` (default: the interior ones, so shared
     boundaries are kept) moved at random by ``scale`` × the diagonal: patches folded, edges and
     corners (edge points moved) far from G1."""
@@ -125,7 +163,9 @@ def perturbed(network: PatchNetwork, scale: float, seed: int, moved: slice = sli
     assert isinstance(patches, GregoryPatchSet)
     points = patches.points.copy()
     rng = np.random.default_rng(seed)
-    points[:, moved] += scale * network.bounding_box_diagonal() * rng.standard_normal(points[:, moved].shape)
+    points[:, moved] += (
+        scale * network.bounding_box_diagonal() * rng.standard_normal(points[:, moved].shape)
+    )
     return dataclasses.replace(network, patches=GregoryPatchSet(points, patches.frame))
 
 
@@ -155,9 +195,13 @@ def test_folds_and_their_locations_as_the_reference(seed: int) -> None:
 def test_folded_patches_as_the_reference(samples: int) -> None:
     # flat unit squares with their control points moved at random: some fold, some do not
     rng = np.random.default_rng(samples)
-    grid = np.stack(np.meshgrid(np.arange(4) / 3, np.arange(4) / 3, [0.0], indexing="ij"), axis=-1).reshape(4, 4, 3)
+    grid = np.stack(
+        np.meshgrid(np.arange(4) / 3, np.arange(4) / 3, [0.0], indexing="ij"), axis=-1
+    ).reshape(4, 4, 3)
     index = np.r_[BEZIER_INDEX, np.repeat(INTERIOR_INDEX, 2, axis=0)]
-    gregory = GregoryPatchSet(grid[index[:, 0], index[:, 1]] + 0.3 * rng.standard_normal((300, 20, 3)))
+    gregory = GregoryPatchSet(
+        grid[index[:, 0], index[:, 1]] + 0.3 * rng.standard_normal((300, 20, 3))
+    )
     bezier = PatchSet(grid + 0.3 * rng.standard_normal((300, 4, 4, 3)), "bezier")
     bspline = PatchSet(grid + 0.3 * rng.standard_normal((300, 4, 4, 3)), "bspline")
     for patches in (gregory, bezier, bspline):
@@ -176,7 +220,11 @@ def test_degenerate_normals_counted_as_the_reference() -> None:
     reference = fairness(as_network(patches), compiled=False)
     assert compiled["turn_max_deg"] == reference["turn_max_deg"]
     assert compiled["thin_plate"] == pytest.approx(reference["thin_plate"], rel=ENERGY_RTOL)
-    assert check(patches, compiled=True).degenerate_normals == check(patches, compiled=False).degenerate_normals > 0
+    assert (
+        check(patches, compiled=True).degenerate_normals
+        == check(patches, compiled=False).degenerate_normals
+        > 0
+    )
 
 
 @pytest.mark.parametrize("valence", [65, 200])

@@ -12,14 +12,24 @@ import pytest
 MALFORMED = Path(__file__).parent / "data" / "malformed"
 MALFORMED_BPT = Path(__file__).parent / "data" / "malformed_bpt"
 REPORT_KEYS = {
-    "max_edge_angle_deg", "mean_edge_angle_deg", "max_corner_angle_deg", "max_g0_gap",
-    "degenerate_normals", "folds", "patches", "shared_edges",
+    "max_edge_angle_deg",
+    "mean_edge_angle_deg",
+    "max_corner_angle_deg",
+    "max_g0_gap",
+    "degenerate_normals",
+    "folds",
+    "patches",
+    "shared_edges",
 }
 
 
 def g1patch(*args: str | Path, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "g1patch.cli", *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=300
+        [sys.executable, "-m", "g1patch.cli", *map(str, args)],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=300,
     )
 
 
@@ -46,7 +56,9 @@ def test_version_and_top_level_help() -> None:
 
     assert g1patch("--version").stdout.strip() == f"g1patch {__version__}"
     result = g1patch("--help")
-    assert result.returncode == 0 and all(c in result.stdout for c in ("build", "check", "export", "render", "demo"))
+    assert result.returncode == 0 and all(
+        c in result.stdout for c in ("build", "check", "export", "render", "demo")
+    )
 
 
 def test_default_build_is_exactly_g1(tmp_path: Path, cube_obj: Path) -> None:
@@ -57,7 +69,9 @@ def test_default_build_is_exactly_g1(tmp_path: Path, cube_obj: Path) -> None:
     assert json.loads(result.stdout)["max_edge_angle_deg"] <= 1e-9
 
 
-def test_build_with_check_writes_the_same_file_and_prints_the_check(tmp_path: Path, cube_obj: Path) -> None:
+def test_build_with_check_writes_the_same_file_and_prints_the_check(
+    tmp_path: Path, cube_obj: Path
+) -> None:
     """``build --check``: the file written while the check runs is the one ``build`` writes, and the
     report printed after the build line is the one ``check`` prints for that file."""
     alone, checked = tmp_path / "alone.npz", tmp_path / "checked.npz"
@@ -67,12 +81,25 @@ def test_build_with_check_writes_the_same_file_and_prints_the_check(tmp_path: Pa
     assert checked.read_bytes() == alone.read_bytes()
     built, *report = result.stdout.splitlines()
     assert built.startswith("built 6 gregory patches")
-    assert report == g1patch("check", checked, "-q").stdout.splitlines()[1:]  # after the file's name
+    assert (
+        report == g1patch("check", checked, "-q").stdout.splitlines()[1:]
+    )  # after the file's name
 
 
 def test_build_check_export(tmp_path: Path, cube_obj: Path) -> None:
     network = tmp_path / "cube.npz"
-    result = g1patch("build", cube_obj, "-o", network, "--method", "corner", "--tangents", "chord", "--twist", "coons")
+    result = g1patch(
+        "build",
+        cube_obj,
+        "-o",
+        network,
+        "--method",
+        "corner",
+        "--tangents",
+        "chord",
+        "--twist",
+        "coons",
+    )
     assert result.returncode == 0, result.stderr
     assert network.exists()
 
@@ -98,17 +125,25 @@ def test_build_check_export(tmp_path: Path, cube_obj: Path) -> None:
 
 def test_step_export_reports_its_accuracy(tmp_path: Path, cube_obj: Path) -> None:
     pytest.importorskip("OCP", reason="STEP export needs the 'cad' extra (cadquery-ocp-novtk)")
-    for method, kind in (("corner", "exact B-spline faces,"), ("gregory", "exact B-spline faces of the split4 re-assembly")):
+    for method, kind in (
+        ("corner", "exact B-spline faces,"),
+        ("gregory", "exact B-spline faces of the split4 re-assembly"),
+    ):
         network = tmp_path / f"{method}.npz"
         assert g1patch("build", cube_obj, "-o", network, "--method", method).returncode == 0
         result = g1patch("export", network, "-o", tmp_path / f"{method}.step")
         assert result.returncode == 0, result.stderr
         assert kind in result.stdout and "max deviation from the network's surface" in result.stdout
-        assert "closed solid" in result.stdout and "measured on OpenCASCADE's surfaces" in result.stdout
+        assert (
+            "closed solid" in result.stdout
+            and "measured on OpenCASCADE's surfaces" in result.stdout
+        )
 
 
 @pytest.mark.parametrize("mode", [(), ("--zebra",), ("--deviation",)])
-def test_render_writes_a_png_of_the_requested_size(tmp_path: Path, cube_obj: Path, mode: tuple[str, ...]) -> None:
+def test_render_writes_a_png_of_the_requested_size(
+    tmp_path: Path, cube_obj: Path, mode: tuple[str, ...]
+) -> None:
     import matplotlib.image
 
     network = tmp_path / "cube.npz"
@@ -123,13 +158,21 @@ def test_check_reads_patch_files(shared_data: Path) -> None:
     result = g1patch("check", shared_data / "teapot.bpt", "--json")
     assert result.returncode == 0
     report = json.loads(result.stdout)
-    assert (report["patches"], report["shared_edges"], report["collapsed_patch_edges"]) == (32, 52, 8)
+    assert (report["patches"], report["shared_edges"], report["collapsed_patch_edges"]) == (
+        32,
+        52,
+        8,
+    )
 
 
 def test_demo_writes_its_files(tmp_path: Path) -> None:
     result = g1patch("demo", "--out", tmp_path / "out")
     assert result.returncode == 0, result.stderr
-    assert "max G1 angle at corners" in result.stdout and "Gregory" in result.stdout and "split4" in result.stdout
+    assert (
+        "max G1 angle at corners" in result.stdout
+        and "Gregory" in result.stdout
+        and "split4" in result.stdout
+    )
     for name in ("cube_corner.obj", "cube_gregory.obj", "cube_split4.obj", "cube_limit.obj"):
         assert (tmp_path / "out" / name).stat().st_size > 0
     for name in ("cube_zebra.png", "cube_deviation.png"):

@@ -22,7 +22,9 @@ def sheet_network(height: np.ndarray, provenance: dict[str, str] | None = None) 
     mesh = shapes.grid(1, 1)
     i, j = np.meshgrid(np.arange(4) / 3.0, np.arange(4) / 3.0, indexing="ij")
     control = np.stack([i, j, np.broadcast_to(height[:, None], (4, 4))], axis=-1)
-    return network_from_mesh(mesh.topology, PatchSet(control[None], "bezier"), mesh.vertices, provenance=provenance)
+    return network_from_mesh(
+        mesh.topology, PatchSet(control[None], "bezier"), mesh.vertices, provenance=provenance
+    )
 
 
 def plane_projection(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -59,7 +61,9 @@ def test_surface_samples_shapes_and_unit_normals() -> None:
     assert positions.shape == normals.shape == (1, 5, 5, 3)
     u = np.linspace(0.0, 1.0, 5)
     np.testing.assert_allclose(positions[0, :, 0, 2], u**2, atol=1e-15)
-    expected = np.stack([-2.0 * u, np.zeros(5), np.ones(5)], axis=1) / np.sqrt(1.0 + 4.0 * u**2)[:, None]
+    expected = (
+        np.stack([-2.0 * u, np.zeros(5), np.ones(5)], axis=1) / np.sqrt(1.0 + 4.0 * u**2)[:, None]
+    )
     np.testing.assert_allclose(normals[0, :, 2], expected, atol=1e-15)
 
 
@@ -78,8 +82,12 @@ def test_distance_to_sphere_of_the_sphere_mesh_corners() -> None:
     corners = mesh.vertices[mesh.faces]  # a bilinear patch per quad, as Bézier control points
     weights = np.linspace(0.0, 1.0, 4)
     s, t = weights[:, None, None], weights[None, :, None]
-    control = ((1 - s) * (1 - t))[None] * corners[:, None, None, 0] + (s * (1 - t))[None] * corners[:, None, None, 1] \
-        + (s * t)[None] * corners[:, None, None, 2] + ((1 - s) * t)[None] * corners[:, None, None, 3]
+    control = (
+        ((1 - s) * (1 - t))[None] * corners[:, None, None, 0]
+        + (s * (1 - t))[None] * corners[:, None, None, 1]
+        + (s * t)[None] * corners[:, None, None, 2]
+        + ((1 - s) * t)[None] * corners[:, None, None, 3]
+    )
     network = network_from_mesh(mesh.topology, PatchSet(control, "bezier"), mesh.vertices)
     found = compare.distance_to_sphere(network, samples=9)
     positions, _ = compare.surface_samples(network, 9)
@@ -104,8 +112,14 @@ def test_closest_points_on_triangles_match_brute_force(seed: int) -> None:
     rng = np.random.default_rng(seed)
     triangles = rng.normal(size=(30, 3, 3))
     points = 2.0 * rng.normal(size=(200, 3))
-    closest = compare.closest_points_on_triangles(points[:, None], triangles[None, :, 0], triangles[None, :, 1], triangles[None, :, 2])
-    np.testing.assert_allclose(np.linalg.norm(closest - points[:, None], axis=-1).min(axis=1), brute_force_distance(points, triangles), atol=1e-12)
+    closest = compare.closest_points_on_triangles(
+        points[:, None], triangles[None, :, 0], triangles[None, :, 1], triangles[None, :, 2]
+    )
+    np.testing.assert_allclose(
+        np.linalg.norm(closest - points[:, None], axis=-1).min(axis=1),
+        brute_force_distance(points, triangles),
+        atol=1e-12,
+    )
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -115,7 +129,11 @@ def test_mesh_distance_matches_brute_force(seed: int) -> None:
     points = rng.normal(size=(40, 3)) * rng.choice([0.05, 1.0, 5.0], size=(40, 1))
     faces = np.array([rng.choice(40, 3, replace=False) for _ in range(60)])
     queries = rng.normal(size=(3000, 3)) * rng.choice([0.1, 1.0, 10.0], size=(3000, 1))
-    np.testing.assert_allclose(compare.mesh_distance(queries, points, faces), brute_force_distance(queries, points[faces]), atol=1e-12)
+    np.testing.assert_allclose(
+        compare.mesh_distance(queries, points, faces),
+        brute_force_distance(queries, points[faces]),
+        atol=1e-12,
+    )
 
 
 def test_mesh_distance_to_quads_near_a_sphere() -> None:
@@ -127,8 +145,12 @@ def test_mesh_distance_to_quads_near_a_sphere() -> None:
     triangles = mesh.vertices[np.concatenate([mesh.faces[:, [0, 1, 2]], mesh.faces[:, [0, 2, 3]]])]
     found = compare.mesh_distance(queries, mesh.vertices, mesh.faces)
     assert found.shape == (len(queries), 2)
-    np.testing.assert_allclose(found.ravel(), brute_force_distance(queries.reshape(-1, 3), triangles), atol=1e-12)
-    np.testing.assert_allclose(compare.mesh_distance(mesh.vertices, mesh.vertices, mesh.faces), 0.0, atol=1e-15)
+    np.testing.assert_allclose(
+        found.ravel(), brute_force_distance(queries.reshape(-1, 3), triangles), atol=1e-12
+    )
+    np.testing.assert_allclose(
+        compare.mesh_distance(mesh.vertices, mesh.vertices, mesh.faces), 0.0, atol=1e-15
+    )
 
 
 def test_mesh_distance_rejects_bad_faces() -> None:
@@ -148,7 +170,7 @@ def test_network_normal_turns_of_a_parabolic_sheet() -> None:
     u = np.linspace(0.0, 1.0, 9)
     along_u = np.degrees(np.diff(np.arctan(2.0 * u)))
     assert turns.shape == (2 * 9 * 8,)
-    np.testing.assert_allclose(np.sort(turns)[-8 * 9:], np.sort(np.repeat(along_u, 9)), atol=1e-12)
+    np.testing.assert_allclose(np.sort(turns)[-8 * 9 :], np.sort(np.repeat(along_u, 9)), atol=1e-12)
     np.testing.assert_allclose(np.sort(turns)[: 8 * 9], 0.0, atol=1e-12)
 
 
@@ -204,7 +226,9 @@ def test_load_reference_of_the_shared_cube(shared_data: Path) -> None:
     assert radii.max() < np.sqrt(3.0)
     np.testing.assert_allclose(radii[:8], radii[0], rtol=1e-6)
     np.testing.assert_allclose(np.abs(reference.points[:8, 2]), 0.5, rtol=1e-6)
-    turns = compare.turn_percentiles(compare.reference_normal_turns(reference.points, reference.faces))
+    turns = compare.turn_percentiles(
+        compare.reference_normal_turns(reference.points, reference.faces)
+    )
     assert 0 < turns["median"] < turns["p99"] < 5.0
 
 
@@ -224,10 +248,20 @@ def test_load_reference_errors(tmp_path: Path) -> None:
     with pytest.raises(FormatError, match="missing array.*faces, levels"):
         compare.load_reference(partial)
     wrong = tmp_path / "wrong.limit.npz"
-    np.savez(wrong, points=np.zeros((4, 3), np.float32), faces=np.array([[0, 1, 2, 4]], np.int32), levels=np.int32(1))
+    np.savez(
+        wrong,
+        points=np.zeros((4, 3), np.float32),
+        faces=np.array([[0, 1, 2, 4]], np.int32),
+        levels=np.int32(1),
+    )
     with pytest.raises(FormatError, match=r"faces: indices must lie in 0\.\.3"):
         compare.load_reference(wrong)
     flat = tmp_path / "flat.limit.npz"
-    np.savez(flat, points=np.zeros(12, np.float32), faces=np.array([[0, 1, 2, 3]], np.int32), levels=np.int32(1))
+    np.savez(
+        flat,
+        points=np.zeros(12, np.float32),
+        faces=np.array([[0, 1, 2, 3]], np.int32),
+        levels=np.int32(1),
+    )
     with pytest.raises(FormatError, match=r"points: expected .*\(M, 3\)"):
         compare.load_reference(flat)

@@ -20,9 +20,20 @@ from g1patch.patches import PatchSet
 
 EPS = np.finfo(float).eps
 REPORT_KEYS = {
-    "max_edge_angle_deg", "mean_edge_angle_deg", "max_corner_angle_deg", "max_g0_gap",
-    "degenerate_normals", "folds", "patches", "shared_edges",
-    "fold_samples", "fold_locations", "turn_median_deg", "turn_p99_deg", "turn_max_deg", "thin_plate",
+    "max_edge_angle_deg",
+    "mean_edge_angle_deg",
+    "max_corner_angle_deg",
+    "max_g0_gap",
+    "degenerate_normals",
+    "folds",
+    "patches",
+    "shared_edges",
+    "fold_samples",
+    "fold_locations",
+    "turn_median_deg",
+    "turn_p99_deg",
+    "turn_max_deg",
+    "thin_plate",
 }
 
 
@@ -66,16 +77,25 @@ def test_g0_gap_is_relative_to_the_bounding_box() -> None:
 
 def test_angle_between_is_accurate_near_zero() -> None:
     tiny = 1e-12
-    assert float(angle_between(np.array([1.0, 0, 0]), np.array([1.0, tiny, 0]))) == pytest.approx(np.degrees(tiny), rel=1e-12)
+    assert float(angle_between(np.array([1.0, 0, 0]), np.array([1.0, tiny, 0]))) == pytest.approx(
+        np.degrees(tiny), rel=1e-12
+    )
 
 
 def test_teapot_report(shared_data: Path) -> None:
     report = check(network_from_patch_points(read_bpt(shared_data / "teapot.bpt")))
     # The data README: 32 patches, boundary curves 52 shared / 16 open / 8 collapsed.
-    assert (report.patches, report.shared_edges, report.open_edges, report.collapsed_patch_edges) == (32, 52, 16, 8)
+    assert (
+        report.patches,
+        report.shared_edges,
+        report.open_edges,
+        report.collapsed_patch_edges,
+    ) == (32, 52, 16, 8)
     assert report.collapsed_edges == 2  # the lid's and the bottom's poles
     assert report.max_g0_gap <= 1e-15  # shared curves have identical control points
-    assert report.max_edge_angle_deg <= 1e-9  # Newell's patches are tangent-continuous across shared curves
+    assert (
+        report.max_edge_angle_deg <= 1e-9
+    )  # Newell's patches are tangent-continuous across shared curves
     assert report.degenerate_normals > 0  # at the poles p_u × p_v = 0
     assert report.folds == 0 and report.inconsistent_orientation_edges == 0
     # The handle's ends meet the body's patches at one point at an angle: a real corner crease.
@@ -103,22 +123,34 @@ def test_report_serialises_to_json() -> None:
 
 def test_summary_names_the_figures() -> None:
     text = check(build_corner_network(shapes.cube())).summary()
-    for label in ("max G1 angle on edges", "max G1 angle at corners", "max G0 gap", "folds", "worst edge",
-                  "normal turn median / p99 / max", "thin-plate energy"):
+    for label in (
+        "max G1 angle on edges",
+        "max G1 angle at corners",
+        "max G0 gap",
+        "folds",
+        "worst edge",
+        "normal turn median / p99 / max",
+        "thin-plate energy",
+    ):
         assert label in text
 
 
 @pytest.mark.parametrize("argument", [{"samples": 1}, {"samples": 2.5}, {"fold_samples": 0}])
 def test_bad_sample_counts(argument: dict[str, float]) -> None:
-    (name, _), = argument.items()
+    ((name, _),) = argument.items()
     with pytest.raises(InputError, match=name):
         check(build_corner_network(shapes.cube()), **argument)  # type: ignore[arg-type]
 
 
 def test_a_curve_shared_by_more_than_two_patches_is_non_manifold() -> None:
     first = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
-    fins = [np.array([[1, 0, 0], [1 + c, 0, s], [1 + c, 1, s], [1, 1, 0]]) for c, s in ((1, 0), (0, 1), (-0.5, 0.5))]
-    patches = PatchSet(np.stack([bilinear_bezier(first)] + [bilinear_bezier(f) for f in fins]), "bezier")
+    fins = [
+        np.array([[1, 0, 0], [1 + c, 0, s], [1 + c, 1, s], [1, 1, 0]])
+        for c, s in ((1, 0), (0, 1), (-0.5, 0.5))
+    ]
+    patches = PatchSet(
+        np.stack([bilinear_bezier(first)] + [bilinear_bezier(f) for f in fins]), "bezier"
+    )
     with pytest.raises(NonManifoldError, match="shared by 4 patches"):
         network_from_patch_points(patches)
 
@@ -145,10 +177,14 @@ def test_planar_vector_algebra_equals_the_interleaved_numpy_formulas() -> None:
     pa, pb = _planar(a), _planar(b)
     scale = np.linalg.norm(a, axis=-1) * np.linalg.norm(b, axis=-1)
     tolerance = 4 * EPS * scale
-    assert (np.abs(np.moveaxis(_cross3(pa, pb), 0, -1) - np.cross(a, b)).max(axis=-1) <= tolerance).all()
+    assert (
+        np.abs(np.moveaxis(_cross3(pa, pb), 0, -1) - np.cross(a, b)).max(axis=-1) <= tolerance
+    ).all()
     np.testing.assert_allclose(_norm3(pa), np.linalg.norm(a, axis=-1), rtol=4 * EPS, atol=0)
     assert (np.abs(_dot3(pa, pb) - np.einsum("...d,...d->...", a, b)) <= tolerance).all()
-    reference = np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.einsum("...d,...d->...", a, b)))
+    reference = np.degrees(
+        np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.einsum("...d,...d->...", a, b))
+    )
     # an angle moves by at most (error of cross or dot) / (|a||b|) radians
     np.testing.assert_allclose(_angle3(pa, pb), reference, rtol=0, atol=np.degrees(16 * EPS))
     np.testing.assert_allclose(angle_between(a, b), reference, rtol=0, atol=np.degrees(16 * EPS))

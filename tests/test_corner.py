@@ -11,15 +11,21 @@ from hypothesis import strategies as st
 
 from g1patch import shapes
 from g1patch.construct.corner import build_corner_network
-from g1patch.targets.local import corner_tangents, fan_normals, least_squares_normals
 from g1patch.continuity import check
 from g1patch.errors import ConstructionError, InputError
 from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh
 from g1patch.patches import CORNER_PARAMETERS
+from g1patch.targets.local import corner_tangents, fan_normals, least_squares_normals
 
 EPS = np.finfo(float).eps
-SHARED_MESHES = ["catmark_cube", "catmark_torus", "catmark_xord_boundary", "catmark_xord_interior", "spot_quadrangulated"]
+SHARED_MESHES = [
+    "catmark_cube",
+    "catmark_torus",
+    "catmark_xord_boundary",
+    "catmark_xord_interior",
+    "spot_quadrangulated",
+]
 
 #: Corner tangents are exact projections onto one plane per vertex, so the normals of all
 #: patches at a corner differ only by the rounding of the projection and the cross product,
@@ -43,7 +49,9 @@ def generated_meshes() -> dict[str, QuadMesh]:
 def noisy(mesh: QuadMesh, scale: float, seed: int) -> QuadMesh:
     rng = np.random.default_rng(seed)
     size = float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
-    return mesh.with_vertices(mesh.vertices + rng.normal(scale=scale * size, size=mesh.vertices.shape))
+    return mesh.with_vertices(
+        mesh.vertices + rng.normal(scale=scale * size, size=mesh.vertices.shape)
+    )
 
 
 @pytest.mark.parametrize("name", sorted(generated_meshes()))
@@ -67,7 +75,11 @@ def test_corner_angle_is_exact_on_shared_meshes(shared_data: Path, name: str) ->
 
 
 @settings(max_examples=25, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), scale=st.floats(1e-4, 2e-2), name=st.sampled_from(["torus", "fan12", "genus2", "boundary_fan4"]))
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    scale=st.floats(1e-4, 2e-2),
+    name=st.sampled_from(["torus", "fan12", "genus2", "boundary_fan4"]),
+)
 def test_corner_angle_is_exact_on_noisy_meshes(seed: int, scale: float, name: str) -> None:
     """Eq. (13) makes every patch's tangent plane at a corner the vertex's plane. On a coarse
     noisy mesh a projected tangent can swap sides, which turns one patch over at the corner:
@@ -76,8 +88,15 @@ def test_corner_angle_is_exact_on_noisy_meshes(seed: int, scale: float, name: st
     network = build_corner_network(mesh)
     corner_normals = np.cross(*network.patches.tangents(CORNER_PARAMETERS))
     vertex_normals = fan_normals(mesh)[mesh.faces]
-    plane_angle = np.degrees(np.arcsin(np.minimum(1.0, np.linalg.norm(np.cross(corner_normals, vertex_normals), axis=-1)
-                                                  / np.linalg.norm(corner_normals, axis=-1))))
+    plane_angle = np.degrees(
+        np.arcsin(
+            np.minimum(
+                1.0,
+                np.linalg.norm(np.cross(corner_normals, vertex_normals), axis=-1)
+                / np.linalg.norm(corner_normals, axis=-1),
+            )
+        )
+    )
     assert plane_angle.max() <= EXACT_DEG
     report = check(network)
     flipped = np.einsum("fkd,fkd->fk", corner_normals, vertex_normals) < 0
@@ -125,7 +144,9 @@ def test_arc_tangents_approximate_the_sphere_better_than_chord() -> None:
     grid = np.linspace(0.0, 1.0, 17)
 
     def radial_error(tangents: str) -> float:
-        points = build_corner_network(mesh, tangents=tangents, twist="coons").patches.evaluate_grid(grid)
+        points = build_corner_network(mesh, tangents=tangents, twist="coons").patches.evaluate_grid(
+            grid
+        )
         return float(np.abs(np.linalg.norm(points, axis=-1) - 1.0).max())
 
     assert radial_error("arc") < radial_error("chord")
@@ -156,13 +177,21 @@ def test_paper_normals_equal_fan_normals_on_the_cube_and_are_unit() -> None:
     assert check(build_corner_network(mesh, normals="paper")).max_corner_angle_deg <= EXACT_DEG
 
 
-@pytest.mark.parametrize("option", [{"tangents": "long"}, {"twist": "smooth"}, {"normals": "average"}])
+@pytest.mark.parametrize(
+    "option", [{"tangents": "long"}, {"twist": "smooth"}, {"normals": "average"}]
+)
 def test_unknown_options_are_named(option: dict[str, str]) -> None:
-    (name, value), = option.items()
+    ((name, value),) = option.items()
     with pytest.raises(InputError, match=f"{name}: unknown value '{value}'"):
         build_corner_network(shapes.cube(), **option)  # type: ignore[arg-type]
 
 
 def test_edge_along_the_normal_is_a_construction_error() -> None:
     with pytest.raises(ConstructionError, match="edge 0→1"):
-        corner_tangents(np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]), np.array([[0.0, 0.0, 1.0]]), "chord", np.array([[0, 1]]))
+        corner_tangents(
+            np.zeros((1, 3)),
+            np.array([[0.0, 0.0, 1.0]]),
+            np.array([[0.0, 0.0, 1.0]]),
+            "chord",
+            np.array([[0, 1]]),
+        )

@@ -17,13 +17,18 @@ from g1patch.construct.gregory import assemble_gregory
 from g1patch.continuity import check
 from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh, Tag
-from g1patch.sharpen import sharp_angle_tags
 from g1patch.shapes import cube, filleted_box, slotted_block, torus
+from g1patch.sharpen import sharp_angle_tags
 from g1patch.targets.creases import sectors
 from g1patch.targets.interpolate import interpolate_targets
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-CREASE_SHAPES = ["catmark_cube_creases2", "catmark_tent_creases1", "catmark_dart_edgecorner", "catmark_torus_creases0"]
+CREASE_SHAPES = [
+    "catmark_cube_creases2",
+    "catmark_tent_creases1",
+    "catmark_dart_edgecorner",
+    "catmark_torus_creases0",
+]
 #: exact G1 on smooth edges and corners, degrees (DESIGN §5)
 G1 = 1e-9
 #: a shared boundary cubic evaluated from both sides: rounding of a unit-scaled patch
@@ -51,22 +56,33 @@ def test_a_box_with_every_edge_sharp_has_flat_faces_at_right_angles() -> None:
     normals = _unit_normals(network.patches, np.random.default_rng(0).random((50, 2)))
     assert np.abs(normals - normals[:, :1]).max() <= 1e-12  # flat: one normal per face
     axes = np.abs(normals[:, 0]).round(12)
-    assert sorted(map(tuple, axes)) == sorted([(1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)] * 2)
+    assert sorted(map(tuple, axes)) == sorted(
+        [(1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)] * 2
+    )
 
 
 def test_the_crease_curve_is_tangent_continuous_through_crease_vertices() -> None:
     ring = torus(12, 6)
     # a loop of edges around the tube's outer equator: all of them sharp
-    loop = np.flatnonzero(np.isclose(np.linalg.norm(ring.vertices[ring.topology.edges][:, :, :2], axis=2), 1.25).all(axis=1))
+    loop = np.flatnonzero(
+        np.isclose(np.linalg.norm(ring.vertices[ring.topology.edges][:, :, :2], axis=2), 1.25).all(
+            axis=1
+        )
+    )
     targets = interpolate_targets(_tagged(ring, loop))
     topology = targets.topology
     found = sectors(topology, targets.seams)
     creased = np.flatnonzero(found.creased)
     assert creased.size == 12
     for v in creased:
-        slots = np.flatnonzero(np.isin(topology.halfedge_edge[topology.ring(v)], loop)) + topology.neighbor_offsets[v]
+        slots = (
+            np.flatnonzero(np.isin(topology.halfedge_edge[topology.ring(v)], loop))
+            + topology.neighbor_offsets[v]
+        )
         t_in, t_out = targets.tangents[slots]
-        assert np.linalg.norm(np.cross(t_in, t_out)) <= 1e-12 * np.linalg.norm(t_in) * np.linalg.norm(t_out)
+        assert np.linalg.norm(np.cross(t_in, t_out)) <= 1e-12 * np.linalg.norm(
+            t_in
+        ) * np.linalg.norm(t_out)
         assert np.dot(t_in, t_out) < 0
     report = check(build_network(_tagged(ring, loop)))
     assert report.passes(G1) and report.folds == 0
@@ -108,7 +124,9 @@ def test_sharp_angle_tags_exactly_the_edges_that_turn_more(part, degrees: float)
     n = np.cross(ends[:, 2] - ends[:, 0], ends[:, 3] - ends[:, 1])
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     pairs = mesh.topology.edge_halfedges
-    turn = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", n[pairs[:, 0] >> 2], n[pairs[:, 1] >> 2]), -1, 1)))
+    turn = np.degrees(
+        np.arccos(np.clip(np.einsum("ij,ij->i", n[pairs[:, 0] >> 2], n[pairs[:, 1] >> 2]), -1, 1))
+    )
     tags = sharp_angle_tags(mesh.vertices, mesh.faces.ravel(), np.full(mesh.n_faces, 4), degrees)
     tagged = _tagged(mesh, np.flatnonzero(turn > degrees)) if (turn > degrees).any() else mesh
     found = QuadMesh(mesh.vertices, mesh.topology, tags)
@@ -118,7 +136,10 @@ def test_sharp_angle_tags_exactly_the_edges_that_turn_more(part, degrees: float)
         assert report.passes(G1) and report.folds == 0
         seams = report.to_dict()["seams"]
         assert seams["count"] == int(found.features.sharp_edges.sum())
-        assert abs(seams["angle_min_deg"] - 90.0) <= 1e-9 and abs(seams["angle_max_deg"] - 90.0) <= 1e-9
+        assert (
+            abs(seams["angle_min_deg"] - 90.0) <= 1e-9
+            and abs(seams["angle_max_deg"] - 90.0) <= 1e-9
+        )
 
 
 def test_sharp_angle_from_the_command_line(tmp_path: Path) -> None:
@@ -178,17 +199,23 @@ def test_shared_crease_shapes_follow_opensubdivs_limit(name: str) -> None:
     assert report.passes(G1) and report.folds == 0
     seams = report.to_dict()["seams"]
     sharp = int(mesh.features.sharp_edges.sum())
-    assert seams["count"] == sharp * 2 ** int(network.provenance["refine"])  # each refinement halves them
+    assert seams["count"] == sharp * 2 ** int(
+        network.provenance["refine"]
+    )  # each refinement halves them
     assert seams["g0_max"] <= G0
     points, _ = compare.surface_samples(network, 5)
     chosen = np.random.default_rng(1).choice(len(points), min(len(points), 1500), replace=False)
-    distance = compare.mesh_distance(points[chosen].reshape(-1, 3), reference.points, reference.faces)
+    distance = compare.mesh_distance(
+        points[chosen].reshape(-1, 3), reference.points, reference.faces
+    )
     low, high = reference.points.min(axis=0), reference.points.max(axis=0)
     assert distance.max() <= LIMIT_DISTANCE * np.linalg.norm(high - low)
 
 
 @pytest.mark.parametrize("shape", ["interpolate", "limit"])
-def test_the_sharp_cube_is_flat_and_a_valid_step_solid_with_12_sharp_edges(shape: str, tmp_path: Path) -> None:
+def test_the_sharp_cube_is_flat_and_a_valid_step_solid_with_12_sharp_edges(
+    shape: str, tmp_path: Path
+) -> None:
     pytest.importorskip("OCP")
     from g1patch.io.cad import export_cad
 
@@ -199,16 +226,31 @@ def test_the_sharp_cube_is_flat_and_a_valid_step_solid_with_12_sharp_edges(shape
     result = export_cad(tmp_path / "cube.step", network)
     assert result.solid and result.valid and result.free_edges == 0
     assert result.seam_edges == 12
-    assert abs(result.seam_angle_min_deg - 90.0) <= 1e-7 and abs(result.seam_angle_max_deg - 90.0) <= 1e-7
-    assert result.max_g1_angle_deg <= 1e-7  # OpenCASCADE's own normals on the smooth edges (there are none here)
+    assert (
+        abs(result.seam_angle_min_deg - 90.0) <= 1e-7
+        and abs(result.seam_angle_max_deg - 90.0) <= 1e-7
+    )
+    assert (
+        result.max_g1_angle_deg <= 1e-7
+    )  # OpenCASCADE's own normals on the smooth edges (there are none here)
 
 
 def _capped_cylinder(sides: int = 16, layers: int = 4) -> tuple[np.ndarray, list[list[int]]]:
     angle = np.linspace(0, 2 * np.pi, sides, endpoint=False)
     ring = np.stack([np.cos(angle), np.sin(angle)], axis=1)
-    vertices = np.concatenate([np.column_stack([ring, np.full(sides, z)]) for z in np.linspace(0, 2, layers + 1)])
-    faces = [[l * sides + i, l * sides + (i + 1) % sides, (l + 1) * sides + (i + 1) % sides, (l + 1) * sides + i]
-             for l in range(layers) for i in range(sides)]
+    vertices = np.concatenate(
+        [np.column_stack([ring, np.full(sides, z)]) for z in np.linspace(0, 2, layers + 1)]
+    )
+    faces = [
+        [
+            l * sides + i,
+            l * sides + (i + 1) % sides,
+            (l + 1) * sides + (i + 1) % sides,
+            (l + 1) * sides + i,
+        ]
+        for l in range(layers)
+        for i in range(sides)
+    ]
     faces += [list(range(sides))[::-1], [layers * sides + i for i in range(sides)]]
     return vertices, faces
 
@@ -223,7 +265,12 @@ def test_n_gon_caps_with_sharp_rims_split_flat_and_stay_round() -> None:
     tags = sharp_angle_tags(vertices, corners, np.array([len(f) for f in faces]), 30.0)
     mesh = QuadMesh.from_arrays(vertices, faces, tags=tags)
     top = mesh.vertices[:, 2] > 1.5
-    assert np.abs(mesh.vertices[top & (np.linalg.norm(mesh.vertices[:, :2], axis=1) < 0.999), 2] - 2.0).max() <= 1e-15
+    assert (
+        np.abs(
+            mesh.vertices[top & (np.linalg.norm(mesh.vertices[:, :2], axis=1) < 0.999), 2] - 2.0
+        ).max()
+        <= 1e-15
+    )
     network = build_network(mesh)
     report = check(network)
     assert report.passes(G1) and report.folds == 0

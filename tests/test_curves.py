@@ -8,12 +8,12 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+import reference as ref
 import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-import reference as ref
 from g1patch.curves import CubicCurves, power_coefficients, reversal_matrix
 from g1patch.errors import InputError
 
@@ -22,7 +22,10 @@ FORMS = ("hermite", "bezier", "bspline")
 #: Absolute floor for underflow: a product that underflows errs by ≤ 2^-1074 absolutely.
 UNDERFLOW = 1e-300
 
-PARAMS = [Fraction(k, d) for d in (1, 3, 8, 7) for k in range(d + 1)] + [Fraction(2, 5), Fraction(9, 10)]
+PARAMS = [Fraction(k, d) for d in (1, 3, 8, 7) for k in range(d + 1)] + [
+    Fraction(2, 5),
+    Fraction(9, 10),
+]
 
 
 def curve_abs_sum(form, control, t, order=0):
@@ -72,10 +75,15 @@ def test_power_coefficients_match_sympy(form, rational_curves):
     assert got.shape == (3, 4, 3)
     for n in range(3):
         exact = np.array(
-            [[float(c) for c in ref.coefficients(p, 3)] for p in ref.curve_polynomials(form, rational_curves[n])]
+            [
+                [float(c) for c in ref.coefficients(p, 3)]
+                for p in ref.curve_polynomials(form, rational_curves[n])
+            ]
         ).T
         # coefficient k = Σ_i x_i M[i, 3-k]: a 4-term sum with exactly representable (or 1/6) weights
-        scale = np.abs(np.array(ref.basis_matrix(form).tolist(), dtype=float)).T[::-1] @ np.abs(control[n])
+        scale = np.abs(np.array(ref.basis_matrix(form).tolist(), dtype=float)).T[::-1] @ np.abs(
+            control[n]
+        )
         assert np.all(np.abs(got[n] - exact) <= 4 * EPS * scale)
 
 
@@ -93,7 +101,8 @@ def test_bezier_interpolates_its_end_points_and_end_tangents_exactly():
     curves = CubicCurves(control, "bezier")
     np.testing.assert_array_equal(curves.evaluate([0.0, 1.0]), control[:, [0, 3]])
     np.testing.assert_array_equal(
-        curves.derivative([0.0, 1.0]), np.stack([3 * (control[:, 1] - control[:, 0]), 3 * (control[:, 3] - control[:, 2])], 1)
+        curves.derivative([0.0, 1.0]),
+        np.stack([3 * (control[:, 1] - control[:, 0]), 3 * (control[:, 3] - control[:, 2])], 1),
     )
 
 
@@ -139,12 +148,20 @@ def test_reversed_is_exact(form):
     control = rng.normal(size=(6, 4, 3)) * 10.0 ** rng.integers(-5, 5, size=(6, 1, 1))
     curves = CubicCurves(control, form)
     back = curves.reversed()
-    expected = control[:, [1, 0, 3, 2]] * np.array([1, 1, -1, -1])[:, None] if form == "hermite" else control[:, ::-1]
+    expected = (
+        control[:, [1, 0, 3, 2]] * np.array([1, 1, -1, -1])[:, None]
+        if form == "hermite"
+        else control[:, ::-1]
+    )
     np.testing.assert_array_equal(back.control, expected)
     np.testing.assert_array_equal(back.reversed().control, control)
     assert back.form == form
     t = np.arange(17) / 16.0  # 1 - t exact
-    bound = CURVE_EVAL_ULPS * EPS * (curve_abs_sum(form, control, t) + curve_abs_sum(form, control, 1 - t))
+    bound = (
+        CURVE_EVAL_ULPS
+        * EPS
+        * (curve_abs_sum(form, control, t) + curve_abs_sum(form, control, 1 - t))
+    )
     assert np.all(np.abs(back.evaluate(t) - curves.evaluate(1 - t)) <= bound)
 
 
@@ -164,12 +181,19 @@ def conversion_bound(source, target, control, t):
 
 FINITE = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False, allow_subnormal=False)
 UNIT = st.floats(0.0, 1.0, allow_nan=False, allow_subnormal=False)
-CURVE_CONTROL = arrays(np.float64, st.tuples(st.integers(1, 3), st.just(4), st.integers(1, 3)), elements=FINITE)
+CURVE_CONTROL = arrays(
+    np.float64, st.tuples(st.integers(1, 3), st.just(4), st.integers(1, 3)), elements=FINITE
+)
 CURVE_PARAMS = arrays(np.float64, st.integers(1, 6), elements=UNIT)
 
 
 @settings(deadline=None, max_examples=60)
-@given(control=CURVE_CONTROL, t=CURVE_PARAMS, source=st.sampled_from(FORMS), target=st.sampled_from(FORMS))
+@given(
+    control=CURVE_CONTROL,
+    t=CURVE_PARAMS,
+    source=st.sampled_from(FORMS),
+    target=st.sampled_from(FORMS),
+)
 def test_conversion_keeps_the_curve(control, t, source, target):
     curves = CubicCurves(control, source)
     converted = curves.convert(target)
@@ -201,16 +225,22 @@ def test_conversion_of_rational_curves_matches_sympy():
     for source, target in itertools.product(FORMS, FORMS):
         converted = CubicCurves(ref.to_float(control), source).convert(target)
         C = ref.conversion_matrix(source, target)
-        exact = np.array((C * sp.Matrix(control.tolist()).applyfunc(ref.rational)).tolist(), dtype=float)
+        exact = np.array(
+            (C * sp.Matrix(control.tolist()).applyfunc(ref.rational)).tolist(), dtype=float
+        )
         abs_c = np.abs(np.array(C.tolist(), dtype=float))
         # 4-term sum with rounded inputs and rounded C: ≤ (γ_4 + 2u) |C||x| + u|y| ≤ 4 eps |C||x|
-        assert np.all(np.abs(converted.control - exact) <= 4 * EPS * abs_c @ np.abs(ref.to_float(control)))
+        assert np.all(
+            np.abs(converted.control - exact) <= 4 * EPS * abs_c @ np.abs(ref.to_float(control))
+        )
 
 
 # -------------------------------------------------------------------- bad input
 @pytest.mark.parametrize("shape", [(4,), (3, 2), (5, 3), (2, 3, 3)])
 def test_bad_control_shape_is_named(shape):
-    with pytest.raises(InputError, match=re.escape(f"control: expected shape (..., 4, N), got {shape}")):
+    with pytest.raises(
+        InputError, match=re.escape(f"control: expected shape (..., 4, N), got {shape}")
+    ):
         CubicCurves(np.zeros(shape))
 
 
@@ -218,7 +248,9 @@ def test_bad_control_shape_is_named(shape):
 def test_non_finite_control_is_named(value):
     control = np.zeros((2, 4, 3))
     control[1, 2, 0] = value
-    with pytest.raises(InputError, match=re.escape(f"control: non-finite value {value} at index (1, 2, 0)")):
+    with pytest.raises(
+        InputError, match=re.escape(f"control: non-finite value {value} at index (1, 2, 0)")
+    ):
         CubicCurves(control, "hermite")
 
 
@@ -229,7 +261,9 @@ def test_non_numeric_control_is_named():
 
 @pytest.mark.parametrize("bad", ["Bezier", "nurbs", None])
 def test_unknown_form_is_named(bad):
-    pattern = "^" + re.escape(f"form: unknown value {bad!r}; expected one of 'hermite', 'bezier', 'bspline'")
+    pattern = "^" + re.escape(
+        f"form: unknown value {bad!r}; expected one of 'hermite', 'bezier', 'bspline'"
+    )
     with pytest.raises(InputError, match=pattern):
         CubicCurves(np.zeros((4, 3)), bad)
     with pytest.raises(InputError, match=pattern):
@@ -242,7 +276,9 @@ def test_unknown_form_is_named(bad):
 
 def test_bad_parameters_are_named():
     curves = CubicCurves(np.zeros((2, 3, 4, 3)))
-    with pytest.raises(InputError, match=re.escape("t: expected shape (K,) or (2, 3, K), got (3, 5)")):
+    with pytest.raises(
+        InputError, match=re.escape("t: expected shape (K,) or (2, 3, K), got (3, 5)")
+    ):
         curves.evaluate(np.zeros((3, 5)))
     with pytest.raises(InputError, match=r"^t: expected shape .* got \(2, 3, 4, 5\)"):
         curves.evaluate(np.zeros((2, 3, 4, 5)))
@@ -258,12 +294,16 @@ def test_bad_parameters_are_named():
 def test_bad_derivative_order_is_named(order):
     curves = CubicCurves(np.zeros((4, 3)))
     for call in (lambda: curves.evaluate([0.5], order), lambda: curves.derivative([0.5], order)):
-        with pytest.raises(InputError, match=r"^order: expected a non-negative integer, got ") as info:
+        with pytest.raises(
+            InputError, match=r"^order: expected a non-negative integer, got "
+        ) as info:
             call()
         assert repr(order) in str(info.value)
 
 
-@pytest.mark.parametrize("control", [np.zeros((3, 2)), np.full((4, 2), np.nan)], ids=["shape", "nan"])
+@pytest.mark.parametrize(
+    "control", [np.zeros((3, 2)), np.full((4, 2), np.nan)], ids=["shape", "nan"]
+)
 def test_power_coefficients_checks_its_control(control):
     with pytest.raises(InputError, match=r"^control: "):
         power_coefficients(control, "bezier")

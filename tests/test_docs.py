@@ -30,12 +30,22 @@ def test_the_docs_build_without_warnings(tmp_path: Path) -> None:
             pytest.skip(f"{module} is not installed: the docs build needs pip install -e '.[docs]'")
     site = tmp_path / "site"
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
-    result = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(site)], cwd=ROOT,
-                            capture_output=True, text=True, env=env, timeout=600)
-    assert result.returncode == 0, f"mkdocs build --strict failed:\n{result.stdout}\n{result.stderr}"
+    result = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(site)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+    )
+    assert result.returncode == 0, (
+        f"mkdocs build --strict failed:\n{result.stdout}\n{result.stderr}"
+    )
     assert "WARNING" not in result.stderr, result.stderr
     render_page = (site / "api" / "render" / "index.html").read_text(encoding="utf-8")
-    assert 'id="g1patch.render.auto_camera"' in render_page, "the API reference documents auto_camera"
+    assert 'id="g1patch.render.auto_camera"' in render_page, (
+        "the API reference documents auto_camera"
+    )
     assert ":func:" not in render_page, "Sphinx roles are shown as code (docs/griffe_roles.py)"
     for page in ("build", "check", "export", "render", "view", "demo", "batch"):
         assert (site / "guide" / page / "index.html").is_file(), f"no guide page for {page}"
@@ -45,10 +55,18 @@ def test_the_pictures_are_small_and_every_one_is_shown() -> None:
     pictures = sorted((DOCS / "images").glob("*.png"))
     assert pictures, "docs/images holds the pictures made by docs/make_pictures.py"
     for picture in pictures:
-        assert picture.stat().st_size <= MAX_PICTURE_BYTES, f"{picture.name}: {picture.stat().st_size} bytes"
+        assert picture.stat().st_size <= MAX_PICTURE_BYTES, (
+            f"{picture.name}: {picture.stat().st_size} bytes"
+        )
     pages = [*DOCS.rglob("*.md"), ROOT / "README.md"]
-    shown = {Path(m).name for page in pages for m in re.findall(r"\]\(([^)]+\.png)\)", page.read_text(encoding="utf-8"))}
-    assert {p.name for p in pictures} <= shown, f"pictures no page shows: {sorted({p.name for p in pictures} - shown)}"
+    shown = {
+        Path(m).name
+        for page in pages
+        for m in re.findall(r"\]\(([^)]+\.png)\)", page.read_text(encoding="utf-8"))
+    }
+    assert {p.name for p in pictures} <= shown, (
+        f"pictures no page shows: {sorted({p.name for p in pictures} - shown)}"
+    )
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     for name in ("cube_three_ways_zebra.png", "spot_zebra.png"):
         assert f"docs/images/{name}" in readme, f"the README shows {name}"

@@ -58,7 +58,15 @@ def test_network_round_trip_keeps_the_report(tmp_path: Path) -> None:
     np.testing.assert_array_equal(loaded.patches.control, network.patches.control)
     assert loaded.patches.form == "hermite"
     assert loaded.provenance == network.provenance
-    for name in ("corner_ids", "edge_ids", "edge_reversed", "neighbor", "neighbor_edge", "vertices", "vertex_normals"):
+    for name in (
+        "corner_ids",
+        "edge_ids",
+        "edge_reversed",
+        "neighbor",
+        "neighbor_edge",
+        "vertices",
+        "vertex_normals",
+    ):
         np.testing.assert_array_equal(getattr(loaded, name), getattr(network, name))
     assert check(loaded).to_dict() == check(network).to_dict()
 

@@ -29,7 +29,9 @@ def flat_sheet(fold: bool = False) -> PatchSet:
     s = np.arange(4) / 3.0
     control = []
     for x0, y0 in ((0, 0), (1, 0), (1, 1), (0, 1)):
-        net = np.stack(np.broadcast_arrays(x0 + s[:, None], y0 + s[None, :], 0.0 * s[:, None]), axis=-1)
+        net = np.stack(
+            np.broadcast_arrays(x0 + s[:, None], y0 + s[None, :], 0.0 * s[:, None]), axis=-1
+        )
         control.append(net)
     patches = np.stack(control)
     if fold:
@@ -38,12 +40,15 @@ def flat_sheet(fold: bool = False) -> PatchSet:
 
 
 def test_a_sheet_lapping_over_itself_folds_and_fails_the_verdict() -> None:
-    clean, folded = check(network_from_patch_points(flat_sheet())), check(network_from_patch_points(flat_sheet(True)))
+    clean, folded = (
+        check(network_from_patch_points(flat_sheet())),
+        check(network_from_patch_points(flat_sheet(True))),
+    )
     assert clean.folds == 0 and clean.fold_locations == () and clean.passes(1e-9)
     # the boundary curves are unchanged and the sheet stays in its plane: still exactly G1
     assert folded.is_g1(1e-9) and folded.max_edge_angle_deg == 0.0
     assert folded.folds == 1 and not folded.passes(1e-9)
-    (patch, u, v), = folded.fold_locations
+    ((patch, u, v),) = folded.fold_locations
     assert patch == 0 and 0.0 < u < 1.0 and 0.0 < v < 1.0
     assert folded.turn_max_deg == 180.0
     assert folded.to_dict()["fold_locations"] == [{"patch": 0, "u": u, "v": v}]
@@ -82,7 +87,9 @@ def quadratic_patch(a: float, b: float, c: float) -> PatchSet:
     s = np.arange(4) / 3.0
     square = np.array([0.0, 0.0, 1.0 / 3.0, 1.0])
     z = a * square[:, None] + b * s[:, None] * s[None, :] + c * square[None, :]
-    return PatchSet(np.stack(np.broadcast_arrays(s[:, None], s[None, :], z), axis=-1)[None], "bezier")
+    return PatchSet(
+        np.stack(np.broadcast_arrays(s[:, None], s[None, :], z), axis=-1)[None], "bezier"
+    )
 
 
 @pytest.mark.parametrize("samples", [2, 5, 17])
@@ -93,21 +100,32 @@ def test_thin_plate_energy_of_a_quadratic_is_exact(samples: int) -> None:
     diagonal = np.linalg.norm(corners.max(axis=0) - corners.min(axis=0))
     # p_uu = (0, 0, 2a), p_uv = (0, 0, b), p_vv = (0, 0, 2c): ∫∫ 4a² + 2b² + 4c²; differences of p_u, p_v are exact
     figures = fairness(network_from_patch_points(patches), samples=samples)
-    assert figures["thin_plate"] == pytest.approx((4 * a * a + 2 * b * b + 4 * c * c) / diagonal**2, rel=1e-12)
+    assert figures["thin_plate"] == pytest.approx(
+        (4 * a * a + 2 * b * b + 4 * c * c) / diagonal**2, rel=1e-12
+    )
 
 
 def test_thin_plate_energy_is_scale_free() -> None:
     network = build_corner_network(shapes.torus(8, 5))
-    scaled = build_corner_network(shapes.torus(8, 5).with_vertices(1e3 * shapes.torus(8, 5).vertices))
-    assert fairness(scaled)["thin_plate"] == pytest.approx(fairness(network)["thin_plate"], rel=1e-12)
+    scaled = build_corner_network(
+        shapes.torus(8, 5).with_vertices(1e3 * shapes.torus(8, 5).vertices)
+    )
+    assert fairness(scaled)["thin_plate"] == pytest.approx(
+        fairness(network)["thin_plate"], rel=1e-12
+    )
 
 
 def exact_turns(patches: Any, samples: int) -> NDArray[np.float64]:
     grid = np.linspace(0.0, 1.0, samples)
-    normals = np.cross(patches.evaluate_grid(grid, grid, 1, 0), patches.evaluate_grid(grid, grid, 0, 1))
-    return np.concatenate([
-        angle_between(normals[:, 1:], normals[:, :-1]).ravel(), angle_between(normals[:, :, 1:], normals[:, :, :-1]).ravel()
-    ])
+    normals = np.cross(
+        patches.evaluate_grid(grid, grid, 1, 0), patches.evaluate_grid(grid, grid, 0, 1)
+    )
+    return np.concatenate(
+        [
+            angle_between(normals[:, 1:], normals[:, :-1]).ravel(),
+            angle_between(normals[:, :, 1:], normals[:, :, :-1]).ravel(),
+        ]
+    )
 
 
 @pytest.mark.parametrize("samples", [5, 17])
@@ -140,7 +158,9 @@ def test_gregory_grid_tangents_equal_their_evaluation() -> None:
     p_u, p_v = measures._tangents(patches)
     for tangent, (du, dv) in ((p_u, (1, 0)), (p_v, (0, 1))):
         expected = np.moveaxis(patches.evaluate_grid(measures.grid, measures.grid, du, dv), -1, 0)
-        np.testing.assert_allclose(tangent, expected, rtol=0, atol=64 * EPS * np.abs(expected).max())
+        np.testing.assert_allclose(
+            tangent, expected, rtol=0, atol=64 * EPS * np.abs(expected).max()
+        )
 
 
 @dataclass(frozen=True)
@@ -174,27 +194,43 @@ class Framed:
     def evaluate(self, uv: ArrayLike, du: int = 0, dv: int = 0) -> NDArray[np.float64]:
         return self._world(self.inner.evaluate(uv, du, dv), du, dv)
 
-    def evaluate_grid(self, u: ArrayLike, v: ArrayLike | None = None, du: int = 0, dv: int = 0) -> NDArray[np.float64]:
+    def evaluate_grid(
+        self, u: ArrayLike, v: ArrayLike | None = None, du: int = 0, dv: int = 0
+    ) -> NDArray[np.float64]:
         return self._world(self.inner.evaluate_grid(u, v, du, dv), du, dv)
 
 
 def test_a_framed_network_is_measured_in_its_local_coordinates() -> None:
     rng = np.random.default_rng(8)
     mesh = shapes.torus(9, 5)
-    network = build_corner_network(mesh.with_vertices(mesh.vertices + rng.normal(scale=0.02, size=mesh.vertices.shape)))
+    network = build_corner_network(
+        mesh.with_vertices(mesh.vertices + rng.normal(scale=0.02, size=mesh.vertices.shape))
+    )
     assert isinstance(network.patches, PatchSet) and network.vertices is not None
     frame = Similarity(np.array([1e6, -2e6, 3e5]), 1e4)
-    framed = PatchNetwork(**{**network.__dict__, "patches": Framed(network.patches, frame),
-                             "vertices": frame.centre + frame.scale * network.vertices})
+    framed = PatchNetwork(
+        **{
+            **network.__dict__,
+            "patches": Framed(network.patches, frame),
+            "vertices": frame.centre + frame.scale * network.vertices,
+        }
+    )
     local, world = check(network).to_dict(), check(framed).to_dict()
-    assert world.pop("bounding_box_diagonal") == pytest.approx(frame.scale * local.pop("bounding_box_diagonal"), rel=1e-12)
+    assert world.pop("bounding_box_diagonal") == pytest.approx(
+        frame.scale * local.pop("bounding_box_diagonal"), rel=1e-12
+    )
     # the vertices' round trip through the frame (c + s x − c) / s rounds at 1e-16 · |c| / s
     assert world.pop("max_vertex_deviation") <= 1e-13 and local.pop("max_vertex_deviation") == 0.0
     assert world == local
 
 
 def g1patch_cli(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "g1patch.cli", *map(str, args)], capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "g1patch.cli", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 def test_check_exits_1_on_folds_and_says_so(tmp_path: Path) -> None:
@@ -206,7 +242,9 @@ def test_check_exits_1_on_folds_and_says_so(tmp_path: Path) -> None:
     failed = g1patch_cli("check", folded, "--max-angle", "90")
     assert failed.returncode == 1
     verdict = failed.stderr.strip().splitlines()
-    assert len(verdict) == 1 and verdict[0].startswith("FAILED: 1 folded patches (first: patch 0 at")
+    assert len(verdict) == 1 and verdict[0].startswith(
+        "FAILED: 1 folded patches (first: patch 0 at"
+    )
     assert "G1 angle" not in verdict[0]
     data = json.loads(g1patch_cli("check", folded, "--json", "--max-angle", "90").stdout)
     assert data["folds"] == 1 and data["fold_locations"][0]["patch"] == 0

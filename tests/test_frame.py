@@ -58,9 +58,13 @@ def world_set(patches: PatchSet) -> PatchSet:
     return PatchSet(patches.world_control(), patches.form)
 
 
-def weight_sum(form: str, u: NDArray[np.float64], v: NDArray[np.float64], du: int, dv: int) -> NDArray[np.float64]:
+def weight_sum(
+    form: str, u: NDArray[np.float64], v: NDArray[np.float64], du: int, dv: int
+) -> NDArray[np.float64]:
     """W = Σ_ij |b_i^(du)(u) b_j^(dv)(v)| at the pairs (u, v)."""
-    return np.abs(basis_values(form, u, du)).sum(axis=-1) * np.abs(basis_values(form, v, dv)).sum(axis=-1)
+    return np.abs(basis_values(form, u, du)).sum(axis=-1) * np.abs(basis_values(form, v, dv)).sum(
+        axis=-1
+    )
 
 
 def magnitude(patches: PatchSet | GregoryPatchSet) -> float:
@@ -70,19 +74,30 @@ def magnitude(patches: PatchSet | GregoryPatchSet) -> float:
     return float(np.abs(patches.frame.centre).max() + patches.frame.scale * np.abs(local).max())
 
 
-def assert_close_ulps(got: NDArray[np.float64], want: NDArray[np.float64], weights: NDArray[np.float64], size: float) -> None:
+def assert_close_ulps(
+    got: NDArray[np.float64], want: NDArray[np.float64], weights: NDArray[np.float64], size: float
+) -> None:
     """|got − want| ≤ ULPS · eps · W · size, W broadcast over the value axis."""
     bound = ULPS * EPS * weights[..., None] * size
     excess = np.abs(got - want) - bound
-    assert excess.max() <= 0.0, f"off by {np.abs(got - want).max():.3e} where the bound is {bound.max():.3e}"
+    assert excess.max() <= 0.0, (
+        f"off by {np.abs(got - want).max():.3e} where the bound is {bound.max():.3e}"
+    )
 
 
-def assert_normals_close(framed: NDArray[np.float64], p_u: NDArray[np.float64], p_v: NDArray[np.float64],
-                         error: NDArray[np.float64]) -> None:
+def assert_normals_close(
+    framed: NDArray[np.float64],
+    p_u: NDArray[np.float64],
+    p_v: NDArray[np.float64],
+    error: NDArray[np.float64],
+) -> None:
     """World normals from tangents known to ``error`` each: |δn| ≤ 2 (|δa| |b| + |a| |δb|) / |a × b| + 4 eps."""
     direct = np.cross(p_u, p_v)
     length = np.linalg.norm(direct, axis=-1)
-    bound = 2.0 * error * (np.linalg.norm(p_u, axis=-1) + np.linalg.norm(p_v, axis=-1)) / length + 4 * EPS
+    bound = (
+        2.0 * error * (np.linalg.norm(p_u, axis=-1) + np.linalg.norm(p_v, axis=-1)) / length
+        + 4 * EPS
+    )
     assert (np.linalg.norm(framed - direct / length[..., None], axis=-1) <= bound).all()
 
 
@@ -117,7 +132,9 @@ def test_maps_and_their_formulas() -> None:
 
 
 def test_to_world_in_place_matches_a_fresh_result_across_chunks() -> None:
-    values = np.random.default_rng(3).normal(size=(5, 71, 67, 3))  # more rows than one in-place chunk
+    values = np.random.default_rng(3).normal(
+        size=(5, 71, 67, 3)
+    )  # more rows than one in-place chunk
     fresh = FAR.to_world(values)
     np.testing.assert_array_equal(fresh, FAR.centre + FAR.scale * values)
     assert FAR.to_world(values, out=values) is values
@@ -161,13 +178,21 @@ def test_invalid_frames_are_refused_by_name(centre: object, scale: object, match
 def test_frame_arrays_round_trip_and_errors() -> None:
     assert Frame.from_arrays(FAR.to_arrays()) == FAR
     assert Frame.from_arrays({"points": np.zeros(3)}) is None
-    with pytest.raises(InputError, match="needs both 'frame_centre' and 'frame_scale', got only 'frame_scale'"):
+    with pytest.raises(
+        InputError, match="needs both 'frame_centre' and 'frame_scale', got only 'frame_scale'"
+    ):
         Frame.from_arrays({"frame_scale": np.array(1.0)})
-    with pytest.raises(InputError, match=r"frame scale: expected one number, got an array of float64 \(2,\)"):
+    with pytest.raises(
+        InputError, match=r"frame scale: expected one number, got an array of float64 \(2,\)"
+    ):
         Frame.from_arrays({"frame_centre": np.zeros(3), "frame_scale": np.ones(2)})
-    with pytest.raises(InputError, match="frame: expected a g1patch.frame.Frame or None, got tuple"):
+    with pytest.raises(
+        InputError, match="frame: expected a g1patch.frame.Frame or None, got tuple"
+    ):
         PatchSet(local_control(1, 0), frame=(np.zeros(3), 1.0))  # type: ignore[arg-type]
-    with pytest.raises(InputError, match="frame: expected a g1patch.frame.Frame or None, got float"):
+    with pytest.raises(
+        InputError, match="frame: expected a g1patch.frame.Frame or None, got float"
+    ):
         GregoryPatchSet(np.zeros((1, 20, 3)), frame=1.0)  # type: ignore[arg-type]
 
 
@@ -187,7 +212,9 @@ def test_framed_evaluation_is_the_local_one_mapped_bit_for_bit(form: str) -> Non
         grid = FAR.vectors_to_world(grid) if du or dv else FAR.to_world(grid)
         np.testing.assert_array_equal(framed.evaluate_grid(GRID_U, GRID_V, du, dv), grid)
     np.testing.assert_array_equal(framed.normals(UV), local.normals(UV))
-    np.testing.assert_array_equal(framed.normals_grid(GRID_U, GRID_V), local.normals_grid(GRID_U, GRID_V))
+    np.testing.assert_array_equal(
+        framed.normals_grid(GRID_U, GRID_V), local.normals_grid(GRID_U, GRID_V)
+    )
     positions, normals = framed.evaluate_grid_with_normals(GRID_U, GRID_V)
     np.testing.assert_array_equal(positions, FAR.to_world(local.evaluate_grid(GRID_U, GRID_V)))
     np.testing.assert_array_equal(normals, local.normals_grid(GRID_U, GRID_V))
@@ -202,23 +229,46 @@ def test_framed_patches_equal_the_same_patches_in_world_coordinates(form: str) -
         weights = weight_sum(form, UV[:, 0], UV[:, 1], du, dv)
         assert_close_ulps(framed.evaluate(UV, du, dv), world.evaluate(UV, du, dv), weights, size)
         per_patch = np.random.default_rng(du + 3 * dv).uniform(size=(len(framed), 9, 2))
-        assert_close_ulps(framed.evaluate(per_patch, du, dv), world.evaluate(per_patch, du, dv),
-                          weight_sum(form, per_patch[..., 0], per_patch[..., 1], du, dv), size)
+        assert_close_ulps(
+            framed.evaluate(per_patch, du, dv),
+            world.evaluate(per_patch, du, dv),
+            weight_sum(form, per_patch[..., 0], per_patch[..., 1], du, dv),
+            size,
+        )
         grid_weights = weight_sum(form, GRID_U[:, None], GRID_V[None, :], du, dv)
-        assert_close_ulps(framed.evaluate_grid(GRID_U, GRID_V, du, dv), world.evaluate_grid(GRID_U, GRID_V, du, dv),
-                          grid_weights, size)
+        assert_close_ulps(
+            framed.evaluate_grid(GRID_U, GRID_V, du, dv),
+            world.evaluate_grid(GRID_U, GRID_V, du, dv),
+            grid_weights,
+            size,
+        )
     p_u, p_v = world.tangents(UV)
-    tangent_error = ULPS * EPS * size * np.maximum(weight_sum(form, UV[:, 0], UV[:, 1], 1, 0),
-                                                   weight_sum(form, UV[:, 0], UV[:, 1], 0, 1))
+    tangent_error = (
+        ULPS
+        * EPS
+        * size
+        * np.maximum(
+            weight_sum(form, UV[:, 0], UV[:, 1], 1, 0), weight_sum(form, UV[:, 0], UV[:, 1], 0, 1)
+        )
+    )
     assert_normals_close(framed.normals(UV), p_u, p_v, tangent_error)
     for (du, dv), got, want in zip(((1, 0), (0, 1)), framed.tangents(UV), (p_u, p_v)):
         assert_close_ulps(got, want, weight_sum(form, UV[:, 0], UV[:, 1], du, dv), size)
-    assert_close_ulps(framed.twist(UV), world.twist(UV), weight_sum(form, UV[:, 0], UV[:, 1], 1, 1), size)
+    assert_close_ulps(
+        framed.twist(UV), world.twist(UV), weight_sum(form, UV[:, 0], UV[:, 1], 1, 1), size
+    )
     corner_weights = weight_sum(form, CORNER_PARAMETERS[:, 0], CORNER_PARAMETERS[:, 1], 0, 0)
     assert_close_ulps(framed.corners(), world.corners(), corner_weights, size)
     t = np.linspace(0.0, 1.0, 7)
-    curve_weights = np.abs(basis_values(form, t)).sum(axis=-1) * 2.0  # one row of the net, then the curve
-    assert_close_ulps(framed.boundary_curves().evaluate(t), world.boundary_curves().evaluate(t), curve_weights, size)
+    curve_weights = (
+        np.abs(basis_values(form, t)).sum(axis=-1) * 2.0
+    )  # one row of the net, then the curve
+    assert_close_ulps(
+        framed.boundary_curves().evaluate(t),
+        world.boundary_curves().evaluate(t),
+        curve_weights,
+        size,
+    )
 
 
 def test_grid_outputs_are_mapped_in_place() -> None:
@@ -229,7 +279,9 @@ def test_grid_outputs_are_mapped_in_place() -> None:
     np.testing.assert_array_equal(out, framed.evaluate_grid(GRID_U, GRID_V))
     assert framed.evaluate_grid(GRID_U, GRID_V, 1, 0, out=out) is out
     np.testing.assert_array_equal(out, framed.evaluate_grid(GRID_U, GRID_V, 1, 0))
-    positions, normals = framed.evaluate_grid_with_normals(GRID_U, GRID_V, out=out, normals_out=normals_out)
+    positions, normals = framed.evaluate_grid_with_normals(
+        GRID_U, GRID_V, out=out, normals_out=normals_out
+    )
     assert positions is out and normals is normals_out
     np.testing.assert_array_equal(out, framed.evaluate_grid(GRID_U, GRID_V))
     np.testing.assert_array_equal(normals_out, framed.normals_grid(GRID_U, GRID_V))
@@ -259,14 +311,21 @@ def test_conversions_take_and_coons_keep_the_frame(source: str) -> None:
         # conversion acts on the local control alone: its round-trip error (test_patches) is that of
         # unit-sized numbers, whatever the frame
         np.testing.assert_array_equal(converted.control, framed.local().convert(target).control)  # type: ignore[arg-type]
-        np.testing.assert_array_equal(back.control, framed.local().convert(target).convert(source).control)  # type: ignore[arg-type]
-        assert_close_ulps(back.evaluate(UV), framed.evaluate(UV), np.full(len(UV), 8.0), magnitude(framed))
+        np.testing.assert_array_equal(
+            back.control, framed.local().convert(target).convert(source).control
+        )  # type: ignore[arg-type]
+        assert_close_ulps(
+            back.evaluate(UV), framed.evaluate(UV), np.full(len(UV), 8.0), magnitude(framed)
+        )
     assert framed.take([2, 0, 2]).frame == FAR
     np.testing.assert_array_equal(framed.take([2, 0]).control, framed.control[[2, 0]])
     coons = framed.with_coons_twists()
     assert coons.frame == FAR and coons.form == source
     np.testing.assert_array_equal(coons.control, framed.local().with_coons_twists().control)
-    assert framed.with_frame(None).frame is None and framed.with_frame(Frame.identity()).frame == Frame.identity()
+    assert (
+        framed.with_frame(None).frame is None
+        and framed.with_frame(Frame.identity()).frame == Frame.identity()
+    )
 
 
 def test_power_form_diagonals_and_closure_are_world_values() -> None:
@@ -276,9 +335,15 @@ def test_power_form_diagonals_and_closure_are_world_values() -> None:
     # p(u, v) = Σ A_ij u^(3-i) v^(3-j): evaluate the power form at UV and compare with evaluate
     power = framed.power_coefficients()
     u, v = UV[:, 0], UV[:, 1]
-    monomials = (u[:, None] ** np.arange(3, -1, -1))[:, :, None] * (v[:, None] ** np.arange(3, -1, -1))[:, None, :]
-    np.testing.assert_allclose(np.einsum("kij,nijd->nkd", monomials, power), framed.evaluate(UV),
-                               rtol=0, atol=1e3 * EPS * size)
+    monomials = (u[:, None] ** np.arange(3, -1, -1))[:, :, None] * (
+        v[:, None] ** np.arange(3, -1, -1)
+    )[:, None, :]
+    np.testing.assert_allclose(
+        np.einsum("kij,nijd->nkd", monomials, power),
+        framed.evaluate(UV),
+        rtol=0,
+        atol=1e3 * EPS * size,
+    )
     np.testing.assert_allclose(power, world.power_coefficients(), rtol=0, atol=1e3 * EPS * size)
     for got, want in zip(framed.diagonal_polynomials(), world.diagonal_polynomials()):
         np.testing.assert_allclose(got, want, rtol=0, atol=1e4 * EPS * size)
@@ -302,8 +367,15 @@ def test_property_framed_equals_world_for_any_frame(
     du, dv = order
     local = framed.local().evaluate(uv, du, dv)
     got = framed.evaluate(uv, du, dv)
-    np.testing.assert_array_equal(got, frame.vectors_to_world(local) if du or dv else frame.to_world(local))
-    assert_close_ulps(got, world_set(framed).evaluate(uv, du, dv), weight_sum(form, uv[:, 0], uv[:, 1], du, dv), magnitude(framed))
+    np.testing.assert_array_equal(
+        got, frame.vectors_to_world(local) if du or dv else frame.to_world(local)
+    )
+    assert_close_ulps(
+        got,
+        world_set(framed).evaluate(uv, du, dv),
+        weight_sum(form, uv[:, 0], uv[:, 1], du, dv),
+        magnitude(framed),
+    )
 
 
 # ------------------------------------------------------------------------------ GregoryPatchSet
@@ -335,17 +407,29 @@ def test_framed_gregory_patches_equal_the_world_ones() -> None:
         weights = np.abs(gregory_weights(UV[:, 0], UV[:, 1], du, dv)).sum(axis=-1)
         got = framed.evaluate(UV, du, dv)
         mapped = local.evaluate(UV, du, dv)
-        np.testing.assert_array_equal(got, FAR.vectors_to_world(mapped) if du or dv else FAR.to_world(mapped))
+        np.testing.assert_array_equal(
+            got, FAR.vectors_to_world(mapped) if du or dv else FAR.to_world(mapped)
+        )
         assert_close_ulps(got, world.evaluate(UV, du, dv), weights, size)
         per_patch = np.broadcast_to(UV, (len(framed),) + UV.shape)
         # per-patch weights take a batched product, shared ones one matrix product: BLAS may sum them in another order
         assert_close_ulps(framed.evaluate(per_patch, du, dv), got, weights, size)
-        grid_weights = np.abs(gregory_weights(GRID_U[:, None], GRID_V[None, :], du, dv)).sum(axis=-1)
-        assert_close_ulps(framed.evaluate_grid(GRID_U, GRID_V, du, dv), world.evaluate_grid(GRID_U, GRID_V, du, dv),
-                          grid_weights, size)
+        grid_weights = np.abs(gregory_weights(GRID_U[:, None], GRID_V[None, :], du, dv)).sum(
+            axis=-1
+        )
+        assert_close_ulps(
+            framed.evaluate_grid(GRID_U, GRID_V, du, dv),
+            world.evaluate_grid(GRID_U, GRID_V, du, dv),
+            grid_weights,
+            size,
+        )
     np.testing.assert_array_equal(framed.normals(UV), local.normals(UV))
-    tangent_error = ULPS * EPS * size * np.abs(gregory_weights(UV[:, 0], UV[:, 1], 1, 0)).sum(axis=-1).clip(3.0)
-    assert_normals_close(framed.normals(UV), world.evaluate(UV, 1, 0), world.evaluate(UV, 0, 1), tangent_error)
+    tangent_error = (
+        ULPS * EPS * size * np.abs(gregory_weights(UV[:, 0], UV[:, 1], 1, 0)).sum(axis=-1).clip(3.0)
+    )
+    assert_normals_close(
+        framed.normals(UV), world.evaluate(UV, 1, 0), world.evaluate(UV, 0, 1), tangent_error
+    )
     np.testing.assert_array_equal(framed.corners(), framed.world_points()[:, :4])
     np.testing.assert_array_equal(framed.boundary_curves().control, world.boundary_curves().control)
     assert framed.take([1, 1]).frame == FAR and framed.with_frame(None).frame is None
@@ -364,15 +448,19 @@ def framed_cube(frame: Frame = FAR) -> tuple[PatchNetwork, PatchNetwork]:
     network = build_corner_network(shapes.cube())
     framed = network.patches.with_frame(frame)  # type: ignore[attr-defined]
     vertices = frame.to_world(network.vertices)
-    return (dataclasses.replace(network, patches=framed, vertices=vertices),
-            dataclasses.replace(network, patches=world_set(framed), vertices=vertices))
+    return (
+        dataclasses.replace(network, patches=framed, vertices=vertices),
+        dataclasses.replace(network, patches=world_set(framed), vertices=vertices),
+    )
 
 
 def test_network_file_keeps_the_frame_and_the_local_numbers(tmp_path: Path) -> None:
     framed, _ = framed_cube()
     save_network(tmp_path / "n.npz", framed)
     with np.load(tmp_path / "n.npz") as data:
-        assert json.loads(str(data["header"]))["version"] == FORMAT_VERSION >= 2  # frames since version 2
+        assert (
+            json.loads(str(data["header"]))["version"] == FORMAT_VERSION >= 2
+        )  # frames since version 2
         np.testing.assert_array_equal(data["frame_centre"], FAR.centre)
         assert data["frame_scale"].shape == () and float(data["frame_scale"]) == FAR.scale
     loaded = load_network(tmp_path / "n.npz")
@@ -410,25 +498,44 @@ def rewrite(path: Path, target: Path, version: int | None = None, **arrays: obje
 def test_version_1_files_still_load_without_a_frame(tmp_path: Path) -> None:
     framed, _ = framed_cube()
     save_network(tmp_path / "n.npz", framed)
-    old = rewrite(tmp_path / "n.npz", tmp_path / "v1.npz", version=1, frame_centre=None, frame_scale=None)
+    old = rewrite(
+        tmp_path / "n.npz", tmp_path / "v1.npz", version=1, frame_centre=None, frame_scale=None
+    )
     loaded = load_network(old)
     assert isinstance(loaded.patches, PatchSet) and loaded.patches.frame is None
     np.testing.assert_array_equal(loaded.patches.control, framed.patches.control)  # type: ignore[attr-defined]
     # version 1 has no frame: arrays of that name in such a file are not read
-    assert load_network(rewrite(tmp_path / "n.npz", tmp_path / "v1f.npz", version=1)).patches.frame is None  # type: ignore[attr-defined]
+    assert (
+        load_network(rewrite(tmp_path / "n.npz", tmp_path / "v1f.npz", version=1)).patches.frame
+        is None
+    )  # type: ignore[attr-defined]
 
 
 @pytest.mark.parametrize(
     "arrays,match",
     [
-        ({"frame_scale": None}, "corrupt network file: arrays: a frame needs both 'frame_centre' and 'frame_scale'"),
-        ({"frame_scale": np.array(-1.0)}, "corrupt network file: frame scale: expected a positive finite number, got -1.0"),
+        (
+            {"frame_scale": None},
+            "corrupt network file: arrays: a frame needs both 'frame_centre' and 'frame_scale'",
+        ),
+        (
+            {"frame_scale": np.array(-1.0)},
+            "corrupt network file: frame scale: expected a positive finite number, got -1.0",
+        ),
         ({"frame_scale": np.ones(3)}, r"corrupt network file: frame scale: expected one number"),
-        ({"frame_centre": np.array([0.0, np.inf, 0.0])}, "corrupt network file: frame centre: non-finite value inf"),
-        ({"frame_centre": np.zeros(4)}, r"corrupt network file: frame centre: expected shape \(\.\.\., 3\)"),
+        (
+            {"frame_centre": np.array([0.0, np.inf, 0.0])},
+            "corrupt network file: frame centre: non-finite value inf",
+        ),
+        (
+            {"frame_centre": np.zeros(4)},
+            r"corrupt network file: frame centre: expected shape \(\.\.\., 3\)",
+        ),
     ],
 )
-def test_bad_frame_arrays_are_format_errors(tmp_path: Path, arrays: dict[str, object], match: str) -> None:
+def test_bad_frame_arrays_are_format_errors(
+    tmp_path: Path, arrays: dict[str, object], match: str
+) -> None:
     save_network(tmp_path / "n.npz", framed_cube()[0])
     with pytest.raises(FormatError, match=match):
         load_network(rewrite(tmp_path / "n.npz", tmp_path / "bad.npz", **arrays))
@@ -454,9 +561,16 @@ def test_volume_tessellation_and_fit_are_in_world_coordinates() -> None:
     mesh, reference = tessellate(framed, 5), tessellate(world, 5)
     np.testing.assert_array_equal(mesh.triangles, reference.triangles)
     # W ≤ 4 bounds the Hermite position weights Σ_ij |H_i(u) H_j(v)|
-    np.testing.assert_allclose(mesh.points, reference.points, rtol=0, atol=ULPS * EPS * magnitude(framed.patches) * 4)  # type: ignore[arg-type]
+    np.testing.assert_allclose(
+        mesh.points, reference.points, rtol=0, atol=ULPS * EPS * magnitude(framed.patches) * 4
+    )  # type: ignore[arg-type]
     # the world set's tangents carry the rounding of its control, ≈ eps |c| against tangents of size ≈ s
-    np.testing.assert_allclose(mesh.normals, reference.normals, rtol=0, atol=16 * EPS * np.abs(frame.centre).max() / frame.scale)
+    np.testing.assert_allclose(
+        mesh.normals,
+        reference.normals,
+        rtol=0,
+        atol=16 * EPS * np.abs(frame.centre).max() / frame.scale,
+    )
 
     gregory = GregoryPatchSet(gregory_local(2, 12), frame)
     fit = fit_bspline_surfaces(gregory, 1e-4 * frame.scale)
@@ -474,8 +588,10 @@ def test_step_export_of_a_framed_network_writes_world_coordinates(tmp_path: Path
     from g1patch.io.cad import export_step, read_step_faces
 
     framed, world = framed_cube()
-    results = [export_step(tmp_path / f"{name}.step", network, g1_samples=5)
-               for name, network in (("framed", framed), ("world", world))]
+    results = [
+        export_step(tmp_path / f"{name}.step", network, g1_samples=5)
+        for name, network in (("framed", framed), ("world", world))
+    ]
     for result in results:
         assert result.exact and result.solid and result.valid and result.free_edges == 0
     assert results[0].volume == pytest.approx(results[1].volume, rel=1e-9)

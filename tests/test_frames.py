@@ -7,17 +7,28 @@ import pytest
 import scipy.sparse as sp
 
 from g1patch import shapes
-from g1patch.targets.local import fan_normals
 from g1patch.mesh import QuadMesh
 from g1patch.targets.frames import (
-    CUBIC_POINTS, MAX_TILT, SMALL_RING, VertexFrames, _face_ring_rows, _face_rings, _fit_all, _fit_compiled, _Ring, vertex_frames,
+    CUBIC_POINTS,
+    MAX_TILT,
+    SMALL_RING,
+    VertexFrames,
+    _face_ring_rows,
+    _face_rings,
+    _fit_all,
+    _fit_compiled,
+    _Ring,
+    vertex_frames,
 )
+from g1patch.targets.local import fan_normals
 
 AXES = np.array([1.0, 0.7, 0.5])
 
 
 def angle_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("vd,vd->v", a, b)))
+    return np.degrees(
+        np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("vd,vd->v", a, b))
+    )
 
 
 def tangent_projector(n: np.ndarray) -> np.ndarray:
@@ -31,7 +42,9 @@ def ellipsoid(level: int) -> tuple[QuadMesh, np.ndarray]:
     return mesh.with_vertices(x), n / np.linalg.norm(n, axis=1, keepdims=True)
 
 
-def torus(n_major: int, n_minor: int, R: float = 2.0, r: float = 0.7) -> tuple[QuadMesh, np.ndarray, np.ndarray]:
+def torus(
+    n_major: int, n_minor: int, R: float = 2.0, r: float = 0.7
+) -> tuple[QuadMesh, np.ndarray, np.ndarray]:
     """The mesh, exact normals and exact shape operators (principal curvatures 1/r and cos φ/(R + r cos φ))."""
     mesh = shapes.torus(n_major, n_minor, R, r)
     u = np.repeat(np.linspace(0.0, 2.0 * np.pi, n_major, endpoint=False), n_minor)
@@ -39,8 +52,10 @@ def torus(n_major: int, n_minor: int, R: float = 2.0, r: float = 0.7) -> tuple[Q
     n = np.stack([np.cos(phi) * np.cos(u), np.cos(phi) * np.sin(u), np.sin(phi)], axis=1)
     t_u = np.stack([-np.sin(u), np.cos(u), 0.0 * u], axis=1)
     t_phi = np.stack([-np.sin(phi) * np.cos(u), -np.sin(phi) * np.sin(u), np.cos(phi)], axis=1)
-    s = (t_phi[:, :, None] * t_phi[:, None, :] / r
-         + (np.cos(phi) / (R + r * np.cos(phi)))[:, None, None] * t_u[:, :, None] * t_u[:, None, :])
+    s = (
+        t_phi[:, :, None] * t_phi[:, None, :] / r
+        + (np.cos(phi) / (R + r * np.cos(phi)))[:, None, None] * t_u[:, :, None] * t_u[:, None, :]
+    )
     return mesh, n, s
 
 
@@ -60,7 +75,9 @@ def check_invariants(frames: VertexFrames) -> None:
     assert np.isfinite(n).all() and np.isfinite(s).all()
     np.testing.assert_allclose(np.linalg.norm(n, axis=1), 1.0, atol=1e-14)
     np.testing.assert_allclose(s, s.transpose(0, 2, 1), atol=1e-14)
-    np.testing.assert_allclose(np.einsum("vij,vj->vi", s, n), 0.0, atol=1e-12 * max(1.0, np.abs(s).max()))
+    np.testing.assert_allclose(
+        np.einsum("vij,vj->vi", s, n), 0.0, atol=1e-12 * max(1.0, np.abs(s).max())
+    )
 
 
 @pytest.mark.parametrize("level", range(5))
@@ -102,7 +119,9 @@ def test_torus_normals_and_shape_operator_converge() -> None:
         check_invariants(frames)
         normal_error.append(angle_deg(frames.normals, exact_n).max())
         shape_error.append(np.abs(frames.shape_operator - exact_s).max())
-    assert normal_error[0] > normal_error[1] > normal_error[2] and normal_error[2] < 0.01, normal_error
+    assert normal_error[0] > normal_error[1] > normal_error[2] and normal_error[2] < 0.01, (
+        normal_error
+    )
     assert shape_error[0] > shape_error[1] > shape_error[2] and shape_error[2] < 0.02, shape_error
 
 
@@ -115,11 +134,16 @@ def test_coarse_torus_keeps_the_fan_normal() -> None:
     assert angle_deg(frames.normals, exact_n).max() < 1e-10
 
 
-@pytest.mark.parametrize("mesh", [shapes.grid(5, 4), shapes.fan(5, 2), shapes.boundary_fan(3), shapes.strip(4)],
-                         ids=["grid", "fan", "boundary_fan", "strip"])
+@pytest.mark.parametrize(
+    "mesh",
+    [shapes.grid(5, 4), shapes.fan(5, 2), shapes.boundary_fan(3), shapes.strip(4)],
+    ids=["grid", "fan", "boundary_fan", "strip"],
+)
 def test_flat_meshes_have_normal_z_and_no_curvature(mesh: QuadMesh) -> None:
     frames = vertex_frames(mesh)
-    np.testing.assert_array_equal(frames.normals, np.broadcast_to([0.0, 0.0, 1.0], frames.normals.shape))
+    np.testing.assert_array_equal(
+        frames.normals, np.broadcast_to([0.0, 0.0, 1.0], frames.normals.shape)
+    )
     np.testing.assert_array_equal(frames.shape_operator, 0.0)
 
 
@@ -150,7 +174,12 @@ def test_folded_ring_is_repaired() -> None:
     """One long, steep edge (towards −y) tilts the fan normal until the short ring edges fold over."""
     mesh = shapes.grid(2, 2, size=(2.0, 2.0))
     x = mesh.vertices - [1.0, 1.0, 0.0]
-    x[[1, 3, 5, 7]] = [[0.0, -1.73, 2.167], [-0.398, 0.0, 0.657], [0.159, 0.0, 0.068], [0.0, 0.145, 0.133]]
+    x[[1, 3, 5, 7]] = [
+        [0.0, -1.73, 2.167],
+        [-0.398, 0.0, 0.657],
+        [0.159, 0.0, 0.068],
+        [0.0, 0.145, 0.133],
+    ]
     mesh = mesh.with_vertices(x)
     assert not goes_once_around(mesh, 4, fan_normals(mesh)[4])
     frames = vertex_frames(mesh)
@@ -164,17 +193,33 @@ def _reference_meshes() -> list[QuadMesh]:
     noise = np.random.default_rng(5).uniform(-0.02, 0.02, noisy.vertices.shape)
     folded = shapes.grid(2, 2, size=(2.0, 2.0))
     x = folded.vertices - [1.0, 1.0, 0.0]
-    x[[1, 3, 5, 7]] = [[0.0, -1.73, 2.167], [-0.398, 0.0, 0.657], [0.159, 0.0, 0.068], [0.0, 0.145, 0.133]]
-    return [ellipsoid(3)[0], torus(24, 12)[0], torus(12, 6, 1.0, 0.25)[0], noisy.with_vertices(noisy.vertices + noise),
-            shapes.cube_sphere(0), shapes.boundary_fan(3), shapes.fan(7, 2), folded.with_vertices(x),
-            shapes.grid(8, 8, height=lambda x, y: 0.3 * x * x - 0.2 * y * y + 0.1 * x * y)]
+    x[[1, 3, 5, 7]] = [
+        [0.0, -1.73, 2.167],
+        [-0.398, 0.0, 0.657],
+        [0.159, 0.0, 0.068],
+        [0.0, 0.145, 0.133],
+    ]
+    return [
+        ellipsoid(3)[0],
+        torus(24, 12)[0],
+        torus(12, 6, 1.0, 0.25)[0],
+        noisy.with_vertices(noisy.vertices + noise),
+        shapes.cube_sphere(0),
+        shapes.boundary_fan(3),
+        shapes.fan(7, 2),
+        folded.with_vertices(x),
+        shapes.grid(8, 8, height=lambda x, y: 0.3 * x * x - 0.2 * y * y + 0.1 * x * y),
+    ]
 
 
 def split_polygon(n: int) -> QuadMesh:
     """One n-gon on the monkey saddle z = 0.1 sin 3θ around the unit circle, split into n quads
     around a centre hub whose whole 2-ring lies near the rim."""
     theta = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
-    return QuadMesh.from_arrays(np.stack([np.cos(theta), np.sin(theta), 0.1 * np.sin(3.0 * theta)], axis=1), [list(range(n))])
+    return QuadMesh.from_arrays(
+        np.stack([np.cos(theta), np.sin(theta), 0.1 * np.sin(3.0 * theta)], axis=1),
+        [list(range(n))],
+    )
 
 
 @pytest.mark.parametrize("n", [16, 1000])
@@ -203,7 +248,10 @@ def test_compiled_kernel_matches_the_numpy_reference(index: int) -> None:
     np.testing.assert_array_equal(fast.repaired, reference.repaired)
     assert (angle_deg(fast.normals, reference.normals) <= np.degrees(256 * eps)).all()
     scale = np.maximum(np.abs(reference.shape_operator).max(axis=(1, 2)), np.finfo(np.float64).tiny)
-    assert (np.abs(fast.shape_operator - reference.shape_operator).max(axis=(1, 2)) <= 2.0**14 * eps * scale).all()
+    assert (
+        np.abs(fast.shape_operator - reference.shape_operator).max(axis=(1, 2))
+        <= 2.0**14 * eps * scale
+    ).all()
 
 
 def test_compiled_kernel_matches_the_numpy_reference_around_a_hub() -> None:
@@ -214,28 +262,51 @@ def test_compiled_kernel_matches_the_numpy_reference_around_a_hub() -> None:
     mesh = split_polygon(100)
     fast, reference = vertex_frames(mesh), vertex_frames(mesh, compiled=False)
     np.testing.assert_array_equal(fast.fitted, reference.fitted)
-    assert (angle_deg(fast.normals, reference.normals) <= np.degrees(256 * np.finfo(np.float64).eps)).all()
+    assert (
+        angle_deg(fast.normals, reference.normals) <= np.degrees(256 * np.finfo(np.float64).eps)
+    ).all()
     inner = ~mesh.topology.is_boundary_vertex
     difference = np.abs(fast.shape_operator[inner] - reference.shape_operator[inner]).max()
     assert difference <= 2.0**14 * np.finfo(np.float64).eps * np.abs(reference.shape_operator).max()
 
 
-@pytest.mark.parametrize("mesh", [split_polygon(SMALL_RING), split_polygon(SMALL_RING + 1), split_polygon(1000), shapes.torus(6, 4)],
-                         ids=["hub at the limit", "hub above it", "hub of 1000", "torus"])
+@pytest.mark.parametrize(
+    "mesh",
+    [
+        split_polygon(SMALL_RING),
+        split_polygon(SMALL_RING + 1),
+        split_polygon(1000),
+        shapes.torus(6, 4),
+    ],
+    ids=["hub at the limit", "hub above it", "hub of 1000", "torus"],
+)
 def test_face_ring_rows_are_scipys_rows_of_the_incidence_product(mesh: QuadMesh) -> None:
     """The kernel's rows of ``I Iᵀ`` are scipy's, point for point and in its order, on both of its
     paths: rings up to SMALL_RING faces (insertion sort, row scan), larger ones (sort, marks)."""
     nv, nf = mesh.n_vertices, mesh.n_faces
-    incidence = sp.csr_matrix((np.ones(4 * nf, dtype=bool), (mesh.faces.ravel(), np.repeat(np.arange(nf), 4))), shape=(nv, nf))
+    incidence = sp.csr_matrix(
+        (np.ones(4 * nf, dtype=bool), (mesh.faces.ravel(), np.repeat(np.arange(nf), 4))),
+        shape=(nv, nf),
+    )
     product = (incidence @ incidence.T).tocsr()
     offsets, points = _face_ring_rows(mesh)
     np.testing.assert_array_equal(offsets, product.indptr)
     np.testing.assert_array_equal(points, product.indices)
 
 
-@pytest.mark.parametrize(("mesh", "drops"), [(split_polygon(16), False), (split_polygon(100), True), (shapes.grid(6, 5), True),
-                                              (shapes.strip(4), True)], ids=["hub of 16", "hub of 100", "flat grid", "strip"])
-def test_fit_kernel_residual_and_determination_match_the_numpy_reference(mesh: QuadMesh, drops: bool) -> None:
+@pytest.mark.parametrize(
+    ("mesh", "drops"),
+    [
+        (split_polygon(16), False),
+        (split_polygon(100), True),
+        (shapes.grid(6, 5), True),
+        (shapes.strip(4), True),
+    ],
+    ids=["hub of 16", "hub of 100", "flat grid", "strip"],
+)
+def test_fit_kernel_residual_and_determination_match_the_numpy_reference(
+    mesh: QuadMesh, drops: bool
+) -> None:
     """The kernel computes a vertex's residual and determination (pivot) once, on its last refit,
     as vectors across lanes; they are the reference's, which computes them on every refit: squared
     residual within 2¹⁴ ε of the largest, pivot (a sin²) within 2¹⁴ ε, and the same dropped columns
@@ -253,7 +324,11 @@ def test_fit_kernel_residual_and_determination_match_the_numpy_reference(mesh: Q
         residual[vertices], pivot[vertices] = fit.residual, fit.pivot
     eps = 2.0**14 * np.finfo(np.float64).eps
     np.testing.assert_array_equal(fast.pivot == 0.0, pivot == 0.0)
-    np.testing.assert_allclose(fast.pivot, pivot, rtol=0.0, atol=eps)  # a sin² in [0, 1]; near-dropped columns differ ~1e-15
+    np.testing.assert_allclose(
+        fast.pivot, pivot, rtol=0.0, atol=eps
+    )  # a sin² in [0, 1]; near-dropped columns differ ~1e-15
     # residual² is a difference of sums (exact fits: rounding either side of 0, clipped), so compared squared
-    np.testing.assert_allclose(fast.residual**2, residual**2, rtol=0.0, atol=eps * max(1.0, float((residual**2).max())))
+    np.testing.assert_allclose(
+        fast.residual**2, residual**2, rtol=0.0, atol=eps * max(1.0, float((residual**2).max()))
+    )
     assert (fast.pivot == 0.0).any() == drops

@@ -8,17 +8,18 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
+import fuzzing
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
-import fuzzing
 
 #: cases per CI run (the issue asks for at least 500)
 CI_CASES = 500
 
 
-@settings(max_examples=CI_CASES, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
+@settings(
+    max_examples=CI_CASES, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck)
+)
 @given(st.integers(min_value=0, max_value=2**32 - 1))
 def test_hostile_inputs_keep_the_command_line_promises(seed: int) -> None:
     with tempfile.TemporaryDirectory() as directory:

@@ -36,22 +36,21 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from g1patch import shapes
-from g1patch.construct.corner import build_corner_network
-from g1patch.targets.local import corner_tangents, fan_normals
 from g1patch.build import build_gregory_network
-from g1patch.targets.interpolate import tangent_stars
+from g1patch.construct.corner import build_corner_network
 from g1patch.continuity import angle_between, check
 from g1patch.errors import ConstructionError, InputError
 from g1patch.gregory import GregoryPatchSet
 from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh
 from g1patch.network import PatchNetwork, edge_parameters
+from g1patch.targets.interpolate import tangent_stars
+from g1patch.targets.local import corner_tangents, fan_normals
 
 EDGE_DIRECTION = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
-INWARD = np.array([[0.0, 1.0], [-1.0, 0.0], [0.0, -1.0], [1.0, 0.0]])  # EDGE_DIRECTION turned by +90°
-
-
-
+INWARD = np.array(
+    [[0.0, 1.0], [-1.0, 0.0], [0.0, -1.0], [1.0, 0.0]]
+)  # EDGE_DIRECTION turned by +90°
 
 
 # ------------------------------------------------------------------------------ shared meshes
@@ -63,8 +62,12 @@ def test_shared_meshes_are_exactly_g1(shared_data: Path, name: str, shape: str) 
     assert isinstance(network.patches, GregoryPatchSet)
     assert network.provenance["method"] == "gregory" and network.provenance["shape"] == shape
     # stored in the working frame (centred, unit-scaled): corners come back within rounding
-    np.testing.assert_allclose(network.patches.corners(), mesh.vertices[mesh.faces], rtol=0,
-                               atol=4 * np.finfo(float).eps * np.abs(mesh.vertices).max())
+    np.testing.assert_allclose(
+        network.patches.corners(),
+        mesh.vertices[mesh.faces],
+        rtol=0,
+        atol=4 * np.finfo(float).eps * np.abs(mesh.vertices).max(),
+    )
     assert_exact_g1(check(network))
 
 
@@ -75,7 +78,9 @@ def test_shared_meshes_are_exactly_g1(shared_data: Path, name: str, shape: str) 
     st.integers(0, 2**32 - 1),
     st.sampled_from(INTERPOLATING),
 )
-def test_perturbed_shared_meshes_are_exactly_g1(name: str, amplitude: float, seed: int, shape: str) -> None:
+def test_perturbed_shared_meshes_are_exactly_g1(
+    name: str, amplitude: float, seed: int, shape: str
+) -> None:
     from conftest import SHARED_DATA
 
     if not SHARED_DATA.is_dir():
@@ -111,9 +116,15 @@ def fd_normals(network: PatchNetwork, t: np.ndarray, h: float) -> np.ndarray:
     difference along the edge and C the one-sided second-order difference (−3p₀ + 4p₁ − p₂)/2h
     into the patch; (edge direction, inward) is a rotation of (u, v), so T × C ∥ p_u × p_v."""
     edge = np.arange(4)[:, None, None]
-    stencil = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, 2]], dtype=float)  # (along, inward) steps
-    offsets = h * (stencil[:, None, 0, None] * EDGE_DIRECTION + stencil[:, None, 1, None] * INWARD)  # (5, 4, 2)
-    uv = edge_parameters(edge, t[None, :, None]) + np.moveaxis(offsets, 0, 1)[:, None]  # (4, K, 5, 2)
+    stencil = np.array(
+        [[0, 0], [1, 0], [-1, 0], [0, 1], [0, 2]], dtype=float
+    )  # (along, inward) steps
+    offsets = h * (
+        stencil[:, None, 0, None] * EDGE_DIRECTION + stencil[:, None, 1, None] * INWARD
+    )  # (5, 4, 2)
+    uv = (
+        edge_parameters(edge, t[None, :, None]) + np.moveaxis(offsets, 0, 1)[:, None]
+    )  # (4, K, 5, 2)
     p = network.patches.evaluate(uv.reshape(-1, 2)).reshape(-1, 4, len(t), 5, 3)
     along = (p[..., 1, :] - p[..., 2, :]) / (2 * h)
     inward = (-3 * p[..., 0, :] + 4 * p[..., 3, :] - p[..., 4, :]) / (2 * h)
@@ -144,7 +155,11 @@ def test_finite_difference_normals_agree_across_edges(mesh: QuadMesh) -> None:
 
 def expected_cosines(mesh: QuadMesh) -> np.ndarray:
     topology = mesh.topology
-    return np.where(topology.is_boundary_vertex, np.cos(np.pi / topology.face_count), np.cos(2 * np.pi / topology.valence))
+    return np.where(
+        topology.is_boundary_vertex,
+        np.cos(np.pi / topology.face_count),
+        np.cos(2 * np.pi / topology.valence),
+    )
 
 
 @pytest.mark.parametrize("mesh", [perturbed(shapes.fan(6, 2), NOISE, 3), perturbed(shapes.boundary_fan(4), NOISE, 4),
@@ -158,14 +173,20 @@ def test_the_g1_equation_holds_as_a_vector_identity(mesh: QuadMesh) -> None:
     uv = edge_parameters(np.arange(4)[:, None], t[None, :]).reshape(-1, 2)
     p_u = patches.evaluate(uv, 1, 0).reshape(-1, 4, len(t), 3)
     p_v = patches.evaluate(uv, 0, 1).reshape(-1, 4, len(t), 3)
-    cross = INWARD[None, :, None, 0, None] * p_u + INWARD[None, :, None, 1, None] * p_v  # into the patch
-    tangent = EDGE_DIRECTION[None, :, None, 0, None] * p_u + EDGE_DIRECTION[None, :, None, 1, None] * p_v
+    cross = (
+        INWARD[None, :, None, 0, None] * p_u + INWARD[None, :, None, 1, None] * p_v
+    )  # into the patch
+    tangent = (
+        EDGE_DIRECTION[None, :, None, 0, None] * p_u + EDGE_DIRECTION[None, :, None, 1, None] * p_v
+    )
     patch, edge = network.shared_edges()
     other, other_edge = network.neighbor[patch, edge], network.neighbor_edge[patch, edge]
     cosine = expected_cosines(mesh)
     start, end = network.corner_ids[patch, edge], network.corner_ids[patch, (edge + 1) % 4]
     phi = 2 * cosine[start, None] * (1 - t) - 2 * cosine[end, None] * t
-    residual = cross[patch, edge] + cross[other, other_edge, ::-1] - phi[..., None] * tangent[patch, edge]
+    residual = (
+        cross[patch, edge] + cross[other, other_edge, ::-1] - phi[..., None] * tangent[patch, edge]
+    )
     scale = np.abs(cross).max() + np.abs(tangent).max()
     assert np.abs(residual).max() <= 1e-13 * scale
 
@@ -183,17 +204,21 @@ def test_tangent_stars_are_regular(mesh: QuadMesh) -> None:
     scale = np.abs(star).max()
     assert np.abs(np.einsum("sd,sd->s", star, normals[slot_vertex])).max() <= 1e-14 * scale
     for v in range(topology.n_vertices):  # a test-side loop over a few dozen vertices
-        t = star[offsets[v]:offsets[v + 1]]
+        t = star[offsets[v] : offsets[v + 1]]
         if topology.is_boundary_vertex[v]:
             inner = range(1, len(t) - 1)
         else:
             inner = range(len(t))
         for j in inner:
-            np.testing.assert_allclose(t[j - 1] + t[(j + 1) % len(t)], 2 * cosine[v] * t[j], rtol=0, atol=1e-14 * scale)
+            np.testing.assert_allclose(
+                t[j - 1] + t[(j + 1) % len(t)], 2 * cosine[v] * t[j], rtol=0, atol=1e-14 * scale
+            )
         if topology.is_boundary_vertex[v] and topology.face_count[v] == 1:
-            ring = topology.neighbors[offsets[v]:offsets[v + 1]]
+            ring = topology.neighbors[offsets[v] : offsets[v + 1]]
             x = mesh.vertices
-            np.testing.assert_array_equal(t, corner_tangents(x[[v, v]], x[ring], normals[[v, v]], "chord"))
+            np.testing.assert_array_equal(
+                t, corner_tangents(x[[v, v]], x[ring], normals[[v, v]], "chord")
+            )
 
 
 @pytest.mark.parametrize("mesh", [perturbed(shapes.fan(7, 1), NOISE, 9), perturbed(shapes.boundary_fan(5), NOISE, 10),
@@ -205,16 +230,24 @@ def test_stars_are_least_squares_fits(mesh: QuadMesh) -> None:
     topology = mesh.topology
     ring = topology.one_ring(0)
     faces = topology.face_count[0]
-    theta = np.pi * np.arange(faces + 1) / faces if topology.is_boundary_vertex[0] else 2 * np.pi * np.arange(len(ring)) / len(ring)
+    theta = (
+        np.pi * np.arange(faces + 1) / faces
+        if topology.is_boundary_vertex[0]
+        else 2 * np.pi * np.arange(len(ring)) / len(ring)
+    )
     x = mesh.vertices
     s = corner_tangents(x[[0] * len(ring)], x[ring], normals[[0] * len(ring)], "arc")
     basis = np.stack([np.cos(theta), np.sin(theta)], axis=1)
     coefficients = np.linalg.lstsq(basis, s, rcond=None)[0]
-    np.testing.assert_allclose(star[: len(ring)], basis @ coefficients, rtol=0, atol=1e-14 * np.abs(s).max())
+    np.testing.assert_allclose(
+        star[: len(ring)], basis @ coefficients, rtol=0, atol=1e-14 * np.abs(s).max()
+    )
 
 
 def test_interior_edges_share_their_boundary_cubic_bit_for_bit(shared_data: Path) -> None:
-    network = build_gregory_network(perturbed(read_mesh(shared_data / "catmark_xord_interior.obj"), NOISE, 8))
+    network = build_gregory_network(
+        perturbed(read_mesh(shared_data / "catmark_xord_interior.obj"), NOISE, 8)
+    )
     assert isinstance(network.patches, GregoryPatchSet)
     curves = network.patches.boundary_curves().control
     patch, edge = network.shared_edges()
@@ -243,7 +276,9 @@ def test_cube_to_sphere_deviation() -> None:
     deviation = {}
     for tangents in ("chord", "arc"):
         for level in range(5):
-            network = build_gregory_network(shapes.cube_sphere(level), shape="legacy", tangents=tangents)  # type: ignore[arg-type]
+            network = build_gregory_network(
+                shapes.cube_sphere(level), shape="legacy", tangents=tangents
+            )  # type: ignore[arg-type]
             assert_exact_g1(check(network, samples=9, fold_samples=5))
             deviation[tangents, level] = radial_deviation(network)
     assert deviation["arc", 0][1] <= 1e-4

@@ -34,7 +34,20 @@ def random_points(seed: int, count: int = 3) -> np.ndarray:
 def scattered(seed: int, count: int = 12) -> np.ndarray:
     """Parameters in [0, 1]² including corners, edge points and points next to the corners."""
     rng = np.random.default_rng(seed)
-    special = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.3, 0], [1, 0.6], [0.2, 1], [0, 0.9], [1e-9, 2e-9], [1 - 1e-9, 1]])
+    special = np.array(
+        [
+            [0, 0],
+            [1, 0],
+            [1, 1],
+            [0, 1],
+            [0.3, 0],
+            [1, 0.6],
+            [0.2, 1],
+            [0, 0.9],
+            [1e-9, 2e-9],
+            [1 - 1e-9, 1],
+        ]
+    )
     return np.vstack([special, rng.random((count, 2))])
 
 
@@ -85,7 +98,10 @@ def test_matches_the_sympy_derivation(du: int, dv: int) -> None:
     rng = np.random.default_rng(7)
     numerators = rng.integers(-20, 21, size=(20, 3))
     denominators = rng.choice([1, 2, 3, 4, 5, 7], size=(20, 3))
-    exact = [[sp.Rational(int(n), int(d)) for n, d in zip(row_n, row_d)] for row_n, row_d in zip(numerators, denominators)]
+    exact = [
+        [sp.Rational(int(n), int(d)) for n, d in zip(row_n, row_d)]
+        for row_n, row_d in zip(numerators, denominators)
+    ]
     points = np.array([[float(c) for c in row] for row in exact])
     expressions = [sp.diff(e, u, du, v, dv) for e in sympy_patch(exact)]
     reference = np.array([[exact_value(e, a, b) for e in expressions] for a, b in SYMPY_UV])
@@ -104,7 +120,9 @@ def test_equal_pairs_give_the_bicubic_bezier_patch() -> None:
     uv = scattered(2)
     scale = np.abs(points).max()
     for du, dv in [(0, 0), (1, 0), (0, 1)]:
-        np.testing.assert_allclose(gregory.evaluate(uv, du, dv), bezier.evaluate(uv, du, dv), rtol=0, atol=REL * scale)
+        np.testing.assert_allclose(
+            gregory.evaluate(uv, du, dv), bezier.evaluate(uv, du, dv), rtol=0, atol=REL * scale
+        )
 
 
 def test_layout_is_rotation_symmetric() -> None:
@@ -117,8 +135,12 @@ def test_layout_is_rotation_symmetric() -> None:
     turned = np.stack([1.0 - uv[:, 1], uv[:, 0]], axis=1)
     scale = np.abs(points).max()
     np.testing.assert_allclose(Q.evaluate(uv), P.evaluate(turned), rtol=0, atol=REL * scale)
-    np.testing.assert_allclose(Q.evaluate(uv, 1, 0), P.evaluate(turned, 0, 1), rtol=0, atol=REL * scale)
-    np.testing.assert_allclose(Q.evaluate(uv, 0, 1), -P.evaluate(turned, 1, 0), rtol=0, atol=REL * scale)
+    np.testing.assert_allclose(
+        Q.evaluate(uv, 1, 0), P.evaluate(turned, 0, 1), rtol=0, atol=REL * scale
+    )
+    np.testing.assert_allclose(
+        Q.evaluate(uv, 0, 1), -P.evaluate(turned, 1, 0), rtol=0, atol=REL * scale
+    )
 
 
 @pytest.mark.parametrize("edge", range(4))
@@ -132,7 +154,10 @@ def test_an_edge_sees_only_its_own_interior_points(edge: int) -> None:
     moved[:, others] += 10.0
     uv = edge_parameters(np.array(edge), np.linspace(0.0, 1.0, 17))
     for du, dv in [(0, 0), (1, 0), (0, 1)]:
-        np.testing.assert_array_equal(GregoryPatchSet(moved).evaluate(uv, du, dv), GregoryPatchSet(points).evaluate(uv, du, dv))
+        np.testing.assert_array_equal(
+            GregoryPatchSet(moved).evaluate(uv, du, dv),
+            GregoryPatchSet(points).evaluate(uv, du, dv),
+        )
 
 
 def test_cross_derivative_on_an_edge_is_the_bezier_row() -> None:
@@ -155,8 +180,12 @@ def test_corner_values_and_derivatives_are_exact_limits() -> None:
     scale = REL * np.abs(points).max()
     np.testing.assert_allclose(p_u[:, 0], 3 * (points[:, 4] - points[:, 0]), rtol=0, atol=scale)
     np.testing.assert_allclose(p_v[:, 0], 3 * (points[:, 5] - points[:, 0]), rtol=0, atol=scale)
-    np.testing.assert_allclose(p_u[:, 2], 3 * (points[:, 2] - points[:, 8]), rtol=0, atol=scale)  # b33 − b23 (E+_2)
-    np.testing.assert_allclose(p_v[:, 2], 3 * (points[:, 2] - points[:, 9]), rtol=0, atol=scale)  # b33 − b32 (E-_2)
+    np.testing.assert_allclose(
+        p_u[:, 2], 3 * (points[:, 2] - points[:, 8]), rtol=0, atol=scale
+    )  # b33 − b23 (E+_2)
+    np.testing.assert_allclose(
+        p_v[:, 2], 3 * (points[:, 2] - points[:, 9]), rtol=0, atol=scale
+    )  # b33 − b32 (E-_2)
 
 
 @pytest.mark.parametrize("tiny", [1e-9, 1e-200, 1e-300, 5e-324])
@@ -195,7 +224,10 @@ unit_parameter = st.one_of(st.sampled_from([0.0, 1.0]), st.floats(0.0, 1.0))
 
 
 @settings(deadline=None, max_examples=60)
-@given(st.integers(0, 2**32 - 1), st.lists(st.tuples(unit_parameter, unit_parameter), min_size=1, max_size=6))
+@given(
+    st.integers(0, 2**32 - 1),
+    st.lists(st.tuples(unit_parameter, unit_parameter), min_size=1, max_size=6),
+)
 def test_affine_invariance(seed: int, params: list[tuple[float, float]]) -> None:
     """Weights sum to 1 (positions) and to 0 (derivatives): p(A x + c) = A p(x) + c, p_u(A x + c) = A p_u(x)."""
     rng = np.random.default_rng(seed)
@@ -205,9 +237,16 @@ def test_affine_invariance(seed: int, params: list[tuple[float, float]]) -> None
     patches = GregoryPatchSet(points)
     uv = np.array(params)
     scale = REL * 10 * np.abs(points).max() * np.abs(matrix).sum() + REL * np.abs(shift).max()
-    np.testing.assert_allclose(moved.evaluate(uv), patches.evaluate(uv) @ matrix.T + shift, rtol=0, atol=scale)
+    np.testing.assert_allclose(
+        moved.evaluate(uv), patches.evaluate(uv) @ matrix.T + shift, rtol=0, atol=scale
+    )
     for du, dv in [(1, 0), (0, 1)]:
-        np.testing.assert_allclose(moved.evaluate(uv, du, dv), patches.evaluate(uv, du, dv) @ matrix.T, rtol=0, atol=scale * 10)
+        np.testing.assert_allclose(
+            moved.evaluate(uv, du, dv),
+            patches.evaluate(uv, du, dv) @ matrix.T,
+            rtol=0,
+            atol=scale * 10,
+        )
     weights = gregory_weights(uv[:, 0], uv[:, 1])
     np.testing.assert_allclose(weights.sum(axis=-1), 1.0, rtol=0, atol=1e-15)
 
@@ -219,8 +258,15 @@ def test_grid_and_per_patch_parameters_agree_with_shared_ones() -> None:
     uv = np.stack(np.meshgrid(u_grid, v_grid, indexing="ij"), axis=-1).reshape(-1, 2)
     for du, dv in [(0, 0), (1, 0), (0, 1)]:
         shared = patches.evaluate(uv, du, dv)
-        np.testing.assert_array_equal(patches.evaluate_grid(u_grid, v_grid, du, dv), shared.reshape(4, 5, 3, 3))
-        np.testing.assert_allclose(patches.evaluate(np.broadcast_to(uv, (4,) + uv.shape), du, dv), shared, rtol=0, atol=1e-14 * np.abs(shared).max())
+        np.testing.assert_array_equal(
+            patches.evaluate_grid(u_grid, v_grid, du, dv), shared.reshape(4, 5, 3, 3)
+        )
+        np.testing.assert_allclose(
+            patches.evaluate(np.broadcast_to(uv, (4,) + uv.shape), du, dv),
+            shared,
+            rtol=0,
+            atol=1e-14 * np.abs(shared).max(),
+        )
     assert patches.evaluate_grid(u_grid).shape == (4, 5, 5, 3)
 
 
@@ -231,7 +277,9 @@ def test_boundary_curves_are_the_patch_edges() -> None:
     t = np.linspace(0.0, 1.0, 11)
     uv = edge_parameters(np.arange(4)[:, None], t[None, :]).reshape(-1, 2)
     on_edges = patches.evaluate(uv).reshape(3, 4, 11, 3)
-    np.testing.assert_allclose(curves.evaluate(t), on_edges, rtol=0, atol=REL * np.abs(patches.points).max())
+    np.testing.assert_allclose(
+        curves.evaluate(t), on_edges, rtol=0, atol=REL * np.abs(patches.points).max()
+    )
 
 
 def test_normals_are_unit_and_zero_where_degenerate() -> None:
@@ -257,12 +305,18 @@ def test_arrays_round_trip_and_kind() -> None:
         (lambda p: p.evaluate([[0.5, 0.5]], 1, 1), "du \\+ dv"),
         (lambda p: p.evaluate([[0.5, 1.5]]), "uv: Gregory patches are defined on"),
         (lambda p: p.evaluate([[0.5, 0.5, 0.5]]), "uv: expected shape"),
-        (lambda p: p.evaluate(np.zeros((2, 4, 2))), "uv: expected shape \\(K, 2\\) or \\(3, K, 2\\)"),
+        (
+            lambda p: p.evaluate(np.zeros((2, 4, 2))),
+            "uv: expected shape \\(K, 2\\) or \\(3, K, 2\\)",
+        ),
         (lambda p: p.evaluate_grid([-0.1, 0.5]), "u: Gregory patches"),
         (lambda p: p.evaluate_grid([[0.1]]), "u: expected a 1-D"),
         (lambda p: GregoryPatchSet(np.zeros((2, 16, 3))), "points: expected shape"),
         (lambda p: GregoryPatchSet(np.zeros((20, 3))), "points: expected shape \\(N, 20, 3\\)"),
-        (lambda p: GregoryPatchSet.from_arrays({"control": np.zeros((1, 20, 3))}), "arrays: .*'points'"),
+        (
+            lambda p: GregoryPatchSet.from_arrays({"control": np.zeros((1, 20, 3))}),
+            "arrays: .*'points'",
+        ),
     ],
 )
 def test_bad_input_names_the_argument(call, match: str) -> None:  # type: ignore[no-untyped-def]

@@ -83,7 +83,13 @@ def normal_tolerance(control, form, u, v):
     wv, dwv = basis_values(form, v), basis_values(form, v, 1)
     p_u, p_v = reference_contract(control, dwu, wv), reference_contract(control, wu, dwv)
     a_u, a_v = abs_contract(control, dwu, wv), abs_contract(control, wu, dwv)
-    s = np.stack([a_u[..., i] * a_v[..., k] + a_u[..., k] * a_v[..., i] for i, k in ((1, 2), (2, 0), (0, 1))], -1)
+    s = np.stack(
+        [
+            a_u[..., i] * a_v[..., k] + a_u[..., k] * a_v[..., i]
+            for i, k in ((1, 2), (2, 0), (0, 1))
+        ],
+        -1,
+    )
     c = np.cross(p_u, p_v)
     with np.errstate(divide="ignore", invalid="ignore"):
         tol = 96 * EPS * np.linalg.norm(s, axis=-1) / np.linalg.norm(c, axis=-1) + 4 * EPS
@@ -111,11 +117,18 @@ def test_contract_matches_einsum(block_points, form, du, dv, compiled):
 @pytest.mark.parametrize("form", FORMS)
 def test_single_patch_and_wide_grids(block_points, form, compiled):
     control = make_control(1, seed=5)
-    for u, v in ((parameters(2, 3), parameters(31, 4)), (parameters(23, 5), parameters(3, 6)), (np.array([0.25]), np.array([0.5]))):
+    for u, v in (
+        (parameters(2, 3), parameters(31, 4)),
+        (parameters(23, 5), parameters(3, 6)),
+        (np.array([0.25]), np.array([0.5])),
+    ):
         wu, wv = basis_values(form, u, 1), basis_values(form, v)
         got = _grid.contract(control, wu, wv, compiled=compiled)
         assert got.shape == (1, u.size, v.size, 3)
-        assert np.all(np.abs(got - reference_contract(control, wu, wv)) <= 16 * EPS * abs_contract(control, wu, wv))
+        assert np.all(
+            np.abs(got - reference_contract(control, wu, wv))
+            <= 16 * EPS * abs_contract(control, wu, wv)
+        )
 
 
 @COMPILED
@@ -126,7 +139,10 @@ def test_large_grid_uses_row_blocks_and_matches(compiled):
     u, v = np.linspace(0.0, 1.0, 200), np.linspace(0.0, 1.0, 150)
     wu, wv = basis_values("bezier", u), basis_values("bezier", v)
     got = _grid.contract(control, wu, wv, compiled=compiled)
-    assert np.all(np.abs(got - reference_contract(control, wu, wv)) <= 16 * EPS * abs_contract(control, wu, wv))
+    assert np.all(
+        np.abs(got - reference_contract(control, wu, wv))
+        <= 16 * EPS * abs_contract(control, wu, wv)
+    )
     normals = _grid.normals(control, "bezier", u, v, compiled=compiled)
     expected, tol = normal_tolerance(control, "bezier", u, v)
     assert np.all(np.linalg.norm(normals - expected, axis=-1) <= tol)
@@ -138,20 +154,33 @@ def test_out_is_filled_in_place_and_checked(compiled):
     wu = wv = basis_values("bezier", np.linspace(0.0, 1.0, 4))
     out = np.full((3, 4, 4, 3), np.nan)
     assert _grid.contract(control, wu, wv, out=out, compiled=compiled) is out
-    assert np.all(np.abs(out - reference_contract(control, wu, wv)) <= 16 * EPS * abs_contract(control, wu, wv))
-    with pytest.raises(InputError, match=r"^out: expected a C-contiguous float64 array of shape \(3, 4, 4, 3\)"):
+    assert np.all(
+        np.abs(out - reference_contract(control, wu, wv))
+        <= 16 * EPS * abs_contract(control, wu, wv)
+    )
+    with pytest.raises(
+        InputError, match=r"^out: expected a C-contiguous float64 array of shape \(3, 4, 4, 3\)"
+    ):
         _grid.contract(control, wu, wv, out=np.empty((3, 4, 3, 3)))
     with pytest.raises(InputError, match="^out: "):
         _grid.contract(control, wu, wv, out=np.empty((3, 4, 4, 3))[::-1])
     with pytest.raises(InputError, match="^normals_out: "):
-        _grid.positions_and_normals(control, "bezier", np.zeros(4), np.zeros(4), normals_out=np.empty((3, 4, 4, 3), np.float32))
+        _grid.positions_and_normals(
+            control,
+            "bezier",
+            np.zeros(4),
+            np.zeros(4),
+            normals_out=np.empty((3, 4, 4, 3), np.float32),
+        )
 
 
 @COMPILED
 def test_empty_batches_and_grids(compiled):
     wu = basis_values("bezier", np.linspace(0.0, 1.0, 5))
     assert _grid.contract(np.zeros((0, 4, 4, 3)), wu, wu, compiled=compiled).shape == (0, 5, 5, 3)
-    positions, normals = _grid.positions_and_normals(make_control(2), "hermite", np.zeros(0), np.linspace(0, 1, 3), compiled=compiled)
+    positions, normals = _grid.positions_and_normals(
+        make_control(2), "hermite", np.zeros(0), np.linspace(0, 1, 3), compiled=compiled
+    )
     assert positions.shape == normals.shape == (2, 0, 3, 3)
 
 
@@ -200,7 +229,9 @@ def test_collapsed_edge_gives_zero_normals_not_nan(block_points, form, compiled)
     np.testing.assert_array_equal(normals[2], 0.0)
     alive = np.ones(5, bool)
     alive[2] = False
-    np.testing.assert_allclose(np.linalg.norm(normals[alive, 1:], axis=-1), 1.0, rtol=0, atol=4 * EPS)
+    np.testing.assert_allclose(
+        np.linalg.norm(normals[alive, 1:], axis=-1), 1.0, rtol=0, atol=4 * EPS
+    )
     expected, tol = normal_tolerance(control, form, u, v)
     live = np.isfinite(tol)
     assert np.all(np.linalg.norm(normals - expected, axis=-1)[live] <= tol[live])
@@ -211,8 +242,9 @@ def test_point_patch_away_from_origin_is_finite(compiled):
     """Collapsed to a point that is not the origin, p_u and p_v are rounding noise: finite, never NaN."""
     control = np.broadcast_to(np.array([0.3, -1.7, 2.9]), (2, 4, 4, 3)).copy()
     for form in FORMS:
-        _, normals = _grid.positions_and_normals(control, form, np.linspace(0.0, 1.0, 17), np.linspace(0.0, 1.0, 5),
-                                                 compiled=compiled)
+        _, normals = _grid.positions_and_normals(
+            control, form, np.linspace(0.0, 1.0, 17), np.linspace(0.0, 1.0, 5), compiled=compiled
+        )
         assert np.isfinite(normals).all()
         length = np.linalg.norm(normals, axis=-1)
         assert np.all(length <= 1.0 + 4 * EPS)
@@ -266,11 +298,15 @@ def test_patchset_uses_the_compiled_kernels_from_the_threshold(monkeypatch):
     monkeypatch.setattr(_grid, "KERNEL_POINTS", 4 * 9 * 9)
     calls = []
     real = _grid._compiled
-    monkeypatch.setattr(_grid, "_compiled", lambda kernel: calls.append(kernel.__name__) or real(kernel))
+    monkeypatch.setattr(
+        _grid, "_compiled", lambda kernel: calls.append(kernel.__name__) or real(kernel)
+    )
     above = patches.evaluate_grid_with_normals(u), patches.evaluate_grid(u, u, 1, 0)
     assert calls == ["_normals_kernel", "_contract_kernel"]
     wu, dwu = basis_values("hermite", u), basis_values("hermite", u, 1)
-    assert np.all(np.abs(above[0][0] - below[0][0]) <= 16 * EPS * abs_contract(patches.control, wu, wu))
+    assert np.all(
+        np.abs(above[0][0] - below[0][0]) <= 16 * EPS * abs_contract(patches.control, wu, wu)
+    )
     assert np.all(np.abs(above[1] - below[1]) <= 16 * EPS * abs_contract(patches.control, dwu, wu))
     _, tol = normal_tolerance(patches.control, "hermite", u, u)
     assert np.all(np.linalg.norm(above[0][1] - below[0][1], axis=-1) <= tol)

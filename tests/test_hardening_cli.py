@@ -29,8 +29,13 @@ from g1patch.tessellate import MAX_TRIANGLES, TRIANGLE_BUDGET
 
 
 def g1patch(*args: str | Path, **options: object) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "g1patch.cli", *map(str, args)], capture_output=True, text=True,
-                          timeout=300, **options)  # type: ignore[call-overload]
+    return subprocess.run(
+        [sys.executable, "-m", "g1patch.cli", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        **options,
+    )  # type: ignore[call-overload]
 
 
 def temporaries(directory: Path) -> list[str]:
@@ -65,9 +70,18 @@ def test_outputs_get_the_mode_the_umask_gives(tmp_path: Path, cube: Path, umask:
     from g1patch.io.meshfile import write_quads
 
     write_quads(mesh, shapes.cube().vertices, shapes.cube().faces)
-    outputs = [tmp_path / "built.npz", tmp_path / "out.obj", tmp_path / "out.bpt", tmp_path / "out.png"]
-    commands = [("build", mesh, "-o", outputs[0]), ("export", cube, "-o", outputs[1], "--resolution", "3"),
-                ("export", cube, "-o", outputs[2]), ("render", cube, "-o", outputs[3], "--size", "64", "64")]
+    outputs = [
+        tmp_path / "built.npz",
+        tmp_path / "out.obj",
+        tmp_path / "out.bpt",
+        tmp_path / "out.png",
+    ]
+    commands = [
+        ("build", mesh, "-o", outputs[0]),
+        ("export", cube, "-o", outputs[1], "--resolution", "3"),
+        ("export", cube, "-o", outputs[2]),
+        ("render", cube, "-o", outputs[3], "--size", "64", "64"),
+    ]
     for command in commands:
         result = g1patch(*command, umask=umask)
         assert result.returncode == 0, result.stderr
@@ -84,14 +98,23 @@ def test_a_replaced_file_keeps_its_mode(tmp_path: Path, cube: Path) -> None:
     assert stat.S_IMODE(output.stat().st_mode) == 0o640 and output.read_text() != "old"
 
 
-@pytest.mark.parametrize(("signum", "code", "words"), [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")])
-def test_a_signal_during_export_leaves_no_file(tmp_path: Path, torus: Path, signum: int, code: int, words: str) -> None:
+@pytest.mark.parametrize(
+    ("signum", "code", "words"),
+    [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")],
+)
+def test_a_signal_during_export_leaves_no_file(
+    tmp_path: Path, torus: Path, signum: int, code: int, words: str
+) -> None:
     output = tmp_path / "out.obj"
     # a job started in the background by a shell inherits SIGINT ignored, and Python then keeps it so:
     # give the child the default disposition, as a terminal's foreground job has
-    process = subprocess.Popen([sys.executable, "-m", "g1patch.cli", "export", str(torus), "-o", str(output)],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    process = subprocess.Popen(
+        [sys.executable, "-m", "g1patch.cli", "export", str(torus), "-o", str(output)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     try:
         deadline = time.monotonic() + 120
         while not temporaries(tmp_path) and process.poll() is None and time.monotonic() < deadline:
@@ -99,7 +122,9 @@ def test_a_signal_during_export_leaves_no_file(tmp_path: Path, torus: Path, sign
         seen = temporaries(tmp_path)
         assert seen, "the export finished (or never started writing) before the signal"
         assert seen[0].startswith(f"{TEMPORARY_PREFIX}out.obj.") and seen[0].endswith(".obj")
-        process.send_signal(signum)  # at once: the block writer can finish 2 M triangles within 0.2 s
+        process.send_signal(
+            signum
+        )  # at once: the block writer can finish 2 M triangles within 0.2 s
         _, stderr = process.communicate(timeout=60)
     finally:
         if process.poll() is None:
@@ -112,8 +137,12 @@ def test_a_signal_during_export_leaves_no_file(tmp_path: Path, torus: Path, sign
 
 def test_errors_name_the_users_path_and_the_reason(tmp_path: Path, cube: Path) -> None:
     missing = tmp_path / "no" / "such" / "dir"
-    cases = [("export", cube, "-o", missing / "x.obj"), ("export", cube, "-o", missing / "x.bpt"),
-             ("build", shapes_obj(tmp_path), "-o", missing / "x.npz"), ("render", cube, "-o", missing / "x.png", "--size", "64", "64")]
+    cases = [
+        ("export", cube, "-o", missing / "x.obj"),
+        ("export", cube, "-o", missing / "x.bpt"),
+        ("build", shapes_obj(tmp_path), "-o", missing / "x.npz"),
+        ("render", cube, "-o", missing / "x.png", "--size", "64", "64"),
+    ]
     for command in cases:
         result = g1patch(*command)
         assert result.returncode == 2
@@ -130,7 +159,9 @@ def shapes_obj(directory: Path) -> Path:
 
 
 def test_a_directory_that_cannot_be_written(tmp_path: Path, cube: Path) -> None:
-    if os.geteuid() == 0:  # root writes anywhere permissions allow; /sys refuses new files even to root
+    if (
+        os.geteuid() == 0
+    ):  # root writes anywhere permissions allow; /sys refuses new files even to root
         if not Path("/sys").is_dir():
             pytest.skip("running as root without /sys: no directory refuses a new file")
         directory = Path("/sys")
@@ -158,20 +189,30 @@ def test_a_file_too_large_is_named(tmp_path: Path, cube: Path) -> None:
 
 
 def test_a_closed_pipe_is_quiet(tmp_path: Path, cube: Path) -> None:
-    process = subprocess.Popen([sys.executable, "-m", "g1patch.cli", "check", str(cube)],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "g1patch.cli", "check", str(cube)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     assert process.stdout is not None and process.stderr is not None
     process.stdout.close()  # before the first line: writing must fail with EPIPE
     stderr = process.stderr.read()
     process.wait(timeout=120)
     assert stderr == b"" and process.returncode == 141
 
-    shell = subprocess.run(f"{sys.executable} -m g1patch.cli check {cube} | head -1", shell=True, capture_output=True,
-                           text=True, timeout=120)
+    shell = subprocess.run(
+        f"{sys.executable} -m g1patch.cli check {cube} | head -1",
+        shell=True,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert shell.stderr == "" and len(shell.stdout.splitlines()) == 1
 
 
-def test_ctrl_c_in_process_is_one_line(cube: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+def test_ctrl_c_in_process_is_one_line(
+    cube: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     from g1patch import continuity
 
     def interrupted(*args: object, **kwargs: object) -> None:
@@ -208,7 +249,9 @@ def test_a_resolution_above_the_cap_needs_force(tmp_path: Path) -> None:
     result = g1patch("export", network, "-o", output, "--resolution", "5000")
     assert result.returncode == 2
     line = one_line(result.stderr)
-    assert line.startswith("g1patch: error: --resolution 5000 on 9 patches would write 450 M triangles (~")
+    assert line.startswith(
+        "g1patch: error: --resolution 5000 on 9 patches would write 450 M triangles (~"
+    )
     assert "GB" in line and "use --force or a lower resolution" in line
     assert sorted(os.listdir(tmp_path)) == ["grid.npz"]
 
@@ -218,14 +261,27 @@ def test_force_lifts_the_cap(tmp_path: Path, cube: Path, monkeypatch: pytest.Mon
 
     monkeypatch.setattr(tessellate, "MAX_TRIANGLES", 1000)
     output = tmp_path / "cube.ply"
-    assert main(["export", str(cube), "-o", str(output), "--resolution", "20"]) == 2 and not output.exists()
-    assert main(["export", str(cube), "-o", str(output), "--resolution", "20", "--force"]) == 0 and output.exists()
+    assert (
+        main(["export", str(cube), "-o", str(output), "--resolution", "20"]) == 2
+        and not output.exists()
+    )
+    assert (
+        main(["export", str(cube), "-o", str(output), "--resolution", "20", "--force"]) == 0
+        and output.exists()
+    )
     assert MAX_TRIANGLES >= 10 * TRIANGLE_BUDGET  # the real cap leaves room above the default
 
 
-def test_shared_spot_split4_default_export_stays_within_the_budget(tmp_path: Path, shared_data: Path) -> None:
+def test_shared_spot_split4_default_export_stays_within_the_budget(
+    tmp_path: Path, shared_data: Path
+) -> None:
     network, output = tmp_path / "spot.npz", tmp_path / "spot.obj"
-    assert g1patch("build", shared_data / "spot_quadrangulated.obj", "-o", network, "--method", "split4").returncode == 0
+    assert (
+        g1patch(
+            "build", shared_data / "spot_quadrangulated.obj", "-o", network, "--method", "split4"
+        ).returncode
+        == 0
+    )
     result = g1patch("export", network, "-o", output)
     assert result.returncode == 0, result.stderr
     triangles = sum(1 for line in output.open() if line.startswith("f "))
@@ -241,7 +297,13 @@ def test_render_samples_by_pixels(tmp_path: Path, monkeypatch: pytest.MonkeyPatc
     original = render_module._sample
 
     def spy(network, resolution, band, filled=None):  # type: ignore[no-untyped-def]
-        chosen.append((network.n_patches, resolution, None if filled is None else int(np.count_nonzero(filled))))
+        chosen.append(
+            (
+                network.n_patches,
+                resolution,
+                None if filled is None else int(np.count_nonzero(filled)),
+            )
+        )
         return original(network, resolution, band, filled)
 
     monkeypatch.setattr(render_module, "_sample", spy)
@@ -252,7 +314,9 @@ def test_render_samples_by_pixels(tmp_path: Path, monkeypatch: pytest.MonkeyPatc
     render_module.render(tmp_path / "many.png", many, size=(200, 200), mode="deviation")
     (_, small, _), (_, large, _), (patches, fine, filled) = chosen
     assert small < large  # the cube gets more samples in a bigger picture
-    assert patches == filled == many.n_patches and fine == 2  # sub-pixel patches: no bands, no moiré
+    assert (
+        patches == filled == many.n_patches and fine == 2
+    )  # sub-pixel patches: no bands, no moiré
 
 
 def test_deviation_maps_of_many_patches_sample_edges_by_pixels(tmp_path: Path) -> None:
@@ -267,7 +331,9 @@ def test_deviation_maps_of_many_patches_sample_edges_by_pixels(tmp_path: Path) -
     render_module.render(path, network, mode="deviation", size=(200, 200))
     rgb = matplotlib.image.imread(path)[..., :3]
     assert rgb.shape[:2] == (200, 200)
-    assert ((rgb.max(axis=-1) - rgb.min(axis=-1)) > 0.3).sum() > 1000, "the filled patches carry their edges' colours"
+    assert ((rgb.max(axis=-1) - rgb.min(axis=-1)) > 0.3).sum() > 1000, (
+        "the filled patches carry their edges' colours"
+    )
 
 
 def test_deviation_without_a_report_measures_the_edges_as_check_does() -> None:
@@ -289,7 +355,9 @@ def traced_check_peak(valence: int) -> tuple[float, float]:
 
     mesh = shapes.fan(valence)
     lifted = mesh.vertices.copy()
-    lifted[1:, 2] = 0.1 * np.sin(np.arange(len(lifted) - 1))  # a non-planar star: normals that differ
+    lifted[1:, 2] = 0.1 * np.sin(
+        np.arange(len(lifted) - 1)
+    )  # a non-planar star: normals that differ
     network = build_corner_network(mesh.with_vertices(lifted))
     tracemalloc.start()
     try:
@@ -303,12 +371,16 @@ def traced_check_peak(valence: int) -> tuple[float, float]:
 
 def test_check_memory_is_linear_in_the_valence() -> None:
     peak, _ = traced_check_peak(2000)
-    assert peak <= 60e6, f"{peak / 1e6:.0f} MB at valence 2000 (the pairwise corner arrays took ~260 MB)"
+    assert peak <= 60e6, (
+        f"{peak / 1e6:.0f} MB at valence 2000 (the pairwise corner arrays took ~260 MB)"
+    )
 
 
 def test_check_at_valence_10000_within_500_mb() -> None:
     _, seconds = traced_check_peak(1000)
     if seconds * 100 > 60 and not os.environ.get("G1PATCH_SLOW_TESTS"):
-        pytest.skip(f"would take ~{seconds * 100:.0f} s here (set G1PATCH_SLOW_TESTS=1, or run benchmarks/bench_bounds.py)")
+        pytest.skip(
+            f"would take ~{seconds * 100:.0f} s here (set G1PATCH_SLOW_TESTS=1, or run benchmarks/bench_bounds.py)"
+        )
     peak, _ = traced_check_peak(10_000)
     assert peak <= 500e6, f"{peak / 1e6:.0f} MB"

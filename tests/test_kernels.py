@@ -13,7 +13,9 @@ def test_ranges_cover_the_items_in_order(monkeypatch: pytest.MonkeyPatch) -> Non
     monkeypatch.setattr(kernels, "CHUNK_ITEMS", 3)
     monkeypatch.setattr(kernels, "workers", lambda: 4)
     assert kernels.in_chunks(lambda lo, hi: (lo, hi), 13) == [(0, 3), (3, 6), (6, 9), (9, 13)]
-    assert kernels.in_chunks(lambda lo, hi: (lo, hi), 5) == [(0, 5)]  # fewer than two ranges' worth: one call
+    assert kernels.in_chunks(lambda lo, hi: (lo, hi), 5) == [
+        (0, 5)
+    ]  # fewer than two ranges' worth: one call
     assert kernels.in_chunks(lambda lo, hi: (lo, hi), 0) == [(0, 0)]
 
 

@@ -77,13 +77,16 @@ def test_assembly_of_a_random_fan_takes_the_kh_fit() -> None:
 def test_targets_kernels(mesh: QuadMesh) -> None:
     """Projected tangents, their turn along smooth mesh lines, fan validity (on the raw fans, valid or not), interior targets with and
     without the shape operator, and the coarse-face turn."""
+    from g1patch.kernels import jit_kernel
     from g1patch.targets import interpolate
     from g1patch.targets.frames import vertex_frames
-    from g1patch.kernels import jit_kernel
 
     frames = vertex_frames(mesh)
     topology, n = mesh.topology, frames.normals
-    fast, reference = interpolate._projected_tangents(mesh, n), interpolate._projected_tangents(mesh, n, compiled=False)
+    fast, reference = (
+        interpolate._projected_tangents(mesh, n),
+        interpolate._projected_tangents(mesh, n, compiled=False),
+    )
     for a, b in zip(fast, reference, strict=True):
         assert_close(a, b)
     raw = fast[0]
@@ -94,10 +97,15 @@ def test_targets_kernels(mesh: QuadMesh) -> None:
     assert_close(in_place, lines)
     twisted = raw * np.where(np.arange(len(raw)) % 3 == 0, -1.0, 1.0)[:, None]  # folded fans fail
     for t in (raw, twisted):
-        assert_close(interpolate._valid_fans(topology, n, t), interpolate._valid_fans(topology, n, t, compiled=False))
+        assert_close(
+            interpolate._valid_fans(topology, n, t),
+            interpolate._valid_fans(topology, n, t, compiled=False),
+        )
     for s in (frames.shape_operator, None):
-        assert_close(interpolate._interior_targets(topology, mesh.vertices, raw, n, s),
-                     interpolate._interior_targets(topology, mesh.vertices, raw, n, s, compiled=False))
+        assert_close(
+            interpolate._interior_targets(topology, mesh.vertices, raw, n, s),
+            interpolate._interior_targets(topology, mesh.vertices, raw, n, s, compiled=False),
+        )
     corner_normals = n[topology.faces]
     turn = np.empty(mesh.n_faces)
     jit_kernel(interpolate._turn_kernel)(corner_normals, turn)
@@ -119,7 +127,9 @@ def test_faces_at_risk(mesh: QuadMesh) -> None:
 
     targets = interpolate_targets(mesh)
     rng = np.random.default_rng(9)
-    shaken = targets.with_changes(tangents=targets.tangents * rng.uniform(0.4, 1.8, len(targets.tangents))[:, None],
-                                  fallback=rng.random(mesh.n_vertices) < 0.05)
+    shaken = targets.with_changes(
+        tangents=targets.tangents * rng.uniform(0.4, 1.8, len(targets.tangents))[:, None],
+        fallback=rng.random(mesh.n_vertices) < 0.05,
+    )
     for t in (targets, shaken):
         assert_close(_faces_at_risk(t), _faces_at_risk(t, compiled=False))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_subdivision import grid_torus, torus_surface
 
 from g1patch import continuity
 from g1patch.compare import compare_fairness, load_reference, mesh_distance, surface_samples
@@ -15,15 +16,19 @@ from g1patch.network import PatchNetwork, network_from_mesh
 from g1patch.subdivision import limit_points, refine, refine_grids
 from g1patch.targets.limit import limit_targets
 
-from test_subdivision import grid_torus, torus_surface
-
 #: (mesh, Catmull–Clark steps before the targets) → bound on the max distance / diagonal, ~20 %
 #: above the measured 0.39e-3, 0.09e-6, 1.15e-3, 2.65e-3, 0.29e-3 unrefined and 0.18e-3, 0.09e-6,
 #: 0.70e-3, 1.71e-3 after one step (the issue asks 2e-3 and 5e-4)
 DISTANCE_BOUNDS = {
-    ("catmark_cube", 0): 5e-4, ("catmark_torus", 0): 1e-6, ("catmark_xord_interior", 0): 1.4e-3,
-    ("catmark_xord_boundary", 0): 3.2e-3, ("spot_quadrangulated", 0): 3.5e-4, ("catmark_cube", 1): 2.2e-4,
-    ("catmark_torus", 1): 1e-6, ("catmark_xord_interior", 1): 8.5e-4, ("catmark_xord_boundary", 1): 2e-3,
+    ("catmark_cube", 0): 5e-4,
+    ("catmark_torus", 0): 1e-6,
+    ("catmark_xord_interior", 0): 1.4e-3,
+    ("catmark_xord_boundary", 0): 3.2e-3,
+    ("spot_quadrangulated", 0): 3.5e-4,
+    ("catmark_cube", 1): 2.2e-4,
+    ("catmark_torus", 1): 1e-6,
+    ("catmark_xord_interior", 1): 8.5e-4,
+    ("catmark_xord_boundary", 1): 2e-3,
 }
 
 
@@ -33,21 +38,31 @@ def gregory_network(mesh: QuadMesh) -> PatchNetwork:
     centre, scale = 0.5 * (low + high), float(np.linalg.norm(high - low))
     targets = limit_targets(mesh.with_vertices((mesh.vertices - centre) / scale))
     patches = GregoryPatchSet(assemble_gregory(targets).points * scale + centre)
-    return network_from_mesh(mesh.topology, patches, targets.positions * scale + centre, targets.normals, {"method": "gregory"})
+    return network_from_mesh(
+        mesh.topology,
+        patches,
+        targets.positions * scale + centre,
+        targets.normals,
+        {"method": "gregory"},
+    )
 
 
 def test_regular_torus_network_is_the_bspline() -> None:
     mesh = grid_torus(noise=0.05)
     s = np.linspace(0.0, 1.0, 7)
     network = gregory_network(mesh)
-    np.testing.assert_allclose(network.patches.evaluate_grid(s, s), torus_surface(mesh.vertices, 8, 6, s), atol=1e-12)
+    np.testing.assert_allclose(
+        network.patches.evaluate_grid(s, s), torus_surface(mesh.vertices, 8, 6, s), atol=1e-12
+    )
 
 
 def test_catmark_torus_network_is_the_bspline(shared_data) -> None:
     mesh = read_mesh(shared_data / "catmark_torus.obj")
     fine, grid = refine_grids(mesh, 3)
     s = np.linspace(0.0, 1.0, 9)
-    np.testing.assert_allclose(gregory_network(mesh).patches.evaluate_grid(s, s), limit_points(fine)[grid], atol=1e-12)
+    np.testing.assert_allclose(
+        gregory_network(mesh).patches.evaluate_grid(s, s), limit_points(fine)[grid], atol=1e-12
+    )
 
 
 @pytest.mark.parametrize("valence", [3, 5, 7, 12])
@@ -57,7 +72,9 @@ def test_any_valence_gives_valid_exactly_g1_targets(valence: int) -> None:
     n = valence
     angle = 2 * np.pi * np.arange(2 * n) / (2 * n)
     ring1 = np.stack([np.cos(angle), np.sin(angle), 0.1 * rng.standard_normal(2 * n)], axis=1)
-    ring2 = np.stack([2 * np.cos(angle), 2 * np.sin(angle), 0.1 * rng.standard_normal(2 * n)], axis=1)
+    ring2 = np.stack(
+        [2 * np.cos(angle), 2 * np.sin(angle), 0.1 * rng.standard_normal(2 * n)], axis=1
+    )
     points = np.concatenate([[[0.0, 0.0, 0.3]], ring1, ring2])
     r1 = lambda i: 1 + i % (2 * n)  # noqa: E731
     r2 = lambda i: 1 + 2 * n + i % (2 * n)  # noqa: E731
@@ -71,7 +88,9 @@ def test_any_valence_gives_valid_exactly_g1_targets(valence: int) -> None:
 
 
 @pytest.mark.parametrize(("name", "refinements"), sorted(DISTANCE_BOUNDS))
-def test_reference_meshes_are_exactly_g1_and_close(shared_data, name: str, refinements: int) -> None:
+def test_reference_meshes_are_exactly_g1_and_close(
+    shared_data, name: str, refinements: int
+) -> None:
     """Exactly G1, no folds, within the distance bound; unrefined, the p99 normal turn within 1.3 × the reference's."""
     mesh = refine(read_mesh(shared_data / f"{name}.obj"), refinements)
     reference = load_reference(shared_data / "reference" / f"{name}.limit.npz")
@@ -80,7 +99,10 @@ def test_reference_meshes_are_exactly_g1_and_close(shared_data, name: str, refin
     assert report.max_edge_angle_deg <= 1e-9 and report.max_corner_angle_deg <= 1e-9
     assert report.folds == 0
     samples, _ = surface_samples(network, 9 if mesh.n_faces < 1000 else 5)
-    distance = mesh_distance(samples.reshape(-1, 3), reference.points, reference.faces) / reference.bounding_box_diagonal
+    distance = (
+        mesh_distance(samples.reshape(-1, 3), reference.points, reference.faces)
+        / reference.bounding_box_diagonal
+    )
     assert distance.max() <= DISTANCE_BOUNDS[name, refinements]
     if refinements == 0:
         assert compare_fairness(network, reference).p99_ratio <= 1.3
@@ -110,7 +132,12 @@ def test_kernels_give_the_numpy_targets_bit_for_bit(shared_data, monkeypatch) ->
 
     tagged = read_mesh(shared_data / "catmark_torus_creases0.obj")
     meshes = [read_mesh(path) for path in sorted(shared_data.glob("*.obj"))]
-    meshes += [shapes.noisy_sphere(2, noise=0.3), shapes.fan(7, 2), refine(tagged, 1), refine(shapes.genus2(), 1)]
+    meshes += [
+        shapes.noisy_sphere(2, noise=0.3),
+        shapes.fan(7, 2),
+        refine(tagged, 1),
+        refine(shapes.genus2(), 1),
+    ]
     fields = ("positions", "normals", "tangents", "interior", "corner_normals", "seams", "fallback")
     for mesh in meshes:
         monkeypatch.setattr(subdivision, "KERNEL_VERTICES", 10**9)
@@ -118,7 +145,9 @@ def test_kernels_give_the_numpy_targets_bit_for_bit(shared_data, monkeypatch) ->
         monkeypatch.setattr(subdivision, "KERNEL_VERTICES", 0)
         kernels = limit_targets(mesh)
         for name in fields:
-            np.testing.assert_array_equal(getattr(kernels, name), getattr(numpy, name), err_msg=f"{mesh.source}: {name}")
+            np.testing.assert_array_equal(
+                getattr(kernels, name), getattr(numpy, name), err_msg=f"{mesh.source}: {name}"
+            )
 
 
 def test_pinched_neighbourhoods_are_filled_not_refined_whole() -> None:
@@ -140,7 +169,9 @@ def test_pinched_neighbourhoods_are_filled_not_refined_whole() -> None:
     assert not _pinched_vertices(topology, np.ones(9, dtype=bool)).any()
 
 
-def test_spot_refined_twice_refines_only_the_neighbourhood(shared_data, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_spot_refined_twice_refines_only_the_neighbourhood(
+    shared_data, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """Spot refined twice: the 3-ring neighbourhood of its irregular faces pinches at 38 vertices;
     filled there it is a manifold mesh of 6,348 of the 46,848 faces, refined alone (11 s -> 2.6 s),
     and the targets equal those of the whole mesh refined, bit for bit (checked once by hand)."""
@@ -150,6 +181,10 @@ def test_spot_refined_twice_refines_only_the_neighbourhood(shared_data, monkeypa
     mesh = refine(read_mesh(shared_data / "spot_quadrangulated.obj"), 2)
     sizes: list[int] = []
     original = limit.refine_grids
-    monkeypatch.setattr(limit, "refine_grids", lambda source, levels: (sizes.append(source.n_faces), original(source, levels))[1])
+    monkeypatch.setattr(
+        limit,
+        "refine_grids",
+        lambda source, levels: (sizes.append(source.n_faces), original(source, levels))[1],
+    )
     limit.limit_targets(mesh)
     assert sizes == [6_348]

@@ -17,7 +17,13 @@ from g1patch.subdivision import limit_points, refine
 from g1patch.targets.interpolate import shape_targets
 from g1patch.targets.limit_interpolate import interpolating_cage, limit_matrix
 
-SHARED = ("catmark_cube", "catmark_torus", "catmark_xord_interior", "catmark_xord_boundary", "spot_quadrangulated")
+SHARED = (
+    "catmark_cube",
+    "catmark_torus",
+    "catmark_xord_interior",
+    "catmark_xord_boundary",
+    "spot_quadrangulated",
+)
 #: on the one-ring disks the surface through the vertices is itself more curved than the limit of
 #: the mesh as a cage: the exact Catmull–Clark limit of the interpolating cage has 1.91 × (interior)
 #: and 1.98 × (boundary) the reference's p99 normal turn; Gregory is within 1.1 × of that surface
@@ -46,7 +52,9 @@ def check_network(mesh: QuadMesh, method: str, reference: Reference) -> float:
     assert report.max_vertex_deviation is not None and report.max_vertex_deviation <= 1e-10
     assert report.max_edge_angle_deg <= 1e-9 and report.max_corner_angle_deg <= 1e-9
     assert report.folds == 0
-    np.testing.assert_array_equal(network.vertices[:mesh.n_vertices], mesh.vertices)  # split4 appends its sub-patch corners
+    np.testing.assert_array_equal(
+        network.vertices[: mesh.n_vertices], mesh.vertices
+    )  # split4 appends its sub-patch corners
     return compare_fairness(network, reference).p99_ratio
 
 
@@ -57,24 +65,38 @@ def boundary_grid(mode: int) -> QuadMesh:
 
 @pytest.mark.parametrize(
     "mesh",
-    [shapes.cube(), shapes.torus(5, 4), shapes.sphere_quads(1), shapes.genus2(), shapes.fan(7, 2), boundary_grid(1), boundary_grid(2)],
+    [
+        shapes.cube(),
+        shapes.torus(5, 4),
+        shapes.sphere_quads(1),
+        shapes.genus2(),
+        shapes.fan(7, 2),
+        boundary_grid(1),
+        boundary_grid(2),
+    ],
     ids=["cube", "torus", "sphere", "genus2", "fan7", "grid-edge-only", "grid-edge-and-corner"],
 )
 def test_limit_matrix_is_limit_points(mesh: QuadMesh) -> None:
     """``L x = limit_points`` for any positions on the topology (boundary modes, corners, a crease)."""
     rng = np.random.default_rng(0)
-    moved = mesh.with_vertices(mesh.vertices + 0.05 * mesh.bounding_box_diagonal * rng.standard_normal(mesh.vertices.shape))
+    moved = mesh.with_vertices(
+        mesh.vertices + 0.05 * mesh.bounding_box_diagonal * rng.standard_normal(mesh.vertices.shape)
+    )
     np.testing.assert_allclose(limit_matrix(mesh) @ moved.vertices, limit_points(moved), atol=1e-14)
     sharpness = np.zeros(mesh.n_edges)
     sharpness[::3] = 10.0
-    np.testing.assert_allclose(limit_matrix(mesh, sharpness) @ moved.vertices, limit_points(moved, sharpness), atol=1e-14)
+    np.testing.assert_allclose(
+        limit_matrix(mesh, sharpness) @ moved.vertices, limit_points(moved, sharpness), atol=1e-14
+    )
 
 
 def test_cage_has_the_vertices_as_limit_points() -> None:
     mesh = shapes.sphere_quads(2)
     solution = interpolating_cage(mesh)
     assert solution.solver == "lu" and solution.condition < 20.0 and solution.residual <= 1e-14
-    np.testing.assert_allclose(limit_points(mesh.with_vertices(solution.cage)), mesh.vertices, atol=1e-14)
+    np.testing.assert_allclose(
+        limit_points(mesh.with_vertices(solution.cage)), mesh.vertices, atol=1e-14
+    )
     targets = shape_targets(mesh, "limit-interpolate")
     assert targets.rule == "limit-interpolate" and targets.n_fallback == 0
     np.testing.assert_array_equal(targets.positions, mesh.vertices)
@@ -90,11 +112,17 @@ def test_cube_checkerboard_least_norm_cage() -> None:
 
 def test_jittered_cube_has_no_interpolating_cage() -> None:
     cube = shapes.cube()
-    jittered = cube.with_vertices(cube.vertices + 0.05 * np.random.default_rng(1).standard_normal((8, 3)))
+    jittered = cube.with_vertices(
+        cube.vertices + 0.05 * np.random.default_rng(1).standard_normal((8, 3))
+    )
     with pytest.raises(ConstructionError, match="numerically singular.*checkerboard"):
         build_network(jittered, "gregory", "limit-interpolate")
     report = continuity.check(build_network(jittered, "gregory", "limit-interpolate", refine=1))
-    assert report.max_vertex_deviation <= 1e-10 and report.max_edge_angle_deg <= 1e-9 and report.folds == 0
+    assert (
+        report.max_vertex_deviation <= 1e-10
+        and report.max_edge_angle_deg <= 1e-9
+        and report.folds == 0
+    )
 
 
 @pytest.mark.parametrize("method", ["gregory", "split4"])

@@ -16,8 +16,21 @@ GLIBC = memory._glibc()
 
 
 class _MallInfo2(ctypes.Structure):
-    _fields_ = [(name, ctypes.c_size_t) for name in (
-        "arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks", "fordblks", "keepcost")]
+    _fields_ = [
+        (name, ctypes.c_size_t)
+        for name in (
+            "arena",
+            "ordblks",
+            "smblks",
+            "hblks",
+            "hblkhd",
+            "usmblks",
+            "fsmblks",
+            "uordblks",
+            "fordblks",
+            "keepcost",
+        )
+    ]
 
 
 def _mapped_blocks() -> int:
@@ -27,15 +40,23 @@ def _mapped_blocks() -> int:
     return int(function().hblks)
 
 
-NEEDS_MALLINFO2 = pytest.mark.skipif(not GLIBC or not hasattr(ctypes.CDLL(None), "mallinfo2"), reason="needs glibc ≥ 2.33 (mallinfo2)")
+NEEDS_MALLINFO2 = pytest.mark.skipif(
+    not GLIBC or not hasattr(ctypes.CDLL(None), "mallinfo2"),
+    reason="needs glibc ≥ 2.33 (mallinfo2)",
+)
 
 
 def _in_child(code: str, environment: dict[str, str] | None = None) -> str:
     """``code``'s standard output in a fresh interpreter (its allocator untouched by earlier tests), with
     this folder importable and ``environment`` added."""
     prologue = f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); import numpy as np; from test_memory import _mapped_blocks; "
-    return subprocess.run([sys.executable, "-c", prologue + code], capture_output=True, text=True, check=True,
-                          env={**os.environ, **(environment or {})}).stdout.strip()
+    return subprocess.run(
+        [sys.executable, "-c", prologue + code],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**os.environ, **(environment or {})},
+    ).stdout.strip()
 
 
 @NEEDS_MALLINFO2
@@ -68,12 +89,16 @@ def test_a_child_started_with_the_environment_keeps_large_arrays_in_the_heap() -
     assert _in_child(code) == "1"
 
 
-_ADVICE = "advise = (np._core if hasattr(np, '_core') else np.core).multiarray._set_madvise_hugepage; "
+_ADVICE = (
+    "advise = (np._core if hasattr(np, '_core') else np.core).multiarray._set_madvise_hugepage; "
+)
 
 
 def test_tuning_leaves_numpys_huge_page_advice_as_numpy_sets_it() -> None:
     """The command line's settings keep 2 MiB pages for large arrays (5–10× faster first touch on
     the development VM, DESIGN §6); ``without_huge_page_advice`` still turns them off."""
-    code = _ADVICE + ("default = advise(True); advise(default); from g1patch import memory; memory.tune_for_large_arrays(); "
-                      "print(advise(default) == default); memory.without_huge_page_advice(); print(advise(default))")
+    code = _ADVICE + (
+        "default = advise(True); advise(default); from g1patch import memory; memory.tune_for_large_arrays(); "
+        "print(advise(default) == default); memory.without_huge_page_advice(); print(advise(default))"
+    )
     assert _in_child(code).split() == ["True", "False"]

@@ -59,7 +59,9 @@ def assert_topology_invariants(topology: QuadTopology) -> None:
     # edges: unique sorted pairs, each with its one or two half-edges
     assert (t.edges[:, 0] < t.edges[:, 1]).all()
     assert np.unique(t.edges, axis=0).shape == t.edges.shape
-    np.testing.assert_array_equal(t.edges[t.halfedge_edge], np.sort(np.stack([origin, target], axis=1), axis=1))
+    np.testing.assert_array_equal(
+        t.edges[t.halfedge_edge], np.sort(np.stack([origin, target], axis=1), axis=1)
+    )
     np.testing.assert_array_equal(t.is_boundary_edge, t.edge_halfedges[:, 1] < 0)
     listed = t.edge_halfedges[t.edge_halfedges >= 0]
     np.testing.assert_array_equal(np.sort(listed), h)
@@ -67,7 +69,9 @@ def assert_topology_invariants(topology: QuadTopology) -> None:
 
     # counts
     np.testing.assert_array_equal(t.valence, np.bincount(t.edges.ravel(), minlength=t.n_vertices))
-    np.testing.assert_array_equal(t.face_count, np.bincount(t.faces.ravel(), minlength=t.n_vertices))
+    np.testing.assert_array_equal(
+        t.face_count, np.bincount(t.faces.ravel(), minlength=t.n_vertices)
+    )
     np.testing.assert_array_equal(t.valence, t.face_count + t.is_boundary_vertex)
     boundary_vertices = np.unique(t.edges[t.is_boundary_edge])
     np.testing.assert_array_equal(np.flatnonzero(t.is_boundary_vertex), boundary_vertices)
@@ -80,9 +84,13 @@ def assert_topology_invariants(topology: QuadTopology) -> None:
     np.testing.assert_array_equal(t.origin(t.ring_halfedges), ring_vertex)
     first, last = t.ring_offsets[:-1], t.ring_offsets[1:] - 1
     not_last = np.setdiff1d(np.arange(t.ring_halfedges.size), last)
-    np.testing.assert_array_equal(t.next_ccw(t.ring_halfedges[not_last]), t.ring_halfedges[not_last + 1])
+    np.testing.assert_array_equal(
+        t.next_ccw(t.ring_halfedges[not_last]), t.ring_halfedges[not_last + 1]
+    )
     interior = ~t.is_boundary_vertex
-    np.testing.assert_array_equal(t.next_ccw(t.ring_halfedges[last[interior]]), t.ring_halfedges[first[interior]])
+    np.testing.assert_array_equal(
+        t.next_ccw(t.ring_halfedges[last[interior]]), t.ring_halfedges[first[interior]]
+    )
     assert (t.twin[t.ring_halfedges[first[~interior]]] == -1).all()
     assert (t.next_ccw(t.ring_halfedges[last[~interior]]) == -1).all()
 
@@ -90,9 +98,15 @@ def assert_topology_invariants(topology: QuadTopology) -> None:
     np.testing.assert_array_equal(np.diff(t.neighbor_offsets), t.valence)
     for v in range(t.n_vertices):
         ring_targets = t.target(t.ring(v))
-        expected = ring_targets if interior[v] else np.append(ring_targets, t.origin(t.prev(t.ring(v)[-1])))
+        expected = (
+            ring_targets
+            if interior[v]
+            else np.append(ring_targets, t.origin(t.prev(t.ring(v)[-1])))
+        )
         np.testing.assert_array_equal(t.one_ring(v), expected)
-        adjacent = np.sort(np.concatenate([t.edges[t.edges[:, 0] == v, 1], t.edges[t.edges[:, 1] == v, 0]]))
+        adjacent = np.sort(
+            np.concatenate([t.edges[t.edges[:, 0] == v, 1], t.edges[t.edges[:, 1] == v, 0]])
+        )
         np.testing.assert_array_equal(np.sort(t.one_ring(v)), adjacent)
 
     assert t.euler_characteristic == t.n_vertices - t.n_edges + t.n_faces
@@ -135,7 +149,11 @@ def test_invariants_on_shared_meshes(shared_data) -> None:
         assert_rings_turn_with_faces(mesh)
 
 
-@pytest.mark.parametrize("mesh", [shapes.grid(4, 3), shapes.fan(5, rings=2), shapes.fan(12), shapes.boundary_fan(4)], ids=["grid", "fan5x2", "fan12", "boundary_fan4"])
+@pytest.mark.parametrize(
+    "mesh",
+    [shapes.grid(4, 3), shapes.fan(5, rings=2), shapes.fan(12), shapes.boundary_fan(4)],
+    ids=["grid", "fan5x2", "fan12", "boundary_fan4"],
+)
 def test_rings_are_counter_clockwise_in_the_plane(mesh: QuadMesh) -> None:
     """Planar meshes facing +z: neighbour angles about a vertex increase, by one full turn inside, less outside."""
     t = mesh.topology
@@ -234,10 +252,25 @@ TWO_SQUARES = SQUARE + [[2, 0, 0], [2, 1, 0]]
 @pytest.mark.parametrize(
     ("vertices", "faces", "error", "pattern"),
     [
-        (TWO_SQUARES, [[0, 1, 2, 3], [1, 4, 9, 2]], MeshError, r"face 1 has vertex index 9 outside 0\.\.5"),
+        (
+            TWO_SQUARES,
+            [[0, 1, 2, 3], [1, 4, 9, 2]],
+            MeshError,
+            r"face 1 has vertex index 9 outside 0\.\.5",
+        ),
         (TWO_SQUARES, [[0, 1, 2, 3], [1, -1, 5, 2]], MeshError, r"face 1 has vertex index -1"),
-        (SQUARE, [[0, 1, 1, 3]], DegenerateFaceError, r"face 0 repeats a vertex: corners \(0, 1, 1, 3\)"),
-        (TWO_SQUARES, [[0, 1, 2, 3], [1, 2, 5, 4]], OrientationError, r"faces 0 and 1 both traverse edge 1 -> 2"),
+        (
+            SQUARE,
+            [[0, 1, 1, 3]],
+            DegenerateFaceError,
+            r"face 0 repeats a vertex: corners \(0, 1, 1, 3\)",
+        ),
+        (
+            TWO_SQUARES,
+            [[0, 1, 2, 3], [1, 2, 5, 4]],
+            OrientationError,
+            r"faces 0 and 1 both traverse edge 1 -> 2",
+        ),
         (
             SQUARE + [[1, -1, 0], [0, -1, 0], [1, 0, 1], [0, 0, 1]],
             [[0, 1, 2, 3], [1, 0, 5, 4], [0, 1, 6, 7]],
@@ -251,9 +284,24 @@ TWO_SQUARES = SQUARE + [[2, 0, 0], [2, 1, 0]]
             r"faces around vertex 2 \(0, 1\) form more than one fan",
         ),
         (SQUARE, [[0, 1, 2, 3], [0, 3, 2, 1]], ValenceError, r"interior vertex 0 has valence 2"),
-        (TWO_SQUARES, [[0, 1, 2, 3], [1, 4, 5, 2], [1, 0, 4]], MeshError, r"1 faces are not quads.*--no-split"),
-        ([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]], [[0, 1, 2, 3]], DegenerateFaceError, r"face 0 \(0, 1, 2, 3\) has zero area"),
-        ([[0, 0, 0], [1, 0, 0], [np.inf, 1, 0], [0, 1, 0]], [[0, 1, 2, 3]], InputError, r"vertex 2 has a non-finite coordinate"),
+        (
+            TWO_SQUARES,
+            [[0, 1, 2, 3], [1, 4, 5, 2], [1, 0, 4]],
+            MeshError,
+            r"1 faces are not quads.*--no-split",
+        ),
+        (
+            [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]],
+            [[0, 1, 2, 3]],
+            DegenerateFaceError,
+            r"face 0 \(0, 1, 2, 3\) has zero area",
+        ),
+        (
+            [[0, 0, 0], [1, 0, 0], [np.inf, 1, 0], [0, 1, 0]],
+            [[0, 1, 2, 3]],
+            InputError,
+            r"vertex 2 has a non-finite coordinate",
+        ),
         (SQUARE, [[0, 1, 2, 3], [0, 1]], DegenerateFaceError, r"face 1 has 2 corners"),
         (SQUARE, np.zeros((0, 4), dtype=int), MeshError, r"no faces"),
     ],
@@ -303,7 +351,9 @@ def test_topology_rejects_unused_vertices() -> None:
 def test_unused_vertices_are_dropped_with_one_note(caplog) -> None:
     vertices = [[9, 9, 9]] + SQUARE + [[8, 8, 8]]
     with caplog.at_level(logging.INFO, logger="g1patch.mesh"):
-        mesh = QuadMesh.from_arrays(vertices, [[1, 2, 3, 4]], source="a.obj", tags=[Tag("corner", (2,))])
+        mesh = QuadMesh.from_arrays(
+            vertices, [[1, 2, 3, 4]], source="a.obj", tags=[Tag("corner", (2,))]
+        )
     assert [r.getMessage() for r in caplog.records] == ["a.obj: dropped 2 unused vertices (0, 5)"]
     np.testing.assert_array_equal(mesh.vertices, SQUARE)
     np.testing.assert_array_equal(mesh.faces, [[0, 1, 2, 3]])
@@ -319,7 +369,9 @@ def test_mixed_faces_are_refined_once(caplog) -> None:
     with caplog.at_level(logging.INFO, logger="g1patch.mesh"):
         mesh = QuadMesh.from_arrays(vertices, faces)
     assert len(caplog.records) == 1
-    assert "2 of 3 faces are not quads; refined the whole mesh once" in caplog.records[0].getMessage()
+    assert (
+        "2 of 3 faces are not quads; refined the whole mesh once" in caplog.records[0].getMessage()
+    )
     n_edges = 4 + 5 + 3 - 2  # two shared edges
     assert mesh.n_faces == 4 + 5 + 3
     assert mesh.n_vertices == 8 + n_edges + 3
@@ -337,12 +389,19 @@ def test_refine_polygons_layout() -> None:
     # edges sorted by vertex pair: (0,1), (0,3), (1,2), (2,3) -> vertices 4..7, centroid 8
     np.testing.assert_array_equal(quads, [[0, 4, 8, 5], [1, 6, 8, 4], [2, 7, 8, 6], [3, 5, 8, 7]])
     np.testing.assert_array_equal(parent, [0, 0, 0, 0])
-    np.testing.assert_allclose(new_vertices[4:], [[0.5, 0, 0], [0, 0.5, 0], [1, 0.5, 0], [0.5, 1, 0], [0.5, 0.5, 0]])
+    np.testing.assert_allclose(
+        new_vertices[4:], [[0.5, 0, 0], [0, 0.5, 0], [1, 0.5, 0], [0.5, 1, 0], [0.5, 0.5, 0]]
+    )
 
 
 def test_tags_follow_refinement() -> None:
     vertices = TWO_SQUARES
-    tags = [Tag("crease", (1, 2), (3.0,)), Tag("hole", (1,)), Tag("corner", (0,)), Tag("interpolateboundary", (1,))]
+    tags = [
+        Tag("crease", (1, 2), (3.0,)),
+        Tag("hole", (1,)),
+        Tag("corner", (0,)),
+        Tag("interpolateboundary", (1,)),
+    ]
     mesh = QuadMesh.from_arrays(vertices, [[0, 1, 2, 3], [1, 4, 5, 2]], tags=tags)
     refined = shapes.subdivide(mesh)
     crease, hole, corner, rule = refined.tags
@@ -358,7 +417,9 @@ def test_tags_must_name_existing_items() -> None:
     with pytest.raises(MeshError, match=r"tag 'hole' names face 3, outside 0\.\.0"):
         QuadMesh.from_arrays(SQUARE, [[0, 1, 2, 3]], tags=[Tag("hole", (3,))])
     with pytest.raises(MeshError, match=r"tag 'crease' names \(0, 2\), which is not an edge"):
-        QuadMesh.from_arrays(SQUARE + [[1, -1, 0]], [[0, 1, 2, 3], [0, 4, 1]], tags=[Tag("crease", (0, 2), (1.0,))])
+        QuadMesh.from_arrays(
+            SQUARE + [[1, -1, 0]], [[0, 1, 2, 3], [0, 4, 1]], tags=[Tag("crease", (0, 2), (1.0,))]
+        )
     with pytest.raises(MeshError, match=r"tag 'crease' needs pairs"):
         QuadMesh.from_arrays(SQUARE, [[0, 1, 2, 3]], tags=[Tag("crease", (0, 1, 2), (1.0,))])
 
@@ -395,7 +456,11 @@ def test_relabelling_gives_an_isomorphic_topology(mesh: QuadMesh, seed: int) -> 
     u = QuadTopology.from_faces(relabel[rotated])
 
     assert_topology_invariants(u)
-    assert (u.n_edges, u.euler_characteristic, u.n_components) == (t.n_edges, t.euler_characteristic, t.n_components)
+    assert (u.n_edges, u.euler_characteristic, u.n_components) == (
+        t.n_edges,
+        t.euler_characteristic,
+        t.n_components,
+    )
     np.testing.assert_array_equal(u.valence[relabel], t.valence)
     np.testing.assert_array_equal(u.face_count[relabel], t.face_count)
     np.testing.assert_array_equal(u.is_boundary_vertex[relabel], t.is_boundary_vertex)
@@ -407,7 +472,9 @@ def test_relabelling_gives_an_isomorphic_topology(mesh: QuadMesh, seed: int) -> 
         else:  # the same cycle, possibly from another start
             start = int(np.flatnonzero(got == expected[0])[0])
             np.testing.assert_array_equal(np.roll(got, -start), expected)
-    assert sorted(len(loop) for loop in u.boundary_loops()) == sorted(len(loop) for loop in t.boundary_loops())
+    assert sorted(len(loop) for loop in u.boundary_loops()) == sorted(
+        len(loop) for loop in t.boundary_loops()
+    )
 
 
 @settings(max_examples=40, deadline=None)
@@ -416,7 +483,11 @@ def test_subdivision_counts(mesh: QuadMesh) -> None:
     """One Catmull–Clark topology step: V' = V + E + F, E' = 2E + 4F, F' = 4F, χ and valences kept."""
     t = mesh.topology
     r = shapes.subdivide(mesh).topology
-    assert (r.n_vertices, r.n_edges, r.n_faces) == (t.n_vertices + t.n_edges + t.n_faces, 2 * t.n_edges + 4 * t.n_faces, 4 * t.n_faces)
+    assert (r.n_vertices, r.n_edges, r.n_faces) == (
+        t.n_vertices + t.n_edges + t.n_faces,
+        2 * t.n_edges + 4 * t.n_faces,
+        4 * t.n_faces,
+    )
     assert r.euler_characteristic == t.euler_characteristic
     assert np.count_nonzero(r.is_boundary_edge) == 2 * np.count_nonzero(t.is_boundary_edge)
     np.testing.assert_array_equal(r.valence[: t.n_vertices], t.valence)

@@ -13,12 +13,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from g1patch import shapes
 from g1patch import mesh as meshmodule
+from g1patch import shapes
 from g1patch.errors import G1PatchError
 from g1patch.mesh import QuadMesh, _as_polygons
 
-SETTINGS = settings(max_examples=200, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
+SETTINGS = settings(
+    max_examples=200, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck)
+)
 
 
 def connectivity(corners: np.ndarray, sizes: np.ndarray, n_vertices: int, compiled: bool) -> tuple:
@@ -27,7 +29,10 @@ def connectivity(corners: np.ndarray, sizes: np.ndarray, n_vertices: int, compil
         result = meshmodule._connect(corners, sizes, n_vertices, compiled=compiled)
     except G1PatchError as error:
         return (type(error).__name__, str(error))
-    return tuple((name, array.dtype.str, array.shape, array.tobytes()) for name, array in result._asdict().items())
+    return tuple(
+        (name, array.dtype.str, array.shape, array.tobytes())
+        for name, array in result._asdict().items()
+    )
 
 
 def assert_same(corners: np.ndarray, sizes: np.ndarray, n_vertices: int) -> tuple:
@@ -42,7 +47,9 @@ MESHES = {
     "grid": lambda: shapes.grid(7, 3),
     "strip": lambda: shapes.strip(4),
     "genus2": shapes.genus2,
-    "fan300": lambda: shapes.fan(300),  # a vertex beyond the kernel's insertion buckets: the NumPy code
+    "fan300": lambda: shapes.fan(
+        300
+    ),  # a vertex beyond the kernel's insertion buckets: the NumPy code
     "boundary_fan": lambda: shapes.boundary_fan(6),
     "filleted_box": shapes.filleted_box,
 }
@@ -90,7 +97,10 @@ def test_connect_kernel_valence_two_and_closed_fans() -> None:
     cube = shapes.cube()
     twice = np.concatenate([cube.faces, cube.faces + 8])
     twice[twice == 8] = 0  # two cubes sharing vertex 0 only
-    assert assert_same(twice.ravel().copy(), np.full(12, 4, dtype=np.int64), 16)[0] == "NonManifoldError"
+    assert (
+        assert_same(twice.ravel().copy(), np.full(12, 4, dtype=np.int64), 16)[0]
+        == "NonManifoldError"
+    )
 
 
 @st.composite
@@ -109,7 +119,9 @@ def quad_soups(draw) -> tuple[np.ndarray, np.ndarray, int]:
 
 @SETTINGS
 @given(quad_soups())
-def test_connect_kernel_is_the_reference_on_damaged_grids(soup: tuple[np.ndarray, np.ndarray, int]) -> None:
+def test_connect_kernel_is_the_reference_on_damaged_grids(
+    soup: tuple[np.ndarray, np.ndarray, int],
+) -> None:
     assert_same(*soup)
 
 
@@ -128,7 +140,9 @@ def test_face_area_kernel_gives_the_reference_verdict(scale: float) -> None:
     assert area_outcome(vertices, faces, True) == area_outcome(vertices, faces, False) == "ok"
     flat = vertices.copy()
     flat[faces[3, 2]] = flat[faces[3, 0]]  # a diagonal of zero length
-    flat[faces[7, 1]] = (flat[faces[7, 0]] + flat[faces[7, 2]]) / 2  # not zero area: one diagonal remains
+    flat[faces[7, 1]] = (
+        flat[faces[7, 0]] + flat[faces[7, 2]]
+    ) / 2  # not zero area: one diagonal remains
     assert area_outcome(flat, faces, True) == area_outcome(flat, faces, False) != "ok"
     nan = vertices.copy()
     nan[0, 0] = np.nan
@@ -138,7 +152,9 @@ def test_face_area_kernel_gives_the_reference_verdict(scale: float) -> None:
 def test_from_arrays_of_a_large_mesh_is_the_reference(monkeypatch: pytest.MonkeyPatch) -> None:
     """The whole QuadMesh through the kernels and through the NumPy code: every topology array equal."""
     mesh = shapes.large_torus(30_000)
-    assert mesh.n_faces >= meshmodule.KERNEL_FACES and 4 * mesh.n_faces >= meshmodule.KERNEL_HALFEDGES
+    assert (
+        mesh.n_faces >= meshmodule.KERNEL_FACES and 4 * mesh.n_faces >= meshmodule.KERNEL_HALFEDGES
+    )
     fast = QuadMesh.from_arrays(mesh.vertices, mesh.faces)
     monkeypatch.setattr(meshmodule, "KERNEL_HALFEDGES", 10**12)
     monkeypatch.setattr(meshmodule, "KERNEL_FACES", 10**12)

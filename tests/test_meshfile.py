@@ -31,10 +31,31 @@ INTERPOLATE_BOUNDARY = (Tag("interpolateboundary", (1,), (), ()),)
 STATISTICS = {
     "catmark_cube": (8, 6, 12, 0, 0, 1, 2, 0, {3: 8}, {}, ()),
     "catmark_torus": (32, 32, 64, 0, 0, 1, 0, 1, {4: 32}, {}, ()),
-    "catmark_xord_boundary": (44, 18, 58, 44, 4, 4, 4, None, {}, {2: 26, 3: 14, 4: 1, 5: 1, 6: 1, 7: 1}, INTERPOLATE_BOUNDARY),
+    "catmark_xord_boundary": (
+        44,
+        18,
+        58,
+        44,
+        4,
+        4,
+        4,
+        None,
+        {},
+        {2: 26, 3: 14, 4: 1, 5: 1, 6: 1, 7: 1},
+        INTERPOLATE_BOUNDARY,
+    ),
     "catmark_xord_interior": (
-        151, 71, 213, 142, 9, 9, 9, None,
-        {3: 1, 5: 1, 6: 1, 7: 1, 8: 1, 9: 1, 10: 1, 11: 1, 12: 1}, {2: 71, 3: 71}, INTERPOLATE_BOUNDARY,
+        151,
+        71,
+        213,
+        142,
+        9,
+        9,
+        9,
+        None,
+        {3: 1, 5: 1, 6: 1, 7: 1, 8: 1, 9: 1, 10: 1, 11: 1, 12: 1},
+        {2: 71, 3: 71},
+        INTERPOLATE_BOUNDARY,
     ),
     "spot_quadrangulated": (2930, 2928, 5856, 0, 0, 1, 2, 0, {3: 56, 4: 2830, 5: 40, 6: 4}, {}, ()),
 }
@@ -52,7 +73,9 @@ def test_shared_mesh_statistics(shared_data: Path, name: str, caplog) -> None:
         mesh = read_mesh(path)
     assert caplog.records == []  # all quads, no unused vertices: nothing dropped or split
     t = mesh.topology
-    V, F, E, boundary_edges, loops, components, chi, genus, interior, boundary, tags = STATISTICS[name]
+    V, F, E, boundary_edges, loops, components, chi, genus, interior, boundary, tags = STATISTICS[
+        name
+    ]
     v_lines = sum(line.startswith("v ") for line in path.read_text().splitlines())
     assert (t.n_vertices, t.n_faces, t.n_edges) == (V, F, E) and v_lines == V
     assert np.count_nonzero(t.is_boundary_edge) == boundary_edges
@@ -78,25 +101,73 @@ CORPUS = {
     "garbage.obj": (FormatError, r"not a text file", None),
     "garbage.off": (FormatError, r"not a text file", None),
     "garbage.ply": (FormatError, r"expected a PLY header", 1),
-    "inconsistent_orientation.obj": (OrientationError, r"faces 0 and 1 both traverse edge 1 -> 2 in the same direction", None),
-    "nan_coordinates.obj": (FormatError, r"vertex 2 has a non-finite coordinate \(1\.0, nan, 0\.0\)", 3),
-    "nan_coordinates.off": (FormatError, r"vertex 2 has a non-finite coordinate \(1\.0, 1\.0, inf\)", 5),
-    "nan_coordinates.ply": (FormatError, r"vertex 2 has a non-finite coordinate \(nan, 1\.0, 0\.0\)", 12),
+    "inconsistent_orientation.obj": (
+        OrientationError,
+        r"faces 0 and 1 both traverse edge 1 -> 2 in the same direction",
+        None,
+    ),
+    "nan_coordinates.obj": (
+        FormatError,
+        r"vertex 2 has a non-finite coordinate \(1\.0, nan, 0\.0\)",
+        3,
+    ),
+    "nan_coordinates.off": (
+        FormatError,
+        r"vertex 2 has a non-finite coordinate \(1\.0, 1\.0, inf\)",
+        5,
+    ),
+    "nan_coordinates.ply": (
+        FormatError,
+        r"vertex 2 has a non-finite coordinate \(nan, 1\.0, 0\.0\)",
+        12,
+    ),
     "no_faces.obj": (FormatError, r"no faces", None),
-    "nonmanifold_edge.obj": (NonManifoldError, r"edge \(0, 1\) is used by 3 faces \(0, 1, 2\)", None),
-    "out_of_range.obj": (FormatError, r"face 1 names vertex 4 \(0-based\), but the file has 4 vertices", 6),
-    "out_of_range.off": (FormatError, r"face 0 names vertex 7 \(0-based\), but the file has 4 vertices", 7),
-    "out_of_range.ply": (FormatError, r"face 0 names vertex 4 \(0-based\), but the file has 4 vertices", 14),
-    "repeated_vertex.obj": (DegenerateFaceError, r"face 0 repeats a vertex: corners \(0, 1, 1, 3\)", None),
+    "nonmanifold_edge.obj": (
+        NonManifoldError,
+        r"edge \(0, 1\) is used by 3 faces \(0, 1, 2\)",
+        None,
+    ),
+    "out_of_range.obj": (
+        FormatError,
+        r"face 1 names vertex 4 \(0-based\), but the file has 4 vertices",
+        6,
+    ),
+    "out_of_range.off": (
+        FormatError,
+        r"face 0 names vertex 7 \(0-based\), but the file has 4 vertices",
+        7,
+    ),
+    "out_of_range.ply": (
+        FormatError,
+        r"face 0 names vertex 4 \(0-based\), but the file has 4 vertices",
+        14,
+    ),
+    "repeated_vertex.obj": (
+        DegenerateFaceError,
+        r"face 0 repeats a vertex: corners \(0, 1, 1, 3\)",
+        None,
+    ),
     "tag_out_of_range.obj": (MeshError, r"tag 'corner' names vertex 9, outside 0\.\.3", None),
     "truncated.obj": (FormatError, r"a face needs at least 3 corners, got 2", 12),
     "truncated.off": (FormatError, r"truncated: the header announces 8 vertices and 6 faces", 8),
     "truncated.ply": (FormatError, r"cannot read the PLY data, truncated or malformed", None),
     "truncated_ascii.ply": (FormatError, r"cannot read the PLY data, truncated or malformed", None),
-    "two_closed_fans.obj": (NonManifoldError, r"the 6 faces around vertex 7 \(1, 3, 5, 6, 8, 10\) form more than one fan", None),
-    "two_fans.obj": (NonManifoldError, r"the 2 faces around vertex 2 \(0, 1\) form more than one fan", None),
+    "two_closed_fans.obj": (
+        NonManifoldError,
+        r"the 6 faces around vertex 7 \(1, 3, 5, 6, 8, 10\) form more than one fan",
+        None,
+    ),
+    "two_fans.obj": (
+        NonManifoldError,
+        r"the 2 faces around vertex 2 \(0, 1\) form more than one fan",
+        None,
+    ),
     "unknown_statement.obj": (FormatError, r"unknown OBJ statement 'hello'", 5),
-    "unsupported.xyz": (FormatError, r"unsupported extension '\.xyz'; expected one of \.obj, \.ply, \.off", None),
+    "unsupported.xyz": (
+        FormatError,
+        r"unsupported extension '\.xyz'; expected one of \.obj, \.ply, \.off",
+        None,
+    ),
     "valence2_interior.obj": (ValenceError, r"interior vertex 0 has valence 2", None),
     "zero_index.obj": (FormatError, r"vertex index 0 in a face; OBJ indices start at 1", 5),
 }
@@ -155,7 +226,10 @@ def test_obj_statements_indices_and_tags(tmp_path: Path) -> None:
     mesh = read_mesh(path)
     np.testing.assert_array_equal(mesh.faces, [[0, 1, 2, 3], [1, 4, 5, 2]])
     np.testing.assert_array_equal(mesh.vertices[4:], [[2, 0, 0], [2, 1, 0]])
-    assert mesh.tags == (Tag("crease", (1, 2), (4.5,), ()), Tag("creasemethod", (), (), ("chaikin",)))
+    assert mesh.tags == (
+        Tag("crease", (1, 2), (4.5,), ()),
+        Tag("creasemethod", (), (), ("chaikin",)),
+    )
 
 
 MIXED_OBJ = """\
@@ -199,7 +273,9 @@ def test_obj_round_trip(tmp_path: Path) -> None:
 
 def off_text(vertices: np.ndarray, faces: np.ndarray, header: str) -> str:
     rows = [" ".join(map(repr, v.tolist())) for v in vertices]
-    rows += [f"{len(f)} " + " ".join(map(str, f.tolist())) + "  0.5 0.5 0.5" for f in faces]  # with face colours
+    rows += [
+        f"{len(f)} " + " ".join(map(str, f.tolist())) + "  0.5 0.5 0.5" for f in faces
+    ]  # with face colours
     return header + "\n# a comment line\n" + "\n".join(rows) + "\n"
 
 
@@ -241,7 +317,10 @@ def test_ply_ascii_with_mixed_faces_keeps_their_order(tmp_path: Path) -> None:
     mesh = read_mesh(path)
     assert mesh.n_faces == 4 + 3 + 4
     quads_only = tmp_path / "quads.ply"
-    quads_only.write_text(header.replace("vertex 7", "vertex 6").replace("face 3", "face 2") + body.replace("1 -1 0\n", "").replace("3 0 6 1\n", ""))
+    quads_only.write_text(
+        header.replace("vertex 7", "vertex 6").replace("face 3", "face 2")
+        + body.replace("1 -1 0\n", "").replace("3 0 6 1\n", "")
+    )
     np.testing.assert_array_equal(read_mesh(quads_only).faces, [[0, 1, 2, 3], [1, 4, 5, 2]])
 
 
@@ -268,12 +347,19 @@ def test_write_quads_as_stl_splits_each_quad(tmp_path: Path) -> None:
 
 
 def test_write_rejects_bad_input_before_writing(tmp_path: Path) -> None:
-    with pytest.raises(FormatError, match=r"unsupported extension '\.vtk' for writing; expected one of \.obj, \.ply, \.stl"):
+    with pytest.raises(
+        FormatError,
+        match=r"unsupported extension '\.vtk' for writing; expected one of \.obj, \.ply, \.stl",
+    ):
         write_triangles(tmp_path / "out.vtk", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
-    with pytest.raises(InputError, match=r"triangles: row 0 \(0, 1, 3\) names a point outside 0\.\.2"):
+    with pytest.raises(
+        InputError, match=r"triangles: row 0 \(0, 1, 3\) names a point outside 0\.\.2"
+    ):
         write_triangles(tmp_path / "out.obj", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 3]])
     with pytest.raises(InputError, match=r"vertices: non-finite value"):
-        write_quads(tmp_path / "out.ply", [[0, 0, 0], [1, 0, 0], [1, 1, np.nan], [0, 1, 0]], [[0, 1, 2, 3]])
+        write_quads(
+            tmp_path / "out.ply", [[0, 0, 0], [1, 0, 0], [1, 1, np.nan], [0, 1, 0]], [[0, 1, 2, 3]]
+        )
     assert list(tmp_path.iterdir()) == []
 
 
@@ -294,4 +380,6 @@ def test_a_failing_write_leaves_no_file(tmp_path: Path, monkeypatch) -> None:
     old.write_bytes(b"previous contents")
     with pytest.raises(OSError, match="disk full"):
         write_quads(old, cube.vertices, cube.faces)
-    assert [p.name for p in tmp_path.iterdir()] == ["old.ply"] and old.read_bytes() == b"previous contents"
+    assert [p.name for p in tmp_path.iterdir()] == [
+        "old.ply"
+    ] and old.read_bytes() == b"previous contents"

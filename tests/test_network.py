@@ -13,8 +13,13 @@ from g1patch.patches import PatchSet
 
 def _first_sides(network: PatchNetwork) -> list[tuple[int, int]]:
     """Each shared edge's side (patch, edge) that comes first, (patch, edge) < its neighbour's, by a loop."""
-    return [(p, e) for p in range(network.n_patches) for e in range(4)
-            if network.neighbor[p, e] >= 0 and (p, e) < (network.neighbor[p, e], network.neighbor_edge[p, e])]
+    return [
+        (p, e)
+        for p in range(network.n_patches)
+        for e in range(4)
+        if network.neighbor[p, e] >= 0
+        and (p, e) < (network.neighbor[p, e], network.neighbor_edge[p, e])
+    ]
 
 
 def _self_adjacent() -> PatchNetwork:
@@ -22,12 +27,23 @@ def _self_adjacent() -> PatchNetwork:
     neighbor = np.array([[-1, 0, 1, 0], [0, -1, -1, -1]])
     neighbor_edge = np.array([[-1, 3, 0, 1], [2, -1, -1, -1]])
     four = np.zeros((2, 4), dtype=bool)
-    return PatchNetwork(PatchSet(np.zeros((2, 4, 4, 3))), np.zeros((2, 4), dtype=np.int64), np.arange(8).reshape(2, 4),
-                        four, neighbor, neighbor_edge, four, np.zeros(8, dtype=bool))
+    return PatchNetwork(
+        PatchSet(np.zeros((2, 4, 4, 3))),
+        np.zeros((2, 4), dtype=np.int64),
+        np.arange(8).reshape(2, 4),
+        four,
+        neighbor,
+        neighbor_edge,
+        four,
+        np.zeros(8, dtype=bool),
+    )
 
 
-@pytest.mark.parametrize("network", [_self_adjacent(), build_network(shapes.fan(5, 2)), build_network(shapes.grid(3, 2), "split4")],
-                         ids=["self-adjacent", "fan", "split4 grid"])
+@pytest.mark.parametrize(
+    "network",
+    [_self_adjacent(), build_network(shapes.fan(5, 2)), build_network(shapes.grid(3, 2), "split4")],
+    ids=["self-adjacent", "fan", "split4 grid"],
+)
 def test_shared_edges_lists_each_shared_edge_once_by_its_first_side(network: PatchNetwork) -> None:
     patch, edge = network.shared_edges()
     assert list(zip(patch.tolist(), edge.tolist())) == _first_sides(network)

@@ -14,12 +14,12 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+import reference as ref
 import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-import reference as ref
 from g1patch.basis import conversion_matrix
 from g1patch.errors import InputError
 from g1patch.patches import (
@@ -49,13 +49,32 @@ UV = [
     (R(2, 3), R(5, 6)), (R(1, 7), R(9, 10)), (R(0), R(1, 3)), (R(1), R(2, 3)), (R(5, 8), R(3, 8)),
     (R(1, 10), R(1)),
 ]  # fmt: skip
-DERIVATIVES = [(0, 0), (1, 0), (0, 1), (1, 1), (2, 0), (0, 2), (2, 1), (1, 2), (2, 2), (3, 0), (3, 3), (4, 0), (1, 4)]
+DERIVATIVES = [
+    (0, 0),
+    (1, 0),
+    (0, 1),
+    (1, 1),
+    (2, 0),
+    (0, 2),
+    (2, 1),
+    (1, 2),
+    (2, 2),
+    (3, 0),
+    (3, 3),
+    (4, 0),
+    (1, 4),
+]
 GRID_U = [R(0), R(1, 3), R(1, 2), R(6, 7), R(1)]
 GRID_V = [R(1, 5), R(1, 4), R(3, 4)]
 
 
 def floats(values) -> np.ndarray:
-    return np.array([[float(a) for a in row] if isinstance(row, (tuple, list)) else float(row) for row in values])
+    return np.array(
+        [
+            [float(a) for a in row] if isinstance(row, (tuple, list)) else float(row)
+            for row in values
+        ]
+    )
 
 
 class Reference:
@@ -87,7 +106,9 @@ def assert_close_to_exact(got, exact, scale, rel=EVAL_REL):
     exact value is not the result of heavy cancellation (|p| ≥ |S|/1000 — there ≤ 45 eps·S would
     allow up to 1000× more than 1e-14 of |p|, so the S-based bound is the meaningful one)."""
     err = np.abs(got - exact)
-    assert np.all(err <= rel * scale + UNDERFLOW), f"worst error {np.max(err / (scale + UNDERFLOW)) / EPS:.1f} eps·S"
+    assert np.all(err <= rel * scale + UNDERFLOW), (
+        f"worst error {np.max(err / (scale + UNDERFLOW)) / EPS:.1f} eps·S"
+    )
     size = np.linalg.norm(exact, axis=-1)
     plain = size >= np.linalg.norm(scale, axis=-1) / 1000
     assert np.all(np.linalg.norm(got - exact, axis=-1)[plain] <= rel * size[plain])
@@ -108,13 +129,19 @@ def abs_hs_net(N):
     out = N.copy()
     corners = N[:, 0, 0] + N[:, 0, 1] + N[:, 1, 0] + N[:, 1, 1]
     for a, b in itertools.product((0, 1), repeat=2):
-        out[:, 2 + a, 2 + b] = corners + N[:, 2 + a, 1] + N[:, 2 + a, 0] + N[:, 1, 2 + b] + N[:, 0, 2 + b]
+        out[:, 2 + a, 2 + b] = (
+            corners + N[:, 2 + a, 1] + N[:, 2 + a, 0] + N[:, 1, 2 + b] + N[:, 0, 2 + b]
+        )
     return out
 
 
 def closure_abs(N):
     """Σ |coefficient|·N over the 12 terms of C (4 per corner point, 1 per tangent)."""
-    return 4 * N[:, :2, :2].sum(axis=(1, 2)) + N[:, 2:, :2].sum(axis=(1, 2)) + N[:, :2, 2:].sum(axis=(1, 2))
+    return (
+        4 * N[:, :2, :2].sum(axis=(1, 2))
+        + N[:, 2:, :2].sum(axis=(1, 2))
+        + N[:, :2, 2:].sum(axis=(1, 2))
+    )
 
 
 def diagonal_scale(form, N):
@@ -131,7 +158,11 @@ def test_reference_is_the_tensor_product_of_its_basis(form):
     X = sp.Matrix(4, 4, sp.symbols("x0:16"))
     H = ref.hermite_basis_from_conditions() if form == "hermite" else ref.basis_polynomials(form)
     polys = ref.patch_polynomials(form, np.array(X.tolist(), dtype=object)[..., None])
-    tensor = sum(H[i].subs(ref.t, ref.u) * X[i, j] * H[j].subs(ref.t, ref.v) for i in range(4) for j in range(4))
+    tensor = sum(
+        H[i].subs(ref.t, ref.u) * X[i, j] * H[j].subs(ref.t, ref.v)
+        for i in range(4)
+        for j in range(4)
+    )
     assert sp.expand(polys[0].as_expr() - tensor) == 0
 
 
@@ -142,7 +173,9 @@ def test_evaluate_shared_parameters(reference, du, dv):
     got = patches.evaluate(uv, du, dv)
     assert got.shape == (3, len(UV), 3)
     exact = reference.values([UV] * 3, du, dv)
-    assert_close_to_exact(got, exact, ref.abs_patch_sum(reference.form, reference.control, uv, du, dv))
+    assert_close_to_exact(
+        got, exact, ref.abs_patch_sum(reference.form, reference.control, uv, du, dv)
+    )
     if du >= 4 or dv >= 4:
         assert not got.any()
 
@@ -155,7 +188,9 @@ def test_evaluate_per_patch_parameters(reference, du, dv):
     got = patches.evaluate(uv, du, dv)
     assert got.shape == (3, len(UV), 3)
     exact = reference.values(per_patch, du, dv)
-    assert_close_to_exact(got, exact, ref.abs_patch_sum(reference.form, reference.control, uv, du, dv))
+    assert_close_to_exact(
+        got, exact, ref.abs_patch_sum(reference.form, reference.control, uv, du, dv)
+    )
 
 
 @pytest.mark.parametrize("du,dv", [(0, 0), (1, 0), (0, 1), (1, 1), (2, 0), (0, 2), (3, 2)])
@@ -166,7 +201,9 @@ def test_evaluate_grid(reference, du, dv):
     assert got.flags.c_contiguous and got.dtype == np.float64
     pairs = list(itertools.product(GRID_U, GRID_V))  # u slow, v fast = grid order
     exact = reference.values([pairs] * 3, du, dv).reshape(got.shape)
-    scale = ref.abs_patch_sum(reference.form, reference.control, floats(pairs), du, dv).reshape(got.shape)
+    scale = ref.abs_patch_sum(reference.form, reference.control, floats(pairs), du, dv).reshape(
+        got.shape
+    )
     assert_close_to_exact(got, exact, scale)
 
 
@@ -176,7 +213,9 @@ def test_evaluate_grid_square_and_resolution(reference):
     square = patches.evaluate_grid(u)
     assert square.shape == (3, 5, 5, 3)
     pairs = list(itertools.product(GRID_U, GRID_U))
-    scale = ref.abs_patch_sum(reference.form, reference.control, floats(pairs)).reshape(square.shape)
+    scale = ref.abs_patch_sum(reference.form, reference.control, floats(pairs)).reshape(
+        square.shape
+    )
     assert_close_to_exact(square, reference.values([pairs] * 3).reshape(square.shape), scale)
     # grid(G) is the uniform G×G grid including both borders
     grid = patches.grid(9)
@@ -193,7 +232,9 @@ def test_tangents_twist_corners_are_the_derivatives(reference):
     p_u, p_v = patches.tangents(uv)
     for got, (du, dv) in ((p_u, (1, 0)), (p_v, (0, 1)), (patches.twist(uv), (1, 1))):
         assert_close_to_exact(
-            got, reference.values([UV] * 3, du, dv), ref.abs_patch_sum(reference.form, reference.control, uv, du, dv)
+            got,
+            reference.values([UV] * 3, du, dv),
+            ref.abs_patch_sum(reference.form, reference.control, uv, du, dv),
         )
     corners = [(R(0), R(0)), (R(1), R(0)), (R(1), R(1)), (R(0), R(1))]
     np.testing.assert_array_equal(CORNER_PARAMETERS, floats(corners))
@@ -211,7 +252,9 @@ def exact_unit_normals(reference, uv_per_patch):
         pu_polys, pv_polys = ref.derivative(polys, 1, 0), ref.derivative(polys, 0, 1)
         row = []
         for a, b in uvs:
-            cross = sp.Matrix(ref.evaluate(pu_polys, a, b)).cross(sp.Matrix(ref.evaluate(pv_polys, a, b)))
+            cross = sp.Matrix(ref.evaluate(pu_polys, a, b)).cross(
+                sp.Matrix(ref.evaluate(pv_polys, a, b))
+            )
             norm = sp.sqrt(cross.dot(cross))
             row.append([float(sp.N(c / norm, 30)) for c in cross])
         out.append(row)
@@ -224,8 +267,12 @@ def normal_tolerance(reference, uv):
     the final normalisation (norm, divide) adds ≤ 2 eps and the reference's rounding 0.5 eps."""
     patches = PatchSet(reference.control, reference.form)
     p_u, p_v = patches.tangents(uv)
-    e_u = np.linalg.norm(EVAL_REL * ref.abs_patch_sum(reference.form, reference.control, uv, 1, 0), axis=-1)
-    e_v = np.linalg.norm(EVAL_REL * ref.abs_patch_sum(reference.form, reference.control, uv, 0, 1), axis=-1)
+    e_u = np.linalg.norm(
+        EVAL_REL * ref.abs_patch_sum(reference.form, reference.control, uv, 1, 0), axis=-1
+    )
+    e_v = np.linalg.norm(
+        EVAL_REL * ref.abs_patch_sum(reference.form, reference.control, uv, 0, 1), axis=-1
+    )
     n_u, n_v = np.linalg.norm(p_u, axis=-1), np.linalg.norm(p_v, axis=-1)
     c = np.linalg.norm(np.cross(p_u, p_v), axis=-1)
     delta = e_u * n_v + n_u * e_v + e_u * e_v + 2 * EPS * n_u * n_v
@@ -269,7 +316,9 @@ def test_normals_are_zero_not_nan_on_a_collapsed_edge(form):
     if form != "bspline":
         np.testing.assert_array_equal(normals, 0.0)
         np.testing.assert_array_equal(grid[:, :, 0], 0.0)
-        np.testing.assert_allclose(np.linalg.norm(grid[:, :, 1], axis=-1), 1.0, rtol=0, atol=4 * EPS)
+        np.testing.assert_allclose(
+            np.linalg.norm(grid[:, :, 1], axis=-1), 1.0, rtol=0, atol=4 * EPS
+        )
 
 
 # ------------------------------------------------------------------ Hermite layout
@@ -285,7 +334,9 @@ def test_hermite_layout_is_the_papers_eq_4():
         (0, 1): (slice(0, 2), slice(2, 4)),
         (1, 1): (slice(2, 4), slice(2, 4)),
     }.items():
-        np.testing.assert_array_equal(patches.evaluate(ab, du, dv), X[:, rows, cols].reshape(4, 4, 3))
+        np.testing.assert_array_equal(
+            patches.evaluate(ab, du, dv), X[:, rows, cols].reshape(4, 4, 3)
+        )
         np.testing.assert_array_equal(
             patches.evaluate_grid([0.0, 1.0], [0.0, 1.0], du, dv), X[:, rows, cols]
         )
@@ -300,17 +351,28 @@ def conversion_scale(source, target, control, uv):
     form errs by ≤ ~16 eps of its own S. |C||P||C|^T carries the conditioning of the conversion."""
     abs_c = np.abs(np.array(ref.conversion_matrix(source, target).tolist(), dtype=float))
     converted = np.einsum("ik,nkld,jl->nijd", abs_c, np.abs(control), abs_c)
-    return ref.abs_patch_sum(target, converted, uv) + ref.abs_patch_sum(source, control, uv) + UNDERFLOW
+    return (
+        ref.abs_patch_sum(target, converted, uv)
+        + ref.abs_patch_sum(source, control, uv)
+        + UNDERFLOW
+    )
 
 
 FINITE = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False, allow_subnormal=False)
 UNIT = st.floats(0.0, 1.0, allow_nan=False, allow_subnormal=False)
-PATCH_CONTROL = arrays(np.float64, st.tuples(st.integers(1, 3), st.just(4), st.just(4), st.just(3)), elements=FINITE)
+PATCH_CONTROL = arrays(
+    np.float64, st.tuples(st.integers(1, 3), st.just(4), st.just(4), st.just(3)), elements=FINITE
+)
 UV_PARAMS = arrays(np.float64, st.tuples(st.integers(1, 5), st.just(2)), elements=UNIT)
 
 
 @settings(deadline=None, max_examples=60)
-@given(control=PATCH_CONTROL, uv=UV_PARAMS, source=st.sampled_from(FORMS), target=st.sampled_from(FORMS))
+@given(
+    control=PATCH_CONTROL,
+    uv=UV_PARAMS,
+    source=st.sampled_from(FORMS),
+    target=st.sampled_from(FORMS),
+)
 def test_conversion_keeps_the_surface(control, uv, source, target):
     patches = PatchSet(control, source)
     converted = patches.convert(target)
@@ -320,7 +382,12 @@ def test_conversion_keeps_the_surface(control, uv, source, target):
 
 
 @settings(deadline=None, max_examples=80)
-@given(control=PATCH_CONTROL, uv=UV_PARAMS, start=st.sampled_from(FORMS), via=st.lists(st.sampled_from(FORMS), min_size=1, max_size=2))
+@given(
+    control=PATCH_CONTROL,
+    uv=UV_PARAMS,
+    start=st.sampled_from(FORMS),
+    via=st.lists(st.sampled_from(FORMS), min_size=1, max_size=2),
+)
 def test_round_trips_keep_the_surface(control, uv, start, via):
     """start → via… → start (A → B → A, A → B → C → A): control values and points come back up to
     4 eps × the magnitudes composed along the path (Skeel-style: |C_n|…|C_1| |P| (…)^T)."""
@@ -338,9 +405,13 @@ def test_round_trips_keep_the_surface(control, uv, start, via):
         abs_chain = step @ abs_chain
         current = np.einsum("ik,nkld,jl->nijd", step, current, step)
         scale_points = scale_points + ref.abs_patch_sum(target, current, uv)
-    bound = 4 * EPS * np.einsum("ik,nkld,jl->nijd", abs_chain, np.abs(control), abs_chain) + UNDERFLOW
+    bound = (
+        4 * EPS * np.einsum("ik,nkld,jl->nijd", abs_chain, np.abs(control), abs_chain) + UNDERFLOW
+    )
     assert np.all(np.abs(back.control - control) <= bound)
-    assert np.all(np.abs(back.evaluate(uv) - patches.evaluate(uv)) <= 4 * EPS * scale_points + UNDERFLOW)
+    assert np.all(
+        np.abs(back.evaluate(uv) - patches.evaluate(uv)) <= 4 * EPS * scale_points + UNDERFLOW
+    )
 
 
 def test_convert_same_form_is_identity_and_uses_exact_matrices(reference):
@@ -364,7 +435,9 @@ def test_converted_rational_patches_match_sympy(reference, target):
     # converting errs by ≤ ~γ_9 of |C||P||C|^T, evaluating by ≤ 16 eps of its own S: the sum of the
     # two S (converted net, source net) times EVAL_REL bounds it with margin.
     converted_abs = abs_convert(reference.form, target, np.abs(reference.control))
-    scale = ref.abs_patch_sum(target, converted_abs, uv, 1, 1) + ref.abs_patch_sum(reference.form, reference.control, uv, 1, 1)
+    scale = ref.abs_patch_sum(target, converted_abs, uv, 1, 1) + ref.abs_patch_sum(
+        reference.form, reference.control, uv, 1, 1
+    )
     assert_close_to_exact(got, exact, scale)
 
 
@@ -384,13 +457,20 @@ def test_boundary_curves_match_sympy_restrictions(reference):
     got = curves.power_coefficients()  # (3, 4, 4 powers, 3)
     for n, k in itertools.product(range(3), range(4)):
         uu, vv = EDGE_PARAMETERS[k]
-        exact = np.array([[float(c) for c in ref.coefficients(e, 3)] for e in ref.restrict(reference.polys[n], uu, vv)]).T
+        exact = np.array(
+            [
+                [float(c) for c in ref.coefficients(e, 3)]
+                for e in ref.restrict(reference.polys[n], uu, vv)
+            ]
+        ).T
         # boundary control c_i = Σ_j b_j(end) P_ij (|b_j(end)| ≤ 1; ≤ 3 eps with the rounded 1/6, 4/6),
         # then coefficient p = Σ_i c_i M[i, 3-p] (≤ γ_4 = 2 eps): ≤ 5 eps·colsum|M|·max_i Σ_j |P|, plus
         # the reference's rounding; asserted with 8 eps.
         abs_m = np.abs(np.array(ref.basis_matrix(reference.form).tolist(), dtype=float))
         net = np.abs(reference.control[n])
-        lines = np.maximum(net.sum(axis=0).max(axis=0), net.sum(axis=1).max(axis=0))  # per coordinate
+        lines = np.maximum(
+            net.sum(axis=0).max(axis=0), net.sum(axis=1).max(axis=0)
+        )  # per coordinate
         magnitude = abs_m.sum(axis=0)[::-1, None] * lines[None, :]
         assert np.all(np.abs(got[n, k] - exact) <= 8 * EPS * magnitude), (n, k)
 
@@ -419,7 +499,10 @@ def test_boundary_curves_are_the_patch_restricted_to_its_edges(form):
     start, end = curves.evaluate([0.0, 1.0]).transpose(2, 0, 1, 3)
     scale = ref.abs_patch_sum(form, patches.control, CORNER_PARAMETERS)
     assert np.all(np.abs(start - corners) <= EVAL_REL * scale)
-    assert np.all(np.abs(end - np.roll(corners, -1, axis=1)) <= EVAL_REL * (scale + np.roll(scale, -1, axis=1)))
+    assert np.all(
+        np.abs(end - np.roll(corners, -1, axis=1))
+        <= EVAL_REL * (scale + np.roll(scale, -1, axis=1))
+    )
     if form != "bspline":  # integer basis values at the ends: exact
         np.testing.assert_array_equal(start, corners)
         np.testing.assert_array_equal(end, np.roll(corners, -1, axis=1))
@@ -476,7 +559,9 @@ def test_hermite_diagonals_are_exact_for_integer_data():
     X = random_integer_hermite(12)
     D, E = PatchSet(X, "hermite").diagonal_polynomials()
     for n in range(len(X)):
-        exact_D, exact_E = exact_diagonals(ref.patch_polynomials("hermite", X[n].astype(int).astype(object)))
+        exact_D, exact_E = exact_diagonals(
+            ref.patch_polynomials("hermite", X[n].astype(int).astype(object))
+        )
         np.testing.assert_array_equal(D[n], ref.to_float(exact_D))
         np.testing.assert_array_equal(E[n], ref.to_float(exact_E))
 
@@ -488,7 +573,9 @@ def test_generic_patch_has_degree_six_diagonals(form):
     np.testing.assert_array_equal(polynomial_degree(D), 6)
     np.testing.assert_array_equal(polynomial_degree(E), 6)
     for n in range(2):
-        exact_D, exact_E = exact_diagonals(ref.patch_polynomials("hermite", X[n].astype(int).astype(object)))
+        exact_D, exact_E = exact_diagonals(
+            ref.patch_polynomials("hermite", X[n].astype(int).astype(object))
+        )
         assert all(ref.exact_degree(list(exact_D[:, d])) == 6 for d in range(3))
         assert all(ref.exact_degree(list(exact_E[:, d])) == 6 for d in range(3))
 
@@ -562,12 +649,22 @@ def test_hs_patch_is_the_coons_patch_of_its_boundary(form):
     F = abs_convert("hermite", form, abs_hs_net(abs_convert(form, "hermite", F0)))
     uv = floats(UV)
     exact = np.array(
-        [[[float(x) for x in ref.evaluate(coons_reference(X[n]), a, b)] for a, b in UV] for n in range(3)]
+        [
+            [[float(x) for x in ref.evaluate(coons_reference(X[n]), a, b)] for a, b in UV]
+            for n in range(3)
+        ]
     )
     assert_close_to_exact(hs.evaluate(uv), exact, ref.abs_patch_sum(form, F, uv))
     # The boundary does not change.
     t = np.arange(9) / 8.0
-    edges = np.concatenate([np.stack([t, 0 * t], -1), np.stack([1 + 0 * t, t], -1), np.stack([t, 1 + 0 * t], -1), np.stack([0 * t, t], -1)])
+    edges = np.concatenate(
+        [
+            np.stack([t, 0 * t], -1),
+            np.stack([1 + 0 * t, t], -1),
+            np.stack([t, 1 + 0 * t], -1),
+            np.stack([0 * t, t], -1),
+        ]
+    )
     scale = ref.abs_patch_sum(form, F, edges) + ref.abs_patch_sum(form, F0, edges)
     assert np.all(np.abs(hs.evaluate(edges) - patches.evaluate(edges)) <= EVAL_REL * scale)
 
@@ -578,7 +675,13 @@ def test_hermite_hs_patch_power_form_is_exactly_coons():
     for n in range(len(X)):
         coons = coons_reference(X[n])
         exact = np.array(
-            [[[float(p.coeff_monomial(ref.u ** (3 - i) * ref.v ** (3 - j))) for p in coons] for j in range(4)] for i in range(4)]
+            [
+                [
+                    [float(p.coeff_monomial(ref.u ** (3 - i) * ref.v ** (3 - j))) for p in coons]
+                    for j in range(4)
+                ]
+                for i in range(4)
+            ]
         )
         np.testing.assert_array_equal(A[n], exact)
     # a33 = a32 = a23 = a22 = 0 (skala-patches.md A.2)
@@ -755,7 +858,10 @@ def test_bad_control_shape_is_named(shape, message):
 def test_non_finite_control_is_named(value):
     control = np.zeros((2, 4, 4, 3))
     control[1, 3, 2, 1] = value
-    with pytest.raises(InputError, match="^" + re.escape(f"control: non-finite value {value} at index (1, 3, 2, 1)")):
+    with pytest.raises(
+        InputError,
+        match="^" + re.escape(f"control: non-finite value {value} at index (1, 3, 2, 1)"),
+    ):
         PatchSet(control, "hermite")
 
 
@@ -768,7 +874,9 @@ def test_all_finite_tells_overflow_from_non_finite_entries():
     for value in (np.nan, np.inf, -np.inf):
         spoiled = huge.copy()
         spoiled[617] = value
-        assert not all_finite(spoiled) and not all_finite(np.where(np.arange(1000) == 3, value, 1.0))
+        assert not all_finite(spoiled) and not all_finite(
+            np.where(np.arange(1000) == 3, value, 1.0)
+        )
     mixed = np.array([np.inf, -np.inf, 1.0])  # a NaN sum
     assert not all_finite(mixed)
 
@@ -780,7 +888,9 @@ def test_non_numeric_control_is_named():
 
 @pytest.mark.parametrize("bad", ["Hermite", "nurbs", None])
 def test_unknown_form_is_named(bad):
-    pattern = "^" + re.escape(f"form: unknown value {bad!r}; expected one of 'hermite', 'bezier', 'bspline'")
+    pattern = "^" + re.escape(
+        f"form: unknown value {bad!r}; expected one of 'hermite', 'bezier', 'bspline'"
+    )
     with pytest.raises(InputError, match=pattern):
         PatchSet(np.zeros((1, 4, 4, 3)), bad)
     with pytest.raises(InputError, match=pattern):
@@ -812,7 +922,9 @@ def test_non_finite_parameters_are_named(patches, value):
     uv = np.full((3, 2), 0.5)
     uv[2, 1] = value
     for call in (patches.evaluate, patches.tangents, patches.twist, patches.normals):
-        with pytest.raises(InputError, match="^" + re.escape(f"uv: non-finite value {value} at index (2, 1)")):
+        with pytest.raises(
+            InputError, match="^" + re.escape(f"uv: non-finite value {value} at index (2, 1)")
+        ):
             call(uv)
     grid = [0.0, 0.5, value]
     for name, call in (
@@ -821,7 +933,9 @@ def test_non_finite_parameters_are_named(patches, value):
         ("u", lambda: patches.normals_grid(grid)),
         ("v", lambda: patches.normals_grid([0.5], grid)),
     ):
-        with pytest.raises(InputError, match="^" + re.escape(f"{name}: non-finite value {value} at index (2,)")):
+        with pytest.raises(
+            InputError, match="^" + re.escape(f"{name}: non-finite value {value} at index (2,)")
+        ):
             call()
 
 
@@ -832,7 +946,9 @@ def test_bad_grid_parameters_are_named(patches):
         ("u", lambda: patches.normals_grid(np.zeros((2, 2)))),
         ("v", lambda: patches.normals_grid([0.5], np.zeros((2, 3)))),
     ):
-        with pytest.raises(InputError, match=rf"^{name}: expected a 1-D array of parameters, got shape \(2, [23]\)"):
+        with pytest.raises(
+            InputError, match=rf"^{name}: expected a 1-D array of parameters, got shape \(2, [23]\)"
+        ):
             call()
     with pytest.raises(InputError, match=r"^u: expected an array of numbers"):
         patches.evaluate_grid("abc")
@@ -842,7 +958,10 @@ def test_bad_grid_parameters_are_named(patches):
 
 @pytest.mark.parametrize("resolution", [1, 0, -3, 2.5, "8", None, 4.0])
 def test_bad_resolution_is_named(patches, resolution):
-    with pytest.raises(InputError, match="^" + re.escape(f"resolution: expected an integer ≥ 2, got {resolution!r}")):
+    with pytest.raises(
+        InputError,
+        match="^" + re.escape(f"resolution: expected an integer ≥ 2, got {resolution!r}"),
+    ):
         patches.grid(resolution)
 
 
@@ -872,20 +991,31 @@ def test_bad_derivative_order_names_du_or_dv(patches, name):
         patches.evaluate_grid([0.5], **{name: -1})
 
 
-@pytest.mark.parametrize("function,name", [(hs_twists, "hermite"), (closure, "hermite"), (diagonal_polynomials, "power")])
+@pytest.mark.parametrize(
+    "function,name", [(hs_twists, "hermite"), (closure, "hermite"), (diagonal_polynomials, "power")]
+)
 def test_free_functions_check_their_argument(function, name):
-    with pytest.raises(InputError, match="^" + re.escape(f"{name}: expected shape (..., 4, 4, 3), got (2, 4, 3, 3)")):
+    with pytest.raises(
+        InputError,
+        match="^" + re.escape(f"{name}: expected shape (..., 4, 4, 3), got (2, 4, 3, 3)"),
+    ):
         function(np.zeros((2, 4, 3, 3)))
     bad = np.zeros((2, 4, 4, 3))
     bad[0, 1, 2, 0] = np.nan
-    with pytest.raises(InputError, match="^" + re.escape(f"{name}: non-finite value nan at index (0, 1, 2, 0)")):
+    with pytest.raises(
+        InputError, match="^" + re.escape(f"{name}: non-finite value nan at index (0, 1, 2, 0)")
+    ):
         function(bad)
 
 
 def test_polynomial_degree_checks_its_argument():
-    with pytest.raises(InputError, match="^" + re.escape("coefficients: expected shape (..., N, N), got (7,)")):
+    with pytest.raises(
+        InputError, match="^" + re.escape("coefficients: expected shape (..., N, N), got (7,)")
+    ):
         polynomial_degree(np.zeros(7))
-    with pytest.raises(InputError, match="^" + re.escape("coefficients: non-finite value inf at index (3, 1)")):
+    with pytest.raises(
+        InputError, match="^" + re.escape("coefficients: non-finite value inf at index (3, 1)")
+    ):
         bad = np.zeros((7, 3))
         bad[3, 1] = np.inf
         polynomial_degree(bad)

@@ -23,7 +23,9 @@ def _outward(vertices: NDArray[np.float64], faces: Faces) -> Faces:
     return oriented
 
 
-def _around(vertices: NDArray[np.float64], centre: NDArray[np.float64], ids: NDArray[np.int64]) -> list[int]:
+def _around(
+    vertices: NDArray[np.float64], centre: NDArray[np.float64], ids: NDArray[np.int64]
+) -> list[int]:
     """``ids`` sorted counter-clockwise around the outward direction ``centre``."""
     e1 = np.cross(centre, [0.3, 0.5, 0.7])
     e1 /= np.linalg.norm(e1)
@@ -35,14 +37,20 @@ def icosahedron() -> tuple[NDArray[np.float64], Faces]:
     """20 triangles, vertices on the unit sphere."""
     g = (1 + 5**0.5) / 2
     vertices = np.array(
-        [p for a in (-1, 1) for b in (-g, g) for p in ((0, a, b), (a, b, 0), (b, 0, a))], dtype=float
+        [p for a in (-1, 1) for b in (-g, g) for p in ((0, a, b), (a, b, 0), (b, 0, a))],
+        dtype=float,
     )
     vertices /= np.linalg.norm(vertices, axis=1)[:, None]
     distance = np.linalg.norm(vertices[:, None] - vertices[None], axis=2)
     edge = distance[distance > 0].min()
     near = np.abs(distance - edge) < 1e-9
-    faces = [[i, j, k] for i in range(12) for j in range(i + 1, 12) for k in range(j + 1, 12)
-             if near[i, j] and near[j, k] and near[i, k]]
+    faces = [
+        [i, j, k]
+        for i in range(12)
+        for j in range(i + 1, 12)
+        for k in range(j + 1, 12)
+        if near[i, j] and near[j, k] and near[i, k]
+    ]
     return vertices, _outward(vertices, faces)
 
 
@@ -65,11 +73,18 @@ def icosidodecahedron() -> tuple[NDArray[np.float64], Faces]:
     vertices = ico[keys // 12] + ico[keys % 12]
     vertices /= np.linalg.norm(vertices, axis=1)[:, None]
     faces = inverse.reshape(3, -1).T.tolist()
-    faces += [_around(vertices, ico[v], np.flatnonzero((keys // 12 == v) | (keys % 12 == v))) for v in range(12)]
+    faces += [
+        _around(vertices, ico[v], np.flatnonzero((keys // 12 == v) | (keys % 12 == v)))
+        for v in range(12)
+    ]
     return vertices, faces
 
 
-SOLIDS = {"icosahedron": icosahedron, "dodecahedron": dodecahedron, "icosidodecahedron": icosidodecahedron}
+SOLIDS = {
+    "icosahedron": icosahedron,
+    "dodecahedron": dodecahedron,
+    "icosidodecahedron": icosidodecahedron,
+}
 
 
 def _flat(faces: Faces) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
@@ -107,9 +122,10 @@ def test_points_of_a_sphere_cage_approach_the_sphere(name: str) -> None:
     edge_error = np.abs(1 - np.linalg.norm(smooth[nv : nv + ne], axis=1))
     assert edge_error.max() < 1e-12
     all_new = slice(nv, None)
-    ratio = np.abs(1 - np.linalg.norm(smooth[all_new], axis=1)).mean() / np.abs(
-        1 - np.linalg.norm(flat[all_new], axis=1)
-    ).mean()
+    ratio = (
+        np.abs(1 - np.linalg.norm(smooth[all_new], axis=1)).mean()
+        / np.abs(1 - np.linalg.norm(flat[all_new], axis=1)).mean()
+    )
     assert ratio < 0.3
 
 
@@ -197,7 +213,9 @@ def _wall_fan(w: tuple[float, float, float]) -> tuple[NDArray[np.float64], Faces
     return vertices, [[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 1]]
 
 
-@pytest.mark.parametrize("w", [(0.0, 1.0, 1.0), (0.0, 0.0, 1.0)], ids=["edge-along-normal", "zero-normal"])
+@pytest.mark.parametrize(
+    "w", [(0.0, 1.0, 1.0), (0.0, 0.0, 1.0)], ids=["edge-along-normal", "zero-normal"]
+)
 def test_degenerate_tangents_fall_back_to_the_midpoint(w: tuple[float, float, float]) -> None:
     vertices, faces = _wall_fan(w)
     flat, _, _ = _split(vertices, faces, smooth=False)

@@ -57,7 +57,10 @@ def exact_cross(rows: np.ndarray) -> list[Fraction]:
     """ξ_k = (−1)^(k+1) det(D with column k deleted), 1-based k, in rationals."""
     data = [[Fraction(float(x)) for x in row] for row in rows]
     n = len(data[0])
-    return [(-1) ** k * exact_det([[row[j] for j in range(n) if j != k] for row in data]) for k in range(n)]
+    return [
+        (-1) ** k * exact_det([[row[j] for j in range(n) if j != k] for row in data])
+        for k in range(n)
+    ]
 
 
 def exact_cramer(A: np.ndarray, b: np.ndarray) -> tuple[list[Fraction], Fraction]:
@@ -65,7 +68,10 @@ def exact_cramer(A: np.ndarray, b: np.ndarray) -> tuple[list[Fraction], Fraction
     a = [[Fraction(float(x)) for x in row] for row in A]
     rhs = [Fraction(float(x)) for x in b]
     n = len(a)
-    replaced = [exact_det([[rhs[r] if c == i else a[r][c] for c in range(n)] for r in range(n)]) for i in range(n)]
+    replaced = [
+        exact_det([[rhs[r] if c == i else a[r][c] for c in range(n)] for r in range(n)])
+        for i in range(n)
+    ]
     return replaced, exact_det(a)
 
 
@@ -79,9 +85,9 @@ def as_float(values: list[Fraction]) -> np.ndarray:
 
 
 def int_matrix(rows: int, cols: int) -> st.SearchStrategy[np.ndarray]:
-    return st.lists(st.lists(SMALL_INT, min_size=cols, max_size=cols), min_size=rows, max_size=rows).map(
-        lambda x: np.array(x, dtype=np.float64).reshape(rows, cols)
-    )
+    return st.lists(
+        st.lists(SMALL_INT, min_size=cols, max_size=cols), min_size=rows, max_size=rows
+    ).map(lambda x: np.array(x, dtype=np.float64).reshape(rows, cols))
 
 
 @st.composite
@@ -91,7 +97,9 @@ def int_rows(draw: st.DrawFn, min_n: int = 2, max_n: int = 6) -> np.ndarray:
 
 
 # Floats with no underflow in products of ≤ 8 factors, so the relative bounds hold.
-FLOAT = st.floats(-1e3, 1e3, allow_nan=False, allow_infinity=False).map(lambda x: 0.0 if abs(x) < 1e-30 else x)
+FLOAT = st.floats(-1e3, 1e3, allow_nan=False, allow_infinity=False).map(
+    lambda x: 0.0 if abs(x) < 1e-30 else x
+)
 
 
 @st.composite
@@ -171,7 +179,12 @@ def test_swapping_two_rows_flips_the_sign(rows: np.ndarray, data: st.DataObject)
             assert np.array_equal(pj.generalized_cross(swapped, method=method), expected)
         else:  # a different pivot order: equal up to LU rounding, ~n·eps of Π‖α_i‖ (Hadamard's bound on a minor)
             scale = float(np.prod(np.linalg.norm(rows, axis=1)))
-            assert np.allclose(pj.generalized_cross(swapped, method=method), expected, rtol=0, atol=64 * EPS * scale)
+            assert np.allclose(
+                pj.generalized_cross(swapped, method=method),
+                expected,
+                rtol=0,
+                atol=64 * EPS * scale,
+            )
 
 
 @settings(max_examples=100, deadline=None)
@@ -232,7 +245,9 @@ def test_agrees_with_numpy_solve(n: int, method: str) -> None:
     assert np.all(np.abs(points - reference).max(axis=-1) <= bound)
 
 
-def _ill_conditioned(rng: np.random.Generator, n: int, cond: float) -> tuple[np.ndarray, np.ndarray]:
+def _ill_conditioned(
+    rng: np.random.Generator, n: int, cond: float
+) -> tuple[np.ndarray, np.ndarray]:
     u, _ = np.linalg.qr(rng.standard_normal((n, n)))
     v, _ = np.linalg.qr(rng.standard_normal((n, n)))
     return u @ np.diag(np.logspace(0, -math.log10(cond), n)) @ v.T, rng.standard_normal(n)
@@ -378,7 +393,10 @@ def test_paper_eq_9() -> None:
 
 
 def test_parallel_lines_meet_at_infinity() -> None:
-    l1, l2 = np.array([2.0, 3.0, 1.0]), np.array([4.0, 6.0, 5.0])  # 2x + 3y + 1 = 0 ∥ 4x + 6y + 5 = 0
+    l1, l2 = (
+        np.array([2.0, 3.0, 1.0]),
+        np.array([4.0, 6.0, 5.0]),
+    )  # 2x + 3y + 1 = 0 ∥ 4x + 6y + 5 = 0
     point = pj.meet_lines_2d(l1, l2)
     assert point[2] == 0 and np.any(point[:2] != 0)
     assert pj.classify(point) == Kind.AT_INFINITY
@@ -418,7 +436,11 @@ def test_plane_through_collinear_points_is_degenerate() -> None:
     assert pj.classify(plane, rows) == Kind.DEGENERATE
     # inexact float data: not zero, but at rounding level relative to the Hadamard bound
     rng = np.random.default_rng(0)
-    p, d, t = 100 * rng.standard_normal((1000, 3)), rng.standard_normal((1000, 3)), rng.standard_normal((1000, 3))
+    p, d, t = (
+        100 * rng.standard_normal((1000, 3)),
+        rng.standard_normal((1000, 3)),
+        rng.standard_normal((1000, 3)),
+    )
     rows = pj.homogeneous(p[:, None, :] + t[..., None] * d[:, None, :])
     planes = pj.plane_through_points(rows[:, 0], rows[:, 1], rows[:, 2])
     assert np.mean(np.any(planes != 0, axis=-1)) > 0.5
@@ -482,16 +504,51 @@ def test_broadcasting_and_empty_batches() -> None:
 P3 = [0.0, 0.0, 1.0]
 P4 = [0.0, 0.0, 0.0, 1.0]
 BAD_INPUT = [
-    (pj.generalized_cross, ([[1.0, 2.0, 3.0]] * 3,), {}, r"rows: expected shape \(\.\.\., n-1, n\).*\(3, 3\)"),
+    (
+        pj.generalized_cross,
+        ([[1.0, 2.0, 3.0]] * 3,),
+        {},
+        r"rows: expected shape \(\.\.\., n-1, n\).*\(3, 3\)",
+    ),
     (pj.generalized_cross, ([1.0, 2.0],), {}, r"rows: expected shape"),
     (pj.generalized_cross, (np.zeros((0, 1)),), {}, r"rows: expected shape"),
-    (pj.generalized_cross, ([[1.0, np.nan, 3.0], [1.0, 2.0, 3.0]],), {}, r"rows: non-finite value nan"),
-    (pj.generalized_cross, ([[1.0, 2.0, 3.0], [1.0, np.inf, 3.0]],), {}, r"rows: non-finite value inf"),
-    (pj.generalized_cross, ([["a", "b", "c"], ["d", "e", "f"]],), {}, r"rows: expected an array of numbers"),
-    (pj.generalized_cross, ([[1.0, 2.0, 3.0], [1.0, 2.0, 4.0]],), {"method": "qr"}, r"method: unknown value 'qr'"),
+    (
+        pj.generalized_cross,
+        ([[1.0, np.nan, 3.0], [1.0, 2.0, 3.0]],),
+        {},
+        r"rows: non-finite value nan",
+    ),
+    (
+        pj.generalized_cross,
+        ([[1.0, 2.0, 3.0], [1.0, np.inf, 3.0]],),
+        {},
+        r"rows: non-finite value inf",
+    ),
+    (
+        pj.generalized_cross,
+        ([["a", "b", "c"], ["d", "e", "f"]],),
+        {},
+        r"rows: expected an array of numbers",
+    ),
+    (
+        pj.generalized_cross,
+        ([[1.0, 2.0, 3.0], [1.0, 2.0, 4.0]],),
+        {"method": "qr"},
+        r"method: unknown value 'qr'",
+    ),
     (pj.cross, (), {}, r"vectors: expected at least one vector"),
-    (pj.cross, ([1.0, 2.0, 3.0], [1.0, 2.0]), {}, r"vectors\[1\]: expected shape \(\.\.\., 3\), got \(2,\)"),
-    (pj.cross, ([1.0, 2.0, 3.0, 4.0], [1.0, 2.0, 3.0, 4.0]), {}, r"vectors\[0\]: expected shape \(\.\.\., 3\)"),
+    (
+        pj.cross,
+        ([1.0, 2.0, 3.0], [1.0, 2.0]),
+        {},
+        r"vectors\[1\]: expected shape \(\.\.\., 3\), got \(2,\)",
+    ),
+    (
+        pj.cross,
+        ([1.0, 2.0, 3.0, 4.0], [1.0, 2.0, 3.0, 4.0]),
+        {},
+        r"vectors\[0\]: expected shape \(\.\.\., 3\)",
+    ),
     (pj.cross, (np.zeros((2, 3)), np.zeros((5, 3))), {}, r"batch shapes do not broadcast"),
     (pj.cross, ([1.0, 2.0, 3.0], [np.nan, 0.0, 0.0]), {}, r"vectors\[1\]: non-finite"),
     (pj.augmented, (np.zeros((2, 3)), [1.0, 2.0]), {}, r"A: expected a square matrix.*\(2, 3\)"),
@@ -499,8 +556,18 @@ BAD_INPUT = [
     (pj.solve, (np.zeros((0, 0)), []), {}, r"A: expected a square matrix"),
     (pj.solve, (np.eye(2), [1.0, 2.0, 3.0]), {}, r"b: expected shape \(\.\.\., 2\), got \(3,\)"),
     (pj.solve, (np.eye(2), [1.0, np.nan]), {}, r"b: non-finite value nan at index \(1,\)"),
-    (pj.solve, ([[1.0, np.inf], [0.0, 1.0]], [1.0, 2.0]), {}, r"A: non-finite value inf at index \(0, 1\)"),
-    (pj.solve, (np.zeros((3, 2, 2)), np.zeros((4, 2))), {}, r"A \(3, 2, 2\) and b \(4, 2\): batch shapes"),
+    (
+        pj.solve,
+        ([[1.0, np.inf], [0.0, 1.0]], [1.0, 2.0]),
+        {},
+        r"A: non-finite value inf at index \(0, 1\)",
+    ),
+    (
+        pj.solve,
+        (np.zeros((3, 2, 2)), np.zeros((4, 2))),
+        {},
+        r"A \(3, 2, 2\) and b \(4, 2\): batch shapes",
+    ),
     (pj.solve, (np.eye(2), [1.0, 2.0]), {"method": "svd"}, r"method: unknown value 'svd'"),
     (pj.null_vector, (np.eye(3),), {}, r"A: expected shape \(\.\.\., n-1, n\).*\(3, 3\)"),
     (pj.null_vector, ([[np.nan, 0.0, 0.0], [0.0, 1.0, 0.0]],), {}, r"A: non-finite"),
@@ -512,8 +579,18 @@ BAD_INPUT = [
     (pj.classify, (P3,), {"rtol": -1.0}, r"rtol: expected a finite non-negative number, got -1.0"),
     (pj.classify, (P3,), {"rtol": np.nan}, r"rtol: expected a finite non-negative number"),
     (pj.classify, (P3,), {"rtol": "tight"}, r"rtol: expected a non-negative number, got 'tight'"),
-    (pj.classify, (P3, np.zeros((3, 4))), {}, r"rows: expected shape \(\.\.\., 2, 3\) to match xi \(3,\)"),
-    (pj.classify, (np.zeros((2, 3)), np.zeros((5, 2, 3))), {}, r"xi \(2, 3\) and rows \(5, 2, 3\): batch shapes"),
+    (
+        pj.classify,
+        (P3, np.zeros((3, 4))),
+        {},
+        r"rows: expected shape \(\.\.\., 2, 3\) to match xi \(3,\)",
+    ),
+    (
+        pj.classify,
+        (np.zeros((2, 3)), np.zeros((5, 2, 3))),
+        {},
+        r"xi \(2, 3\) and rows \(5, 2, 3\): batch shapes",
+    ),
     (pj.classify, (P3, [[1.0, np.inf, 0.0], [0.0, 1.0, 0.0]]), {}, r"rows: non-finite value inf"),
     (pj.homogeneous, ([1.0, np.inf],), {}, r"points: non-finite value inf"),
     (pj.homogeneous, (3.0,), {}, r"points: expected shape \(\.\.\., N\), got \(\)"),
@@ -525,11 +602,21 @@ BAD_INPUT = [
     (pj.rescale, ([1.0, np.inf],), {}, r"h: non-finite value inf"),
     (pj.rescale, (2.0,), {}, r"h: expected shape \(\.\.\., N\), got \(\)"),
     (pj.solve, (2.0, [1.0]), {}, r"A: expected shape \(\.\.\., N, N\), got \(\)"),
-    (pj.join_points_2d, ([1.0, 2.0], P3), {}, r"x1: expected shape \(\.\.\., 3\), got \(2,\) \(append w with homogeneous\(\)\)"),
+    (
+        pj.join_points_2d,
+        ([1.0, 2.0], P3),
+        {},
+        r"x1: expected shape \(\.\.\., 3\), got \(2,\) \(append w with homogeneous\(\)\)",
+    ),
     (pj.join_points_2d, (P3, [1.0, np.nan, 1.0]), {}, r"x2: non-finite value nan"),
     (pj.meet_lines_2d, (P3, P4), {}, r"l2: expected shape \(\.\.\., 3\), got \(4,\)"),
     (pj.meet_lines_2d, (np.zeros((2, 3)), np.zeros((3, 3))), {}, r"l1 \(2, 3\), l2 \(3, 3\)"),
-    (pj.plane_through_points, (P4, P4, [1.0, 2.0, 3.0]), {}, r"x3: expected shape \(\.\.\., 4\), got \(3,\) \(append w"),
+    (
+        pj.plane_through_points,
+        (P4, P4, [1.0, 2.0, 3.0]),
+        {},
+        r"x3: expected shape \(\.\.\., 4\), got \(3,\) \(append w",
+    ),
     (pj.plane_through_points, (P4, [np.inf, 0, 0, 1], P4), {}, r"x2: non-finite value inf"),
     (pj.meet_planes, (P4, P4, P3), {}, r"p3: expected shape \(\.\.\., 4\), got \(3,\)"),
     (pj.meet_planes, ([np.nan, 0, 0, 1], P4, P4), {}, r"p1: non-finite value nan"),
@@ -544,5 +631,9 @@ def test_bad_input_raises_input_error(function, args: tuple, kwargs: dict, messa
 
 def test_every_public_function_has_a_bad_input_case() -> None:
     covered = {function.__name__ for function, *_ in BAD_INPUT}
-    functions = {name for name in pj.__all__ if callable(getattr(pj, name)) and name not in {"Kind", "Method"}}
+    functions = {
+        name
+        for name in pj.__all__
+        if callable(getattr(pj, name)) and name not in {"Kind", "Method"}
+    }
     assert functions <= covered, functions - covered

@@ -25,7 +25,9 @@ from g1patch.io import meshfile
 from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh
 
-SETTINGS = settings(max_examples=300, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
+SETTINGS = settings(
+    max_examples=300, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck)
+)
 PATH = Path("mesh.obj")
 
 #: how a coordinate may be spelt; the fast path reads those with '_' as float() does, not by np.fromstring
@@ -33,7 +35,21 @@ PLAIN_COORDINATES = st.one_of(
     st.floats(-1e6, 1e6, allow_nan=False).map(repr),
     st.floats(allow_nan=False, allow_infinity=False).map(repr),
     st.integers(-1000, 1000).map(str),
-    st.sampled_from(["0", "-0", "+1.5", ".5", "-.25", "5.", "1e3", "1E-3", "-2.5e+2", "0.30000000000000004", "4.9e-324"]),
+    st.sampled_from(
+        [
+            "0",
+            "-0",
+            "+1.5",
+            ".5",
+            "-.25",
+            "5.",
+            "1e3",
+            "1E-3",
+            "-2.5e+2",
+            "0.30000000000000004",
+            "4.9e-324",
+        ]
+    ),
 )
 COORDINATES = st.one_of(PLAIN_COORDINATES, st.sampled_from(["1_0", "1_000.5"]))
 SPACE = st.sampled_from([" ", "  ", "\t", " \t "])
@@ -47,7 +63,11 @@ def outcome(read, path: Path, data: bytes) -> tuple:
     except G1PatchError as error:
         return (type(error).__name__, str(error), getattr(error, "line", None))
     faces = parsed.faces if isinstance(parsed.faces, np.ndarray) else np.concatenate(parsed.faces)
-    sizes = [parsed.faces.shape[1]] * len(parsed.faces) if isinstance(parsed.faces, np.ndarray) else [len(f) for f in parsed.faces]
+    sizes = (
+        [parsed.faces.shape[1]] * len(parsed.faces)
+        if isinstance(parsed.faces, np.ndarray)
+        else [len(f) for f in parsed.faces]
+    )
     return (parsed.vertices.shape, parsed.vertices.tobytes(), faces.tolist(), sizes, parsed.tags)
 
 
@@ -55,12 +75,31 @@ def outcome(read, path: Path, data: bytes) -> tuple:
 def obj_files(draw) -> bytes:
     """An OBJ file of a few polygons, maybe damaged."""
     n = draw(st.integers(3, 12))
-    coordinates = draw(st.lists(st.lists(COORDINATES, min_size=3, max_size=3), min_size=n, max_size=n))
+    coordinates = draw(
+        st.lists(st.lists(COORDINATES, min_size=3, max_size=3), min_size=n, max_size=n)
+    )
     lines: list[str] = []
     defined = 0
     for row in coordinates:
         while draw(st.integers(0, 4)) == 0:  # decoration between vertices
-            lines.append(draw(st.sampled_from(["", "# a comment", "vt 0.5 0.5", "vn 0 0 1", "vp 1", "g part", "s off", "o thing", "  ", "usemtl a/b"])))
+            lines.append(
+                draw(
+                    st.sampled_from(
+                        [
+                            "",
+                            "# a comment",
+                            "vt 0.5 0.5",
+                            "vn 0 0 1",
+                            "vp 1",
+                            "g part",
+                            "s off",
+                            "o thing",
+                            "  ",
+                            "usemtl a/b",
+                        ]
+                    )
+                )
+            )
         w = [draw(st.sampled_from(["1", "1.0", "0.5"]))] if draw(st.integers(0, 5)) == 0 else []
         space = draw(SPACE)
         lines.append(space.join(["v", *row, *w]) + draw(st.sampled_from(["", " ", "  # end"])))
@@ -69,7 +108,9 @@ def obj_files(draw) -> bytes:
         corners = draw(st.lists(st.integers(0, n - 1), min_size=3, max_size=6))
         spelt = []
         for c in corners:
-            index = str(c + 1) if draw(st.booleans()) else str(c - defined)  # 1-based or counted back
+            index = (
+                str(c + 1) if draw(st.booleans()) else str(c - defined)
+            )  # 1-based or counted back
             spelt.append(index + draw(st.sampled_from(["", "", "/1", "//2", "/3/4"])))
         lines.append(draw(SPACE).join(["f", *spelt]))
     if draw(st.booleans()):
@@ -82,12 +123,46 @@ def obj_files(draw) -> bytes:
         row = draw(st.integers(0, len(lines) - 1))
         parts = lines[row].split()
         if len(parts) > 1:
-            parts[draw(st.integers(1, len(parts) - 1))] = draw(st.sampled_from(["x", "1.2.3", "-", "+", "0", "nan", "inf", "99999999999999999999", "1-2", "--1", "1e", ""]))
+            parts[draw(st.integers(1, len(parts) - 1))] = draw(
+                st.sampled_from(
+                    [
+                        "x",
+                        "1.2.3",
+                        "-",
+                        "+",
+                        "0",
+                        "nan",
+                        "inf",
+                        "99999999999999999999",
+                        "1-2",
+                        "--1",
+                        "1e",
+                        "",
+                    ]
+                )
+            )
             lines[row] = " ".join(parts)
     elif damage == "line":
         del lines[draw(st.integers(0, len(lines) - 1))]
     elif damage == "insert":
-        lines.insert(draw(st.integers(0, len(lines))), draw(st.sampled_from(["f 1 2", "v 1 2", "v a b c", "hello", "f 1/2/3/4 x", "v", "f", "t x 1/0/0", "f 1 2 999"])))
+        lines.insert(
+            draw(st.integers(0, len(lines))),
+            draw(
+                st.sampled_from(
+                    [
+                        "f 1 2",
+                        "v 1 2",
+                        "v a b c",
+                        "hello",
+                        "f 1/2/3/4 x",
+                        "v",
+                        "f",
+                        "t x 1/0/0",
+                        "f 1 2 999",
+                    ]
+                )
+            ),
+        )
     elif damage == "leading":
         row = draw(st.integers(0, len(lines) - 1))
         lines[row] = draw(SPACE) + lines[row]
@@ -112,9 +187,15 @@ def off_files(draw) -> bytes:
     """An OFF file of a few polygons (counts beside the header or on their own line, colours after
     vertices or faces), maybe damaged."""
     n = draw(st.integers(3, 10))
-    coordinates = draw(st.lists(st.lists(COORDINATES, min_size=3, max_size=3), min_size=n, max_size=n))
-    faces = draw(st.lists(st.lists(st.integers(0, n - 1), min_size=3, max_size=6), min_size=1, max_size=6))
-    header = draw(st.sampled_from(["OFF\n{} {} 0", "OFF {} {} 0", "COFF\n# counts\n{} {} 0", "OFF\n\n{} {}"]))
+    coordinates = draw(
+        st.lists(st.lists(COORDINATES, min_size=3, max_size=3), min_size=n, max_size=n)
+    )
+    faces = draw(
+        st.lists(st.lists(st.integers(0, n - 1), min_size=3, max_size=6), min_size=1, max_size=6)
+    )
+    header = draw(
+        st.sampled_from(["OFF\n{} {} 0", "OFF {} {} 0", "COFF\n# counts\n{} {} 0", "OFF\n\n{} {}"])
+    )
     lines = header.format(n, len(faces)).split("\n")
     colour = draw(st.sampled_from(["", " 0.5 0.5 0.5", " 255 0 0"]))
     for row in coordinates:
@@ -122,7 +203,9 @@ def off_files(draw) -> bytes:
         if draw(st.integers(0, 4)) == 0:
             lines.append(draw(st.sampled_from(["", "# comment", "   "])))
     for face in faces:
-        lines.append(draw(SPACE).join(map(str, [len(face), *face])) + (colour if draw(st.booleans()) else ""))
+        lines.append(
+            draw(SPACE).join(map(str, [len(face), *face])) + (colour if draw(st.booleans()) else "")
+        )
     if draw(st.booleans()):
         lines.append("anything after the faces is ignored")
     damage = draw(st.sampled_from([None] * 4 + ["token", "line", "header"]))
@@ -130,7 +213,9 @@ def off_files(draw) -> bytes:
         row = draw(st.integers(1, len(lines) - 1))
         parts = lines[row].split()
         if parts:
-            parts[draw(st.integers(0, len(parts) - 1))] = draw(st.sampled_from(["x", "-", "+", "nan", "2", "99", "-1", "1.5", "1e"]))
+            parts[draw(st.integers(0, len(parts) - 1))] = draw(
+                st.sampled_from(["x", "-", "+", "nan", "2", "99", "-1", "1.5", "1e"])
+            )
             lines[row] = " ".join(parts)
     elif damage == "line":
         del lines[draw(st.integers(0, len(lines) - 1))]
@@ -164,7 +249,9 @@ def test_read_mesh_gives_the_reference_mesh(tmp_path: Path) -> None:
     assert meshfile._obj_fast(data) is not None
     mesh = read_mesh(path)
     parsed = meshfile._read_obj_lines(path, data)
-    expected = QuadMesh.from_arrays(parsed.vertices, parsed.faces, source=str(path), tags=parsed.tags)
+    expected = QuadMesh.from_arrays(
+        parsed.vertices, parsed.faces, source=str(path), tags=parsed.tags
+    )
     assert mesh.vertices.tobytes() == expected.vertices.tobytes()
     assert mesh.faces.tolist() == expected.faces.tolist() == [[0, 1, 2, 3], [1, 4, 5, 2]]
     assert mesh.tags == expected.tags
@@ -173,16 +260,42 @@ def test_read_mesh_gives_the_reference_mesh(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("text", "message", "line"),
     [
-        ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 x\nf 1 2 3 4\n", "expected 'v x y z' with 3 numbers, got '0 1 x'", 4),
-        ("v 0 0 0\r\nv 1 0 0\r\n\r\nf 1 2 3 -\r\n", "expected 'f' with integer vertex indices, got '-'", 4),
-        ("v 0 0 0\nv 1 0 0\nv 1 1 0\n# c\nf 1 2 4\n", "face 0 names vertex 3 (0-based), but the file has 3 vertices", 5),
-        ("v 0 0 0\nv 1 0 0\nv 1 nan 0\nf 1 2 3\n", "vertex 2 has a non-finite coordinate (1.0, nan, 0.0)", 3),
+        (
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 x\nf 1 2 3 4\n",
+            "expected 'v x y z' with 3 numbers, got '0 1 x'",
+            4,
+        ),
+        (
+            "v 0 0 0\r\nv 1 0 0\r\n\r\nf 1 2 3 -\r\n",
+            "expected 'f' with integer vertex indices, got '-'",
+            4,
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\n# c\nf 1 2 4\n",
+            "face 0 names vertex 3 (0-based), but the file has 3 vertices",
+            5,
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 1 nan 0\nf 1 2 3\n",
+            "vertex 2 has a non-finite coordinate (1.0, nan, 0.0)",
+            3,
+        ),
         ("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\nvx 1\n", "unknown OBJ statement 'vx'", 5),
-        ("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\nv\n", "expected 'v x y z' with 3 numbers, got 'v'", 5),
-        ("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 0\n", "vertex index 0 in a face; OBJ indices start at 1", 4),
+        (
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\nv\n",
+            "expected 'v x y z' with 3 numbers, got 'v'",
+            5,
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 0\n",
+            "vertex index 0 in a face; OBJ indices start at 1",
+            4,
+        ),
     ],
 )
-def test_malformed_obj_keeps_the_line_numbered_message(tmp_path: Path, text: str, message: str, line: int) -> None:
+def test_malformed_obj_keeps_the_line_numbered_message(
+    tmp_path: Path, text: str, message: str, line: int
+) -> None:
     path = tmp_path / "bad.obj"
     path.write_text(text, newline="")
     with pytest.raises(FormatError) as caught:
@@ -193,7 +306,15 @@ def test_malformed_obj_keeps_the_line_numbered_message(tmp_path: Path, text: str
 # -- binary PLY ----------------------------------------------------------------------------------
 
 
-def ply_bytes(points: np.ndarray, faces: np.ndarray, coordinate: str, count: str, index: str, order: str, extra: bool) -> bytes:
+def ply_bytes(
+    points: np.ndarray,
+    faces: np.ndarray,
+    coordinate: str,
+    count: str,
+    index: str,
+    order: str,
+    extra: bool,
+) -> bytes:
     """A binary PLY file of ``points`` and ``faces`` with the given types, byte order and an extra
     vertex property."""
     names = {"f4": "float", "f8": "double", "u1": "uchar", "i4": "int", "u4": "uint"}
@@ -203,20 +324,46 @@ def ply_bytes(points: np.ndarray, faces: np.ndarray, coordinate: str, count: str
     vertex = np.zeros(len(points), dtype=fields)
     for k, axis in enumerate("xyz"):
         vertex[axis] = points[:, k]
-    face = np.zeros(len(faces), dtype=[("n", order + count), ("i", order + index, (faces.shape[1],))])
+    face = np.zeros(
+        len(faces), dtype=[("n", order + count), ("i", order + index, (faces.shape[1],))]
+    )
     face["n"], face["i"] = faces.shape[1], faces
-    header = ["ply", f"format binary_{'little' if order == '<' else 'big'}_endian 1.0", "comment test", f"element vertex {len(points)}"]
+    header = [
+        "ply",
+        f"format binary_{'little' if order == '<' else 'big'}_endian 1.0",
+        "comment test",
+        f"element vertex {len(points)}",
+    ]
     header += [f"property {names[kind.lstrip('<>')]} {name}" for name, kind in fields]
-    header += [f"element face {len(faces)}", f"property list {names[count]} {names[index]} vertex_indices", "end_header", ""]
+    header += [
+        f"element face {len(faces)}",
+        f"property list {names[count]} {names[index]} vertex_indices",
+        "end_header",
+        "",
+    ]
     return "\n".join(header).encode() + vertex.tobytes() + face.tobytes()
 
 
 @SETTINGS
 @given(
-    st.sampled_from(["f4", "f8"]), st.sampled_from(["u1", "i4"]), st.sampled_from(["i4", "u4"]),
-    st.sampled_from(["<", ">"]), st.booleans(), st.integers(3, 5), st.integers(0, 2**32 - 1),
+    st.sampled_from(["f4", "f8"]),
+    st.sampled_from(["u1", "i4"]),
+    st.sampled_from(["i4", "u4"]),
+    st.sampled_from(["<", ">"]),
+    st.booleans(),
+    st.integers(3, 5),
+    st.integers(0, 2**32 - 1),
 )
-def test_binary_ply_records_are_meshio(tmp_path_factory, coordinate: str, count: str, index: str, order: str, extra: bool, corners: int, seed: int) -> None:
+def test_binary_ply_records_are_meshio(
+    tmp_path_factory,
+    coordinate: str,
+    count: str,
+    index: str,
+    order: str,
+    extra: bool,
+    corners: int,
+    seed: int,
+) -> None:
     rng = np.random.default_rng(seed)
     points = rng.normal(size=(int(rng.integers(3, 20)), 3)) * 10.0 ** rng.integers(-3, 4)
     faces = rng.integers(0, len(points), size=(int(rng.integers(1, 8)), corners))
@@ -227,23 +374,37 @@ def test_binary_ply_records_are_meshio(tmp_path_factory, coordinate: str, count:
     assert records is not None
     expected = meshfile._ply_meshio(path, meshfile._ply_header(path, data))
     assert records[0].tobytes() == expected[0].tobytes()
-    assert records[1].tolist() == expected[1].tolist() and records[2].tolist() == expected[2].tolist()
+    assert (
+        records[1].tolist() == expected[1].tolist() and records[2].tolist() == expected[2].tolist()
+    )
 
 
 def test_binary_ply_other_layouts_go_to_meshio(tmp_path: Path) -> None:
     """Mixed corner counts, a cut file or more bytes than announced: meshio and the old messages."""
     points = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0]], dtype=float)
     path = tmp_path / "mixed.ply"
-    meshio.ply.write(str(path), meshio.Mesh(points, [("quad", np.array([[0, 1, 2, 3]])), ("triangle", np.array([[1, 4, 2]]))]), binary=True)
+    meshio.ply.write(
+        str(path),
+        meshio.Mesh(
+            points, [("quad", np.array([[0, 1, 2, 3]])), ("triangle", np.array([[1, 4, 2]]))]
+        ),
+        binary=True,
+    )
     data = path.read_bytes()
     assert meshfile._ply_records(data) is None
     assert read_mesh(path).n_faces == 4 + 3
     quads = ply_bytes(points, np.array([[0, 1, 2, 3]]), "f8", "u1", "i4", "<", False)
-    assert meshfile._ply_records(quads + b"\0") is None and meshfile._ply_records(quads[:-1]) is None
+    assert (
+        meshfile._ply_records(quads + b"\0") is None and meshfile._ply_records(quads[:-1]) is None
+    )
     path.write_bytes(quads[:-3])
     with pytest.raises(FormatError, match=r"cannot read the PLY data, truncated or malformed"):
         read_mesh(path)
-    path.write_bytes(quads.replace(b"property list uchar int vertex_indices", b"property list uchar int vertex_index\x20"))
+    path.write_bytes(
+        quads.replace(
+            b"property list uchar int vertex_indices", b"property list uchar int vertex_index\x20"
+        )
+    )
     assert meshfile._ply_records(path.read_bytes()) is None
 
 
@@ -257,20 +418,38 @@ def ascii_ply_files(draw) -> bytes:
     n = draw(st.integers(3, 10))
     normals = draw(st.booleans())
     width = 6 if normals else 3
-    coordinates = draw(st.lists(st.lists(PLAIN_COORDINATES, min_size=width, max_size=width), min_size=n, max_size=n))
-    faces = draw(st.lists(st.lists(st.integers(0, n - 1), min_size=3, max_size=5), min_size=1, max_size=6))
+    coordinates = draw(
+        st.lists(
+            st.lists(PLAIN_COORDINATES, min_size=width, max_size=width), min_size=n, max_size=n
+        )
+    )
+    faces = draw(
+        st.lists(st.lists(st.integers(0, n - 1), min_size=3, max_size=5), min_size=1, max_size=6)
+    )
     properties = ["property double x", "property double y", "property double z"]
-    properties += ["property double nx", "property double ny", "property double nz"] if normals else []
+    properties += (
+        ["property double nx", "property double ny", "property double nz"] if normals else []
+    )
     index = draw(st.sampled_from(["int", "uint32", "int32"]))
-    lines = ["ply", "format ascii 1.0", "comment generated", f"element vertex {n}", *properties, f"element face {len(faces)}",
-             f"property list uchar {index} vertex_indices", "end_header"]
+    lines = [
+        "ply",
+        "format ascii 1.0",
+        "comment generated",
+        f"element vertex {n}",
+        *properties,
+        f"element face {len(faces)}",
+        f"property list uchar {index} vertex_indices",
+        "end_header",
+    ]
     lines += [draw(SPACE).join(row) for row in coordinates]
     lines += [draw(SPACE).join(map(str, [len(face), *face])) for face in faces]
     damage = draw(st.sampled_from([None] * 4 + ["token", "line", "blank", "comment", "crlf"]))
     if damage == "token":
         row = draw(st.integers(len(lines) - n - len(faces), len(lines) - 1))
         parts = lines[row].split()
-        parts[draw(st.integers(0, len(parts) - 1))] = draw(st.sampled_from(["x", "-", "nan", "99", "-1", "1.5", "2"]))
+        parts[draw(st.integers(0, len(parts) - 1))] = draw(
+            st.sampled_from(["x", "-", "nan", "99", "-1", "1.5", "2"])
+        )
         lines[row] = " ".join(parts)
     elif damage == "line":
         del lines[draw(st.integers(len(lines) - n - len(faces), len(lines) - 1))]
@@ -288,7 +467,9 @@ def test_ascii_ply_fast_path_is_meshio(tmp_path_factory, data: bytes) -> None:
     path = tmp_path_factory.mktemp("ply") / "m.ply"
     path.write_bytes(data)
     fast = meshfile._ply_text(data)
-    reference = outcome(meshfile._read_ply, path, data)  # through the fast path where it accepts the file
+    reference = outcome(
+        meshfile._read_ply, path, data
+    )  # through the fast path where it accepts the file
     try:
         expected = meshfile._ply_meshio(path, meshfile._ply_header(path, data))
     except FormatError as error:
@@ -302,7 +483,12 @@ def test_ascii_ply_fast_path_is_meshio(tmp_path_factory, data: bytes) -> None:
 def test_ascii_ply_as_meshio_writes_it_takes_the_fast_path(tmp_path: Path) -> None:
     mesh = shapes.torus(6, 4)
     path = tmp_path / "torus.ply"
-    meshio.ply.write(str(path), meshio.Mesh(mesh.vertices, [("quad", mesh.faces.astype(np.int32))]), binary=False)
+    meshio.ply.write(
+        str(path), meshio.Mesh(mesh.vertices, [("quad", mesh.faces.astype(np.int32))]), binary=False
+    )
     assert meshfile._ply_text(path.read_bytes()) is not None
     again = read_mesh(path)
-    assert again.vertices.tobytes() == mesh.vertices.tobytes() and again.faces.tolist() == mesh.faces.tolist()
+    assert (
+        again.vertices.tobytes() == mesh.vertices.tobytes()
+        and again.faces.tolist() == mesh.faces.tolist()
+    )

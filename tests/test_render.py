@@ -29,12 +29,16 @@ from g1patch.render import (
 from g1patch.tessellate import tessellate
 
 
-def bspline_torus(n_major: int = 8, n_minor: int = 6, R: float = 1.0, r: float = 0.4) -> PatchNetwork:
+def bspline_torus(
+    n_major: int = 8, n_minor: int = 6, R: float = 1.0, r: float = 0.4
+) -> PatchNetwork:
     """A closed torus of uniform bicubic B-spline patches over a periodic control net: C2, so exactly G1."""
     u = 2 * np.pi * np.arange(n_major) / n_major
     v = 2 * np.pi * np.arange(n_minor) / n_minor
     U, V = np.meshgrid(u, v, indexing="ij")
-    net = np.stack([(R + r * np.cos(V)) * np.cos(U), (R + r * np.cos(V)) * np.sin(U), r * np.sin(V)], axis=-1)
+    net = np.stack(
+        [(R + r * np.cos(V)) * np.cos(U), (R + r * np.cos(V)) * np.sin(U), r * np.sin(V)], axis=-1
+    )
     i = (np.arange(n_major)[:, None] + np.arange(4)) % n_major
     j = (np.arange(n_minor)[:, None] + np.arange(4)) % n_minor
     control = net[i[:, None, :, None], j[None, :, None, :]].reshape(-1, 4, 4, 3)
@@ -86,7 +90,9 @@ def test_zebra_pictures_are_black_and_white(tmp_path: Path, corner_cube: PatchNe
     assert (grey < 0.15).mean() > 0.15 and (grey > 0.6).mean() > 0.3
 
 
-def test_deviation_pictures_colour_the_edges(tmp_path: Path, corner_cube: PatchNetwork, smooth_torus: PatchNetwork) -> None:
+def test_deviation_pictures_colour_the_edges(
+    tmp_path: Path, corner_cube: PatchNetwork, smooth_torus: PatchNetwork
+) -> None:
     for network, name in ((corner_cube, "crease"), (smooth_torus, "smooth")):
         path = tmp_path / f"{name}.png"
         render(path, network, mode="deviation", size=(400, 300), resolution=33)
@@ -95,9 +101,18 @@ def test_deviation_pictures_colour_the_edges(tmp_path: Path, corner_cube: PatchN
         assert saturated.sum() > 200, f"{name}: no coloured edge lines"
 
 
-def test_deviation_accepts_a_report_and_a_fixed_scale(tmp_path: Path, corner_cube: PatchNetwork) -> None:
+def test_deviation_accepts_a_report_and_a_fixed_scale(
+    tmp_path: Path, corner_cube: PatchNetwork
+) -> None:
     path = tmp_path / "fixed.png"
-    render(path, corner_cube, mode="deviation", size=(300, 300), report=check(corner_cube), angle_range=(1e-10, 90.0))
+    render(
+        path,
+        corner_cube,
+        mode="deviation",
+        size=(300, 300),
+        report=check(corner_cube),
+        angle_range=(1e-10, 90.0),
+    )
     assert_picture(path, (300, 300))
 
 
@@ -106,7 +121,14 @@ def test_side_by_side_draws_every_network_in_one_png(
     tmp_path: Path, corner_cube: PatchNetwork, smooth_torus: PatchNetwork, mode: str
 ) -> None:
     path = tmp_path / f"pair_{mode}.png"
-    render_side_by_side(path, [corner_cube, smooth_torus], ["creased", "smooth"], mode=mode, size=(500, 260), resolution=9)
+    render_side_by_side(
+        path,
+        [corner_cube, smooth_torus],
+        ["creased", "smooth"],
+        mode=mode,
+        size=(500, 260),
+        resolution=9,
+    )
     image = assert_picture(path, (500, 260))
     grey = image[..., :3].mean(axis=-1)
     half = image.shape[1] // 2 if mode != "deviation" else int(image.shape[1] * 0.4)
@@ -116,7 +138,9 @@ def test_side_by_side_draws_every_network_in_one_png(
 def test_open_and_mixed_orientation_networks_render(tmp_path: Path, shared_data: Path) -> None:
     from g1patch.io.bpt import read_bpt
 
-    wave = build_corner_network(shapes.grid(4, 3, height=lambda x, y: 0.2 * np.sin(3 * x) * np.cos(2 * y)))
+    wave = build_corner_network(
+        shapes.grid(4, 3, height=lambda x, y: 0.2 * np.sin(3 * x) * np.cos(2 * y))
+    )
     teapot = network_from_patch_points(read_bpt(shared_data / "teapot.bpt"), source="teapot")
     for network, name in ((wave, "wave"), (teapot, "teapot")):
         for mode in MODES:
@@ -140,19 +164,35 @@ def test_up_axis_is_a_rotation_of_the_world(tmp_path: Path) -> None:
     turned = mesh.with_vertices(np.roll(mesh.vertices, -1, axis=1))
     first, second = tmp_path / "z.png", tmp_path / "y.png"
     render(first, build_corner_network(mesh), mode="zebra", size=(200, 200), resolution=9, up="z")
-    render(second, build_corner_network(turned), mode="zebra", size=(200, 200), resolution=9, up="y")
+    render(
+        second, build_corner_network(turned), mode="zebra", size=(200, 200), resolution=9, up="y"
+    )
     assert np.abs(read_png(first) - read_png(second)).mean() < 2e-3
 
 
 def test_zoom_magnifies_about_the_target(tmp_path: Path, corner_cube: PatchNetwork) -> None:
     whole, zoomed = tmp_path / "whole.png", tmp_path / "zoomed.png"
-    camera = {"view": render_module.DEFAULT_VIEW, "up": "z"}  # the corner (1, -1, 1) faces this camera
+    camera = {
+        "view": render_module.DEFAULT_VIEW,
+        "up": "z",
+    }  # the corner (1, -1, 1) faces this camera
     render(whole, corner_cube, size=(200, 200), resolution=9, **camera)
-    render(zoomed, corner_cube, size=(200, 200), resolution=9, zoom=4.0, target=(1.0, -1.0, 1.0), **camera)
+    render(
+        zoomed,
+        corner_cube,
+        size=(200, 200),
+        resolution=9,
+        zoom=4.0,
+        target=(1.0, -1.0, 1.0),
+        **camera,
+    )
+
     def background(image: np.ndarray) -> float:
         return float((image[..., :3].mean(axis=-1) > 0.99).mean())
 
-    assert background(read_png(zoomed)) < 0.5 * background(read_png(whole)), "zooming in should fill the picture"
+    assert background(read_png(zoomed)) < 0.5 * background(read_png(whole)), (
+        "zooming in should fill the picture"
+    )
 
 
 def test_render_surfaces_draws_triangle_meshes(tmp_path: Path, corner_cube: PatchNetwork) -> None:
@@ -163,16 +203,24 @@ def test_render_surfaces_draws_triangle_meshes(tmp_path: Path, corner_cube: Patc
 
 
 # --------------------------------------------------------------------------- stripes measure smoothness
-def test_stripes_jump_across_creases_and_flow_across_g1_edges(corner_cube: PatchNetwork, smooth_torus: PatchNetwork) -> None:
+def test_stripes_jump_across_creases_and_flow_across_g1_edges(
+    corner_cube: PatchNetwork, smooth_torus: PatchNetwork
+) -> None:
     assert check(smooth_torus).is_g1()
     creased = stripe_jumps(corner_cube)
     smooth = stripe_jumps(smooth_torus)
-    assert creased.shape == (check(corner_cube).shared_edges,) and smooth.shape == (check(smooth_torus).shared_edges,)
-    assert creased.min() > 0.5, f"a 46° crease moves the stripes by less than half a period: {creased}"
+    assert creased.shape == (check(corner_cube).shared_edges,) and smooth.shape == (
+        check(smooth_torus).shared_edges,
+    )
+    assert creased.min() > 0.5, (
+        f"a 46° crease moves the stripes by less than half a period: {creased}"
+    )
     assert smooth.max() < 1e-9
 
 
-def test_gregory_cube_zebra_differs_from_the_corner_cube_along_the_edges(corner_cube: PatchNetwork, tmp_path: Path) -> None:
+def test_gregory_cube_zebra_differs_from_the_corner_cube_along_the_edges(
+    corner_cube: PatchNetwork, tmp_path: Path
+) -> None:
     """Same cube, same camera: the corner cube's stripes jump at every edge, Gregory's do not."""
     from g1patch.build import build_gregory_network
 
@@ -190,18 +238,26 @@ def test_stripe_jumps_grow_with_the_crease_and_the_stripe_count(corner_cube: Pat
     coarse = build_corner_network(shapes.cube_sphere(1))
     fine = build_corner_network(shapes.cube_sphere(3))
     assert stripe_jumps(fine).max() < stripe_jumps(coarse).max() < stripe_jumps(corner_cube).max()
-    np.testing.assert_allclose(stripe_jumps(corner_cube, stripes=24), 2.0 * stripe_jumps(corner_cube, stripes=12), rtol=1e-12)
+    np.testing.assert_allclose(
+        stripe_jumps(corner_cube, stripes=24),
+        2.0 * stripe_jumps(corner_cube, stripes=12),
+        rtol=1e-12,
+    )
 
 
 def test_stripe_phase_is_a_function_of_the_normal_line() -> None:
     normals = np.random.default_rng(1).normal(size=(50, 3))
     normals /= np.linalg.norm(normals, axis=1, keepdims=True)
     phase = stripe_phase(normals, view=(10.0, 20.0), stripes=7)
-    np.testing.assert_allclose(np.sin(stripe_phase(-normals, view=(10.0, 20.0), stripes=7)), np.sin(phase), atol=1e-12)
+    np.testing.assert_allclose(
+        np.sin(stripe_phase(-normals, view=(10.0, 20.0), stripes=7)), np.sin(phase), atol=1e-12
+    )
     assert phase.shape == (50,)
 
 
-def test_the_picture_keeps_both_sides_of_an_edge(corner_cube: PatchNetwork, smooth_torus: PatchNetwork) -> None:
+def test_the_picture_keeps_both_sides_of_an_edge(
+    corner_cube: PatchNetwork, smooth_torus: PatchNetwork
+) -> None:
     """What is painted: the stripe phase at coincident samples of neighbouring patches jumps on
     the creased cube and agrees on the smooth torus (the sides' normals are not averaged)."""
     from scipy.spatial import cKDTree
@@ -261,14 +317,18 @@ def test_choose_resolution_stays_in_range_and_within_budget() -> None:
         ({"target": [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]}, "target"),
     ],
 )
-def test_bad_arguments_name_themselves(tmp_path: Path, corner_cube: PatchNetwork, arguments: dict, name: str) -> None:
+def test_bad_arguments_name_themselves(
+    tmp_path: Path, corner_cube: PatchNetwork, arguments: dict, name: str
+) -> None:
     path = tmp_path / "bad.png"
     with pytest.raises(InputError, match=name):
         render(path, corner_cube, **arguments)
     assert not any(tmp_path.iterdir()), "a failed call left a file"
 
 
-def test_bad_networks_paths_titles_and_reports(tmp_path: Path, corner_cube: PatchNetwork, smooth_torus: PatchNetwork) -> None:
+def test_bad_networks_paths_titles_and_reports(
+    tmp_path: Path, corner_cube: PatchNetwork, smooth_torus: PatchNetwork
+) -> None:
     path = tmp_path / "bad.png"
     with pytest.raises(InputError, match="network"):
         render(path, shapes.cube(), mode="shaded")  # a mesh, not a network
@@ -287,7 +347,9 @@ def test_bad_networks_paths_titles_and_reports(tmp_path: Path, corner_cube: Patc
     assert not any(tmp_path.iterdir())
 
 
-def test_missing_matplotlib_is_a_clear_error(tmp_path: Path, corner_cube: PatchNetwork, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_missing_matplotlib_is_a_clear_error(
+    tmp_path: Path, corner_cube: PatchNetwork, monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.setitem(sys.modules, "matplotlib", None)
     monkeypatch.setitem(sys.modules, "matplotlib.figure", None)
     with pytest.raises(MissingDependencyError, match=r"matplotlib.*g1patch\[viz\]"):
@@ -311,7 +373,9 @@ def test_a_failed_render_leaves_the_old_file_and_no_partial_one(
     assert [p.name for p in tmp_path.iterdir()] == ["picture.png"]
 
 
-def test_deviation_map_keeps_the_edges_of_patches_seen_edge_on(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_deviation_map_keeps_the_edges_of_patches_seen_edge_on(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """A coarse sphere's patches at the silhouette are seen edge-on but are large: their edges stay
     lines, none is filled (their projected spacing is ~0; their spacing at the picture's scale is not)."""
     from g1patch.build import build_split4_network
@@ -324,5 +388,10 @@ def test_deviation_map_keeps_the_edges_of_patches_seen_edge_on(tmp_path: Path, m
         return original(network, resolution, band, filled)
 
     monkeypatch.setattr(render_module, "_sample", spy)
-    render_module.render(tmp_path / "sphere.png", build_split4_network(shapes.cube()), mode="deviation", size=(600, 600))
+    render_module.render(
+        tmp_path / "sphere.png",
+        build_split4_network(shapes.cube()),
+        mode="deviation",
+        size=(600, 600),
+    )
     assert filled_counts == [0]

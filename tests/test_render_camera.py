@@ -15,7 +15,15 @@ from g1patch.build import build_gregory_network
 from g1patch.cli import main
 from g1patch.errors import InputError
 from g1patch.network import PatchNetwork
-from g1patch.render import AUTO_TURN_DEG, DEFAULT_VIEW, FILL, _Camera, auto_camera, render, stripe_jumps
+from g1patch.render import (
+    AUTO_TURN_DEG,
+    DEFAULT_VIEW,
+    FILL,
+    _Camera,
+    auto_camera,
+    render,
+    stripe_jumps,
+)
 
 AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -83,9 +91,17 @@ def test_the_camera_follows_the_data_about_the_up_axis() -> None:
     """A slab turned by 30° about z: the azimuth turns by 30° (modulo the front's half turn)."""
     points, weights = box_samples((4.0, 2.0, 0.5))
     points -= points.mean(axis=0)
-    points[:, 2] += np.where(points[:, 0] > 0, 0.2 * points[:, 0], 0.0)  # a raised +x end: the front
+    points[:, 2] += np.where(
+        points[:, 0] > 0, 0.2 * points[:, 0], 0.0
+    )  # a raised +x end: the front
     turn = math.radians(30.0)
-    rotation = np.array([[math.cos(turn), -math.sin(turn), 0.0], [math.sin(turn), math.cos(turn), 0.0], [0.0, 0.0, 1.0]])
+    rotation = np.array(
+        [
+            [math.cos(turn), -math.sin(turn), 0.0],
+            [math.sin(turn), math.cos(turn), 0.0],
+            [0.0, 0.0, 1.0],
+        ]
+    )
     up, view = auto_camera(points, weights)
     turned_up, turned_view = auto_camera(points @ rotation.T, weights)
     assert up == turned_up == "z"
@@ -153,14 +169,20 @@ def spot(shared_data_path: Path) -> tuple[PatchNetwork, np.ndarray]:
     return build_gregory_network(mesh), mesh.vertices
 
 
-def test_spot_is_y_up_and_seen_from_its_front_three_quarter(spot: tuple[PatchNetwork, np.ndarray]) -> None:
+def test_spot_is_y_up_and_seen_from_its_front_three_quarter(
+    spot: tuple[PatchNetwork, np.ndarray],
+) -> None:
     network, vertices = spot
     up, view = auto_camera(network)
     assert up == "y"
-    assert vertices[np.argmax(vertices[:, 1]), 2] < 0.0, "Spot faces −z: its horns stand at the −z end"
+    assert vertices[np.argmax(vertices[:, 1]), 2] < 0.0, (
+        "Spot faces −z: its horns stand at the −z end"
+    )
     eye = eye_of(up, view)
     horizontal = eye * [1.0, 0.0, 1.0] / np.linalg.norm(eye * [1.0, 0.0, 1.0])
-    assert math.degrees(math.acos(horizontal @ [0.0, 0.0, -1.0])) == pytest.approx(AUTO_TURN_DEG, abs=1.0)
+    assert math.degrees(math.acos(horizontal @ [0.0, 0.0, -1.0])) == pytest.approx(
+        AUTO_TURN_DEG, abs=1.0
+    )
     assert 20.0 <= view[0] <= 30.0
 
 
@@ -196,26 +218,43 @@ def test_the_default_picture_of_spot_is_upright_from_the_front_three_quarter(
     low, high = screen.min(axis=0), screen.max(axis=0)
 
     rows, columns = np.nonzero(mask)
-    box = np.array([columns.max() - columns.min() + 1, rows.max() - rows.min() + 1], dtype=np.float64)
+    box = np.array(
+        [columns.max() - columns.min() + 1, rows.max() - rows.min() + 1], dtype=np.float64
+    )
     assert (box / size).max() == pytest.approx(FILL, abs=0.02), "framed to 90 % of the binding side"
-    assert box[1] / box[0] == pytest.approx((high - low)[1] / (high - low)[0], rel=0.04), "the aspect of an upright Spot"
+    assert box[1] / box[0] == pytest.approx((high - low)[1] / (high - low)[0], rel=0.04), (
+        "the aspect of an upright Spot"
+    )
 
     scale = (box[1] - 1) / (high - low)[1]
     column = columns.min() + (screen[:, 0] - low[0]) * scale
     row = rows.max() - (screen[:, 1] - low[1]) * scale
-    r, c = np.clip(np.round(row).astype(int), 0, size[1] - 1), np.clip(np.round(column).astype(int), 0, size[0] - 1)
-    grown = mask | np.roll(mask, 1, 0) | np.roll(mask, -1, 0) | np.roll(mask, 1, 1) | np.roll(mask, -1, 1)
+    r, c = (
+        np.clip(np.round(row).astype(int), 0, size[1] - 1),
+        np.clip(np.round(column).astype(int), 0, size[0] - 1),
+    )
+    grown = (
+        mask
+        | np.roll(mask, 1, 0)
+        | np.roll(mask, -1, 0)
+        | np.roll(mask, 1, 1)
+        | np.roll(mask, -1, 1)
+    )
     assert grown[r, c].mean() > 0.99, "the vertices project onto the silhouette"
     top, bottom = np.argmin(row), np.argmax(row)
     assert abs(row[top] - rows.min()) < 3 and abs(row[bottom] - rows.max()) < 3
     assert vertices[top, 1] > vertices[:, 1].max() - 0.1, "a horn is at the top of the picture"
-    assert vertices[bottom, 1] < vertices[:, 1].min() + 0.1, "a hoof is at the bottom of the picture"
+    assert vertices[bottom, 1] < vertices[:, 1].min() + 0.1, (
+        "a hoof is at the bottom of the picture"
+    )
 
     on_its_back = tmp_path / "back.png"
     render(on_its_back, network, size=size, up="z")
     rows_z, columns_z = np.nonzero(silhouette(on_its_back))
     aspect_z = (rows_z.max() - rows_z.min() + 1) / (columns_z.max() - columns_z.min() + 1)
-    assert abs(aspect_z - box[1] / box[0]) > 0.1 * box[1] / box[0], "the test tells a z-up picture apart"
+    assert abs(aspect_z - box[1] / box[0]) > 0.1 * box[1] / box[0], (
+        "the test tells a z-up picture apart"
+    )
 
 
 def test_the_teapot_is_z_up(shared_data_path: Path) -> None:
@@ -228,18 +267,40 @@ def test_the_teapot_is_z_up(shared_data_path: Path) -> None:
 
 
 # --------------------------------------------------------------------------- command line
-def test_render_and_demo_take_auto_and_explicit_cameras(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_render_and_demo_take_auto_and_explicit_cameras(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     network = tmp_path / "cube.npz"
     mesh = tmp_path / "cube.obj"
     cube = shapes.cube()
-    mesh.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in cube.vertices)
-                    + "".join("f " + " ".join(str(i + 1) for i in face) + "\n" for face in cube.faces))
+    mesh.write_text(
+        "".join(f"v {x} {y} {z}\n" for x, y, z in cube.vertices)
+        + "".join("f " + " ".join(str(i + 1) for i in face) + "\n" for face in cube.faces)
+    )
     assert main(["build", str(mesh), "-o", str(network)]) == 0
     pictures = {}
-    for name, options in (("auto", []), ("auto2", ["--view", "auto", "--up", "auto"]),
-                          ("y", ["--up", "y", "--view", "25", "-60"]), ("high", ["--view", "60", "30"])):
+    for name, options in (
+        ("auto", []),
+        ("auto2", ["--view", "auto", "--up", "auto"]),
+        ("y", ["--up", "y", "--view", "25", "-60"]),
+        ("high", ["--view", "60", "30"]),
+    ):
         pictures[name] = tmp_path / f"{name}.png"
-        assert main(["render", str(network), "-o", str(pictures[name]), "--size", "120", "120", *options]) == 0
+        assert (
+            main(
+                [
+                    "render",
+                    str(network),
+                    "-o",
+                    str(pictures[name]),
+                    "--size",
+                    "120",
+                    "120",
+                    *options,
+                ]
+            )
+            == 0
+        )
     read = {name: matplotlib.image.imread(path) for name, path in pictures.items()}
     np.testing.assert_array_equal(read["auto"], read["auto2"])
     assert np.abs(read["auto"] - read["y"]).max() < 0.02  # the cube: y-up from the default view
@@ -247,15 +308,25 @@ def test_render_and_demo_take_auto_and_explicit_cameras(tmp_path: Path, capsys: 
     capsys.readouterr()
     assert main(["render", str(network), "-o", str(tmp_path / "bad.png"), "--view", "up"]) == 2
     assert "--view" in capsys.readouterr().err
-    assert main(["render", str(network), "-o", str(tmp_path / "bad.png"), "--view", "1", "2", "3"]) == 2
+    assert (
+        main(["render", str(network), "-o", str(tmp_path / "bad.png"), "--view", "1", "2", "3"])
+        == 2
+    )
     assert not (tmp_path / "bad.png").exists()
 
 
 def test_a_long_title_fits_its_panel(tmp_path: Path) -> None:
     """The title's font shrinks until its longest line fits: no text runs off the picture's sides."""
     path = tmp_path / "titled.png"
-    render(path, build_gregory_network(shapes.cube()), size=(240, 200), title="a rather long title " * 4)
+    render(
+        path,
+        build_gregory_network(shapes.cube()),
+        size=(240, 200),
+        title="a rather long title " * 4,
+    )
     grey = matplotlib.image.imread(path)[..., :3].mean(axis=-1)
     band = grey[: grey.shape[0] // 6]
     assert (band < 0.5).any(), "the title is drawn"
-    assert (band[:, :3] > 0.99).all() and (band[:, -3:] > 0.99).all(), "the title runs off the picture"
+    assert (band[:, :3] > 0.99).all() and (band[:, -3:] > 0.99).all(), (
+        "the title runs off the picture"
+    )

@@ -38,7 +38,9 @@ Case = tuple[np.ndarray, Faces]
 
 def bumpy_grid(n: int = 4) -> tuple[np.ndarray, np.ndarray]:
     """An n × n grid on a gentle bump; vertex j (n + 1) + i at (i, j, 0.1 sin i cos j)."""
-    grid = shapes.grid(n, n, size=(float(n), float(n)), height=lambda x, y: 0.1 * np.sin(x) * np.cos(y))
+    grid = shapes.grid(
+        n, n, size=(float(n), float(n)), height=lambda x, y: 0.1 * np.sin(x) * np.cos(y)
+    )
     return np.array(grid.vertices), np.array(grid.faces)
 
 
@@ -66,7 +68,9 @@ def book(pages: int) -> tuple[np.ndarray, np.ndarray]:
 def two_cubes() -> tuple[np.ndarray, np.ndarray]:
     """Two cubes sharing one corner (vertex 7): every edge is fine, the corner has two closed fans."""
     cube = shapes.cube()
-    return np.concatenate([cube.vertices, cube.vertices[1:] + 2.0]), np.concatenate([cube.faces, cube.faces + 7])
+    return np.concatenate([cube.vertices, cube.vertices[1:] + 2.0]), np.concatenate(
+        [cube.faces, cube.faces + 7]
+    )
 
 
 def two_pyramids() -> tuple[np.ndarray, list[list[int]]]:
@@ -99,7 +103,9 @@ def moebius(n: int = 12, width: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
     t = 2 * np.pi * np.arange(n)[:, None] / n
     s = np.array([-width, width])[None, :]
     radius = 1 + s * np.cos(t / 2)
-    vertices = np.stack([radius * np.cos(t), radius * np.sin(t), s * np.sin(t / 2)], axis=-1).reshape(-1, 3)
+    vertices = np.stack(
+        [radius * np.cos(t), radius * np.sin(t), s * np.sin(t / 2)], axis=-1
+    ).reshape(-1, 3)
     i = np.arange(n)
     faces = np.stack([2 * i, 2 * ((i + 1) % n), 2 * ((i + 1) % n) + 1, 2 * i + 1], axis=1)
     faces[-1] = [2 * (n - 1), 1, 0, 2 * (n - 1) + 1]  # the half twist
@@ -121,15 +127,25 @@ def assert_builds_exactly(mesh: QuadMesh) -> None:
 
 # -- every case: repaired by default, refused with strict ---------------------------------------------
 
-SPLIT_EDGE = r"^1 non-manifold edge \(0, 1\) with {} faces split into sheets \(\+{} vertex copies\)$"
+SPLIT_EDGE = (
+    r"^1 non-manifold edge \(0, 1\) with {} faces split into sheets \(\+{} vertex copies\)$"
+)
 SPLIT_VERTEX = r"^1 non-manifold vertex \({}\) split into one copy per fan \(\+1 vertex\)$"
 CASES: dict[str, tuple[Callable[[], Case], type[MeshError], str]] = {
-    "valence-2": (lambda: fold_in(*bumpy_grid(), 5), ValenceError, r"^1 valence-2 vertex \(25\) dissolved$"),
+    "valence-2": (
+        lambda: fold_in(*bumpy_grid(), 5),
+        ValenceError,
+        r"^1 valence-2 vertex \(25\) dissolved$",
+    ),
     "book-3": (lambda: book(3), NonManifoldError, SPLIT_EDGE.format(3, 4)),
     "book-100": (lambda: book(100), NonManifoldError, SPLIT_EDGE.format(100, 198)),
     "two-cubes": (two_cubes, NonManifoldError, SPLIT_VERTEX.format(7)),
     "two-pyramids": (two_pyramids, NonManifoldError, SPLIT_VERTEX.format(0)),
-    "repeated-vertex": (cube_with_repeated_corner, DegenerateFaceError, r"^1 face repeating a vertex \(2\) reduced to 1 simple polygon$"),
+    "repeated-vertex": (
+        cube_with_repeated_corner,
+        DegenerateFaceError,
+        r"^1 face repeating a vertex \(2\) reduced to 1 simple polygon$",
+    ),
     "flipped-face": (cube_with_flipped_face, OrientationError, r"^1 face \(2\) reoriented$"),
 }
 
@@ -198,8 +214,11 @@ def test_valence_two_between_a_triangle_and_a_pentagon_leaves_the_quad() -> None
 
 def test_a_closed_pillow_leaves_nothing_and_says_so() -> None:
     square = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
-    with pytest.raises(ValenceError, match=r"no face is left after the repairs \(1 valence-2 vertex .* dissolved, "
-                                           r"2 faces \(0, 1\) dropped: their merge left no polygon\)"):
+    with pytest.raises(
+        ValenceError,
+        match=r"no face is left after the repairs \(1 valence-2 vertex .* dissolved, "
+        r"2 faces \(0, 1\) dropped: their merge left no polygon\)",
+    ):
         QuadMesh.from_arrays(square, [[0, 1, 2, 3], [0, 3, 2, 1]])
     with pytest.raises(ValenceError, match=r"interior vertex 0 has valence 2"):
         QuadMesh.from_arrays(square, [[0, 1, 2, 3], [0, 3, 2, 1]], strict=True)
@@ -240,7 +259,10 @@ def test_repeated_vertices_cut_faces_into_simple_polygons() -> None:
     a, x, b, y = polygons[3]
     polygons[3] = [a, x, a, b]  # a, x, a, b: two edges walked twice, nothing left
     mesh = QuadMesh.from_arrays(vertices, polygons, tags=[Tag("hole", (3,))])
-    assert mesh.repairs == ("1 degenerate face (3) dropped", "1 vertex left without a face (8) dropped")
+    assert mesh.repairs == (
+        "1 degenerate face (3) dropped",
+        "1 vertex left without a face (8) dropped",
+    )
     assert mesh.n_faces == 3
     assert mesh.tags == (Tag("hole", ()),)
     # a face that touches itself at the centre 4: the triangles (4, 0, 1) and (4, 8, 7), corner to corner
@@ -255,7 +277,10 @@ def test_repeated_vertices_cut_faces_into_simple_polygons() -> None:
 
 def test_faces_with_nothing_left_is_an_error() -> None:
     square = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
-    with pytest.raises(DegenerateFaceError, match=r"no face is left after the repairs \(1 degenerate face \(0\) dropped\)"):
+    with pytest.raises(
+        DegenerateFaceError,
+        match=r"no face is left after the repairs \(1 degenerate face \(0\) dropped\)",
+    ):
         QuadMesh.from_arrays(square, [[0, 1, 0, 2]])
 
 
@@ -273,7 +298,9 @@ def test_the_majority_keeps_its_orientation() -> None:
 
 def test_a_moebius_strip_is_still_refused() -> None:
     vertices, faces = moebius()
-    with pytest.raises(OrientationError, match=r"^strip\.obj: face 0 lies on a non-orientable sheet"):
+    with pytest.raises(
+        OrientationError, match=r"^strip\.obj: face 0 lies on a non-orientable sheet"
+    ):
         QuadMesh.from_arrays(vertices, faces, source="strip.obj")
     with pytest.raises(OrientationError, match=r"both traverse edge"):
         QuadMesh.from_arrays(vertices, faces, strict=True)
@@ -299,7 +326,11 @@ def test_tags_follow_the_repairs() -> None:
     vertices, faces = bumpy_grid()
     folded_vertices, folded = fold_in(vertices, faces, 5)
     v, a, x, b = folded[-2]
-    tags = [Tag("hole", (len(folded) - 1,)), Tag("crease", (0, 1, v, a), (10.0, 10.0)), Tag("corner", (v, 0))]
+    tags = [
+        Tag("hole", (len(folded) - 1,)),
+        Tag("crease", (0, 1, v, a), (10.0, 10.0)),
+        Tag("corner", (v, 0)),
+    ]
     mesh = QuadMesh.from_arrays(folded_vertices, folded, tags=tags)
     assert mesh.repairs == (
         "1 valence-2 vertex (25) dissolved",
@@ -317,13 +348,20 @@ def test_tags_follow_the_repairs() -> None:
 
 def write_obj(path: Path, vertices: np.ndarray, faces: Faces) -> Path:
     lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in np.asarray(vertices, dtype=float).tolist()]
-    lines += ["f " + " ".join(str(i + 1) for i in face) for face in np.asarray(faces, dtype=object).tolist()]
+    lines += [
+        "f " + " ".join(str(i + 1) for i in face)
+        for face in np.asarray(faces, dtype=object).tolist()
+    ]
     path.write_text("\n".join(lines) + "\n")
     return path
 
 
-@pytest.mark.parametrize("name", ["valence-2", "book-3", "two-cubes", "repeated-vertex", "flipped-face"])
-def test_cli_repairs_with_one_line_and_refuses_when_strict(tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str) -> None:
+@pytest.mark.parametrize(
+    "name", ["valence-2", "book-3", "two-cubes", "repeated-vertex", "flipped-face"]
+)
+def test_cli_repairs_with_one_line_and_refuses_when_strict(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str
+) -> None:
     make, _, note = CASES[name]
     source = write_obj(tmp_path / f"{name}.obj", *make())
     out = tmp_path / "out.npz"
@@ -335,7 +373,9 @@ def test_cli_repairs_with_one_line_and_refuses_when_strict(tmp_path: Path, capsy
     strict_out = tmp_path / "strict.npz"
     assert main(["build", str(source), "-o", str(strict_out), "-q", "--strict"]) == 2
     captured = capsys.readouterr()
-    assert len(captured.err.splitlines()) == 1 and captured.err.startswith(f"g1patch: error: {source}: ")
+    assert len(captured.err.splitlines()) == 1 and captured.err.startswith(
+        f"g1patch: error: {source}: "
+    )
     assert not strict_out.exists()
 
 
@@ -377,7 +417,9 @@ def test_one_large_polygon_splits_in_linear_memory() -> None:
     """10 000 and 100 000 sides: the peak grows by at most 15× (it was quadratic: 37 GiB at 100 000)."""
     peaks = {}
     for n in (10_000, 100_000):
-        peaks[n], mesh = peak_memory(lambda: QuadMesh.from_arrays(regular_polygon(n), [list(range(n))]))
+        peaks[n], mesh = peak_memory(
+            lambda: QuadMesh.from_arrays(regular_polygon(n), [list(range(n))])
+        )
         assert mesh.n_faces == n and mesh.topology.valence.max() == n
     assert peaks[100_000] <= 15 * peaks[10_000], peaks
     assert peaks[100_000] <= 500 * 2**20
@@ -393,7 +435,9 @@ def test_a_cylinder_with_one_large_cap() -> None:
     assert len(mesh.topology.boundary_loops()) == 1
 
 
-@pytest.mark.parametrize("make", [lambda: shapes.fan(300), lambda: shapes.boundary_fan(300)], ids=["closed", "boundary"])
+@pytest.mark.parametrize(
+    "make", [lambda: shapes.fan(300), lambda: shapes.boundary_fan(300)], ids=["closed", "boundary"]
+)
 def test_rings_beyond_the_walk_are_ranked_in_order(make: Callable[[], QuadMesh]) -> None:
     """A 300-face fan: the first positions are walked, the rest ranked; either way h_{i+1} = twin(prev(h_i))."""
     topology = make().topology
@@ -412,7 +456,9 @@ def test_two_large_closed_fans_at_one_vertex() -> None:
     n = disk.n_vertices
     vertices = np.concatenate([disk.vertices, disk.vertices[1:] + [0, 0, 1]])
     faces = np.concatenate([disk.faces, np.where(disk.faces == 0, 0, disk.faces + n - 1)])
-    with pytest.raises(NonManifoldError, match=r"the 80 faces around vertex 0 .* form more than one fan"):
+    with pytest.raises(
+        NonManifoldError, match=r"the 80 faces around vertex 0 .* form more than one fan"
+    ):
         QuadMesh.from_arrays(vertices, faces, strict=True)
     mesh = QuadMesh.from_arrays(vertices, faces)
     assert mesh.repairs == ("1 non-manifold vertex (0) split into one copy per fan (+1 vertex)",)

@@ -54,8 +54,12 @@ def seamed_cube(shift: float = 0.0) -> PatchNetwork:
     mesh = shapes.cube()
     control = flat_patches(mesh).control.copy()
     control[0, ..., 0] -= shift  # face 0 is x = −1
-    return network_from_mesh(mesh.topology, PatchSet(control, "bezier"), mesh.vertices,
-                             seam_edges=np.ones(mesh.topology.n_edges, dtype=bool))
+    return network_from_mesh(
+        mesh.topology,
+        PatchSet(control, "bezier"),
+        mesh.vertices,
+        seam_edges=np.ones(mesh.topology.n_edges, dtype=bool),
+    )
 
 
 def mesh_edge(mesh: QuadMesh, a: int, b: int) -> int:
@@ -70,12 +74,18 @@ def fading_crease(seams: list[tuple[int, int]], lift: float = 0.1) -> tuple[Patc
     ends, while the edges y = 1 stay exactly G1. ``seams``: mesh edges (vertex pairs) marked."""
     mesh = shapes.grid(2, 2, size=(2.0, 2.0))
     control = flat_patches(mesh).control.copy()
-    for point in ((4 / 3, 1.0), (4 / 3, 4 / 3), (4 / 3, 2 / 3)):  # edge and first inner row beside x = 1
+    for point in (
+        (4 / 3, 1.0),
+        (4 / 3, 4 / 3),
+        (4 / 3, 2 / 3),
+    ):  # edge and first inner row beside x = 1
         near = (np.abs(control[..., :2] - point) < 1e-12).all(axis=-1)
         control[near, 2] = lift
     flags = np.zeros(mesh.topology.n_edges, dtype=bool)
     flags[[mesh_edge(mesh, a, b) for a, b in seams]] = True
-    network = network_from_mesh(mesh.topology, PatchSet(control, "bezier"), mesh.vertices, seam_edges=flags)
+    network = network_from_mesh(
+        mesh.topology, PatchSet(control, "bezier"), mesh.vertices, seam_edges=flags
+    )
     return network, float(np.degrees(np.arctan(3 * lift)))
 
 
@@ -84,10 +94,15 @@ def bspline_torus(n_major: int = 8, n_minor: int = 6) -> PatchNetwork:
     u = 2 * np.pi * np.arange(n_major) / n_major
     v = 2 * np.pi * np.arange(n_minor) / n_minor
     U, V = np.meshgrid(u, v, indexing="ij")
-    net = np.stack([(1 + 0.4 * np.cos(V)) * np.cos(U), (1 + 0.4 * np.cos(V)) * np.sin(U), 0.4 * np.sin(V)], axis=-1)
+    net = np.stack(
+        [(1 + 0.4 * np.cos(V)) * np.cos(U), (1 + 0.4 * np.cos(V)) * np.sin(U), 0.4 * np.sin(V)],
+        axis=-1,
+    )
     i = (np.arange(n_major)[:, None] + np.arange(4)) % n_major
     j = (np.arange(n_minor)[:, None] + np.arange(4)) % n_minor
-    return network_from_patch_points(PatchSet(net[i[:, None, :, None], j[None, :, None, :]].reshape(-1, 4, 4, 3), "bspline"))
+    return network_from_patch_points(
+        PatchSet(net[i[:, None, :, None], j[None, :, None, :]].reshape(-1, 4, 4, 3), "bspline")
+    )
 
 
 # ----------------------------------------------------------------------------- the network
@@ -101,7 +116,10 @@ def test_network_from_mesh_marks_both_sides_of_each_seam() -> None:
     patch, edge = np.nonzero(one.seam)
     assert len(patch) == 2 and one.n_seams == 1
     assert (one.edge_ids[patch, edge] == mesh_edge(mesh, 0, 1)).all()
-    assert one.neighbor[patch[0], edge[0]] == patch[1] and one.neighbor_edge[patch[0], edge[0]] == edge[1]
+    assert (
+        one.neighbor[patch[0], edge[0]] == patch[1]
+        and one.neighbor_edge[patch[0], edge[0]] == edge[1]
+    )
     plain = network_from_mesh(mesh.topology, flat_patches(mesh), mesh.vertices)
     assert plain.seam.shape == (6, 4) and not plain.seam.any() and plain.n_seams == 0
 
@@ -111,7 +129,12 @@ def test_seams_are_kept_by_copies_and_ignored_on_boundary_edges() -> None:
     assert dataclasses.replace(network, vertex_normals=None).seam.all()
     assert PatchNetwork(**network.__dict__).seam.all()
     grid = shapes.grid(2, 1)
-    marked = network_from_mesh(grid.topology, flat_patches(grid), grid.vertices, seam_edges=np.ones(grid.n_edges, dtype=bool))
+    marked = network_from_mesh(
+        grid.topology,
+        flat_patches(grid),
+        grid.vertices,
+        seam_edges=np.ones(grid.n_edges, dtype=bool),
+    )
     assert marked.n_seams == 1  # the one interior edge; boundary edges are sharp anyway
 
 
@@ -120,7 +143,10 @@ def test_seam_flags_are_validated_and_errors_name_the_edge() -> None:
     one_sided = network.seam.copy()
     one_sided[0, 0] = False
     other, other_edge = network.neighbor[0, 0], network.neighbor_edge[0, 0]
-    with pytest.raises(InputError, match=rf"patch {other} edge {other_edge} is a seam but its other side, patch 0 edge 0, is not"):
+    with pytest.raises(
+        InputError,
+        match=rf"patch {other} edge {other_edge} is a seam but its other side, patch 0 edge 0, is not",
+    ):
         dataclasses.replace(network, seam=one_sided)
     with pytest.raises(InputError, match=r"seam: expected shape \(6, 4\)"):
         dataclasses.replace(network, seam=np.ones((6, 3), dtype=bool))
@@ -132,7 +158,9 @@ def test_seam_flags_are_validated_and_errors_name_the_edge() -> None:
         dataclasses.replace(lone, seam=np.ones((1, 4), dtype=bool))
     mesh = shapes.cube()
     with pytest.raises(InputError, match=r"seam_edges: expected shape \(12,\)"):
-        network_from_mesh(mesh.topology, flat_patches(mesh), mesh.vertices, seam_edges=np.ones(11, dtype=bool))
+        network_from_mesh(
+            mesh.topology, flat_patches(mesh), mesh.vertices, seam_edges=np.ones(11, dtype=bool)
+        )
 
 
 def test_split4_marks_both_halves_of_each_seam_mesh_edge() -> None:
@@ -145,12 +173,18 @@ def test_split4_marks_both_halves_of_each_seam_mesh_edge() -> None:
     assert network.n_patches == 24 and network.n_seams == 4
     patch, edge = np.nonzero(network.seam)
     assert set((network.edge_ids[patch, edge] // 2).tolist()) == {2, 7}
-    assert (network.edge_ids[patch, edge] < 2 * mesh.n_edges).all()  # never the split's inner seams M–C
+    assert (
+        network.edge_ids[patch, edge] < 2 * mesh.n_edges
+    ).all()  # never the split's inner seams M–C
     plain = split4_network_from_targets(mesh, targets, frame, {})
     assert not plain.seam.any()
     np.testing.assert_array_equal(network.patches.control, plain.patches.control)
     report = check(network)  # the targets knew nothing of the seams: still G1 across them
-    assert report.seam_edges == 4 and report.seam_angle_max_deg is not None and report.seam_angle_max_deg < EXACT
+    assert (
+        report.seam_edges == 4
+        and report.seam_angle_max_deg is not None
+        and report.seam_angle_max_deg < EXACT
+    )
     assert report.passes(EXACT)
     with pytest.raises(InputError, match=r"seam_edges: expected shape \(12,\), one per mesh edge"):
         split4_network_from_targets(mesh, targets, frame, {}, seam_edges=np.ones(24, dtype=bool))
@@ -171,8 +205,14 @@ def test_the_seamed_cube_passes_with_12_seams_at_90_degrees() -> None:
     assert report.edge_seam.all() and np.allclose(report.edge_angle_deg, 90.0)
 
     plain = check(dataclasses.replace(seamed_cube(), seam=None))
-    assert plain.seam_edges == 0 and plain.seam_angle_min_deg is None and plain.seam_angle_max_deg is None
-    assert plain.max_edge_angle_deg == pytest.approx(90.0) and plain.max_corner_angle_deg == pytest.approx(90.0)
+    assert (
+        plain.seam_edges == 0
+        and plain.seam_angle_min_deg is None
+        and plain.seam_angle_max_deg is None
+    )
+    assert plain.max_edge_angle_deg == pytest.approx(
+        90.0
+    ) and plain.max_corner_angle_deg == pytest.approx(90.0)
     assert not plain.passes(EXACT)
 
 
@@ -184,10 +224,17 @@ def test_seams_in_the_text_and_json_report() -> None:
     assert float(rows["seam max G0 gap (of bbox diag)"]) <= SEAM_ROUNDING
     data = json.loads(json.dumps(report.to_dict()))
     assert data["seams"]["count"] == 12 and data["seams"]["g0_max"] <= SEAM_ROUNDING
-    assert data["seams"]["angle_min_deg"] == pytest.approx(90.0) and data["seams"]["angle_max_deg"] == pytest.approx(90.0)
+    assert data["seams"]["angle_min_deg"] == pytest.approx(90.0) and data["seams"][
+        "angle_max_deg"
+    ] == pytest.approx(90.0)
     assert data["worst_edge"] is None
     plain = check(bspline_torus()).to_dict()
-    assert plain["seams"] == {"count": 0, "g0_max": 0.0, "angle_min_deg": None, "angle_max_deg": None}
+    assert plain["seams"] == {
+        "count": 0,
+        "g0_max": 0.0,
+        "angle_min_deg": None,
+        "angle_max_deg": None,
+    }
     assert "seams (sharp on purpose)" not in dict(check(bspline_torus()).rows())
 
 
@@ -208,9 +255,17 @@ def test_seams_on_a_g1_network_measure_angle_zero() -> None:
     seamed = torus.with_seams(flags)
     report, plain = check(seamed), check(torus)
     assert report.seam_edges == flags.sum() == seamed.n_seams
-    assert report.seam_angle_max_deg is not None and report.seam_angle_max_deg < EXACT and report.seam_g0_max < SEAM_G0_RTOL
-    assert report.passes(EXACT) and report.max_corner_angle_deg <= plain.max_corner_angle_deg + EXACT
-    np.testing.assert_array_equal(report.edge_angle_deg, plain.edge_angle_deg)  # measured alike, reported apart
+    assert (
+        report.seam_angle_max_deg is not None
+        and report.seam_angle_max_deg < EXACT
+        and report.seam_g0_max < SEAM_G0_RTOL
+    )
+    assert (
+        report.passes(EXACT) and report.max_corner_angle_deg <= plain.max_corner_angle_deg + EXACT
+    )
+    np.testing.assert_array_equal(
+        report.edge_angle_deg, plain.edge_angle_deg
+    )  # measured alike, reported apart
 
 
 def test_a_dart_end_is_one_sector_and_stays_g1() -> None:
@@ -231,18 +286,26 @@ def test_corners_compare_normals_only_within_a_sector() -> None:
     through, angle = fading_crease([(4, 7), (1, 4)])  # a seam all across: two sectors at the centre
     report = check(through)
     assert report.seam_edges == 2
-    assert report.max_edge_angle_deg < EXACT and report.max_corner_angle_deg < EXACT  # quads 1 and 3 agree, 0 and 2 too
+    assert (
+        report.max_edge_angle_deg < EXACT and report.max_corner_angle_deg < EXACT
+    )  # quads 1 and 3 agree, 0 and 2 too
     assert report.seam_angle_max_deg == pytest.approx(angle, rel=1e-12)
-    assert report.seam_angle_min_deg is not None and report.seam_angle_min_deg < EXACT  # the far ends are flat
+    assert (
+        report.seam_angle_min_deg is not None and report.seam_angle_min_deg < EXACT
+    )  # the far ends are flat
     assert report.passes(EXACT)
     sectors = through.corner_sectors()
     assert len(np.unique(sectors[through.corner_ids == 4])) == 2
 
-    dart, _ = fading_crease([(4, 7)])  # the seam ends at the centre: one sector there, which is not G1
+    dart, _ = fading_crease(
+        [(4, 7)]
+    )  # the seam ends at the centre: one sector there, which is not G1
     report = check(dart)
     assert len(np.unique(dart.corner_sectors()[dart.corner_ids == 4])) == 1
     assert report.max_corner_angle_deg == pytest.approx(angle, rel=1e-12)
-    assert report.max_edge_angle_deg == pytest.approx(angle, rel=1e-12)  # edge 1–4 creases, and is no seam
+    assert report.max_edge_angle_deg == pytest.approx(
+        angle, rel=1e-12
+    )  # edge 1–4 creases, and is no seam
     assert not report.passes(EXACT)
 
 
@@ -258,8 +321,14 @@ def test_an_intended_sharp_fin_is_not_a_fold() -> None:
     assert seamed.n_seams == 1
     report = check(seamed)
     assert report.folds == 0 and report.fold_locations == ()
-    assert report.seam_angle_min_deg == pytest.approx(150.0) and report.seam_angle_max_deg == pytest.approx(150.0)
-    assert report.max_edge_angle_deg == 0.0 and report.max_corner_angle_deg == 0.0 and report.passes(EXACT)
+    assert report.seam_angle_min_deg == pytest.approx(
+        150.0
+    ) and report.seam_angle_max_deg == pytest.approx(150.0)
+    assert (
+        report.max_edge_angle_deg == 0.0
+        and report.max_corner_angle_deg == 0.0
+        and report.passes(EXACT)
+    )
 
 
 # ----------------------------------------------------------------------------- the file
@@ -274,7 +343,9 @@ def test_network_file_round_trip_keeps_the_seams(tmp_path: Path) -> None:
     assert check(loaded).to_dict() == check(network).to_dict()
 
 
-def _rewrite(source: Path, target: Path, version: int, drop: tuple[str, ...] = (), **arrays: np.ndarray) -> Path:
+def _rewrite(
+    source: Path, target: Path, version: int, drop: tuple[str, ...] = (), **arrays: np.ndarray
+) -> Path:
     with np.load(source) as data:
         contents = {name: data[name] for name in data.files if name not in drop}
     header = json.loads(str(contents["header"]))
@@ -307,7 +378,10 @@ def test_check_command_reports_seams(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert main(["check", str(tmp_path / "cube.npz"), "--max-angle", "1e-9"]) == 0
     out = capsys.readouterr().out
     assert "seams (sharp on purpose)" in out and "90° / 90°" in out
-    assert "passed: G1 angles within 1e-09°, no folds; 12 seams (sharp on purpose) closed within 1e-12" in out
+    assert (
+        "passed: G1 angles within 1e-09°, no folds; 12 seams (sharp on purpose) closed within 1e-12"
+        in out
+    )
     assert main(["check", str(tmp_path / "cube.npz"), "--json"]) == 0
     seams = json.loads(capsys.readouterr().out)["seams"]
     assert seams["count"] == 12 and seams["angle_min_deg"] == pytest.approx(90.0)
@@ -330,7 +404,9 @@ def test_deviation_pictures_draw_seams_in_their_own_colour_with_a_legend(tmp_pat
     seamed, plain = seamed_cube(), dataclasses.replace(seamed_cube(), seam=None)
     render(tmp_path / "seams.png", seamed, mode="deviation", size=(400, 360), resolution=9)
     render(tmp_path / "plain.png", plain, mode="deviation", size=(400, 360), resolution=9)
-    with_seams, without = (matplotlib.image.imread(tmp_path / name) for name in ("seams.png", "plain.png"))
+    with_seams, without = (
+        matplotlib.image.imread(tmp_path / name) for name in ("seams.png", "plain.png")
+    )
     assert with_seams.shape[:2] == (360, 400)
     assert _seam_pixels(with_seams).sum() > 300 and _seam_pixels(without).sum() == 0
     # the legend's swatch: the seam colour itself, unlit, in the band below the picture
@@ -341,8 +417,10 @@ def test_deviation_pictures_draw_seams_in_their_own_colour_with_a_legend(tmp_pat
     for mode in ("shaded", "zebra"):  # seams change nothing there
         render(tmp_path / f"s_{mode}.png", seamed, mode=mode, size=(200, 200), resolution=9)
         render(tmp_path / f"p_{mode}.png", plain, mode=mode, size=(200, 200), resolution=9)
-        np.testing.assert_array_equal(matplotlib.image.imread(tmp_path / f"s_{mode}.png"),
-                                      matplotlib.image.imread(tmp_path / f"p_{mode}.png"))
+        np.testing.assert_array_equal(
+            matplotlib.image.imread(tmp_path / f"s_{mode}.png"),
+            matplotlib.image.imread(tmp_path / f"p_{mode}.png"),
+        )
 
 
 # ----------------------------------------------------------------------------- CAD
@@ -351,7 +429,9 @@ def _occ_edges(shape: object) -> list[tuple[np.ndarray, float]]:
     normals of its two faces there (OCC: BRepAdaptor_Curve2d on each face, BRepLProp_SLProps)."""
     from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Curve2d, BRepAdaptor_Surface
     from OCP.BRepLProp import BRepLProp_SLProps
-    from OCP.collections import IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as EdgeFaces
+    from OCP.collections import (
+        IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as EdgeFaces,
+    )
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_REVERSED
     from OCP.TopExp import TopExp
     from OCP.TopoDS import TopoDS
@@ -367,12 +447,20 @@ def _occ_edges(shape: object) -> list[tuple[np.ndarray, float]]:
         for shape_face in edges.FindFromIndex(index):
             face = TopoDS.Face(shape_face)
             uv = BRepAdaptor_Curve2d(edge, face).Value(middle)
-            normal = np.array(BRepLProp_SLProps(BRepAdaptor_Surface(face), uv.X(), uv.Y(), 1, 1e-9).Normal().Coord())
+            normal = np.array(
+                BRepLProp_SLProps(BRepAdaptor_Surface(face), uv.X(), uv.Y(), 1, 1e-9)
+                .Normal()
+                .Coord()
+            )
             normals.append(-normal if face.Orientation() == TopAbs_REVERSED else normal)
         assert len(normals) == 2, "every edge of a closed solid has two faces"
         a, b = normals
-        measured.append((np.array(curve.Value(middle).Coord()),
-                         float(np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b)), a @ b)))))
+        measured.append(
+            (
+                np.array(curve.Value(middle).Coord()),
+                float(np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b)), a @ b))),
+            )
+        )
     return measured
 
 
@@ -391,7 +479,9 @@ def test_cad_export_keeps_seams_as_sharp_edges_of_one_solid(name: str, tmp_path:
     assert result.solid and result.valid and result.free_edges == 0 and result.exact
     assert result.volume == pytest.approx(8.0, rel=1e-12)
     assert result.seam_edges == 12 and result.max_g1_angle_deg == 0.0
-    assert result.seam_angle_min_deg == pytest.approx(90.0, abs=1e-9) and result.seam_angle_max_deg == pytest.approx(90.0, abs=1e-9)
+    assert result.seam_angle_min_deg == pytest.approx(
+        90.0, abs=1e-9
+    ) and result.seam_angle_max_deg == pytest.approx(90.0, abs=1e-9)
 
     model = read_cad_faces(tmp_path / name)
     assert BRepCheck_Analyzer(model.shape).IsValid() and len(model.faces) == 6
@@ -403,4 +493,6 @@ def test_cad_export_keeps_seams_as_sharp_edges_of_one_solid(name: str, tmp_path:
     assert len(edges) == 12
     for middle, angle in edges:
         assert angle == pytest.approx(90.0, abs=1e-9)
-        assert np.sort(np.abs(middle)) == pytest.approx([0.0, 1.0, 1.0], abs=1e-12)  # the middle of a cube edge
+        assert np.sort(np.abs(middle)) == pytest.approx(
+            [0.0, 1.0, 1.0], abs=1e-12
+        )  # the middle of a cube edge

@@ -16,7 +16,15 @@ from exactness import MAX_ANGLE_DEG, SHARED_MESHES, perturbed
 
 from g1patch import shapes
 from g1patch.build import build_network
-from g1patch.compare import Deviation, compare_fairness, distance_to_ellipsoid, distance_to_sphere, distance_to_torus, load_reference, reference_path
+from g1patch.compare import (
+    Deviation,
+    compare_fairness,
+    distance_to_ellipsoid,
+    distance_to_sphere,
+    distance_to_torus,
+    load_reference,
+    reference_path,
+)
 from g1patch.continuity import check
 from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh
@@ -43,7 +51,11 @@ def test_the_cube_comes_out_round() -> None:
 FAMILIES: dict[str, tuple[Callable[[int], QuadMesh], tuple[int, int], Callable[..., Deviation]]] = {
     "sphere": (shapes.sphere_quads, (3, 4), distance_to_sphere),  # 384, 1536 quads
     "ellipsoid": (shapes.ellipsoid_quads, (3, 4), distance_to_ellipsoid),
-    "torus": (lambda level: shapes.torus_quads(12 * 2**level, 6 * 2**level), (2, 3), distance_to_torus),  # 48×24, 96×48
+    "torus": (
+        lambda level: shapes.torus_quads(12 * 2**level, 6 * 2**level),
+        (2, 3),
+        distance_to_torus,
+    ),  # 48×24, 96×48
     "icosa_ellipsoid": (shapes.icosa_ellipsoid, (1, 2), distance_to_ellipsoid),  # valences 3–5
 }
 
@@ -72,7 +84,10 @@ def test_smooth_mesh_lines_run_straight_through_their_vertices() -> None:
     assert np.abs(np.cross(unit[:, :2], unit[:, 2:])).max() <= 1e-12
     assert (np.einsum("vkd,vkd->vk", unit[:, :2], unit[:, 2:]) < 0.0).all()
     network = build_network(mesh)
-    assert surface_deviation(network, split4_of_gregory(network))[1] <= 1e-4 * network.bounding_box_diagonal()
+    assert (
+        surface_deviation(network, split4_of_gregory(network))[1]
+        <= 1e-4 * network.bounding_box_diagonal()
+    )
 
 
 def test_kinked_mesh_lines_keep_their_chords() -> None:
@@ -86,10 +101,14 @@ def test_kinked_mesh_lines_keep_their_chords() -> None:
     raw = interpolate._projected_tangents(mesh, normals)[0]
     turned = interpolate._along_smooth_lines(mesh, normals, raw)
     size = np.sort(np.abs(mesh.vertices), axis=1)
-    on_cube_edges = np.isclose(size[:, 1], size[:, 2], rtol=1e-12)  # the two largest coordinates agree
+    on_cube_edges = np.isclose(
+        size[:, 1], size[:, 2], rtol=1e-12
+    )  # the two largest coordinates agree
     slots = np.isin(interpolate.slot_vertices(mesh.topology), np.flatnonzero(on_cube_edges))
     change = np.linalg.norm(turned - raw, axis=1) / np.linalg.norm(raw, axis=1)
-    assert on_cube_edges.sum() > 24 and change[slots].max() <= 4 * np.finfo(float).eps  # the lines along the
+    assert (
+        on_cube_edges.sum() > 24 and change[slots].max() <= 4 * np.finfo(float).eps
+    )  # the lines along the
     # edges are great circles: straight through, they turn by rounding only (measured ≤ 2.1e-16)
 
 
@@ -97,9 +116,17 @@ CAGES: dict[str, Callable[[], QuadMesh]] = {
     "box_cage": shapes.box_cage,
     "box_cage_jittered": lambda: shapes.box_cage(jitter_seed=3),
     "thin_slab": shapes.thin_slab,
-    **{f"noisy_sphere_{level}_{seed}": (lambda level=level, seed=seed: shapes.noisy_sphere(level, 0.08, seed))
-       for level in (1, 2) for seed in range(3)},
-    **{f"flat_fan_{n}": (lambda n=n: shapes.flat_fan(n)) for n in (3, 4, 5, 6, 8, 12, 16, 32, 64, 128, 360)},
+    **{
+        f"noisy_sphere_{level}_{seed}": (
+            lambda level=level, seed=seed: shapes.noisy_sphere(level, 0.08, seed)
+        )
+        for level in (1, 2)
+        for seed in range(3)
+    },
+    **{
+        f"flat_fan_{n}": (lambda n=n: shapes.flat_fan(n))
+        for n in (3, 4, 5, 6, 8, 12, 16, 32, 64, 128, 360)
+    },
 }
 
 
@@ -144,7 +171,12 @@ def test_translation_and_scale_do_not_change_the_angles(method: str) -> None:
     untransformed mesh's."""
     mesh = perturbed(shapes.sphere_quads(2), 0.05, 11)
     base = check(build_network(mesh, method))  # type: ignore[arg-type]
-    for transform in (lambda x: x + 1e6, lambda x: 1e6 * x, lambda x: 1e-6 * x, lambda x: 1e-6 * x - 3e5):
+    for transform in (
+        lambda x: x + 1e6,
+        lambda x: 1e6 * x,
+        lambda x: 1e-6 * x,
+        lambda x: 1e-6 * x - 3e5,
+    ):
         report = check(build_network(mesh.with_vertices(transform(mesh.vertices)), method))  # type: ignore[arg-type]
         for name in ("max_edge_angle_deg", "max_corner_angle_deg"):
             value = getattr(report, name)
@@ -215,7 +247,9 @@ def test_fold_guard_never_repeats_a_retreat(monkeypatch: pytest.MonkeyPatch) -> 
         return original(targets, vertices, weight)
 
     monkeypatch.setattr(build_module, "retreat", recorded)
-    monkeypatch.setattr(build_module, "folded_patches", lambda patches, samples: np.ones(len(patches), dtype=bool))
+    monkeypatch.setattr(
+        build_module, "folded_patches", lambda patches, samples: np.ones(len(patches), dtype=bool)
+    )
     build_network(perturbed(shapes.torus(3, 5), 0.05, 0))
     assert [weight for weight, _ in retreats] == [0.5, 1.0]
     assert all(a != b for a, b in zip(retreats, retreats[1:]))
@@ -230,12 +264,18 @@ def test_fold_guard_keeps_its_best_attempt(monkeypatch: pytest.MonkeyPatch) -> N
     from g1patch.targets.interpolate import interpolate_targets
 
     mesh = perturbed(shapes.torus(3, 5), 0.05, 0)
-    monkeypatch.setattr(build_module, "retreat", lambda targets, vertices, weight: targets.with_changes(tangents=3.0 * targets.tangents))
+    monkeypatch.setattr(
+        build_module,
+        "retreat",
+        lambda targets, vertices, weight: targets.with_changes(tangents=3.0 * targets.tangents),
+    )
     network = build_network(mesh)
     frame = Frame.of_points(mesh.vertices)
     local = QuadMesh(frame.to_local(mesh.vertices), mesh.topology, mesh.tags)
     assert network.provenance["fallback_vertices"] == "0"
-    np.testing.assert_array_equal(network.patches.points, assemble_gregory(interpolate_targets(local)).points)
+    np.testing.assert_array_equal(
+        network.patches.points, assemble_gregory(interpolate_targets(local)).points
+    )
 
 
 def test_a_large_polygon_builds_unfolded_without_the_guard() -> None:
@@ -246,7 +286,10 @@ def test_a_large_polygon_builds_unfolded_without_the_guard() -> None:
     the model (all three folded it before)."""
     n = 20_000
     theta = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
-    mesh = QuadMesh.from_arrays(np.stack([np.cos(theta), np.sin(theta), 0.1 * np.sin(3.0 * theta)], axis=1), [list(range(n))])
+    mesh = QuadMesh.from_arrays(
+        np.stack([np.cos(theta), np.sin(theta), 0.1 * np.sin(3.0 * theta)], axis=1),
+        [list(range(n))],
+    )
     network = build_network(mesh)
     assert network.provenance["fallback_vertices"] == str(n)  # the narrowed corners
     report = check(network)

@@ -16,13 +16,17 @@ AXES = np.array([1.0, 0.7, 0.5])
 def signed_volume(mesh: QuadMesh) -> float:
     """Σ det(p0, p1, p2) + det(p0, p2, p3) over the quads, / 6: positive when faces point outward."""
     p = mesh.vertices[mesh.faces]
-    volume = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])) + np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 2], p[:, 3]))
+    volume = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])) + np.einsum(
+        "ij,ij->i", p[:, 0], np.cross(p[:, 2], p[:, 3])
+    )
     return float(volume.sum() / 6.0)
 
 
 def valences(mesh: QuadMesh, boundary: bool = False) -> dict[int, int]:
     topology = mesh.topology
-    values, counts = np.unique(topology.valence[topology.is_boundary_vertex == boundary], return_counts=True)
+    values, counts = np.unique(
+        topology.valence[topology.is_boundary_vertex == boundary], return_counts=True
+    )
     return dict(zip(values.tolist(), counts.tolist(), strict=True))
 
 
@@ -34,7 +38,11 @@ def edge_lengths(mesh: QuadMesh) -> np.ndarray:
 @pytest.mark.parametrize("level", [0, 1, 2, 3])
 def test_sphere_quads(level: int) -> None:
     mesh = shapes.sphere_quads(level)
-    assert mesh.n_faces == 6 * 4**level and mesh.topology.is_closed and mesh.topology.euler_characteristic == 2
+    assert (
+        mesh.n_faces == 6 * 4**level
+        and mesh.topology.is_closed
+        and mesh.topology.euler_characteristic == 2
+    )
     np.testing.assert_allclose(np.linalg.norm(mesh.vertices, axis=1), 1.0, rtol=0, atol=1e-15)
     assert valences(mesh) == ({3: 8} if level == 0 else {3: 8, 4: mesh.n_vertices - 8})
     assert signed_volume(mesh) > 0
@@ -43,7 +51,9 @@ def test_sphere_quads(level: int) -> None:
 def test_sphere_quads_projects_after_each_split() -> None:
     """Level 1 equals cube_sphere(1) (one split, one projection); from level 2 the edge midpoints
     are taken on the sphere, so the quads are more even than cube_sphere's."""
-    np.testing.assert_allclose(shapes.sphere_quads(1).vertices, shapes.cube_sphere(1).vertices, atol=1e-15)
+    np.testing.assert_allclose(
+        shapes.sphere_quads(1).vertices, shapes.cube_sphere(1).vertices, atol=1e-15
+    )
     fine, once = shapes.sphere_quads(3), shapes.cube_sphere(3)
     assert not np.allclose(fine.vertices, once.vertices)
     spread = [lengths.max() / lengths.min() for lengths in (edge_lengths(fine), edge_lengths(once))]
@@ -70,7 +80,11 @@ def test_torus_quads() -> None:
 @pytest.mark.parametrize("level", [0, 1, 2])
 def test_icosa_ellipsoid(level: int) -> None:
     mesh = shapes.icosa_ellipsoid(level, AXES)
-    assert mesh.n_faces == 60 * 4**level and mesh.topology.is_closed and mesh.topology.euler_characteristic == 2
+    assert (
+        mesh.n_faces == 60 * 4**level
+        and mesh.topology.is_closed
+        and mesh.topology.euler_characteristic == 2
+    )
     found = valences(mesh)
     assert (found[3], found[5]) == (20, 12) and set(found) == {3, 4, 5}
     np.testing.assert_allclose(((mesh.vertices / AXES) ** 2).sum(axis=1), 1.0, atol=1e-14)
@@ -108,7 +122,9 @@ def test_noisy_sphere() -> None:
     noisy = shapes.noisy_sphere(2, noise=0.08, seed=5)
     moved = np.abs(noisy.vertices - plain.vertices)
     assert 0 < moved.max() <= 0.08 * edge_lengths(plain).min()
-    np.testing.assert_array_equal(noisy.vertices, shapes.noisy_sphere(2, noise=0.08, seed=5).vertices)
+    np.testing.assert_array_equal(
+        noisy.vertices, shapes.noisy_sphere(2, noise=0.08, seed=5).vertices
+    )
     assert noisy.topology.is_closed and signed_volume(noisy) > 0
     with pytest.raises(InputError, match="noise"):
         shapes.noisy_sphere(1, noise=0.7)
@@ -124,7 +140,9 @@ def test_flat_fan(valence: int) -> None:
     p = mesh.vertices[mesh.faces][:, :, :2]
     q = np.roll(p, -1, axis=1)
     a, b = q - p, np.roll(q, -1, axis=1) - q
-    turn = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]  # z of the turn at every corner: all left turns = convex
+    turn = (
+        a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    )  # z of the turn at every corner: all left turns = convex
     assert (turn > 0).all()
 
 
@@ -135,10 +153,16 @@ def near_points(seed: int, count: int = 2000) -> np.ndarray:
     """Random directions scaled to radius 0.6 … 1.6 (inside and outside the unit-sized surfaces)."""
     rng = np.random.default_rng(seed)
     directions = rng.normal(size=(count, 3))
-    return directions / np.linalg.norm(directions, axis=1, keepdims=True) * rng.uniform(0.6, 1.6, (count, 1))
+    return (
+        directions
+        / np.linalg.norm(directions, axis=1, keepdims=True)
+        * rng.uniform(0.6, 1.6, (count, 1))
+    )
 
 
-def assert_closest(points: np.ndarray, closest: np.ndarray, normals: np.ndarray, gradient: np.ndarray) -> None:
+def assert_closest(
+    points: np.ndarray, closest: np.ndarray, normals: np.ndarray, gradient: np.ndarray
+) -> None:
     """Normals unit, along the surface gradient at the closest point (outward), and p − q along the normal."""
     np.testing.assert_allclose(np.linalg.norm(normals, axis=-1), 1.0, atol=1e-15)
     unit_gradient = gradient / np.linalg.norm(gradient, axis=-1, keepdims=True)
@@ -187,6 +211,11 @@ def test_torus_project() -> None:
     rho = np.hypot(closest[:, 0], closest[:, 1])
     np.testing.assert_allclose(np.hypot(rho - 2.0, closest[:, 2]), 0.7)
     # gradient of (rho − R)² + z² − r²
-    gradient = np.stack([(rho - 2.0) * closest[:, 0] / rho, (rho - 2.0) * closest[:, 1] / rho, closest[:, 2]], axis=1)
+    gradient = np.stack(
+        [(rho - 2.0) * closest[:, 0] / rho, (rho - 2.0) * closest[:, 1] / rho, closest[:, 2]],
+        axis=1,
+    )
     assert_closest(points, closest, normals, gradient)
-    np.testing.assert_allclose(np.linalg.norm(points - closest, axis=1), np.abs(radius - 1.0) * 0.7, atol=1e-14)
+    np.testing.assert_allclose(
+        np.linalg.norm(points - closest, axis=1), np.abs(radius - 1.0) * 0.7, atol=1e-14
+    )

@@ -35,10 +35,16 @@ def test_cube() -> None:
     assert counts(mesh) == (8, 12, 6, 0)
     np.testing.assert_array_equal(np.abs(mesh.vertices), 1.0)
     assert signed_volume(mesh) == pytest.approx(8.0)
-    normals = np.cross(*(mesh.vertices[mesh.faces[:, 2]] - mesh.vertices[mesh.faces[:, 0]],
-                         mesh.vertices[mesh.faces[:, 3]] - mesh.vertices[mesh.faces[:, 1]]))
+    normals = np.cross(
+        *(
+            mesh.vertices[mesh.faces[:, 2]] - mesh.vertices[mesh.faces[:, 0]],
+            mesh.vertices[mesh.faces[:, 3]] - mesh.vertices[mesh.faces[:, 1]],
+        )
+    )
     centres = mesh.vertices[mesh.faces].mean(axis=1)
-    np.testing.assert_allclose(normals / np.linalg.norm(normals, axis=1, keepdims=True), centres)  # outward
+    np.testing.assert_allclose(
+        normals / np.linalg.norm(normals, axis=1, keepdims=True), centres
+    )  # outward
 
 
 @pytest.mark.parametrize("level", [0, 1, 2, 3])
@@ -53,7 +59,9 @@ def test_cube_sphere(level: int) -> None:
 
 
 def test_cube_sphere_level_0_is_the_scaled_cube() -> None:
-    np.testing.assert_allclose(shapes.cube_sphere(0).vertices, shapes.cube().vertices / np.sqrt(3.0))
+    np.testing.assert_allclose(
+        shapes.cube_sphere(0).vertices, shapes.cube().vertices / np.sqrt(3.0)
+    )
     assert [shapes.cube_sphere(level).n_faces for level in (1, 2, 3)] == [24, 96, 384]
 
 
@@ -134,8 +142,10 @@ def test_subdivide_is_linear() -> None:
     t = mesh.topology
     np.testing.assert_array_equal(refined.vertices[: t.n_vertices], mesh.vertices)
     midpoints = mesh.vertices[t.edges].mean(axis=1)
-    np.testing.assert_allclose(refined.vertices[t.n_vertices:t.n_vertices + t.n_edges], midpoints)
-    np.testing.assert_allclose(refined.vertices[t.n_vertices + t.n_edges:], mesh.vertices[mesh.faces].mean(axis=1))
+    np.testing.assert_allclose(refined.vertices[t.n_vertices : t.n_vertices + t.n_edges], midpoints)
+    np.testing.assert_allclose(
+        refined.vertices[t.n_vertices + t.n_edges :], mesh.vertices[mesh.faces].mean(axis=1)
+    )
     assert signed_areas_xy(refined).sum() == pytest.approx(signed_areas_xy(mesh).sum())
     assert (signed_areas_xy(refined) > 0).all()
 

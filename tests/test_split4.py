@@ -34,10 +34,7 @@ from hypothesis import strategies as st
 from scipy.interpolate import NdBSpline
 
 from g1patch import shapes
-from g1patch.targets.local import fan_normals
-from g1patch.build import build_gregory_network
-from g1patch.targets.interpolate import tangent_stars
-from g1patch.build import build_split4_network
+from g1patch.build import build_gregory_network, build_split4_network
 from g1patch.construct.split4 import BSPLINE_KNOTS, _chain_shears, bspline_nets, macro_nets
 from g1patch.continuity import ContinuityReport, check
 from g1patch.errors import G1PatchError, InputError
@@ -45,6 +42,8 @@ from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh
 from g1patch.network import check_consistent
 from g1patch.patches import PatchSet
+from g1patch.targets.interpolate import tangent_stars
+from g1patch.targets.local import fan_normals
 
 
 def collapsed(base: QuadMesh, picks: Sequence[int]) -> QuadMesh | None:
@@ -81,7 +80,9 @@ def build_and_check(mesh: QuadMesh, shape: str = "interpolate") -> ContinuityRep
     assert network.n_patches == 4 * topology.n_faces
     interior = int((~topology.is_boundary_edge).sum())
     report = check(network)
-    assert report.shared_edges == 2 * interior + 4 * topology.n_faces  # two halves per mesh edge + 4 seams per quad
+    assert (
+        report.shared_edges == 2 * interior + 4 * topology.n_faces
+    )  # two halves per mesh edge + 4 seams per quad
     return report
 
 
@@ -94,14 +95,25 @@ def test_shared_meshes_are_exactly_g1(shared_data: Path, name: str, shape: str) 
     assert network.provenance["method"] == "split4" and network.provenance["shape"] == shape
     assert isinstance(network.patches, PatchSet) and network.patches.form == "bezier"
     corners = network.patches.world_control()[:, [0, 3, 3, 0], [0, 0, 3, 3]].reshape(-1, 4, 4, 3)
-    np.testing.assert_allclose(corners[:, np.arange(4), np.arange(4)], mesh.vertices[mesh.faces], rtol=0,
-                               atol=4 * np.finfo(float).eps * np.abs(mesh.vertices).max())  # stored in the working frame
+    np.testing.assert_allclose(
+        corners[:, np.arange(4), np.arange(4)],
+        mesh.vertices[mesh.faces],
+        rtol=0,
+        atol=4 * np.finfo(float).eps * np.abs(mesh.vertices).max(),
+    )  # stored in the working frame
     assert_exact_g1(build_and_check(mesh, shape))
 
 
 @settings(deadline=None, max_examples=20)
-@given(st.sampled_from(SHARED_MESHES), st.floats(0.0, NOISE), st.integers(0, 2**32 - 1), st.sampled_from(INTERPOLATING))
-def test_perturbed_shared_meshes_are_exactly_g1(name: str, amplitude: float, seed: int, shape: str) -> None:
+@given(
+    st.sampled_from(SHARED_MESHES),
+    st.floats(0.0, NOISE),
+    st.integers(0, 2**32 - 1),
+    st.sampled_from(INTERPOLATING),
+)
+def test_perturbed_shared_meshes_are_exactly_g1(
+    name: str, amplitude: float, seed: int, shape: str
+) -> None:
     from conftest import SHARED_DATA
 
     if not SHARED_DATA.is_dir():
@@ -124,7 +136,9 @@ def test_generated_meshes_are_exactly_g1(drawn: tuple[QuadMesh, str]) -> None:
 def test_every_interior_valence(valence: int) -> None:
     """A lifted, noisy fan: interior valence n next to valence-4 and -3 vertices and the boundary."""
     mesh = shapes.fan(valence, 3)
-    lifted = mesh.with_vertices(mesh.vertices + np.c_[0 * mesh.vertices[:, :2], 0.1 * mesh.vertices[:, 0] ** 2])
+    lifted = mesh.with_vertices(
+        mesh.vertices + np.c_[0 * mesh.vertices[:, :2], 0.1 * mesh.vertices[:, 0] ** 2]
+    )
     assert_exact_g1(build_and_check(perturbed(lifted, NOISE, valence)))
 
 
@@ -147,7 +161,9 @@ COLLAPSE_BASES: dict[str, Callable[[int], QuadMesh]] = {
     st.floats(0.0, 0.03),
     st.integers(0, 2**32 - 1),
 )
-def test_collapsed_meshes_are_exactly_g1(base: str, n: int, picks: list[int], amplitude: float, seed: int) -> None:
+def test_collapsed_meshes_are_exactly_g1(
+    base: str, n: int, picks: list[int], amplitude: float, seed: int
+) -> None:
     """Diagonal collapses: valence 3, 5, 6, 8, … with adjacent even-valence (≥ 6) vertices, open and closed."""
     mesh = COLLAPSE_BASES[base](n)
     mesh = collapsed(mesh, sorted({p % mesh.topology.n_faces for p in picks}))
@@ -162,13 +178,17 @@ def adjacent_even_valence(mesh: QuadMesh) -> bool:
     return bool((even[t.edges[:, 0]] & even[t.edges[:, 1]]).any())
 
 
-@pytest.mark.parametrize(("picks", "valences"), [([9, 19], {6}), ([18, 28, 34, 43], {6, 8}), ([12, 29, 45, 46], {5, 6})])
+@pytest.mark.parametrize(
+    ("picks", "valences"), [([9, 19], {6}), ([18, 28, 34, 43], {6, 8}), ([12, 29, 45, 46], {5, 6})]
+)
 def test_adjacent_even_valence_clusters(picks: list[int], valences: set[int]) -> None:
     """Clusters of adjacent even-valence vertices are solved jointly (one sparse min-norm solve)."""
     mesh = collapsed(shapes.grid(8, 8, height=height), picks)
     assert mesh is not None
     t = mesh.topology
-    assert valences <= set(t.valence[~t.is_boundary_vertex].tolist()) and adjacent_even_valence(mesh)
+    assert valences <= set(t.valence[~t.is_boundary_vertex].tolist()) and adjacent_even_valence(
+        mesh
+    )
     assert_exact_g1(build_and_check(perturbed(mesh, 0.02, 5)))
 
 
@@ -236,8 +256,14 @@ def walked_shears(mesh: QuadMesh) -> np.ndarray:
         gaps = [cosine[first[1]] - cosine[first[2]], cosine[last[2]] - cosine[last[1]]]
         size = max(abs(g) for g in gaps)
         # λ towards the k-th vertex along the line alternates: ε_k = (−1)^k ε_0
-        nodes = [2 * first[0] + (x_of[first[0]] != first[1]), 2 * last[0] + (x_of[last[0]] != last[2])]
-        at_start = (-abs(gaps[0]), nodes[0]) <= (-abs(gaps[1]), nodes[1])  # ties: the smaller node 2e + side
+        nodes = [
+            2 * first[0] + (x_of[first[0]] != first[1]),
+            2 * last[0] + (x_of[last[0]] != last[2]),
+        ]
+        at_start = (-abs(gaps[0]), nodes[0]) <= (
+            -abs(gaps[1]),
+            nodes[1],
+        )  # ties: the smaller node 2e + side
         sign0 = -np.sign(gaps[0]) if at_start else -np.sign(gaps[1]) * (-1) ** len(line)
         for k, (edge, near_v, far_v) in enumerate(line):
             towards_far = sign0 * size * (-1) ** (k + 1)
@@ -312,15 +338,23 @@ def test_bspline_nets_evaluate_to_the_pieces(mesh: QuadMesh) -> None:
         for k, (su, sv) in enumerate(((0, 0), (1, 0), (1, 1), (0, 1))):
             expected = network.patches.take([4 * f + k]).evaluate_grid(s, s)[0]
             points = np.stack([0.5 * (su + u), 0.5 * (sv + v)], axis=-1).reshape(-1, 2)
-            np.testing.assert_allclose(spline(points).reshape(9, 9, 3), expected, rtol=0, atol=1e-13 * scale)
+            np.testing.assert_allclose(
+                spline(points).reshape(9, 9, 3), expected, rtol=0, atol=1e-13 * scale
+            )
 
 
 def test_macro_net_rows_three_are_midpoints() -> None:
     """Row and column 3 of every 7×7 macro net are the midpoints of their neighbours (C1 ⇔ double knot)."""
-    nets = macro_nets(build_split4_network(perturbed(shapes.cube_sphere(1), NOISE, 8)).patches.world_control())
+    nets = macro_nets(
+        build_split4_network(perturbed(shapes.cube_sphere(1), NOISE, 8)).patches.world_control()
+    )
     scale = np.abs(nets).max()
-    np.testing.assert_allclose(nets[:, 3], 0.5 * (nets[:, 2] + nets[:, 4]), rtol=0, atol=1e-14 * scale)
-    np.testing.assert_allclose(nets[:, :, 3], 0.5 * (nets[:, :, 2] + nets[:, :, 4]), rtol=0, atol=1e-14 * scale)
+    np.testing.assert_allclose(
+        nets[:, 3], 0.5 * (nets[:, 2] + nets[:, 4]), rtol=0, atol=1e-14 * scale
+    )
+    np.testing.assert_allclose(
+        nets[:, :, 3], 0.5 * (nets[:, :, 2] + nets[:, :, 4]), rtol=0, atol=1e-14 * scale
+    )
 
 
 # ------------------------------------------------------------------------------ other properties
@@ -349,9 +383,15 @@ def test_similarity_invariance() -> None:
 def test_close_to_the_gregory_network() -> None:
     """Same stars and boundary tangents: the two exact surfaces stay within a few % of the bbox."""
     mesh = perturbed(shapes.cube_sphere(2), NOISE, 12)
-    split = build_split4_network(mesh).patches.evaluate_grid(np.linspace(0.0, 1.0, 5)).reshape(-1, 4, 5, 5, 3)
+    split = (
+        build_split4_network(mesh)
+        .patches.evaluate_grid(np.linspace(0.0, 1.0, 5))
+        .reshape(-1, 4, 5, 5, 3)
+    )
     gregory = build_gregory_network(mesh).patches.evaluate_grid(np.linspace(0.0, 1.0, 9))
-    pieces = np.stack([gregory[:, :5, :5], gregory[:, 4:, :5], gregory[:, 4:, 4:], gregory[:, :5, 4:]], axis=1)
+    pieces = np.stack(
+        [gregory[:, :5, :5], gregory[:, 4:, :5], gregory[:, 4:, 4:], gregory[:, :5, 4:]], axis=1
+    )
     np.testing.assert_allclose(split[:, 0, 0, 0], pieces[:, 0, 0, 0], atol=1e-15)  # mesh vertices
     assert np.abs(split - pieces).max() < 0.05 * 2.0 * np.sqrt(3.0)
 
@@ -366,7 +406,9 @@ def test_bspline_nets_needs_split4_pieces() -> None:
         bspline_nets(PatchSet(np.zeros((3, 4, 4, 3))))
 
 
-def test_blocked_assembly_does_not_depend_on_the_block_size(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_blocked_assembly_does_not_depend_on_the_block_size(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """The sub-patch controls are assembled in blocks of faces: any block size (one face, a
     partial last block, all faces at once) gives bit-identical controls."""
     from g1patch.construct import split4
@@ -397,8 +439,13 @@ def test_a_turning_rim_gets_the_nearest_fan_of_equal_sectors(k: int) -> None:
     mesh = mesh.with_vertices(lifted)
     targets = interpolate_targets(mesh)
     n = targets.normals[0]
-    wanted = sum(np.arctan2(np.cross(a, b) @ n, a @ b) for a, b in itertools.pairwise(targets.tangents[: k + 1]))
-    assert split4_star(targets).cosine[: k + 1] == pytest.approx(np.cos(wanted / k), abs=1e-12)  # a build: regular
+    wanted = sum(
+        np.arctan2(np.cross(a, b) @ n, a @ b)
+        for a, b in itertools.pairwise(targets.tangents[: k + 1])
+    )
+    assert split4_star(targets).cosine[: k + 1] == pytest.approx(
+        np.cos(wanted / k), abs=1e-12
+    )  # a build: regular
     stars = split4_star(targets, equal_sectors=True)
     fan = stars.star[: k + 1]  # vertex 0, the hub
     areas = np.array([np.cross(a, b) @ n for a, b in itertools.pairwise(fan)])
@@ -407,11 +454,17 @@ def test_a_turning_rim_gets_the_nearest_fan_of_equal_sectors(k: int) -> None:
     assert turn == pytest.approx(wanted, abs=np.radians(12.0))  # not π: the rim turns
     assert_exact_g1(check(build_split4_network(mesh)))
     gregory = build_gregory_network(mesh)
-    assert surface_deviation(gregory, split4_of_gregory(gregory))[1] <= 6e-4 * gregory.bounding_box_diagonal()
+    assert (
+        surface_deviation(gregory, split4_of_gregory(gregory))[1]
+        <= 6e-4 * gregory.bounding_box_diagonal()
+    )
 
 
-@pytest.mark.parametrize("mesh", [shapes.box_cage(), shapes.genus2(), shapes.noisy_sphere(1), shapes.boundary_fan(4)],
-                         ids=["box_cage", "genus2", "noisy_sphere", "boundary_fan"])
+@pytest.mark.parametrize(
+    "mesh",
+    [shapes.box_cage(), shapes.genus2(), shapes.noisy_sphere(1), shapes.boundary_fan(4)],
+    ids=["box_cage", "genus2", "noisy_sphere", "boundary_fan"],
+)
 def test_equal_sector_fans_are_nearer_than_regular_stars(mesh: QuadMesh) -> None:
     """With ``equal_sectors``, at boundary vertices and odd valences the fan is one of equal sectors
     (the nearest to the targets): its sectors' areas agree to 1e-12, each relation
@@ -425,7 +478,9 @@ def test_equal_sector_fans_are_nearer_than_regular_stars(mesh: QuadMesh) -> None
     topology = targets.topology
     stars = split4.split4_star(targets, equal_sectors=True)
     boundary = topology.is_boundary_vertex
-    chosen = np.flatnonzero(np.where(boundary, topology.face_count >= 2, topology.valence % 2 == 1) & ~stars.shrunk)
+    chosen = np.flatnonzero(
+        np.where(boundary, topology.face_count >= 2, topology.valence % 2 == 1) & ~stars.shrunk
+    )
     assert chosen.size
     for v in chosen:
         lo, hi = topology.neighbor_offsets[v], topology.neighbor_offsets[v + 1]
@@ -456,12 +511,22 @@ def test_the_deviation_finds_foot_points_in_the_next_patch() -> None:
     steps = 65
     points = surface_samples(gregory, steps)[0]
     grid = np.arange(steps * steps).reshape(steps, steps)
-    quads = np.stack([grid[:-1, :-1], grid[1:, :-1], grid[1:, 1:], grid[:-1, 1:]], axis=-1).reshape(-1, 4)
+    quads = np.stack([grid[:-1, :-1], grid[1:, :-1], grid[1:, 1:], grid[:-1, 1:]], axis=-1).reshape(
+        -1, 4
+    )
     quads = (quads[None] + steps * steps * np.arange(len(points))[:, None, None]).reshape(-1, 4)
     half = np.linspace(0.0, 1.0, 3)  # surface_deviation's default: 5 samples a quad, 3 a sub-patch
-    samples = split4.patches.evaluate(np.stack(np.meshgrid(half, half, indexing="ij"), axis=-1).reshape(-1, 2))
+    samples = split4.patches.evaluate(
+        np.stack(np.meshgrid(half, half, indexing="ij"), axis=-1).reshape(-1, 2)
+    )
     exact = mesh_distance(samples, points.reshape(-1, 3), quads).max()
-    centres = surface_samples(gregory, 2 * steps - 1)[0][:, 1::2, 1::2]  # the cells' middles on the surface
-    corners = 0.25 * (points[:, :-1, :-1] + points[:, 1:, :-1] + points[:, 1:, 1:] + points[:, :-1, 1:])
-    sag = float(np.linalg.norm(centres - corners, axis=-1).max())  # how far the chords lie off the surface
+    centres = surface_samples(gregory, 2 * steps - 1)[0][
+        :, 1::2, 1::2
+    ]  # the cells' middles on the surface
+    corners = 0.25 * (
+        points[:, :-1, :-1] + points[:, 1:, :-1] + points[:, 1:, 1:] + points[:, :-1, 1:]
+    )
+    sag = float(
+        np.linalg.norm(centres - corners, axis=-1).max()
+    )  # how far the chords lie off the surface
     assert exact - sag <= surface_deviation(gregory, split4)[1] <= 1.02 * exact

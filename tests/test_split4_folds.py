@@ -65,7 +65,10 @@ def test_star_length_safeguard(name: str, shape: str) -> None:
     of its edge; shrinking is uniform per vertex (the star stays regular), and only refits count as
     fallbacks."""
     mesh = CAGES[name]()
-    low, high = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)  # the build's working coordinates
+    low, high = (
+        mesh.vertices.min(axis=0),
+        mesh.vertices.max(axis=0),
+    )  # the build's working coordinates
     local = (mesh.vertices - 0.5 * (low + high)) / np.linalg.norm(high - low)
     targets = shape_targets(mesh.with_vertices(local), shape)  # type: ignore[arg-type]
     stars = split4_star(targets)
@@ -75,7 +78,11 @@ def test_star_length_safeguard(name: str, shape: str) -> None:
     edge = targets.positions[topology.neighbors] - targets.positions[slot_vertex]
     normal = targets.normals[slot_vertex]
     chord = np.linalg.norm(edge, axis=1)
-    arc = 2.0 * chord**2 / (chord + np.linalg.norm(edge - np.sum(edge * normal, axis=1)[:, None] * normal, axis=1))
+    arc = (
+        2.0
+        * chord**2
+        / (chord + np.linalg.norm(edge - np.sum(edge * normal, axis=1)[:, None] * normal, axis=1))
+    )
     wanted = np.linalg.norm(targets.tangents, axis=1)
     fine = ~stars.refitted[slot_vertex]
     assert (length[fine] <= STAR_LENGTH_LIMIT * wanted[fine] * (1 + 1e-12)).all()

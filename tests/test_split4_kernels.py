@@ -51,7 +51,9 @@ def noisy(mesh: QuadMesh, share: float, seed: int) -> QuadMesh:
     edges = mesh.vertices[mesh.topology.edges]
     shortest = np.linalg.norm(edges[:, 0] - edges[:, 1], axis=1).min()
     rng = np.random.default_rng(seed)
-    return mesh.with_vertices(mesh.vertices + rng.uniform(-share * shortest, share * shortest, mesh.vertices.shape))
+    return mesh.with_vertices(
+        mesh.vertices + rng.uniform(-share * shortest, share * shortest, mesh.vertices.shape)
+    )
 
 
 MESHES = {
@@ -72,14 +74,20 @@ def local_targets(mesh: QuadMesh, shape: str = "interpolate") -> tuple[Targets, 
     return shape_targets(mesh.with_vertices(frame.to_local(mesh.vertices)), shape), frame
 
 
-def assert_close(mesh: QuadMesh, reference: split4.Split4Parts, compiled: split4.Split4Parts) -> None:
+def assert_close(
+    mesh: QuadMesh, reference: split4.Split4Parts, compiled: split4.Split4Parts
+) -> None:
     """Points within POINT_ULPS ε · max|x|, normals within NORMAL_ULPS ε · max|x| / ℓ_min (module docstring)."""
     size = np.abs(reference[0].control).max()
-    np.testing.assert_array_less(np.abs(compiled[0].control - reference[0].control), POINT_ULPS * EPS * size)
+    np.testing.assert_array_less(
+        np.abs(compiled[0].control - reference[0].control), POINT_ULPS * EPS * size
+    )
     np.testing.assert_array_less(np.abs(compiled[1] - reference[1]), POINT_ULPS * EPS * size)
     edges = mesh.vertices[mesh.topology.edges]
     shortest = np.linalg.norm(edges[:, 0] - edges[:, 1], axis=1).min()
-    np.testing.assert_array_less(np.abs(compiled[2] - reference[2]), NORMAL_ULPS * EPS * size / shortest)
+    np.testing.assert_array_less(
+        np.abs(compiled[2] - reference[2]), NORMAL_ULPS * EPS * size / shortest
+    )
 
 
 @pytest.mark.parametrize("name", MESHES)
@@ -90,7 +98,9 @@ def test_kernels_give_the_reference_patches(name: str, shape: str) -> None:
     reference = split4_patches(targets, mesh.vertices, frame.centre, frame.scale, compiled=False)
     compiled = split4_patches(targets, mesh.vertices, frame.centre, frame.scale, compiled=True)
     assert_close(mesh, reference, compiled)
-    np.testing.assert_array_equal(compiled[0].control[::4, 0, 0], mesh.vertices[mesh.topology.faces[:, 0]])  # corners exact
+    np.testing.assert_array_equal(
+        compiled[0].control[::4, 0, 0], mesh.vertices[mesh.topology.faces[:, 0]]
+    )  # corners exact
 
 
 def test_kernels_follow_a_guide_and_given_stars() -> None:
@@ -98,12 +108,18 @@ def test_kernels_follow_a_guide_and_given_stars() -> None:
     mesh = irregular(1)
     targets, _ = local_targets(mesh)
     rng = np.random.default_rng(5)
-    guide = macro_nets(split4_patches(targets, targets.positions, np.zeros(3), 1.0, compiled=False)[0].control)
+    guide = macro_nets(
+        split4_patches(targets, targets.positions, np.zeros(3), 1.0, compiled=False)[0].control
+    )
     guide += rng.normal(scale=1e-3, size=guide.shape)
     star = split4_star(targets)
     star = star._replace(factor=np.where(rng.random(len(star.factor)) < 0.1, 0.7, 1.0))
-    reference = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide, star, compiled=False)
-    compiled = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide, star, compiled=True)
+    reference = split4_patches(
+        targets, targets.positions, np.zeros(3), 1.0, guide, star, compiled=False
+    )
+    compiled = split4_patches(
+        targets, targets.positions, np.zeros(3), 1.0, guide, star, compiled=True
+    )
     assert_close(mesh.with_vertices(targets.positions), reference, compiled)
 
 
@@ -119,17 +135,25 @@ def test_kernels_in_ranges_are_the_kernels_in_one(monkeypatch: pytest.MonkeyPatc
         np.testing.assert_array_equal(getattr(a, "control", a), getattr(b, "control", b))
 
 
-def test_the_default_is_numpy_below_the_threshold_and_kernels_above(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_the_default_is_numpy_below_the_threshold_and_kernels_above(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     mesh = irregular(0)
     targets, frame = local_targets(mesh)
     reference = split4_patches(targets, mesh.vertices, frame.centre, frame.scale, compiled=False)
     compiled = split4_patches(targets, mesh.vertices, frame.centre, frame.scale, compiled=True)
-    assert not np.array_equal(reference[0].control, compiled[0].control)  # rounding tells the paths apart
-    np.testing.assert_array_equal(split4_patches(targets, mesh.vertices, frame.centre, frame.scale)[0].control,
-                                  reference[0].control)
+    assert not np.array_equal(
+        reference[0].control, compiled[0].control
+    )  # rounding tells the paths apart
+    np.testing.assert_array_equal(
+        split4_patches(targets, mesh.vertices, frame.centre, frame.scale)[0].control,
+        reference[0].control,
+    )
     monkeypatch.setattr(split4, "KERNEL_FACES", mesh.topology.n_faces)
-    np.testing.assert_array_equal(split4_patches(targets, mesh.vertices, frame.centre, frame.scale)[0].control,
-                                  compiled[0].control)
+    np.testing.assert_array_equal(
+        split4_patches(targets, mesh.vertices, frame.centre, frame.scale)[0].control,
+        compiled[0].control,
+    )
 
 
 @pytest.mark.parametrize("name", MESHES)
@@ -149,17 +173,27 @@ def test_the_star_kernel_gives_the_reference_stars(name: str) -> None:
     mesh = MESHES[name]()
     targets, _ = local_targets(mesh)
     long = targets.tangents.copy()
-    long[targets.topology.neighbor_offsets[0]:targets.topology.neighbor_offsets[1]] *= 3.0
-    for wanted in (targets, Targets(targets.topology, targets.positions, targets.normals, long, targets.interior)):
-        reference, compiled = split4_star(wanted, compiled=False), split4_star(wanted, compiled=True)
+    long[targets.topology.neighbor_offsets[0] : targets.topology.neighbor_offsets[1]] *= 3.0
+    for wanted in (
+        targets,
+        Targets(targets.topology, targets.positions, targets.normals, long, targets.interior),
+    ):
+        reference, compiled = (
+            split4_star(wanted, compiled=False),
+            split4_star(wanted, compiled=True),
+        )
         np.testing.assert_array_equal(compiled.cosine, reference.cosine)
         np.testing.assert_array_equal(compiled.shrunk, reference.shrunk)
         np.testing.assert_array_equal(compiled.refitted, reference.refitted)
         np.testing.assert_allclose(compiled.factor, reference.factor, rtol=POINT_ULPS * EPS, atol=0)
         size = np.abs(reference.star).max()
-        np.testing.assert_array_less(np.abs(compiled.star - reference.star), POINT_ULPS * EPS * size)
-    assert split4_star(Targets(targets.topology, targets.positions, targets.normals, long, targets.interior),
-                       compiled=True).shrunk[0]
+        np.testing.assert_array_less(
+            np.abs(compiled.star - reference.star), POINT_ULPS * EPS * size
+        )
+    assert split4_star(
+        Targets(targets.topology, targets.positions, targets.normals, long, targets.interior),
+        compiled=True,
+    ).shrunk[0]
 
 
 @pytest.mark.parametrize("name", MESHES)
@@ -167,8 +201,23 @@ def test_the_network_kernel_gives_the_reference_connectivity(name: str) -> None:
     mesh = MESHES[name]()
     targets, _ = local_targets(mesh)
     patches, extra, normals, _ = split4_patches(targets, targets.positions, np.zeros(3), 1.0)
-    points, point_normals = np.concatenate([targets.positions, extra]), np.concatenate([targets.normals, normals])
-    reference = split4._split4_network(targets.topology, patches, points, point_normals, {}, compiled=False)
-    compiled = split4._split4_network(targets.topology, patches, points, point_normals, {}, compiled=True)
-    for field in ("corner_ids", "edge_ids", "edge_reversed", "neighbor", "neighbor_edge", "same_direction", "edge_collapsed"):
+    points, point_normals = (
+        np.concatenate([targets.positions, extra]),
+        np.concatenate([targets.normals, normals]),
+    )
+    reference = split4._split4_network(
+        targets.topology, patches, points, point_normals, {}, compiled=False
+    )
+    compiled = split4._split4_network(
+        targets.topology, patches, points, point_normals, {}, compiled=True
+    )
+    for field in (
+        "corner_ids",
+        "edge_ids",
+        "edge_reversed",
+        "neighbor",
+        "neighbor_edge",
+        "same_direction",
+        "edge_collapsed",
+    ):
         np.testing.assert_array_equal(getattr(compiled, field), getattr(reference, field))

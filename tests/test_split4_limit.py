@@ -28,7 +28,13 @@ from pathlib import Path
 import pytest
 
 from g1patch.build import build_network
-from g1patch.compare import compare_fairness, load_reference, mesh_distance, patch_samples, surface_samples
+from g1patch.compare import (
+    compare_fairness,
+    load_reference,
+    mesh_distance,
+    patch_samples,
+    surface_samples,
+)
 from g1patch.continuity import check
 from g1patch.io.meshfile import read_mesh
 
@@ -37,21 +43,33 @@ FAIRNESS_FACTOR = 1.05
 #: and its max distance to the reference Gregory's by this one (worst measured 1.50, the cube)
 DISTANCE_FACTOR = 1.6
 
-CASES = [("catmark_cube", 0), ("catmark_xord_interior", 0), ("catmark_xord_boundary", 0), ("catmark_xord_boundary", 1)]
+CASES = [
+    ("catmark_cube", 0),
+    ("catmark_xord_interior", 0),
+    ("catmark_xord_boundary", 0),
+    ("catmark_xord_boundary", 1),
+]
 
 
 @pytest.mark.parametrize(("name", "refine"), CASES)
 def test_split4_limit_is_as_fair_as_gregory(shared_data: Path, name: str, refine: int) -> None:
     mesh = read_mesh(shared_data / f"{name}.obj")
     reference = load_reference(shared_data / "reference" / f"{name}.limit.npz")
-    reference = dataclasses.replace(reference, levels=reference.levels - refine)  # the same step per refined face
+    reference = dataclasses.replace(
+        reference, levels=reference.levels - refine
+    )  # the same step per refined face
     ratio, distance = {}, {}
     for method in ("gregory", "split4"):
         network = build_network(mesh, method, "limit", refine=refine)  # type: ignore[arg-type]
         report = check(network, samples=max(9, 33 >> refine))
-        assert max(report.max_edge_angle_deg, report.max_corner_angle_deg) <= 1e-9 and report.folds == 0
+        assert (
+            max(report.max_edge_angle_deg, report.max_corner_angle_deg) <= 1e-9
+            and report.folds == 0
+        )
         ratio[method] = compare_fairness(network, reference).p99_ratio
         samples, _ = surface_samples(network, patch_samples(network, 8 >> refine))
-        distance[method] = float(mesh_distance(samples.reshape(-1, 3), reference.points, reference.faces).max())
+        distance[method] = float(
+            mesh_distance(samples.reshape(-1, 3), reference.points, reference.faces).max()
+        )
     assert ratio["split4"] <= FAIRNESS_FACTOR * ratio["gregory"], ratio
     assert distance["split4"] <= DISTANCE_FACTOR * distance["gregory"], distance

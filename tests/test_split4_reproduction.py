@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from exactness import assert_exact_g1
+from test_subdivision import grid_torus
 
 from g1patch import shapes
 from g1patch.build import build_network
@@ -25,8 +26,6 @@ from g1patch.continuity import check
 from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh, QuadTopology
 from g1patch.network import PatchNetwork
-
-from test_subdivision import grid_torus
 
 #: uniform cubic B-spline control points → Bézier points of one span
 B_TO_BEZIER = np.array([[1.0, 4, 1, 0], [0, 4, 2, 0], [0, 2, 4, 0], [0, 1, 4, 1]]) / 6.0
@@ -44,9 +43,15 @@ def control_rings(topology: QuadTopology, faces: np.ndarray | None = None) -> np
         h = 4 * faces + k  # V_k → V_{k+1}
         out = QuadTopology.next(topology.twin[h])  # V_k → the point outside V_k across edge k
         along = QuadTopology.next(out)  # → the point outside V_{k+1}
-        diagonal = QuadTopology.next(QuadTopology.next(topology.twin[out]))  # → the diagonal point at V_k
-        points = {(1, 1): topology.origin(h), (1, 0): topology.target(out), (2, 0): topology.target(along),
-                  (0, 0): topology.target(diagonal)}
+        diagonal = QuadTopology.next(
+            QuadTopology.next(topology.twin[out])
+        )  # → the diagonal point at V_k
+        points = {
+            (1, 1): topology.origin(h),
+            (1, 0): topology.target(out),
+            (2, 0): topology.target(along),
+            (0, 0): topology.target(diagonal),
+        }
         for (i, j), vertex in points.items():
             for _ in range(k):  # a quarter turn about the ring's centre per corner
                 i, j = 3 - j, i
@@ -57,6 +62,7 @@ def control_rings(topology: QuadTopology, faces: np.ndarray | None = None) -> np
 
 def halved(nets: np.ndarray) -> np.ndarray:
     """(F, 4, 4, 3) Bézier nets subdivided at ½ in u and v by de Casteljau: (F, 7, 7, 3) macro nets."""
+
     def along(c: np.ndarray, axis: int) -> np.ndarray:
         c = np.moveaxis(c, axis, 1)
         p0, p1, p2, p3 = c[:, 0], c[:, 1], c[:, 2], c[:, 3]
@@ -76,7 +82,10 @@ def bspline_macro_nets(mesh: QuadMesh, faces: np.ndarray | None = None) -> np.nd
 def reproduction_error(mesh: QuadMesh, network: PatchNetwork) -> float:
     """max |split4 control − B-spline control| / bounding-box diagonal."""
     diagonal = float(np.linalg.norm(mesh.vertices.max(axis=0) - mesh.vertices.min(axis=0)))
-    return float(np.abs(macro_nets(network.patches.world_control()) - bspline_macro_nets(mesh)).max()) / diagonal
+    return (
+        float(np.abs(macro_nets(network.patches.world_control()) - bspline_macro_nets(mesh)).max())
+        / diagonal
+    )
 
 
 REGULAR = {
@@ -106,8 +115,13 @@ def test_regular_closed_cages_give_the_bspline(name: str) -> None:
     mesh = REGULAR[name]()
     network = build_network(mesh, "split4", "limit")
     assert reproduction_error(mesh, network) <= REPRODUCTION_RTOL
-    assert network.provenance["star_safeguard_vertices"] == "0" and network.provenance["fallback_vertices"] == "0"
-    if mesh.n_faces <= 1000:  # the check of 80 000 sub-patches takes half a minute; the B-spline is G1 (C2) anyway
+    assert (
+        network.provenance["star_safeguard_vertices"] == "0"
+        and network.provenance["fallback_vertices"] == "0"
+    )
+    if (
+        mesh.n_faces <= 1000
+    ):  # the check of 80 000 sub-patches takes half a minute; the B-spline is G1 (C2) anyway
         assert_exact_g1(check(network))
 
 
@@ -157,13 +171,16 @@ def test_faces_on_closed_lines_of_an_irregular_cage_give_the_bspline() -> None:
     faces = np.flatnonzero(calm & unsheared)
     assert 30 <= len(faces) < topology.n_faces
     diagonal = float(np.linalg.norm(mesh.vertices.max(axis=0) - mesh.vertices.min(axis=0)))
-    error = np.abs(macro_nets(network.patches.world_control())[faces] - bspline_macro_nets(mesh, faces)).max()
+    error = np.abs(
+        macro_nets(network.patches.world_control())[faces] - bspline_macro_nets(mesh, faces)
+    ).max()
     assert error <= REPRODUCTION_RTOL * diagonal
 
 
 # ------------------------------------------------------------------------------ CAD export
 
 from ocp_marks import requires_ocp  # noqa: E402
+
 CUBE = Path(__file__).parents[1] / "src" / "g1patch" / "data" / "cube.obj"
 
 
@@ -172,13 +189,20 @@ def quad_order(model: object, network: PatchNetwork, n_quads: int) -> list[int]:
     from scipy.spatial import cKDTree
 
     middles = np.concatenate([face.evaluate(np.array([[0.5, 0.5]])) for face in model.faces])  # type: ignore[attr-defined]
-    centres = network.patches.evaluate(np.array([[1.0, 1.0]]))[::4, 0]  # corner 2 of sub-patch 4f: C
+    centres = network.patches.evaluate(np.array([[1.0, 1.0]]))[
+        ::4, 0
+    ]  # corner 2 of sub-patch 4f: C
     distance, order = cKDTree(middles).query(centres)
-    assert distance.max() <= 1e-9 * network.bounding_box_diagonal() and len(set(order.tolist())) == n_quads
+    assert (
+        distance.max() <= 1e-9 * network.bounding_box_diagonal()
+        and len(set(order.tolist())) == n_quads
+    )
     return order.tolist()
 
 
-def read_back(path: Path, mesh: QuadMesh, network: PatchNetwork, samples: int = 9) -> tuple[list[tuple[int, int]], float, float]:
+def read_back(
+    path: Path, mesh: QuadMesh, network: PatchNetwork, samples: int = 9
+) -> tuple[list[tuple[int, int]], float, float]:
     """Per quad its read face's pole-grid size; the read surfaces' largest distance from the
     sub-patches (relative to the diagonal); the largest angle between the read faces' OCC normals
     across the mesh edges (degrees)."""
@@ -198,7 +222,12 @@ def read_back(path: Path, mesh: QuadMesh, network: PatchNetwork, samples: int = 
     for f, face in enumerate(faces):
         for k in range(4):
             expected = network.patches.take([4 * f + k]).evaluate(uv)[0]
-            distance = max(distance, float(np.linalg.norm(face.evaluate(0.5 * (uv + corner[k])) - expected, axis=1).max()))
+            distance = max(
+                distance,
+                float(
+                    np.linalg.norm(face.evaluate(0.5 * (uv + corner[k])) - expected, axis=1).max()
+                ),
+            )
     t = np.linspace(0.0, 1.0, samples)
     angle = 0.0
     for h in topology.edge_halfedges[~topology.is_boundary_edge, 0].tolist():
@@ -206,7 +235,11 @@ def read_back(path: Path, mesh: QuadMesh, network: PatchNetwork, samples: int = 
         a = faces[h >> 2].normals(edge_parameters(np.full(samples, h & 3), t))
         b = faces[twin >> 2].normals(edge_parameters(np.full(samples, twin & 3), 1.0 - t))
         angle = max(angle, float(angle_between(a, b).max()))
-    return [face.poles().shape[:2] for face in faces], distance / network.bounding_box_diagonal(), angle
+    return (
+        [face.poles().shape[:2] for face in faces],
+        distance / network.bounding_box_diagonal(),
+        angle,
+    )
 
 
 @requires_ocp
@@ -218,14 +251,23 @@ def test_limit_split4_step_is_one_face_per_quad(name: str, tmp_path: Path) -> No
 
     from g1patch.io.cad import export_step, split4_quad_faces
 
-    mesh = {"torus_8_4": lambda: shapes.torus(8, 4), "cube": lambda: read_mesh(CUBE),
-            "collapsed_torus": lambda: collapsed(shapes.torus(12, 8), [0])}[name]()
+    mesh = {
+        "torus_8_4": lambda: shapes.torus(8, 4),
+        "cube": lambda: read_mesh(CUBE),
+        "collapsed_torus": lambda: collapsed(shapes.torus(12, 8), [0]),
+    }[name]()
     assert mesh is not None
     network = build_network(mesh, "split4", "limit")
     quads = split4_quad_faces(network)
     assert quads is not None
     result = export_step(tmp_path / f"{name}.step", network)
-    assert result.faces == mesh.n_faces and result.exact and result.solid and result.valid and result.free_edges == 0
+    assert (
+        result.faces == mesh.n_faces
+        and result.exact
+        and result.solid
+        and result.valid
+        and result.free_edges == 0
+    )
     assert result.max_g1_angle_deg <= 1e-7
     text = (tmp_path / f"{name}.step").read_text()
     assert text.count("ADVANCED_FACE(") == mesh.n_faces
@@ -235,7 +277,9 @@ def test_limit_split4_step_is_one_face_per_quad(name: str, tmp_path: Path) -> No
     assert distance <= 1e-11 and angle <= 1e-7
     single = int(quads.single.sum())
     if name == "torus_8_4":
-        assert single == mesh.n_faces and result.spans == 1  # all regular: every quad is the B-spline's span
+        assert (
+            single == mesh.n_faces and result.spans == 1
+        )  # all regular: every quad is the B-spline's span
     elif name == "cube":
         assert single == 0 and result.spans == 2  # no regular face: two spans each, never dozens
     else:
@@ -269,12 +313,25 @@ def test_quads_that_are_not_one_bicubic_keep_two_spans() -> None:
     quads = split4_quad_faces(network)
     assert quads is not None and quads.single.all()
     control = network.patches.control.copy()  # local coordinates
-    control[4 * 5, 1, 1] += 1e-9  # the twist at corner 0 of quad 5: rows and columns 2–4 untouched, still C1
-    moved = dataclasses.replace(network, patches=dataclasses.replace(network.patches, control=control))
+    control[4 * 5, 1, 1] += (
+        1e-9  # the twist at corner 0 of quad 5: rows and columns 2–4 untouched, still C1
+    )
+    moved = dataclasses.replace(
+        network, patches=dataclasses.replace(network.patches, control=control)
+    )
     quads = split4_quad_faces(moved)
     assert quads is not None and np.flatnonzero(~quads.single).tolist() == [5]
-    control[4 * 5, 2, 2] += 1e-6  # next to the seams: row 3 is no longer the midpoints, a kink inside quad 5
-    assert split4_quad_faces(dataclasses.replace(network, patches=dataclasses.replace(network.patches, control=control))) is None
+    control[4 * 5, 2, 2] += (
+        1e-6  # next to the seams: row 3 is no longer the midpoints, a kink inside quad 5
+    )
+    assert (
+        split4_quad_faces(
+            dataclasses.replace(
+                network, patches=dataclasses.replace(network.patches, control=control)
+            )
+        )
+        is None
+    )
     # bare sub-patches in split4's order are recognised from their shared points; in any other order they are not
     bare = network.patches.world_control()
     assert split4_quad_faces(network_from_patch_points(PatchSet(bare))) is not None

@@ -6,20 +6,33 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
+from test_subdivision import grid_torus, square_grid
 
 from g1patch.compare import load_reference
 from g1patch.errors import InputError
 from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh, Tag
 from g1patch.subdivision import (
-    RULE_CORNER, RULE_CREASE, RULE_SMOOTH, limit_corner_normals, limit_normals, limit_points, limit_stars,
-    limit_tangents, refine, refine_grids, vertex_rules,
+    RULE_CORNER,
+    RULE_CREASE,
+    RULE_SMOOTH,
+    limit_corner_normals,
+    limit_normals,
+    limit_points,
+    limit_stars,
+    limit_tangents,
+    refine,
+    refine_grids,
+    vertex_rules,
 )
 from g1patch.targets.limit_interpolate import limit_matrix
 
-from test_subdivision import grid_torus, square_grid
-
-CREASED = ["catmark_cube_creases2", "catmark_tent_creases1", "catmark_dart_edgecorner", "catmark_torus_creases0"]
+CREASED = [
+    "catmark_cube_creases2",
+    "catmark_tent_creases1",
+    "catmark_dart_edgecorner",
+    "catmark_torus_creases0",
+]
 SMOOTH = ["catmark_cube", "catmark_torus", "catmark_xord_interior", "catmark_xord_boundary"]
 #: Blender's limit evaluation isolates features to this level (the modifier's quality)
 REFERENCE_ISOLATION = 6
@@ -47,21 +60,30 @@ def test_refined_limit_matches_opensubdiv(shared_data, name: str) -> None:
     fine = refine(mesh, reference.levels)
     points = limit_points(fine)
     assert points.shape == reference.points.shape
-    corners = one_face_corners(mesh) if mesh.features.boundary != "edge-and-corner" else np.zeros(0, dtype=int)
+    corners = (
+        one_face_corners(mesh)
+        if mesh.features.boundary != "edge-and-corner"
+        else np.zeros(0, dtype=int)
+    )
     ours = np.delete(np.arange(len(points)), corners)
     theirs = np.delete(np.arange(len(reference.points)), corners)
     ours_to_theirs = cKDTree(reference.points).query(points[ours])[0] / diagonal
     theirs_to_ours = cKDTree(points).query(reference.points[theirs])[0] / diagonal
     assert max(ours_to_theirs.max(), theirs_to_ours.max()) <= 1e-6
     # the cage's own vertices keep their numbers: compare them point for point
-    cage = np.linalg.norm(points[: mesh.n_vertices] - reference.points[: mesh.n_vertices], axis=1) / diagonal
+    cage = (
+        np.linalg.norm(points[: mesh.n_vertices] - reference.points[: mesh.n_vertices], axis=1)
+        / diagonal
+    )
     assert np.delete(cage, corners).max() <= 1e-6
     if corners.size:
         level6 = refine(mesh, REFERENCE_ISOLATION).vertices[corners]
         assert np.linalg.norm(level6 - reference.points[corners], axis=1).max() / diagonal <= 1e-6
         x = mesh.vertices
         ring = np.stack([mesh.topology.one_ring(v) for v in corners])
-        np.testing.assert_allclose(points[corners], (x[ring[:, 0]] + 4 * x[corners] + x[ring[:, 1]]) / 6, atol=1e-14)
+        np.testing.assert_allclose(
+            points[corners], (x[ring[:, 0]] + 4 * x[corners] + x[ring[:, 1]]) / 6, atol=1e-14
+        )
 
 
 @pytest.mark.parametrize("name", CREASED)
@@ -69,8 +91,15 @@ def test_cage_limit_points_match_opensubdiv(shared_data, name: str) -> None:
     """``limit_points`` of the unrefined crease cages (refined near the semi-sharp features inside)."""
     mesh = read_mesh(shared_data / f"{name}.obj")
     reference = load_reference(shared_data / "reference" / f"{name}.limit.npz")
-    error = np.linalg.norm(limit_points(mesh) - reference.points[: mesh.n_vertices], axis=1) / reference.bounding_box_diagonal
-    corners = one_face_corners(mesh) if mesh.features.boundary != "edge-and-corner" else np.zeros(0, dtype=int)
+    error = (
+        np.linalg.norm(limit_points(mesh) - reference.points[: mesh.n_vertices], axis=1)
+        / reference.bounding_box_diagonal
+    )
+    corners = (
+        one_face_corners(mesh)
+        if mesh.features.boundary != "edge-and-corner"
+        else np.zeros(0, dtype=int)
+    )
     assert np.delete(error, corners).max() <= 1e-6
     assert error[corners].max(initial=0.0) <= 2e-5
 
@@ -87,8 +116,16 @@ def crease_line(size: int = 4) -> tuple[QuadMesh, np.ndarray]:
     return mesh, line
 
 
-def crease_tags(line: np.ndarray, values, corner: tuple[int, float] | None = None, *extra: Tag) -> tuple[Tag, ...]:
-    tags = [Tag("crease", tuple(line.ravel().tolist()), tuple(np.broadcast_to(values, len(line)).tolist()))]
+def crease_tags(
+    line: np.ndarray, values, corner: tuple[int, float] | None = None, *extra: Tag
+) -> tuple[Tag, ...]:
+    tags = [
+        Tag(
+            "crease",
+            tuple(line.ravel().tolist()),
+            tuple(np.broadcast_to(values, len(line)).tolist()),
+        )
+    ]
     if corner is not None:
         tags.append(Tag("corner", (corner[0],), (corner[1],)))
     return (*tags, *extra)
@@ -111,7 +148,9 @@ def test_infinite_sharpness_is_the_sharp_rule() -> None:
     x = mesh.vertices
     v = line[1, 1]  # inside the line: a crease vertex between line[1, 0] and line[2, 1]
     a, b = line[1, 0], line[2, 1]
-    np.testing.assert_allclose(refine(sharp, 1).vertices[v], (6 * x[v] + x[a] + x[b]) / 8, atol=1e-14)
+    np.testing.assert_allclose(
+        refine(sharp, 1).vertices[v], (6 * x[v] + x[a] + x[b]) / 8, atol=1e-14
+    )
     np.testing.assert_allclose(limit_points(sharp)[v], (4 * x[v] + x[a] + x[b]) / 6, atol=1e-14)
     assert vertex_rules(sharp)[v] == RULE_CREASE and vertex_rules(mesh)[v] == RULE_SMOOTH
     fine = refine(sharp, 2)
@@ -137,7 +176,9 @@ def test_sharpness_one_is_one_sharp_step_then_smooth() -> None:
     fine = refine(one, 1)
     np.testing.assert_array_equal(fine.vertices, refine(infinite, 1).vertices)
     assert not any(tag.name in ("crease", "corner") for tag in fine.tags)
-    np.testing.assert_array_equal(refine(one, 3).vertices, refine(QuadMesh.from_arrays(fine.vertices, fine.faces), 2).vertices)
+    np.testing.assert_array_equal(
+        refine(one, 3).vertices, refine(QuadMesh.from_arrays(fine.vertices, fine.faces), 2).vertices
+    )
 
 
 @pytest.mark.parametrize("s", [2.0, 3.0])
@@ -146,13 +187,21 @@ def test_integer_sharpness_is_that_many_sharp_steps(s: float) -> None:
     semi = with_tags(mesh, *crease_tags(line, s, (12, s)))
     infinite = with_tags(mesh, *crease_tags(line, 10.0, (12, 10.0)))
     levels = int(s)
-    np.testing.assert_allclose(refine(semi, levels).vertices, refine(infinite, levels).vertices, atol=1e-14)
+    np.testing.assert_allclose(
+        refine(semi, levels).vertices, refine(infinite, levels).vertices, atol=1e-14
+    )
     assert not any(tag.name in ("crease", "corner") for tag in refine(semi, levels).tags)
     # s = 1 + t: one sharp step, then t left on every half
     fine = refine(with_tags(mesh, *crease_tags(line, 1.3)), 1)
-    np.testing.assert_allclose(fine.vertices, refine(with_tags(mesh, *crease_tags(line, 10.0)), 1).vertices, atol=1e-14)
+    np.testing.assert_allclose(
+        fine.vertices, refine(with_tags(mesh, *crease_tags(line, 10.0)), 1).vertices, atol=1e-14
+    )
     crease = [tag for tag in fine.tags if tag.name == "crease"]
-    assert len(crease) == 1 and len(crease[0].ints) == 4 * len(line) and np.allclose(crease[0].floats, 0.3)
+    assert (
+        len(crease) == 1
+        and len(crease[0].ints) == 4 * len(line)
+        and np.allclose(crease[0].floats, 0.3)
+    )
 
 
 @pytest.mark.parametrize("name", CREASED)
@@ -167,14 +216,18 @@ def test_refining_twice_by_one_is_refining_by_two(shared_data, name: str) -> Non
 
 def test_refined_tags_carry_the_decremented_sharpness() -> None:
     mesh, line = crease_line()
-    tagged = with_tags(mesh, *crease_tags(line, [4.7, 2.5, 0.5, 10.0], (12, 3.0)), Tag("interpolateboundary", (1,)))
+    tagged = with_tags(
+        mesh, *crease_tags(line, [4.7, 2.5, 0.5, 10.0], (12, 3.0)), Tag("interpolateboundary", (1,))
+    )
     fine = refine(tagged, 1)
     assert fine.tags[0] == Tag("interpolateboundary", (1,))
     features = fine.features
     nv = mesh.n_vertices
     keys = fine.topology.edges[:, 0] * fine.n_vertices + fine.topology.edges[:, 1]
     for (a, b), s, child in zip(line, [4.7, 2.5, 0.5, 10.0], [3.7, 1.5, 0.0, 10.0]):
-        e = np.searchsorted(mesh.topology.edges[:, 0] * nv + mesh.topology.edges[:, 1], min(a, b) * nv + max(a, b))
+        e = np.searchsorted(
+            mesh.topology.edges[:, 0] * nv + mesh.topology.edges[:, 1], min(a, b) * nv + max(a, b)
+        )
         m = nv + e
         for end in (a, b):
             half = np.searchsorted(keys, min(end, m) * fine.n_vertices + max(end, m))
@@ -196,7 +249,9 @@ def test_chaikin_subdivides_the_sharpness_with_its_neighbours() -> None:
 
     def child(a: int, b: int, end: int) -> float:
         m = nv + np.searchsorted(edge_keys, min(a, b) * nv + max(a, b))
-        return float(fine.features.edge_sharpness[np.searchsorted(fine_keys, min(end, m) * fv + max(end, m))])
+        return float(
+            fine.features.edge_sharpness[np.searchsorted(fine_keys, min(end, m) * fv + max(end, m))]
+        )
 
     (a0, b0), (a1, b1) = line[0], line[1]
     assert child(a0, b0, a0) == pytest.approx(1.0)  # the line's end: no other semi-sharp edge
@@ -204,7 +259,9 @@ def test_chaikin_subdivides_the_sharpness_with_its_neighbours() -> None:
     assert child(a1, b1, a1) == pytest.approx(0.75 * 4 + 0.25 * 2 - 1)
     assert child(a1, b1, b1) == pytest.approx(3.0)  # its neighbour there has 4 too
     even = refine(with_tags(mesh, *crease_tags(line, 2.5), method), 3)
-    np.testing.assert_allclose(even.vertices, refine(with_tags(mesh, *crease_tags(line, 2.5)), 3).vertices, atol=1e-14)
+    np.testing.assert_allclose(
+        even.vertices, refine(with_tags(mesh, *crease_tags(line, 2.5)), 3).vertices, atol=1e-14
+    )
     twice = refine(refine(uneven, 1), 2)
     once = refine(uneven, 3)
     np.testing.assert_array_equal(twice.vertices, once.vertices)
@@ -225,9 +282,15 @@ def test_holes_take_part_and_their_children_are_holes() -> None:
 def test_sharpness_argument_overrides_the_tags() -> None:
     mesh, line = crease_line()
     tagged = with_tags(mesh, *crease_tags(line, 2.0))
-    np.testing.assert_array_equal(refine(tagged, 2, np.zeros(mesh.n_edges)).vertices, refine(mesh, 2).vertices)
-    np.testing.assert_array_equal(refine(mesh, 2, tagged.features.edge_sharpness).vertices, refine(tagged, 2).vertices)
-    np.testing.assert_array_equal(limit_points(mesh, tagged.features.edge_sharpness), limit_points(tagged))
+    np.testing.assert_array_equal(
+        refine(tagged, 2, np.zeros(mesh.n_edges)).vertices, refine(mesh, 2).vertices
+    )
+    np.testing.assert_array_equal(
+        refine(mesh, 2, tagged.features.edge_sharpness).vertices, refine(tagged, 2).vertices
+    )
+    np.testing.assert_array_equal(
+        limit_points(mesh, tagged.features.edge_sharpness), limit_points(tagged)
+    )
     with pytest.raises(InputError, match="sharpness"):
         refine(mesh, 1, -np.ones(mesh.n_edges))
     with pytest.raises(InputError, match="shape"):
@@ -263,8 +326,14 @@ def test_semi_sharp_limits_are_those_of_the_decayed_refinement(shared_data, name
     offsets, fine_offsets = mesh.topology.neighbor_offsets, fine.topology.neighbor_offsets
     ours, theirs = limit_tangents(mesh), limit_tangents(fine)
     for v in np.flatnonzero(near):
-        np.testing.assert_allclose(ours[offsets[v]:offsets[v + 1]], 2**levels * theirs[fine_offsets[v]:fine_offsets[v] + offsets[v + 1] - offsets[v]], atol=1e-12)
-    np.testing.assert_allclose(limit_normals(mesh)[near], limit_normals(fine)[:nv][near], atol=1e-12)
+        np.testing.assert_allclose(
+            ours[offsets[v] : offsets[v + 1]],
+            2**levels * theirs[fine_offsets[v] : fine_offsets[v] + offsets[v + 1] - offsets[v]],
+            atol=1e-12,
+        )
+    np.testing.assert_allclose(
+        limit_normals(mesh)[near], limit_normals(fine)[:nv][near], atol=1e-12
+    )
     a, b = limit_stars(mesh)
     fine_a, fine_b = limit_stars(fine)
     np.testing.assert_allclose(a[near], 2**levels * fine_a[:nv][near], atol=1e-12)
@@ -300,12 +369,18 @@ def test_corner_normals_are_the_sector_normals_of_the_limit(shared_data, name: s
     estimate = finite_difference_normals(mesh)
     rules = vertex_rules(mesh)[mesh.faces]
     features = mesh.features
-    semi = (features.edge_sharpness > 0) & (features.edge_sharpness < 10) & (features.edge_sharpness > 0.5)
+    semi = (
+        (features.edge_sharpness > 0)
+        & (features.edge_sharpness < 10)
+        & (features.edge_sharpness > 0.5)
+    )
     near = np.zeros(mesh.n_vertices, dtype=bool)
     near[mesh.topology.edges[semi].ravel()] = True
     near |= (features.vertex_sharpness > 0) & (features.vertex_sharpness < 10)
     checked = (rules != RULE_CORNER) & ~near[mesh.faces].any(axis=1, keepdims=True)
-    if name == "catmark_cube_creases2":  # the cube's corners: three sharp edges, one face per sector
+    if (
+        name == "catmark_cube_creases2"
+    ):  # the cube's corners: three sharp edges, one face per sector
         checked |= rules == RULE_CORNER
     angle = np.arccos(np.clip(np.einsum("fcd,fcd->fc", normals, estimate), -1, 1))
     assert angle[checked].max() < 0.05
@@ -327,10 +402,14 @@ def test_crease_sectors_have_their_own_normals() -> None:
         sector_normals = normals[at]
         # two normals, one per side of the crease, each perpendicular to the crease tangent
         same = sector_normals @ sector_normals[0] > 1 - 1e-12
-        assert same.sum() == 2 and (sector_normals[~same] @ sector_normals[~same][0] > 1 - 1e-12).all()
+        assert (
+            same.sum() == 2 and (sector_normals[~same] @ sector_normals[~same][0] > 1 - 1e-12).all()
+        )
         assert sector_normals[~same][0] @ sector_normals[0] < 0.9999
         ring = tagged.topology.one_ring(v)
-        along = [tangents[tagged.topology.neighbor_offsets[v] + j] for j, w in enumerate(ring) if w < 6]
+        along = [
+            tangents[tagged.topology.neighbor_offsets[v] + j] for j, w in enumerate(ring) if w < 6
+        ]
         assert np.abs(sector_normals @ along[0]).max() < 1e-14
     smooth = ~on_crease.any(axis=1)
     vertex_normals = limit_normals(tagged)
@@ -396,5 +475,9 @@ def test_local_limits_where_the_neighbourhood_is_not_a_manifold() -> None:
 
 def test_local_limits_with_chaikin() -> None:
     mesh, line = crease_line(6)
-    tagged = with_tags(mesh, *crease_tags(np.array(line), [1.0, 3.0, 2.0, 3.5, 0.5, 2.0]), Tag("creasemethod", strings=("chaikin",)))
+    tagged = with_tags(
+        mesh,
+        *crease_tags(np.array(line), [1.0, 3.0, 2.0, 3.5, 0.5, 2.0]),
+        Tag("creasemethod", strings=("chaikin",)),
+    )
     assert_local_limits_are_global(tagged)

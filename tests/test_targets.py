@@ -23,7 +23,12 @@ from g1patch.mesh import QuadMesh
 from g1patch.network import network_from_mesh
 from g1patch.patches import PatchSet
 from g1patch.targets import Targets, halfedge_slots
-from g1patch.targets.interpolate import interpolate_targets, legacy_targets, safeguarded_fans, slot_vertices
+from g1patch.targets.interpolate import (
+    interpolate_targets,
+    legacy_targets,
+    safeguarded_fans,
+    slot_vertices,
+)
 
 
 def _torus_grid(n: int, m: int) -> QuadMesh:
@@ -34,7 +39,9 @@ def _torus_grid(n: int, m: int) -> QuadMesh:
 def _bspline_patches(mesh: QuadMesh, n: int, m: int, seed: int) -> np.ndarray:
     """Bézier nets (F, 4, 4, 3) of a periodic uniform bicubic B-spline over the grid: the torus's
     vertices as control points, perturbed so nothing is symmetric."""
-    control = mesh.vertices.reshape(n, m, 3) + 0.05 * np.random.default_rng(seed).normal(size=(n, m, 3))
+    control = mesh.vertices.reshape(n, m, 3) + 0.05 * np.random.default_rng(seed).normal(
+        size=(n, m, 3)
+    )
     i, j = np.meshgrid(np.arange(n), np.arange(m), indexing="ij")
     rows = (i[..., None] + np.arange(-1, 3)) % n  # the 4 × 4 control block of face (i, j)
     cols = (j[..., None] + np.arange(-1, 3)) % m
@@ -56,8 +63,12 @@ def _targets_of_bezier(mesh: QuadMesh, nets: np.ndarray) -> Targets:
     tangents = np.empty((int(topology.neighbor_offsets[-1]), 3))
     count = topology.n_faces
     prev = topology.prev(np.arange(4 * count))
-    tangents[slot_out] = (3.0 * (np.stack([nets[:, a, b] for a, b in toward_next], axis=1) - corners)).reshape(-1, 3)
-    tangents[slot_in[prev]] = (3.0 * (np.stack([nets[:, a, b] for a, b in toward_prev], axis=1) - corners)).reshape(-1, 3)
+    tangents[slot_out] = (
+        3.0 * (np.stack([nets[:, a, b] for a, b in toward_next], axis=1) - corners)
+    ).reshape(-1, 3)
+    tangents[slot_in[prev]] = (
+        3.0 * (np.stack([nets[:, a, b] for a, b in toward_prev], axis=1) - corners)
+    ).reshape(-1, 3)
     normals = np.zeros((topology.n_vertices, 3))
     u_dir = tangents[slot_out].reshape(count, 4, 3)
     v_dir = tangents[slot_in[prev]].reshape(count, 4, 3)
@@ -77,14 +88,33 @@ def test_c1_targets_come_back_unchanged(seed: int) -> None:
     points = assemble_gregory(targets).points
     scale = np.abs(nets).max()
     flat = {  # Gregory layout → Bézier index
-        0: (0, 0), 1: (3, 0), 2: (3, 3), 3: (0, 3), 4: (1, 0), 5: (0, 1), 6: (3, 1), 7: (2, 0),
-        8: (2, 3), 9: (3, 2), 10: (0, 2), 11: (1, 3),
-        12: (1, 1), 13: (1, 1), 14: (2, 1), 15: (2, 1), 16: (2, 2), 17: (2, 2), 18: (1, 2), 19: (1, 2),
+        0: (0, 0),
+        1: (3, 0),
+        2: (3, 3),
+        3: (0, 3),
+        4: (1, 0),
+        5: (0, 1),
+        6: (3, 1),
+        7: (2, 0),
+        8: (2, 3),
+        9: (3, 2),
+        10: (0, 2),
+        11: (1, 3),
+        12: (1, 1),
+        13: (1, 1),
+        14: (2, 1),
+        15: (2, 1),
+        16: (2, 2),
+        17: (2, 2),
+        18: (1, 2),
+        19: (1, 2),
     }
     expected = np.stack([nets[:, a, b] for a, b in (flat[k] for k in range(20))], axis=1)
     assert np.abs(points - expected).max() <= 1e-13 * scale
     corner = assemble_corner(targets).convert("bezier").control
-    assert np.abs(corner - nets).max() <= 1e-13 * scale  # C1 data: the paper's patches are the spline too
+    assert (
+        np.abs(corner - nets).max() <= 1e-13 * scale
+    )  # C1 data: the paper's patches are the spline too
 
 
 def _random_fan_targets(mesh: QuadMesh, seed: int) -> Targets:
@@ -97,12 +127,19 @@ def _random_fan_targets(mesh: QuadMesh, seed: int) -> Targets:
     lengths = rng.uniform(0.3, 2.0, len(slot_vertex))[:, None]
     tangents = base.tangents * lengths
     normals = base.normals
-    interior = base.interior + 0.2 * rng.normal(size=base.interior.shape) * np.linalg.norm(base.tangents, axis=1).mean()
+    interior = (
+        base.interior
+        + 0.2 * rng.normal(size=base.interior.shape) * np.linalg.norm(base.tangents, axis=1).mean()
+    )
     return Targets(topology, base.positions, normals, tangents, interior)
 
 
 @settings(deadline=None, max_examples=25)
-@given(st.sampled_from(["fan", "boundary_fan", "torus", "cube_sphere", "genus2"]), st.integers(0, 40), st.integers(0, 2**32 - 1))
+@given(
+    st.sampled_from(["fan", "boundary_fan", "torus", "cube_sphere", "genus2"]),
+    st.integers(0, 40),
+    st.integers(0, 2**32 - 1),
+)
 def test_any_valid_fan_assembles_exactly_g1(kind: str, size: int, seed: int) -> None:
     """Flexible fans: lengths scaled at random per slot, interior targets anywhere: still exactly G1."""
     makers = {
@@ -128,17 +165,25 @@ def test_corner_split_solves_the_fan_equation() -> None:
     n = np.array([[0.0, 0.0, 1.0]] * 50)
     angles = np.sort(rng.uniform(0.2, 2.9, (50, 2)), axis=1)
     q = np.stack([np.ones(50), np.zeros(50), np.zeros(50)], axis=1) * rng.uniform(0.5, 2, (50, 1))
-    d_left = np.stack([np.cos(angles[:, 0]), np.sin(angles[:, 0]), np.zeros(50)], axis=1) * rng.uniform(0.5, 2, (50, 1))
-    d_right = np.stack([np.cos(-angles[:, 1]), np.sin(-angles[:, 1]), np.zeros(50)], axis=1) * rng.uniform(0.5, 2, (50, 1))
+    d_left = np.stack(
+        [np.cos(angles[:, 0]), np.sin(angles[:, 0]), np.zeros(50)], axis=1
+    ) * rng.uniform(0.5, 2, (50, 1))
+    d_right = np.stack(
+        [np.cos(-angles[:, 1]), np.sin(-angles[:, 1]), np.zeros(50)], axis=1
+    ) * rng.uniform(0.5, 2, (50, 1))
     alpha, beta, phi, margin = corner_split(q, d_left, d_right, n)
     assert (margin > 0).all() and (alpha > 0).all() and (beta > 0).all()
     np.testing.assert_allclose(alpha + beta, 2.0, rtol=0, atol=1e-15)
-    np.testing.assert_allclose(alpha[:, None] * d_left + beta[:, None] * d_right, phi[:, None] * q, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(
+        alpha[:, None] * d_left + beta[:, None] * d_right, phi[:, None] * q, rtol=0, atol=1e-14
+    )
     for valence in (3, 5, 6, 9):
         theta = 2 * np.pi / valence
         star = lambda a: np.array([[np.cos(a), np.sin(a), 0.0]])  # noqa: E731
         alpha, beta, phi, _ = corner_split(star(0.0), star(theta), star(-theta), n[:1])
-        np.testing.assert_allclose([alpha[0], beta[0], phi[0]], [1.0, 1.0, 2 * np.cos(theta)], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(
+            [alpha[0], beta[0], phi[0]], [1.0, 1.0, 2 * np.cos(theta)], rtol=0, atol=1e-15
+        )
 
 
 def test_an_invalid_fan_is_refused_by_the_assembly() -> None:
@@ -158,9 +203,21 @@ def test_an_invalid_fan_is_refused_by_the_assembly() -> None:
 def test_targets_validate_their_shapes() -> None:
     targets = legacy_targets(shapes.cube())
     with pytest.raises(InputError, match="targets.interior: expected shape"):
-        Targets(targets.topology, targets.positions, targets.normals, targets.tangents, targets.interior[:, :, 0])
+        Targets(
+            targets.topology,
+            targets.positions,
+            targets.normals,
+            targets.tangents,
+            targets.interior[:, :, 0],
+        )
     with pytest.raises(InputError, match="targets.tangents: expected shape"):
-        Targets(targets.topology, targets.positions, targets.normals, targets.tangents[:-1], targets.interior)
+        Targets(
+            targets.topology,
+            targets.positions,
+            targets.normals,
+            targets.tangents[:-1],
+            targets.interior,
+        )
 
 
 def test_unknown_shape_and_method() -> None:
@@ -178,11 +235,18 @@ def test_the_gregory_assembly_scales_with_its_targets(scale: float) -> None:
     and folded the slivers of a large polygon's split. Bound: a few ε of the points' size."""
     targets = interpolate_targets(perturbed(shapes.torus(6, 4), 0.05, 3))
     scaled = targets.with_changes(
-        positions=scale * targets.positions, tangents=scale * targets.tangents, interior=scale * targets.interior
+        positions=scale * targets.positions,
+        tangents=scale * targets.tangents,
+        interior=scale * targets.interior,
     )
     for compiled in (True, False):
         points = assemble_gregory(targets, compiled=compiled).points
-        np.testing.assert_allclose(assemble_gregory(scaled, compiled=compiled).points / scale, points, rtol=0, atol=64 * np.finfo(float).eps * np.abs(points).max())
+        np.testing.assert_allclose(
+            assemble_gregory(scaled, compiled=compiled).points / scale,
+            points,
+            rtol=0,
+            atol=64 * np.finfo(float).eps * np.abs(points).max(),
+        )
 
 
 def test_a_nearly_straight_corner_narrows_instead_of_spreading() -> None:
@@ -190,7 +254,14 @@ def test_a_nearly_straight_corner_narrows_instead_of_spreading() -> None:
     so no blend towards it is valid: its tangents turn towards each other by (θ − 180° + 3ε/2)/2
     each, to 180° − 3ε/2 = 177° (ε = 2°), keeping their lengths, instead of being spread to 90°."""
     theta = np.radians(179.9)
-    vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0 + np.cos(theta), 1.0, 0.0], [np.cos(theta), np.sin(theta), 0.0]])
+    vertices = np.array(
+        [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0 + np.cos(theta), 1.0, 0.0],
+            [np.cos(theta), np.sin(theta), 0.0],
+        ]
+    )
     vertices[2] = vertices[1] + vertices[3]  # a parallelogram with a 179.9° corner at vertex 0
     mesh = QuadMesh.from_arrays(vertices, [[0, 1, 2, 3]])
     topology = mesh.topology
@@ -203,5 +274,11 @@ def test_a_nearly_straight_corner_narrows_instead_of_spreading() -> None:
     turn = np.degrees(np.arctan2(np.cross(a, b)[2], a @ b))
     assert guarded[0]
     assert turn == pytest.approx(177.0, abs=1e-12)
-    np.testing.assert_allclose(np.linalg.norm([a, b], axis=1), chord[[first, first + 1]], rtol=1e-15)
-    np.testing.assert_allclose(np.degrees(np.arctan2(a[1], a[0])) - np.degrees(np.arctan2(raw[first][1], raw[first][0])), 1.45, atol=1e-12)
+    np.testing.assert_allclose(
+        np.linalg.norm([a, b], axis=1), chord[[first, first + 1]], rtol=1e-15
+    )
+    np.testing.assert_allclose(
+        np.degrees(np.arctan2(a[1], a[0])) - np.degrees(np.arctan2(raw[first][1], raw[first][0])),
+        1.45,
+        atol=1e-12,
+    )

@@ -32,7 +32,11 @@ def assert_watertight(mesh: TriangleMesh) -> None:
     assert (directed == 1).all(), "an edge is used twice in the same direction: orientation broken"
 
 
-@pytest.mark.parametrize("mesh", [shapes.cube(), shapes.torus(8, 5), shapes.genus2(), shapes.cube_sphere(2)], ids=["cube", "torus", "genus2", "sphere"])
+@pytest.mark.parametrize(
+    "mesh",
+    [shapes.cube(), shapes.torus(8, 5), shapes.genus2(), shapes.cube_sphere(2)],
+    ids=["cube", "torus", "genus2", "sphere"],
+)
 @pytest.mark.parametrize("resolution", [2, 3, 9])
 def test_closed_networks_tessellate_watertight(mesh, resolution: int) -> None:  # type: ignore[no-untyped-def]
     surface = tessellate(build_corner_network(mesh), resolution)
@@ -64,7 +68,9 @@ def test_points_lie_on_the_patches_and_normals_are_unit() -> None:
     sampled = network.patches.evaluate_grid(grid).reshape(-1, 3)
     # every point is one of the grid samples (welded points come from one of the patches,
     # which agree to the G0 gap, here exact)
-    distance = np.min(np.linalg.norm(surface.points[:, None, :] - sampled[None, :, :], axis=-1), axis=1)
+    distance = np.min(
+        np.linalg.norm(surface.points[:, None, :] - sampled[None, :, :], axis=-1), axis=1
+    )
     assert distance.max() <= 1e-15
     np.testing.assert_allclose(np.linalg.norm(surface.normals, axis=1), 1.0, rtol=1e-15, atol=4e-16)
 
@@ -73,7 +79,9 @@ def test_triangles_face_like_the_surface_normals() -> None:
     surface = tessellate(build_corner_network(shapes.cube_sphere(1)), 5)
     p = surface.points[surface.triangles]
     face_normals = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    assert (np.einsum("td,td->t", face_normals, surface.normals[surface.triangles].mean(axis=1)) > 0).all()
+    assert (
+        np.einsum("td,td->t", face_normals, surface.normals[surface.triangles].mean(axis=1)) > 0
+    ).all()
 
 
 def test_teapot_collapsed_edges_are_welded(shared_data: Path) -> None:

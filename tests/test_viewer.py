@@ -56,7 +56,9 @@ def creased() -> g1patch.Surface:
 
 
 def _embedded(page: str, name: str, dtype: Any) -> np.ndarray:
-    match = re.search(rf'<script type="application/octet-stream" id="g1-{name}">([^<]*)</script>', page)
+    match = re.search(
+        rf'<script type="application/octet-stream" id="g1-{name}">([^<]*)</script>', page
+    )
     assert match is not None, name
     return np.frombuffer(base64.b64decode(match.group(1)), dtype=dtype)
 
@@ -71,8 +73,12 @@ def test_page_is_self_contained(cube_page: Path) -> None:
     page = cube_page.read_text(encoding="utf-8")
     urls = set(re.findall(r"https?://[^\s\"'<>)\\]+", page))
     assert urls <= NAMESPACES, urls - NAMESPACES
-    assert not re.search(r"<(script|link|img|iframe)[^>]+(src|href)=", page)  # nothing loaded by reference
-    imports = json.loads(re.search(r'<script type="importmap">(.*?)</script>', page, re.S).group(1))["imports"]
+    assert not re.search(
+        r"<(script|link|img|iframe)[^>]+(src|href)=", page
+    )  # nothing loaded by reference
+    imports = json.loads(
+        re.search(r'<script type="importmap">(.*?)</script>', page, re.S).group(1)
+    )["imports"]
     assert set(imports) == {"three", "three/addons/controls/OrbitControls.js"}
     assert all(url.startswith("data:text/javascript;base64,") for url in imports.values())
     three = base64.b64decode(imports["three"].split(",", 1)[1]).decode()
@@ -86,13 +92,20 @@ def test_page_holds_the_exact_samples(cube: g1patch.Surface, cube_page: Path) ->
     meta = _meta(page)
     n, r = cube.n_patches, meta["resolution"]
     assert (n, r, meta["up"]) == (6, 17, "y") and meta["triangles"] == 2 * 16**2 * 6
-    positions = _embedded(page, "positions", np.float32).reshape(n, r, r, 3) + np.array(meta["centre"])
+    positions = _embedded(page, "positions", np.float32).reshape(n, r, r, 3) + np.array(
+        meta["centre"]
+    )
     normals = _embedded(page, "normals", np.float32).reshape(n, r, r, 3)
     grid = np.linspace(0, 1, r)
     exact = cube.patches.evaluate_grid(grid, grid)
     assert np.abs(positions - exact).max() < 1e-6
-    assert meta["radius"] == pytest.approx(np.linalg.norm(exact - meta["centre"], axis=-1).max(), rel=1e-6)
-    du, dv = cube.patches.evaluate_grid(grid, grid, 1, 0), cube.patches.evaluate_grid(grid, grid, 0, 1)
+    assert meta["radius"] == pytest.approx(
+        np.linalg.norm(exact - meta["centre"], axis=-1).max(), rel=1e-6
+    )
+    du, dv = (
+        cube.patches.evaluate_grid(grid, grid, 1, 0),
+        cube.patches.evaluate_grid(grid, grid, 0, 1),
+    )
     unit = np.cross(du, dv)
     unit /= np.linalg.norm(unit, axis=-1, keepdims=True)
     assert np.abs(normals - unit).max() < 1e-6
@@ -114,14 +127,19 @@ def test_seams_are_embedded_as_lines() -> None:
     page = view_html(surface.network)
     meta = _meta(page)
     seams = _embedded(page, "seams", np.float32).reshape(-1, 2, 3)
-    assert surface.network.n_seams and len(seams) == meta["seamSegments"] == 12 * (meta["resolution"] - 1)
+    assert surface.network.n_seams and len(seams) == meta["seamSegments"] == 12 * (
+        meta["resolution"] - 1
+    )
     sides = _embedded(page, "sides", np.float32).reshape(-1, 4)
     assert ((sides == -1).sum(), surface.check().seam_edges) == (24, 12)
 
 
 def test_budget_refuses_large_pages_unless_forced(cube: g1patch.Surface, tmp_path: Path) -> None:
     target = tmp_path / "big.html"
-    with pytest.raises(ViewTooLargeError, match=r"6 patches at 500 samples a side .* 2.99 M triangles .* budget of 2 M"):
+    with pytest.raises(
+        ViewTooLargeError,
+        match=r"6 patches at 500 samples a side .* 2.99 M triangles .* budget of 2 M",
+    ):
         write_view(target, cube.network, resolution=500)
     assert not list(tmp_path.iterdir())
     assert isinstance(ViewTooLargeError("x"), g1patch.InputError)
@@ -129,8 +147,13 @@ def test_budget_refuses_large_pages_unless_forced(cube: g1patch.Surface, tmp_pat
     assert _meta(page)["resolution"] == 3
     from g1patch.viewer import _resolution
 
-    with pytest.raises(ViewTooLargeError, match=r"1200000 patches at 2 samples .* 2.4 M triangles \(~180 MB\).*coarsest"):
-        _resolution(1_200_000, None, False)  # above a million patches even the coarsest page is too large
+    with pytest.raises(
+        ViewTooLargeError,
+        match=r"1200000 patches at 2 samples .* 2.4 M triangles \(~180 MB\).*coarsest",
+    ):
+        _resolution(
+            1_200_000, None, False
+        )  # above a million patches even the coarsest page is too large
     assert _resolution(1_200_000, None, True) == 2
 
 
@@ -151,13 +174,17 @@ def test_surface_view_writes_or_returns_the_page(cube: g1patch.Surface, tmp_path
     assert g1patch.api.view(cube.network, tmp_path / "again.htm").exists()
 
 
-def test_cli_view(cube: g1patch.Surface, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_view(
+    cube: g1patch.Surface, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     network = tmp_path / "cube.npz"
     save_network(network, cube.network)
     assert main(["view", str(network), "-o", str(tmp_path / "cube.html")]) == 0
     out = capsys.readouterr().out
     assert re.search(r"wrote a viewer of 6 patches, 3072 triangles \(.* MB\) -> .*cube\.html", out)
-    assert main(["view", str(network), "-o", str(tmp_path / "big.html"), "--resolution", "600"]) == 2
+    assert (
+        main(["view", str(network), "-o", str(tmp_path / "big.html"), "--resolution", "600"]) == 2
+    )
     error = capsys.readouterr().err.strip()
     assert error.startswith("g1patch: error: ") and "--force" in error and "\n" not in error
     assert main(["view", str(tmp_path / "missing.npz"), "-o", str(tmp_path / "x.html")]) == 2
@@ -186,20 +213,42 @@ class DevTools:
         command_read, self._command_write = os.pipe()
         self._reply_read, reply_write = os.pipe()
 
-        def pipes() -> None:  # in the child: the protocol's descriptors 3 (commands) and 4 (replies)
+        def pipes() -> (
+            None
+        ):  # in the child: the protocol's descriptors 3 (commands) and 4 (replies)
             import fcntl
 
-            commands, replies = (fcntl.fcntl(fd, fcntl.F_DUPFD, 10) for fd in (command_read, reply_write))
+            commands, replies = (
+                fcntl.fcntl(fd, fcntl.F_DUPFD, 10) for fd in (command_read, reply_write)
+            )
             os.dup2(commands, 3)
             os.dup2(replies, 4)
 
         self.process = subprocess.Popen(
-            [executable, "--headless", "--remote-debugging-pipe", "--no-sandbox", "--use-angle=swiftshader",
-             "--enable-unsafe-swiftshader", "--no-first-run", "--no-default-browser-check", "--disable-extensions",
-             "--disable-background-networking", "--disable-component-update", "--disable-sync", "--hide-scrollbars",
-             "--mute-audio", f"--user-data-dir={profile}", f"--window-size={WINDOW[0]},{WINDOW[1]}", "about:blank"],
-            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-            preexec_fn=pipes, close_fds=False,
+            [
+                executable,
+                "--headless",
+                "--remote-debugging-pipe",
+                "--no-sandbox",
+                "--use-angle=swiftshader",
+                "--enable-unsafe-swiftshader",
+                "--no-first-run",
+                "--no-default-browser-check",
+                "--disable-extensions",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                "--hide-scrollbars",
+                "--mute-audio",
+                f"--user-data-dir={profile}",
+                f"--window-size={WINDOW[0]},{WINDOW[1]}",
+                "about:blank",
+            ],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            preexec_fn=pipes,
+            close_fds=False,
         )
         os.close(command_read)
         os.close(reply_write)
@@ -209,7 +258,9 @@ class DevTools:
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
         self._stderr: list[bytes] = []
-        threading.Thread(target=lambda: self._stderr.extend(self.process.stderr), daemon=True).start()  # type: ignore[arg-type]
+        threading.Thread(
+            target=lambda: self._stderr.extend(self.process.stderr), daemon=True
+        ).start()  # type: ignore[arg-type]
         self.session = ""
 
     def _read(self) -> None:
@@ -242,14 +293,27 @@ class DevTools:
 
     def open_page(self) -> None:
         target = self.send("Target.createTarget", url="about:blank")["targetId"]
-        self.session = self.send("Target.attachToTarget", targetId=target, flatten=True)["sessionId"]
+        self.session = self.send("Target.attachToTarget", targetId=target, flatten=True)[
+            "sessionId"
+        ]
         for domain in ("Page", "Runtime", "Log", "Network"):
             self.send(f"{domain}.enable")
-        self.send("Emulation.setDeviceMetricsOverride", width=WINDOW[0], height=WINDOW[1], deviceScaleFactor=1,
-                  mobile=False)
+        self.send(
+            "Emulation.setDeviceMetricsOverride",
+            width=WINDOW[0],
+            height=WINDOW[1],
+            deviceScaleFactor=1,
+            mobile=False,
+        )
 
     def evaluate(self, expression: str, timeout: float = 60.0) -> Any:
-        result = self.send("Runtime.evaluate", timeout, expression=expression, awaitPromise=True, returnByValue=True)
+        result = self.send(
+            "Runtime.evaluate",
+            timeout,
+            expression=expression,
+            awaitPromise=True,
+            returnByValue=True,
+        )
         if "exceptionDetails" in result:
             raise RuntimeError(f"{expression}: {result['exceptionDetails']}")
         return result["result"].get("value")
@@ -271,7 +335,9 @@ class DevTools:
 def browser(tmp_path_factory: pytest.TempPathFactory) -> Iterator[DevTools]:
     executable = _browser()
     if executable is None:
-        pytest.skip("no Chromium found (apt-get install chromium): the viewer's browser tests need one")
+        pytest.skip(
+            "no Chromium found (apt-get install chromium): the viewer's browser tests need one"
+        )
     tools = DevTools(executable, tmp_path_factory.mktemp("chromium-profile"))
     try:
         tools.open_page()
@@ -292,11 +358,15 @@ def shoot(browser: DevTools, page: Path, mode: str) -> tuple[np.ndarray, np.ndar
         assert not message, message
         assert time.monotonic() < deadline, f"{page.name}#{mode} did not render in 90 s"
         time.sleep(0.1)
-    browser.evaluate("new Promise(done => requestAnimationFrame(() => requestAnimationFrame(done)))")
+    browser.evaluate(
+        "new Promise(done => requestAnimationFrame(() => requestAnimationFrame(done)))"
+    )
     shot = base64.b64decode(browser.send("Page.captureScreenshot", format="png")["data"])
     canvas = browser.evaluate("document.querySelector('canvas').toDataURL('image/png')")
     image = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB"))
-    alpha = np.asarray(Image.open(io.BytesIO(base64.b64decode(canvas.split(",", 1)[1]))).convert("RGBA"))[..., 3]
+    alpha = np.asarray(
+        Image.open(io.BytesIO(base64.b64decode(canvas.split(",", 1)[1]))).convert("RGBA")
+    )[..., 3]
     return image, alpha > 0
 
 
@@ -308,15 +378,22 @@ def _errors(browser: DevTools) -> list[str]:
         if method == "Runtime.exceptionThrown":
             found.append(json.dumps(params["exceptionDetails"])[:300])
         elif method == "Runtime.consoleAPICalled" and params.get("type") in ("error", "assert"):
-            found.append(" ".join(str(arg.get("value", arg.get("description"))) for arg in params.get("args", [])))
+            found.append(
+                " ".join(
+                    str(arg.get("value", arg.get("description"))) for arg in params.get("args", [])
+                )
+            )
         elif method == "Log.entryAdded" and params["entry"]["level"] == "error":
             found.append(params["entry"]["text"])
     return found
 
 
 def _requests(browser: DevTools) -> set[str]:
-    return {event["params"]["request"]["url"].split(":", 1)[0] for event in browser.events
-            if event.get("method") == "Network.requestWillBeSent"}
+    return {
+        event["params"]["request"]["url"].split(":", 1)[0]
+        for event in browser.events
+        if event.get("method") == "Network.requestWillBeSent"
+    }
 
 
 def _alternations(row: np.ndarray, covered: np.ndarray) -> int:
@@ -328,7 +405,9 @@ def _alternations(row: np.ndarray, covered: np.ndarray) -> int:
     return int(np.count_nonzero(light[1:] != light[:-1]))
 
 
-SCREENSHOTS = os.environ.get("G1PATCH_SCREENSHOTS")  # a folder to keep the screenshots in, for a person to look at
+SCREENSHOTS = os.environ.get(
+    "G1PATCH_SCREENSHOTS"
+)  # a folder to keep the screenshots in, for a person to look at
 
 
 def _keep(image: np.ndarray, name: str) -> None:
@@ -339,7 +418,9 @@ def _keep(image: np.ndarray, name: str) -> None:
         Image.fromarray(image).save(Path(SCREENSHOTS) / f"{name}.png")
 
 
-def test_browser_draws_every_mode(browser: DevTools, cube_page: Path, creased: g1patch.Surface, tmp_path: Path) -> None:
+def test_browser_draws_every_mode(
+    browser: DevTools, cube_page: Path, creased: g1patch.Surface, tmp_path: Path
+) -> None:
     creased_page = write_view(tmp_path / "creased.html", creased.network)
     shots = {}
     for page in (cube_page, creased_page):
@@ -349,10 +430,16 @@ def test_browser_draws_every_mode(browser: DevTools, cube_page: Path, creased: g
             shots[page.stem, mode] = image, covered
             height, width = covered.shape
             fraction = covered.mean()
-            assert 0.12 < fraction < 0.7, (page.name, mode, fraction)  # the surface, framed: not blank, not all
+            assert 0.12 < fraction < 0.7, (
+                page.name,
+                mode,
+                fraction,
+            )  # the surface, framed: not blank, not all
             rows, columns = np.nonzero(covered)
             assert abs(rows.mean() / height - 0.5) < 0.1 and abs(columns.mean() / width - 0.5) < 0.1
-            assert np.ptp(rows) > 0.6 * height  # framed to the silhouette: it fills most of the height
+            assert (
+                np.ptp(rows) > 0.6 * height
+            )  # framed to the silhouette: it fills most of the height
             surface = image[covered]
             assert surface.std(axis=0).max() > 10  # lit, not a flat silhouette
     for page in ("cube", "creased"):
@@ -366,12 +453,16 @@ def test_browser_draws_every_mode(browser: DevTools, cube_page: Path, creased: g
         assert np.median(shaded_changes) <= 3, (page, shaded_changes)  # shading varies slowly
         difference = np.abs(deviation.astype(int) - shaded.astype(int))[covered].max(axis=-1)
         assert (difference > 30).mean() > 0.5  # the deviation mode is a different picture
+
     # the creased cube's edges are coloured by their angle (plasma's yellow end), the exact one's not
     def yellowish(image: np.ndarray, covered: np.ndarray) -> int:
         surface = image[covered].astype(int)
         return int(((surface[:, 0] > 200) & (surface[:, 1] > 120) & (surface[:, 2] < 110)).sum())
 
-    assert yellowish(*shots["creased", "deviation"]) > 500 and yellowish(*shots["cube", "deviation"]) == 0
+    assert (
+        yellowish(*shots["creased", "deviation"]) > 500
+        and yellowish(*shots["cube", "deviation"]) == 0
+    )
     assert _errors(browser) == []
     assert _requests(browser) <= {"file", "data", "about"}, _requests(browser)
 
@@ -381,4 +472,8 @@ def test_cli_view_help(capsys: pytest.CaptureFixture[str]) -> None:
         main(["view", "--help"])
     assert done.value.code == 0
     text = capsys.readouterr().out
-    assert "examples:" in text and "g1patch view surface.npz -o surface.html" in text and "--force" in text
+    assert (
+        "examples:" in text
+        and "g1patch view surface.npz -o surface.html" in text
+        and "--force" in text
+    )

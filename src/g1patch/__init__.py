@@ -28,11 +28,24 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: public name → the module that defines it (imported on first access, PEP 562)
 _LAZY = {
-    "read": "api", "smooth": "api", "Surface": "api", "check": "api", "export": "api", "as_mesh": "api",
-    "as_network": "api", "view": "api",
-    "QuadMesh": "mesh", "QuadTopology": "mesh", "PatchNetwork": "network", "PatchSet": "patches",
-    "GregoryPatchSet": "gregory", "ContinuityReport": "continuity",
-    "G1PatchError": "errors", "InputError": "errors", "MeshError": "errors", "FormatError": "errors",
+    "read": "api",
+    "smooth": "api",
+    "Surface": "api",
+    "check": "api",
+    "export": "api",
+    "as_mesh": "api",
+    "as_network": "api",
+    "view": "api",
+    "QuadMesh": "mesh",
+    "QuadTopology": "mesh",
+    "PatchNetwork": "network",
+    "PatchSet": "patches",
+    "GregoryPatchSet": "gregory",
+    "ContinuityReport": "continuity",
+    "G1PatchError": "errors",
+    "InputError": "errors",
+    "MeshError": "errors",
+    "FormatError": "errors",
     "MissingDependencyError": "errors",
 }
 

@@ -89,11 +89,15 @@ def _interleaving_weights(weights_v: NDArray[np.float64]) -> NDArray[np.float64]
     return w.reshape(12, 3 * gv)
 
 
-def _check_out(name: str, out: NDArray[np.float64] | None, shape: tuple[int, ...]) -> NDArray[np.float64]:
+def _check_out(
+    name: str, out: NDArray[np.float64] | None, shape: tuple[int, ...]
+) -> NDArray[np.float64]:
     if out is None:
         return np.empty(shape)
     if out.shape != shape or out.dtype != np.float64 or not out.flags.c_contiguous:
-        raise InputError(f"{name}: expected a C-contiguous float64 array of shape {shape}, got {out.dtype} {out.shape}")
+        raise InputError(
+            f"{name}: expected a C-contiguous float64 array of shape {shape}, got {out.dtype} {out.shape}"
+        )
     return out
 
 
@@ -124,7 +128,11 @@ def contract(
         return out
     if _use_kernels(out.size // 3, compiled):
         kernel = _compiled(_contract_kernel)
-        control, wu_t, wv_t = np.ascontiguousarray(control), np.ascontiguousarray(weights_u.T), np.ascontiguousarray(weights_v.T)
+        control, wu_t, wv_t = (
+            np.ascontiguousarray(control),
+            np.ascontiguousarray(weights_u.T),
+            np.ascontiguousarray(weights_v.T),
+        )
         in_chunks(lambda lo, hi: kernel(control, wu_t, wv_t, out, lo, hi), n, least=1)
     else:
         _run(control, weights_u, None, weights_v, None, out, None)
@@ -168,8 +176,11 @@ def _normals_into(
     compiled: bool | None,
 ) -> NDArray[np.float64]:
     """Unit normals into ``normals_out`` (allocated when None), and positions too when given."""
-    normals_out = _check_out("normals_out" if positions is not None else "out", normals_out,
-                             (control.shape[0], u.shape[0], v.shape[0], 3))
+    normals_out = _check_out(
+        "normals_out" if positions is not None else "out",
+        normals_out,
+        (control.shape[0], u.shape[0], v.shape[0], 3),
+    )
     if normals_out.size == 0:
         return normals_out
     wu, dwu = basis_values(form, u), basis_values(form, u, 1)
@@ -179,7 +190,11 @@ def _normals_into(
         control = np.ascontiguousarray(control)
         wu_t, dwu_t, wv_t, dwv_t = (np.ascontiguousarray(w.T) for w in (wu, dwu, wv, dwv))
         into = np.empty((0, 0, 0, 3)) if positions is None else positions
-        in_chunks(lambda lo, hi: kernel(control, wu_t, dwu_t, wv_t, dwv_t, into, normals_out, lo, hi), control.shape[0], least=1)
+        in_chunks(
+            lambda lo, hi: kernel(control, wu_t, dwu_t, wv_t, dwv_t, into, normals_out, lo, hi),
+            control.shape[0],
+            least=1,
+        )
     else:
         _run(control, wu, dwu, wv, dwv, positions, normals_out)
     return normals_out
@@ -237,7 +252,10 @@ def _run(
             m = hi - lo
             # u_rep[e, (j, k)] = U_e[j] and v_tile[e, (j, k)] = V_e[k]: the products below are then contiguous
             # (a broadcast operand makes NumPy's multiply about 3x slower)
-            u_rep, v_tile = u_rep_buf[: 48 * m].reshape(3, 16, m), v_tile_buf[: 48 * m].reshape(3, 16, m)
+            u_rep, v_tile = (
+                u_rep_buf[: 48 * m].reshape(3, 16, m),
+                v_tile_buf[: 48 * m].reshape(3, 16, m),
+            )
             np.copyto(u_rep.reshape(3, 4, 4, m), r_u[:, lo:hi].reshape(3, 4, 1, m))
             np.copyto(v_tile.reshape(3, 4, 4, m), r_v[:, lo:hi].reshape(3, 1, 4, m))
             coeff, tmp = coeff_buf[: 16 * m].reshape(16, m), tmp_buf[: 16 * m].reshape(16, m)
@@ -272,14 +290,28 @@ def _compiled(kernel: Callable[..., Any]) -> Callable[..., Any]:
 
 
 def _row_curves(
-    control: NDArray[np.float64], n: int, weights_t: NDArray[np.float64], rows: NDArray[np.float64], first: int
+    control: NDArray[np.float64],
+    n: int,
+    weights_t: NDArray[np.float64],
+    rows: NDArray[np.float64],
+    first: int,
 ) -> None:
     """``rows[first + 3 j + e, a] = Σ_i weights_t[i, a] P[n, i, j, e]``: patch n's row curves at every u, vectorised over a."""
     for k in range(12):
         j, e = k // 3, k % 3
-        p0, p1, p2, p3 = control[n, 0, j, e], control[n, 1, j, e], control[n, 2, j, e], control[n, 3, j, e]
+        p0, p1, p2, p3 = (
+            control[n, 0, j, e],
+            control[n, 1, j, e],
+            control[n, 2, j, e],
+            control[n, 3, j, e],
+        )
         for a in range(weights_t.shape[1]):
-            rows[first + k, a] = weights_t[0, a] * p0 + weights_t[1, a] * p1 + weights_t[2, a] * p2 + weights_t[3, a] * p3
+            rows[first + k, a] = (
+                weights_t[0, a] * p0
+                + weights_t[1, a] * p1
+                + weights_t[2, a] * p2
+                + weights_t[3, a] * p3
+            )
 
 
 def _contract_kernel(

@@ -68,8 +68,10 @@ PREVIEW_SIZE = (400, 400)
 #: text repr is shown instead, and :meth:`Surface.render` draws them on request
 PREVIEW_MAX_PATCHES = 20_000
 
-_SOURCES = ("a mesh file path (.obj, .ply, .off), a (vertices, faces) pair of arrays or lists, a meshio.Mesh, "
-            "an object with vertices and faces (trimesh), a pyvista.PolyData or a QuadMesh")
+_SOURCES = (
+    "a mesh file path (.obj, .ply, .off), a (vertices, faces) pair of arrays or lists, a meshio.Mesh, "
+    "an object with vertices and faces (trimesh), a pyvista.PolyData or a QuadMesh"
+)
 
 
 # ------------------------------------------------------------------------------- descriptions
@@ -79,7 +81,11 @@ def describe(value: object) -> str:
     """A short phrase naming ``value`` for an error message: its type and a repr of at most ~60
     characters (arrays by shape and dtype, never their contents)."""
     kind = type(value)
-    name = kind.__qualname__ if kind.__module__ == "builtins" else f"{kind.__module__.split('.')[0]}.{kind.__qualname__}"
+    name = (
+        kind.__qualname__
+        if kind.__module__ == "builtins"
+        else f"{kind.__module__.split('.')[0]}.{kind.__qualname__}"
+    )
     if isinstance(value, np.ndarray):
         return f"a numpy.ndarray of shape {value.shape} and dtype {value.dtype}"
     short = reprlib.Repr()
@@ -140,10 +146,12 @@ def surface_box(patches: Any, samples: int = BOX_SAMPLES) -> tuple[np.ndarray, n
         points = patches.control.reshape(-1, 16, 3)
     low, high = np.full(3, np.inf), np.full(3, -np.inf)
     for start in range(0, len(points), _BLOCK):
-        sampled = np.matmul(weights, points[start:start + _BLOCK]).reshape(-1, 3)
+        sampled = np.matmul(weights, points[start : start + _BLOCK]).reshape(-1, 3)
         low, high = np.minimum(low, sampled.min(axis=0)), np.maximum(high, sampled.max(axis=0))
     frame = getattr(patches, "frame", None)
-    if frame is not None and len(points):  # x ↦ c + s x with s > 0 keeps the order of every coordinate
+    if frame is not None and len(
+        points
+    ):  # x ↦ c + s x with s > 0 keeps the order of every coordinate
         low, high = frame.to_world(low), frame.to_world(high)
     return low, high
 
@@ -153,7 +161,9 @@ def network_box(network: PatchNetwork) -> tuple[np.ndarray, np.ndarray]:
     return surface_box(network.patches)
 
 
-def network_repr(network: PatchNetwork, name: str = "PatchNetwork", notes: Sequence[str] = ()) -> str:
+def network_repr(
+    network: PatchNetwork, name: str = "PatchNetwork", notes: Sequence[str] = ()
+) -> str:
     """``<PatchNetwork 6 gregory patches, interpolate, bbox (-1.732, -1.732, -1.732)…(1.732, 1.732, 1.732)>``."""
     provenance = network.provenance
     method = provenance.get("method")
@@ -181,7 +191,9 @@ def _png_via_file(draw: Any) -> bytes:
         return path.read_bytes()
 
 
-def network_png(network: PatchNetwork, size: tuple[int, int] = PREVIEW_SIZE, **options: Any) -> bytes:
+def network_png(
+    network: PatchNetwork, size: tuple[int, int] = PREVIEW_SIZE, **options: Any
+) -> bytes:
     """The PNG bytes of :func:`g1patch.render.render` of ``network``."""
     from .render import render
 
@@ -196,7 +208,9 @@ def mesh_png(mesh: QuadMesh, size: tuple[int, int] = PREVIEW_SIZE) -> bytes:
     triangles = mesh.faces[:, [0, 1, 2, 0, 2, 3]].reshape(-1, 3)
     points = mesh.vertices[triangles].reshape(-1, 3)
     corner = mesh.vertices[mesh.faces]
-    normal = np.cross(corner[:, 2] - corner[:, 0], corner[:, 3] - corner[:, 1])  # the quad's diagonals
+    normal = np.cross(
+        corner[:, 2] - corner[:, 0], corner[:, 3] - corner[:, 1]
+    )  # the quad's diagonals
     length = np.linalg.norm(normal, axis=1, keepdims=True)
     normal = np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
     normals = np.repeat(normal, 6, axis=0)
@@ -226,7 +240,13 @@ def _check_path(name: str, path: object) -> Path:
     raise InputError(f"{name}: expected a file name (str or pathlib.Path), got {describe(path)}")
 
 
-def read(path: PathLike, *, split: bool = True, sharp_angle: float | None = None, strict: bool | None = None) -> QuadMesh | PatchNetwork:
+def read(
+    path: PathLike,
+    *,
+    split: bool = True,
+    sharp_angle: float | None = None,
+    strict: bool | None = None,
+) -> QuadMesh | PatchNetwork:
     """Open a file by its suffix: a mesh (``.obj`` with OpenSubdiv tags, ``.ply``, ``.off``) as a
     :class:`~g1patch.mesh.QuadMesh` (options as for :func:`g1patch.io.meshfile.read_mesh`), a
     network file (``.npz``, written by ``g1patch build`` or :meth:`Surface.export`) or Newell's
@@ -247,8 +267,11 @@ def read(path: PathLike, *, split: bool = True, sharp_angle: float | None = None
         from .network import network_from_patch_points
 
         return network_from_patch_points(read_bpt(target), source=str(target))
-    raise FormatError(target, f"unsupported extension {target.suffix or '(none)'!r}; g1patch.read opens meshes "
-                              f"({', '.join(MESH_SUFFIXES)}), network files (.npz) and Bézier patches (.bpt)")
+    raise FormatError(
+        target,
+        f"unsupported extension {target.suffix or '(none)'!r}; g1patch.read opens meshes "
+        f"({', '.join(MESH_SUFFIXES)}), network files (.npz) and Bézier patches (.bpt)",
+    )
 
 
 def _sharp_tags(vertices: Any, faces: Any, degrees: float | None) -> tuple[Tag, ...]:
@@ -261,8 +284,16 @@ def _sharp_tags(vertices: Any, faces: Any, degrees: float | None) -> tuple[Tag, 
 
     corners, sizes = _as_polygons(faces)
     points = np.asarray(vertices, dtype=np.float64)
-    if (points.ndim != 2 or points.shape[1] != 3 or not sizes.size or not corners.size or corners.min() < 0
-            or corners.max() >= len(points) or not np.isfinite(points).all() or sizes.min() < 3):
+    if (
+        points.ndim != 2
+        or points.shape[1] != 3
+        or not sizes.size
+        or not corners.size
+        or corners.min() < 0
+        or corners.max() >= len(points)
+        or not np.isfinite(points).all()
+        or sizes.min() < 3
+    ):
         return ()
     return sharp_angle_tags(points, corners, sizes, degrees)
 
@@ -275,13 +306,22 @@ def _planar_to_space(vertices: Any) -> Any:
     return vertices
 
 
-def _from_arrays(vertices: Any, faces: Any, source: str | None, *, split: bool, sharp_angle: float | None,
-                 strict: bool | None) -> QuadMesh:
+def _from_arrays(
+    vertices: Any,
+    faces: Any,
+    source: str | None,
+    *,
+    split: bool,
+    sharp_angle: float | None,
+    strict: bool | None,
+) -> QuadMesh:
     from .mesh import QuadMesh
 
     vertices = _planar_to_space(vertices)
     tags = _sharp_tags(vertices, faces, sharp_angle)
-    return QuadMesh.from_arrays(vertices, faces, split=split, source=source, tags=tags, strict=strict)
+    return QuadMesh.from_arrays(
+        vertices, faces, split=split, source=source, tags=tags, strict=strict
+    )
 
 
 #: meshio cell types of surfaces (polygon blocks are "polygon", in older files "polygonN")
@@ -311,9 +351,13 @@ def _meshio_faces(mesh: Any) -> Any:
                 "and the boundary of a volume mesh)"
             )
     if skipped:
-        logger.info("meshio.Mesh: left out the %s cells (not faces)", ", ".join(sorted(set(skipped))))
+        logger.info(
+            "meshio.Mesh: left out the %s cells (not faces)", ", ".join(sorted(set(skipped)))
+        )
     if not blocks:
-        raise InputError("meshio.Mesh: has no triangle, quad or polygon cells: there is no surface to smooth")
+        raise InputError(
+            "meshio.Mesh: has no triangle, quad or polygon cells: there is no surface to smooth"
+        )
     if len({block.shape[1] for block in blocks}) == 1:
         return np.concatenate(blocks)
     return [row for block in blocks for row in block]
@@ -327,14 +371,18 @@ def _vtk_faces(flat: Any) -> Any:
     while position < len(cells):
         size = int(cells[position])
         if size < 1 or position + 1 + size > len(cells):
-            raise InputError(f"faces: not a VTK cell array (a cell of {size} points at entry {position} of {len(cells)})")
-        faces.append(cells[position + 1: position + 1 + size])
+            raise InputError(
+                f"faces: not a VTK cell array (a cell of {size} points at entry {position} of {len(cells)})"
+            )
+        faces.append(cells[position + 1 : position + 1 + size])
         position += 1 + size
     sizes = {len(face) for face in faces}
     return np.stack(faces) if len(sizes) == 1 else faces
 
 
-def as_mesh(source: Any, *, split: bool = True, sharp_angle: float | None = None, strict: bool | None = None) -> QuadMesh:
+def as_mesh(
+    source: Any, *, split: bool = True, sharp_angle: float | None = None, strict: bool | None = None
+) -> QuadMesh:
     """A validated :class:`~g1patch.mesh.QuadMesh` of anything :func:`smooth` accepts.
 
     ``source``: a mesh file path (str or path-like: ``.obj``, ``.ply``, ``.off``); a
@@ -352,32 +400,63 @@ def as_mesh(source: Any, *, split: bool = True, sharp_angle: float | None = None
         if sharp_angle is None:
             return source
         tags = _sharp_tags(source.vertices, source.faces, sharp_angle)
-        return QuadMesh(source.vertices, source.topology, source.tags + tags, source.source, source.repairs)
+        return QuadMesh(
+            source.vertices, source.topology, source.tags + tags, source.source, source.repairs
+        )
     if isinstance(source, (str, os.PathLike)):
         path = Path(source)
         suffix = path.suffix.lower()
         if suffix in NETWORK_SUFFIXES:
-            raise InputError(f"{path}: is a {'network' if suffix == '.npz' else 'Bézier patch'} file, already a surface, "
-                             "not a mesh to smooth; open it with g1patch.read(path) or g1patch.Surface(g1patch.read(path))")
+            raise InputError(
+                f"{path}: is a {'network' if suffix == '.npz' else 'Bézier patch'} file, already a surface, "
+                "not a mesh to smooth; open it with g1patch.read(path) or g1patch.Surface(g1patch.read(path))"
+            )
         from .io.meshfile import read_mesh
 
         return read_mesh(path, split=split, sharp_angle=sharp_angle, strict=strict)
     if isinstance(source, (tuple, list)) and len(source) == 2:
         vertices, faces = source
-        return _from_arrays(vertices, faces, None, split=split, sharp_angle=sharp_angle, strict=strict)
-    if hasattr(source, "points") and hasattr(source, "cells") and not hasattr(source, "faces"):  # meshio.Mesh
-        return _from_arrays(source.points, _meshio_faces(source), None, split=split, sharp_angle=sharp_angle,
-                            strict=strict)
+        return _from_arrays(
+            vertices, faces, None, split=split, sharp_angle=sharp_angle, strict=strict
+        )
+    if (
+        hasattr(source, "points") and hasattr(source, "cells") and not hasattr(source, "faces")
+    ):  # meshio.Mesh
+        return _from_arrays(
+            source.points,
+            _meshio_faces(source),
+            None,
+            split=split,
+            sharp_angle=sharp_angle,
+            strict=strict,
+        )
     if hasattr(source, "vertices") and hasattr(source, "faces"):  # trimesh.Trimesh and the like
-        return _from_arrays(np.asarray(source.vertices), _face_list(source.faces), None, split=split,
-                            sharp_angle=sharp_angle, strict=strict)
-    if hasattr(source, "points") and hasattr(source, "faces"):  # pyvista.PolyData: faces a VTK cell array
+        return _from_arrays(
+            np.asarray(source.vertices),
+            _face_list(source.faces),
+            None,
+            split=split,
+            sharp_angle=sharp_angle,
+            strict=strict,
+        )
+    if hasattr(source, "points") and hasattr(
+        source, "faces"
+    ):  # pyvista.PolyData: faces a VTK cell array
         faces = source.faces
         faces = _vtk_faces(faces) if np.ndim(faces) == 1 else _face_list(faces)
-        return _from_arrays(np.asarray(source.points), faces, None, split=split, sharp_angle=sharp_angle, strict=strict)
+        return _from_arrays(
+            np.asarray(source.points),
+            faces,
+            None,
+            split=split,
+            sharp_angle=sharp_angle,
+            strict=strict,
+        )
     if isinstance(source, _surface_types()):
-        raise InputError(f"smooth: got a {type(source).__name__}, already a surface, not a mesh; use "
-                         f"g1patch.Surface({type(source).__name__.lower()}) to check, export or render it")
+        raise InputError(
+            f"smooth: got a {type(source).__name__}, already a surface, not a mesh; use "
+            f"g1patch.Surface({type(source).__name__.lower()}) to check, export or render it"
+        )
     raise InputError(f"smooth: cannot make a mesh of {describe(source)}; expected {_SOURCES}")
 
 
@@ -418,8 +497,10 @@ def as_network(surface: Any, name: str = "surface") -> PatchNetwork:
         return replace(network_from_patch_points(bezier, source="GregoryPatchSet"), patches=surface)
     if isinstance(surface, (str, os.PathLike)) and Path(surface).suffix.lower() in NETWORK_SUFFIXES:
         return read(surface)  # type: ignore[return-value]
-    raise InputError(f"{name}: expected a Surface, PatchNetwork, PatchSet, GregoryPatchSet or a network file "
-                     f"(.npz, .bpt), got {describe(surface)}")
+    raise InputError(
+        f"{name}: expected a Surface, PatchNetwork, PatchSet, GregoryPatchSet or a network file "
+        f"(.npz, .bpt), got {describe(surface)}"
+    )
 
 
 # ------------------------------------------------------------------------------- the surface
@@ -437,7 +518,11 @@ class Surface:
 
     __slots__ = ("network", "mesh", "_report")
 
-    def __init__(self, network: PatchNetwork | PatchSet | GregoryPatchSet | Surface, mesh: QuadMesh | None = None) -> None:
+    def __init__(
+        self,
+        network: PatchNetwork | PatchSet | GregoryPatchSet | Surface,
+        mesh: QuadMesh | None = None,
+    ) -> None:
         if isinstance(network, Surface):
             mesh = network.mesh if mesh is None else mesh
         self.network: PatchNetwork = as_network(network, "network")
@@ -505,7 +590,9 @@ class Surface:
             self._report = measure(self.network)
         return self._report
 
-    def tessellate(self, resolution: int | None = None, *, force: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    def tessellate(
+        self, resolution: int | None = None, *, force: bool = False
+    ) -> tuple[np.ndarray, np.ndarray]:
         """``(points (P, 3), triangles (T, 3))``: every patch sampled on a ``resolution²`` grid,
         welded along shared edges (:func:`g1patch.tessellate.tessellate`; None: about 2 M
         triangles at most, 17 samples a side for small networks; ``force`` allows more than 20 M)."""
@@ -537,10 +624,15 @@ class Surface:
         target = _check_path("path", path)
         suffix = target.suffix.lower()
         if suffix not in EXPORT_SUFFIXES:
-            raise FormatError(target, f"unsupported extension {target.suffix or '(none)'!r}; expected one of "
-                                      f"{', '.join(EXPORT_SUFFIXES)}")
+            raise FormatError(
+                target,
+                f"unsupported extension {target.suffix or '(none)'!r}; expected one of "
+                f"{', '.join(EXPORT_SUFFIXES)}",
+            )
         if suffix in CAD_SUFFIXES:
-            _check_options(target, options, ("tolerance", "progress", "g1_samples", "method", "max_deviation"))
+            _check_options(
+                target, options, ("tolerance", "progress", "g1_samples", "method", "max_deviation")
+            )
             from .io.cad import export_cad
 
             return export_cad(target, self.network, **options)
@@ -548,7 +640,9 @@ class Surface:
             _check_options(target, options, ("resolution", "force"))
             from .io.meshfile import write_triangles
 
-            points, triangles = self.tessellate(options.get("resolution"), force=bool(options.get("force", False)))
+            points, triangles = self.tessellate(
+                options.get("resolution"), force=bool(options.get("force", False))
+            )
             write_triangles(target, points, triangles)
             return target
         _check_options(target, options, ())
@@ -561,13 +655,23 @@ class Surface:
         from .patches import PatchSet
 
         if not isinstance(self.network.patches, PatchSet):
-            raise FormatError(target, ".bpt holds polynomial Bézier patches; this surface's patches are rational "
-                                      "Gregory patches (export to .step, or smooth with method='split4')")
+            raise FormatError(
+                target,
+                ".bpt holds polynomial Bézier patches; this surface's patches are rational "
+                "Gregory patches (export to .step, or smooth with method='split4')",
+            )
         write_bpt(target, self.network.patches)
         return target
 
-    def render(self, path: PathLike | None = None, mode: str = "shaded", *, view: tuple[float, float] | str = "auto",
-               up: str = "auto", **options: Any) -> Path | bytes:
+    def render(
+        self,
+        path: PathLike | None = None,
+        mode: str = "shaded",
+        *,
+        view: tuple[float, float] | str = "auto",
+        up: str = "auto",
+        **options: Any,
+    ) -> Path | bytes:
         """A PNG of the surface: ``mode`` ``"shaded"``, ``"zebra"`` (reflection lines, they
         break where it creases) or ``"deviation"`` (every patch edge coloured by its G1 angle);
         ``view`` = (elevation, azimuth) and the ``up`` axis default to ``"auto"``: chosen from the
@@ -585,8 +689,16 @@ class Surface:
         render(target, self.network, mode=mode, **options)  # type: ignore[arg-type]
         return target
 
-    def view(self, path: PathLike | None = None, *, resolution: int | None = None, force: bool = False,
-             title: str | None = None, up: str = "auto", view: tuple[float, float] | str = "auto") -> Path | str:
+    def view(
+        self,
+        path: PathLike | None = None,
+        *,
+        resolution: int | None = None,
+        force: bool = False,
+        title: str | None = None,
+        up: str = "auto",
+        view: tuple[float, float] | str = "auto",
+    ) -> Path | str:
         """An interactive viewer: one self-contained HTML page (orbit, zoom, pan; shaded, zebra and
         G1-deviation modes; seams as lines; the continuity summary), written to ``path``
         (``.html``, returned) or returned as a string when ``path`` is None. ``resolution``:
@@ -595,7 +707,13 @@ class Surface:
         :func:`g1patch.viewer.view_html` makes the page; opening it needs no network."""
         from .viewer import view_html, write_view
 
-        options: dict[str, Any] = {"resolution": resolution, "force": force, "title": title, "up": up, "view": view}
+        options: dict[str, Any] = {
+            "resolution": resolution,
+            "force": force,
+            "title": title,
+            "up": up,
+            "view": view,
+        }
         if path is None:
             return view_html(self.network, report=self.check(), **options)
         return write_view(_check_path("path", path), self.network, report=self.check(), **options)
@@ -605,8 +723,10 @@ def _check_options(target: Path, options: dict[str, Any], allowed: Sequence[str]
     unknown = sorted(set(options) - set(allowed))
     if unknown:
         takes = f"takes only {', '.join(allowed)}" if allowed else "takes no options"
-        raise InputError(f"export to {target.suffix.lower()}: unknown option {', '.join(map(repr, unknown))} "
-                         f"(this format {takes})")
+        raise InputError(
+            f"export to {target.suffix.lower()}: unknown option {', '.join(map(repr, unknown))} "
+            f"(this format {takes})"
+        )
 
 
 # ------------------------------------------------------------------------------- functions

@@ -73,7 +73,9 @@ _DERIVATIVE = np.array(
 
 
 def _matmul(a: RationalMatrix, b: RationalMatrix) -> RationalMatrix:
-    return tuple(tuple(sum(a[i][k] * b[k][j] for k in range(4)) for j in range(4)) for i in range(4))
+    return tuple(
+        tuple(sum(a[i][k] * b[k][j] for k in range(4)) for j in range(4)) for i in range(4)
+    )
 
 
 def _inverse(a: RationalMatrix) -> RationalMatrix:
@@ -137,7 +139,9 @@ def _conversion(source: Form, target: Form) -> NDArray[np.float64]:
 
 def exact_conversion_matrix(source: Form, target: Form) -> RationalMatrix:
     """Exact ``C = (M_source M_target^-1)^T``: control values ``y = C x`` describe the same cubic."""
-    return _exact_conversion(check_choice("source", source, FORMS), check_choice("target", target, FORMS))
+    return _exact_conversion(
+        check_choice("source", source, FORMS), check_choice("target", target, FORMS)
+    )
 
 
 def basis_matrix(form: Form) -> NDArray[np.float64]:

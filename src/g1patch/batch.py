@@ -43,8 +43,18 @@ from .api import CAD_SUFFIXES, EXPORT_SUFFIXES, MESH_SUFFIXES, PathLike
 from .errors import G1PatchError, InputError, MissingDependencyError, check_choice
 from .memory import tune_for_large_arrays
 
-__all__ = ["FORMATS", "SUMMARY_NAME", "BuildOptions", "Job", "collect_inputs", "convert", "parse_formats", "plan",
-           "run_batch", "summary_table"]
+__all__ = [
+    "FORMATS",
+    "SUMMARY_NAME",
+    "BuildOptions",
+    "Job",
+    "collect_inputs",
+    "convert",
+    "parse_formats",
+    "plan",
+    "run_batch",
+    "summary_table",
+]
 
 #: the formats ``--formats`` takes: the suffixes :meth:`Surface.export` writes, without the dot
 FORMATS = tuple(suffix[1:] for suffix in EXPORT_SUFFIXES)
@@ -76,9 +86,15 @@ class BuildOptions:
         check_choice("method", self.method, METHODS)
         check_choice("shape", self.shape, SHAPES)
         if isinstance(self.refine, bool) or not isinstance(self.refine, int) or self.refine < 0:
-            raise InputError(f"refine: expected a number of Catmull–Clark steps ≥ 0, got {self.refine!r}")
-        if self.sharp_angle is not None and not (math.isfinite(self.sharp_angle) and 0 < self.sharp_angle < 180):
-            raise InputError(f"sharp angle: expected degrees between 0 and 180, got {self.sharp_angle!r}")
+            raise InputError(
+                f"refine: expected a number of Catmull–Clark steps ≥ 0, got {self.refine!r}"
+            )
+        if self.sharp_angle is not None and not (
+            math.isfinite(self.sharp_angle) and 0 < self.sharp_angle < 180
+        ):
+            raise InputError(
+                f"sharp angle: expected degrees between 0 and 180, got {self.sharp_angle!r}"
+            )
 
 
 @dataclass(frozen=True)
@@ -103,8 +119,10 @@ def parse_formats(text: str | Sequence[str]) -> tuple[str, ...]:
     for name in names:
         cleaned = name.strip().lower().lstrip(".")
         if cleaned not in FORMATS:
-            raise InputError(f"--formats: unknown format {name.strip()!r}; expected a comma-separated list of "
-                             f"{', '.join(FORMATS)}")
+            raise InputError(
+                f"--formats: unknown format {name.strip()!r}; expected a comma-separated list of "
+                f"{', '.join(FORMATS)}"
+            )
         if cleaned not in formats:
             formats.append(cleaned)
     return tuple(formats)
@@ -113,9 +131,14 @@ def parse_formats(text: str | Sequence[str]) -> tuple[str, ...]:
 def _check_formats(formats: Sequence[str], options: BuildOptions) -> None:
     """Refuse, before any work, what every file would fail on: .bpt of rational patches, CAD without OCP."""
     if "bpt" in formats and options.method == "gregory":
-        raise InputError("--formats bpt: .bpt holds polynomial Bézier patches and gregory patches are rational; "
-                         "use --method split4 (or corner), or export .step instead")
-    if any(f".{name}" in CAD_SUFFIXES for name in formats) and importlib.util.find_spec("OCP") is None:
+        raise InputError(
+            "--formats bpt: .bpt holds polynomial Bézier patches and gregory patches are rational; "
+            "use --method split4 (or corner), or export .step instead"
+        )
+    if (
+        any(f".{name}" in CAD_SUFFIXES for name in formats)
+        and importlib.util.find_spec("OCP") is None
+    ):
         raise MissingDependencyError("cadquery-ocp-novtk", "cad", "STEP/IGES export")
 
 
@@ -127,15 +150,24 @@ def collect_inputs(paths: Sequence[PathLike]) -> list[Path]:
     for given in paths:
         path = Path(given)
         if path.is_dir():
-            inside = sorted(child for child in path.iterdir()
-                            if child.suffix.lower() in MESH_SUFFIXES and not child.name.startswith(".") and child.is_file())
+            inside = sorted(
+                child
+                for child in path.iterdir()
+                if child.suffix.lower() in MESH_SUFFIXES
+                and not child.name.startswith(".")
+                and child.is_file()
+            )
             if not inside:
-                raise InputError(f"{path}: a folder with no mesh files ({', '.join(MESH_SUFFIXES)}) directly inside it")
+                raise InputError(
+                    f"{path}: a folder with no mesh files ({', '.join(MESH_SUFFIXES)}) directly inside it"
+                )
             found.update(dict.fromkeys(child.resolve() for child in inside))
         elif path.is_file():
             if path.suffix.lower() not in MESH_SUFFIXES:
-                raise InputError(f"{path}: not a mesh file; batch converts {', '.join(MESH_SUFFIXES)} files "
-                                 "(and the folders holding them)")
+                raise InputError(
+                    f"{path}: not a mesh file; batch converts {', '.join(MESH_SUFFIXES)} files "
+                    "(and the folders holding them)"
+                )
             found[path.resolve()] = None
         else:
             raise InputError(f"{path}: no such file or folder")
@@ -144,7 +176,9 @@ def collect_inputs(paths: Sequence[PathLike]) -> list[Path]:
     return list(found)
 
 
-def _outputs(sources: Sequence[Path], out: Path, formats: Sequence[str]) -> dict[Path, tuple[Path, ...]]:
+def _outputs(
+    sources: Sequence[Path], out: Path, formats: Sequence[str]
+) -> dict[Path, tuple[Path, ...]]:
     """``OUT/<stem>.<format>`` per source; two sources writing one file, or an output that is an
     input, raise :class:`InputError` naming both."""
     writer: dict[Path, Path] = {}
@@ -153,15 +187,19 @@ def _outputs(sources: Sequence[Path], out: Path, formats: Sequence[str]) -> dict
         targets = tuple(out / f"{source.stem}.{name}" for name in formats)
         for target in targets:
             if target in writer:
-                raise InputError(f"{writer[target]} and {source} would both write {target}; rename one, or batch "
-                                 "them into different --out folders")
+                raise InputError(
+                    f"{writer[target]} and {source} would both write {target}; rename one, or batch "
+                    "them into different --out folders"
+                )
             writer[target] = source
         result[source] = targets
     inputs = set(sources)
     for target, source in writer.items():
         if target in inputs:
-            raise InputError(f"{source}: its output {target} would overwrite the input {target}; choose another --out "
-                             "folder or other --formats")
+            raise InputError(
+                f"{source}: its output {target} would overwrite the input {target}; choose another --out "
+                "folder or other --formats"
+            )
     return result
 
 
@@ -180,7 +218,11 @@ def _previous_records(out: Path) -> dict[str, dict[str, Any]]:
     path = out / SUMMARY_NAME
     try:
         files = json.loads(path.read_text(encoding="utf-8"))["files"]
-        return {record["input"]: record for record in files if isinstance(record, dict) and "input" in record}
+        return {
+            record["input"]: record
+            for record in files
+            if isinstance(record, dict) and "input" in record
+        }
     except FileNotFoundError:
         return {}
     except (OSError, ValueError, KeyError, TypeError) as error:
@@ -192,10 +234,14 @@ def _reusable(previous: dict[str, Any] | None, options: BuildOptions) -> bool:
     if previous is None:
         return True
     wanted = asdict(options)
-    return previous.get("status") in (BUILT, SKIPPED) and all(previous.get(key) == wanted[key] for key in _OPTION_KEYS)
+    return previous.get("status") in (BUILT, SKIPPED) and all(
+        previous.get(key) == wanted[key] for key in _OPTION_KEYS
+    )
 
 
-def plan(sources: Sequence[Path], out: Path, formats: Sequence[str], options: BuildOptions) -> tuple[list[Job], dict[str, dict[str, Any]]]:
+def plan(
+    sources: Sequence[Path], out: Path, formats: Sequence[str], options: BuildOptions
+) -> tuple[list[Job], dict[str, dict[str, Any]]]:
     """(jobs to run, records of the files skipped, by input path): see the module docstring for when a file is skipped."""
     previous = _previous_records(out)
     jobs, skipped = [], {}
@@ -217,10 +263,23 @@ def plan(sources: Sequence[Path], out: Path, formats: Sequence[str], options: Bu
 def _record(job: Job, status: str = CANCELLED) -> dict[str, Any]:
     """A record with the job's identity and options and no figures yet."""
     return {
-        "input": job.source, "name": Path(job.source).name, "status": status, **asdict(job.options),
-        "patches": None, "max_g1_angle_deg": None, "max_edge_angle_deg": None, "max_corner_angle_deg": None,
-        "folds": None, "repairs": [], "seams": None, "fallback_vertices": None,
-        "times": {}, "outputs": [], "cad": {}, "error": None, "note": None,
+        "input": job.source,
+        "name": Path(job.source).name,
+        "status": status,
+        **asdict(job.options),
+        "patches": None,
+        "max_g1_angle_deg": None,
+        "max_edge_angle_deg": None,
+        "max_corner_angle_deg": None,
+        "folds": None,
+        "repairs": [],
+        "seams": None,
+        "fallback_vertices": None,
+        "times": {},
+        "outputs": [],
+        "cad": {},
+        "error": None,
+        "note": None,
     }
 
 
@@ -262,24 +321,37 @@ def convert(job: Job) -> dict[str, Any]:
         return spent
 
     try:
-        mesh = g1patch.read(job.source, sharp_angle=options.sharp_angle, strict=True if options.strict else None)
+        mesh = g1patch.read(
+            job.source, sharp_angle=options.sharp_angle, strict=True if options.strict else None
+        )
         times["read"] = lap()
-        surface = g1patch.smooth(mesh, shape=options.shape, method=options.method, refine=options.refine)
+        surface = g1patch.smooth(
+            mesh, shape=options.shape, method=options.method, refine=options.refine
+        )
         times["build"] = lap()
-        record.update(patches=surface.n_patches, repairs=list(surface.repairs), seams=surface.network.n_seams,
-                      fallback_vertices=int(surface.provenance.get("fallback_vertices", "0")))
+        record.update(
+            patches=surface.n_patches,
+            repairs=list(surface.repairs),
+            seams=surface.network.n_seams,
+            fallback_vertices=int(surface.provenance.get("fallback_vertices", "0")),
+        )
         report = surface.check()
         times["check"] = lap()
-        record.update(max_g1_angle_deg=_finite(max(report.max_edge_angle_deg, report.max_corner_angle_deg)),
-                      max_edge_angle_deg=_finite(report.max_edge_angle_deg),
-                      max_corner_angle_deg=_finite(report.max_corner_angle_deg), folds=report.folds)
+        record.update(
+            max_g1_angle_deg=_finite(max(report.max_edge_angle_deg, report.max_corner_angle_deg)),
+            max_edge_angle_deg=_finite(report.max_edge_angle_deg),
+            max_corner_angle_deg=_finite(report.max_corner_angle_deg),
+            folds=report.folds,
+        )
         times["export"] = {}
         for output in job.outputs:
             written = surface.export(output)
             name = Path(output).suffix[1:]
             times["export"][name] = lap()
             record["outputs"].append(output)
-            if not isinstance(written, Path):  # STEP/IGES: faces, deviation, OpenCASCADE's G1 angles
+            if not isinstance(
+                written, Path
+            ):  # STEP/IGES: faces, deviation, OpenCASCADE's G1 angles
                 record["cad"][name] = written.to_dict()
         record["status"] = BUILT
         if mesh.repairs:
@@ -327,33 +399,50 @@ def _embedded_worker_setup() -> Any:
     return EmbeddedWorkerSetup()
 
 
-def _client(stack: ExitStack, scheduler: str | None, workers: int | None, n_jobs: int) -> tuple[Any, str]:
+def _client(
+    stack: ExitStack, scheduler: str | None, workers: int | None, n_jobs: int
+) -> tuple[Any, str]:
     """A connected ``distributed.Client`` (closed by ``stack``) and a phrase saying where it runs."""
     Client, LocalCluster = _distributed().Client, _distributed().LocalCluster
     if scheduler is None:
         count = workers or min(_cores(), n_jobs)
-        cluster = stack.enter_context(LocalCluster(
-            n_workers=count, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
-            silence_logs=logging.CRITICAL,  # a record says what failed; no shutdown races on stderr
-        ))
+        cluster = stack.enter_context(
+            LocalCluster(
+                n_workers=count,
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address=None,
+                silence_logs=logging.CRITICAL,  # a record says what failed; no shutdown races on stderr
+            )
+        )
         client = stack.enter_context(Client(cluster))
         client.register_plugin(_embedded_worker_setup())
         return client, f"{count} local worker{'s' if count > 1 else ''}"
     try:
         client = stack.enter_context(Client(scheduler))
     except (OSError, TimeoutError, ValueError) as error:
-        raise InputError(f"--scheduler {scheduler}: cannot connect ({' '.join(str(error).split())})") from None
+        raise InputError(
+            f"--scheduler {scheduler}: cannot connect ({' '.join(str(error).split())})"
+        ) from None
     try:
         client.wait_for_workers(1, timeout=WORKER_WAIT_S)
     except TimeoutError:
-        raise G1PatchError(f"--scheduler {scheduler}: no worker joined within {WORKER_WAIT_S:g} s "
-                           f"(start one: dask worker {scheduler})") from None
+        raise G1PatchError(
+            f"--scheduler {scheduler}: no worker joined within {WORKER_WAIT_S:g} s "
+            f"(start one: dask worker {scheduler})"
+        ) from None
     count = len(client.scheduler_info().get("workers", {}))
     return client, f"the cluster at {scheduler} ({count} worker{'s' if count > 1 else ''})"
 
 
-def _run(jobs: Sequence[Job], scheduler: str | None, workers: int | None, progress: bool,
-         done: dict[str, dict[str, Any]]) -> None:
+def _run(
+    jobs: Sequence[Job],
+    scheduler: str | None,
+    workers: int | None,
+    progress: bool,
+    done: dict[str, dict[str, Any]],
+) -> None:
     """Run ``jobs`` on the cluster, one task each, putting each record into ``done`` (by input path)
     as it finishes. On an interrupt the tasks already finished are collected too before it is raised
     again, so that their outputs count as built."""
@@ -363,16 +452,30 @@ def _run(jobs: Sequence[Job], scheduler: str | None, workers: int | None, progre
     with ExitStack() as stack:
         client, where = _client(stack, scheduler, workers, len(jobs))
         if progress:
-            print(f"g1patch: converting {len(jobs)} file{'s' if len(jobs) > 1 else ''} on {where}", file=sys.stderr)
+            print(
+                f"g1patch: converting {len(jobs)} file{'s' if len(jobs) > 1 else ''} on {where}",
+                file=sys.stderr,
+            )
         futures = {client.submit(convert, job, pure=False): job for job in jobs}
-        bar = stack.enter_context(tqdm(total=len(jobs), desc="batch", unit="file", file=sys.stderr,
-                                       disable=not progress, leave=False))
+        bar = stack.enter_context(
+            tqdm(
+                total=len(jobs),
+                desc="batch",
+                unit="file",
+                file=sys.stderr,
+                disable=not progress,
+                leave=False,
+            )
+        )
         try:
             for future in as_completed(futures):
                 try:
                     record = future.result()
                 except Exception as error:  # the task died (its worker killed, the cluster gone)
-                    record = {**_record(futures[future], FAILED), "error": f"task lost: {one_line(error)}"}
+                    record = {
+                        **_record(futures[future], FAILED),
+                        "error": f"task lost: {one_line(error)}",
+                    }
                 done[record["input"]] = record
                 bar.update()
         except KeyboardInterrupt:
@@ -407,8 +510,10 @@ def run_batch(
     options = BuildOptions() if options is None else options
     formats = parse_formats(formats)
     if workers is not None and scheduler is not None:
-        raise InputError("--workers: sets the size of the embedded cluster; with --scheduler the cluster's own "
-                         "workers run the files")
+        raise InputError(
+            "--workers: sets the size of the embedded cluster; with --scheduler the cluster's own "
+            "workers run the files"
+        )
     if workers is not None and (isinstance(workers, bool) or workers < 1):
         raise InputError(f"--workers: expected a number of worker processes ≥ 1, got {workers!r}")
     _check_formats(formats, options)
@@ -433,18 +538,31 @@ def run_batch(
     return result
 
 
-def _write_summary(folder: Path, records: list[dict[str, Any]], formats: Sequence[str], wall: float,
-                   scheduler: str | None) -> None:
+def _write_summary(
+    folder: Path,
+    records: list[dict[str, Any]],
+    formats: Sequence[str],
+    wall: float,
+    scheduler: str | None,
+) -> None:
     from . import __version__
     from .io.atomic import atomic_path
 
     summary = {
-        "g1patch": __version__, "formats": list(formats), "scheduler": scheduler or "local", "wall_s": wall,
-        "counts": {status: sum(r["status"] == status for r in records) for status in (BUILT, SKIPPED, FAILED, CANCELLED)},
+        "g1patch": __version__,
+        "formats": list(formats),
+        "scheduler": scheduler or "local",
+        "wall_s": wall,
+        "counts": {
+            status: sum(r["status"] == status for r in records)
+            for status in (BUILT, SKIPPED, FAILED, CANCELLED)
+        },
         "files": records,
     }
     with atomic_path(folder / SUMMARY_NAME) as temporary:
-        temporary.write_text(json.dumps(_json_ready(summary), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+        temporary.write_text(
+            json.dumps(_json_ready(summary), indent=1, allow_nan=False) + "\n", encoding="utf-8"
+        )
 
 
 def _json_ready(value: Any) -> Any:
@@ -473,17 +591,49 @@ def _cell(value: Any, form: str) -> str:
 def summary_table(records: Sequence[dict[str, Any]]) -> str:
     """The records as a text table: one row per file, the note (an error, a repair, why it was
     skipped) last, then a line of counts."""
-    header = ("file", "status", "method", "shape", "patches", "max G1°", "folds", "repairs", "seams", "time s", "note")
+    header = (
+        "file",
+        "status",
+        "method",
+        "shape",
+        "patches",
+        "max G1°",
+        "folds",
+        "repairs",
+        "seams",
+        "time s",
+        "note",
+    )
     rows = [header]
     for r in records:
         total = r["times"].get("total") if r["status"] != SKIPPED else None
         note = r["error"] if r["status"] == FAILED else r.get("note") or ""
-        rows.append((r["name"], r["status"], r["method"], r["shape"], _cell(r["patches"], "d"),
-                     _cell(r["max_g1_angle_deg"], ".2e"), _cell(r["folds"], "d"), str(len(r["repairs"])),
-                     _cell(r["seams"], "d"), _cell(total, ".2f"), note))
+        rows.append(
+            (
+                r["name"],
+                r["status"],
+                r["method"],
+                r["shape"],
+                _cell(r["patches"], "d"),
+                _cell(r["max_g1_angle_deg"], ".2e"),
+                _cell(r["folds"], "d"),
+                str(len(r["repairs"])),
+                _cell(r["seams"], "d"),
+                _cell(total, ".2f"),
+                note,
+            )
+        )
     widths = [max(len(row[column]) for row in rows) for column in range(len(header) - 1)]
-    lines = ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)) + "  " + row[-1] for row in rows]
-    counts = {status: sum(r["status"] == status for r in records) for status in (BUILT, SKIPPED, FAILED, CANCELLED)}
-    tally = ", ".join(f"{count} {status}" for status, count in counts.items() if count or status != CANCELLED)
+    lines = [
+        "  ".join(cell.ljust(width) for cell, width in zip(row, widths)) + "  " + row[-1]
+        for row in rows
+    ]
+    counts = {
+        status: sum(r["status"] == status for r in records)
+        for status in (BUILT, SKIPPED, FAILED, CANCELLED)
+    }
+    tally = ", ".join(
+        f"{count} {status}" for status, count in counts.items() if count or status != CANCELLED
+    )
     lines.append(f"{len(records)} file{'s' if len(records) != 1 else ''}: {tally}")
     return "\n".join(line.rstrip() for line in lines)

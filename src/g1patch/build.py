@@ -30,7 +30,7 @@ from .errors import InputError, check_choice
 from .frame import Frame
 from .gregory import GregoryPatchSet
 from .mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology, Tag
-from .network import PatchNetwork, Patches, network_from_mesh
+from .network import Patches, PatchNetwork, network_from_mesh
 from .patches import PatchSet
 from .targets import Targets
 from .targets.interpolate import SHAPES, ShapeRule, retreat, shape_targets
@@ -66,14 +66,29 @@ def semi_sharp_levels(mesh: QuadMesh) -> int:
     if not semi.size:
         return 0
     levels = int(np.ceil(semi.max()))
-    logger.info("semi-sharp features (sharpness up to %g): refining %d Catmull–Clark steps first", semi.max(), levels)
+    logger.info(
+        "semi-sharp features (sharpness up to %g): refining %d Catmull–Clark steps first",
+        semi.max(),
+        levels,
+    )
     return levels
 
 
 def _provenance(
-    mesh: QuadMesh, method: str, shape: str, tangents: str, targets: Targets, refine: int, repairs: tuple[str, ...]
+    mesh: QuadMesh,
+    method: str,
+    shape: str,
+    tangents: str,
+    targets: Targets,
+    refine: int,
+    repairs: tuple[str, ...],
 ) -> dict[str, str]:
-    provenance = {"method": method, "shape": shape, "refine": str(refine), "fallback_vertices": str(targets.n_fallback)}
+    provenance = {
+        "method": method,
+        "shape": shape,
+        "refine": str(refine),
+        "fallback_vertices": str(targets.n_fallback),
+    }
     if shape == "legacy":
         provenance["tangents"] = tangents
     if targets.seams.any():
@@ -99,9 +114,21 @@ def _faces_at_risk(targets: Targets, *, compiled: bool = True) -> np.ndarray:
         from .kernels import jit_kernel
 
         risky = np.zeros(topology.n_faces, dtype=bool)
-        jit_kernel(_risk_kernel)(faces, topology.ring_offsets, topology.ring_halfedges, topology.neighbor_offsets,
-                                 targets.positions, targets.tangents, targets.fallback, targets.corner_normals,
-                                 np.cos(RISK_TURN), np.cos(RISK_TANGENT), RISK_LENGTH[0], RISK_LENGTH[1], risky)
+        jit_kernel(_risk_kernel)(
+            faces,
+            topology.ring_offsets,
+            topology.ring_halfedges,
+            topology.neighbor_offsets,
+            targets.positions,
+            targets.tangents,
+            targets.fallback,
+            targets.corner_normals,
+            np.cos(RISK_TURN),
+            np.cos(RISK_TANGENT),
+            RISK_LENGTH[0],
+            RISK_LENGTH[1],
+            risky,
+        )
         return np.flatnonzero(risky)
     n = targets.corner_normals
     risky = targets.fallback[faces].any(axis=1)
@@ -112,16 +139,29 @@ def _faces_at_risk(targets: Targets, *, compiled: bool = True) -> np.ndarray:
     tangent = targets.tangents[slot_out]
     chord_length, tangent_length = np.linalg.norm(chord, axis=1), np.linalg.norm(tangent, axis=1)
     ratio = tangent_length / np.where(chord_length > 0, chord_length, 1.0)
-    cosine = np.einsum("hd,hd->h", chord, tangent) / np.maximum(chord_length * tangent_length, np.finfo(float).tiny)
+    cosine = np.einsum("hd,hd->h", chord, tangent) / np.maximum(
+        chord_length * tangent_length, np.finfo(float).tiny
+    )
     off = (cosine < np.cos(RISK_TANGENT)) | (ratio < RISK_LENGTH[0]) | (ratio > RISK_LENGTH[1])
     risky |= off.reshape(-1, 4).any(axis=1)
     return np.flatnonzero(risky)
 
 
-def _risk_kernel(faces: np.ndarray, ring_offsets: np.ndarray, ring_halfedges: np.ndarray, slot_offsets: np.ndarray,
-                 x: np.ndarray, tangents: np.ndarray, fallback: np.ndarray, corner_normals: np.ndarray,
-                 min_turn_cosine: float, min_tangent_cosine: float, shortest: float, longest: float,
-                 risky: np.ndarray) -> None:
+def _risk_kernel(
+    faces: np.ndarray,
+    ring_offsets: np.ndarray,
+    ring_halfedges: np.ndarray,
+    slot_offsets: np.ndarray,
+    x: np.ndarray,
+    tangents: np.ndarray,
+    fallback: np.ndarray,
+    corner_normals: np.ndarray,
+    min_turn_cosine: float,
+    min_tangent_cosine: float,
+    shortest: float,
+    longest: float,
+    risky: np.ndarray,
+) -> None:
     """:func:`_faces_at_risk` into ``risky`` (F,), all False on entry: per face the fallbacks and
     the corner normals' cosines ``n_k·n_{k+1}``; per vertex A and ring face i the tangent t of slot
     i (A → B) against the chord d = B − A, ``t·d / (|t||d|)`` and ``|t|/|d|``."""
@@ -147,7 +187,10 @@ def _risk_kernel(faces: np.ndarray, ring_offsets: np.ndarray, ring_halfedges: np
 
 
 def _guarded(
-    targets: Targets, assemble: Callable[[Targets], A], patches_per_face: int, patches_of: Callable[[A], Patches] = lambda a: a,
+    targets: Targets,
+    assemble: Callable[[Targets], A],
+    patches_per_face: int,
+    patches_of: Callable[[A], Patches] = lambda a: a,
 ) -> tuple[A, Targets]:
     """Assemble, and where faces fold retreat their vertices' targets (module docstring). Only the
     faces at risk (:func:`_faces_at_risk`) of ``patches_of(assemble(targets))`` are tested (an
@@ -169,7 +212,11 @@ def _guarded(
     for step, weight in enumerate((*GUARD_STEPS, None)):
         tested = _faces_at_risk(guarded)
         rows = (patches_per_face * tested[:, None] + np.arange(patches_per_face)).ravel()
-        folded = rows[folded_patches(patches_of(assembled).take(rows), GUARD_SAMPLES)] if rows.size else rows
+        folded = (
+            rows[folded_patches(patches_of(assembled).take(rows), GUARD_SAMPLES)]
+            if rows.size
+            else rows
+        )
         folded_faces[tested] = False
         folded_faces[folded // patches_per_face] = True
         count = int(folded_faces.sum())
@@ -180,7 +227,9 @@ def _guarded(
         corners = np.zeros(topology.n_vertices, dtype=bool)
         corners[topology.faces[folded_faces]] = True
         if step:
-            slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
+            slot_vertex = np.repeat(
+                np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets)
+            )
             corners[topology.neighbors[corners[slot_vertex]]] = True
         if not (corners & ~retreated).any() and weight == applied:
             break  # the same retreat again: the same patches
@@ -193,7 +242,12 @@ def _guarded(
 
 
 def build_network(
-    mesh: QuadMesh, method: Method = "gregory", shape: ShapeRule = "interpolate", *, tangents: TangentRule = "arc", refine: int = 0
+    mesh: QuadMesh,
+    method: Method = "gregory",
+    shape: ShapeRule = "interpolate",
+    *,
+    tangents: TangentRule = "arc",
+    refine: int = 0,
 ) -> PatchNetwork:
     """The patch network of ``mesh``: targets by ``shape``, assembled by ``method``.
 
@@ -213,7 +267,9 @@ def build_network(
     check_choice("tangents", tangents, TANGENTS)
     if isinstance(refine, bool) or not isinstance(refine, (int, np.integer)) or refine < 0:
         raise InputError(f"refine: expected a number of Catmull–Clark steps ≥ 0, got {refine!r}")
-    refine = max(int(refine), semi_sharp_levels(mesh) if shape in ("limit", "limit-interpolate") else 0)
+    refine = max(
+        int(refine), semi_sharp_levels(mesh) if shape in ("limit", "limit-interpolate") else 0
+    )
     repairs = mesh.repairs
     if refine:
         from .subdivision import refine as subdivide
@@ -225,10 +281,17 @@ def build_network(
         local = _without_creases(local)
     targets = shape_targets(local, shape, tangents=tangents)
     guard = shape == "interpolate"
-    surface = mesh if shape != "limit" else mesh.with_vertices(frame.to_world(targets.positions))  # the points passed through
+    surface = (
+        mesh if shape != "limit" else mesh.with_vertices(frame.to_world(targets.positions))
+    )  # the points passed through
     provenance = _provenance(mesh, method, shape, tangents, targets, refine, repairs)
     if method == "split4":
-        from .construct.split4 import Split4Parts, split4_network_from_parts, split4_patches, split4_provenance
+        from .construct.split4 import (
+            Split4Parts,
+            split4_network_from_parts,
+            split4_patches,
+            split4_provenance,
+        )
 
         def assemble_split4(t: Targets) -> Split4Parts:
             return split4_patches(t, t.positions, np.zeros(3), 1.0)
@@ -239,34 +302,60 @@ def build_network(
             parts = assemble_split4(targets)
         sub_patches, extra, extra_normals, stars = parts
         provenance, normals = split4_provenance(provenance, targets, stars), targets.normals
-        del parts, stars, targets, local  # the network needs none of the rest: freed before its arrays are made (DESIGN §6)
-        network = split4_network_from_parts(surface, sub_patches, extra, extra_normals, normals, frame, provenance)
+        del (
+            parts,
+            stars,
+            targets,
+            local,
+        )  # the network needs none of the rest: freed before its arrays are made (DESIGN §6)
+        network = split4_network_from_parts(
+            surface, sub_patches, extra, extra_normals, normals, frame, provenance
+        )
         # said once the network exists: a build that then fails says one thing, its error
         if mesh.features.sharp_edges.any():
-            logger.warning("split4 does not keep sharp edges yet: the %d tagged sharp edges come out smooth "
-                           "(use --method gregory)", int(mesh.features.sharp_edges.sum()))
+            logger.warning(
+                "split4 does not keep sharp edges yet: the %d tagged sharp edges come out smooth "
+                "(use --method gregory)",
+                int(mesh.features.sharp_edges.sum()),
+            )
         if mesh.features.holes.any():
-            logger.warning("split4 does not leave holes open yet: the %d hole faces get patches (use --method gregory)",
-                           int(mesh.features.holes.sum()))
+            logger.warning(
+                "split4 does not leave holes open yet: the %d hole faces get patches (use --method gregory)",
+                int(mesh.features.holes.sum()),
+            )
         return network
-    assemble: Callable[[Targets], Patches] = assemble_corner if method == "corner" else assemble_gregory
+    assemble: Callable[[Targets], Patches] = (
+        assemble_corner if method == "corner" else assemble_gregory
+    )
     if guard:
         patches, targets = _guarded(targets, assemble, 1)
         provenance["fallback_vertices"] = str(targets.n_fallback)
     else:
         patches = assemble(targets)
     normals, seams = targets.normals, targets.seams
-    del targets, local  # the network needs none of the rest: freed before its arrays are made (DESIGN §6)
+    del (
+        targets,
+        local,
+    )  # the network needs none of the rest: freed before its arrays are made (DESIGN §6)
     framed: PatchSet | GregoryPatchSet = patches.with_frame(frame)  # type: ignore[attr-defined]
     holes = mesh.features.holes
     if holes.any():
-        return _without_holes(mesh.topology, framed, surface.vertices, normals, seams, provenance, ~holes)
-    return network_from_mesh(mesh.topology, framed, surface.vertices, normals, provenance, seam_edges=seams)
+        return _without_holes(
+            mesh.topology, framed, surface.vertices, normals, seams, provenance, ~holes
+        )
+    return network_from_mesh(
+        mesh.topology, framed, surface.vertices, normals, provenance, seam_edges=seams
+    )
 
 
 def _without_holes(
-    topology: QuadTopology, patches: Patches, vertices: np.ndarray, normals: np.ndarray, seams: np.ndarray,
-    provenance: dict[str, str], keep: np.ndarray,
+    topology: QuadTopology,
+    patches: Patches,
+    vertices: np.ndarray,
+    normals: np.ndarray,
+    seams: np.ndarray,
+    provenance: dict[str, str],
+    keep: np.ndarray,
 ) -> PatchNetwork:
     """The network of the faces ``keep`` only: hole faces take part in every rule around them
     (OpenSubdiv's semantics), but get no patch, so their edges become open boundaries."""
@@ -282,7 +371,14 @@ def _without_holes(
     sub_seams = np.zeros(sub.n_edges, dtype=bool)
     sub_seams[sub.halfedge_edge] = seams[parent]
     provenance = {**provenance, "holes": str(int((~keep).sum()))}
-    return network_from_mesh(sub, patches.take(np.flatnonzero(keep)), vertices[used], normals[used], provenance, seam_edges=sub_seams)
+    return network_from_mesh(
+        sub,
+        patches.take(np.flatnonzero(keep)),
+        vertices[used],
+        normals[used],
+        provenance,
+        seam_edges=sub_seams,
+    )
 
 
 def _without_creases(mesh: QuadMesh) -> QuadMesh:
@@ -291,20 +387,40 @@ def _without_creases(mesh: QuadMesh) -> QuadMesh:
     features = mesh.features
     topology = mesh.topology
     tags = [tag for tag in mesh.tags if tag.name not in ("crease", "corner")]
-    kept = np.flatnonzero((features.edge_sharpness > 0) & (features.edge_sharpness < INFINITE_SHARPNESS))
+    kept = np.flatnonzero(
+        (features.edge_sharpness > 0) & (features.edge_sharpness < INFINITE_SHARPNESS)
+    )
     if kept.size:
-        tags.append(Tag("crease", tuple(topology.edges[kept].ravel().tolist()), tuple(features.edge_sharpness[kept].tolist())))
-    corners = np.flatnonzero((features.vertex_sharpness > 0) & (features.vertex_sharpness < INFINITE_SHARPNESS))
+        tags.append(
+            Tag(
+                "crease",
+                tuple(topology.edges[kept].ravel().tolist()),
+                tuple(features.edge_sharpness[kept].tolist()),
+            )
+        )
+    corners = np.flatnonzero(
+        (features.vertex_sharpness > 0) & (features.vertex_sharpness < INFINITE_SHARPNESS)
+    )
     if corners.size:
-        tags.append(Tag("corner", tuple(corners.tolist()), tuple(features.vertex_sharpness[corners].tolist())))
+        tags.append(
+            Tag(
+                "corner",
+                tuple(corners.tolist()),
+                tuple(features.vertex_sharpness[corners].tolist()),
+            )
+        )
     return QuadMesh(mesh.vertices, topology, tuple(tags), mesh.source, mesh.repairs)
 
 
-def build_gregory_network(mesh: QuadMesh, *, shape: ShapeRule = "interpolate", tangents: TangentRule = "arc") -> PatchNetwork:
+def build_gregory_network(
+    mesh: QuadMesh, *, shape: ShapeRule = "interpolate", tangents: TangentRule = "arc"
+) -> PatchNetwork:
     """``build_network(mesh, "gregory", shape)``: exact G1, one rational Gregory patch per quad."""
     return build_network(mesh, "gregory", shape, tangents=tangents)
 
 
-def build_split4_network(mesh: QuadMesh, *, shape: ShapeRule = "interpolate", tangents: TangentRule = "arc") -> PatchNetwork:
+def build_split4_network(
+    mesh: QuadMesh, *, shape: ShapeRule = "interpolate", tangents: TangentRule = "arc"
+) -> PatchNetwork:
     """``build_network(mesh, "split4", shape)``: exact G1, 2×2 polynomial bicubics per quad."""
     return build_network(mesh, "split4", shape, tangents=tangents)

@@ -79,8 +79,8 @@ _EXAMPLES = {
 def _parser() -> argparse.ArgumentParser:
     from .construct.corner import TWISTS
     from .io.cad import CAD_METHODS, DEVIATION_RTOL
-    from .targets.local import NORMALS, TANGENTS
     from .targets.interpolate import SHAPES
+    from .targets.local import NORMALS, TANGENTS
 
     parser = argparse.ArgumentParser(
         prog="g1patch",
@@ -93,112 +93,278 @@ def _parser() -> argparse.ArgumentParser:
 
     def command(name: str, text: str) -> argparse.ArgumentParser:
         sub = commands.add_parser(
-            name, help=text, description=text, epilog=_EXAMPLES[name], formatter_class=argparse.RawDescriptionHelpFormatter
+            name,
+            help=text,
+            description=text,
+            epilog=_EXAMPLES[name],
+            formatter_class=argparse.RawDescriptionHelpFormatter,
         )
         sub.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
         return sub
 
     build = command("build", "build a patch network from a quad mesh (OBJ, PLY, OFF)")
     build.add_argument("mesh", type=Path, help="input quad mesh")
-    build.add_argument("-o", "--output", type=Path, required=True, help="network file to write (.npz)")
-    build.add_argument("--method", choices=METHODS, default="gregory",
-                       help="gregory: exact G1, rational interiors (default); split4: exact G1 with polynomial "
-                            "bicubics, exact in STEP; corner: the paper's, G1 at corners only")
-    build.add_argument("--shape", choices=SHAPES, default="interpolate",
-                       help="interpolate: through the vertices, fitted normals, flexible tangent fans, curvature-carrying "
-                            "twists (default); limit: the Catmull–Clark limit of the mesh as a control cage; "
-                            "legacy: the first release's rules (fan normal, regular star, bilinear twist)")
-    build.add_argument("--refine", type=int, default=0, metavar="N", help="Catmull–Clark steps before building (default: 0)")
-    build.add_argument("--tangents", choices=TANGENTS, default="arc", help="legacy shape: tangent lengths (default: arc)")
-    build.add_argument("--twist", choices=TWISTS, default="bilinear",
-                       help="corner method, legacy shape: twist vectors (default: bilinear)")
-    build.add_argument("--normals", choices=NORMALS, default="fan", help="corner method, legacy shape: vertex normals (default: fan)")
-    build.add_argument("--no-split", action="store_true", help="reject faces that are not quads instead of splitting them")
-    build.add_argument("--strict", action="store_true",
-                       help="refuse a mesh that needs repair (repeated vertices, non-manifold edges or vertices, "
-                            "inconsistent orientation, interior valence 2) instead of repairing it and saying how")
-    build.add_argument("--sharp-angle", type=float, metavar="DEG",
-                       help="keep edges whose faces' normals differ by more than DEG degrees sharp (creases), and "
-                            "vertices with three such edges as corners (default: off; the file's own tags always count)")
-    build.add_argument("--check", action="store_true",
-                       help="also measure the network's continuity, as 'g1patch check' does, while the file is written, "
-                            "and print the report")
+    build.add_argument(
+        "-o", "--output", type=Path, required=True, help="network file to write (.npz)"
+    )
+    build.add_argument(
+        "--method",
+        choices=METHODS,
+        default="gregory",
+        help="gregory: exact G1, rational interiors (default); split4: exact G1 with polynomial "
+        "bicubics, exact in STEP; corner: the paper's, G1 at corners only",
+    )
+    build.add_argument(
+        "--shape",
+        choices=SHAPES,
+        default="interpolate",
+        help="interpolate: through the vertices, fitted normals, flexible tangent fans, curvature-carrying "
+        "twists (default); limit: the Catmull–Clark limit of the mesh as a control cage; "
+        "legacy: the first release's rules (fan normal, regular star, bilinear twist)",
+    )
+    build.add_argument(
+        "--refine",
+        type=int,
+        default=0,
+        metavar="N",
+        help="Catmull–Clark steps before building (default: 0)",
+    )
+    build.add_argument(
+        "--tangents",
+        choices=TANGENTS,
+        default="arc",
+        help="legacy shape: tangent lengths (default: arc)",
+    )
+    build.add_argument(
+        "--twist",
+        choices=TWISTS,
+        default="bilinear",
+        help="corner method, legacy shape: twist vectors (default: bilinear)",
+    )
+    build.add_argument(
+        "--normals",
+        choices=NORMALS,
+        default="fan",
+        help="corner method, legacy shape: vertex normals (default: fan)",
+    )
+    build.add_argument(
+        "--no-split",
+        action="store_true",
+        help="reject faces that are not quads instead of splitting them",
+    )
+    build.add_argument(
+        "--strict",
+        action="store_true",
+        help="refuse a mesh that needs repair (repeated vertices, non-manifold edges or vertices, "
+        "inconsistent orientation, interior valence 2) instead of repairing it and saying how",
+    )
+    build.add_argument(
+        "--sharp-angle",
+        type=float,
+        metavar="DEG",
+        help="keep edges whose faces' normals differ by more than DEG degrees sharp (creases), and "
+        "vertices with three such edges as corners (default: off; the file's own tags always count)",
+    )
+    build.add_argument(
+        "--check",
+        action="store_true",
+        help="also measure the network's continuity, as 'g1patch check' does, while the file is written, "
+        "and print the report",
+    )
 
-    check = command("check", "measure G0/G1 continuity of a network (.npz) or a Bézier patch file (.bpt)")
+    check = command(
+        "check", "measure G0/G1 continuity of a network (.npz) or a Bézier patch file (.bpt)"
+    )
     check.add_argument("surface", type=Path, help="network (.npz) or patches (.bpt)")
-    check.add_argument("--max-angle", type=float, metavar="DEG",
-                       help="exit 1 if a G1 angle (seams aside) exceeds DEG degrees, the surface folds or a seam is open (G0)")
-    check.add_argument("--samples", type=int, default=33, help="samples per edge, both ends included (default: 33)")
-    check.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    check.add_argument(
+        "--max-angle",
+        type=float,
+        metavar="DEG",
+        help="exit 1 if a G1 angle (seams aside) exceeds DEG degrees, the surface folds or a seam is open (G0)",
+    )
+    check.add_argument(
+        "--samples", type=int, default=33, help="samples per edge, both ends included (default: 33)"
+    )
+    check.add_argument(
+        "--json", action="store_true", help="print one JSON object instead of a table"
+    )
 
-    export = command("export", "write a network as a triangle mesh (OBJ, PLY, STL), CAD file (STEP, IGES) or .bpt")
+    export = command(
+        "export",
+        "write a network as a triangle mesh (OBJ, PLY, STL), CAD file (STEP, IGES) or .bpt",
+    )
     export.add_argument("network", type=Path, help="network file (.npz)")
-    export.add_argument("-o", "--output", type=Path, required=True, help="file to write; the extension picks the format")
-    export.add_argument("--resolution", type=int, metavar="N",
-                        help="meshes: samples per patch side (default: 17, fewer above ~3 900 patches so that "
-                             "the mesh has at most ~2 M triangles, and at least 2)")
-    export.add_argument("--force", action="store_true",
-                        help="meshes: allow a --resolution making more than 20 M triangles")
-    export.add_argument("--tolerance", type=float, metavar="REL",
-                        help="CAD: fit tolerance for rational patches, relative to the bbox diagonal (default: 1e-6)")
-    export.add_argument("--cad-method", choices=CAD_METHODS, default="auto",
-                        help="CAD, Gregory networks: split4 = re-assemble their targets polynomially (exact G1 in CAD), "
-                             "fit = fit each patch (closest, but CAD sees kinks); auto (default): split4, or fit where "
-                             "split4 cannot re-assemble the network")
-    export.add_argument("--max-deviation", type=float, metavar="REL", default=DEVIATION_RTOL,
-                        help="CAD, split4 re-assembly of Gregory networks: cut each patch into n × n quads (n = 2, 3, 4, 6, 8) "
-                             "until the exact surface lies within REL × the bbox diagonal of the network's (default: %(default)g)")
-    export.add_argument("--json", action="store_true", help="CAD: print the figures as one JSON object")
+    export.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        required=True,
+        help="file to write; the extension picks the format",
+    )
+    export.add_argument(
+        "--resolution",
+        type=int,
+        metavar="N",
+        help="meshes: samples per patch side (default: 17, fewer above ~3 900 patches so that "
+        "the mesh has at most ~2 M triangles, and at least 2)",
+    )
+    export.add_argument(
+        "--force",
+        action="store_true",
+        help="meshes: allow a --resolution making more than 20 M triangles",
+    )
+    export.add_argument(
+        "--tolerance",
+        type=float,
+        metavar="REL",
+        help="CAD: fit tolerance for rational patches, relative to the bbox diagonal (default: 1e-6)",
+    )
+    export.add_argument(
+        "--cad-method",
+        choices=CAD_METHODS,
+        default="auto",
+        help="CAD, Gregory networks: split4 = re-assemble their targets polynomially (exact G1 in CAD), "
+        "fit = fit each patch (closest, but CAD sees kinks); auto (default): split4, or fit where "
+        "split4 cannot re-assemble the network",
+    )
+    export.add_argument(
+        "--max-deviation",
+        type=float,
+        metavar="REL",
+        default=DEVIATION_RTOL,
+        help="CAD, split4 re-assembly of Gregory networks: cut each patch into n × n quads (n = 2, 3, 4, 6, 8) "
+        "until the exact surface lies within REL × the bbox diagonal of the network's (default: %(default)g)",
+    )
+    export.add_argument(
+        "--json", action="store_true", help="CAD: print the figures as one JSON object"
+    )
 
-    render = command("render", "draw a network as a PNG: shaded, zebra stripes or a map of G1 angles")
+    render = command(
+        "render", "draw a network as a PNG: shaded, zebra stripes or a map of G1 angles"
+    )
     render.add_argument("network", type=Path, help="network (.npz) or patches (.bpt)")
     render.add_argument("-o", "--output", type=Path, required=True, help="PNG to write")
     mode = render.add_mutually_exclusive_group()
-    mode.add_argument("--zebra", action="store_true", help="reflection lines: they break where the surface creases")
-    mode.add_argument("--deviation", action="store_true", help="colour every patch edge by its G1 angle")
-    render.add_argument("--size", type=int, nargs=2, default=(900, 900), metavar=("W", "H"), help="pixels (default: 900 900)")
+    mode.add_argument(
+        "--zebra",
+        action="store_true",
+        help="reflection lines: they break where the surface creases",
+    )
+    mode.add_argument(
+        "--deviation", action="store_true", help="colour every patch edge by its G1 angle"
+    )
+    render.add_argument(
+        "--size",
+        type=int,
+        nargs=2,
+        default=(900, 900),
+        metavar=("W", "H"),
+        help="pixels (default: 900 900)",
+    )
     _camera_arguments(render)
     render.add_argument("--zoom", type=float, default=1.0, help="magnification (default: 1)")
 
-    view = command("view", "write an interactive viewer: one self-contained HTML page (shaded, zebra, G1 deviation)")
+    view = command(
+        "view",
+        "write an interactive viewer: one self-contained HTML page (shaded, zebra, G1 deviation)",
+    )
     view.add_argument("network", type=Path, help="network (.npz) or patches (.bpt)")
     view.add_argument("-o", "--output", type=Path, required=True, help="HTML page to write")
-    view.add_argument("--resolution", type=int, metavar="R",
-                      help="samples per patch side (default: about 2 M triangles at most, 17 for small networks)")
-    view.add_argument("--force", action="store_true", help="allow a page of more than 2 M triangles")
+    view.add_argument(
+        "--resolution",
+        type=int,
+        metavar="R",
+        help="samples per patch side (default: about 2 M triangles at most, 17 for small networks)",
+    )
+    view.add_argument(
+        "--force", action="store_true", help="allow a page of more than 2 M triangles"
+    )
     _camera_arguments(view)
 
-    demo = command("demo", "the paper's example: the cube smoothed by the paper's patches and by exact G1")
-    demo.add_argument("--out", type=Path, default=Path("out"), help="folder for the OBJ and PNG files (default: out)")
+    demo = command(
+        "demo", "the paper's example: the cube smoothed by the paper's patches and by exact G1"
+    )
+    demo.add_argument(
+        "--out",
+        type=Path,
+        default=Path("out"),
+        help="folder for the OBJ and PNG files (default: out)",
+    )
     _camera_arguments(demo)
 
-    batch = command("batch", "build, check and export many meshes on a Dask cluster, with a summary (needs g1patch[batch])")
-    batch.add_argument("inputs", type=Path, nargs="+", metavar="INPUT", help="mesh files, or folders of them (.obj .ply .off)")
-    batch.add_argument("--out", type=Path, required=True, help="folder for the outputs (<name>.<format>) and summary.json")
-    batch.add_argument("--formats", default="npz", metavar="LIST",
-                       help="comma-separated formats to write per file: npz (network), obj, ply, stl, step, iges, bpt "
-                            "(default: npz)")
-    batch.add_argument("--method", choices=METHODS, default="gregory", help="as for build (default: gregory)")
-    batch.add_argument("--shape", choices=SHAPES, default="interpolate", help="as for build (default: interpolate)")
-    batch.add_argument("--refine", type=int, default=0, metavar="N", help="as for build (default: 0)")
-    batch.add_argument("--sharp-angle", type=float, metavar="DEG", help="as for build (default: off)")
-    batch.add_argument("--strict", action="store_true", help="as for build: refuse meshes that need repair")
+    batch = command(
+        "batch",
+        "build, check and export many meshes on a Dask cluster, with a summary (needs g1patch[batch])",
+    )
+    batch.add_argument(
+        "inputs",
+        type=Path,
+        nargs="+",
+        metavar="INPUT",
+        help="mesh files, or folders of them (.obj .ply .off)",
+    )
+    batch.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="folder for the outputs (<name>.<format>) and summary.json",
+    )
+    batch.add_argument(
+        "--formats",
+        default="npz",
+        metavar="LIST",
+        help="comma-separated formats to write per file: npz (network), obj, ply, stl, step, iges, bpt "
+        "(default: npz)",
+    )
+    batch.add_argument(
+        "--method", choices=METHODS, default="gregory", help="as for build (default: gregory)"
+    )
+    batch.add_argument(
+        "--shape", choices=SHAPES, default="interpolate", help="as for build (default: interpolate)"
+    )
+    batch.add_argument(
+        "--refine", type=int, default=0, metavar="N", help="as for build (default: 0)"
+    )
+    batch.add_argument(
+        "--sharp-angle", type=float, metavar="DEG", help="as for build (default: off)"
+    )
+    batch.add_argument(
+        "--strict", action="store_true", help="as for build: refuse meshes that need repair"
+    )
     where = batch.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, metavar="N", help="worker processes of the embedded local cluster "
-                                                                "(default: one per core, at most one per file)")
-    where.add_argument("--scheduler", metavar="ADDRESS", help="use the Dask cluster whose scheduler is at ADDRESS "
-                                                              "(e.g. tcp://127.0.0.1:8786) instead of a local one")
+    where.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="worker processes of the embedded local cluster "
+        "(default: one per core, at most one per file)",
+    )
+    where.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="use the Dask cluster whose scheduler is at ADDRESS "
+        "(e.g. tcp://127.0.0.1:8786) instead of a local one",
+    )
     return parser
 
 
 def _camera_arguments(parser: argparse.ArgumentParser) -> None:
     """``--view`` and ``--up`` of the commands that draw pictures."""
-    parser.add_argument("--view", nargs="+", default=["auto"], metavar=("auto|ELEV", "AZIM"),
-                        help="camera: elevation and azimuth in degrees, or auto (default): the front three-quarter "
-                             "view of the surface when it has a long axis (g1patch.render.auto_camera)")
-    parser.add_argument("--up", choices=("auto", "x", "y", "z"), default="auto",
-                        help="the model's up axis (default: auto: z for a surface lying flat in the xy plane, "
-                             "else y as in OBJ files)")
+    parser.add_argument(
+        "--view",
+        nargs="+",
+        default=["auto"],
+        metavar=("auto|ELEV", "AZIM"),
+        help="camera: elevation and azimuth in degrees, or auto (default): the front three-quarter "
+        "view of the surface when it has a long axis (g1patch.render.auto_camera)",
+    )
+    parser.add_argument(
+        "--up",
+        choices=("auto", "x", "y", "z"),
+        default="auto",
+        help="the model's up axis (default: auto: z for a surface lying flat in the xy plane, "
+        "else y as in OBJ files)",
+    )
 
 
 def _camera_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -210,7 +376,9 @@ def _camera_options(args: argparse.Namespace) -> dict[str, Any]:
     try:
         elevation, azimuth = (float(value) for value in args.view)
     except ValueError:
-        raise InputError(f"--view: expected auto or two angles ELEV AZIM in degrees, got {' '.join(args.view)!r}") from None
+        raise InputError(
+            f"--view: expected auto or two angles ELEV AZIM in degrees, got {' '.join(args.view)!r}"
+        ) from None
     return {"view": (elevation, azimuth), "up": args.up}
 
 
@@ -224,6 +392,7 @@ def _progress(label: str, quiet: bool) -> Iterator[Callable[[int, int], None]]:
 
     bar = tqdm(total=None, desc=label, unit="", leave=False, file=sys.stderr)
     try:
+
         def update(done: int, total: int) -> None:
             bar.total = total
             bar.n = done
@@ -251,12 +420,24 @@ def _load_surface(path: Path) -> Any:
     if not path.exists():
         raise FormatError(path, "no such file")
     what = describe_file(path, b"")
-    hint = f" (make a network from it: g1patch build {path} -o {path.with_suffix('.npz')})" if suffix in MESH_SUFFIXES + (".off",) else ""
+    hint = (
+        f" (make a network from it: g1patch build {path} -o {path.with_suffix('.npz')})"
+        if suffix in MESH_SUFFIXES + (".off",)
+        else ""
+    )
     raise FormatError(path, f"not a network or patch file but {what}; {expects}{hint}")
 
 
-def build_network(mesh: Any, method: str, *, shape: str = "interpolate", tangents: str = "arc", twist: str = "bilinear",
-                  normals: str = "fan", refine: int = 0) -> Any:
+def build_network(
+    mesh: Any,
+    method: str,
+    *,
+    shape: str = "interpolate",
+    tangents: str = "arc",
+    twist: str = "bilinear",
+    normals: str = "fan",
+    refine: int = 0,
+) -> Any:
     """The network of ``mesh`` by ``method`` and ``shape`` (:func:`g1patch.build.build_network`).
 
     ``--method corner --shape legacy`` is the paper's construction as the first release built it,
@@ -283,8 +464,15 @@ def _build(args: argparse.Namespace) -> int:
         with strict_meshes(args.strict):
             mesh = read_mesh(args.mesh, split=not args.no_split, sharp_angle=args.sharp_angle)
         progress(1, 3)
-        network = build_network(mesh, args.method, shape=args.shape, tangents=args.tangents, twist=args.twist,
-                                normals=args.normals, refine=args.refine)
+        network = build_network(
+            mesh,
+            args.method,
+            shape=args.shape,
+            tangents=args.tangents,
+            twist=args.twist,
+            normals=args.normals,
+            refine=args.refine,
+        )
         progress(2, 3)
         if args.check:  # the file is written while the check runs
             saving = save_network_in_background(args.output, network)
@@ -301,8 +489,12 @@ def _build(args: argparse.Namespace) -> int:
     if mesh.repairs:
         print(f"g1patch: {args.mesh}: {mesh.repair_note}", file=sys.stderr)
     fallback = int(network.provenance.get("fallback_vertices", "0"))
-    note = f"; {fallback} vertices needed a fallback (degenerate or folded fans)" if fallback else ""
-    print(f"built {network.n_patches} {args.method} patches from {args.mesh} -> {args.output}{note}")
+    note = (
+        f"; {fallback} vertices needed a fallback (degenerate or folded fans)" if fallback else ""
+    )
+    print(
+        f"built {network.n_patches} {args.method} patches from {args.mesh} -> {args.output}{note}"
+    )
     if report is not None:
         print(report.summary())
     return EXIT_OK
@@ -327,14 +519,22 @@ def _check(args: argparse.Namespace) -> int:
         failures.append(f"G1 angle {angle:.3e}° above {args.max_angle}°")
     if report.folds:
         patch, u, v = report.fold_locations[0]
-        failures.append(f"{report.folds} folded patches (first: patch {patch} at (u, v) = ({u:.4g}, {v:.4g}))")
+        failures.append(
+            f"{report.folds} folded patches (first: patch {patch} at (u, v) = ({u:.4g}, {v:.4g}))"
+        )
     if not report.seams_closed():
-        failures.append(f"seam G0 gap {report.seam_g0_max:.3e} (of bbox diag) above {SEAM_G0_RTOL:g}")
+        failures.append(
+            f"seam G0 gap {report.seam_g0_max:.3e} (of bbox diag) above {SEAM_G0_RTOL:g}"
+        )
     if not args.json:
         if failures:
             print("FAILED: " + "; ".join(failures), file=sys.stderr)
         else:
-            seams = f"; {report.seam_edges} seams (sharp on purpose) closed within {SEAM_G0_RTOL:g}" if report.seam_edges else ""
+            seams = (
+                f"; {report.seam_edges} seams (sharp on purpose) closed within {SEAM_G0_RTOL:g}"
+                if report.seam_edges
+                else ""
+            )
             print(f"passed: G1 angles within {args.max_angle}°, no folds{seams}")
     return EXIT_CHECK_FAILED if failures else EXIT_OK
 
@@ -342,8 +542,11 @@ def _check(args: argparse.Namespace) -> int:
 def _export(args: argparse.Namespace) -> int:
     suffix = args.output.suffix.lower()
     if suffix not in (*MESH_SUFFIXES, *CAD_SUFFIXES, ".bpt"):
-        raise FormatError(args.output, f"unsupported extension {suffix or '(none)'!r}; expected one of "
-                                       f"{', '.join((*MESH_SUFFIXES, *CAD_SUFFIXES, '.bpt'))}")
+        raise FormatError(
+            args.output,
+            f"unsupported extension {suffix or '(none)'!r}; expected one of "
+            f"{', '.join((*MESH_SUFFIXES, *CAD_SUFFIXES, '.bpt'))}",
+        )
     from .io.network_file import load_network
 
     network = load_network(args.network)
@@ -351,10 +554,17 @@ def _export(args: argparse.Namespace) -> int:
         from .io.cad import export_cad
 
         with _progress("export", args.quiet or args.json) as progress:
-            tolerance = None if args.tolerance is None else args.tolerance * network.bounding_box_diagonal()
-            result = export_cad(args.output, network, tolerance=tolerance, method=args.cad_method,
-                                max_deviation=args.max_deviation,
-                                progress=lambda stage, done, total: progress(done, total))
+            tolerance = (
+                None if args.tolerance is None else args.tolerance * network.bounding_box_diagonal()
+            )
+            result = export_cad(
+                args.output,
+                network,
+                tolerance=tolerance,
+                method=args.cad_method,
+                max_deviation=args.max_deviation,
+                progress=lambda stage, done, total: progress(done, total),
+            )
         corner_only = network.provenance.get("method") == "corner"
         if args.json:
             print(json.dumps({**result.to_dict(), "g1_by_design": not corner_only}))
@@ -364,21 +574,28 @@ def _export(args: argparse.Namespace) -> int:
     if args.json:
         from .errors import InputError
 
-        raise InputError(f"--json: reports CAD exports ({', '.join(CAD_SUFFIXES)}); {args.output} is not one")
+        raise InputError(
+            f"--json: reports CAD exports ({', '.join(CAD_SUFFIXES)}); {args.output} is not one"
+        )
     if suffix == ".bpt":
         from .io.bpt import write_bpt
         from .patches import PatchSet
 
         if not isinstance(network.patches, PatchSet):
-            raise FormatError(args.output, ".bpt holds polynomial Bézier patches; this network's patches are rational "
-                                           "(export to .step instead)")
+            raise FormatError(
+                args.output,
+                ".bpt holds polynomial Bézier patches; this network's patches are rational "
+                "(export to .step instead)",
+            )
         write_bpt(args.output, network.patches)
         print(f"wrote {network.n_patches} Bézier patches -> {args.output}")
         return EXIT_OK
     from .io.meshfile import write_triangles
     from .tessellate import choose_resolution, tessellate
 
-    resolution = choose_resolution(network.n_patches) if args.resolution is None else args.resolution
+    resolution = (
+        choose_resolution(network.n_patches) if args.resolution is None else args.resolution
+    )
     if args.resolution is not None:
         _check_export_size(network.n_patches, resolution, suffix, args.force)
     mesh = tessellate(network, resolution, force=True)
@@ -391,24 +608,40 @@ def _cad_export_text(result: Any, corner_only: bool) -> str:
     """The lines ``export`` prints for a CAD file: faces, size, deviation, OCC's G1 angle, seams."""
     from .tessellate import _size_text
 
-    cells = f", each Gregory patch as {result.refine} × {result.refine} quads" if result.refine > 1 else ""
-    kind = {"exact": "exact B-spline faces", "split4": f"exact B-spline faces of the split4 re-assembly (exact G1{cells})",
-            "fit": "fitted B-spline faces"}[result.method]
-    lines = [f"wrote {result.faces} {kind}{', a closed solid' if result.solid else ''}, "
-             f"{_size_text(result.file_bytes, 'B')} -> {result.path}",
-             f"max deviation from the network's surface: {result.deviation:.3e} ({result.relative_deviation:.2e} of the "
-             f"bbox diagonal{', split4 vs Gregory' if result.method == 'split4' else ''})"]
+    cells = (
+        f", each Gregory patch as {result.refine} × {result.refine} quads"
+        if result.refine > 1
+        else ""
+    )
+    kind = {
+        "exact": "exact B-spline faces",
+        "split4": f"exact B-spline faces of the split4 re-assembly (exact G1{cells})",
+        "fit": "fitted B-spline faces",
+    }[result.method]
+    lines = [
+        f"wrote {result.faces} {kind}{', a closed solid' if result.solid else ''}, "
+        f"{_size_text(result.file_bytes, 'B')} -> {result.path}",
+        f"max deviation from the network's surface: {result.deviation:.3e} ({result.relative_deviation:.2e} of the "
+        f"bbox diagonal{', split4 vs Gregory' if result.method == 'split4' else ''})",
+    ]
     if result.method_note:
         lines.append(result.method_note)
     if result.g1_measured:
-        lines.append(f"max G1 angle across shared edges, measured on OpenCASCADE's surfaces: {result.max_g1_angle_deg:.3e}°")
+        lines.append(
+            f"max G1 angle across shared edges, measured on OpenCASCADE's surfaces: {result.max_g1_angle_deg:.3e}°"
+        )
     else:
         lines.append(f"G1 angle across shared edges: {result.g1_note}")
     if corner_only:
-        lines.append("the network is G1 at its corners only (method corner): its edges kink by design")
+        lines.append(
+            "the network is G1 at its corners only (method corner): its edges kink by design"
+        )
     if result.seam_edges:
-        angles = ("" if result.seam_angle_min_deg is None else
-                  f", their faces meet at {result.seam_angle_min_deg:.4g}° to {result.seam_angle_max_deg:.4g}°")
+        angles = (
+            ""
+            if result.seam_angle_min_deg is None
+            else f", their faces meet at {result.seam_angle_min_deg:.4g}° to {result.seam_angle_max_deg:.4g}°"
+        )
         lines.append(f"{result.seam_edges} seams kept as sharp edges{angles}")
     return "\n".join(lines)
 
@@ -449,10 +682,19 @@ def _render(args: argparse.Namespace) -> int:
 
     if args.output.suffix.lower() != ".png":
         raise FormatError(args.output, "pictures are written as .png")
-    mode: Literal["shaded", "zebra", "deviation"] = "zebra" if args.zebra else "deviation" if args.deviation else "shaded"
+    mode: Literal["shaded", "zebra", "deviation"] = (
+        "zebra" if args.zebra else "deviation" if args.deviation else "shaded"
+    )
     network = _load_surface(args.network)
-    render(args.output, network, mode=mode, size=tuple(args.size), **_camera_options(args), zoom=args.zoom,
-           title=f"{args.network.name}: {mode}")
+    render(
+        args.output,
+        network,
+        mode=mode,
+        size=tuple(args.size),
+        **_camera_options(args),
+        zoom=args.zoom,
+        title=f"{args.network.name}: {mode}",
+    )
     print(f"wrote {args.output}")
     return EXIT_OK
 
@@ -460,10 +702,22 @@ def _render(args: argparse.Namespace) -> int:
 def _batch(args: argparse.Namespace) -> int:
     from .batch import FAILED, BuildOptions, run_batch, summary_table
 
-    options = BuildOptions(method=args.method, shape=args.shape, refine=args.refine, sharp_angle=args.sharp_angle,
-                           strict=args.strict)
-    records = run_batch(args.inputs, args.out, formats=args.formats, options=options, scheduler=args.scheduler,
-                        workers=args.workers, progress=not args.quiet and sys.stderr.isatty())
+    options = BuildOptions(
+        method=args.method,
+        shape=args.shape,
+        refine=args.refine,
+        sharp_angle=args.sharp_angle,
+        strict=args.strict,
+    )
+    records = run_batch(
+        args.inputs,
+        args.out,
+        formats=args.formats,
+        options=options,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        progress=not args.quiet and sys.stderr.isatty(),
+    )
     print(summary_table(records))
     failed = [record["name"] for record in records if record["status"] == FAILED]
     if failed:
@@ -476,10 +730,16 @@ def _view(args: argparse.Namespace) -> int:
     from .tessellate import _size_text, choose_resolution, triangle_count
 
     network = _load_surface(args.network)
-    resolution = choose_resolution(network.n_patches) if args.resolution is None else args.resolution
-    path = Surface(network).view(args.output, resolution=resolution, force=args.force, **_camera_options(args))
-    print(f"wrote a viewer of {network.n_patches} patches, {triangle_count(network.n_patches, resolution)} triangles "
-          f"({_size_text(path.stat().st_size, 'B')}) -> {path}")
+    resolution = (
+        choose_resolution(network.n_patches) if args.resolution is None else args.resolution
+    )
+    path = Surface(network).view(
+        args.output, resolution=resolution, force=args.force, **_camera_options(args)
+    )
+    print(
+        f"wrote a viewer of {network.n_patches} patches, {triangle_count(network.n_patches, resolution)} triangles "
+        f"({_size_text(path.stat().st_size, 'B')}) -> {path}"
+    )
     return EXIT_OK
 
 
@@ -510,33 +770,74 @@ def _demo(args: argparse.Namespace) -> int:
     for vertex, normal in zip(mesh.faces[0], normals, strict=True):
         print(f"     vertex {vertex}: ({normal[0]:+.6f}, {normal[1]:+.6f}, {normal[2]:+.6f})")
     diagonal, anti = hermite.diagonal_polynomials()
-    print(f"   Degrees of its diagonal and anti-diagonal: {int(polynomial_degree(diagonal)[0])} and "
-          f"{int(polynomial_degree(anti)[0])} (S-/HS closure |C| = {np.linalg.norm(hermite.closure()[0]):.1e}).")
+    print(
+        f"   Degrees of its diagonal and anti-diagonal: {int(polynomial_degree(diagonal)[0])} and "
+        f"{int(polynomial_degree(anti)[0])} (S-/HS closure |C| = {np.linalg.norm(hermite.closure()[0]):.1e})."
+    )
     print("2. g1patch's default: the interpolating Gregory network, G1 along every edge.")
-    print("3. g1patch's polynomial option: 2x2 bicubic pieces per quad, G1 everywhere, exact in CAD.")
-    print("4. The cube as a subdivision cage: the Catmull–Clark limit (what a SubD modeller shows), exactly G1.\n")
+    print(
+        "3. g1patch's polynomial option: 2x2 bicubic pieces per quad, G1 everywhere, exact in CAD."
+    )
+    print(
+        "4. The cube as a subdivision cage: the Catmull–Clark limit (what a SubD modeller shows), exactly G1.\n"
+    )
     reports = [check(network) for network in (corner, gregory, split4, limit)]
     corner_report, gregory_report, split4_report, limit_report = reports
-    print(format_reports(reports, ["1. paper (corner G1)", "2. Gregory (exact G1)", "3. split4 (exact G1)", "4. limit (exact G1)"]))
+    print(
+        format_reports(
+            reports,
+            [
+                "1. paper (corner G1)",
+                "2. Gregory (exact G1)",
+                "3. split4 (exact G1)",
+                "4. limit (exact G1)",
+            ],
+        )
+    )
     radius = np.linalg.norm(gregory.patches.evaluate_grid(np.linspace(0, 1, 17)), axis=-1)
     limit_radius = np.linalg.norm(limit.patches.evaluate_grid(np.linspace(0, 1, 17)), axis=-1)
     exact = max(report.max_edge_angle_deg for report in reports[1:])
-    print("\nThe paper's conditions hold at the corners (angle ~1e-14°) but its patches crease along every")
-    print(f"edge by {corner_report.max_edge_angle_deg:.1f}°; the other three are G1 everywhere (max {exact:.1e}°).")
-    print(f"The interpolating Gregory cube is a sphere: radius {radius.min():.4f}..{radius.max():.4f} (√3 = 1.7321);")
-    print(f"the limit surface lies inside the cage: radius {limit_radius.min():.4f}..{limit_radius.max():.4f}.")
+    print(
+        "\nThe paper's conditions hold at the corners (angle ~1e-14°) but its patches crease along every"
+    )
+    print(
+        f"edge by {corner_report.max_edge_angle_deg:.1f}°; the other three are G1 everywhere (max {exact:.1e}°)."
+    )
+    print(
+        f"The interpolating Gregory cube is a sphere: radius {radius.min():.4f}..{radius.max():.4f} (√3 = 1.7321);"
+    )
+    print(
+        f"the limit surface lies inside the cage: radius {limit_radius.min():.4f}..{limit_radius.max():.4f}."
+    )
 
     args.out.mkdir(parents=True, exist_ok=True)
     written = []
-    for name, network in (("cube_corner", corner), ("cube_gregory", gregory), ("cube_split4", split4), ("cube_limit", limit)):
+    for name, network in (
+        ("cube_corner", corner),
+        ("cube_gregory", gregory),
+        ("cube_split4", split4),
+        ("cube_limit", limit),
+    ):
         surface = tessellate(network, 33)
         write_triangles(args.out / f"{name}.obj", surface.points, surface.triangles)
         written.append(args.out / f"{name}.obj")
-    titles = ["paper: corner G1 (creased)", "Gregory (exact G1)", "split4 (exact G1, polynomial)", "Catmull–Clark limit (exact G1)"]
+    titles = [
+        "paper: corner G1 (creased)",
+        "Gregory (exact G1)",
+        "split4 (exact G1, polynomial)",
+        "Catmull–Clark limit (exact G1)",
+    ]
     for mode in ("zebra", "deviation"):
         path = args.out / f"cube_{mode}.png"
-        render_side_by_side(path, [corner, gregory, split4, limit], titles, mode=mode, size=(2400, 640), **camera,
-                            reports=reports if mode == "deviation" else None)
+        render_side_by_side(
+            path,
+            [corner, gregory, split4, limit],
+            titles,
+            mode=mode,
+            size=(2400, 640),
+            **camera,
+            reports=reports if mode == "deviation" else None,
+        )
         written.append(path)
     print("\nwrote " + ", ".join(str(path) for path in written))
     return EXIT_OK
@@ -551,8 +852,11 @@ class Terminated(KeyboardInterrupt):
         self.signum = signum
 
 
-_SIGNAL_WORDS = {int(getattr(signal, name)): words for name, words in
-                 (("SIGINT", "interrupted"), ("SIGTERM", "terminated"), ("SIGHUP", "hung up")) if hasattr(signal, name)}
+_SIGNAL_WORDS = {
+    int(getattr(signal, name)): words
+    for name, words in (("SIGINT", "interrupted"), ("SIGTERM", "terminated"), ("SIGHUP", "hung up"))
+    if hasattr(signal, name)
+}
 
 
 def _raise_terminated(signum: int, frame: object) -> None:
@@ -592,8 +896,17 @@ def _say(line: str) -> None:
 
 
 def _os_error_text(error: OSError) -> str:
-    reason = error.strerror or (os.strerror(error.errno) if error.errno else None) or str(error) or type(error).__name__
-    return f"{os.fsdecode(error.filename)}: {reason}" if isinstance(error.filename, (str, bytes, os.PathLike)) else reason
+    reason = (
+        error.strerror
+        or (os.strerror(error.errno) if error.errno else None)
+        or str(error)
+        or type(error).__name__
+    )
+    return (
+        f"{os.fsdecode(error.filename)}: {reason}"
+        if isinstance(error.filename, (str, bytes, os.PathLike))
+        else reason
+    )
 
 
 def _quiet_stdout() -> None:
@@ -609,8 +922,15 @@ def _quiet_stdout() -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code (see the module docstring)."""
     tune_for_large_arrays()
-    handlers = {"build": _build, "check": _check, "export": _export, "render": _render, "view": _view, "demo": _demo,
-                "batch": _batch}
+    handlers = {
+        "build": _build,
+        "check": _check,
+        "export": _export,
+        "render": _render,
+        "view": _view,
+        "demo": _demo,
+        "batch": _batch,
+    }
     with _signal_handlers():
         try:
             args = _parser().parse_args(argv)
@@ -632,7 +952,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             return EXIT_ERROR
         except MemoryError as error:
             detail = f" ({error})" if str(error) else ""
-            _say(f"g1patch: error: out of memory{detail}; try a lower --resolution, --samples or --size")
+            _say(
+                f"g1patch: error: out of memory{detail}; try a lower --resolution, --samples or --size"
+            )
             return EXIT_ERROR
 
 

@@ -80,7 +80,9 @@ def patch_samples(network: PatchNetwork, face_steps: int) -> int:
     if network.provenance.get("method") != "split4":
         return steps + 1
     if steps % 2:
-        raise InputError(f"face_steps: a split4 network needs an even number of steps per face, got {steps}")
+        raise InputError(
+            f"face_steps: a split4 network needs an even number of steps per face, got {steps}"
+        )
     return steps // 2 + 1
 
 
@@ -93,7 +95,9 @@ def surface_samples(network: PatchNetwork, samples: int) -> tuple[FloatArray, Fl
     grid = np.linspace(0.0, 1.0, _check_samples(samples))
     patches = network.patches
     positions = patches.evaluate_grid(grid, grid)
-    normals = np.cross(patches.evaluate_grid(grid, grid, 1, 0), patches.evaluate_grid(grid, grid, 0, 1))
+    normals = np.cross(
+        patches.evaluate_grid(grid, grid, 1, 0), patches.evaluate_grid(grid, grid, 0, 1)
+    )
     length = np.linalg.norm(normals, axis=-1, keepdims=True)
     np.divide(normals, length, out=normals, where=length > 0)
     return positions, normals
@@ -135,12 +139,16 @@ def distance_to_sphere(network: PatchNetwork, radius: float = 1.0, samples: int 
     return deviation(network, lambda points: sphere_project(points, radius), samples)
 
 
-def distance_to_ellipsoid(network: PatchNetwork, axes: tuple[float, float, float] = (1.0, 0.7, 0.5), samples: int = 21) -> Deviation:
+def distance_to_ellipsoid(
+    network: PatchNetwork, axes: tuple[float, float, float] = (1.0, 0.7, 0.5), samples: int = 21
+) -> Deviation:
     """:func:`deviation` from the ellipsoid with semi-axes ``axes`` (exact closest points)."""
     return deviation(network, lambda points: ellipsoid_project(points, axes), samples)
 
 
-def distance_to_torus(network: PatchNetwork, R: float = 2.0, r: float = 0.7, samples: int = 21) -> Deviation:
+def distance_to_torus(
+    network: PatchNetwork, R: float = 2.0, r: float = 0.7, samples: int = 21
+) -> Deviation:
     """:func:`deviation` from the torus of :func:`g1patch.shapes.torus` with radii ``R``, ``r``."""
     return deviation(network, lambda points: torus_project(points, R, r), samples)
 
@@ -184,26 +192,46 @@ def load_reference(path: str | Path) -> Reference:
     except (ValueError, EOFError, zipfile.BadZipFile) as exc:
         raise FormatError(path, f"not a readable .npz archive ({exc})") from None
     if not isinstance(archive, np.lib.npyio.NpzFile):
-        raise FormatError(path, "expected an .npz archive with arrays points, faces and levels, got a single array")
+        raise FormatError(
+            path,
+            "expected an .npz archive with arrays points, faces and levels, got a single array",
+        )
     with archive:
         missing = [name for name in ("points", "faces", "levels") if name not in archive.files]
         if missing:
-            raise FormatError(path, f"missing array(s) {', '.join(missing)}; the archive has {', '.join(archive.files) or 'none'}")
+            raise FormatError(
+                path,
+                f"missing array(s) {', '.join(missing)}; the archive has {', '.join(archive.files) or 'none'}",
+            )
         try:
             raw = {name: archive[name] for name in ("points", "faces", "levels")}
         except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
             raise FormatError(path, f"an array cannot be read ({exc})") from None
     points, faces, levels = raw["points"], raw["faces"], raw["levels"]
     if points.ndim != 2 or points.shape[1] != 3 or points.dtype.kind != "f":
-        raise FormatError(path, f"points: expected a float array of shape (M, 3), got {points.dtype} {points.shape}")
+        raise FormatError(
+            path,
+            f"points: expected a float array of shape (M, 3), got {points.dtype} {points.shape}",
+        )
     if not np.isfinite(points).all():
-        raise FormatError(path, f"points: {int((~np.isfinite(points).all(axis=1)).sum())} point(s) are not finite")
+        raise FormatError(
+            path, f"points: {int((~np.isfinite(points).all(axis=1)).sum())} point(s) are not finite"
+        )
     if faces.ndim != 2 or faces.shape[1] != 4 or faces.dtype.kind not in "iu" or not len(faces):
-        raise FormatError(path, f"faces: expected an integer array of shape (K, 4), K ≥ 1, got {faces.dtype} {faces.shape}")
+        raise FormatError(
+            path,
+            f"faces: expected an integer array of shape (K, 4), K ≥ 1, got {faces.dtype} {faces.shape}",
+        )
     if faces.min() < 0 or faces.max() >= len(points):
-        raise FormatError(path, f"faces: indices must lie in 0..{len(points) - 1}, found {faces.min()}..{faces.max()}")
+        raise FormatError(
+            path,
+            f"faces: indices must lie in 0..{len(points) - 1}, found {faces.min()}..{faces.max()}",
+        )
     if levels.shape != () or levels.dtype.kind not in "iu" or int(levels) < 0:
-        raise FormatError(path, f"levels: expected a non-negative integer scalar, got {levels.dtype} {levels.shape} {levels!r}")
+        raise FormatError(
+            path,
+            f"levels: expected a non-negative integer scalar, got {levels.dtype} {levels.shape} {levels!r}",
+        )
     return Reference(points.astype(np.float64), faces.astype(np.int64), int(levels), path)
 
 
@@ -247,12 +275,20 @@ def _barycentric_closest(
     return v, w
 
 
-def closest_points_on_triangles(points: ArrayLike, a: ArrayLike, b: ArrayLike, c: ArrayLike) -> FloatArray:
+def closest_points_on_triangles(
+    points: ArrayLike, a: ArrayLike, b: ArrayLike, c: ArrayLike
+) -> FloatArray:
     """The closest point to each of ``points`` on triangle (a, b, c); all (..., 3), broadcast together."""
-    p, a, b, c = np.broadcast_arrays(*(as_float_array(name, value, (3,)) for name, value in zip("pabc", (points, a, b, c))))
+    p, a, b, c = np.broadcast_arrays(
+        *(as_float_array(name, value, (3,)) for name, value in zip("pabc", (points, a, b, c)))
+    )
     ab, ac, ap = b - a, c - a, p - a
     v, w = _barycentric_closest(
-        (ab * ap).sum(-1), (ac * ap).sum(-1), (ab * ab).sum(-1), (ab * ac).sum(-1), (ac * ac).sum(-1)
+        (ab * ap).sum(-1),
+        (ac * ap).sum(-1),
+        (ab * ab).sum(-1),
+        (ab * ac).sum(-1),
+        (ac * ac).sum(-1),
     )
     return a + v[..., None] * ab + w[..., None] * ac
 
@@ -271,7 +307,11 @@ class _TriangleSearch:
 
     @classmethod
     def build(cls, triangles: FloatArray, reach: FloatArray) -> _TriangleSearch:
-        a, ab, ac = triangles[:, 0], triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]
+        a, ab, ac = (
+            triangles[:, 0],
+            triangles[:, 1] - triangles[:, 0],
+            triangles[:, 2] - triangles[:, 0],
+        )
         gram = np.stack([(ab * ab).sum(-1), (ab * ac).sum(-1), (ac * ac).sum(-1)], axis=1)
         return cls(a, ab, ac, gram, reach, cKDTree(triangles.mean(axis=1)))
 
@@ -283,7 +323,9 @@ class _TriangleSearch:
         ab, ac = self.ab[triangle], self.ac[triangle]
         ap = points - self.a[triangle]
         gram = self.gram[triangle]
-        v, w = _barycentric_closest((ab * ap).sum(-1), (ac * ap).sum(-1), gram[:, 0], gram[:, 1], gram[:, 2])
+        v, w = _barycentric_closest(
+            (ab * ap).sum(-1), (ac * ap).sum(-1), gram[:, 0], gram[:, 1], gram[:, 2]
+        )
         return np.linalg.norm(v[:, None] * ab + w[:, None] * ac - ap, axis=-1)
 
     def lower(self, points: FloatArray, best: FloatArray) -> None:
@@ -298,13 +340,19 @@ class _TriangleSearch:
         """
         centroids, largest_reach = self.tree.data, float(self.reach.max())
         nearest = self.tree.query(points, workers=-1)[1]
-        np.minimum(best, self.distance(points, nearest), out=best)  # a tighter bound: the nearest centroid's triangle
+        np.minimum(
+            best, self.distance(points, nearest), out=best
+        )  # a tighter bound: the nearest centroid's triangle
         start, block = 0, _FIRST_BLOCK
         while start < len(points):
             rows = slice(start, min(start + block, len(points)))
-            found = self.tree.query_ball_point(points[rows], best[rows] + largest_reach, workers=-1, return_sorted=False)
+            found = self.tree.query_ball_point(
+                points[rows], best[rows] + largest_reach, workers=-1, return_sorted=False
+            )
             counts = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
-            triangle = np.fromiter(chain.from_iterable(found), dtype=np.int64, count=int(counts.sum()))
+            triangle = np.fromiter(
+                chain.from_iterable(found), dtype=np.int64, count=int(counts.sum())
+            )
             query = np.repeat(np.arange(rows.start, rows.stop), counts)
             gap = np.linalg.norm(points[query] - centroids[triangle], axis=1) - self.reach[triangle]
             keep = gap < best[query]
@@ -331,9 +379,13 @@ def mesh_distance(samples: ArrayLike, points: ArrayLike, faces: ArrayLike) -> Fl
     vertices = as_float_array("points", points, (3,))
     polygons = as_index_array("faces", faces, (None,))
     if polygons.ndim != 2 or polygons.shape[1] not in (3, 4) or not len(polygons):
-        raise InputError(f"faces: expected a non-empty (K, 3) or (K, 4) index array, got shape {polygons.shape}")
+        raise InputError(
+            f"faces: expected a non-empty (K, 3) or (K, 4) index array, got shape {polygons.shape}"
+        )
     if polygons.min() < 0 or polygons.max() >= len(vertices):
-        raise InputError(f"faces: indices must lie in 0..{len(vertices) - 1}, found {polygons.min()}..{polygons.max()}")
+        raise InputError(
+            f"faces: indices must lie in 0..{len(vertices) - 1}, found {polygons.min()}..{polygons.max()}"
+        )
     triangles = _triangles(vertices, polygons)
     reach = np.linalg.norm(triangles - triangles.mean(axis=1, keepdims=True), axis=-1).max(axis=1)
     largest = max(float(reach.max()), np.finfo(float).tiny)
@@ -341,7 +393,9 @@ def mesh_distance(samples: ArrayLike, points: ArrayLike, faces: ArrayLike) -> Fl
     flat = queries.reshape(-1, 3)
     used = np.unique(polygons)
     best = cKDTree(vertices[used]).query(flat, workers=-1)[0]  # a mesh vertex: an upper bound
-    for members in sorted((np.flatnonzero(size_class == c) for c in np.unique(size_class)), key=len, reverse=True):
+    for members in sorted(
+        (np.flatnonzero(size_class == c) for c in np.unique(size_class)), key=len, reverse=True
+    ):
         _TriangleSearch.build(triangles[members], reach[members]).lower(flat, best)
     return best.reshape(queries.shape[:-1])
 
@@ -360,12 +414,18 @@ def reference_vertex_normals(points: ArrayLike, faces: ArrayLike) -> FloatArray:
     quads = as_index_array("faces", faces, (4,))
     corner = positions[quads]  # (K, 4, 3)
     following, preceding = np.roll(corner, -1, axis=1), np.roll(corner, 1, axis=1)
-    area = 0.25 * np.cross(following - corner, preceding - corner)  # half of each corner triangle's area vector
+    area = 0.25 * np.cross(
+        following - corner, preceding - corner
+    )  # half of each corner triangle's area vector
     # corner triangle i touches the corners i - 1, i, i + 1
     spread = area + np.roll(area, -1, axis=1) + np.roll(area, 1, axis=1)
     ids = quads.ravel()
     normals = np.stack(
-        [np.bincount(ids, weights=spread[..., k].ravel(), minlength=len(positions)) for k in range(3)], axis=1
+        [
+            np.bincount(ids, weights=spread[..., k].ravel(), minlength=len(positions))
+            for k in range(3)
+        ],
+        axis=1,
     )
     length = np.linalg.norm(normals, axis=1, keepdims=True)
     np.divide(normals, length, out=normals, where=length > 0)
@@ -379,7 +439,9 @@ def reference_normal_turns(points: ArrayLike, faces: ArrayLike) -> FloatArray:
     normals = reference_vertex_normals(points, quads)
     ends = np.stack([quads, np.roll(quads, -1, axis=1)], axis=-1).reshape(-1, 2)
     edges = np.unique(np.sort(ends, axis=1), axis=0)
-    return np.asarray(angle_between(normals[edges[:, 0]], normals[edges[:, 1]]), dtype=np.float64).reshape(-1)
+    return np.asarray(
+        angle_between(normals[edges[:, 0]], normals[edges[:, 1]]), dtype=np.float64
+    ).reshape(-1)
 
 
 def network_normal_turns(network: PatchNetwork, samples: int) -> FloatArray:

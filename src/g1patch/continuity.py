@@ -57,7 +57,15 @@ from .gregory import BEZIER_INDEX, INTERIOR_INDEX, GregoryPatchSet, gregory_weig
 from .network import Patches, PatchNetwork, edge_parameters
 from .patches import CORNER_PARAMETERS, PatchSet
 
-__all__ = ["SEAM_G0_RTOL", "ContinuityReport", "check", "fairness", "folded_patches", "angle_between", "format_reports"]
+__all__ = [
+    "SEAM_G0_RTOL",
+    "ContinuityReport",
+    "check",
+    "fairness",
+    "folded_patches",
+    "angle_between",
+    "format_reports",
+]
 
 DEGENERATE_RTOL = 1e-13
 """|p_u × p_v| ≤ DEGENERATE_RTOL · diag² is a degenerate normal. At a collapsed edge the
@@ -93,7 +101,9 @@ _CODE_MIN = int(_chord_codes(np.array([4.0 * np.sin(np.radians(_MIN_TURN_DEG) / 
 _CODE_MAX = int(_chord_codes(np.array([4.0]))[0])
 _BINS = _CODE_MAX - _CODE_MIN + 2
 #: bin b holds squared chords in [_EDGES[b], _EDGES[b + 1])
-_EDGES = np.r_[0.0, (np.arange(_CODE_MIN, _CODE_MAX + 2, dtype=np.int32) << _SHIFT).view(np.float32)].astype(np.float64)
+_EDGES = np.r_[
+    0.0, (np.arange(_CODE_MIN, _CODE_MAX + 2, dtype=np.int32) << _SHIFT).view(np.float32)
+].astype(np.float64)
 
 
 def angle_between(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -231,30 +241,49 @@ class ContinuityReport:
             ("max G0 gap (of bbox diag)", f"{self.max_g0_gap:.3e}"),
             ("degenerate normals", f"{self.degenerate_normals}"),
             ("folds", f"{self.folds}"),
-            ("normal turn median / p99 / max",
-             f"{self.turn_median_deg:.3g}° / {self.turn_p99_deg:.3g}° / {self.turn_max_deg:.3g}°"),
+            (
+                "normal turn median / p99 / max",
+                f"{self.turn_median_deg:.3g}° / {self.turn_p99_deg:.3g}° / {self.turn_max_deg:.3g}°",
+            ),
             ("thin-plate energy (of diag²)", f"{self.thin_plate:.4g}"),
         ]
         if self.fold_locations:
             patch, u, v = self.fold_locations[0]
-            rows.insert(rows.index(("folds", f"{self.folds}")) + 1, ("first fold", f"patch {patch} at (u, v) = ({u:.4g}, {v:.4g})"))
+            rows.insert(
+                rows.index(("folds", f"{self.folds}")) + 1,
+                ("first fold", f"patch {patch} at (u, v) = ({u:.4g}, {v:.4g})"),
+            )
         if self.seam_edges:
             rows[2:2] = [
                 ("seams (sharp on purpose)", f"{self.seam_edges}"),
-                ("seam angle min / max", f"{self.seam_angle_min_deg:.4g}° / {self.seam_angle_max_deg:.4g}°"),
+                (
+                    "seam angle min / max",
+                    f"{self.seam_angle_min_deg:.4g}° / {self.seam_angle_max_deg:.4g}°",
+                ),
                 ("seam max G0 gap (of bbox diag)", f"{self.seam_g0_max:.3e}"),
             ]
         if self.collapsed_edges:
-            rows.insert(2, ("collapsed edges", f"{self.collapsed_edges} ({self.collapsed_patch_edges} patch edges)"))
+            rows.insert(
+                2,
+                (
+                    "collapsed edges",
+                    f"{self.collapsed_edges} ({self.collapsed_patch_edges} patch edges)",
+                ),
+            )
         if self.inconsistent_orientation_edges:
-            rows.append(("edges with flipped orientation", f"{self.inconsistent_orientation_edges}"))
+            rows.append(
+                ("edges with flipped orientation", f"{self.inconsistent_orientation_edges}")
+            )
         if self.max_vertex_deviation is not None:
             rows.append(("max vertex deviation (of diag)", f"{self.max_vertex_deviation:.3e}"))
         worst = self.worst_edge
         if worst is not None:
             rows.append(
-                ("worst edge", f"patch {worst['patches'][0]} edge {worst['edges'][0]} / "
-                 f"patch {worst['patches'][1]} edge {worst['edges'][1]}")
+                (
+                    "worst edge",
+                    f"patch {worst['patches'][0]} edge {worst['edges'][0]} / "
+                    f"patch {worst['patches'][1]} edge {worst['edges'][1]}",
+                )
             )
         return rows
 
@@ -265,9 +294,18 @@ class ContinuityReport:
     def verdict(self, max_angle_deg: float = 1e-9) -> str:
         """One phrase: ``"exact G1 (max angle 3.1e-12°), no folds"``, or what fails."""
         angle = max(self.max_edge_angle_deg, self.max_corner_angle_deg)
-        g1 = f"exact G1 (max angle {angle:.2g}°)" if self.is_g1(max_angle_deg) else f"not G1 (max angle {angle:.3g}°)"
+        g1 = (
+            f"exact G1 (max angle {angle:.2g}°)"
+            if self.is_g1(max_angle_deg)
+            else f"not G1 (max angle {angle:.3g}°)"
+        )
         folds = f"{self.folds} folded patches" if self.folds else "no folds"
-        seams = f", {self.seam_edges} seams" + ("" if self.seams_closed() else f" open by {self.seam_g0_max:.2g}") if self.seam_edges else ""
+        seams = (
+            f", {self.seam_edges} seams"
+            + ("" if self.seams_closed() else f" open by {self.seam_g0_max:.2g}")
+            if self.seam_edges
+            else ""
+        )
         return f"{g1}, {folds}{seams}"
 
     def __repr__(self) -> str:
@@ -281,10 +319,14 @@ class ContinuityReport:
         from html import escape
 
         verdict = "passes" if self.passes() else "fails"
-        cells = "".join(f"<tr><td style='text-align:left'>{escape(label)}</td><td style='text-align:left'>{escape(value)}</td></tr>"
-                        for label, value in self.rows())
-        return (f"<div><b>ContinuityReport</b>: {escape(self.verdict())} (the check {verdict} at 1e-9°)"
-                f"<table>{cells}</table></div>")
+        cells = "".join(
+            f"<tr><td style='text-align:left'>{escape(label)}</td><td style='text-align:left'>{escape(value)}</td></tr>"
+            for label, value in self.rows()
+        )
+        return (
+            f"<div><b>ContinuityReport</b>: {escape(self.verdict())} (the check {verdict} at 1e-9°)"
+            f"<table>{cells}</table></div>"
+        )
 
 
 def format_reports(reports: list[ContinuityReport], titles: list[str] | None = None) -> str:
@@ -295,7 +337,10 @@ def format_reports(reports: list[ContinuityReport], titles: list[str] | None = N
     if titles is not None:
         table = [["", *titles], ["", *("-" * len(title) for title in titles)], *table]
     widths = [max(len(row[i]) for row in table) for i in range(len(table[0]))]
-    return "\n".join("  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True)).rstrip() for row in table)
+    return "\n".join(
+        "  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True)).rstrip()
+        for row in table
+    )
 
 
 #: networks of at least this many patches are measured by the kernels by default: below it the
@@ -332,9 +377,15 @@ def check(
     and all patches in one pass each (``progress`` after each); False: the NumPy reference; None
     (default): the kernels from :data:`KERNEL_PATCHES` patches on.
     """
-    for name, value, least in (("samples", samples, 2), ("fold_samples", fold_samples, 2), ("chunk", chunk, 1)):
+    for name, value, least in (
+        ("samples", samples, 2),
+        ("fold_samples", fold_samples, 2),
+        ("chunk", chunk, 1),
+    ):
         _check_count(name, value, least)
-    if not isinstance(network, PatchNetwork):  # a PatchSet or GregoryPatchSet: match its shared edges
+    if not isinstance(
+        network, PatchNetwork
+    ):  # a PatchSet or GregoryPatchSet: match its shared edges
         from .api import as_network
 
         network = as_network(network, "network")
@@ -349,8 +400,14 @@ def check(
         corners = _corner_points(local)
         diagonal = _diagonal(corners) or 1.0
     else:  # the same figures from one pass over the corners in place (4 M corners: 0.5 s -> 0.03 s)
-        corner_points = form[0] if isinstance(local, GregoryPatchSet) else np.ascontiguousarray(_corner_points(local))
-        low, high, farthest = _corner_extent_compiled(corner_points, vertices, np.ascontiguousarray(network.corner_ids, dtype=np.int64))
+        corner_points = (
+            form[0]
+            if isinstance(local, GregoryPatchSet)
+            else np.ascontiguousarray(_corner_points(local))
+        )
+        low, high, farthest = _corner_extent_compiled(
+            corner_points, vertices, np.ascontiguousarray(network.corner_ids, dtype=np.int64)
+        )
         diagonal = (float(np.linalg.norm(high - low)) if len(local) else 0.0) or 1.0
     degenerate_level = degenerate_rtol * diagonal**2
 
@@ -368,18 +425,30 @@ def check(
     grid = _GridMeasures(len(local), fold_samples, degenerate_level)
     if form is not None:
         sides = (left_patch, left_edge, right_patch, right_edge, same)
-        edge_angle, edge_angle_min, edge_worst, edge_gap = _edge_measures_compiled(*form, sides, samples, degenerate_level)
+        edge_angle, edge_angle_min, edge_worst, edge_gap = _edge_measures_compiled(
+            *form, sides, samples, degenerate_level
+        )
         if progress is not None:
             progress(len(left_patch), total)
-        corner_angle = _max_corner_angle_compiled(network, _corner_normals_compiled(*form), degenerate_level, not same.any())
+        corner_angle = _max_corner_angle_compiled(
+            network, _corner_normals_compiled(*form), degenerate_level, not same.any()
+        )
         grid.add_compiled(*form, patch_block)
         if progress is not None:
             progress(total, total)
     else:
         for block in _blocks(len(left_patch), chunk):
-            edge_angle[block], edge_angle_min[block], edge_worst[block], edge_gap[block] = _edge_measures(
-                local, left_patch[block], left_edge[block], right_patch[block], right_edge[block], same[block],
-                samples, degenerate_level,
+            edge_angle[block], edge_angle_min[block], edge_worst[block], edge_gap[block] = (
+                _edge_measures(
+                    local,
+                    left_patch[block],
+                    left_edge[block],
+                    right_patch[block],
+                    right_edge[block],
+                    same[block],
+                    samples,
+                    degenerate_level,
+                )
             )
             if progress is not None:
                 progress(block.stop, total)
@@ -394,7 +463,9 @@ def check(
     folded = grid.folded.copy()
     folded[left_patch[folded_edges]] = folded[right_patch[folded_edges]] = True
     edge_sides = (left_patch, left_edge, right_patch, right_edge, same)
-    locations = _first_per_patch(grid.locations + _edge_fold_locations(edge_sides, folded_edges, edge_worst, samples))
+    locations = _first_per_patch(
+        grid.locations + _edge_fold_locations(edge_sides, folded_edges, edge_worst, samples)
+    )
 
     max_vertex_deviation = None
     if vertices is not None and form is not None:
@@ -423,8 +494,13 @@ def check(
         degenerate_normals=grid.degenerate,
         folds=int(folded.sum()),
         inconsistent_orientation_edges=int(same.sum()),
-        bounding_box_diagonal=float(diagonal if local is patches else
-                                    _world_diagonal(network, corners) if form is None else _world_extent_diagonal(network, low, high)),
+        bounding_box_diagonal=float(
+            diagonal
+            if local is patches
+            else _world_diagonal(network, corners)
+            if form is None
+            else _world_extent_diagonal(network, low, high)
+        ),
         max_vertex_deviation=max_vertex_deviation,
         fold_samples=fold_samples,
         fold_locations=tuple(locations),
@@ -445,7 +521,11 @@ def check(
 
 
 def fairness(
-    network: PatchNetwork, samples: int = FOLD_SAMPLES, degenerate_rtol: float = DEGENERATE_RTOL, *, compiled: bool | None = None
+    network: PatchNetwork,
+    samples: int = FOLD_SAMPLES,
+    degenerate_rtol: float = DEGENERATE_RTOL,
+    *,
+    compiled: bool | None = None,
 ) -> dict[str, float]:
     """The fairness figures of :func:`check` on a ``samples²`` grid per patch.
 
@@ -458,18 +538,29 @@ def fairness(
 
 
 def folded_patches(
-    patches: Patches, samples: int = 9, degenerate_rtol: float = DEGENERATE_RTOL, *, compiled: bool | None = None
+    patches: Patches,
+    samples: int = 9,
+    degenerate_rtol: float = DEGENERATE_RTOL,
+    *,
+    compiled: bool | None = None,
 ) -> NDArray[np.bool_]:
     """Which patches fold (the intrinsic test of :func:`check`) on a ``samples²`` grid, (N,) bool.
 
     For a builder's fold guard: no network needed, patches in any coordinates. ``compiled``: the
     grid kernel (False: the NumPy reference; None: as :func:`check`).
     """
-    return _grid_measures(patches, samples, degenerate_rtol, fairness=False, compiled=compiled)[0].folded
+    return _grid_measures(patches, samples, degenerate_rtol, fairness=False, compiled=compiled)[
+        0
+    ].folded
 
 
 def _grid_measures(
-    patches: Patches, samples: int, degenerate_rtol: float, fairness: bool = True, *, compiled: bool | None = None
+    patches: Patches,
+    samples: int,
+    degenerate_rtol: float,
+    fairness: bool = True,
+    *,
+    compiled: bool | None = None,
 ) -> tuple[_GridMeasures, float]:
     """The grid measures of every patch (``fairness`` False: folds and degenerate normals only),
     in local coordinates, and the bounding-box diagonal."""
@@ -495,7 +586,13 @@ def _patch_block(resolution: int) -> int:
 
 
 def _edge_fold_locations(
-    sides: tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.bool_]],
+    sides: tuple[
+        NDArray[np.int64],
+        NDArray[np.int64],
+        NDArray[np.int64],
+        NDArray[np.int64],
+        NDArray[np.bool_],
+    ],
     folded_edges: NDArray[np.int64],
     worst: NDArray[np.int64],
     samples: int,
@@ -559,7 +656,9 @@ def _world_diagonal(network: PatchNetwork, corners: NDArray[np.float64]) -> floa
     return network.bounding_box_diagonal()
 
 
-def _world_extent_diagonal(network: PatchNetwork, low: NDArray[np.float64], high: NDArray[np.float64]) -> float:
+def _world_extent_diagonal(
+    network: PatchNetwork, low: NDArray[np.float64], high: NDArray[np.float64]
+) -> float:
     """:func:`_world_diagonal` from the local corners' box ``low``, ``high``: ``c + s x`` is monotone in
     each coordinate (both roundings are), so the world corners' extremes are the images of the
     local ones, exactly."""
@@ -627,7 +726,11 @@ def _angle3(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float6
 
 
 def _edge_samples(
-    patches: Patches, patch_ids: NDArray[np.int64], edges: NDArray[np.int64], backwards: NDArray[np.bool_], t: NDArray[np.float64]
+    patches: Patches,
+    patch_ids: NDArray[np.int64],
+    edges: NDArray[np.int64],
+    backwards: NDArray[np.bool_],
+    t: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Points and normals ``p_u × p_v`` at ``t`` along the given patch edges, each planar ``(3, E, K)``.
 
@@ -643,7 +746,9 @@ def _edge_samples(
                 uv = edge_parameters(np.int64(edge), t[::-1] if reverse else t)
                 group = patches.take(patch_ids[rows])
                 points[:, rows] = np.moveaxis(group.evaluate(uv), -1, 0)
-                normals[:, rows] = _cross3(_planar(group.evaluate(uv, 1, 0)), _planar(group.evaluate(uv, 0, 1)))
+                normals[:, rows] = _cross3(
+                    _planar(group.evaluate(uv, 1, 0)), _planar(group.evaluate(uv, 0, 1))
+                )
     return points, normals
 
 
@@ -665,7 +770,9 @@ def _edge_measures(
     normal is flipped, as its patch is oriented the other way.
     """
     t = np.linspace(0.0, 1.0, samples)
-    point_left, normal_left = _edge_samples(patches, left_patch, left_edge, np.zeros(len(same), dtype=bool), t)
+    point_left, normal_left = _edge_samples(
+        patches, left_patch, left_edge, np.zeros(len(same), dtype=bool), t
+    )
     point_right, normal_right = _edge_samples(patches, right_patch, right_edge, ~same, t)
     if same.any():
         normal_right[:, same] *= -1.0
@@ -675,10 +782,17 @@ def _edge_measures(
     gaps = _norm3(point_left)
     worst = angles.argmax(axis=1)
     least = np.where(usable, angles, np.inf).min(axis=1, initial=np.inf)
-    return np.take_along_axis(angles, worst[:, None], axis=1)[:, 0], least, worst, gaps.max(axis=1, initial=0.0)
+    return (
+        np.take_along_axis(angles, worst[:, None], axis=1)[:, 0],
+        least,
+        worst,
+        gaps.max(axis=1, initial=0.0),
+    )
 
 
-def _max_corner_angle(network: PatchNetwork, patches: Patches, degenerate_level: float, oriented: bool) -> float:
+def _max_corner_angle(
+    network: PatchNetwork, patches: Patches, degenerate_level: float, oriented: bool
+) -> float:
     """Largest angle between the corner normals of any two patches meeting at one point in one
     sector (:meth:`PatchNetwork.corner_sectors`: patches across a seam may differ).
 
@@ -688,7 +802,10 @@ def _max_corner_angle(network: PatchNetwork, patches: Patches, degenerate_level:
     stays linear in the valence: a 10 000-valent vertex's 10⁸ pairs asked for 6 GB in one array.
     Every pair's angle is the same operations on the same two normals as in one array.
     """
-    normals = _cross3(_planar(patches.evaluate(CORNER_PARAMETERS, 1, 0)), _planar(patches.evaluate(CORNER_PARAMETERS, 0, 1)))
+    normals = _cross3(
+        _planar(patches.evaluate(CORNER_PARAMETERS, 1, 0)),
+        _planar(patches.evaluate(CORNER_PARAMETERS, 0, 1)),
+    )
     normals = normals.reshape(3, -1)
     usable = _norm3(normals) > degenerate_level
     ids = network.corner_sectors().reshape(-1)[usable]
@@ -705,9 +822,11 @@ def _max_corner_angle(network: PatchNetwork, patches: Patches, degenerate_level:
         groups_per_block = max(1, _CORNER_PAIR_BLOCK // (size * size))
         rows_per_block = size if groups_per_block > 1 else max(1, _CORNER_PAIR_BLOCK // size)
         for first in range(0, len(group_starts), groups_per_block):
-            group = normals[group_starts[first:first + groups_per_block, None] + np.arange(size)]  # (g, m, 3)
+            group = normals[
+                group_starts[first : first + groups_per_block, None] + np.arange(size)
+            ]  # (g, m, 3)
             for row in range(0, size, rows_per_block):
-                rows = np.ascontiguousarray(group[:, row:row + rows_per_block])  # (g, rows, 3)
+                rows = np.ascontiguousarray(group[:, row : row + rows_per_block])  # (g, rows, 3)
                 cross = np.linalg.norm(np.cross(rows[:, :, None], group[:, None, :]), axis=-1)
                 dot = np.einsum("gid,gjd->gij", rows, group)
                 if not oriented:
@@ -734,7 +853,9 @@ class _GridMeasures:
     depend on the blocks.
     """
 
-    def __init__(self, count: int, resolution: int, degenerate_level: float, fairness: bool = True) -> None:
+    def __init__(
+        self, count: int, resolution: int, degenerate_level: float, fairness: bool = True
+    ) -> None:
         self.grid = np.linspace(0.0, 1.0, resolution)
         self.fairness_wanted = fairness
         self.degenerate_level = degenerate_level
@@ -752,7 +873,9 @@ class _GridMeasures:
 
     def add(self, patches: Patches, block: slice) -> None:
         """Measure the patches ``block`` of ``patches``."""
-        p_u, p_v = self._tangents(patches.take(np.arange(block.start, block.stop)))  # (3, B, G, G) each
+        p_u, p_v = self._tangents(
+            patches.take(np.arange(block.start, block.stop))
+        )  # (3, B, G, G) each
         normal = _cross3(p_u, p_v)
         length = _norm3(normal)  # (B, G, G)
         usable = length > self.degenerate_level
@@ -765,7 +888,11 @@ class _GridMeasures:
             # the corner's grid cell: a patch turned over at its corner
             step_u, step_v = (1 if corner_u == 0 else -1), (1 if corner_v == 0 else -1)
             corner = normal[:, :, corner_u, corner_v]
-            for i, j in ((corner_u + step_u, corner_v), (corner_u, corner_v + step_v), (corner_u + step_u, corner_v + step_v)):
+            for i, j in (
+                (corner_u + step_u, corner_v),
+                (corner_u, corner_v + step_v),
+                (corner_u + step_u, corner_v + step_v),
+            ):
                 against = _dot3(normal[:, :, i, j], corner) < 0
                 offending[:, i, j] |= against & usable[:, i, j] & usable[:, corner_u, corner_v]
         worst_chord2, worst_pair = -1.0, None
@@ -790,7 +917,10 @@ class _GridMeasures:
                 worst_chord2 = float(chord2.reshape(-1)[index])
                 position = np.unravel_index(index, chord2.shape)
                 following = tuple(p + (a == axis) for a, p in enumerate(position))
-                worst_pair = (normal[(slice(None), *position)][:, None], normal[(slice(None), *following)][:, None])
+                worst_pair = (
+                    normal[(slice(None), *position)][:, None],
+                    normal[(slice(None), *following)][:, None],
+                )
         if worst_pair is not None:
             self.max_turn_deg = max(self.max_turn_deg, float(_angle3(*worst_pair)[0]))
 
@@ -798,7 +928,9 @@ class _GridMeasures:
         self.folded[block] = folded
         for patch in np.flatnonzero(folded)[: MAX_FOLD_LOCATIONS - len(self.locations)]:
             i, j = np.unravel_index(int(np.argmax(offending[patch])), offending.shape[1:])
-            self.locations.append((block.start + int(patch), float(self.grid[i]), float(self.grid[j])))
+            self.locations.append(
+                (block.start + int(patch), float(self.grid[i]), float(self.grid[j]))
+            )
 
         if not self.fairness_wanted:
             return
@@ -825,11 +957,24 @@ class _GridMeasures:
         degenerate = np.zeros(chunks, dtype=np.int64)
         histogram = np.zeros((chunks if self.fairness_wanted else 1, _BINS), dtype=np.int64)
         best = np.empty((count if self.fairness_wanted else 0, 4))
-        _compiled(_grid_kernel)(points, *_grid_tables(form, self.grid), self.weights, self.degenerate_level,
-                                self.fairness_wanted, _CODE_MIN, _LANES, chunks, location, degenerate, histogram, best, self.energy)
+        _compiled(_grid_kernel)(
+            points,
+            *_grid_tables(form, self.grid),
+            self.weights,
+            self.degenerate_level,
+            self.fairness_wanted,
+            _CODE_MIN,
+            _LANES,
+            chunks,
+            location,
+            degenerate,
+            histogram,
+            best,
+            self.energy,
+        )
         self.degenerate += int(degenerate.sum())
         self.folded = location >= 0
-        for patch in np.flatnonzero(self.folded)[:MAX_FOLD_LOCATIONS - len(self.locations)]:
+        for patch in np.flatnonzero(self.folded)[: MAX_FOLD_LOCATIONS - len(self.locations)]:
             i, j = divmod(int(location[patch]), resolution)
             self.locations.append((int(patch), float(self.grid[i]), float(self.grid[j])))
         if not self.fairness_wanted:
@@ -869,9 +1014,19 @@ class _GridMeasures:
             patches = np.flatnonzero(candidate)
             chord2, angle = np.empty(len(patches)), np.empty(len(patches))
             if len(patches):
-                exact = np.ascontiguousarray(np.swapaxes(_gregory_grid_weights(self.grid), 1, 2))  # (2, 20, G²)
-                _compiled(_turn_kernel)(points, exact, self.degenerate_level, patches, np.full(len(patches), axis),
-                                        _chunks(len(patches)), chord2, angle)
+                exact = np.ascontiguousarray(
+                    np.swapaxes(_gregory_grid_weights(self.grid), 1, 2)
+                )  # (2, 20, G²)
+                _compiled(_turn_kernel)(
+                    points,
+                    exact,
+                    self.degenerate_level,
+                    patches,
+                    np.full(len(patches), axis),
+                    _chunks(len(patches)),
+                    chord2,
+                    angle,
+                )
             best[:, 2 * axis] = -1.0
             best[patches, 2 * axis], best[patches, 2 * axis + 1] = chord2, angle
 
@@ -883,10 +1038,15 @@ class _GridMeasures:
         ``evaluate_grid`` multiplies interleaved values by a Kronecker factor of two thirds zeros).
         """
         if not (isinstance(group, GregoryPatchSet) and getattr(group, "frame", None) is None):
-            return _planar(group.evaluate_grid(self.grid, self.grid, 1, 0)), _planar(group.evaluate_grid(self.grid, self.grid, 0, 1))
+            return _planar(group.evaluate_grid(self.grid, self.grid, 1, 0)), _planar(
+                group.evaluate_grid(self.grid, self.grid, 0, 1)
+            )
         if self.gregory_weights is None:
             u, v = self.grid[:, None], self.grid[None, :]
-            self.gregory_weights = [gregory_weights(u, v, du, dv).reshape(-1, 20).T.copy() for du, dv in ((1, 0), (0, 1))]
+            self.gregory_weights = [
+                gregory_weights(u, v, du, dv).reshape(-1, 20).T.copy()
+                for du, dv in ((1, 0), (0, 1))
+            ]
         points = np.ascontiguousarray(np.moveaxis(group.points, -1, 0))  # (3, B, 20)
         shape = (3, len(group), len(self.grid), len(self.grid))
         p_u, p_v = (np.matmul(points, weights).reshape(shape) for weights in self.gregory_weights)
@@ -993,9 +1153,12 @@ def _compiled(kernel: Callable[..., Any]) -> Callable[..., Any]:
     from numba.extending import intrinsic
 
     if prange is range:
+
         @intrinsic  # type: ignore[misc]
         def fused(typingctx: Any, a: Any, b: Any, c: Any) -> Any:
-            signature = numba.types.float64(numba.types.float64, numba.types.float64, numba.types.float64)
+            signature = numba.types.float64(
+                numba.types.float64, numba.types.float64, numba.types.float64
+            )
             return signature, lambda context, builder, sig, args: builder.fma(*args)
 
         _fma, prange = fused, numba.prange
@@ -1039,29 +1202,52 @@ def _weights(form: str, uv: NDArray[np.float64], du: int, dv: int) -> NDArray[np
     return (weights_u[..., :, None] * weights_v[..., None, :]).reshape(*uv.shape[:-1], 16)
 
 
-def _sparse(weights: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+def _sparse(
+    weights: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
     """``weights (..., K, M)`` as ``(W (..., M, K), index (..., M), count (...))``: the points with
     a nonzero weight at some sample are ``index[..., :count]``, ascending."""
     nonzero = (weights != 0.0).any(axis=-2)
     index = np.argsort(~nonzero, axis=-1, kind="stable").astype(np.int64)
-    return np.ascontiguousarray(np.swapaxes(weights, -1, -2)), index, nonzero.sum(axis=-1).astype(np.int64)
+    return (
+        np.ascontiguousarray(np.swapaxes(weights, -1, -2)),
+        index,
+        nonzero.sum(axis=-1).astype(np.int64),
+    )
 
 
 def _edge_measures_compiled(
-    points: NDArray[np.float64], form: str, sides: tuple[NDArray[Any], ...], samples: int, degenerate_level: float,
+    points: NDArray[np.float64],
+    form: str,
+    sides: tuple[NDArray[Any], ...],
+    samples: int,
+    degenerate_level: float,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
     """:func:`_edge_measures` of all the given edges, both sides of each in one kernel pass."""
     left_patch, left_edge, right_patch, right_edge, same = sides
     t = np.linspace(0.0, 1.0, samples)
-    uv = np.stack([np.stack([edge_parameters(np.int64(edge), t[::-1] if reverse else t) for reverse in (False, True)])
-                   for edge in range(4)])  # (edge, reversed, K, 2)
+    uv = np.stack(
+        [
+            np.stack(
+                [
+                    edge_parameters(np.int64(edge), t[::-1] if reverse else t)
+                    for reverse in (False, True)
+                ]
+            )
+            for edge in range(4)
+        ]
+    )  # (edge, reversed, K, 2)
     table = np.stack([_weights(form, uv, du, dv) for du, dv in ((0, 0), (1, 0), (0, 1))], axis=2)
     weights, index, count = _sparse(table)  # (edge, reversed, derivative, M, K)
     blocks = (count + 3) // 4
-    padded = np.full((*index.shape[:-1], 4 * max(int(blocks.max()), 1)), index.shape[-1], dtype=np.int64)
+    padded = np.full(
+        (*index.shape[:-1], 4 * max(int(blocks.max()), 1)), index.shape[-1], dtype=np.int64
+    )
     for key in np.ndindex(count.shape):
-        padded[key][:count[key]] = index[key][:count[key]]
-    weights = np.concatenate([weights, np.zeros((*weights.shape[:-2], 1, samples))], axis=-2)  # point M: weight +0
+        padded[key][: count[key]] = index[key][: count[key]]
+    weights = np.concatenate(
+        [weights, np.zeros((*weights.shape[:-2], 1, samples))], axis=-2
+    )  # point M: weight +0
     edges = len(left_patch)
     angle, least, gap = np.empty(edges), np.empty(edges), np.empty(edges)
     worst = np.empty(edges, dtype=np.int64)
@@ -1071,19 +1257,56 @@ def _edge_measures_compiled(
         key = ((left_edge * 4 + right_edge) * 2 + same).astype(np.int8)
         order = np.argsort(key, kind="stable")
         bounds = np.r_[0, np.cumsum(np.bincount(key, minlength=32))]
-        groups = np.unique(np.concatenate([np.arange(a, b, _EDGE_LANES) for a, b in itertools.pairwise(bounds)] + [[edges]]))
-        _compiled(_edge_kernel)(points, left_patch, left_edge, right_patch, right_edge, same, order, groups, weights, padded,
-                                blocks, degenerate_level, _CANDIDATE_RTOL, _EDGE_LANES, _chunks(len(groups) - 1), angle, least,
-                                worst, gap)
+        groups = np.unique(
+            np.concatenate(
+                [np.arange(a, b, _EDGE_LANES) for a, b in itertools.pairwise(bounds)] + [[edges]]
+            )
+        )
+        _compiled(_edge_kernel)(
+            points,
+            left_patch,
+            left_edge,
+            right_patch,
+            right_edge,
+            same,
+            order,
+            groups,
+            weights,
+            padded,
+            blocks,
+            degenerate_level,
+            _CANDIDATE_RTOL,
+            _EDGE_LANES,
+            _chunks(len(groups) - 1),
+            angle,
+            least,
+            worst,
+            gap,
+        )
     return angle, least, worst, gap
 
 
-def _edge_kernel(points: NDArray[np.float64], left_patch: NDArray[np.int64], left_edge: NDArray[np.int64],
-                 right_patch: NDArray[np.int64], right_edge: NDArray[np.int64], same: NDArray[np.bool_],
-                 order: NDArray[np.int64], groups: NDArray[np.int64], weights: NDArray[np.float64],
-                 index: NDArray[np.int64], blocks: NDArray[np.int64], level: float, rtol: float, lanes: int, chunks: int,
-                 angle: NDArray[np.float64], least: NDArray[np.float64], worst: NDArray[np.int64],
-                 gap: NDArray[np.float64]) -> None:
+def _edge_kernel(
+    points: NDArray[np.float64],
+    left_patch: NDArray[np.int64],
+    left_edge: NDArray[np.int64],
+    right_patch: NDArray[np.int64],
+    right_edge: NDArray[np.int64],
+    same: NDArray[np.bool_],
+    order: NDArray[np.int64],
+    groups: NDArray[np.int64],
+    weights: NDArray[np.float64],
+    index: NDArray[np.int64],
+    blocks: NDArray[np.int64],
+    level: float,
+    rtol: float,
+    lanes: int,
+    chunks: int,
+    angle: NDArray[np.float64],
+    least: NDArray[np.float64],
+    worst: NDArray[np.int64],
+    gap: NDArray[np.float64],
+) -> None:
     """Per edge: both sides' points and normals at the K samples, then the reference's max and min
     angle, worst sample and max gap; ``atan2`` only at the candidates (:data:`_CANDIDATE_RTOL`).
 
@@ -1125,23 +1348,41 @@ def _edge_kernel(points: NDArray[np.float64], left_patch: NDArray[np.int64], lef
                     edge = left_edge[lead] if side == 0 else right_edge[lead]
                     back = 1 if side == 1 and not same[lead] else 0
                     p = net[side]
-                    for q in range(3):  # the three coordinates of every lane in one loop (the weights are the same)
+                    for q in range(
+                        3
+                    ):  # the three coordinates of every lane in one loop (the weights are the same)
                         out = sums[side, q]
                         if blocks[edge, back, q] == 0:
                             out[:] = 0.0
                         for block in range(blocks[edge, back, q]):
-                            m0, m1 = index[edge, back, q, 4 * block], index[edge, back, q, 4 * block + 1]
-                            m2, m3 = index[edge, back, q, 4 * block + 2], index[edge, back, q, 4 * block + 3]
+                            m0, m1 = (
+                                index[edge, back, q, 4 * block],
+                                index[edge, back, q, 4 * block + 1],
+                            )
+                            m2, m3 = (
+                                index[edge, back, q, 4 * block + 2],
+                                index[edge, back, q, 4 * block + 3],
+                            )
                             w0, w1 = weights[edge, back, q, m0, k], weights[edge, back, q, m1, k]
                             w2, w3 = weights[edge, back, q, m2, k], weights[edge, back, q, m3, k]
                             p0, p1, p2, p3 = p[m0], p[m1], p[m2], p[m3]
                             if block == 0:
                                 for t in range(3 * lanes):
-                                    out[t] = _fma(p3[t], w3, _fma(p2[t], w2, _fma(p1[t], w1, _fma(p0[t], w0, 0.0))))
+                                    out[t] = _fma(
+                                        p3[t],
+                                        w3,
+                                        _fma(p2[t], w2, _fma(p1[t], w1, _fma(p0[t], w0, 0.0))),
+                                    )
                             else:
                                 for t in range(3 * lanes):
-                                    out[t] = _fma(p3[t], w3, _fma(p2[t], w2, _fma(p1[t], w1, _fma(p0[t], w0, out[t]))))
-                for side in range(2):  # normals p_u × p_v (side R's flipped where both sides run the same way)
+                                    out[t] = _fma(
+                                        p3[t],
+                                        w3,
+                                        _fma(p2[t], w2, _fma(p1[t], w1, _fma(p0[t], w0, out[t]))),
+                                    )
+                for side in range(
+                    2
+                ):  # normals p_u × p_v (side R's flipped where both sides run the same way)
                     u, v, n = values[side, 1], values[side, 2], normal[side]
                     sign = flip if side == 1 else 1.0
                     for lane in range(lanes):
@@ -1152,7 +1393,19 @@ def _edge_kernel(points: NDArray[np.float64], left_patch: NDArray[np.int64], lef
                         n[2, lane] = (u[0, lane] * v[1, lane] - u[1, lane] * v[0, lane]) * sign
                 a, b = normal[0], normal[1]
                 for lane in range(lanes):
-                    usable[k, lane] = (np.sqrt((a[0, lane] * a[0, lane] + a[1, lane] * a[1, lane]) + a[2, lane] * a[2, lane]) > level) & (np.sqrt((b[0, lane] * b[0, lane] + b[1, lane] * b[1, lane]) + b[2, lane] * b[2, lane]) > level)
+                    usable[k, lane] = (
+                        np.sqrt(
+                            (a[0, lane] * a[0, lane] + a[1, lane] * a[1, lane])
+                            + a[2, lane] * a[2, lane]
+                        )
+                        > level
+                    ) & (
+                        np.sqrt(
+                            (b[0, lane] * b[0, lane] + b[1, lane] * b[1, lane])
+                            + b[2, lane] * b[2, lane]
+                        )
+                        > level
+                    )
                 for lane in range(lanes):
                     cross[0, lane] = a[1, lane] * b[2, lane] - a[2, lane] * b[1, lane]
                 for lane in range(lanes):
@@ -1160,26 +1413,40 @@ def _edge_kernel(points: NDArray[np.float64], left_patch: NDArray[np.int64], lef
                 for lane in range(lanes):
                     cross[2, lane] = a[0, lane] * b[1, lane] - a[1, lane] * b[0, lane]
                 for lane in range(lanes):
-                    y[k, lane] = np.sqrt((cross[0, lane] * cross[0, lane] + cross[1, lane] * cross[1, lane]) + cross[2, lane] * cross[2, lane])
+                    y[k, lane] = np.sqrt(
+                        (cross[0, lane] * cross[0, lane] + cross[1, lane] * cross[1, lane])
+                        + cross[2, lane] * cross[2, lane]
+                    )
                 for lane in range(lanes):
-                    x[k, lane] = (a[0, lane] * b[0, lane] + a[2, lane] * b[2, lane]) + a[1, lane] * b[1, lane]
+                    x[k, lane] = (a[0, lane] * b[0, lane] + a[2, lane] * b[2, lane]) + a[
+                        1, lane
+                    ] * b[1, lane]
                 for lane in range(lanes):
                     total = y[k, lane] + abs(x[k, lane])
                     ratio = y[k, lane] / total if total > 0.0 else 0.0
                     pseudo[k, lane] = ratio if x[k, lane] >= 0.0 else 2.0 - ratio
                 q0, q1 = values[0, 0], values[1, 0]
                 for lane in range(lanes):
-                    g0, g1, g2 = q0[0, lane] - q1[0, lane], q0[1, lane] - q1[1, lane], q0[2, lane] - q1[2, lane]
+                    g0, g1, g2 = (
+                        q0[0, lane] - q1[0, lane],
+                        q0[1, lane] - q1[1, lane],
+                        q0[2, lane] - q1[2, lane],
+                    )
                     distance[lane] = (g0 * g0 + g1 * g1) + g2 * g2
                 for lane in range(lanes):
                     gap2[lane] = max(gap2[lane], distance[lane])
                 for lane in range(lanes):
                     top[lane] = max(top[lane], pseudo[k, lane]) if usable[k, lane] else top[lane]
                 for lane in range(lanes):
-                    bottom[lane] = min(bottom[lane], pseudo[k, lane]) if usable[k, lane] else bottom[lane]
+                    bottom[lane] = (
+                        min(bottom[lane], pseudo[k, lane]) if usable[k, lane] else bottom[lane]
+                    )
             for k in range(samples):
                 for lane in range(lanes):
-                    candidate[k, lane] = usable[k, lane] & ((pseudo[k, lane] >= top[lane] * (1.0 - rtol)) | (pseudo[k, lane] <= bottom[lane] * (1.0 + rtol)))
+                    candidate[k, lane] = usable[k, lane] & (
+                        (pseudo[k, lane] >= top[lane] * (1.0 - rtol))
+                        | (pseudo[k, lane] <= bottom[lane] * (1.0 + rtol))
+                    )
             for lane in range(stop - first):
                 e = order[first + lane]
                 best, best_at, low = 0.0, 0, np.inf
@@ -1192,8 +1459,9 @@ def _edge_kernel(points: NDArray[np.float64], left_patch: NDArray[np.int64], lef
                 angle[e], worst[e], least[e], gap[e] = best, best_at, low, np.sqrt(gap2[lane])
 
 
-def _corner_extent_compiled(points: NDArray[np.float64], vertices: NDArray[np.float64] | None,
-                            corner_ids: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
+def _corner_extent_compiled(
+    points: NDArray[np.float64], vertices: NDArray[np.float64] | None, corner_ids: NDArray[np.int64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
     """The low and high corner of the box around the patch corners (the first four points of
     ``points (N, M, 3)``: a Gregory patch's corners, or evaluated corners ``(N, 4, 3)``), and the
     largest squared distance ``(d₀² + d₁²) + d₂²`` of a corner to its vertex ``vertices[corner_ids]``
@@ -1203,13 +1471,27 @@ def _corner_extent_compiled(points: NDArray[np.float64], vertices: NDArray[np.fl
     root of the largest square)."""
     chunks = _chunks(len(points))
     low, high, far = np.empty((chunks, 3)), np.empty((chunks, 3)), np.empty(chunks)
-    _compiled(_corner_extent_kernel)(points, np.zeros((0, 3)) if vertices is None else np.ascontiguousarray(vertices, dtype=np.float64),
-                                     corner_ids, chunks, low, high, far)
+    _compiled(_corner_extent_kernel)(
+        points,
+        np.zeros((0, 3)) if vertices is None else np.ascontiguousarray(vertices, dtype=np.float64),
+        corner_ids,
+        chunks,
+        low,
+        high,
+        far,
+    )
     return low.min(axis=0), high.max(axis=0), float(far.max())
 
 
-def _corner_extent_kernel(points: NDArray[np.float64], vertices: NDArray[np.float64], corner_ids: NDArray[np.int64],
-                          chunks: int, low: NDArray[np.float64], high: NDArray[np.float64], far: NDArray[np.float64]) -> None:
+def _corner_extent_kernel(
+    points: NDArray[np.float64],
+    vertices: NDArray[np.float64],
+    corner_ids: NDArray[np.int64],
+    chunks: int,
+    low: NDArray[np.float64],
+    high: NDArray[np.float64],
+    far: NDArray[np.float64],
+) -> None:
     """Per chunk of patches: each coordinate's least and greatest corner value and the largest
     squared distance of a corner to its vertex (NaN where one is NaN, as NumPy's extremes)."""
     patches, measure = points.shape[0], vertices.shape[0] > 0
@@ -1226,7 +1508,11 @@ def _corner_extent_kernel(points: NDArray[np.float64], vertices: NDArray[np.floa
                         most[d] = x
                 if measure:
                     vertex = corner_ids[n, k]
-                    d0, d1, d2 = points[n, k, 0] - vertices[vertex, 0], points[n, k, 1] - vertices[vertex, 1], points[n, k, 2] - vertices[vertex, 2]
+                    d0, d1, d2 = (
+                        points[n, k, 0] - vertices[vertex, 0],
+                        points[n, k, 1] - vertices[vertex, 1],
+                        points[n, k, 2] - vertices[vertex, 2],
+                    )
                     square = (d0 * d0 + d1 * d1) + d2 * d2
                     if not np.isnan(farthest) and (square > farthest or np.isnan(square)):
                         farthest = square
@@ -1236,16 +1522,26 @@ def _corner_extent_kernel(points: NDArray[np.float64], vertices: NDArray[np.floa
 def _corner_normals_compiled(points: NDArray[np.float64], form: str) -> NDArray[np.float64]:
     """``p_u × p_v`` at the four corners of every patch, ``(N, 4, 3)`` (the reference's
     ``_cross3`` of ``evaluate(CORNER_PARAMETERS, 1, 0)`` and ``(0, 1)``)."""
-    table = np.stack([_weights(form, CORNER_PARAMETERS[:, None], du, dv) for du, dv in ((1, 0), (0, 1))])  # (2, 4, 1, M)
+    table = np.stack(
+        [_weights(form, CORNER_PARAMETERS[:, None], du, dv) for du, dv in ((1, 0), (0, 1))]
+    )  # (2, 4, 1, M)
     weights, index, count = _sparse(table)  # (2, 4, M, 1)
     normals = np.empty((len(points), 4, 3))
     if len(points):
-        _compiled(_corner_normal_kernel)(points, weights, index, count, _chunks(len(points)), normals)
+        _compiled(_corner_normal_kernel)(
+            points, weights, index, count, _chunks(len(points)), normals
+        )
     return normals
 
 
-def _corner_normal_kernel(points: NDArray[np.float64], weights: NDArray[np.float64], index: NDArray[np.int64],
-                          count: NDArray[np.int64], chunks: int, normals: NDArray[np.float64]) -> None:
+def _corner_normal_kernel(
+    points: NDArray[np.float64],
+    weights: NDArray[np.float64],
+    index: NDArray[np.int64],
+    count: NDArray[np.int64],
+    chunks: int,
+    normals: NDArray[np.float64],
+) -> None:
     """Corner normals patch by patch (``weights (derivative, corner, M, 1)``)."""
     patches = points.shape[0]
     for chunk in prange(chunks):
@@ -1265,7 +1561,9 @@ def _corner_normal_kernel(points: NDArray[np.float64], weights: NDArray[np.float
                 normals[n, corner, 2] = a[0] * b[1] - a[1] * b[0]
 
 
-def _max_corner_angle_compiled(network: PatchNetwork, normals: NDArray[np.float64], degenerate_level: float, oriented: bool) -> float:
+def _max_corner_angle_compiled(
+    network: PatchNetwork, normals: NDArray[np.float64], degenerate_level: float, oriented: bool
+) -> float:
     """:func:`_max_corner_angle` from the corner normals ``(N, 4, 3)``, sector by sector in a kernel."""
     normals = normals.reshape(-1, 3)
     ids = network.corner_sectors().reshape(-1).astype(np.int64)
@@ -1279,11 +1577,22 @@ def _max_corner_angle_compiled(network: PatchNetwork, normals: NDArray[np.float6
     order = np.empty(len(ids), dtype=np.int64)
     _serial(_counting_sort_kernel)(ids, cursor, order)
     worst = np.zeros(len(starts) - 1)
-    _compiled(_corner_kernel)(normals, order, starts, degenerate_level, oriented, _PAIRWISE_SECTOR, _chunks(len(worst)), worst)
+    _compiled(_corner_kernel)(
+        normals,
+        order,
+        starts,
+        degenerate_level,
+        oriented,
+        _PAIRWISE_SECTOR,
+        _chunks(len(worst)),
+        worst,
+    )
     return float(worst.max(initial=0.0))
 
 
-def _counting_sort_kernel(keys: NDArray[np.int64], cursor: NDArray[np.int64], order: NDArray[np.int64]) -> None:
+def _counting_sort_kernel(
+    keys: NDArray[np.int64], cursor: NDArray[np.int64], order: NDArray[np.int64]
+) -> None:
     """``order``: the items by key, in their order within a key (``cursor[k]``: where key k's first
     goes; advanced as items are placed). Serial: the placement is what makes it stable."""
     for item in range(keys.size):
@@ -1296,11 +1605,23 @@ def _pair_angle(a: NDArray[np.float64], b: NDArray[np.float64], oriented: bool) 
     """``atan2(|a × b|, a · b)`` in degrees (``|a · b|`` unless ``oriented``)."""
     c0, c1, c2 = a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
     dot = (a[0] * b[0] + a[2] * b[2]) + a[1] * b[1]
-    return float(np.degrees(np.arctan2(np.sqrt((c0 * c0 + c1 * c1) + c2 * c2), dot if oriented else abs(dot))))
+    return float(
+        np.degrees(
+            np.arctan2(np.sqrt((c0 * c0 + c1 * c1) + c2 * c2), dot if oriented else abs(dot))
+        )
+    )
 
 
-def _corner_kernel(normals: NDArray[np.float64], order: NDArray[np.int64], starts: NDArray[np.int64], level: float,
-                   oriented: bool, pairwise: int, chunks: int, worst: NDArray[np.float64]) -> None:
+def _corner_kernel(
+    normals: NDArray[np.float64],
+    order: NDArray[np.int64],
+    starts: NDArray[np.int64],
+    level: float,
+    oriented: bool,
+    pairwise: int,
+    chunks: int,
+    worst: NDArray[np.float64],
+) -> None:
     """Per sector (corners ``order[starts[s]:starts[s + 1]]``): the largest angle between two of its
     usable corner normals. Sectors of more than ``pairwise`` corners, oriented, whose normals lie in
     one open hemisphere around their mean m compare only the vertices of the convex hull of their
@@ -1310,7 +1631,7 @@ def _corner_kernel(normals: NDArray[np.float64], order: NDArray[np.int64], start
     sectors = starts.size - 1
     for chunk in prange(chunks):
         for s in range(chunk * sectors // chunks, (chunk + 1) * sectors // chunks):
-            members = order[starts[s]:starts[s + 1]]
+            members = order[starts[s] : starts[s + 1]]
             keep = np.empty(members.size, dtype=np.int64)
             kept = 0
             for corner in members:
@@ -1363,7 +1684,7 @@ def _hull_corners(normals: NDArray[np.float64], corners: NDArray[np.int64]) -> N
             hull[size] = p
             size += 1
         size -= 1  # each chain's last point starts the other
-    return corners[np.unique(hull[:max(size, 1)])]
+    return corners[np.unique(hull[: max(size, 1)])]
 
 
 def _grid_tables(form: str, grid: NDArray[np.float64]) -> tuple[NDArray[Any], ...]:
@@ -1380,8 +1701,12 @@ def _grid_tables(form: str, grid: NDArray[np.float64]) -> tuple[NDArray[Any], ..
     index = np.empty(16, dtype=np.int64)
     index[4 * BEZIER_INDEX[:, 0] + BEZIER_INDEX[:, 1]] = np.arange(12)
     index[4 * INTERIOR_INDEX[:, 0] + INTERIOR_INDEX[:, 1]] = 13 + 2 * np.arange(4)  # Fp_k
-    su, sv = (np.ascontiguousarray(np.moveaxis(table.reshape(len(grid), len(grid), 20)[..., 12::2], -1, 0))
-              for table in _gregory_grid_weights(grid))
+    su, sv = (
+        np.ascontiguousarray(
+            np.moveaxis(table.reshape(len(grid), len(grid), 20)[..., 12::2], -1, 0)
+        )
+        for table in _gregory_grid_weights(grid)
+    )
     return index, 12 + 2 * np.arange(4), 13 + 2 * np.arange(4), bu, dbu, *tables_v, su, sv
 
 
@@ -1391,8 +1716,16 @@ def _gregory_grid_weights(grid: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.stack([gregory_weights(u, v, du, dv).reshape(-1, 20) for du, dv in ((1, 0), (0, 1))])
 
 
-def _turn_kernel(points: NDArray[np.float64], exact: NDArray[np.float64], level: float, patches: NDArray[np.int64],
-                 axes: NDArray[np.int64], chunks: int, chord2: NDArray[np.float64], angle: NDArray[np.float64]) -> None:
+def _turn_kernel(
+    points: NDArray[np.float64],
+    exact: NDArray[np.float64],
+    level: float,
+    patches: NDArray[np.int64],
+    axes: NDArray[np.int64],
+    chunks: int,
+    chord2: NDArray[np.float64],
+    angle: NDArray[np.float64],
+) -> None:
     """For Gregory patches ``patches[c]`` and ``axes[c]`` (0: along u): the first largest squared
     chord between neighbouring unit normals along that axis and the angle of its pair, from the
     tangents summed as the reference's matrix product sums them (``exact (2, 20, G²)``: the point
@@ -1425,7 +1758,10 @@ def _turn_kernel(points: NDArray[np.float64], exact: NDArray[np.float64], level:
             for s in range(samples):
                 normal[2, s] = a[0, s] * b[1, s] - a[1, s] * b[0, s]
             for s in range(samples):
-                length[s] = np.sqrt((normal[0, s] * normal[0, s] + normal[1, s] * normal[1, s]) + normal[2, s] * normal[2, s])
+                length[s] = np.sqrt(
+                    (normal[0, s] * normal[0, s] + normal[1, s] * normal[1, s])
+                    + normal[2, s] * normal[2, s]
+                )
             for s in range(samples):
                 usable[s] = length[s] > level
             for s in range(samples):
@@ -1438,7 +1774,11 @@ def _turn_kernel(points: NDArray[np.float64], exact: NDArray[np.float64], level:
                 for j in range(g - axis):
                     s = i * g + j
                     if usable[s] and usable[s + step]:
-                        c0, c1, c2 = unit[0, s + step] - unit[0, s], unit[1, s + step] - unit[1, s], unit[2, s + step] - unit[2, s]
+                        c0, c1, c2 = (
+                            unit[0, s + step] - unit[0, s],
+                            unit[1, s + step] - unit[1, s],
+                            unit[2, s + step] - unit[2, s],
+                        )
                         value = (c0 * c0 + c2 * c2) + c1 * c1
                         if value > top:
                             top, top_at = value, s
@@ -1450,12 +1790,29 @@ def _turn_kernel(points: NDArray[np.float64], exact: NDArray[np.float64], level:
                 angle[c] = _pair_angle(pair[0], pair[1], True)
 
 
-def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDArray[np.int64], fp: NDArray[np.int64],
-                 bu: NDArray[np.float64], dbu: NDArray[np.float64], bv: NDArray[np.float64], dbv: NDArray[np.float64],
-                 su: NDArray[np.float64], sv: NDArray[np.float64], weights: NDArray[np.float64],
-                 level: float, fairness: bool, code_min: int, lanes: int, chunks: int, location: NDArray[np.int64],
-                 degenerate: NDArray[np.int64], histogram: NDArray[np.int64], best: NDArray[np.float64],
-                 energy: NDArray[np.float64]) -> None:
+def _grid_kernel(
+    points: NDArray[np.float64],
+    index: NDArray[np.int64],
+    fn: NDArray[np.int64],
+    fp: NDArray[np.int64],
+    bu: NDArray[np.float64],
+    dbu: NDArray[np.float64],
+    bv: NDArray[np.float64],
+    dbv: NDArray[np.float64],
+    su: NDArray[np.float64],
+    sv: NDArray[np.float64],
+    weights: NDArray[np.float64],
+    level: float,
+    fairness: bool,
+    code_min: int,
+    lanes: int,
+    chunks: int,
+    location: NDArray[np.int64],
+    degenerate: NDArray[np.int64],
+    histogram: NDArray[np.int64],
+    best: NDArray[np.float64],
+    energy: NDArray[np.float64],
+) -> None:
     """:meth:`_GridMeasures.add` for ``lanes`` patches at a time (the lanes, last axis of
     every scratch array, so the arithmetic vectorises across patches), row by row of their grids:
     tangents (fused multiply-adds: one u contraction of the net per row, 4 products and 4 blends
@@ -1477,10 +1834,17 @@ def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDAr
     for chunk in prange(chunks):
         net, blend = np.zeros((3, 16, lanes)), np.zeros((3, 4, lanes))
         row_u, row_v = np.empty((4, lanes)), np.empty((4, lanes))
-        tu, tv = np.empty((2, 3, gl)), np.empty((2, 3, gl))  # p_u, p_v of rows a − 1, a (by parity), [row, xyz, g b + lane]
+        tu, tv = (
+            np.empty((2, 3, gl)),
+            np.empty((2, 3, gl)),
+        )  # p_u, p_v of rows a − 1, a (by parity), [row, xyz, g b + lane]
         tu4, tv4 = tu.reshape((2, 3, g, lanes)), tv.reshape((2, 3, g, lanes))
         tu_ahead, tv_ahead = tu[:, :, lanes:], tv[:, :, lanes:]  # the sample at b + 1
-        normal, usable, offending = np.empty((3, g, gl)), np.empty((g, gl), dtype=np.bool_), np.empty((g, gl), dtype=np.bool_)
+        normal, usable, offending = (
+            np.empty((3, g, gl)),
+            np.empty((g, gl), dtype=np.bool_),
+            np.empty((g, gl), dtype=np.bool_),
+        )
         unit = np.empty((2, 3, gl))
         unit_ahead, usable_ahead = unit[:, :, lanes:], usable[:, lanes:]
         chord, together = np.empty(gl), np.empty(gl, dtype=np.bool_)
@@ -1500,21 +1864,41 @@ def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDAr
                     for m in range(16):
                         net[d, m, lane] = points[first + lane, index[m], d]
                     for k in range(blends):
-                        blend[d, k, lane] = points[first + lane, fn[k], d] - points[first + lane, fp[k], d]
+                        blend[d, k, lane] = (
+                            points[first + lane, fn[k], d] - points[first + lane, fp[k], d]
+                        )
             column_top[:] = -1.0
             column_row[:] = -1
             along_u[:] = 0.0
             lost = 0
             for a in range(g):
                 r, p = a & 1, 1 - (a & 1)
-                for d in range(3):  # tangents: the u contraction of the net, then 4 products and 4 blends a point
+                for d in range(
+                    3
+                ):  # tangents: the u contraction of the net, then 4 products and 4 blends a point
                     w0, w1, w2, w3 = dbu[a, 0], dbu[a, 1], dbu[a, 2], dbu[a, 3]
                     x0, x1, x2, x3 = bu[a, 0], bu[a, 1], bu[a, 2], bu[a, 3]
                     for j in range(4):
                         for lane in range(lanes):
-                            row_u[j, lane] = _fma(w3, net[d, 12 + j, lane], _fma(w2, net[d, 8 + j, lane], _fma(w1, net[d, 4 + j, lane], w0 * net[d, j, lane])))
+                            row_u[j, lane] = _fma(
+                                w3,
+                                net[d, 12 + j, lane],
+                                _fma(
+                                    w2,
+                                    net[d, 8 + j, lane],
+                                    _fma(w1, net[d, 4 + j, lane], w0 * net[d, j, lane]),
+                                ),
+                            )
                         for lane in range(lanes):
-                            row_v[j, lane] = _fma(x3, net[d, 12 + j, lane], _fma(x2, net[d, 8 + j, lane], _fma(x1, net[d, 4 + j, lane], x0 * net[d, j, lane])))
+                            row_v[j, lane] = _fma(
+                                x3,
+                                net[d, 12 + j, lane],
+                                _fma(
+                                    x2,
+                                    net[d, 8 + j, lane],
+                                    _fma(x1, net[d, 4 + j, lane], x0 * net[d, j, lane]),
+                                ),
+                            )
                     for b in range(g):
                         y0, y1, y2, y3 = bv[0, b], bv[1, b], bv[2, b], bv[3, b]
                         z0, z1, z2, z3 = dbv[0, b], dbv[1, b], dbv[2, b], dbv[3, b]
@@ -1526,16 +1910,52 @@ def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDAr
                             ru0, ru1, ru2, ru3 = row_u[0], row_u[1], row_u[2], row_u[3]
                             rv0, rv1, rv2, rv3 = row_v[0], row_v[1], row_v[2], row_v[3]
                             for lane in range(lanes):
-                                value = _fma(ru3[lane], y3, _fma(ru2[lane], y2, _fma(ru1[lane], y1, ru0[lane] * y0)))
-                                out_u[lane] = _fma(s3, e3[lane], _fma(s2, e2[lane], _fma(s1, e1[lane], _fma(s0, e0[lane], value))))
+                                value = _fma(
+                                    ru3[lane],
+                                    y3,
+                                    _fma(ru2[lane], y2, _fma(ru1[lane], y1, ru0[lane] * y0)),
+                                )
+                                out_u[lane] = _fma(
+                                    s3,
+                                    e3[lane],
+                                    _fma(
+                                        s2, e2[lane], _fma(s1, e1[lane], _fma(s0, e0[lane], value))
+                                    ),
+                                )
                             for lane in range(lanes):
-                                value = _fma(rv3[lane], z3, _fma(rv2[lane], z2, _fma(rv1[lane], z1, rv0[lane] * z0)))
-                                out_v[lane] = _fma(t3, e3[lane], _fma(t2, e2[lane], _fma(t1, e1[lane], _fma(t0, e0[lane], value))))
+                                value = _fma(
+                                    rv3[lane],
+                                    z3,
+                                    _fma(rv2[lane], z2, _fma(rv1[lane], z1, rv0[lane] * z0)),
+                                )
+                                out_v[lane] = _fma(
+                                    t3,
+                                    e3[lane],
+                                    _fma(
+                                        t2, e2[lane], _fma(t1, e1[lane], _fma(t0, e0[lane], value))
+                                    ),
+                                )
                         else:
                             for lane in range(lanes):
-                                tu4[r, d, b, lane] = _fma(row_u[3, lane], y3, _fma(row_u[2, lane], y2, _fma(row_u[1, lane], y1, row_u[0, lane] * y0)))
+                                tu4[r, d, b, lane] = _fma(
+                                    row_u[3, lane],
+                                    y3,
+                                    _fma(
+                                        row_u[2, lane],
+                                        y2,
+                                        _fma(row_u[1, lane], y1, row_u[0, lane] * y0),
+                                    ),
+                                )
                             for lane in range(lanes):
-                                tv4[r, d, b, lane] = _fma(row_v[3, lane], z3, _fma(row_v[2, lane], z2, _fma(row_v[1, lane], z1, row_v[0, lane] * z0)))
+                                tv4[r, d, b, lane] = _fma(
+                                    row_v[3, lane],
+                                    z3,
+                                    _fma(
+                                        row_v[2, lane],
+                                        z2,
+                                        _fma(row_v[1, lane], z1, row_v[0, lane] * z0),
+                                    ),
+                                )
                 # normals, unit normals, usable: one pass over the row's samples
                 n0, n1, n2 = normal[0, a], normal[1, a], normal[2, a]
                 u0, u1, u2 = unit[r, 0], unit[r, 1], unit[r, 2]
@@ -1563,36 +1983,59 @@ def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDAr
                     for b in range(g):
                         for lane in range(count):
                             lost += 0 if usable[a, b * lanes + lane] else 1
-                for axis in range(2):  # neighbours along u: (a − 1, b), (a, b); along v: (a, b), (a, b + 1)
+                for axis in range(
+                    2
+                ):  # neighbours along u: (a − 1, b), (a, b); along v: (a, b), (a, b + 1)
                     if axis == 0 and a == 0:
                         continue
                     behind, span = (a - 1, gl) if axis == 0 else (a, run)
                     if axis == 0:
                         for s in range(gl):
-                            c0, c1, c2 = unit[r, 0, s] - unit[p, 0, s], unit[r, 1, s] - unit[p, 1, s], unit[r, 2, s] - unit[p, 2, s]
-                            chord[s] = (c0 * c0 + c2 * c2) + c1 * c1  # |n̂_a − n̂_b|² = 4 sin²(θ/2): > 2 where θ > 90°
+                            c0, c1, c2 = (
+                                unit[r, 0, s] - unit[p, 0, s],
+                                unit[r, 1, s] - unit[p, 1, s],
+                                unit[r, 2, s] - unit[p, 2, s],
+                            )
+                            chord[s] = (
+                                c0 * c0 + c2 * c2
+                            ) + c1 * c1  # |n̂_a − n̂_b|² = 4 sin²(θ/2): > 2 where θ > 90°
                         for s in range(gl):
                             together[s] = usable[a - 1, s] & usable[a, s]
                     else:
                         for s in range(run):
-                            c0, c1, c2 = unit_ahead[r, 0, s] - unit[r, 0, s], unit_ahead[r, 1, s] - unit[r, 1, s], unit_ahead[r, 2, s] - unit[r, 2, s]
+                            c0, c1, c2 = (
+                                unit_ahead[r, 0, s] - unit[r, 0, s],
+                                unit_ahead[r, 1, s] - unit[r, 1, s],
+                                unit_ahead[r, 2, s] - unit[r, 2, s],
+                            )
                             chord[s] = (c0 * c0 + c2 * c2) + c1 * c1
                         for s in range(run):
                             together[s] = usable[a, s] & usable_ahead[a, s]
                     for s in range(span):
-                        offending[behind, s] = offending[behind, s] | (together[s] & (chord[s] > 2.0))
+                        offending[behind, s] = offending[behind, s] | (
+                            together[s] & (chord[s] > 2.0)
+                        )
                     if not fairness:
                         continue
-                    best_top, best_row = column_top[axis], column_row[axis]  # per column: the first largest chord
+                    best_top, best_row = (
+                        column_top[axis],
+                        column_row[axis],
+                    )  # per column: the first largest chord
                     for s in range(span):
-                        best_row[s] = behind if together[s] & (chord[s] > best_top[s]) else best_row[s]
+                        best_row[s] = (
+                            behind if together[s] & (chord[s] > best_top[s]) else best_row[s]
+                        )
                     for s in range(span):
-                        best_top[s] = chord[s] if together[s] & (chord[s] > best_top[s]) else best_top[s]
+                        best_top[s] = (
+                            chord[s] if together[s] & (chord[s] > best_top[s]) else best_top[s]
+                        )
                     for s in range(span):
                         narrow[s] = chord[s]
                     for s in range(span):
                         code[s] = min(max((bits[s] >> _SHIFT) - (code_min - 1), 0), bins - 1)
-                    for lane in range(count):  # runs of one bin along the row, counted in a register
+                    for lane in range(
+                        count
+                    ):  # runs of one bin along the row, counted in a register
                         current, tally = 0, 0
                         for b in range(span // lanes):
                             if together2[b, lane]:
@@ -1604,14 +2047,24 @@ def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDAr
                         histogram[chunk, current] += tally
                 if not fairness:
                     continue
-                for plane in range(2):  # thin plate: squared differences of p_u, p_v along u (per column), along v (per row)
+                for plane in range(
+                    2
+                ):  # thin plate: squared differences of p_u, p_v along u (per column), along v (per row)
                     t, ahead = (tu, tu_ahead) if plane == 0 else (tv, tv_ahead)
                     if a > 0:
                         for s in range(gl):
-                            c0, c1, c2 = t[r, 0, s] - t[p, 0, s], t[r, 1, s] - t[p, 1, s], t[r, 2, s] - t[p, 2, s]
+                            c0, c1, c2 = (
+                                t[r, 0, s] - t[p, 0, s],
+                                t[r, 1, s] - t[p, 1, s],
+                                t[r, 2, s] - t[p, 2, s],
+                            )
                             along_u[plane, s] += (c0 * c0 + c2 * c2) + c1 * c1
                     for s in range(run):
-                        c0, c1, c2 = ahead[r, 0, s] - t[r, 0, s], ahead[r, 1, s] - t[r, 1, s], ahead[r, 2, s] - t[r, 2, s]
+                        c0, c1, c2 = (
+                            ahead[r, 0, s] - t[r, 0, s],
+                            ahead[r, 1, s] - t[r, 1, s],
+                            ahead[r, 2, s] - t[r, 2, s],
+                        )
                         chord[s] = (c0 * c0 + c2 * c2) + c1 * c1
                     along_v[plane, a, :] = 0.0
                     for b in range(last):
@@ -1640,7 +2093,9 @@ def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDAr
                     step_u, step_v = (1 if cu == 0 else -1), (lanes if cv == 0 else -lanes)
                     for cell in range(3):
                         i, s = cu + (0 if cell == 1 else step_u), o + (0 if cell == 0 else step_v)
-                        dot = (normal[0, i, s] * normal[0, cu, o] + normal[2, i, s] * normal[2, cu, o]) + normal[1, i, s] * normal[1, cu, o]
+                        dot = (
+                            normal[0, i, s] * normal[0, cu, o] + normal[2, i, s] * normal[2, cu, o]
+                        ) + normal[1, i, s] * normal[1, cu, o]
                         if usable[i, s] and dot < 0.0:
                             offending[i, s] = True
             folded[:] = False  # per lane: any offending sample? then the first, row by row
@@ -1669,7 +2124,10 @@ def _grid_kernel(points: NDArray[np.float64], index: NDArray[np.int64], fn: NDAr
                         i, j = s // g, s % g
                         k, l = (i + 1, j) if axis == 0 else (i, j + 1)
                         for d in range(3):
-                            pair[0, d], pair[1, d] = normal[d, i, j * lanes + lane], normal[d, k, l * lanes + lane]
+                            pair[0, d], pair[1, d] = (
+                                normal[d, i, j * lanes + lane],
+                                normal[d, k, l * lanes + lane],
+                            )
                         best[n, 2 * axis + 1] = _pair_angle(pair[0], pair[1], True)
             for lane in range(count):
                 total = 0.0

@@ -18,7 +18,9 @@ __all__ = ["CubicCurves", "reversal_matrix", "power_coefficients"]
 
 _REVERSAL = {
     # x(1-t) in Hermite form: [p(1), p(0), -p'(1), -p'(0)]
-    "hermite": np.array([[0, 1, 0, 0], [1, 0, 0, 0], [0, 0, 0, -1], [0, 0, -1, 0]], dtype=np.float64),
+    "hermite": np.array(
+        [[0, 1, 0, 0], [1, 0, 0, 0], [0, 0, 0, -1], [0, 0, -1, 0]], dtype=np.float64
+    ),
     # Bernstein and uniform B-spline bases are symmetric: reverse the control values.
     "bezier": np.eye(4)[::-1].copy(),
     "bspline": np.eye(4)[::-1].copy(),
@@ -91,7 +93,9 @@ class CubicCurves:
 
     def reversed(self) -> CubicCurves:
         """The same curves traversed from t = 1 to t = 0 (exact in every form)."""
-        return CubicCurves(np.einsum("ij,...jd->...id", reversal_matrix(self.form), self.control), self.form)
+        return CubicCurves(
+            np.einsum("ij,...jd->...id", reversal_matrix(self.form), self.control), self.form
+        )
 
     def power_coefficients(self) -> NDArray[np.float64]:
         """Ascending power coefficients, shape ``batch + (4, dim)``."""

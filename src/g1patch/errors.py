@@ -112,11 +112,13 @@ def as_float_array(
     try:
         array = np.asarray(value, dtype=np.float64, order="C")
     except (TypeError, ValueError) as exc:
-        raise InputError(f"{name}: expected an array of numbers, got {type(value).__name__} ({exc})") from None
+        raise InputError(
+            f"{name}: expected an array of numbers, got {type(value).__name__} ({exc})"
+        ) from None
     need = len(trailing) if min_ndim is None else min_ndim
     shape_ok = array.ndim >= need and all(
         want is None or got == want
-        for got, want in zip(array.shape[array.ndim - len(trailing):], trailing)
+        for got, want in zip(array.shape[array.ndim - len(trailing) :], trailing)
     )
     if not shape_ok:
         expected = "(..., " + _shape_text(trailing)[1:] if trailing else f"at least {need} axes"
@@ -129,24 +131,34 @@ def as_float_array(
     return array
 
 
-def as_index_array(name: str, value: ArrayLike, trailing: Sequence[int | None] = ()) -> NDArray[np.int64]:
+def as_index_array(
+    name: str, value: ArrayLike, trailing: Sequence[int | None] = ()
+) -> NDArray[np.int64]:
     """Convert ``value`` to a C-contiguous int64 array with last axes ``trailing``."""
     array = np.asarray(value)
     if array.size and not np.issubdtype(array.dtype, np.integer):
-        if not np.issubdtype(array.dtype, np.floating) or not np.all(np.isfinite(array)) or np.any(array != np.round(array)):
+        if (
+            not np.issubdtype(array.dtype, np.floating)
+            or not np.all(np.isfinite(array))
+            or np.any(array != np.round(array))
+        ):
             raise InputError(f"{name}: expected integer indices, got dtype {array.dtype}")
     array = np.asarray(array, dtype=np.int64, order="C")
     shape_ok = array.ndim >= len(trailing) and all(
         want is None or got == want
-        for got, want in zip(array.shape[array.ndim - len(trailing):], trailing)
+        for got, want in zip(array.shape[array.ndim - len(trailing) :], trailing)
     )
     if not shape_ok:
-        raise InputError(f"{name}: expected shape (..., {_shape_text(trailing)[1:]}, got {array.shape}")
+        raise InputError(
+            f"{name}: expected shape (..., {_shape_text(trailing)[1:]}, got {array.shape}"
+        )
     return array
 
 
 def check_choice(name: str, value: str, choices: Sequence[str]) -> str:
     """Return ``value`` if it is one of ``choices``, else raise :class:`InputError` listing them."""
     if not isinstance(value, str) or value not in choices:
-        raise InputError(f"{name}: unknown value {value!r}; expected one of {', '.join(map(repr, choices))}")
+        raise InputError(
+            f"{name}: unknown value {value!r}; expected one of {', '.join(map(repr, choices))}"
+        )
     return value

@@ -41,10 +41,14 @@ class Frame:
             raise InputError(f"frame centre: expected shape (3,), got {centre.shape}")
         centre.setflags(write=False)
         scale = self.scale
-        if isinstance(scale, (bool, np.bool_)) or not isinstance(scale, (int, float, np.integer, np.floating)):
+        if isinstance(scale, (bool, np.bool_)) or not isinstance(
+            scale, (int, float, np.integer, np.floating)
+        ):
             raise InputError(f"frame scale: expected a positive finite number, got {scale!r}")
         if not (np.isfinite(scale) and scale > 0):
-            raise InputError(f"frame scale: expected a positive finite number, got {float(scale)!r}")
+            raise InputError(
+                f"frame scale: expected a positive finite number, got {float(scale)!r}"
+            )
         object.__setattr__(self, "centre", centre)
         object.__setattr__(self, "scale", float(scale))
 
@@ -97,12 +101,14 @@ class Frame:
         step = 3 * _CHUNK_ROWS
         tiled = np.tile(self.centre, min(_CHUNK_ROWS, len(flat) // 3))
         for start in range(0, len(flat), step):
-            chunk = flat[start:start + step]
-            np.multiply(source[start:start + step], self.scale, out=chunk)
+            chunk = flat[start : start + step]
+            np.multiply(source[start : start + step], self.scale, out=chunk)
             np.add(chunk, tiled[: len(chunk)], out=chunk)
         return target
 
-    def vectors_to_world(self, d: ArrayLike, out: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+    def vectors_to_world(
+        self, d: ArrayLike, out: NDArray[np.float64] | None = None
+    ) -> NDArray[np.float64]:
         """Vectors ``s d`` (a derivative of any order by u, v), shape (..., 3); into ``out`` when given."""
         vectors = as_float_array("d", d, (3,), finite=False)
         return np.multiply(vectors, self.scale, out=_check_out(out, vectors.shape))
@@ -125,17 +131,23 @@ class Frame:
         if not present:
             return None
         if len(present) == 1:
-            raise InputError(f"arrays: a frame needs both 'frame_centre' and 'frame_scale', got only {present[0]!r}")
+            raise InputError(
+                f"arrays: a frame needs both 'frame_centre' and 'frame_scale', got only {present[0]!r}"
+            )
         scale = np.asarray(arrays["frame_scale"])
         if scale.shape != () or not np.issubdtype(scale.dtype, np.number):
-            raise InputError(f"frame scale: expected one number, got an array of {scale.dtype} {scale.shape}")
+            raise InputError(
+                f"frame scale: expected one number, got an array of {scale.dtype} {scale.shape}"
+            )
         return cls(np.asarray(arrays["frame_centre"]), scale.item())
 
 
 def check_frame(frame: object) -> Frame | None:
     """``frame`` if it is a :class:`Frame` or None, else :class:`InputError`."""
     if frame is not None and not isinstance(frame, Frame):
-        raise InputError(f"frame: expected a g1patch.frame.Frame or None, got {type(frame).__name__}")
+        raise InputError(
+            f"frame: expected a g1patch.frame.Frame or None, got {type(frame).__name__}"
+        )
     return frame
 
 
@@ -143,5 +155,7 @@ def _check_out(out: NDArray[np.float64] | None, shape: tuple[int, ...]) -> NDArr
     if out is None:
         return np.empty(shape)
     if out.shape != shape or out.dtype != np.float64:
-        raise InputError(f"out: expected a float64 array of shape {shape}, got {out.dtype} {out.shape}")
+        raise InputError(
+            f"out: expected a float64 array of shape {shape}, got {out.dtype} {out.shape}"
+        )
     return out

@@ -53,7 +53,9 @@ class VolumeEstimate:
         return self.volume
 
 
-def grid_row_chunks(n_patches: int, n_rows: int, n_columns: int, budget: int = GRID_BUDGET) -> Iterator[slice]:
+def grid_row_chunks(
+    n_patches: int, n_rows: int, n_columns: int, budget: int = GRID_BUDGET
+) -> Iterator[slice]:
     """Row slices such that ``n_patches × rows × n_columns`` stays near ``budget`` points."""
     rows = max(1, budget // max(1, n_patches * n_columns))
     for start in range(0, n_rows, rows):
@@ -63,7 +65,9 @@ def grid_row_chunks(n_patches: int, n_rows: int, n_columns: int, budget: int = G
 def _patches_of(surface: PatchNetwork | Patches) -> Patches:
     patches = surface.patches if isinstance(surface, PatchNetwork) else surface
     if not (hasattr(patches, "evaluate_grid") and hasattr(patches, "__len__")):
-        raise InputError(f"network: expected a PatchNetwork or patches with evaluate_grid, got {type(surface).__name__}")
+        raise InputError(
+            f"network: expected a PatchNetwork or patches with evaluate_grid, got {type(surface).__name__}"
+        )
     return patches
 
 
@@ -79,8 +83,14 @@ def _quadrature(patches: Patches, points: int, centre: NDArray[np.float64]) -> f
     total = 0.0
     for rows in grid_row_chunks(len(patches), points, points):
         p = patches.evaluate_grid(nodes[rows], nodes) - centre
-        flux = np.einsum("nabd,nabd->ab", p, np.cross(patches.evaluate_grid(nodes[rows], nodes, 1, 0),
-                                                      patches.evaluate_grid(nodes[rows], nodes, 0, 1)))
+        flux = np.einsum(
+            "nabd,nabd->ab",
+            p,
+            np.cross(
+                patches.evaluate_grid(nodes[rows], nodes, 1, 0),
+                patches.evaluate_grid(nodes[rows], nodes, 0, 1),
+            ),
+        )
         total += float(weights[rows] @ flux @ weights)
     return total / 3.0
 
@@ -105,7 +115,9 @@ def volume_estimate(
         patches, cube = patches.local(), frame.scale**3  # type: ignore[attr-defined]
     centre = _centre(patches)
     if isinstance(patches, PatchSet):
-        return VolumeEstimate(_quadrature(patches, BICUBIC_POINTS, centre) * cube, BICUBIC_POINTS, 0.0, True)
+        return VolumeEstimate(
+            _quadrature(patches, BICUBIC_POINTS, centre) * cube, BICUBIC_POINTS, 0.0, True
+        )
     points = 8
     previous = _quadrature(patches, points, centre)
     while True:
@@ -117,6 +129,8 @@ def volume_estimate(
         previous = volume
 
 
-def network_volume(network: PatchNetwork | Patches, *, rtol: float = 1e-12, max_points: int = 256) -> float:
+def network_volume(
+    network: PatchNetwork | Patches, *, rtol: float = 1e-12, max_points: int = 256
+) -> float:
     """The volume enclosed by a closed network (see :func:`volume_estimate` for the quadrature)."""
     return volume_estimate(network, rtol=rtol, max_points=max_points).volume

@@ -131,7 +131,11 @@ def _contract(weights: NDArray[np.float64], points: NDArray[np.float64]) -> NDAr
         return np.matmul(weights, points)
     count, samples = points.shape[0], weights.shape[0]
     out = np.empty((count, samples, 3))
-    np.matmul(points.reshape(count, 60), np.kron(weights, np.eye(3)).T, out=out.reshape(count, 3 * samples))
+    np.matmul(
+        points.reshape(count, 60),
+        np.kron(weights, np.eye(3)).T,
+        out=out.reshape(count, 3 * samples),
+    )
     return out
 
 
@@ -182,7 +186,11 @@ class GregoryPatchSet:
 
     def _to_world(self, values: NDArray[np.float64], du: int, dv: int) -> NDArray[np.float64]:
         """Local values of ``∂^(du+dv) p`` mapped to world in place (:meth:`Frame.derivative_to_world`)."""
-        return values if self.frame is None else self.frame.derivative_to_world(values, du + dv, out=values)
+        return (
+            values
+            if self.frame is None
+            else self.frame.derivative_to_world(values, du + dv, out=values)
+        )
 
     # ------------------------------------------------------------- evaluation
     def evaluate(self, uv: ArrayLike, du: int = 0, dv: int = 0) -> NDArray[np.float64]:
@@ -193,12 +201,18 @@ class GregoryPatchSet:
         """
         params = _check_domain("uv", as_float_array("uv", uv, (2,)))
         if params.ndim == 2:
-            return self._to_world(_contract(gregory_weights(params[:, 0], params[:, 1], du, dv), self.points), du, dv)
+            return self._to_world(
+                _contract(gregory_weights(params[:, 0], params[:, 1], du, dv), self.points), du, dv
+            )
         if params.ndim == 3 and params.shape[0] == len(self):
             # Per-patch parameters usually repeat (edge samples, grids): weigh each distinct (u, v) once.
-            keys, inverse = np.unique(params.view(np.complex128)[..., 0], return_inverse=True)  # u + iv
+            keys, inverse = np.unique(
+                params.view(np.complex128)[..., 0], return_inverse=True
+            )  # u + iv
             weights = gregory_weights(keys.real, keys.imag, du, dv)
-            return self._to_world(_contract(weights[inverse.reshape(params.shape[:2])], self.points), du, dv)
+            return self._to_world(
+                _contract(weights[inverse.reshape(params.shape[:2])], self.points), du, dv
+            )
         raise InputError(f"uv: expected shape (K, 2) or ({len(self)}, K, 2), got {params.shape}")
 
     def evaluate_grid(
@@ -228,7 +242,9 @@ class GregoryPatchSet:
         ``(P_k, E+_k, E-_{k+1}, P_{k+1})``."""
         k = np.arange(4)
         following = (k + 1) % 4
-        index = np.stack([k, 4 + 2 * k, 5 + 2 * following, following], axis=1)  # (4 edges, 4 points)
+        index = np.stack(
+            [k, 4 + 2 * k, 5 + 2 * following, following], axis=1
+        )  # (4 edges, 4 points)
         return CubicCurves(self.world_points()[:, index], "bezier")
 
     def to_bezier_control(self) -> NDArray[np.float64]:
@@ -240,7 +256,9 @@ class GregoryPatchSet:
         """
         net = np.empty((len(self), 4, 4, 3))
         net[:, BEZIER_INDEX[:, 0], BEZIER_INDEX[:, 1]] = self.points[:, :12]
-        net[:, INTERIOR_INDEX[:, 0], INTERIOR_INDEX[:, 1]] = 0.5 * (self.points[:, 12::2] + self.points[:, 13::2])
+        net[:, INTERIOR_INDEX[:, 0], INTERIOR_INDEX[:, 1]] = 0.5 * (
+            self.points[:, 12::2] + self.points[:, 13::2]
+        )
         return net
 
     def to_arrays(self) -> dict[str, NDArray[np.float64]]:
@@ -252,7 +270,9 @@ class GregoryPatchSet:
     def from_arrays(cls, arrays: Mapping[str, ArrayLike]) -> GregoryPatchSet:
         """Inverse of :meth:`to_arrays`."""
         if "points" not in arrays:
-            raise InputError(f"arrays: Gregory patches need the array 'points', got {sorted(arrays)}")
+            raise InputError(
+                f"arrays: Gregory patches need the array 'points', got {sorted(arrays)}"
+            )
         return cls(np.asarray(arrays["points"]), Frame.from_arrays(arrays))
 
 

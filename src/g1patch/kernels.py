@@ -48,7 +48,9 @@ def jit_kernel(kernel: Callable[..., object]) -> Callable[..., object]:
 
 def workers() -> int:
     """Cores this process may run on."""
-    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
+    return max(
+        1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    )
 
 
 def _forget_pool() -> None:
@@ -68,7 +70,9 @@ def in_chunks(call: Callable[[int, int], T], count: int, least: int | None = Non
     range order."""
     global _pool
     cores = workers()
-    parts = max(1, min(RANGES_PER_WORKER * cores, count // max(CHUNK_ITEMS if least is None else least, 1)))
+    parts = max(
+        1, min(RANGES_PER_WORKER * cores, count // max(CHUNK_ITEMS if least is None else least, 1))
+    )
     if cores == 1 or parts == 1:
         return [call(0, count)]
     bounds = [count * i // parts for i in range(parts + 1)]

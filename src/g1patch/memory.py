@@ -28,7 +28,12 @@ from __future__ import annotations
 import ctypes
 import os
 
-__all__ = ["TUNED_ENVIRONMENT", "keep_freed_memory", "tune_for_large_arrays", "without_huge_page_advice"]
+__all__ = [
+    "TUNED_ENVIRONMENT",
+    "keep_freed_memory",
+    "tune_for_large_arrays",
+    "without_huge_page_advice",
+]
 
 #: glibc's ``mallopt`` parameters (malloc.h)
 _M_TRIM_THRESHOLD = -1

@@ -151,10 +151,11 @@ def _check_repeated_vertices(corners: IntArray, sizes: IntArray, n_vertices: int
         keys = np.sort(face * n_vertices + corners)
         faces = np.unique(keys[1:][keys[1:] == keys[:-1]] // n_vertices)
     if faces.size:
-        start = int(np.sum(sizes[:faces[0]]))
-        face_corners = corners[start:start + sizes[faces[0]]]
+        start = int(np.sum(sizes[: faces[0]]))
+        face_corners = corners[start : start + sizes[faces[0]]]
         raise DegenerateFaceError(
-            f"face {faces[0]} repeats a vertex: corners {tuple(face_corners.tolist())}" + _all_of(faces, "faces")
+            f"face {faces[0]} repeats a vertex: corners {tuple(face_corners.tolist())}"
+            + _all_of(faces, "faces")
         )
 
 
@@ -169,7 +170,9 @@ def _face_of(halfedges: ArrayLike, face_ends: IntArray) -> IntArray:
     return np.searchsorted(face_ends, halfedges, side="right")
 
 
-def _pair_halfedges(origin: IntArray, target: IntArray, face_ends: IntArray, n_vertices: int) -> _EdgePairing:
+def _pair_halfedges(
+    origin: IntArray, target: IntArray, face_ends: IntArray, n_vertices: int
+) -> _EdgePairing:
     """Group half-edges by undirected edge ``key = min·nv + max`` (one sort) and check each group.
 
     An edge may have at most two half-edges (else :class:`NonManifoldError`), and two of them must
@@ -187,10 +190,11 @@ def _pair_halfedges(origin: IntArray, target: IntArray, face_ends: IntArray, n_v
     crowded = np.flatnonzero(count > 2)
     if crowded.size:
         e = crowded[0]
-        h = order[first[e]:first[e] + count[e]]
+        h = order[first[e] : first[e] + count[e]]
         raise NonManifoldError(
             f"edge {divmod(int(key[h[0]]), n_vertices)} is used by {count[e]} faces "
-            f"({_few(_face_of(np.sort(h), face_ends))}); an edge may have at most 2" + _all_of(crowded, "edges")
+            f"({_few(_face_of(np.sort(h), face_ends))}); an edge may have at most 2"
+            + _all_of(crowded, "edges")
         )
 
     a = order[first]
@@ -207,7 +211,9 @@ def _pair_halfedges(origin: IntArray, target: IntArray, face_ends: IntArray, n_v
 
     halfedge_edge = np.empty(key.size, dtype=np.int64)
     halfedge_edge[order] = np.cumsum(is_first) - 1
-    edge_halfedges = np.stack([np.where(paired, np.minimum(a, b), a), np.where(paired, np.maximum(a, b), -1)], axis=1)
+    edge_halfedges = np.stack(
+        [np.where(paired, np.minimum(a, b), a), np.where(paired, np.maximum(a, b), -1)], axis=1
+    )
     edge_keys = sorted_key[first]
     edges = np.stack([edge_keys // n_vertices, edge_keys % n_vertices], axis=1)
     return _EdgePairing(edges, halfedge_edge, edge_halfedges)
@@ -264,9 +270,13 @@ class QuadTopology:
         connectivity = _connect(quads.ravel(), np.full(quads.shape[0], 4, dtype=np.int64), nv)
         unused = np.flatnonzero(connectivity.face_count == 0)
         if unused.size:
-            raise MeshError(f"vertices {_few(unused)} are used by no face; QuadMesh.from_arrays drops unused vertices")
+            raise MeshError(
+                f"vertices {_few(unused)} are used by no face; QuadMesh.from_arrays drops unused vertices"
+            )
         is_boundary_edge = connectivity.edge_halfedges[:, 1] < 0
-        return cls(faces=quads, n_vertices=nv, is_boundary_edge=is_boundary_edge, **connectivity._asdict())
+        return cls(
+            faces=quads, n_vertices=nv, is_boundary_edge=is_boundary_edge, **connectivity._asdict()
+        )
 
     def __post_init__(self) -> None:
         for value in vars(self).values():
@@ -308,11 +318,11 @@ class QuadTopology:
 
     def ring(self, v: int) -> IntArray:
         """Outgoing half-edges of vertex ``v``, counter-clockwise."""
-        return self.ring_halfedges[self.ring_offsets[v]:self.ring_offsets[v + 1]]
+        return self.ring_halfedges[self.ring_offsets[v] : self.ring_offsets[v + 1]]
 
     def one_ring(self, v: int) -> IntArray:
         """Neighbour vertices of ``v``, counter-clockwise."""
-        return self.neighbors[self.neighbor_offsets[v]:self.neighbor_offsets[v + 1]]
+        return self.neighbors[self.neighbor_offsets[v] : self.neighbor_offsets[v + 1]]
 
     # -- counts and global structure ------------------------------------------------------------
 
@@ -399,7 +409,9 @@ class _Connectivity(NamedTuple):
 KERNEL_HALFEDGES = 80_000
 
 
-def _connect(corners: IntArray, sizes: IntArray, n_vertices: int, *, compiled: bool | None = None) -> _Connectivity:
+def _connect(
+    corners: IntArray, sizes: IntArray, n_vertices: int, *, compiled: bool | None = None
+) -> _Connectivity:
     """Half-edge connectivity of polygons given as flat ``corners`` with ``sizes``, validated.
 
     Half-edge ``h`` is corner ``h``, running to the next corner of its face; unused vertices get
@@ -460,10 +472,21 @@ def _connect(corners: IntArray, sizes: IntArray, n_vertices: int, *, compiled: b
     boundary_before = np.repeat(neighbor_offsets[:-1] - ring_offsets[:-1], face_count)
     neighbors[halfedges + boundary_before] = target[ring]
     boundary = np.flatnonzero(is_boundary_vertex)
-    neighbors[neighbor_offsets[boundary + 1] - 1] = corners[preceding[ring[ring_offsets[boundary + 1] - 1]]]
+    neighbors[neighbor_offsets[boundary + 1] - 1] = corners[
+        preceding[ring[ring_offsets[boundary + 1] - 1]]
+    ]
     return _Connectivity(
-        twin, pairing.edges, pairing.halfedge_edge, pairing.edge_halfedges, valence, face_count,
-        is_boundary_vertex, ring_offsets, ring, neighbor_offsets, neighbors,
+        twin,
+        pairing.edges,
+        pairing.halfedge_edge,
+        pairing.edge_halfedges,
+        valence,
+        face_count,
+        is_boundary_vertex,
+        ring_offsets,
+        ring,
+        neighbor_offsets,
+        neighbors,
     )
 
 
@@ -494,7 +517,9 @@ def _connect_kernel(corners: IntArray, sizes: IntArray, n_vertices: int) -> tupl
         preceding[following[h]] = h
     bucket = np.zeros(n_vertices + 1, dtype=np.int64)
     for h in range(nh):  # counting sort by the smaller vertex
-        bucket[min(corners[h], corners[(h & ~3) | ((h + 1) & 3) if quads else following[h]]) + 1] += 1
+        bucket[
+            min(corners[h], corners[(h & ~3) | ((h + 1) & 3) if quads else following[h]]) + 1
+        ] += 1
     for v in range(n_vertices):
         bucket[v + 1] += bucket[v]
     fill = bucket[:-1].copy()
@@ -520,7 +545,9 @@ def _connect_kernel(corners: IntArray, sizes: IntArray, n_vertices: int) -> tupl
 
     twin = np.full(nh, -1, dtype=np.int64)
     halfedge_edge = np.empty(nh, dtype=np.int64)
-    edges = np.empty((nh, 2), dtype=np.int64)  # the first n_edges rows are written (and their pages touched)
+    edges = np.empty(
+        (nh, 2), dtype=np.int64
+    )  # the first n_edges rows are written (and their pages touched)
     edge_halfedges = np.empty((nh, 2), dtype=np.int64)
     valence = np.zeros(n_vertices, dtype=np.int64)
     n_edges = 0
@@ -531,7 +558,9 @@ def _connect_kernel(corners: IntArray, sizes: IntArray, n_vertices: int) -> tupl
             count = 1
             while i + count < bucket[v + 1] and high[i + count] == high[i]:
                 count += 1
-            if count > 2 or (count == 2 and corners[a] == corners[order[i + 1]]):  # crowded, or one direction
+            if count > 2 or (
+                count == 2 and corners[a] == corners[order[i + 1]]
+            ):  # crowded, or one direction
                 valid = False
                 break
             halfedge_edge[a] = n_edges
@@ -573,19 +602,37 @@ def _connect_kernel(corners: IntArray, sizes: IntArray, n_vertices: int) -> tupl
     for v in range(n_vertices if valid else 0):
         h = start[v]
         for k in range(face_count[v]):
-            if h < 0 or (k > 0 and h == start[v]):  # the boundary, or round a closed fan, before all faces: another fan
+            if h < 0 or (
+                k > 0 and h == start[v]
+            ):  # the boundary, or round a closed fan, before all faces: another fan
                 valid = False
                 break
             ring[ring_offsets[v] + k] = h
-            neighbors[neighbor_offsets[v] + k] = corners[(h & ~3) | ((h + 1) & 3) if quads else following[h]]
+            neighbors[neighbor_offsets[v] + k] = corners[
+                (h & ~3) | ((h + 1) & 3) if quads else following[h]
+            ]
             h = twin[(h & ~3) | ((h + 3) & 3) if quads else preceding[h]]
         if not valid:
             break
         if is_boundary_vertex[v]:
             last = ring[ring_offsets[v + 1] - 1]
-            neighbors[neighbor_offsets[v + 1] - 1] = corners[(last & ~3) | ((last + 3) & 3) if quads else preceding[last]]
-    return (valid, twin, edges[:n_edges], halfedge_edge, edge_halfedges[:n_edges], valence, face_count,
-            is_boundary_vertex, ring_offsets, ring, neighbor_offsets, neighbors)
+            neighbors[neighbor_offsets[v + 1] - 1] = corners[
+                (last & ~3) | ((last + 3) & 3) if quads else preceding[last]
+            ]
+    return (
+        valid,
+        twin,
+        edges[:n_edges],
+        halfedge_edge,
+        edge_halfedges[:n_edges],
+        valence,
+        face_count,
+        is_boundary_vertex,
+        ring_offsets,
+        ring,
+        neighbor_offsets,
+        neighbors,
+    )
 
 
 #: ring positions written one rotation step at a time (for all vertices at once); the rest of the
@@ -621,8 +668,18 @@ def _walk_rings(
         ring[ring_offsets[order[:count]] + step] = h
         current[:count] = twin[preceding[h]]
     if walking.size > _WALK_STEPS:
-        tail = order[:walking[_WALK_STEPS]]
-        _rank_ring_tails(ring, tail, current[:tail.size], face_count, ring_offsets, twin, preceding, corners, face_ends)
+        tail = order[: walking[_WALK_STEPS]]
+        _rank_ring_tails(
+            ring,
+            tail,
+            current[: tail.size],
+            face_count,
+            ring_offsets,
+            twin,
+            preceding,
+            corners,
+            face_ends,
+        )
     return ring
 
 
@@ -661,7 +718,9 @@ def _rank_ring_tails(
         distance[live] += distance[successor[live]]
         successor[live] = successor[successor[live]]
     head = local[first]
-    short = (head < 0) | (np.where(head >= 0, distance[head], 0) + 1 != face_count[tail] - _WALK_STEPS)
+    short = (head < 0) | (
+        np.where(head >= 0, distance[head], 0) + 1 != face_count[tail] - _WALK_STEPS
+    )
     if short.any():
         _raise_fans(tail[short], corners, face_ends, face_count)
     rank = np.zeros(face_count.size, dtype=np.int64)
@@ -670,7 +729,9 @@ def _rank_ring_tails(
     ring[ring_offsets[v] + _WALK_STEPS + rank[v] - distance] = left
 
 
-def _raise_fans(vertices: IntArray, corners: IntArray, face_ends: IntArray, face_count: IntArray) -> None:
+def _raise_fans(
+    vertices: IntArray, corners: IntArray, face_ends: IntArray, face_count: IntArray
+) -> None:
     v = int(vertices[0])
     faces = _face_of(np.flatnonzero(corners == v), face_ends)
     raise NonManifoldError(
@@ -714,10 +775,14 @@ def sectors(topology: QuadTopology | _Connectivity, seams: NDArray[np.bool_]) ->
     ring_vertex = np.repeat(np.arange(nv), face_count)
     position = np.arange(ring_vertex.size) - topology.ring_offsets[ring_vertex]
     boundary = topology.is_boundary_vertex
-    cut = seams[topology.halfedge_edge[topology.ring_halfedges]] | ((position == 0) & boundary[ring_vertex])
+    cut = seams[topology.halfedge_edge[topology.ring_halfedges]] | (
+        (position == 0) & boundary[ring_vertex]
+    )
     cuts = np.bincount(ring_vertex, cut, minlength=nv).astype(np.int64)
     total = np.cumsum(cut)
-    before = np.concatenate([[0], total])[topology.ring_offsets[:-1]]  # cuts before each vertex's ring
+    before = np.concatenate([[0], total])[
+        topology.ring_offsets[:-1]
+    ]  # cuts before each vertex's ring
     local = total - before[ring_vertex]  # cuts at positions ≤ p of its vertex
     count = np.maximum(cuts, 1)
     local_label = np.where(boundary[ring_vertex], local - 1, (local - 1) % count[ring_vertex])
@@ -728,7 +793,10 @@ def sectors(topology: QuadTopology | _Connectivity, seams: NDArray[np.bool_]) ->
     slot = topology.neighbor_offsets[ring_vertex] + position
     start[label[cut]] = slot[cut]
     # a sector ends where the next one (counter-clockwise) starts; a boundary's last at its virtual slot
-    following = sector_offsets[vertex] + (np.arange(vertex.size) - sector_offsets[vertex] + 1) % count[vertex]
+    following = (
+        sector_offsets[vertex]
+        + (np.arange(vertex.size) - sector_offsets[vertex] + 1) % count[vertex]
+    )
     end = np.where(start >= 0, start[following], -1)
     last = sector_offsets[1:][boundary] - 1
     end[last] = topology.neighbor_offsets[1:][boundary] - 1
@@ -741,7 +809,9 @@ def sectors(topology: QuadTopology | _Connectivity, seams: NDArray[np.bool_]) ->
 def _check_finite(vertices: FloatArray) -> None:
     """Every coordinate finite and within :data:`MAX_COORDINATE` (two reductions, which NaN makes
     fail, before any search for the vertex to name)."""
-    if vertices.size == 0 or (vertices.max() <= MAX_COORDINATE and vertices.min() >= -MAX_COORDINATE):
+    if vertices.size == 0 or (
+        vertices.max() <= MAX_COORDINATE and vertices.min() >= -MAX_COORDINATE
+    ):
         return
     bad = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
     if bad.size:
@@ -763,7 +833,9 @@ KERNEL_FACES = 20_000
 _AREA_MARGIN = 1e-6
 
 
-def _check_face_areas(vertices: FloatArray, faces: IntArray, *, compiled: bool | None = None) -> None:
+def _check_face_areas(
+    vertices: FloatArray, faces: IntArray, *, compiled: bool | None = None
+) -> None:
     """Zero area: ``|d1 × d2| <= tol · max(|d1|, |d2|)²`` for the diagonals d1 = p2 − p0, d2 = p3 − p1.
 
     ``compiled`` (default: from :data:`KERNEL_FACES` faces on): :func:`_face_area_kernel` passes
@@ -773,7 +845,9 @@ def _check_face_areas(vertices: FloatArray, faces: IntArray, *, compiled: bool |
     if faces.shape[0] >= KERNEL_FACES if compiled is None else compiled:
         from .kernels import jit_kernel  # numba, imported on first use
 
-        if jit_kernel(_face_area_kernel)(vertices, faces, DEGENERATE_AREA_TOLERANCE * (1.0 + _AREA_MARGIN)):
+        if jit_kernel(_face_area_kernel)(
+            vertices, faces, DEGENERATE_AREA_TOLERANCE * (1.0 + _AREA_MARGIN)
+        ):
             return
     corners = vertices[faces]
     d1 = corners[:, 2] - corners[:, 0]
@@ -794,8 +868,16 @@ def _face_area_kernel(vertices: FloatArray, faces: IntArray, tolerance: float) -
     by face; compiled by :func:`~g1patch.kernels.jit_kernel`."""
     for f in range(faces.shape[0]):
         a, b, c, d = faces[f, 0], faces[f, 1], faces[f, 2], faces[f, 3]
-        u0, u1, u2 = vertices[c, 0] - vertices[a, 0], vertices[c, 1] - vertices[a, 1], vertices[c, 2] - vertices[a, 2]
-        w0, w1, w2 = vertices[d, 0] - vertices[b, 0], vertices[d, 1] - vertices[b, 1], vertices[d, 2] - vertices[b, 2]
+        u0, u1, u2 = (
+            vertices[c, 0] - vertices[a, 0],
+            vertices[c, 1] - vertices[a, 1],
+            vertices[c, 2] - vertices[a, 2],
+        )
+        w0, w1, w2 = (
+            vertices[d, 0] - vertices[b, 0],
+            vertices[d, 1] - vertices[b, 1],
+            vertices[d, 2] - vertices[b, 2],
+        )
         n0, n1, n2 = u1 * w2 - u2 * w1, u2 * w0 - u0 * w2, u0 * w1 - u1 * w0
         size = tolerance * max(u0 * u0 + u1 * u1 + u2 * u2, w0 * w0 + w1 * w1 + w2 * w2)
         if not n0 * n0 + n1 * n1 + n2 * n2 > size * size:
@@ -812,11 +894,15 @@ def _as_polygons(faces: ArrayLike | Sequence[Sequence[int]]) -> tuple[IntArray, 
     if table is not None and table.dtype != object:
         table = as_index_array("faces", table, (None,))
         if table.ndim != 2:
-            raise InputError(f"faces: expected shape (nf, n) or a list of index lists, got shape {table.shape}")
+            raise InputError(
+                f"faces: expected shape (nf, n) or a list of index lists, got shape {table.shape}"
+            )
         return table.ravel(), np.full(table.shape[0], table.shape[1], dtype=np.int64)
     try:
         sizes = np.fromiter(map(len, faces), dtype=np.int64)
-        corners = np.fromiter((int(v) for face in faces for v in face), dtype=np.int64, count=int(sizes.sum()))
+        corners = np.fromiter(
+            (int(v) for face in faces for v in face), dtype=np.int64, count=int(sizes.sum())
+        )
     except (TypeError, ValueError) as exc:
         raise InputError(f"faces: expected a list of lists of vertex indices ({exc})") from None
     return corners, sizes
@@ -843,7 +929,9 @@ _SPLIT_PARALLEL_TOLERANCE = 1e-6
 _SPLIT_NORMAL_TOLERANCE = 1e-12
 
 
-def _corner_normals(vertices: FloatArray, corners: IntArray, sizes: IntArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+def _corner_normals(
+    vertices: FloatArray, corners: IntArray, sizes: IntArray
+) -> tuple[FloatArray, NDArray[np.bool_]]:
     """Area-weighted fan normals ``N_v = Σ (v_next − v) × (v_prev − v)`` over v's corners, unit.
 
     Vertices at the boundary take the same sum over their faces. Returns ``(normals, valid)``;
@@ -856,7 +944,9 @@ def _corner_normals(vertices: FloatArray, corners: IntArray, sizes: IntArray) ->
     preceding[following] = np.arange(corners.size)
     here = vertices[corners]
     cross = np.cross(vertices[corners[following]] - here, vertices[corners[preceding]] - here)
-    summed = np.stack([np.bincount(corners, weights=cross[:, k], minlength=nv) for k in range(3)], axis=1)
+    summed = np.stack(
+        [np.bincount(corners, weights=cross[:, k], minlength=nv) for k in range(3)], axis=1
+    )
     scale = np.bincount(corners, weights=np.linalg.norm(cross, axis=1), minlength=nv)
     length = np.linalg.norm(summed, axis=1)
     valid = (length > _SPLIT_NORMAL_TOLERANCE * scale) & np.isfinite(length)
@@ -885,7 +975,11 @@ def _edge_tangents(
 
 
 def _smooth_edge_points(
-    vertices: FloatArray, a: IntArray, b: IntArray, normals: tuple[FloatArray, FloatArray], valid: tuple[NDArray[np.bool_], NDArray[np.bool_]]
+    vertices: FloatArray,
+    a: IntArray,
+    b: IntArray,
+    normals: tuple[FloatArray, FloatArray],
+    valid: tuple[NDArray[np.bool_], NDArray[np.bool_]],
 ) -> FloatArray:
     """Midpoints of the cubic Hermite curves of edges a–b: ``(A + B)/2 + (t_AB + t_BA)/8``.
 
@@ -901,7 +995,12 @@ def _smooth_edge_points(
 
 
 def _creased_edge_points(
-    vertices: FloatArray, corners: IntArray, sizes: IntArray, a: IntArray, b: IntArray, sharp: NDArray[np.bool_]
+    vertices: FloatArray,
+    corners: IntArray,
+    sizes: IntArray,
+    a: IntArray,
+    b: IntArray,
+    sharp: NDArray[np.bool_],
 ) -> FloatArray:
     """Edge points of a polygon mesh with creases ``sharp`` (per edge a–b, sorted pairs).
 
@@ -930,10 +1029,18 @@ def _creased_edge_points(
     length = np.linalg.norm(summed, axis=1)
     valid = (length > _SPLIT_NORMAL_TOLERANCE * scale) & np.isfinite(length)
     normals = np.divide(summed, length[:, None], out=np.zeros_like(summed), where=valid[:, None])
-    start = connectivity.edge_halfedges[:, 0]  # corner at a (a → b or b → a), its face touches the edge
+    start = connectivity.edge_halfedges[
+        :, 0
+    ]  # corner at a (a → b or b → a), its face touches the edge
     at_a = np.where(corners[start] == a, start, following[start])
     at_b = np.where(corners[start] == b, start, following[start])
-    out = _smooth_edge_points(vertices, a, b, (normals[label[at_a]], normals[label[at_b]]), (valid[label[at_a]], valid[label[at_b]]))
+    out = _smooth_edge_points(
+        vertices,
+        a,
+        b,
+        (normals[label[at_a]], normals[label[at_b]]),
+        (valid[label[at_a]], valid[label[at_b]]),
+    )
 
     # crease curves: the two crease neighbours of every vertex with exactly two creases inside
     e = np.flatnonzero(sharp)
@@ -947,7 +1054,10 @@ def _creased_edge_points(
     owner = ends[two][0::2]
     c_p, c_q = vertices[pairs[:, 0]] - vertices[owner], vertices[pairs[:, 1]] - vertices[owner]
     direction = np.zeros((nv, 3))
-    d = c_q * np.einsum("ij,ij->i", c_p, c_p)[:, None] - c_p * np.einsum("ij,ij->i", c_q, c_q)[:, None]
+    d = (
+        c_q * np.einsum("ij,ij->i", c_p, c_p)[:, None]
+        - c_p * np.einsum("ij,ij->i", c_q, c_q)[:, None]
+    )
     d_length = np.linalg.norm(d, axis=1, keepdims=True)
     direction[owner] = np.divide(d, d_length, out=np.zeros_like(d), where=d_length > 0)
 
@@ -961,12 +1071,19 @@ def _creased_edge_points(
         length = 2.0 * chord_length / (1.0 + np.abs(cosine))
         return np.where(curved[:, None], length[:, None] * along, chord)
 
-    out[e] = 0.5 * (vertices[a[e]] + vertices[b[e]]) + 0.125 * (crease_tangent(a[e], b[e]) + crease_tangent(b[e], a[e]))
+    out[e] = 0.5 * (vertices[a[e]] + vertices[b[e]]) + 0.125 * (
+        crease_tangent(a[e], b[e]) + crease_tangent(b[e], a[e])
+    )
     return out
 
 
 def refine_polygons(
-    vertices: FloatArray, corners: IntArray, sizes: IntArray, *, smooth: bool = False, sharp: NDArray[np.bool_] | None = None
+    vertices: FloatArray,
+    corners: IntArray,
+    sizes: IntArray,
+    *,
+    smooth: bool = False,
+    sharp: NDArray[np.bool_] | None = None,
 ) -> tuple[FloatArray, IntArray, IntArray]:
     """One Catmull–Clark topology step: every n-gon becomes n quads.
 
@@ -999,14 +1116,17 @@ def refine_polygons(
             edge_points = _creased_edge_points(vertices, corners, sizes, a, b, sharp)
         else:
             normals, valid = _corner_normals(vertices, corners, sizes)
-            edge_points = _smooth_edge_points(vertices, a, b, (normals[a], normals[b]), (valid[a], valid[b]))
+            edge_points = _smooth_edge_points(
+                vertices, a, b, (normals[a], normals[b]), (valid[a], valid[b])
+            )
         edge_sums = np.add.reduceat(edge_points[corner_edge], offsets[:-1], axis=0)
         face_points = (2.0 * edge_sums - corner_sums) / sizes[:, None]
     else:
         edge_points = 0.5 * (vertices[a] + vertices[b])
         face_points = corner_sums / sizes[:, None]
     quads = np.stack(
-        [corners, nv + corner_edge, nv + edge_keys.size + corner_face, nv + corner_edge[preceding]], axis=1
+        [corners, nv + corner_edge, nv + edge_keys.size + corner_face, nv + corner_edge[preceding]],
+        axis=1,
     )
     return np.concatenate([vertices, edge_points, face_points]), quads, corner_face
 
@@ -1014,7 +1134,9 @@ def refine_polygons(
 def _check_tags(tags: Sequence[Tag], n_vertices: int, n_faces: int) -> None:
     """Vertex tags (crease pairs, corners) and face tags (holes) must name existing items."""
     for tag in tags:
-        limit = n_vertices if tag.name in VERTEX_TAGS else n_faces if tag.name in FACE_TAGS else None
+        limit = (
+            n_vertices if tag.name in VERTEX_TAGS else n_faces if tag.name in FACE_TAGS else None
+        )
         if limit is None:
             continue
         ints = np.asarray(tag.ints, dtype=np.int64)
@@ -1043,7 +1165,9 @@ def _renumber_tags(tags: Sequence[Tag], new_index: IntArray) -> tuple[Tag, ...]:
 SPLIT_SHARPNESS = 1.0
 
 
-def _crease_edges(tags: Sequence[Tag], corners: IntArray, sizes: IntArray, n_vertices: int) -> NDArray[np.bool_] | None:
+def _crease_edges(
+    tags: Sequence[Tag], corners: IntArray, sizes: IntArray, n_vertices: int
+) -> NDArray[np.bool_] | None:
     """Per edge of the polygons (sorted vertex pairs), whether a crease tag of sharpness ≥
     :data:`SPLIT_SHARPNESS` names it; None without such tags."""
     edge_keys = np.unique(_edge_keys(corners, sizes, n_vertices))
@@ -1054,7 +1178,11 @@ def _crease_edges(tags: Sequence[Tag], corners: IntArray, sizes: IntArray, n_ver
         ints = np.asarray(tag.ints, dtype=np.int64)
         pa, pb = ints[0::2], ints[1::2]
         floats = np.asarray(tag.floats, dtype=np.float64)
-        values = floats if floats.size == pa.size else np.full(pa.size, floats[0] if floats.size else INFINITE_SHARPNESS)
+        values = (
+            floats
+            if floats.size == pa.size
+            else np.full(pa.size, floats[0] if floats.size else INFINITE_SHARPNESS)
+        )
         keys = np.minimum(pa, pb) * n_vertices + np.maximum(pa, pb)
         found = np.minimum(np.searchsorted(edge_keys, keys), edge_keys.size - 1)
         hit = (edge_keys[found] == keys) & (values >= SPLIT_SHARPNESS)
@@ -1062,7 +1190,9 @@ def _crease_edges(tags: Sequence[Tag], corners: IntArray, sizes: IntArray, n_ver
     return sharp if sharp.any() else None
 
 
-def _refine_tags(tags: Sequence[Tag], corners: IntArray, sizes: IntArray, n_vertices: int) -> tuple[Tag, ...]:
+def _refine_tags(
+    tags: Sequence[Tag], corners: IntArray, sizes: IntArray, n_vertices: int
+) -> tuple[Tag, ...]:
     """Carry tags through :func:`refine_polygons`: crease (a, b) becomes (a, m), (m, b); a hole its quads."""
     edge_keys = np.unique(_edge_keys(corners, sizes, n_vertices))
     refined = []
@@ -1074,7 +1204,9 @@ def _refine_tags(tags: Sequence[Tag], corners: IntArray, sizes: IntArray, n_vert
             m = np.minimum(np.searchsorted(edge_keys, keys), edge_keys.size - 1)
             missing = np.flatnonzero(edge_keys[m] != keys)
             if missing.size:
-                raise MeshError(f"tag 'crease' names ({a[missing[0]]}, {b[missing[0]]}), which is not an edge")
+                raise MeshError(
+                    f"tag 'crease' names ({a[missing[0]]}, {b[missing[0]]}), which is not an edge"
+                )
             m += n_vertices
             tag = tag._replace(ints=tuple(np.stack([a, m, m, b], axis=1).ravel().tolist()))
             if len(tag.floats) == a.size > 1:  # one sharpness per edge
@@ -1101,7 +1233,8 @@ def _checked_polygons(
     short = np.flatnonzero(sizes < 3)
     if short.size:
         raise DegenerateFaceError(
-            f"face {short[0]} has {sizes[short[0]]} corners; a face needs at least 3" + _all_of(short, "faces")
+            f"face {short[0]} has {sizes[short[0]]} corners; a face needs at least 3"
+            + _all_of(short, "faces")
         )
     _check_tags(tags, points.shape[0], sizes.size)
     _check_index_range(corners, sizes, points.shape[0])
@@ -1109,7 +1242,12 @@ def _checked_polygons(
 
 
 def _quads_from_polygons(
-    points: FloatArray, corners: IntArray, sizes: IntArray, split: bool, source: str | None, tags: tuple[Tag, ...]
+    points: FloatArray,
+    corners: IntArray,
+    sizes: IntArray,
+    split: bool,
+    source: str | None,
+    tags: tuple[Tag, ...],
 ) -> tuple[FloatArray, IntArray, tuple[Tag, ...]]:
     """Drop unused vertices and split non-quads of checked polygons (see :meth:`QuadMesh.from_arrays`).
 
@@ -1129,7 +1267,9 @@ def _quads_from_polygons(
 
     if not used.all():
         unused = np.flatnonzero(~used)
-        logger.info("%s: dropped %d unused vertices (%s)", source or "mesh", unused.size, _few(unused))
+        logger.info(
+            "%s: dropped %d unused vertices (%s)", source or "mesh", unused.size, _few(unused)
+        )
         new_index = np.cumsum(used) - 1
         new_index[~used] = -1
         points, corners = points[used], new_index[corners]
@@ -1142,7 +1282,9 @@ def _quads_from_polygons(
     logger.info(
         "%s: %d of %d faces are not quads; refined the whole mesh once (every n-gon into n quads, "
         "new points on a smooth surface through the vertices)",
-        source or "mesh", non_quads.size, sizes.size,
+        source or "mesh",
+        non_quads.size,
+        sizes.size,
     )
     return points, quads, tags
 
@@ -1190,7 +1332,11 @@ class Features:
     @classmethod
     def smooth(cls, topology: QuadTopology) -> Features:
         """No sharp edge or vertex, no hole, edge-only boundary."""
-        return cls(np.zeros(topology.n_edges), np.zeros(topology.n_vertices), np.zeros(topology.n_faces, dtype=bool))
+        return cls(
+            np.zeros(topology.n_edges),
+            np.zeros(topology.n_vertices),
+            np.zeros(topology.n_faces, dtype=bool),
+        )
 
     @property
     def sharp_edges(self) -> NDArray[np.bool_]:
@@ -1222,10 +1368,14 @@ def _tag_values(tag: Tag, count: int) -> FloatArray:
     elif floats.size <= 1:
         values = np.full(count, floats[0] if floats.size else INFINITE_SHARPNESS)
     else:
-        raise MeshError(f"tag {tag.name!r} has {count} items but {floats.size} sharpness values; expected 1 or {count}")
+        raise MeshError(
+            f"tag {tag.name!r} has {count} items but {floats.size} sharpness values; expected 1 or {count}"
+        )
     bad = np.flatnonzero(~np.isfinite(values) | (values < 0))
     if bad.size:
-        raise MeshError(f"tag {tag.name!r} has sharpness {values[bad[0]]:g}; a sharpness is a finite number ≥ 0")
+        raise MeshError(
+            f"tag {tag.name!r} has sharpness {values[bad[0]]:g}; a sharpness is a finite number ≥ 0"
+        )
     return values
 
 
@@ -1248,7 +1398,9 @@ def features_from_tags(topology: QuadTopology, tags: Sequence[Tag]) -> Features:
             found = np.minimum(np.searchsorted(edge_keys, keys), max(edge_keys.size - 1, 0))
             missing = np.flatnonzero(edge_keys[found] != keys)
             if missing.size:
-                raise MeshError(f"tag 'crease' names ({a[missing[0]]}, {b[missing[0]]}), which is not an edge")
+                raise MeshError(
+                    f"tag 'crease' names ({a[missing[0]]}, {b[missing[0]]}), which is not an edge"
+                )
             np.maximum.at(edge, found, _tag_values(tag, a.size))
         elif tag.name == "corner":
             np.maximum.at(vertex, ints, _tag_values(tag, ints.size))
@@ -1256,11 +1408,15 @@ def features_from_tags(topology: QuadTopology, tags: Sequence[Tag]) -> Features:
             holes[ints] = True
         elif tag.name == "interpolateboundary" and ints.size:
             if not 0 <= ints[0] < len(BOUNDARY_RULES):
-                raise MeshError(f"tag 'interpolateboundary' has value {ints[0]}; expected 0, 1 or 2")
+                raise MeshError(
+                    f"tag 'interpolateboundary' has value {ints[0]}; expected 0, 1 or 2"
+                )
             boundary = BOUNDARY_RULES[ints[0]]
         elif tag.name == "creasemethod" and tag.strings:
             if tag.strings[0] not in CREASE_METHODS:
-                raise MeshError(f"tag 'creasemethod' has value {tag.strings[0]!r}; expected 'normal' or 'chaikin'")
+                raise MeshError(
+                    f"tag 'creasemethod' has value {tag.strings[0]!r}; expected 'normal' or 'chaikin'"
+                )
             method = tag.strings[0]
     return Features(edge, vertex, holes, boundary, method)
 
@@ -1333,7 +1489,9 @@ class QuadMesh:
         with _named_errors(source):
             points, corners, sizes = _checked_polygons(vertices, faces, tags)
             try:
-                quad_points, quads, quad_tags = _quads_from_polygons(points, corners, sizes, split, source, tags)
+                quad_points, quads, quad_tags = _quads_from_polygons(
+                    points, corners, sizes, split, source, tags
+                )
                 topology = QuadTopology.from_faces(quads, quad_points.shape[0])
             except REPAIRABLE as refusal:
                 if strict:
@@ -1375,7 +1533,9 @@ class QuadMesh:
 
     def with_vertices(self, new_vertices: ArrayLike) -> QuadMesh:
         """The same topology, tags and repair record with new positions (validated the same way)."""
-        return QuadMesh(np.asarray(new_vertices), self.topology, self.tags, self.source, self.repairs)
+        return QuadMesh(
+            np.asarray(new_vertices), self.topology, self.tags, self.source, self.repairs
+        )
 
     @property
     def repair_note(self) -> str:
@@ -1425,4 +1585,6 @@ def subdivide(mesh: QuadMesh) -> QuadMesh:
     sizes = np.full(mesh.n_faces, 4, dtype=np.int64)
     vertices, quads, _ = refine_polygons(mesh.vertices, corners, sizes)
     tags = _refine_tags(mesh.tags, corners, sizes, mesh.n_vertices)
-    return QuadMesh(vertices, QuadTopology.from_faces(quads, vertices.shape[0]), tags, mesh.source, mesh.repairs)
+    return QuadMesh(
+        vertices, QuadTopology.from_faces(quads, vertices.shape[0]), tags, mesh.source, mesh.repairs
+    )

@@ -29,7 +29,13 @@ from .errors import G1PatchError, InputError, NonManifoldError, as_float_array, 
 from .mesh import QuadTopology
 from .patches import PatchSet
 
-__all__ = ["Patches", "PatchNetwork", "edge_parameters", "network_from_mesh", "network_from_patch_points"]
+__all__ = [
+    "Patches",
+    "PatchNetwork",
+    "edge_parameters",
+    "network_from_mesh",
+    "network_from_patch_points",
+]
 
 
 class Patches(Protocol):
@@ -91,7 +97,9 @@ class PatchNetwork:
             if value.shape != (count, 4):
                 raise InputError(f"{name}: expected shape ({count}, 4), got {value.shape}")
             object.__setattr__(self, name, value)
-        object.__setattr__(self, "edge_collapsed", np.ascontiguousarray(self.edge_collapsed, dtype=bool))
+        object.__setattr__(
+            self, "edge_collapsed", np.ascontiguousarray(self.edge_collapsed, dtype=bool)
+        )
         for name in ("vertices", "vertex_normals"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, as_float_array(name, getattr(self, name), (3,)))
@@ -108,7 +116,9 @@ class PatchNetwork:
         lonely = np.flatnonzero(other < 0)
         if lonely.size:
             p, k = patch[lonely[0]], edge[lonely[0]]
-            raise InputError(f"seam: patch {p} edge {k} is marked a seam but has no neighbour (open or collapsed edge)")
+            raise InputError(
+                f"seam: patch {p} edge {k} is marked a seam but has no neighbour (open or collapsed edge)"
+            )
         back = seam[other, self.neighbor_edge[patch, edge]]
         if not back.all():
             bad = int(np.argmin(back))
@@ -122,7 +132,9 @@ class PatchNetwork:
         """This network with ``seam = seam_edges[edge_ids] & (neighbor ≥ 0)``: ``seam_edges``
         (n_edges,) bool marks curves by edge id; on open and collapsed edges it is ignored (they
         are sharp anyway)."""
-        seam = _as_bool("seam_edges", seam_edges, (self.n_edges,))[self.edge_ids] & (self.neighbor >= 0)
+        seam = _as_bool("seam_edges", seam_edges, (self.n_edges,))[self.edge_ids] & (
+            self.neighbor >= 0
+        )
         return replace(self, seam=seam)
 
     @property
@@ -153,13 +165,26 @@ class PatchNetwork:
         following = (other_edge + 1) % 4
         collapsed_patch, collapsed_edge = np.nonzero(self.edge_collapsed[self.edge_ids])
         ends = np.zeros(self.n_corners, dtype=bool)
-        ends[self.corner_ids[self.seam | np.roll(self.seam, 1, axis=1)]] = True  # edges k and k − 1 meet at corner k
+        ends[self.corner_ids[self.seam | np.roll(self.seam, 1, axis=1)]] = (
+            True  # edges k and k − 1 meet at corner k
+        )
         free = ~ends[self.corner_ids]
-        first = np.concatenate([node[patch, edge], node[patch, (edge + 1) % 4], node[collapsed_patch, collapsed_edge], node[free]])
-        second = np.concatenate([
-            node[other, np.where(same, other_edge, following)], node[other, np.where(same, following, other_edge)],
-            node[collapsed_patch, (collapsed_edge + 1) % 4], 4 * count + self.corner_ids[free],
-        ])
+        first = np.concatenate(
+            [
+                node[patch, edge],
+                node[patch, (edge + 1) % 4],
+                node[collapsed_patch, collapsed_edge],
+                node[free],
+            ]
+        )
+        second = np.concatenate(
+            [
+                node[other, np.where(same, other_edge, following)],
+                node[other, np.where(same, following, other_edge)],
+                node[collapsed_patch, (collapsed_edge + 1) % 4],
+                4 * count + self.corner_ids[free],
+            ]
+        )
         size = 4 * count + self.n_corners
         graph = coo_matrix((np.ones(len(first)), (first, second)), shape=(size, size))
         labels = connected_components(graph, directed=False)[1]
@@ -193,7 +218,9 @@ class PatchNetwork:
     def shared_edges(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
         """Each interior edge once: ``(patch, edge)`` of its first side, arrays of shape (E,)."""
         patch = np.arange(len(self.neighbor))[:, None]
-        first = (self.neighbor > patch) | ((self.neighbor == patch) & (self.neighbor_edge > np.arange(4)))
+        first = (self.neighbor > patch) | (
+            (self.neighbor == patch) & (self.neighbor_edge > np.arange(4))
+        )
         return np.nonzero(first)
 
     def open_edges(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
@@ -203,7 +230,9 @@ class PatchNetwork:
 
     def bounding_box_diagonal(self) -> float:
         """Length of the diagonal of the box around the patch corners (the scale of G0 gaps)."""
-        corners = self.patches.evaluate(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])).reshape(-1, 3)
+        corners = self.patches.evaluate(
+            np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+        ).reshape(-1, 3)
         return float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0)))
 
 
@@ -212,7 +241,9 @@ def _as_bool(name: str, value: ArrayLike, shape: tuple[int, ...]) -> NDArray[np.
     array = np.asarray(value)
     if array.shape != shape:
         raise InputError(f"{name}: expected shape {shape}, got {array.shape}")
-    if array.dtype != bool and not (np.issubdtype(array.dtype, np.integer) and np.isin(array, (0, 1)).all()):
+    if array.dtype != bool and not (
+        np.issubdtype(array.dtype, np.integer) and np.isin(array, (0, 1)).all()
+    ):
         raise InputError(f"{name}: expected booleans (or 0 and 1), got an array of {array.dtype}")
     return np.ascontiguousarray(array, dtype=bool)
 
@@ -229,7 +260,9 @@ def _cluster_points(points: NDArray[np.float64], tolerance: float) -> NDArray[np
     return labels.astype(np.int64)
 
 
-def network_from_patch_points(patches: PatchSet, *, source: str = "patches", rtol: float = 1e-9) -> PatchNetwork:
+def network_from_patch_points(
+    patches: PatchSet, *, source: str = "patches", rtol: float = 1e-9
+) -> PatchNetwork:
     """Build a network from patches nobody here built, by matching their boundary control points.
 
     Control points closer than ``rtol`` × the bounding-box diagonal are the same point. Two
@@ -250,7 +283,9 @@ def network_from_patch_points(patches: PatchSet, *, source: str = "patches", rto
     backward = labels[:, :, ::-1]
     is_reversed = _lexicographically_greater(labels, backward)
     canonical = np.where(is_reversed[..., None], backward, labels).reshape(-1, 4)
-    unique_keys, edge_of, multiplicity = np.unique(canonical, axis=0, return_inverse=True, return_counts=True)
+    unique_keys, edge_of, multiplicity = np.unique(
+        canonical, axis=0, return_inverse=True, return_counts=True
+    )
     edge_of = edge_of.reshape(-1)
     collapsed = (unique_keys == unique_keys[:, :1]).all(axis=1)
     overused = (multiplicity > 2) & ~collapsed
@@ -265,7 +300,9 @@ def network_from_patch_points(patches: PatchSet, *, source: str = "patches", rto
     neighbor = np.full(count * 4, -1, dtype=np.int64)
     order = np.argsort(edge_of, kind="stable")
     sorted_edges = edge_of[order]
-    pair_start = np.nonzero((sorted_edges[:-1] == sorted_edges[1:]) & ~collapsed[sorted_edges[:-1]])[0]
+    pair_start = np.nonzero(
+        (sorted_edges[:-1] == sorted_edges[1:]) & ~collapsed[sorted_edges[:-1]]
+    )[0]
     first, second = order[pair_start], order[pair_start + 1]
     neighbor[first], neighbor[second] = second, first
     slot = np.where(neighbor >= 0, neighbor, 0)
@@ -296,10 +333,14 @@ def check_consistent(network: PatchNetwork) -> None:
     """Raise :class:`G1PatchError` if the neighbour arrays do not describe each other."""
     patch, edge = np.nonzero(network.neighbor >= 0)
     other, other_edge = network.neighbor[patch, edge], network.neighbor_edge[patch, edge]
-    back = (network.neighbor[other, other_edge] == patch) & (network.neighbor_edge[other, other_edge] == edge)
+    back = (network.neighbor[other, other_edge] == patch) & (
+        network.neighbor_edge[other, other_edge] == edge
+    )
     if not back.all():
         bad = int(np.argmin(back))
-        raise G1PatchError(f"network: patch {patch[bad]} edge {edge[bad]} points to patch {other[bad]} edge {other_edge[bad]}, which does not point back")
+        raise G1PatchError(
+            f"network: patch {patch[bad]} edge {edge[bad]} points to patch {other[bad]} edge {other_edge[bad]}, which does not point back"
+        )
 
 
 def network_from_mesh(
@@ -330,7 +371,9 @@ def network_from_mesh(
         same_direction=np.zeros(faces.shape, dtype=bool),
         edge_collapsed=np.zeros(topology.n_edges, dtype=bool),
         vertices=np.asarray(vertices, dtype=np.float64),
-        vertex_normals=None if vertex_normals is None else np.asarray(vertex_normals, dtype=np.float64),
+        vertex_normals=None
+        if vertex_normals is None
+        else np.asarray(vertex_normals, dtype=np.float64),
         provenance=dict(provenance or {}),
     )
     return network if seam_edges is None else network.with_seams(seam_edges)

@@ -53,7 +53,9 @@ def _check_parameters(name: str, values: ArrayLike) -> NDArray[np.float64]:
     return params
 
 
-def _curve_control_to_world(control: NDArray[np.float64], form: Form, frame: Frame | None) -> NDArray[np.float64]:
+def _curve_control_to_world(
+    control: NDArray[np.float64], form: Form, frame: Frame | None
+) -> NDArray[np.float64]:
     """Curve control (..., 4, 3) in world coordinates: ``c + s x`` for points, ``s x`` for Hermite's
     derivative entries 2, 3."""
     if frame is None:
@@ -129,7 +131,9 @@ class PatchSet:
     def from_arrays(cls, arrays: Mapping[str, ArrayLike]) -> PatchSet:
         """Inverse of :meth:`to_arrays`."""
         if "control" not in arrays or "form" not in arrays:
-            raise InputError(f"arrays: bicubic patches need the arrays 'control' and 'form', got {sorted(arrays)}")
+            raise InputError(
+                f"arrays: bicubic patches need the arrays 'control' and 'form', got {sorted(arrays)}"
+            )
         form = str(np.asarray(arrays["form"]))
         return cls(np.asarray(arrays["control"]), form, Frame.from_arrays(arrays))  # type: ignore[arg-type]
 
@@ -141,7 +145,11 @@ class PatchSet:
         if form == self.form:
             return self
         matrix = conversion_matrix(self.form, form)
-        return PatchSet(np.einsum("ik,nkld,jl->nijd", matrix, self.control, matrix, optimize=True), form, self.frame)
+        return PatchSet(
+            np.einsum("ik,nkld,jl->nijd", matrix, self.control, matrix, optimize=True),
+            form,
+            self.frame,
+        )
 
     def power_coefficients(self) -> NDArray[np.float64]:
         """``A = M^T P M`` per coordinate, shape (N, 4, 4, 3): ``p = Σ A_ij u^(3-i) v^(3-j)``, in world
@@ -155,7 +163,11 @@ class PatchSet:
 
     def _to_world(self, values: NDArray[np.float64], du: int, dv: int) -> NDArray[np.float64]:
         """Local values of ``∂^(du+dv) p`` mapped to world in place (:meth:`Frame.derivative_to_world`)."""
-        return values if self.frame is None else self.frame.derivative_to_world(values, du + dv, out=values)
+        return (
+            values
+            if self.frame is None
+            else self.frame.derivative_to_world(values, du + dv, out=values)
+        )
 
     # ------------------------------------------------------------- evaluation
     def evaluate_grid(
@@ -245,7 +257,9 @@ class PatchSet:
         """
         u_params = _check_parameters("u", u)
         v_params = u_params if v is None else _check_parameters("v", v)
-        positions, normals = _grid.positions_and_normals(self.control, self.form, u_params, v_params, out, normals_out)
+        positions, normals = _grid.positions_and_normals(
+            self.control, self.form, u_params, v_params, out, normals_out
+        )
         return self._to_world(positions, 0, 0), normals
 
     def corners(self) -> NDArray[np.float64]:
@@ -267,7 +281,11 @@ class PatchSet:
         left = np.einsum("i,nijd->njd", ends[0], self.control)  # u = 0, v: 0 -> 1 (reverse)
         forward = CubicCurves(np.stack([bottom, right, top, left], axis=1), self.form)
         backward = forward.reversed()
-        control = np.where(np.array([False, False, True, True])[None, :, None, None], backward.control, forward.control)
+        control = np.where(
+            np.array([False, False, True, True])[None, :, None, None],
+            backward.control,
+            forward.control,
+        )
         return CubicCurves(_curve_control_to_world(control, self.form, self.frame), self.form)
 
     def diagonal_polynomials(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -314,7 +332,12 @@ def hs_twists(hermite: ArrayLike) -> NDArray[np.float64]:
     (the power coefficients of u^3 v^3, u^3 v^2, u^2 v^3 and u^2 v^2 vanish). Returns (N, 2, 2, 3).
     """
     control = as_float_array("hermite", hermite, (4, 4, 3))
-    delta = control[..., 0, 1, :] + control[..., 1, 0, :] - control[..., 0, 0, :] - control[..., 1, 1, :]
+    delta = (
+        control[..., 0, 1, :]
+        + control[..., 1, 0, :]
+        - control[..., 0, 0, :]
+        - control[..., 1, 1, :]
+    )
     p_u = control[..., 2:4, 0:2, :]  # p_u[a, b] = ∂p/∂u at corner (a, b)
     p_v = control[..., 0:2, 2:4, :]  # p_v[a, b] = ∂p/∂v at corner (a, b)
     u_term = (p_u[..., :, 1, :] - p_u[..., :, 0, :])[..., :, None, :]  # depends on a
@@ -331,7 +354,12 @@ def closure(hermite: ArrayLike) -> NDArray[np.float64]:
     cubic iff ``C = 0``. C depends on the boundary only.
     """
     control = as_float_array("hermite", hermite, (4, 4, 3))
-    delta = control[..., 0, 1, :] + control[..., 1, 0, :] - control[..., 0, 0, :] - control[..., 1, 1, :]
+    delta = (
+        control[..., 0, 1, :]
+        + control[..., 1, 0, :]
+        - control[..., 0, 0, :]
+        - control[..., 1, 1, :]
+    )
     p_u = control[..., 2:4, 0:2, :]
     p_v = control[..., 0:2, 2:4, :]
     u_sum = p_u[..., 0, 1, :] + p_u[..., 1, 1, :] - p_u[..., 0, 0, :] - p_u[..., 1, 0, :]

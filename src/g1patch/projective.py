@@ -120,7 +120,9 @@ def _as_rows(name: str, value: ArrayLike) -> NDArray[np.float64]:
     return rows
 
 
-def _as_vectors(names: tuple[str, ...], values: tuple[ArrayLike, ...], length: int) -> NDArray[np.float64]:
+def _as_vectors(
+    names: tuple[str, ...], values: tuple[ArrayLike, ...], length: int
+) -> NDArray[np.float64]:
     """Check ``len(values)`` vectors of shape ``(..., length)``; broadcast and stack them as rows."""
     arrays = []
     for name, value in zip(names, values):
@@ -162,7 +164,9 @@ def _log2_product_of_norms(rows: NDArray[np.float64]) -> NDArray[np.float64]:
 
 # --------------------------------------------------------------------------- kernels
 @cache
-def _laplace_plan(n: int) -> tuple[tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64]], ...]:
+def _laplace_plan(
+    n: int,
+) -> tuple[tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64]], ...]:
     """Index tables of the row-by-row Laplace expansion of the minors of an (n−1)×n matrix.
 
     Level k holds, for every k-subset S of the columns (in ``itertools.combinations`` order),
@@ -175,7 +179,9 @@ def _laplace_plan(n: int) -> tuple[tuple[NDArray[np.intp], NDArray[np.intp], NDA
     for k in range(1, n):
         subsets = list(itertools.combinations(range(n), k))
         columns = np.array(subsets, dtype=np.intp)
-        sub = np.array([[previous[s[:t] + s[t + 1:]] for t in range(k)] for s in subsets], dtype=np.intp)
+        sub = np.array(
+            [[previous[s[:t] + s[t + 1 :]] for t in range(k)] for s in subsets], dtype=np.intp
+        )
         signs = np.array([[(-1.0) ** (k - 1 + t) for t in range(k)] for _ in subsets])
         plan.append((columns, sub, signs))
         previous = {s: i for i, s in enumerate(subsets)}
@@ -274,13 +280,17 @@ def augmented(A: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     """Rows ``α_i = [a_i | −b_i]`` of the system ``Ax = b``: shape ``(..., n, n+1)``."""
     matrix = as_float_array("A", A, (None, None))
     if matrix.shape[-1] != matrix.shape[-2] or matrix.shape[-1] < 1:
-        raise InputError(f"A: expected a square matrix, shape (..., n, n) with n >= 1, got {matrix.shape}")
+        raise InputError(
+            f"A: expected a square matrix, shape (..., n, n) with n >= 1, got {matrix.shape}"
+        )
     n = matrix.shape[-1]
     rhs = as_float_array("b", b, (n,))
     try:
         batch = np.broadcast_shapes(matrix.shape[:-2], rhs.shape[:-1])
     except ValueError:
-        raise InputError(f"A {matrix.shape} and b {rhs.shape}: batch shapes do not broadcast") from None
+        raise InputError(
+            f"A {matrix.shape} and b {rhs.shape}: batch shapes do not broadcast"
+        ) from None
     rows = np.empty(batch + (n, n + 1))
     rows[..., :n] = matrix
     rows[..., n] = -rhs
@@ -347,7 +357,9 @@ def classify(
     vectors = as_float_array("xi", xi, (None,))
     n = vectors.shape[-1]
     if n < 2:
-        raise InputError(f"xi: expected homogeneous vectors of length >= 2, got shape {vectors.shape}")
+        raise InputError(
+            f"xi: expected homogeneous vectors of length >= 2, got shape {vectors.shape}"
+        )
     tol = _check_rtol(rtol, n)
     size = _norm(vectors)
     w = np.abs(vectors[..., -1])
@@ -370,7 +382,9 @@ def classify(
             log_tol = math.log2(tol) if tol > 0 else -math.inf
             degenerate = np.log2(size) <= log_tol + _log2_product_of_norms(array)
             at_infinity = np.log2(w) <= log_tol + _log2_product_of_norms(array[..., :-1])
-    kinds = np.where(degenerate, Kind.DEGENERATE, np.where(at_infinity, Kind.AT_INFINITY, Kind.FINITE))
+    kinds = np.where(
+        degenerate, Kind.DEGENERATE, np.where(at_infinity, Kind.AT_INFINITY, Kind.FINITE)
+    )
     return kinds.astype(np.int8)
 
 

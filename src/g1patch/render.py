@@ -65,7 +65,7 @@ from numpy.typing import ArrayLike, NDArray
 from .continuity import DEGENERATE_RTOL, ContinuityReport
 from .errors import InputError, MissingDependencyError, as_float_array, check_choice
 from .io.atomic import atomic_path
-from .network import PatchNetwork, Patches, edge_parameters
+from .network import Patches, PatchNetwork, edge_parameters
 from .patches import CORNER_PARAMETERS
 from .tessellate import TriangleMesh
 
@@ -177,7 +177,9 @@ class _Camera:
         eye, right = np.roll(eye, -shift), np.roll(right, -shift)
         return cls(eye, right, np.cross(eye, right))
 
-    def project(self, points: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def project(
+        self, points: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Screen coordinates (…, 2) and depth (…,) (larger = nearer the viewer)."""
         return np.stack([points @ self.right, points @ self.up], axis=-1), points @ self.eye
 
@@ -199,7 +201,11 @@ def stripe_phase(
     ``r = d − 2 (d·n) n`` with d the viewing direction of ``view``; ``φ = stripes · atan2(r·b, r·a)``
     about the stripe axis (see the module docstring). A function of the normal alone.
     """
-    view, stripes, up = _check_view(view, auto=False), _check_stripes(stripes), check_choice("up", up, UP_AXES)
+    view, stripes, up = (
+        _check_view(view, auto=False),
+        _check_stripes(stripes),
+        check_choice("up", up, UP_AXES),
+    )
     camera = _Camera.from_view(view, up)  # type: ignore[arg-type]
     return _phase(np.asarray(normals, dtype=np.float64), camera, stripes)
 
@@ -233,24 +239,37 @@ _AUTO_PATCHES = 65_536
 _AUTO_GRID = 4
 
 
-def _area_samples(surface: PatchNetwork | TriangleMesh) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _area_samples(
+    surface: PatchNetwork | TriangleMesh,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Points (N, 3) on ``surface`` and the area each stands for (N,): a network's patches at the
     midpoints of a 4 × 4 grid of cells, weighted by ``|p_u × p_v|`` (at most :data:`_AUTO_PATCHES`
     patches, evenly spaced), a triangle mesh's triangle centroids weighted by their areas."""
     if isinstance(surface, TriangleMesh):
-        corners = np.asarray(surface.points, dtype=np.float64)[np.asarray(surface.triangles, dtype=np.int64)]
-        area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=-1)
+        corners = np.asarray(surface.points, dtype=np.float64)[
+            np.asarray(surface.triangles, dtype=np.int64)
+        ]
+        area = 0.5 * np.linalg.norm(
+            np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=-1
+        )
         return corners.mean(axis=1), area
     patches = surface.patches
     if len(patches) > _AUTO_PATCHES:
-        patches = patches.take(np.linspace(0, len(patches) - 1, _AUTO_PATCHES).round().astype(np.int64))
+        patches = patches.take(
+            np.linspace(0, len(patches) - 1, _AUTO_PATCHES).round().astype(np.int64)
+        )
     t = (np.arange(_AUTO_GRID) + 0.5) / _AUTO_GRID
-    area = np.linalg.norm(np.cross(patches.evaluate_grid(t, t, 1, 0), patches.evaluate_grid(t, t, 0, 1)), axis=-1)
+    area = np.linalg.norm(
+        np.cross(patches.evaluate_grid(t, t, 1, 0), patches.evaluate_grid(t, t, 0, 1)), axis=-1
+    )
     return patches.evaluate_grid(t, t).reshape(-1, 3), area.reshape(-1)
 
 
 def auto_camera(
-    surface: PatchNetwork | TriangleMesh | ArrayLike, weights: ArrayLike | None = None, *, up: str = AUTO
+    surface: PatchNetwork | TriangleMesh | ArrayLike,
+    weights: ArrayLike | None = None,
+    *,
+    up: str = AUTO,
 ) -> tuple[str, tuple[float, float]]:
     """The up axis and ``(elevation, azimuth)`` that :func:`render` uses for ``up`` / ``view`` = ``"auto"``.
 
@@ -290,15 +309,23 @@ def auto_camera(
     up = check_choice("up", up, (AUTO, *UP_AXES))
     if isinstance(surface, (PatchNetwork, TriangleMesh)):
         if weights is not None:
-            raise InputError("weights: a network or mesh is weighted by its own area; pass weights with points only")
+            raise InputError(
+                "weights: a network or mesh is weighted by its own area; pass weights with points only"
+            )
         points, area = _area_samples(surface)
     else:
         points = as_float_array("points", surface, (3,))
         if points.ndim != 2:
             raise InputError(f"points: expected an (N, 3) array, got shape {points.shape}")
-        area = np.ones(len(points)) if weights is None else as_float_array("weights", weights, (len(points),))
+        area = (
+            np.ones(len(points))
+            if weights is None
+            else as_float_array("weights", weights, (len(points),))
+        )
         if area.shape != (len(points),) or (area < 0).any():
-            raise InputError(f"weights: expected {len(points)} non-negative areas, got shape {area.shape}")
+            raise InputError(
+                f"weights: expected {len(points)} non-negative areas, got shape {area.shape}"
+            )
     total = float(area.sum())
     mean = area @ points / max(total, 1e-300)
     offset = points - mean
@@ -320,9 +347,15 @@ def auto_camera(
     elevation = low + (high - low) * flatness
     if spread2[0] > AUTO_LONG_RATIO**2 * spread2[1]:
         return up, (elevation, DEFAULT_VIEW[1])
-    front = axes[:, 1] * np.sign(axes[np.argmax(np.abs(axes[:, 1])), 1])  # +axis unless the data says otherwise
-    height = covariance[k, [first, second]] @ front  # covariance of height and position along the long axis
-    if height < -AUTO_CORRELATION * math.sqrt(covariance[k, k] * spread2[1]):  # the front stands higher
+    front = axes[:, 1] * np.sign(
+        axes[np.argmax(np.abs(axes[:, 1])), 1]
+    )  # +axis unless the data says otherwise
+    height = (
+        covariance[k, [first, second]] @ front
+    )  # covariance of height and position along the long axis
+    if height < -AUTO_CORRELATION * math.sqrt(
+        covariance[k, k] * spread2[1]
+    ):  # the front stands higher
         front = -front
     turn = math.radians(AUTO_TURN_DEG)
     left = np.array([-front[1], front[0]])  # up × front in the horizontal frame (first, second)
@@ -330,14 +363,17 @@ def auto_camera(
     return up, (elevation, math.degrees(math.atan2(eye[1], eye[0])))
 
 
-def _camera(view: tuple[float, float] | str, up: str, surfaces: Sequence[PatchNetwork | TriangleMesh]) -> _Camera:
+def _camera(
+    view: tuple[float, float] | str, up: str, surfaces: Sequence[PatchNetwork | TriangleMesh]
+) -> _Camera:
     """The camera of checked ``view`` and ``up``; ``"auto"`` in either: :func:`auto_camera` of all
     ``surfaces`` together (one camera for side-by-side panels)."""
     if view != AUTO and up != AUTO:
         return _Camera.from_view(view, up)  # type: ignore[arg-type]
     samples = [_area_samples(surface) for surface in surfaces]
-    chosen_up, chosen_view = auto_camera(np.concatenate([p for p, _ in samples]), np.concatenate([w for _, w in samples]),
-                                         up=up)
+    chosen_up, chosen_view = auto_camera(
+        np.concatenate([p for p, _ in samples]), np.concatenate([w for _, w in samples]), up=up
+    )
     return _Camera.from_view(chosen_view if view == AUTO else view, chosen_up)  # type: ignore[arg-type]
 
 
@@ -360,7 +396,11 @@ def stripe_jumps(
     is :func:`render`'s: ``view`` and ``up`` ``"auto"`` choose it as the picture does (:func:`auto_camera`).
     """
     _check_network(network)
-    view, stripes, up = _check_view(view), _check_stripes(stripes), check_choice("up", up, (AUTO, *UP_AXES))
+    view, stripes, up = (
+        _check_view(view),
+        _check_stripes(stripes),
+        check_choice("up", up, (AUTO, *UP_AXES)),
+    )
     if not isinstance(samples, (int, np.integer)) or isinstance(samples, bool) or samples < 2:
         raise InputError(f"samples: expected an integer ≥ 2, got {samples!r}")
     camera = _camera(view, up, [network])
@@ -368,7 +408,9 @@ def stripe_jumps(
     count = len(patches)
     t = np.linspace(0.0, 1.0, int(samples))
     uv = edge_parameters(np.arange(4)[:, None], t[None, :]).reshape(-1, 2)
-    normals = np.cross(patches.evaluate(uv, 1, 0), patches.evaluate(uv, 0, 1)).reshape(count, 4, samples, 3)
+    normals = np.cross(patches.evaluate(uv, 1, 0), patches.evaluate(uv, 0, 1)).reshape(
+        count, 4, samples, 3
+    )
     length = np.linalg.norm(normals, axis=-1)
     diagonal = network.bounding_box_diagonal() or 1.0
     usable = length > DEGENERATE_RTOL * diagonal**2
@@ -383,7 +425,9 @@ def stripe_jumps(
     right = normals[right_patch[:, None], right_edge[:, None], order]
     right = np.where(same[:, None, None], -right, right)
     valid = usable[left_patch, left_edge] & usable[right_patch[:, None], right_edge[:, None], order]
-    difference = (_phase(left, camera, 1) - _phase(right, camera, 1) + np.pi) % (2.0 * np.pi) - np.pi
+    difference = (_phase(left, camera, 1) - _phase(right, camera, 1) + np.pi) % (
+        2.0 * np.pi
+    ) - np.pi
     jumps = np.where(valid, np.abs(difference) * stripes / (2.0 * np.pi), 0.0)
     return jumps.max(axis=1) if len(jumps) else np.zeros(0)
 
@@ -404,8 +448,14 @@ def _check_size(size: Any) -> tuple[int, int]:
     except (TypeError, ValueError):
         raise InputError(f"size: expected (width, height) in pixels, got {size!r}") from None
     for value in (width, height):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
-            raise InputError(f"size: expected two integers from {low} to {high} pixels, got {size!r}")
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, np.integer))
+            or not low <= value <= high
+        ):
+            raise InputError(
+                f"size: expected two integers from {low} to {high} pixels, got {size!r}"
+            )
     return int(width), int(height)
 
 
@@ -413,20 +463,30 @@ def _check_view(view: Any, auto: bool = True) -> tuple[float, float] | str:
     if isinstance(view, str):
         if auto and view == AUTO:
             return AUTO
-        raise InputError(f"view: expected (elevation, azimuth) in degrees{' or auto' if auto else ''}, got {view!r}")
+        raise InputError(
+            f"view: expected (elevation, azimuth) in degrees{' or auto' if auto else ''}, got {view!r}"
+        )
     try:
         elev, azim = (float(x) for x in view)
     except (TypeError, ValueError):
-        raise InputError(f"view: expected (elevation, azimuth) in degrees{' or auto' if auto else ''}, got {view!r}") from None
+        raise InputError(
+            f"view: expected (elevation, azimuth) in degrees{' or auto' if auto else ''}, got {view!r}"
+        ) from None
     if not (math.isfinite(elev) and math.isfinite(azim)):
         raise InputError(f"view: expected finite angles, got {view!r}")
     if abs(elev) >= 90.0:
-        raise InputError(f"view: elevation must lie strictly between -90 and 90 degrees, got {elev}")
+        raise InputError(
+            f"view: elevation must lie strictly between -90 and 90 degrees, got {elev}"
+        )
     return elev, azim
 
 
 def _check_stripes(stripes: object) -> int:
-    if isinstance(stripes, bool) or not isinstance(stripes, (int, np.integer)) or not 1 <= stripes <= 1000:
+    if (
+        isinstance(stripes, bool)
+        or not isinstance(stripes, (int, np.integer))
+        or not 1 <= stripes <= 1000
+    ):
         raise InputError(f"stripes: expected an integer from 1 to 1000, got {stripes!r}")
     return int(stripes)
 
@@ -434,8 +494,14 @@ def _check_stripes(stripes: object) -> int:
 def _check_resolution(resolution: object) -> int | None:
     if resolution is None:
         return None
-    if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) or not 2 <= resolution <= 1025:
-        raise InputError(f"resolution: expected None or an integer from 2 to 1025, got {resolution!r}")
+    if (
+        isinstance(resolution, bool)
+        or not isinstance(resolution, (int, np.integer))
+        or not 2 <= resolution <= 1025
+    ):
+        raise InputError(
+            f"resolution: expected None or an integer from 2 to 1025, got {resolution!r}"
+        )
     return int(resolution)
 
 
@@ -450,24 +516,36 @@ def _check_path(path: object) -> Path:
         raise InputError(f"path: expected a file name, got {type(path).__name__}")
     target = Path(path)
     if target.suffix.lower() != ".png":
-        raise InputError(f"path: pictures are written as PNG; expected a name ending in .png, got {str(target)!r}")
+        raise InputError(
+            f"path: pictures are written as PNG; expected a name ending in .png, got {str(target)!r}"
+        )
     return target
 
 
-def _check_report(report: object, network: PatchNetwork, name: str = "report") -> ContinuityReport | None:
+def _check_report(
+    report: object, network: PatchNetwork, name: str = "report"
+) -> ContinuityReport | None:
     if report is None:
         return None
     if not isinstance(report, ContinuityReport):
-        raise InputError(f"{name}: expected a ContinuityReport or None, got {type(report).__name__}")
+        raise InputError(
+            f"{name}: expected a ContinuityReport or None, got {type(report).__name__}"
+        )
     if report.patches != network.n_patches or (
         report.edge_patches.size and int(report.edge_patches.max()) >= network.n_patches
     ):
-        raise InputError(f"{name}: was made for {report.patches} patches, the network has {network.n_patches}")
+        raise InputError(
+            f"{name}: was made for {report.patches} patches, the network has {network.n_patches}"
+        )
     return report
 
 
 def _check_zoom(zoom: Any) -> float:
-    if isinstance(zoom, bool) or not isinstance(zoom, (int, float, np.integer, np.floating)) or not 0.1 <= zoom <= 1000.0:
+    if (
+        isinstance(zoom, bool)
+        or not isinstance(zoom, (int, float, np.integer, np.floating))
+        or not 0.1 <= zoom <= 1000.0
+    ):
         raise InputError(f"zoom: expected a number from 0.1 to 1000, got {zoom!r}")
     return float(zoom)
 
@@ -478,7 +556,9 @@ def _check_angle_range(angle_range: Any) -> tuple[float, float] | None:
     try:
         low, high = (float(x) for x in angle_range)
     except (TypeError, ValueError):
-        raise InputError(f"angle_range: expected (low, high) in degrees, got {angle_range!r}") from None
+        raise InputError(
+            f"angle_range: expected (low, high) in degrees, got {angle_range!r}"
+        ) from None
     if not (math.isfinite(low) and math.isfinite(high) and 0.0 <= low < high):
         raise InputError(f"angle_range: expected 0 ≤ low < high, finite, got {angle_range!r}")
     return low, high
@@ -494,7 +574,9 @@ def _matplotlib() -> Any:
 
 
 # --------------------------------------------------------------------------- sampling
-def choose_resolution(n_patches: int, panels: int = 1, budget: int = TRIANGLE_BUDGET, closed: bool = True) -> int:
+def choose_resolution(
+    n_patches: int, panels: int = 1, budget: int = TRIANGLE_BUDGET, closed: bool = True
+) -> int:
     """Samples per patch side r so that ``panels`` pictures of ``n_patches`` draw about ``budget`` triangles.
 
     ``2 (r − 1)² n_patches · panels ≤ budget`` (twice the budget for a ``closed`` surface, whose
@@ -520,20 +602,29 @@ class _Footprint:
     spacing_px: NDArray[np.float64]
 
 
-def _footprint(network: PatchNetwork, camera: _Camera, size: tuple[int, int], panels: int, zoom: float) -> _Footprint:
+def _footprint(
+    network: PatchNetwork, camera: _Camera, size: tuple[int, int], panels: int, zoom: float
+) -> _Footprint:
     corners = network.patches.evaluate(CORNER_PARAMETERS)  # (N, 4, 3)
     screen, _ = camera.project(corners)  # (N, 4, 2)
     flat = screen.reshape(-1, 2)
     extent = np.maximum(flat.max(axis=0) - flat.min(axis=0), 1e-300) / FILL
     pixels_per_unit = float(zoom * min(size[0] / panels / extent[0], size[1] / extent[1]))
-    side = np.linalg.norm(np.roll(corners, -1, axis=1) - corners, axis=-1)  # side k: corner k to k + 1
+    side = np.linalg.norm(
+        np.roll(corners, -1, axis=1) - corners, axis=-1
+    )  # side k: corner k to k + 1
     # the quad's area, half the cross product of its diagonals; the sides 0, 2 run along u, 1, 3
     # along v: the distance between sides 1 and 3 is the area over their mean length, and so on
-    area = 0.5 * np.linalg.norm(np.cross(corners[:, 2] - corners[:, 0], corners[:, 3] - corners[:, 1]), axis=-1)
+    area = 0.5 * np.linalg.norm(
+        np.cross(corners[:, 2] - corners[:, 0], corners[:, 3] - corners[:, 1]), axis=-1
+    )
     across_u = area / np.maximum(0.5 * (side[:, 1] + side[:, 3]), 1e-300)
     across_v = area / np.maximum(0.5 * (side[:, 0] + side[:, 2]), 1e-300)
-    return _Footprint(pixels_per_unit, side.max(axis=1) * pixels_per_unit,
-                      np.minimum(across_u, across_v) * pixels_per_unit)
+    return _Footprint(
+        pixels_per_unit,
+        side.max(axis=1) * pixels_per_unit,
+        np.minimum(across_u, across_v) * pixels_per_unit,
+    )
 
 
 def _pixel_resolution(footprint: _Footprint) -> int:
@@ -560,7 +651,9 @@ class _Surface:
     band_mask: NDArray[np.int64] | None = None
 
 
-def _grid_triangles(count: int, ru: int, rv: int) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+def _grid_triangles(
+    count: int, ru: int, rv: int
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
     """Triangles of ``count`` separate ru × rv grids (counter-clockwise about p_u × p_v), with the
     grid cell (a, b) of every triangle."""
     cells_a, cells_b = np.meshgrid(np.arange(ru - 1), np.arange(rv - 1), indexing="ij")
@@ -569,26 +662,35 @@ def _grid_triangles(count: int, ru: int, rv: int) -> tuple[NDArray[np.int64], ND
     p00, p10 = base + a * rv + b, base + (a + 1) * rv + b
     p11, p01 = p10 + 1, p00 + 1
     triangles = np.concatenate(
-        [np.stack([p00, p10, p11], axis=-1).reshape(-1, 3), np.stack([p00, p11, p01], axis=-1).reshape(-1, 3)]
+        [
+            np.stack([p00, p10, p11], axis=-1).reshape(-1, 3),
+            np.stack([p00, p11, p01], axis=-1).reshape(-1, 3),
+        ]
     )
     cell_a = np.tile(np.broadcast_to(a, (count, a.size)).reshape(-1), 2)
     cell_b = np.tile(np.broadcast_to(b, (count, b.size)).reshape(-1), 2)
     return triangles, cell_a, cell_b
 
 
-def _fill_degenerate(normals: NDArray[np.float64], usable: NDArray[np.bool_]) -> NDArray[np.float64]:
+def _fill_degenerate(
+    normals: NDArray[np.float64], usable: NDArray[np.bool_]
+) -> NDArray[np.float64]:
     """Replace unusable normals on (N, ru, rv) grids by the mean of their usable grid neighbours."""
     for _ in range(3):
         if usable.all():
             break
         padded = np.pad(np.where(usable[..., None], normals, 0.0), ((0, 0), (1, 1), (1, 1), (0, 0)))
         total = sum(
-            padded[:, 1 + di: padded.shape[1] - 1 + di, 1 + dj: padded.shape[2] - 1 + dj]
-            for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj
+            padded[:, 1 + di : padded.shape[1] - 1 + di, 1 + dj : padded.shape[2] - 1 + dj]
+            for di in (-1, 0, 1)
+            for dj in (-1, 0, 1)
+            if di or dj
         )
         length = np.linalg.norm(total, axis=-1)
         fixed = ~usable & (length > 0)
-        normals = np.where(fixed[..., None], total / np.where(length > 0, length, 1.0)[..., None], normals)
+        normals = np.where(
+            fixed[..., None], total / np.where(length > 0, length, 1.0)[..., None], normals
+        )
         usable = usable | fixed
     return normals
 
@@ -598,7 +700,10 @@ _FILLED = 16
 
 
 def _sample(
-    network: PatchNetwork, resolution: int, band: tuple[float, float] | None, filled: NDArray[np.bool_] | None = None
+    network: PatchNetwork,
+    resolution: int,
+    band: tuple[float, float] | None,
+    filled: NDArray[np.bool_] | None = None,
 ) -> _Surface:
     """Every patch on its own grid; with ``band`` = (w_u, w_v) the first and last cells in u (in
     v) have the parameter width w_u (w_v): the bands along the patch edges that the deviation
@@ -617,7 +722,10 @@ def _sample(
         rb = max(r, 4)
         u, v = (np.concatenate([[0.0], np.linspace(w, 1.0 - w, rb - 2), [1.0]]) for w in band)
         fill = np.zeros(count, dtype=bool) if filled is None else np.asarray(filled, dtype=bool)
-        groups = [(np.flatnonzero(~fill), rb, u, v, False), (np.flatnonzero(fill), r, plain, plain, True)]
+        groups = [
+            (np.flatnonzero(~fill), rb, u, v, False),
+            (np.flatnonzero(fill), r, plain, plain, True),
+        ]
     samples = []
     for ids, _, gu, gv, _ in groups:
         part = patches if len(ids) == count else patches.take(ids)
@@ -625,7 +733,9 @@ def _sample(
             samples.append((np.zeros((0, len(gu), len(gv), 3)), np.zeros((0, len(gu), len(gv), 3))))
             continue
         points = part.evaluate_grid(gu, gv)
-        samples.append((points, np.cross(part.evaluate_grid(gu, gv, 1, 0), part.evaluate_grid(gu, gv, 0, 1))))
+        samples.append(
+            (points, np.cross(part.evaluate_grid(gu, gv, 1, 0), part.evaluate_grid(gu, gv, 0, 1)))
+        )
     every = np.concatenate([points.reshape(-1, 3) for points, _ in samples])
     diagonal = float(np.linalg.norm(every.max(axis=0) - every.min(axis=0))) if len(every) else 0.0
     diagonal = diagonal or 1.0
@@ -634,7 +744,11 @@ def _sample(
     for (ids, rg, _, _, is_filled), (points, normals) in zip(groups, samples):
         length = np.linalg.norm(normals, axis=-1)
         usable = length > DEGENERATE_RTOL * diagonal**2
-        normal_parts.append(_fill_degenerate(normals / np.where(usable, length, 1.0)[..., None], usable).reshape(-1, 3))
+        normal_parts.append(
+            _fill_degenerate(normals / np.where(usable, length, 1.0)[..., None], usable).reshape(
+                -1, 3
+            )
+        )
         triangles, cell_a, cell_b = _grid_triangles(len(ids), rg, rg)
         triangle_parts.append(triangles + offset)
         offset += len(ids) * rg * rg
@@ -646,17 +760,23 @@ def _sample(
         else:
             # the patch sides each triangle's cell lies on, as a 4-bit mask (0: interior):
             # bit 0 edge 0 (v = 0), bit 1 edge 1 (u = 1), bit 2 edge 2 (v = 1), bit 3 edge 3 (u = 0)
-            sides = np.stack([cell_b == 0, cell_a == rg - 2, cell_b == rg - 2, cell_a == 0], axis=-1)
+            sides = np.stack(
+                [cell_b == 0, cell_a == rg - 2, cell_b == rg - 2, cell_a == 0], axis=-1
+            )
             mask_parts.append((sides * (1 << np.arange(4))).sum(axis=-1).astype(np.int64))
     triangles = np.concatenate(triangle_parts)
     normals = np.concatenate(normal_parts)
     if band is None:
         return _Surface(every, normals, triangles, closed)
-    return _Surface(every, normals, triangles, closed, np.concatenate(patch_parts), np.concatenate(mask_parts))
+    return _Surface(
+        every, normals, triangles, closed, np.concatenate(patch_parts), np.concatenate(mask_parts)
+    )
 
 
 # --------------------------------------------------------------------------- colours
-def _lights(camera: _Camera) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+def _lights(
+    camera: _Camera,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Key light (upper left, in front), fill light (right), and the highlight's half vector."""
     key = -0.45 * camera.right + 0.60 * camera.up + 0.66 * camera.eye
     fill = 0.70 * camera.right - 0.15 * camera.up + 0.70 * camera.eye
@@ -665,15 +785,21 @@ def _lights(camera: _Camera) -> tuple[NDArray[np.float64], NDArray[np.float64], 
     return key, fill, half / np.linalg.norm(half)
 
 
-def _diffuse(normals: NDArray[np.float64], camera: _Camera) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _diffuse(
+    normals: NDArray[np.float64], camera: _Camera
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Diffuse light in [0, 1] (ambient + key + fill) and the highlight, for normals facing the viewer."""
     key, fill, half = _lights(camera)
-    diffuse = 0.42 + 0.48 * np.clip(normals @ key, 0.0, 1.0) + 0.18 * np.clip(normals @ fill, 0.0, 1.0)
+    diffuse = (
+        0.42 + 0.48 * np.clip(normals @ key, 0.0, 1.0) + 0.18 * np.clip(normals @ fill, 0.0, 1.0)
+    )
     highlight = np.clip(normals @ half, 0.0, 1.0) ** 40
     return np.clip(diffuse, 0.0, 1.0), highlight
 
 
-def _shaded_colours(normals: NDArray[np.float64], camera: _Camera, base: NDArray[np.float64], gloss: float) -> NDArray[np.float64]:
+def _shaded_colours(
+    normals: NDArray[np.float64], camera: _Camera, base: NDArray[np.float64], gloss: float
+) -> NDArray[np.float64]:
     """RGB (…, 3) of ``base`` lit at unit ``normals`` (…, 3) that face the viewer."""
     diffuse, highlight = _diffuse(normals, camera)
     rgb = diffuse[..., None] * base + gloss * highlight[..., None]
@@ -690,9 +816,13 @@ def _zebra_values(phase: NDArray[np.float64], triangles: NDArray[np.int64]) -> N
     stripes fade to grey instead of aliasing into moiré.
     """
     corner = phase[triangles]
-    corner = corner[:, :1] + (corner - corner[:, :1] + np.pi) % (2.0 * np.pi) - np.pi  # unwrapped about corner 0
+    corner = (
+        corner[:, :1] + (corner - corner[:, :1] + np.pi) % (2.0 * np.pi) - np.pi
+    )  # unwrapped about corner 0
     spread = np.zeros(len(phase))
-    np.maximum.at(spread, triangles.reshape(-1), np.repeat(corner.max(axis=1) - corner.min(axis=1), 3))
+    np.maximum.at(
+        spread, triangles.reshape(-1), np.repeat(corner.max(axis=1) - corner.min(axis=1), 3)
+    )
     softness = np.clip(0.5 * spread, 0.02, 1.0)
     value = np.clip(0.5 + 0.5 * np.sin(phase) / softness, 0.0, 1.0)
     blur = np.clip((spread - 0.5 * np.pi) / np.pi, 0.0, 1.0)
@@ -708,13 +838,17 @@ class _AngleScale:
     log: bool
 
 
-def _angle_scale(angles: Sequence[NDArray[np.float64]], angle_range: tuple[float, float] | None) -> _AngleScale:
+def _angle_scale(
+    angles: Sequence[NDArray[np.float64]], angle_range: tuple[float, float] | None
+) -> _AngleScale:
     from matplotlib import colormaps
     from matplotlib.colors import ListedColormap, LogNorm, Normalize
 
     base = colormaps[_DEVIATION_CMAP]
     cmap = ListedColormap(base(np.linspace(*_CMAP_RANGE, 256)), name="g1patch_deviation")
-    values = np.concatenate([np.asarray(a, dtype=np.float64).reshape(-1) for a in angles] + [np.zeros(0)])
+    values = np.concatenate(
+        [np.asarray(a, dtype=np.float64).reshape(-1) for a in angles] + [np.zeros(0)]
+    )
     if angle_range is not None:
         low, high = angle_range
     else:
@@ -738,7 +872,9 @@ def _deviation_caption(report: ContinuityReport | _EdgeAngles) -> str:
     return caption + (f", {report.seam_edges} seams" if report.seam_edges else "")
 
 
-def _band_angles(network: PatchNetwork, report: ContinuityReport | _EdgeAngles) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+def _band_angles(
+    network: PatchNetwork, report: ContinuityReport | _EdgeAngles
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """G1 angle of every patch side (N, 4), NaN on open, collapsed and seam sides; and the seam sides (N, 4)."""
     angles = np.full((network.n_patches, 4), np.nan)
     seams = np.zeros((network.n_patches, 4), dtype=bool)
@@ -803,7 +939,9 @@ class _Panel:
     title: str | None
 
 
-def _visible(surface: _Surface, camera: _Camera) -> tuple[NDArray[np.bool_], NDArray[np.float64], NDArray[np.float64]]:
+def _visible(
+    surface: _Surface, camera: _Camera
+) -> tuple[NDArray[np.bool_], NDArray[np.float64], NDArray[np.float64]]:
     """Which triangles to draw, their screen corners (T, 3, 2) and depths (T,)."""
     screen, depth = camera.project(surface.points)
     corners = screen[surface.triangles]
@@ -882,17 +1020,28 @@ def _draw(
     title_size = float(np.clip(min(height, width * panel_width) / 30.0, 6.0, 15.0))
     # a glyph is about 0.6 of the font size wide: the font shrinks (to 6 pt) until the longest
     # line fits its panel, and lines still too long are wrapped
-    longest = max((len(line) for p in panels if p.title for line in p.title.splitlines()), default=0)
+    longest = max(
+        (len(line) for p in panels if p.title for line in p.title.splitlines()), default=0
+    )
     if longest:
-        title_size = max(6.0, min(title_size, 0.95 * width * panel_width / (0.6 * longest) * 72.0 / _DPI))
+        title_size = max(
+            6.0, min(title_size, 0.95 * width * panel_width / (0.6 * longest) * 72.0 / _DPI)
+        )
     fits = max(8, int(0.95 * width * panel_width / (0.6 * title_size * _DPI / 72.0)))
-    titles = ["\n".join(textwrap.fill(line, fits) for line in p.title.splitlines()) if p.title else None for p in panels]
+    titles = [
+        "\n".join(textwrap.fill(line, fits) for line in p.title.splitlines()) if p.title else None
+        for p in panels
+    ]
     lines = max((t.count("\n") + 1 for t in titles if t), default=0)
-    title_band = min(0.4, (0.9 + 1.3 * lines) * title_size * (_DPI / 72.0) / height) if lines else 0.0
+    title_band = (
+        min(0.4, (0.9 + 1.3 * lines) * title_size * (_DPI / 72.0) / height) if lines else 0.0
+    )
     legend_size = max(6.0, title_size * 0.8)
     legend_band = min(0.2, 2.2 * legend_size * (_DPI / 72.0) / height) if legend else 0.0
     for column, panel in enumerate(panels):
-        axes = figure.add_axes((column * panel_width, legend_band, panel_width, 1.0 - title_band - legend_band))
+        axes = figure.add_axes(
+            (column * panel_width, legend_band, panel_width, 1.0 - title_band - legend_band)
+        )
         axes.set_axis_off()
         box_w, box_h = width * panel_width, height * (1.0 - title_band - legend_band)
         units_per_pixel = max(panel.extent[0] / box_w, panel.extent[1] / box_h)
@@ -901,11 +1050,21 @@ def _draw(
         axes.set_xlim(low[0], high[0])
         axes.set_ylim(low[1], high[1])
         # triangles wholly outside the picture (zoomed in) are not drawn
-        inside = ((panel.polygons.max(axis=1) >= low) & (panel.polygons.min(axis=1) <= high)).all(axis=1)
+        inside = ((panel.polygons.max(axis=1) >= low) & (panel.polygons.min(axis=1) <= high)).all(
+            axis=1
+        )
         axes.add_artist(_gouraud_artist(panel.polygons[inside], panel.colours[inside]))
         if titles[column]:
-            figure.text((column + 0.5) * panel_width, 1.0 - 0.5 * title_band, titles[column], ha="center",
-                        va="center", fontsize=title_size, color="0.15", linespacing=1.3)
+            figure.text(
+                (column + 0.5) * panel_width,
+                1.0 - 0.5 * title_band,
+                titles[column],
+                ha="center",
+                va="center",
+                fontsize=title_size,
+                color="0.15",
+                linespacing=1.3,
+            )
     if scale is not None:
         from matplotlib.cm import ScalarMappable
 
@@ -915,13 +1074,26 @@ def _draw(
         bar.tick_params(labelsize=max(6.0, title_size * 0.7))
         if scale.norm.vmin < EXACT_G1_DEG < scale.norm.vmax:  # the project's bar for "exactly G1"
             bar.axhline(EXACT_G1_DEG, color="white", linewidth=1.2)
-            bar.text(-0.25, EXACT_G1_DEG, "exact\nG1", transform=bar.get_yaxis_transform(), ha="right",
-                     va="center", fontsize=max(5.0, title_size * 0.6), color="0.25")
+            bar.text(
+                -0.25,
+                EXACT_G1_DEG,
+                "exact\nG1",
+                transform=bar.get_yaxis_transform(),
+                ha="right",
+                va="center",
+                fontsize=max(5.0, title_size * 0.6),
+                color="0.25",
+            )
     if legend:
         from matplotlib.patches import Patch
 
-        figure.legend(handles=[Patch(facecolor=colour, label=text) for text, colour in legend], loc="lower left",
-                      frameon=False, fontsize=legend_size, ncols=len(legend))
+        figure.legend(
+            handles=[Patch(facecolor=colour, label=text) for text, colour in legend],
+            loc="lower left",
+            frameon=False,
+            fontsize=legend_size,
+            ncols=len(legend),
+        )
     with atomic_path(path) as temporary:
         figure.savefig(temporary, format="png", dpi=_DPI, facecolor=_BACKGROUND)
 
@@ -952,7 +1124,9 @@ def _band_width(patches: Patches, pixels_per_unit: float) -> tuple[float, float]
     at most a tenth of the patch (the mean length of the u- and v-curves of ``patches``, at most
     :data:`_BAND_WIDTH_PATCHES` of them evenly spaced, in pixels of the picture, sets the scale)."""
     if len(patches) > _BAND_WIDTH_PATCHES:
-        patches = patches.take(np.linspace(0, len(patches) - 1, _BAND_WIDTH_PATCHES).round().astype(np.int64))
+        patches = patches.take(
+            np.linspace(0, len(patches) - 1, _BAND_WIDTH_PATCHES).round().astype(np.int64)
+        )
     params = np.linspace(0.0, 1.0, 5)
     coarse = patches.evaluate_grid(params, params)
     widths = []
@@ -1000,10 +1174,23 @@ def _edge_angles(network: PatchNetwork, samples: int) -> _EdgeAngles:
     same = network.same_direction[left_patch, left_edge]
     angle = np.zeros(len(left_patch))
     for block in _blocks(len(left_patch), 4096):
-        angle[block] = _edge_measures(local, left_patch[block], left_edge[block], right_patch[block], right_edge[block],
-                                      same[block], samples, DEGENERATE_RTOL * diagonal**2)[0]
-    return _EdgeAngles(np.stack([left_patch, right_patch], axis=1), np.stack([left_edge, right_edge], axis=1), angle,
-                       network.seam[left_patch, left_edge], samples)
+        angle[block] = _edge_measures(
+            local,
+            left_patch[block],
+            left_edge[block],
+            right_patch[block],
+            right_edge[block],
+            same[block],
+            samples,
+            DEGENERATE_RTOL * diagonal**2,
+        )[0]
+    return _EdgeAngles(
+        np.stack([left_patch, right_patch], axis=1),
+        np.stack([left_edge, right_edge], axis=1),
+        angle,
+        network.seam[left_patch, left_edge],
+        samples,
+    )
 
 
 def _edge_samples(edge_counts: Sequence[int], size: tuple[int, int]) -> int:
@@ -1049,8 +1236,19 @@ def render(
     matplotlib, :class:`MissingDependencyError`. The file appears complete or not at all.
     """
     render_side_by_side(
-        path, [network], [title], mode=mode, size=size, resolution=resolution, view=view, up=up,
-        reports=[report], stripes=stripes, angle_range=angle_range, zoom=zoom, target=target,
+        path,
+        [network],
+        [title],
+        mode=mode,
+        size=size,
+        resolution=resolution,
+        view=view,
+        up=up,
+        reports=[report],
+        stripes=stripes,
+        angle_range=angle_range,
+        zoom=zoom,
+        target=target,
     )
 
 
@@ -1087,22 +1285,36 @@ def render_side_by_side(
     if target_point is not None and target_point.shape != (3,):
         raise InputError(f"target: expected one point (x, y, z), got shape {target_point.shape}")
     if isinstance(networks, PatchNetwork) or not isinstance(networks, Sequence) or not networks:
-        raise InputError(f"networks: expected a non-empty sequence of PatchNetwork, got {type(networks).__name__}")
+        raise InputError(
+            f"networks: expected a non-empty sequence of PatchNetwork, got {type(networks).__name__}"
+        )
     for index, network in enumerate(networks):
         if not isinstance(network, PatchNetwork):
-            raise InputError(f"networks[{index}]: expected a PatchNetwork, got {type(network).__name__}")
+            raise InputError(
+                f"networks[{index}]: expected a PatchNetwork, got {type(network).__name__}"
+            )
         _check_network(network)
     if isinstance(titles, str) or not isinstance(titles, Sequence) or len(titles) != len(networks):
-        count = len(titles) if isinstance(titles, Sequence) and not isinstance(titles, str) else type(titles).__name__
+        count = (
+            len(titles)
+            if isinstance(titles, Sequence) and not isinstance(titles, str)
+            else type(titles).__name__
+        )
         raise InputError(f"titles: expected one title per network ({len(networks)}), got {count}")
     for index, title in enumerate(titles):
         _check_title(f"titles[{index}]" if len(titles) > 1 else "title", title)
     if reports is None:
         reports = [None] * len(networks)
-    if isinstance(reports, ContinuityReport) or not isinstance(reports, Sequence) or len(reports) != len(networks):
+    if (
+        isinstance(reports, ContinuityReport)
+        or not isinstance(reports, Sequence)
+        or len(reports) != len(networks)
+    ):
         raise InputError(f"reports: expected one report (or None) per network ({len(networks)})")
-    checked = [_check_report(r, n, f"reports[{i}]" if len(networks) > 1 else "report")
-               for i, (r, n) in enumerate(zip(reports, networks))]
+    checked = [
+        _check_report(r, n, f"reports[{i}]" if len(networks) > 1 else "report")
+        for i, (r, n) in enumerate(zip(reports, networks))
+    ]
     _matplotlib()
 
     camera = _camera(view, up, networks)
@@ -1112,13 +1324,17 @@ def render_side_by_side(
     shown_titles = list(titles)
     legend: list[tuple[str, NDArray[np.float64]]] = []
     if mode == "deviation":
-        samples = _edge_samples([len(n.shared_edges()[0]) for r, n in zip(checked, networks) if r is None], size)
+        samples = _edge_samples(
+            [len(n.shared_edges()[0]) for r, n in zip(checked, networks) if r is None], size
+        )
         full: list[ContinuityReport | _EdgeAngles] = [
             r if r is not None else _edge_angles(n, samples) for r, n in zip(checked, networks)
         ]
         sides = [_band_angles(n, r) for n, r in zip(networks, full)]
         scale = _angle_scale([r.edge_angle_deg[~r.edge_seam] for r in full], angle_range)
-        shown_titles = ["\n".join(filter(None, [t, _deviation_caption(r)])) for t, r in zip(titles, full)]
+        shown_titles = [
+            "\n".join(filter(None, [t, _deviation_caption(r)])) for t, r in zip(titles, full)
+        ]
         if any(r.seam_edges for r in full):
             legend.append((_SEAM_LABEL, _SEAM_COLOUR))
     panels = []
@@ -1128,12 +1344,29 @@ def render_side_by_side(
         band, filled = None, None
         if mode == "deviation":
             filled = footprint.spacing_px < EDGE_SPACING_PX
-            banded = network.patches if not filled.any() else network.patches.take(np.flatnonzero(~filled))
+            banded = (
+                network.patches
+                if not filled.any()
+                else network.patches.take(np.flatnonzero(~filled))
+            )
             band = _band_width(banded, footprint.pixels_per_unit) if len(banded) else (0.1, 0.1)
         surface = _sample(network, r, band, filled)
-        panels.append(_panel(surface, camera, mode, title, stripes=stripes, sides=network_sides, scale=scale,
-                             zoom=zoom, target=target_point))
-    label = "G1 angle across the edge (degrees" + (", log scale)" if scale is not None and scale.log else ")")
+        panels.append(
+            _panel(
+                surface,
+                camera,
+                mode,
+                title,
+                stripes=stripes,
+                sides=network_sides,
+                scale=scale,
+                zoom=zoom,
+                target=target_point,
+            )
+        )
+    label = "G1 angle across the edge (degrees" + (
+        ", log scale)" if scale is not None and scale.log else ")"
+    )
     _draw(out_path, panels, size, scale, label, legend)
 
 
@@ -1154,9 +1387,15 @@ def render_surfaces(
     target = _check_path(path)
     size, view, up = _check_size(size), _check_view(view), check_choice("up", up, (AUTO, *UP_AXES))
     if isinstance(meshes, TriangleMesh) or not isinstance(meshes, Sequence) or not meshes:
-        raise InputError(f"meshes: expected a non-empty sequence of TriangleMesh, got {type(meshes).__name__}")
+        raise InputError(
+            f"meshes: expected a non-empty sequence of TriangleMesh, got {type(meshes).__name__}"
+        )
     if isinstance(titles, str) or not isinstance(titles, Sequence) or len(titles) != len(meshes):
-        count = len(titles) if isinstance(titles, Sequence) and not isinstance(titles, str) else type(titles).__name__
+        count = (
+            len(titles)
+            if isinstance(titles, Sequence) and not isinstance(titles, str)
+            else type(titles).__name__
+        )
         raise InputError(f"titles: expected one title per mesh ({len(meshes)}), got {count}")
     for index, (mesh, title) in enumerate(zip(meshes, titles)):
         if not isinstance(mesh, TriangleMesh):
@@ -1169,7 +1408,14 @@ def render_surfaces(
         # a tessellation is welded: call it closed when every triangle edge has two triangles
         t = np.asarray(mesh.triangles, dtype=np.int64)
         undirected = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
-        closed = bool(len(t)) and bool((np.unique(undirected, axis=0, return_counts=True)[1] == 2).all())
-        surface = _Surface(np.asarray(mesh.points, dtype=np.float64), np.asarray(mesh.normals, dtype=np.float64), t, closed)
+        closed = bool(len(t)) and bool(
+            (np.unique(undirected, axis=0, return_counts=True)[1] == 2).all()
+        )
+        surface = _Surface(
+            np.asarray(mesh.points, dtype=np.float64),
+            np.asarray(mesh.normals, dtype=np.float64),
+            t,
+            closed,
+        )
         panels.append(_panel(surface, camera, "shaded", title))
     _draw(target, panels, size)

@@ -119,8 +119,12 @@ def _cut_repeats(p: _Polygons) -> tuple[_Polygons, IntArray]:
         p = _regroup(p, face, position, ~duplicate, p.source, p.holes)
     while True:
         face, position = _positions(p.sizes)
-        order = np.argsort(face * p.origin.size + p.corners, kind="stable")  # by face, vertex, position
-        again = (face[order][1:] == face[order][:-1]) & (p.corners[order][1:] == p.corners[order][:-1])
+        order = np.argsort(
+            face * p.origin.size + p.corners, kind="stable"
+        )  # by face, vertex, position
+        again = (face[order][1:] == face[order][:-1]) & (
+            p.corners[order][1:] == p.corners[order][:-1]
+        )
         if not again.any():
             break
         first, second = order[:-1][again], order[1:][again]
@@ -137,8 +141,12 @@ def _cut_repeats(p: _Polygons) -> tuple[_Polygons, IntArray]:
         new_face = np.where(inside, p.sizes.size + index, face)
         repeating.append(p.source[cut_face])
         p = _regroup(
-            p, new_face, position, np.ones(face.size, dtype=bool),
-            np.concatenate([p.source, p.source[cut_face]]), np.concatenate([p.holes, p.holes[:, cut_face]], axis=1),
+            p,
+            new_face,
+            position,
+            np.ones(face.size, dtype=bool),
+            np.concatenate([p.source, p.source[cut_face]]),
+            np.concatenate([p.holes, p.holes[:, cut_face]], axis=1),
         )
     return p, np.unique(np.concatenate(repeating))
 
@@ -165,7 +173,11 @@ def _pairs(corners: IntArray, sizes: IntArray, n_vertices: int) -> _Pairs:
     crowded = order[np.repeat(many, counts)]
     edges = sorted_keys[starts[many]]
     return _Pairs(
-        order[two], order[two + 1], crowded, np.stack([edges // n_vertices, edges % n_vertices], axis=1), counts[many]
+        order[two],
+        order[two + 1],
+        crowded,
+        np.stack([edges // n_vertices, edges % n_vertices], axis=1),
+        counts[many],
     )
 
 
@@ -218,7 +230,10 @@ def _sheets(p: _Polygons, notes: _Notes) -> tuple[_Polygons, bool]:
     # orientation: (f, 0) and (f, 1) of the double cover are one component on a non-orientable sheet
     f1, f2, flip_pair = face[pairs.first], face[pairs.second], same.astype(np.int64)
     n_faces = p.sizes.size
-    cover = np.concatenate([2 * f1, 2 * f1 + 1]), np.concatenate([2 * f2 + flip_pair, 2 * f2 + 1 - flip_pair])
+    cover = (
+        np.concatenate([2 * f1, 2 * f1 + 1]),
+        np.concatenate([2 * f2 + flip_pair, 2 * f2 + 1 - flip_pair]),
+    )
     label = _components(2 * n_faces, *cover)
     up, down = label[0::2], label[1::2]
     twisted = np.flatnonzero(up == down)
@@ -250,8 +265,12 @@ def _sheets(p: _Polygons, notes: _Notes) -> tuple[_Polygons, bool]:
 
     split = _Polygons(corners, p.sizes, p.source, p.holes, origin)
     if flip.any():
-        reversed_position = np.where(flip[face], (p.sizes[face] - position) % p.sizes[face], position)
-        split = _regroup(split, face, reversed_position, np.ones(face.size, dtype=bool), p.source, p.holes)
+        reversed_position = np.where(
+            flip[face], (p.sizes[face] - position) % p.sizes[face], position
+        )
+        split = _regroup(
+            split, face, reversed_position, np.ones(face.size, dtype=bool), p.source, p.holes
+        )
     return split, bool(pairs.crowded.size or extra.size or flip.any())
 
 
@@ -277,7 +296,9 @@ def _dissolve(p: _Polygons, notes: _Notes) -> _Polygons:
         won = at[claim[face[at]] == priority[p.corners[at]]]
         both = np.bincount(p.corners[won], minlength=n_vertices) == 2
         won = won[both[p.corners[won]]]
-        won = won[np.argsort(p.corners[won], kind="stable")]  # the two corners of each vertex, in face order
+        won = won[
+            np.argsort(p.corners[won], kind="stable")
+        ]  # the two corners of each vertex, in face order
         c1, c2 = won[0::2], won[1::2]
         f1, f2 = face[c1], face[c2]
         n1, n2 = p.sizes[f1], p.sizes[f2]
@@ -342,16 +363,29 @@ def _matches(sorted_keys: IntArray, wanted: IntArray) -> tuple[IntArray, IntArra
 
 def _repeat_floats(tag: Tag, counts: IntArray) -> tuple[float, ...]:
     """One sharpness per item stays one per item (repeated like the items); one for all stays."""
-    return tuple(np.repeat(tag.floats, counts).tolist()) if len(tag.floats) == counts.size > 1 else tag.floats
+    return (
+        tuple(np.repeat(tag.floats, counts).tolist())
+        if len(tag.floats) == counts.size > 1
+        else tag.floats
+    )
 
 
 def _carry_tags(
-    tags: Sequence[Tag], p: _Polygons, corners: IntArray, sizes: IntArray, n_input: int, notes: _Notes
+    tags: Sequence[Tag],
+    p: _Polygons,
+    corners: IntArray,
+    sizes: IntArray,
+    n_input: int,
+    notes: _Notes,
 ) -> tuple[Tag, ...]:
     """Corners to every copy of their vertex, crease pairs to every edge between copies of their
     ends, holes to the faces made from holes (module docstring); ``corners``, ``sizes`` are the input's."""
     by_origin = np.argsort(p.origin, kind="stable")
-    edges = _edge_table(p, corners, sizes, n_input) if any(tag.name == "crease" for tag in tags) else None
+    edges = (
+        _edge_table(p, corners, sizes, n_input)
+        if any(tag.name == "crease" for tag in tags)
+        else None
+    )
     carried = []
     hole_tag = 0
     for tag in tags:
@@ -359,17 +393,23 @@ def _carry_tags(
         if tag.name == "corner":
             found, counts = _matches(p.origin[by_origin], ints)
             notes.add("tag items", ints[counts == 0])
-            tag = tag._replace(ints=tuple(by_origin[found].tolist()), floats=_repeat_floats(tag, counts))
+            tag = tag._replace(
+                ints=tuple(by_origin[found].tolist()), floats=_repeat_floats(tag, counts)
+            )
         elif tag.name == "crease" and edges is not None:
             u, w = ints[0::2], ints[1::2]
             keys = np.minimum(u, w) * n_input + np.maximum(u, w)
             not_edge = np.flatnonzero(~np.isin(keys, edges.input_edges))
             if not_edge.size:
-                raise MeshError(f"tag 'crease' names ({u[not_edge[0]]}, {w[not_edge[0]]}), which is not an edge")
+                raise MeshError(
+                    f"tag 'crease' names ({u[not_edge[0]]}, {w[not_edge[0]]}), which is not an edge"
+                )
             found, counts = _matches(edges.input_keys, keys)
             notes.add("tag items", u[counts == 0])
             pairs = np.stack([edges.a[found], edges.b[found]], axis=1)
-            tag = tag._replace(ints=tuple(pairs.ravel().tolist()), floats=_repeat_floats(tag, counts))
+            tag = tag._replace(
+                ints=tuple(pairs.ravel().tolist()), floats=_repeat_floats(tag, counts)
+            )
         elif tag.name in FACE_TAGS:
             tag = tag._replace(ints=tuple(np.flatnonzero(p.holes[hole_tag]).tolist()))
             hole_tag += 1
@@ -393,7 +433,9 @@ def _phrases(notes: _Notes) -> tuple[str, ...]:
     edges = notes.get("edges").reshape(-1, 2)
     if edges.size:
         faces = notes.get("edge faces")
-        counts = f"{faces.min()}" if faces.min() == faces.max() else f"{faces.min()} to {faces.max()}"
+        counts = (
+            f"{faces.min()}" if faces.min() == faces.max() else f"{faces.min()} to {faces.max()}"
+        )
         named = _few_pairs(edges) if len(edges) == 1 else f"({_few_pairs(edges)})"
         copies = _plural(notes.get("edge copies").size, "vertex copy", "vertex copies")
         edge_count = _plural(len(edges), "non-manifold edge")
@@ -417,7 +459,9 @@ def _phrases(notes: _Notes) -> tuple[str, ...]:
         lines.append(f"{named} ({_few(merge_dropped)}) dropped: their merge left no polygon")
     orphans = np.unique(notes.get("orphans"))
     if orphans.size:
-        lines.append(f"{_plural(orphans.size, 'vertex', 'vertices')} left without a face ({_few(orphans)}) dropped")
+        lines.append(
+            f"{_plural(orphans.size, 'vertex', 'vertices')} left without a face ({_few(orphans)}) dropped"
+        )
     tag_items = notes.get("tag items")
     if tag_items.size:
         named = _plural(tag_items.size, "tag item")
@@ -435,7 +479,13 @@ def repair_polygons(
     holes = np.zeros((len(hole_tags), sizes.size), dtype=bool)
     for row, tag in enumerate(hole_tags):
         holes[row, np.asarray(tag.ints, dtype=np.int64)] = True
-    p = _Polygons(corners, sizes, np.arange(sizes.size, dtype=np.int64), holes, np.arange(n_input, dtype=np.int64))
+    p = _Polygons(
+        corners,
+        sizes,
+        np.arange(sizes.size, dtype=np.int64),
+        holes,
+        np.arange(n_input, dtype=np.int64),
+    )
     notes = _Notes()
 
     p, repeating = _cut_repeats(p)
@@ -443,7 +493,9 @@ def repair_polygons(
     notes.add("polygons", p.source[np.isin(p.source, repeating)])
     notes.add("dropped", repeating[~np.isin(repeating, p.source)])
     if not p.sizes.size:
-        raise DegenerateFaceError(f"no face is left after the repairs ({', '.join(_phrases(notes))})")
+        raise DegenerateFaceError(
+            f"no face is left after the repairs ({', '.join(_phrases(notes))})"
+        )
     for _ in range(SHEET_PASSES):
         p, changed = _sheets(p, notes)
         if not changed:

@@ -108,10 +108,14 @@ def torus(n_major: int, n_minor: int, R: float = 1.0, r: float = 0.25) -> QuadMe
     u = np.linspace(0.0, 2.0 * np.pi, n_major, endpoint=False)[:, None]
     v = np.linspace(0.0, 2.0 * np.pi, n_minor, endpoint=False)[None, :]
     ring = R + r * np.cos(v)
-    vertices = np.stack(np.broadcast_arrays(ring * np.cos(u), ring * np.sin(u), r * np.sin(v)), axis=-1)
+    vertices = np.stack(
+        np.broadcast_arrays(ring * np.cos(u), ring * np.sin(u), r * np.sin(v)), axis=-1
+    )
     i, j = np.meshgrid(np.arange(n_major), np.arange(n_minor), indexing="ij")
     i1, j1 = (i + 1) % n_major, (j + 1) % n_minor
-    faces = np.stack([i * n_minor + j, i1 * n_minor + j, i1 * n_minor + j1, i * n_minor + j1], axis=-1)
+    faces = np.stack(
+        [i * n_minor + j, i1 * n_minor + j, i1 * n_minor + j1, i * n_minor + j1], axis=-1
+    )
     return QuadMesh.from_arrays(vertices.reshape(-1, 3), faces.reshape(-1, 4), strict=True)
 
 
@@ -138,14 +142,24 @@ def fan(valence: int, rings: int = 1) -> QuadMesh:
     vertices = np.concatenate([np.zeros((1, 3)), (scale * outline).reshape(-1, 3)])
 
     k = np.arange(valence)
-    inner = np.stack([np.zeros_like(k), 1 + 2 * k, 2 + 2 * k, 1 + (2 * k + 2) % (2 * valence)], axis=1)
+    inner = np.stack(
+        [np.zeros_like(k), 1 + 2 * k, 2 + 2 * k, 1 + (2 * k + 2) % (2 * valence)], axis=1
+    )
     m, j = np.meshgrid(np.arange(rings - 1), np.arange(2 * valence), indexing="ij")
     ring_start = 1 + 2 * valence * m
     step = (j + 1) % (2 * valence)
     bands = np.stack(
-        [ring_start + j, ring_start + 2 * valence + j, ring_start + 2 * valence + step, ring_start + step], axis=-1
+        [
+            ring_start + j,
+            ring_start + 2 * valence + j,
+            ring_start + 2 * valence + step,
+            ring_start + step,
+        ],
+        axis=-1,
     )
-    return QuadMesh.from_arrays(vertices, np.concatenate([inner, bands.reshape(-1, 4)]), strict=True)
+    return QuadMesh.from_arrays(
+        vertices, np.concatenate([inner, bands.reshape(-1, 4)]), strict=True
+    )
 
 
 def boundary_fan(k: int) -> QuadMesh:
@@ -203,7 +217,9 @@ def filleted_box(cells: int = 8, radius: float = 0.375) -> QuadMesh:
     offset = x[:, :2] - centre
     inside = (offset > 0).all(axis=1)
     # the corner square's two outer sides map onto the arc by angle: (1, y) and (x, 1) at even steps
-    s_side = np.where(offset[:, 0] >= offset[:, 1], offset[:, 1], 2 * radius - offset[:, 0])[inside] / (2 * radius)
+    s_side = np.where(offset[:, 0] >= offset[:, 1], offset[:, 1], 2 * radius - offset[:, 0])[
+        inside
+    ] / (2 * radius)
     depth = np.maximum(offset[:, 0], offset[:, 1])[inside] / radius  # 1 on the outer sides
     angle = 0.5 * np.pi * s_side
     arc = np.stack([np.cos(angle), np.sin(angle)], axis=1) * radius
@@ -211,12 +227,14 @@ def filleted_box(cells: int = 8, radius: float = 0.375) -> QuadMesh:
     return box.with_vertices(x)
 
 
-def slotted_block(cells: tuple[int, int, int] = (6, 3, 3), slot: tuple[int, int] = (2, 4)) -> QuadMesh:
+def slotted_block(
+    cells: tuple[int, int, int] = (6, 3, 3), slot: tuple[int, int] = (2, 4)
+) -> QuadMesh:
     """A block of unit cubes ``cells`` with a slot through it along y: the cubes with
     ``slot[0] ≤ x < slot[1]`` in the top layer removed. Every edge is a 90° edge (convex or
     concave) or flat, the case ``--sharp-angle`` must separate exactly."""
     filled = np.ones(cells, dtype=bool)
-    filled[slot[0]:slot[1], :, cells[2] - 1] = False
+    filled[slot[0] : slot[1], :, cells[2] - 1] = False
     return voxel_surface(filled)
 
 
@@ -247,7 +265,9 @@ def _split_projected(vertices: FloatArray, faces: IntArray, level: int) -> QuadM
     (edge midpoints, face centroids) and every vertex projected onto the unit sphere again."""
     points = _unit_rows(vertices)
     for _ in range(_check_count("level", level, 0)):
-        points, faces, _ = refine_polygons(points, faces.ravel(), np.full(len(faces), 4, dtype=np.int64))
+        points, faces, _ = refine_polygons(
+            points, faces.ravel(), np.full(len(faces), 4, dtype=np.int64)
+        )
         points = _unit_rows(points)
     return QuadMesh.from_arrays(points, faces, strict=True)
 
@@ -297,7 +317,9 @@ def _icosahedron() -> tuple[FloatArray, IntArray]:
     sides = np.linalg.norm(p - np.roll(p, 1, axis=1), axis=-1)
     triangles = triples[np.isclose(sides, 2.0).all(axis=1)]
     p = vertices[triangles]
-    inward = np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), p.sum(axis=1)) < 0
+    inward = (
+        np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), p.sum(axis=1)) < 0
+    )
     triangles[inward] = triangles[inward][:, ::-1]
     return vertices, triangles
 
@@ -311,7 +333,9 @@ def icosa_ellipsoid(level: int, axes: Sequence[float] = (1.0, 0.7, 0.5)) -> Quad
     vertices keep valence 5, the 20 triangle centroids have valence 3, all others valence 4.
     """
     vertices, triangles = _icosahedron()
-    points, quads, _ = refine_polygons(vertices, triangles.ravel(), np.full(len(triangles), 3, dtype=np.int64))
+    points, quads, _ = refine_polygons(
+        vertices, triangles.ravel(), np.full(len(triangles), 3, dtype=np.int64)
+    )
     mesh = _split_projected(points, quads, level)
     return mesh.with_vertices(mesh.vertices * _check_axes(axes))
 
@@ -323,7 +347,9 @@ def _box_surface(coordinates: Sequence[FloatArray]) -> QuadMesh:
     """The outward surface of the box grid with increasing grid coordinates along x, y and z."""
     lattice = voxel_surface(np.ones(tuple(len(c) - 1 for c in coordinates), dtype=bool))
     index = lattice.vertices.astype(np.int64)  # lattice points 0..n along each axis
-    return lattice.with_vertices(np.stack([c[index[:, k]] for k, c in enumerate(coordinates)], axis=1))
+    return lattice.with_vertices(
+        np.stack([c[index[:, k]] for k, c in enumerate(coordinates)], axis=1)
+    )
 
 
 def _shortest_edge(mesh: QuadMesh) -> float:
@@ -362,11 +388,16 @@ def box_cage(
         ends = np.concatenate([[0.0], np.cumsum(steps)])
         coordinates.append(length * (ends / ends[-1] - 0.5))
     mesh = _box_surface(coordinates)
-    return mesh if jitter_seed is None else _jittered(mesh, jitter * _shortest_edge(mesh), jitter_seed)
+    return (
+        mesh if jitter_seed is None else _jittered(mesh, jitter * _shortest_edge(mesh), jitter_seed)
+    )
 
 
 def thin_slab(
-    size: tuple[float, float] = (2.0, 1.0), thickness: float = 0.05, divisions: tuple[int, int] = (8, 4), rim: int = 2
+    size: tuple[float, float] = (2.0, 1.0),
+    thickness: float = 0.05,
+    divisions: tuple[int, int] = (8, 4),
+    rim: int = 2,
 ) -> QuadMesh:
     """A thin centred box ``size`` × ``thickness`` on a uniform grid: flat faces meeting at 90° rims.
 
@@ -374,21 +405,30 @@ def thin_slab(
     side wall, so every rim vertex sees one long edge across the face and short edges down the wall.
     """
     if not thickness > 0 or not all(side > 0 for side in size):
-        raise InputError(f"thin_slab: expected positive size and thickness, got {size!r}, {thickness!r}")
-    nx, ny = _check_count("divisions[0]", divisions[0], 1), _check_count("divisions[1]", divisions[1], 1)
+        raise InputError(
+            f"thin_slab: expected positive size and thickness, got {size!r}, {thickness!r}"
+        )
+    nx, ny = (
+        _check_count("divisions[0]", divisions[0], 1),
+        _check_count("divisions[1]", divisions[1], 1),
+    )
     nz = _check_count("rim", rim, 1)
-    return _box_surface([
-        np.linspace(-size[0] / 2, size[0] / 2, nx + 1),
-        np.linspace(-size[1] / 2, size[1] / 2, ny + 1),
-        np.linspace(-thickness / 2, thickness / 2, nz + 1),
-    ])
+    return _box_surface(
+        [
+            np.linspace(-size[0] / 2, size[0] / 2, nx + 1),
+            np.linspace(-size[1] / 2, size[1] / 2, ny + 1),
+            np.linspace(-thickness / 2, thickness / 2, nz + 1),
+        ]
+    )
 
 
 def noisy_sphere(level: int, noise: float = 0.08, seed: int = 0) -> QuadMesh:
     """:func:`sphere_quads` with each coordinate of each vertex moved by a uniform random amount
     in ±``noise`` × its shortest edge (NumPy generator ``seed``)."""
     if not 0 <= noise < 0.5:
-        raise InputError(f"noise: expected a fraction of the shortest edge in [0, 0.5), got {noise!r}")
+        raise InputError(
+            f"noise: expected a fraction of the shortest edge in [0, 0.5), got {noise!r}"
+        )
     mesh = sphere_quads(level)
     return _jittered(mesh, noise * _shortest_edge(mesh), seed)
 
@@ -425,7 +465,9 @@ def sphere_project(points: ArrayLike, radius: float = 1.0) -> tuple[FloatArray, 
     return radius * normals, normals
 
 
-def ellipsoid_project(points: ArrayLike, axes: Sequence[float] = (1.0, 0.7, 0.5)) -> tuple[FloatArray, FloatArray]:
+def ellipsoid_project(
+    points: ArrayLike, axes: Sequence[float] = (1.0, 0.7, 0.5)
+) -> tuple[FloatArray, FloatArray]:
     """Closest points on the ellipsoid ``Σ (x_k / a_k)² = 1`` and the outward unit normals there.
 
     The closest point to p is ``q_k = a_k² p_k / (a_k² + t)`` where t (> −min a_k²) is the root of
@@ -450,7 +492,9 @@ def ellipsoid_project(points: ArrayLike, axes: Sequence[float] = (1.0, 0.7, 0.5)
     return a2 * p / denominator, _unit_rows(p / denominator)
 
 
-def torus_project(points: ArrayLike, R: float = 2.0, r: float = 0.7) -> tuple[FloatArray, FloatArray]:
+def torus_project(
+    points: ArrayLike, R: float = 2.0, r: float = 0.7
+) -> tuple[FloatArray, FloatArray]:
     """Closest points on the torus of :func:`torus` (axis z, radii ``R`` > ``r``) and the outward normals.
 
     The closest point lies on the tube circle in the half-plane through p: ``c + r n`` with

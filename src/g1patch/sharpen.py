@@ -19,19 +19,26 @@ from .mesh import INFINITE_SHARPNESS, Tag, _edge_keys, _following_corner
 __all__ = ["sharp_angle_tags"]
 
 
-def _polygon_normals(vertices: NDArray[np.float64], corners: NDArray[np.int64], sizes: NDArray[np.int64]) -> NDArray[np.float64]:
+def _polygon_normals(
+    vertices: NDArray[np.float64], corners: NDArray[np.int64], sizes: NDArray[np.int64]
+) -> NDArray[np.float64]:
     """Unit Newell normals of polygons given as flat ``corners`` with ``sizes`` (zero where degenerate)."""
     here = vertices[corners]
     there = vertices[corners[_following_corner(sizes)]]
     face = np.repeat(np.arange(sizes.size), sizes)
     product = np.cross(here, there)
-    total = np.stack([np.bincount(face, product[:, d], minlength=sizes.size) for d in range(3)], axis=1)
+    total = np.stack(
+        [np.bincount(face, product[:, d], minlength=sizes.size) for d in range(3)], axis=1
+    )
     length = np.linalg.norm(total, axis=1, keepdims=True)
     return np.divide(total, length, out=np.zeros_like(total), where=length > 0)
 
 
 def sharp_angle_tags(
-    vertices: NDArray[np.float64], corners: NDArray[np.int64], sizes: NDArray[np.int64], degrees: float
+    vertices: NDArray[np.float64],
+    corners: NDArray[np.int64],
+    sizes: NDArray[np.int64],
+    degrees: float,
 ) -> tuple[Tag, ...]:
     """``crease`` tags for the edges whose two polygons' normals differ by more than ``degrees``,
     and a ``corner`` tag for the vertices with at least three of them (empty tuple if none).

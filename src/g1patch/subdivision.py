@@ -72,7 +72,7 @@ indices. Tangents are then in the original face's parameter scale: the refined t
 from __future__ import annotations
 
 from collections.abc import Callable
-from functools import lru_cache
+from functools import cache, lru_cache
 from typing import Literal, NamedTuple
 
 import numpy as np
@@ -82,10 +82,27 @@ from .errors import InputError, MeshError, as_float_array
 from .mesh import QuadMesh, QuadTopology, Tag, refine_polygons
 
 __all__ = [
-    "BOUNDARY_MODES", "BoundaryMode", "INFINITE_SHARPNESS", "KERNEL_VERTICES", "RULE_CORNER", "RULE_CREASE", "RULE_SMOOTH",
+    "BOUNDARY_MODES",
+    "BoundaryMode",
+    "INFINITE_SHARPNESS",
+    "KERNEL_VERTICES",
+    "RULE_CORNER",
+    "RULE_CREASE",
+    "RULE_SMOOTH",
     "boundary_mode",
-    "LimitData", "catmull_clark_points", "corner_vertices", "limit_corner_normals", "limit_data", "limit_normals", "limit_points", "limit_stars",
-    "limit_tangents", "refine", "refine_grids", "sharp_edges", "vertex_rules",
+    "LimitData",
+    "catmull_clark_points",
+    "corner_vertices",
+    "limit_corner_normals",
+    "limit_data",
+    "limit_normals",
+    "limit_points",
+    "limit_stars",
+    "limit_tangents",
+    "refine",
+    "refine_grids",
+    "sharp_edges",
+    "vertex_rules",
 ]
 
 BoundaryMode = Literal["edge-only", "edge-and-corner"]
@@ -114,7 +131,9 @@ def boundary_mode(mesh: QuadMesh) -> BoundaryMode:
 
 def _segment_sum(index: IntArray, values: FloatArray, count: int) -> FloatArray:
     """``out[v] = Σ_{index[i] = v} values[i]`` for (N, 3) values."""
-    return np.stack([np.bincount(index, weights=values[:, d], minlength=count) for d in range(3)], axis=1)
+    return np.stack(
+        [np.bincount(index, weights=values[:, d], minlength=count) for d in range(3)], axis=1
+    )
 
 
 def _edge_override(topology: QuadTopology, sharpness: ArrayLike) -> FloatArray:
@@ -123,7 +142,9 @@ def _edge_override(topology: QuadTopology, sharpness: ArrayLike) -> FloatArray:
         raise InputError(f"sharpness: expected shape ({topology.n_edges},), got {values.shape}")
     negative = np.flatnonzero(values < 0)
     if negative.size:
-        raise InputError(f"sharpness: edge {negative[0]} has sharpness {values[negative[0]]:g}; a sharpness is ≥ 0")
+        raise InputError(
+            f"sharpness: edge {negative[0]} has sharpness {values[negative[0]]:g}; a sharpness is ≥ 0"
+        )
     return values
 
 
@@ -181,10 +202,14 @@ class _Level(NamedTuple):
 def _effective(
     topology: QuadTopology, edge: FloatArray, vertex: FloatArray, mode: BoundaryMode
 ) -> tuple[FloatArray, FloatArray]:
-    edge = np.where(topology.is_boundary_edge, INFINITE_SHARPNESS, np.minimum(edge, INFINITE_SHARPNESS))
+    edge = np.where(
+        topology.is_boundary_edge, INFINITE_SHARPNESS, np.minimum(edge, INFINITE_SHARPNESS)
+    )
     vertex = np.minimum(vertex, INFINITE_SHARPNESS)
     if mode == "edge-and-corner":
-        vertex = np.where(topology.is_boundary_vertex & (topology.face_count == 1), INFINITE_SHARPNESS, vertex)
+        vertex = np.where(
+            topology.is_boundary_vertex & (topology.face_count == 1), INFINITE_SHARPNESS, vertex
+        )
     return edge, vertex
 
 
@@ -195,8 +220,13 @@ def _level_of(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> _Level:
     mode = boundary_mode(mesh)
     edge, vertex = _effective(topology, edge, features.vertex_sharpness, mode)
     return _Level(
-        np.asarray(mesh.vertices, dtype=np.float64), topology, edge, vertex, np.asarray(features.holes, dtype=bool),
-        mode, features.crease_method == "chaikin",
+        np.asarray(mesh.vertices, dtype=np.float64),
+        topology,
+        edge,
+        vertex,
+        np.asarray(features.holes, dtype=bool),
+        mode,
+        features.crease_method == "chaikin",
     )
 
 
@@ -216,7 +246,9 @@ def _child_edge_halves(level: _Level) -> tuple[FloatArray, FloatArray]:
     a, b = topology.edges[:, 0], topology.edges[:, 1]
     semi = (s > 0) & (s < INFINITE_SHARPNESS)
     count = np.bincount(a[semi], minlength=nv) + np.bincount(b[semi], minlength=nv)
-    total = np.bincount(a[semi], weights=s[semi], minlength=nv) + np.bincount(b[semi], weights=s[semi], minlength=nv)
+    total = np.bincount(a[semi], weights=s[semi], minlength=nv) + np.bincount(
+        b[semi], weights=s[semi], minlength=nv
+    )
 
     def at(end: IntArray) -> FloatArray:
         others = count[end] - 1
@@ -229,10 +261,14 @@ def _child_edge_halves(level: _Level) -> tuple[FloatArray, FloatArray]:
 
 def _rules(vertex_sharpness: FloatArray, sharp_count: IntArray) -> IntArray:
     """OpenSubdiv's vertex rule: corner if the vertex is sharp or more than two edges are, crease with two."""
-    return np.select([(vertex_sharpness > 0) | (sharp_count > 2), sharp_count == 2], [_CORNER, _CREASE], _SMOOTH)
+    return np.select(
+        [(vertex_sharpness > 0) | (sharp_count > 2), sharp_count == 2], [_CORNER, _CREASE], _SMOOTH
+    )
 
 
-def _end_sums(x: FloatArray, edges: IntArray, at_a: BoolArray, at_b: BoolArray, nv: int) -> FloatArray:
+def _end_sums(
+    x: FloatArray, edges: IntArray, at_a: BoolArray, at_b: BoolArray, nv: int
+) -> FloatArray:
     """Per vertex the sum of the far ends of the edges marked at that end."""
     a, b = edges[:, 0], edges[:, 1]
     return _segment_sum(a[at_a], x[b[at_a]], nv) + _segment_sum(b[at_b], x[a[at_b]], nv)
@@ -254,8 +290,14 @@ def _step(level: _Level) -> _Level:
     right = np.maximum(topology.edge_halfedges[:, 1], 0) >> 2
     middle = 0.5 * (x[a] + x[b])
     smooth_edge = 0.25 * (x[a] + x[b] + face_points[left] + face_points[right])
-    weight = np.where(s <= 0, 0.0, np.where((half_a > 0) & (half_b > 0), 1.0, np.minimum(s, 1.0)))[:, None]
-    edge_points = np.where(weight == 0, smooth_edge, np.where(weight == 1, middle, weight * middle + (1 - weight) * smooth_edge))
+    weight = np.where(s <= 0, 0.0, np.where((half_a > 0) & (half_b > 0), 1.0, np.minimum(s, 1.0)))[
+        :, None
+    ]
+    edge_points = np.where(
+        weight == 0,
+        smooth_edge,
+        np.where(weight == 1, middle, weight * middle + (1 - weight) * smooth_edge),
+    )
 
     h = np.arange(topology.n_halfedges)
     origin = topology.origin(h)
@@ -266,7 +308,9 @@ def _step(level: _Level) -> _Level:
 
     sharp = s > 0
     parent_rule = _rules(level.vertex, np.bincount(edges[sharp].ravel(), minlength=nv))
-    child_count = np.bincount(a[half_a > 0], minlength=nv) + np.bincount(b[half_b > 0], minlength=nv)
+    child_count = np.bincount(a[half_a > 0], minlength=nv) + np.bincount(
+        b[half_b > 0], minlength=nv
+    )
     child_rule = _rules(child_vertex, child_count)
     vertex_points = smooth.copy()
     creased = np.flatnonzero(parent_rule != _SMOOTH)
@@ -274,22 +318,39 @@ def _step(level: _Level) -> _Level:
         parent_crease = (6.0 * x + _end_sums(x, edges, sharp, sharp, nv)) / 8.0
         child_crease = (6.0 * x + _end_sums(x, edges, half_a > 0, half_b > 0, nv)) / 8.0
         parent_mask = np.where((parent_rule == _CREASE)[:, None], parent_crease, x)
-        child_mask = np.select([child_rule[:, None] == _SMOOTH, child_rule[:, None] == _CREASE], [smooth, child_crease], x)
+        child_mask = np.select(
+            [child_rule[:, None] == _SMOOTH, child_rule[:, None] == _CREASE],
+            [smooth, child_crease],
+            x,
+        )
         # the fractional weight of the transition: the mean of the sharpness values that decay to 0 here
         if level.chaikin:
             decay_a, decay_b = sharp & (half_a <= 0), sharp & (half_b <= 0)
         else:
             decay_a = decay_b = sharp & (s <= 1.0)
         vertex_decays = (level.vertex > 0) & (child_vertex <= 0)
-        total = (np.bincount(a[decay_a], weights=s[decay_a], minlength=nv)
-                 + np.bincount(b[decay_b], weights=s[decay_b], minlength=nv) + np.where(vertex_decays, level.vertex, 0.0))
-        count = np.bincount(a[decay_a], minlength=nv) + np.bincount(b[decay_b], minlength=nv) + vertex_decays
+        total = (
+            np.bincount(a[decay_a], weights=s[decay_a], minlength=nv)
+            + np.bincount(b[decay_b], weights=s[decay_b], minlength=nv)
+            + np.where(vertex_decays, level.vertex, 0.0)
+        )
+        count = (
+            np.bincount(a[decay_a], minlength=nv)
+            + np.bincount(b[decay_b], minlength=nv)
+            + vertex_decays
+        )
         w = np.minimum(np.divide(total, count, out=np.zeros(nv), where=count > 0), 1.0)[:, None]
-        blended = np.where(child_rule[:, None] == parent_rule[:, None], parent_mask, w * parent_mask + (1 - w) * child_mask)
+        blended = np.where(
+            child_rule[:, None] == parent_rule[:, None],
+            parent_mask,
+            w * parent_mask + (1 - w) * child_mask,
+        )
         vertex_points[creased] = blended[creased]
     points = np.concatenate([vertex_points, edge_points, face_points])
 
-    _, quads, _ = refine_polygons(x, topology.faces.ravel(), np.full(topology.n_faces, 4, dtype=np.int64))
+    _, quads, _ = refine_polygons(
+        x, topology.faces.ravel(), np.full(topology.n_faces, 4, dtype=np.int64)
+    )
     child = QuadTopology.from_faces(quads, len(points))
     child_edge = np.zeros(child.n_edges)
     keys = child.edges[:, 0] * len(points) + child.edges[:, 1]
@@ -300,7 +361,15 @@ def _step(level: _Level) -> _Level:
         child_edge[np.searchsorted(keys, half_keys[positive])] = values[positive]
     child_vertices = np.concatenate([child_vertex, np.zeros(ne + topology.n_faces)])
     child_edge, child_vertices = _effective(child, child_edge, child_vertices, level.mode)
-    return _Level(points, child, child_edge, child_vertices, np.repeat(level.holes, 4), level.mode, level.chaikin)
+    return _Level(
+        points,
+        child,
+        child_edge,
+        child_vertices,
+        np.repeat(level.holes, 4),
+        level.mode,
+        level.chaikin,
+    )
 
 
 def _level_tags(tags: tuple[Tag, ...], level: _Level) -> tuple[Tag, ...]:
@@ -310,8 +379,16 @@ def _level_tags(tags: tuple[Tag, ...], level: _Level) -> tuple[Tag, ...]:
     out = [tag for tag in tags if tag.name not in _FEATURE_TAGS]
     creases = np.flatnonzero((level.edge > 0) & ~topology.is_boundary_edge)
     if creases.size:
-        out.append(Tag("crease", tuple(topology.edges[creases].ravel().tolist()), tuple(level.edge[creases].tolist())))
-    implicit = topology.is_boundary_vertex & (topology.face_count == 1) & (level.mode == "edge-and-corner")
+        out.append(
+            Tag(
+                "crease",
+                tuple(topology.edges[creases].ravel().tolist()),
+                tuple(level.edge[creases].tolist()),
+            )
+        )
+    implicit = (
+        topology.is_boundary_vertex & (topology.face_count == 1) & (level.mode == "edge-and-corner")
+    )
     corners = np.flatnonzero((level.vertex > 0) & ~implicit)
     if corners.size:
         out.append(Tag("corner", tuple(corners.tolist()), tuple(level.vertex[corners].tolist())))
@@ -334,7 +411,9 @@ def refine(mesh: QuadMesh, levels: int = 1, sharpness: ArrayLike | None = None) 
     return refine_grids(mesh, levels, sharpness)[0]
 
 
-def refine_grids(mesh: QuadMesh, levels: int, sharpness: ArrayLike | None = None) -> tuple[QuadMesh, IntArray]:
+def refine_grids(
+    mesh: QuadMesh, levels: int, sharpness: ArrayLike | None = None
+) -> tuple[QuadMesh, IntArray]:
     """:func:`refine`, and per original face the refined vertices as a grid ``(F, m + 1, m + 1)``,
     ``m = 2^levels``: ``grid[f, i, j]`` sits at parameter ``(i/m, j/m)`` of face f (u from corner 0
     to 1, v from corner 0 to 3). Cell (i, j) of a level is the face holding the half-edge
@@ -354,7 +433,9 @@ def refine_grids(mesh: QuadMesh, levels: int, sharpness: ArrayLike | None = None
         def edge_point(p: IntArray, q: IntArray) -> IntArray:
             return nv + np.searchsorted(edge_keys, np.minimum(p, q) * nv + np.maximum(p, q))
 
-        cell = order[np.searchsorted(directed[order], grid[:, :-1, :-1] * nv + grid[:, 1:, :-1])] >> 2
+        cell = (
+            order[np.searchsorted(directed[order], grid[:, :-1, :-1] * nv + grid[:, 1:, :-1])] >> 2
+        )
         size = 2 * grid.shape[1] - 1
         fine = np.empty((grid.shape[0], size, size), dtype=np.int64)
         fine[:, ::2, ::2] = grid
@@ -398,8 +479,17 @@ def _limit_positions(level: _Level, compiled: bool | None = None) -> FloatArray:
         crease = np.flatnonzero(rule == _CREASE)
         if crease.size:
             sharp = level.edge >= INFINITE_SHARPNESS
-            points[crease] = ((4.0 * x + _end_sums(x, topology.edges, sharp, sharp, nv)) / 6.0)[crease]
-        jit_kernel(_positions_kernel)(x, topology.faces, topology.ring_offsets, topology.ring_halfedges, rule == _SMOOTH, points)
+            points[crease] = ((4.0 * x + _end_sums(x, topology.edges, sharp, sharp, nv)) / 6.0)[
+                crease
+            ]
+        jit_kernel(_positions_kernel)(
+            x,
+            topology.faces,
+            topology.ring_offsets,
+            topology.ring_halfedges,
+            rule == _SMOOTH,
+            points,
+        )
         return points
     h = np.arange(topology.n_halfedges)
     origin = topology.origin(h)
@@ -417,8 +507,14 @@ def _kernel_wanted(compiled: bool | None, count: int) -> bool:
     return count >= KERNEL_VERTICES if compiled is None else compiled
 
 
-def _positions_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray,
-                      smooth: BoolArray, points: FloatArray) -> None:
+def _positions_kernel(
+    x: FloatArray,
+    faces: IntArray,
+    ring_offsets: IntArray,
+    ring_halfedges: IntArray,
+    smooth: BoolArray,
+    points: FloatArray,
+) -> None:
     """``points[v] = (n² V + 4ΣE_i + ΣD_i)/(n(n + 5))`` at the smooth vertices, the sums in half-edge
     order as :func:`_segment_sum` adds them (the ring sorted), so the values are the reference's."""
     order = np.empty(max(1, int(np.max(ring_offsets[1:] - ring_offsets[:-1]))), dtype=np.int64)
@@ -452,7 +548,9 @@ def _positions_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, ri
         points[v, 2] = (n * n * x[v, 2] + 4.0 * n2 + o2) / scale
 
 
-def _by_valence(n: IntArray, i: IntArray, table: Callable[[IntArray, IntArray], tuple[FloatArray, ...]]) -> tuple[FloatArray, ...]:
+def _by_valence(
+    n: IntArray, i: IntArray, table: Callable[[IntArray, IntArray], tuple[FloatArray, ...]]
+) -> tuple[FloatArray, ...]:
     """``table(n, i)`` for many entries, evaluated once per distinct ``(n, i)`` (valences repeat)."""
     valences = np.unique(n)
     if len(valences) * int(valences.max(initial=0)) > len(n):
@@ -463,7 +561,9 @@ def _by_valence(n: IntArray, i: IntArray, table: Callable[[IntArray, IntArray], 
     return tuple(column[rows] for column in table(*keys))
 
 
-def _interior_mask_weights(n: IntArray, i: IntArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+def _interior_mask_weights(
+    n: IntArray, i: IntArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Weights of ``E_i`` and ``D_i`` in the scaled eigen tangents A (cosines) and B (sines) at valence n."""
     theta = 2.0 * np.pi / n
     cos_t = np.cos(theta)
@@ -472,12 +572,14 @@ def _interior_mask_weights(n: IntArray, i: IntArray) -> tuple[FloatArray, FloatA
     scale = 1.0 / (2.0 * n + c * n * (1.0 + cos_t))
     a0, a1 = i * theta, (i + 1) * theta
     return (
-        scale * 4.0 * np.cos(a0), scale * c * (np.cos(a0) + np.cos(a1)),
-        scale * 4.0 * np.sin(a0), scale * c * (np.sin(a0) + np.sin(a1)),
+        scale * 4.0 * np.cos(a0),
+        scale * c * (np.cos(a0) + np.cos(a1)),
+        scale * 4.0 * np.sin(a0),
+        scale * c * (np.sin(a0) + np.sin(a1)),
     )
 
 
-@lru_cache(maxsize=None)
+@cache
 def _cross_mask(k: int) -> tuple[float, FloatArray, FloatArray]:
     """The across-crease tangent mask of a crease sector with k faces: ``(w_V, w_E (k + 1), w_D (k))``.
 
@@ -497,24 +599,26 @@ def _cross_mask(k: int) -> tuple[float, FloatArray, FloatArray]:
         return -4.0 / 6.0, np.array([-1.0, 4.0, -1.0]) / 6.0, np.array([1.0, 1.0]) / 6.0
     size = 2 * k + 2
     unit = np.eye(size)
-    edge, diagonal = unit[1:k + 2], unit[k + 2:]
+    edge, diagonal = unit[1 : k + 2], unit[k + 2 :]
     face_points = 0.25 * (unit[0] + edge[:-1] + diagonal + edge[1:])
     matrix = np.empty((size, size))
     matrix[0] = (6.0 * unit[0] + edge[0] + edge[k]) / 8.0
     matrix[1] = 0.5 * (unit[0] + edge[0])
     matrix[k + 1] = 0.5 * (unit[0] + edge[k])
-    matrix[2:k + 1] = 0.25 * (unit[0] + edge[1:k] + face_points[:-1] + face_points[1:])
-    matrix[k + 2:] = face_points
+    matrix[2 : k + 1] = 0.25 * (unit[0] + edge[1:k] + face_points[:-1] + face_points[1:])
+    matrix[k + 2 :] = face_points
     values, vectors = np.linalg.eig(matrix.T)
     mirror = np.concatenate([[0], 1 + np.arange(k + 1)[::-1], k + 2 + np.arange(k)[::-1]])
     vectors = vectors.real / np.linalg.norm(vectors.real, axis=0)
-    symmetric = (np.abs(values.imag) < 1e-12) & (np.abs(vectors - vectors[mirror]).max(axis=0) < 1e-9)
+    symmetric = (np.abs(values.imag) < 1e-12) & (
+        np.abs(vectors - vectors[mirror]).max(axis=0) < 1e-9
+    )
     candidates = np.flatnonzero(symmetric & (values.real < 1.0 - 1e-9))
     mask = vectors[:, candidates[np.argmax(values.real[candidates])]]
     angles = np.pi * np.arange(k + 1) / k
     planar = np.concatenate([[0.0], np.sin(angles), np.sin(angles[:-1]) + np.sin(angles[1:])])
     mask = mask / (mask @ planar)
-    return float(mask[0]), mask[1:k + 2], mask[k + 2:]
+    return float(mask[0]), mask[1 : k + 2], mask[k + 2 :]
 
 
 class _Limit(NamedTuple):
@@ -563,7 +667,9 @@ def _limit_frames(level: _Level, corners: bool = False, compiled: bool | None = 
     # the vertices the NumPy code below handles (all, or those the kernel leaves), their slots and ring entries
     chosen = np.flatnonzero(~smooth) if kernel else np.arange(nv)
     slot_vertex = np.repeat(chosen, slot_count[chosen])
-    slot = np.arange(len(slot_vertex)) - np.repeat(np.cumsum(slot_count[chosen]) - slot_count[chosen], slot_count[chosen])
+    slot = np.arange(len(slot_vertex)) - np.repeat(
+        np.cumsum(slot_count[chosen]) - slot_count[chosen], slot_count[chosen]
+    )
     slot_index = offsets[slot_vertex] + slot
     ring_vertex = np.repeat(chosen, k[chosen])
     i = np.arange(len(ring_vertex)) - np.repeat(np.cumsum(k[chosen]) - k[chosen], k[chosen])
@@ -576,7 +682,9 @@ def _limit_frames(level: _Level, corners: bool = False, compiled: bool | None = 
     slot_edge = np.empty(len(tangents), dtype=np.int64)  # written and read at the chosen slots only
     slot_edge[ring_slot] = topology.halfedge_edge[h]
     rims = chosen[boundary[chosen]]
-    slot_edge[offsets[rims + 1] - 1] = topology.halfedge_edge[QuadTopology.prev(topology.ring_halfedges[topology.ring_offsets[rims + 1] - 1])]
+    slot_edge[offsets[rims + 1] - 1] = topology.halfedge_edge[
+        QuadTopology.prev(topology.ring_halfedges[topology.ring_offsets[rims + 1] - 1])
+    ]
     slot_sharp = np.zeros(len(tangents), dtype=bool)
     slot_sharp[slot_index] = level.edge[slot_edge[slot_index]] >= INFINITE_SHARPNESS
     sharp_slots = np.flatnonzero(slot_sharp[slot_index])  # positions in the chosen slots
@@ -593,12 +701,25 @@ def _limit_frames(level: _Level, corners: bool = False, compiled: bool | None = 
 
         valences = np.unique(k[smooth])
         starts = np.concatenate([[0], np.cumsum(valences)])
-        keys = np.repeat(valences, valences), np.arange(starts[-1]) - np.repeat(starts[:-1], valences)
+        keys = (
+            np.repeat(valences, valences),
+            np.arange(starts[-1]) - np.repeat(starts[:-1], valences),
+        )
         start_of = np.zeros(int(valences[-1]) + 1, dtype=np.int64)
         start_of[valences] = starts[:-1]
         jit_kernel(_stars_kernel)(
-            x, topology.faces, topology.ring_offsets, topology.ring_halfedges, offsets, smooth, start_of,
-            np.stack(_interior_mask_weights(*keys)), np.stack(_slot_rotation(*keys)), a, b, tangents,
+            x,
+            topology.faces,
+            topology.ring_offsets,
+            topology.ring_halfedges,
+            offsets,
+            smooth,
+            start_of,
+            np.stack(_interior_mask_weights(*keys)),
+            np.stack(_slot_rotation(*keys)),
+            a,
+            b,
+            tangents,
         )
     elif smooth.any():
         on_ring = _where(smooth[ring_vertex])
@@ -619,7 +740,9 @@ def _limit_frames(level: _Level, corners: bool = False, compiled: bool | None = 
     if cv.size:
         p, q = first, last
         span = q - p  # faces in sector 0
-        along[cv] = 0.5 * (x[topology.neighbors[offsets[cv] + p[cv]]] - x[topology.neighbors[offsets[cv] + q[cv]]])
+        along[cv] = 0.5 * (
+            x[topology.neighbors[offsets[cv] + p[cv]]] - x[topology.neighbors[offsets[cv] + q[cv]]]
+        )
         at = crease[ring_vertex]
         rv, ri = ring_vertex[at], i[at]
         second = (ri < p[rv]) | (ri >= q[rv])
@@ -633,10 +756,17 @@ def _limit_frames(level: _Level, corners: bool = False, compiled: bool | None = 
             vertex_weight, spoke, face = _cross_mask(int(count))
             sel = size == count
             o = offset[sel]
-            across += _segment_sum(sector[sel], spoke[o, None] * e_i[at][sel] + face[o, None] * d_i[at][sel], 2 * cv.size)
+            across += _segment_sum(
+                sector[sel],
+                spoke[o, None] * e_i[at][sel] + face[o, None] * d_i[at][sel],
+                2 * cv.size,
+            )
             closing = np.flatnonzero(sector_size == count)
             owner = cv[closing // 2]
-            across[closing] += vertex_weight * x[owner] + spoke[count] * x[topology.neighbors[offsets[owner] + ends[closing]]]
+            across[closing] += (
+                vertex_weight * x[owner]
+                + spoke[count] * x[topology.neighbors[offsets[owner] + ends[closing]]]
+            )
         a[cv] = along[cv]
         b[cv] = across[0::2]
         at = crease[slot_vertex]
@@ -644,9 +774,15 @@ def _limit_frames(level: _Level, corners: bool = False, compiled: bool | None = 
         second = (sj < p[sv]) | (sj > q[sv])
         sector_along = np.where(second[:, None], -along[sv], along[sv])
         sector_across = across[2 * np.searchsorted(cv, sv) + second]
-        angle = np.pi * np.where(second, (sj - q[sv]) % k[sv] / np.maximum(k[sv] - span[sv], 1), (sj - p[sv]) / np.maximum(span[sv], 1))
+        angle = np.pi * np.where(
+            second,
+            (sj - q[sv]) % k[sv] / np.maximum(k[sv] - span[sv], 1),
+            (sj - p[sv]) / np.maximum(span[sv], 1),
+        )
         t = np.cos(angle)[:, None] * sector_along + np.sin(angle)[:, None] * sector_across
-        t = np.where((sj == p[sv])[:, None], along[sv], np.where((sj == q[sv])[:, None], -along[sv], t))
+        t = np.where(
+            (sj == p[sv])[:, None], along[sv], np.where((sj == q[sv])[:, None], -along[sv], t)
+        )
         tangents[slot_index[at]] = t
 
     # corner: the chords, a and b on the first sharp slot and the next one
@@ -656,7 +792,9 @@ def _limit_frames(level: _Level, corners: bool = False, compiled: bool | None = 
         tangents[slot_index[at]] = x[topology.neighbors[slot_index[at]]] - x[slot_vertex[at]]
         corners_at = np.flatnonzero(corner)
         a[corners_at] = tangents[offsets[corners_at] + first[corners_at]]
-        b[corners_at] = tangents[offsets[corners_at] + (first[corners_at] + 1) % slot_count[corners_at]]
+        b[corners_at] = tangents[
+            offsets[corners_at] + (first[corners_at] + 1) % slot_count[corners_at]
+        ]
 
     if not corners:
         return _Limit(None, tangents, a, b)
@@ -668,15 +806,24 @@ def _limit_frames(level: _Level, corners: bool = False, compiled: bool | None = 
     starts = slot_sharp[ring_slot]
     label = np.empty(len(h), dtype=np.int64)
     label[order] = np.cumsum(starts[order] | (shifted[order] == 0)) - 1
-    ring_normals = _unit(_segment_sum(label, cross, int(label.max()) + 1) if len(label) else np.zeros((0, 3)))[label]
+    ring_normals = _unit(
+        _segment_sum(label, cross, int(label.max()) + 1) if len(label) else np.zeros((0, 3))
+    )[label]
     star_normals = _unit(np.cross(a, b))
     one_star = smooth[ring_vertex]
     ring_normals[one_star] = star_normals[ring_vertex[one_star]]
-    if cv.size:  # each sector's own star (a one-face sector has no second slot tangent off the crease)
+    if (
+        cv.size
+    ):  # each sector's own star (a one-face sector has no second slot tangent off the crease)
         at = crease[ring_vertex]
         rv, ri = ring_vertex[at], i[at]
         second = (ri < first[rv]) | (ri >= last[rv])
-        ring_normals[at] = _unit(np.cross(np.where(second[:, None], -along[rv], along[rv]), across[2 * np.searchsorted(cv, rv) + second]))
+        ring_normals[at] = _unit(
+            np.cross(
+                np.where(second[:, None], -along[rv], along[rv]),
+                across[2 * np.searchsorted(cv, rv) + second],
+            )
+        )
     if not kernel:
         return _Limit(None, tangents, a, b, ring_normals)
     every = star_normals[np.repeat(np.arange(nv), k)]  # the kernel's smooth vertices: one star each
@@ -684,9 +831,20 @@ def _limit_frames(level: _Level, corners: bool = False, compiled: bool | None = 
     return _Limit(None, tangents, a, b, every)
 
 
-def _stars_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray, offsets: IntArray,
-                  smooth: BoolArray, start_of: IntArray, weights: FloatArray, rotation: FloatArray,
-                  a: FloatArray, b: FloatArray, tangents: FloatArray) -> None:
+def _stars_kernel(
+    x: FloatArray,
+    faces: IntArray,
+    ring_offsets: IntArray,
+    ring_halfedges: IntArray,
+    offsets: IntArray,
+    smooth: BoolArray,
+    start_of: IntArray,
+    weights: FloatArray,
+    rotation: FloatArray,
+    a: FloatArray,
+    b: FloatArray,
+    tangents: FloatArray,
+) -> None:
     """At each smooth vertex the stars ``A = Σ w_E,i E_i + w_D,i D_i`` (``weights[0:2]``), B
     (``weights[2:4]``), in ring order as :func:`_segment_sum` adds them, and slot j's tangent
     ``cos φ_j A + sin φ_j B`` (``rotation``); the tables' row for valence n, entry i, is ``start_of[n] + i``."""
@@ -701,7 +859,12 @@ def _stars_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, ring_h
             h = ring_halfedges[r0 + i]
             f, c = h >> 2, h & 3
             e, d = faces[f, (c + 1) & 3], faces[f, (c + 2) & 3]
-            ea, da, eb, db = weights[0, base + i], weights[1, base + i], weights[2, base + i], weights[3, base + i]
+            ea, da, eb, db = (
+                weights[0, base + i],
+                weights[1, base + i],
+                weights[2, base + i],
+                weights[3, base + i],
+            )
             a0 += ea * x[e, 0] + da * x[d, 0]
             a1 += ea * x[e, 1] + da * x[d, 1]
             a2 += ea * x[e, 2] + da * x[d, 2]
@@ -738,8 +901,12 @@ def _sublevel(level: _Level, faces: BoolArray) -> tuple[_Level, IntArray]:
     original = np.flatnonzero(used)
     keys = topology.edges[:, 0] * topology.n_vertices + topology.edges[:, 1]
     sub_keys = original[sub.edges[:, 0]] * topology.n_vertices + original[sub.edges[:, 1]]
-    edge, vertex = _effective(sub, level.edge[np.searchsorted(keys, sub_keys)], level.vertex[original], level.mode)
-    return _Level(level.x[original], sub, edge, vertex, level.holes[faces], level.mode, level.chaikin), index
+    edge, vertex = _effective(
+        sub, level.edge[np.searchsorted(keys, sub_keys)], level.vertex[original], level.mode
+    )
+    return _Level(
+        level.x[original], sub, edge, vertex, level.holes[faces], level.mode, level.chaikin
+    ), index
 
 
 def _neighbourhood(level: _Level, vertices: BoolArray, rings: int) -> BoolArray:
@@ -763,7 +930,9 @@ def _decayed(level: _Level) -> tuple[_Level, int]:
     return level, steps
 
 
-def _limit(mesh: QuadMesh, sharpness: ArrayLike | None, frames: bool, corners: bool = False) -> _Limit:
+def _limit(
+    mesh: QuadMesh, sharpness: ArrayLike | None, frames: bool, corners: bool = False
+) -> _Limit:
     """Limit data of the mesh's own vertices (module docstring): the masks where no semi-sharp
     feature reaches, the masks on the decayed refinement of a neighbourhood elsewhere."""
     level = _level_of(mesh, sharpness)
@@ -816,7 +985,9 @@ def limit_points(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArr
     return _limit(mesh, sharpness, frames=False).points
 
 
-def limit_stars(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
+def limit_stars(
+    mesh: QuadMesh, sharpness: ArrayLike | None = None
+) -> tuple[FloatArray, FloatArray]:
     """Per vertex the two scaled limit tangents ``(a, b)``, (V, 3) each, ``a × b`` along the outward
     normal (OpenSubdiv's tangent pair): inside A and B of the module docstring; at a crease vertex
     (boundary or interior) a along the crease towards the first sharp slot ``E_p`` of the ring,
@@ -860,7 +1031,9 @@ def limit_data(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> LimitData:
     assert frames.tangents is not None and frames.a is not None and frames.b is not None
     points = _limit(mesh, sharpness, frames=False).points
     assert points is not None
-    return LimitData(points, frames.a, frames.b, frames.tangents, _unit(np.cross(frames.a, frames.b)))
+    return LimitData(
+        points, frames.a, frames.b, frames.tangents, _unit(np.cross(frames.a, frames.b))
+    )
 
 
 def limit_corner_normals(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArray:

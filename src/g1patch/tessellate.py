@@ -118,7 +118,9 @@ class TooLargeError(InputError):
     """A tessellation would exceed :data:`MAX_TRIANGLES` and was not forced."""
 
 
-def check_size(n_patches: int, resolution: int, force: bool = False, max_triangles: int = MAX_TRIANGLES) -> int:
+def check_size(
+    n_patches: int, resolution: int, force: bool = False, max_triangles: int = MAX_TRIANGLES
+) -> int:
     """The triangle count of ``n_patches`` at ``resolution``; raises :class:`TooLargeError` (an
     :class:`InputError`) with the size when it exceeds ``max_triangles`` and not ``force``."""
     triangles = triangle_count(n_patches, resolution)
@@ -131,7 +133,9 @@ def check_size(n_patches: int, resolution: int, force: bool = False, max_triangl
     return triangles
 
 
-def tessellate(network: PatchNetwork, resolution: int | None = None, *, force: bool = False) -> TriangleMesh:
+def tessellate(
+    network: PatchNetwork, resolution: int | None = None, *, force: bool = False
+) -> TriangleMesh:
     """Sample every patch on a ``resolution × resolution`` grid and weld shared samples.
 
     ``resolution`` None: :func:`choose_resolution` (about :data:`TRIANGLE_BUDGET` triangles). A
@@ -143,7 +147,11 @@ def tessellate(network: PatchNetwork, resolution: int | None = None, *, force: b
     """
     if resolution is None:
         resolution = choose_resolution(network.n_patches)
-    if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) or resolution < 2:
+    if (
+        isinstance(resolution, bool)
+        or not isinstance(resolution, (int, np.integer))
+        or resolution < 2
+    ):
         raise InputError(f"resolution: expected an integer ≥ 2, got {resolution!r}")
     r = int(resolution)
     check_size(network.n_patches, r, force)
@@ -154,7 +162,9 @@ def tessellate(network: PatchNetwork, resolution: int | None = None, *, force: b
     points = np.zeros((total, 3))
     point_normals = np.zeros((total, 3))
     cells = (r - 1) ** 2
-    a, b = (axis.reshape(-1) for axis in np.meshgrid(np.arange(r - 1), np.arange(r - 1), indexing="ij"))
+    a, b = (
+        axis.reshape(-1) for axis in np.meshgrid(np.arange(r - 1), np.arange(r - 1), indexing="ij")
+    )
     triangles = np.empty((2, count, cells, 3), dtype=np.int64)
     step = max(1, _BLOCK_SAMPLES // (r * r))
     for start in range(0, count, step):
@@ -162,7 +172,9 @@ def tessellate(network: PatchNetwork, resolution: int | None = None, *, force: b
         patches = network.patches.take(np.arange(block.start, block.stop))
         flat_index = index[block].reshape(-1)
         points[flat_index] = patches.evaluate_grid(grid, grid).reshape(-1, 3)
-        normals = np.cross(patches.evaluate_grid(grid, grid, 1, 0), patches.evaluate_grid(grid, grid, 0, 1))
+        normals = np.cross(
+            patches.evaluate_grid(grid, grid, 1, 0), patches.evaluate_grid(grid, grid, 0, 1)
+        )
         np.add.at(point_normals, flat_index, normals.reshape(-1, 3))
         p00, p10 = index[block, a, b], index[block, a + 1, b]
         p11, p01 = index[block, a + 1, b + 1], index[block, a, b + 1]
@@ -171,7 +183,11 @@ def tessellate(network: PatchNetwork, resolution: int | None = None, *, force: b
         second[..., 0], second[..., 1], second[..., 2] = p00, p11, p01
     del index
     triangles = triangles.reshape(-1, 3)
-    keep = (triangles[:, 0] != triangles[:, 1]) & (triangles[:, 1] != triangles[:, 2]) & (triangles[:, 0] != triangles[:, 2])
+    keep = (
+        (triangles[:, 0] != triangles[:, 1])
+        & (triangles[:, 1] != triangles[:, 2])
+        & (triangles[:, 0] != triangles[:, 2])
+    )
     if not keep.all():
         triangles = triangles[keep]
     del keep

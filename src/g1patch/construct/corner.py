@@ -18,9 +18,16 @@ import numpy as np
 
 from ..errors import check_choice
 from ..mesh import QuadMesh
-from ..targets.local import NORMALS, NormalRule, TangentRule, corner_tangents, fan_normals, least_squares_normals
 from ..network import PatchNetwork, network_from_mesh
 from ..patches import PatchSet, hs_twists
+from ..targets.local import (
+    NORMALS,
+    NormalRule,
+    TangentRule,
+    corner_tangents,
+    fan_normals,
+    least_squares_normals,
+)
 
 if TYPE_CHECKING:
     from ..targets import Targets
@@ -61,7 +68,12 @@ def build_corner_network(
     to_prev = corner_tangents(x, np.roll(x, 1, axis=1), n, tangents, prev_edges)  # T(k → k−1)
 
     control = np.zeros((len(faces), 4, 4, 3))
-    control[:, 0, 0], control[:, 1, 0], control[:, 1, 1], control[:, 0, 1] = x[:, 0], x[:, 1], x[:, 2], x[:, 3]
+    control[:, 0, 0], control[:, 1, 0], control[:, 1, 1], control[:, 0, 1] = (
+        x[:, 0],
+        x[:, 1],
+        x[:, 2],
+        x[:, 3],
+    )
     control[:, 2, 0], control[:, 0, 2] = to_next[:, 0], to_prev[:, 0]  # corner (0,0)
     control[:, 3, 0], control[:, 1, 2] = -to_prev[:, 1], to_next[:, 1]  # corner (1,0)
     control[:, 3, 1], control[:, 1, 3] = -to_next[:, 2], -to_prev[:, 2]  # corner (1,1)
@@ -73,7 +85,9 @@ def build_corner_network(
     provenance = {"method": "corner", "tangents": tangents, "twist": twist, "normals": normals}
     if mesh.source:
         provenance["source"] = str(mesh.source)
-    return network_from_mesh(mesh.topology, PatchSet(control, "hermite"), mesh.vertices, fan_normals(mesh), provenance)
+    return network_from_mesh(
+        mesh.topology, PatchSet(control, "hermite"), mesh.vertices, fan_normals(mesh), provenance
+    )
 
 
 def assemble_corner(targets: Targets) -> PatchSet:
@@ -97,10 +111,20 @@ def assemble_corner(targets: Targets) -> PatchSet:
     x = targets.positions[topology.faces]
     w = 9.0 * (targets.corner_interior - x) - 3.0 * (to_next + to_prev)
     control = np.zeros((count, 4, 4, 3))
-    control[:, 0, 0], control[:, 1, 0], control[:, 1, 1], control[:, 0, 1] = x[:, 0], x[:, 1], x[:, 2], x[:, 3]
+    control[:, 0, 0], control[:, 1, 0], control[:, 1, 1], control[:, 0, 1] = (
+        x[:, 0],
+        x[:, 1],
+        x[:, 2],
+        x[:, 3],
+    )
     control[:, 2, 0], control[:, 0, 2] = to_next[:, 0], to_prev[:, 0]  # corner (0,0)
     control[:, 3, 0], control[:, 1, 2] = -to_prev[:, 1], to_next[:, 1]  # corner (1,0)
     control[:, 3, 1], control[:, 1, 3] = -to_next[:, 2], -to_prev[:, 2]  # corner (1,1)
     control[:, 2, 1], control[:, 0, 3] = to_prev[:, 3], -to_next[:, 3]  # corner (0,1)
-    control[:, 2, 2], control[:, 3, 2], control[:, 3, 3], control[:, 2, 3] = w[:, 0], -w[:, 1], w[:, 2], -w[:, 3]
+    control[:, 2, 2], control[:, 3, 2], control[:, 3, 3], control[:, 2, 3] = (
+        w[:, 0],
+        -w[:, 1],
+        w[:, 2],
+        -w[:, 3],
+    )
     return PatchSet(control, "hermite")

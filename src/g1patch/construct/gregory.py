@@ -78,7 +78,11 @@ def _bracket(a: FloatArray, b: FloatArray, n: FloatArray) -> FloatArray:
     """``[a, b] = (a × b)·n``, by components (rows of 3-vectors)."""
     a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
     b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
-    return (a1 * b2 - a2 * b1) * n[:, 0] + (a2 * b0 - a0 * b2) * n[:, 1] + (a0 * b1 - a1 * b0) * n[:, 2]
+    return (
+        (a1 * b2 - a2 * b1) * n[:, 0]
+        + (a2 * b0 - a0 * b2) * n[:, 1]
+        + (a0 * b1 - a1 * b0) * n[:, 2]
+    )
 
 
 def corner_split(
@@ -96,7 +100,9 @@ def corner_split(
     alpha = 2.0 * right / safe
     beta = 2.0 * left / safe
     phi = -2.0 * _bracket(d_left, d_right, normal) / safe
-    size = np.linalg.norm(q, axis=-1) * np.maximum(np.linalg.norm(d_left, axis=-1), np.linalg.norm(d_right, axis=-1))
+    size = np.linalg.norm(q, axis=-1) * np.maximum(
+        np.linalg.norm(d_left, axis=-1), np.linalg.norm(d_right, axis=-1)
+    )
     margin = np.minimum(left, right) / np.where(size > 0, size, 1.0)
     return alpha, beta, phi, margin
 
@@ -152,7 +158,13 @@ def assemble_gregory(targets: Targets, *, compiled: bool = True) -> GregoryPatch
     points = np.empty((topology.n_faces, 20, 3))
     if not compiled:
         margins = np.full((2, topology.n_edges), np.inf)
-        _assemble_numpy(targets, tangent_plane_tangents(targets, compiled=False), *halfedge_slots(topology), points, margins)
+        _assemble_numpy(
+            targets,
+            tangent_plane_tangents(targets, compiled=False),
+            *halfedge_slots(topology),
+            points,
+            margins,
+        )
         return GregoryPatchSet(points)
     sectors = targets.has_sectors
     slot_out, slot_in = slot_tables(topology)
@@ -160,10 +172,27 @@ def assemble_gregory(targets: Targets, *, compiled: bool = True) -> GregoryPatch
     tangents = tangent_plane_tangents(targets) if sectors else targets.tangents
     origin, corner_normals = topology.faces.reshape(-1), targets.corner_normals.reshape(-1, 3)
 
-    def run(halfedges: tuple[int, int], edges: tuple[int, int]) -> tuple[int, int, float, int, float]:
-        return kernel(targets.positions, tangents, targets.normals, not sectors, origin, slot_out, slot_in, corner_normals,
-                      targets.interior, topology.edge_halfedges, targets.seams, SYMMETRIC_TOLERANCE, RIDGE, points,
-                      *halfedges, *edges)
+    def run(
+        halfedges: tuple[int, int], edges: tuple[int, int]
+    ) -> tuple[int, int, float, int, float]:
+        return kernel(
+            targets.positions,
+            tangents,
+            targets.normals,
+            not sectors,
+            origin,
+            slot_out,
+            slot_in,
+            corner_normals,
+            targets.interior,
+            topology.edge_halfedges,
+            targets.seams,
+            SYMMETRIC_TOLERANCE,
+            RIDGE,
+            points,
+            *halfedges,
+            *edges,
+        )
 
     # the corners and targets of every face first, then the edges overwrite the interior points they solve
     in_chunks(lambda lo, hi: run((lo, hi), (0, 0)), origin.size)
@@ -178,7 +207,12 @@ def assemble_gregory(targets: Targets, *, compiled: bool = True) -> GregoryPatch
 
 
 def _assemble_numpy(
-    targets: Targets, t: FloatArray, slot_out: NDArray[np.int64], slot_in: NDArray[np.int64], points: FloatArray, margins: FloatArray
+    targets: Targets,
+    t: FloatArray,
+    slot_out: NDArray[np.int64],
+    slot_in: NDArray[np.int64],
+    points: FloatArray,
+    margins: FloatArray,
 ) -> None:
     """The NumPy reference of :func:`_assemble_kernel`: gathers, scatters and batched closed-form solves over
     edges (corner-split margins into ``margins`` (2, E), raising where one is not positive)."""
@@ -207,9 +241,13 @@ def _assemble_numpy(
     q1 = 3.0 * (b2 - b1)
     d0_left, d0_right = t[slot_in[prev[h]]], t[slot_out[nxt[g]]]
     d3_left, d3_right = t[slot_out[nxt[h]]], t[slot_in[prev[g]]]
-    corner_normals = targets.corner_normals.reshape(-1, 3)  # a smooth edge's two faces share A's sector, and B's
+    corner_normals = targets.corner_normals.reshape(
+        -1, 3
+    )  # a smooth edge's two faces share A's sector, and B's
     alpha0, beta0, phi0, margins[0, split] = corner_split(q0, d0_left, d0_right, corner_normals[h])
-    alpha1, beta1, phi2, margins[1, split] = corner_split(q2, d3_left, d3_right, corner_normals[nxt[h]])
+    alpha1, beta1, phi2, margins[1, split] = corner_split(
+        q2, d3_left, d3_right, corner_normals[nxt[h]]
+    )
     bad = np.flatnonzero(~(margins.ravel() > 0))
     if bad.size:
         end, edge = divmod(int(bad[0]), topology.n_edges)
@@ -223,7 +261,9 @@ def _assemble_numpy(
     r1_right = 3.0 * (far[right, (k_right + 1) & 3] - b1)
     r2_right = 3.0 * (near[right, k_right] - b2)
 
-    symmetric = (np.abs(alpha0 - 1.0) <= SYMMETRIC_TOLERANCE) & (np.abs(alpha1 - 1.0) <= SYMMETRIC_TOLERANCE)
+    symmetric = (np.abs(alpha0 - 1.0) <= SYMMETRIC_TOLERANCE) & (
+        np.abs(alpha1 - 1.0) <= SYMMETRIC_TOLERANCE
+    )
     d1_left, d2_left, d1_right, d2_right = (np.empty_like(q0) for _ in range(4))
     s = symmetric
     if s.any():  # D_L + D_R = Φ c', Φ linear: both sides move by the same vector
@@ -236,7 +276,17 @@ def _assemble_numpy(
     k = ~symmetric
     if k.any():
         d1_left[k], d2_left[k], d1_right[k], d2_right[k] = _kh_fit(
-            q0[k], q1[k], q2[k], d0_left[k], d3_left[k], alpha0[k], beta0[k], phi0[k], alpha1[k], beta1[k], phi2[k],
+            q0[k],
+            q1[k],
+            q2[k],
+            d0_left[k],
+            d3_left[k],
+            alpha0[k],
+            beta0[k],
+            phi0[k],
+            alpha1[k],
+            beta1[k],
+            phi2[k],
             (r1_left[k], r2_left[k], r1_right[k], r2_right[k]),
         )
 
@@ -249,8 +299,17 @@ def _assemble_numpy(
 
 
 def _kh_fit(
-    q0: FloatArray, q1: FloatArray, q2: FloatArray, d0_left: FloatArray, d3_left: FloatArray,
-    alpha0: FloatArray, beta0: FloatArray, phi0: FloatArray, alpha1: FloatArray, beta1: FloatArray, phi2: FloatArray,
+    q0: FloatArray,
+    q1: FloatArray,
+    q2: FloatArray,
+    d0_left: FloatArray,
+    d3_left: FloatArray,
+    alpha0: FloatArray,
+    beta0: FloatArray,
+    phi0: FloatArray,
+    alpha1: FloatArray,
+    beta1: FloatArray,
+    phi2: FloatArray,
     wanted: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Interior coefficients ``d1_L, d2_L, d1_R, d2_R`` of the k-h form (h_L0 = 0) whose free values
@@ -289,7 +348,9 @@ def _kh_fit(
     h1 = (r_h - _dot(c, r_g) / a) / (d - _dot(c, c) / a)
     g1 = (r_g - c * h1[:, None]) / a[:, None]
     h1 = h1[:, None]
-    return tuple(k_i + c_i * g1 + v_i * h1 for k_i, v_i, c_i in zip(constant, along, scalar, strict=True))  # type: ignore[return-value]
+    return tuple(
+        k_i + c_i * g1 + v_i * h1 for k_i, v_i, c_i in zip(constant, along, scalar, strict=True)
+    )  # type: ignore[return-value]
 
 
 # ----------------------------------------------------------------------------------------------
@@ -298,10 +359,24 @@ def _kh_fit(
 
 
 def _assemble_kernel(
-    x: FloatArray, t: FloatArray, normals: FloatArray, project: bool, origin: NDArray[np.int64], slot_out: NDArray[np.int32],
-    slot_in: NDArray[np.int32], corner_normals: FloatArray, interior: FloatArray, edge_halfedges: NDArray[np.int64],
-    seams: NDArray[np.bool_], symmetric_tolerance: float, ridge: float, points: FloatArray,
-    first_halfedge: int, stop_halfedge: int, first_edge: int, stop_edge: int,
+    x: FloatArray,
+    t: FloatArray,
+    normals: FloatArray,
+    project: bool,
+    origin: NDArray[np.int64],
+    slot_out: NDArray[np.int32],
+    slot_in: NDArray[np.int32],
+    corner_normals: FloatArray,
+    interior: FloatArray,
+    edge_halfedges: NDArray[np.int64],
+    seams: NDArray[np.bool_],
+    symmetric_tolerance: float,
+    ridge: float,
+    points: FloatArray,
+    first_halfedge: int,
+    stop_halfedge: int,
+    first_edge: int,
+    stop_edge: int,
 ) -> tuple[int, int, float, int, float]:
     """:func:`_assemble_numpy` one half-edge, then one edge at a time, straight into ``points`` (F, 20, 3),
     for the half-edges ``first_halfedge ≤ i < stop_halfedge`` and the edges ``first_edge ≤ e < stop_edge``
@@ -321,8 +396,14 @@ def _assemble_kernel(
         v, s_out, s_in = origin[i], slot_out[i], slot_in[prev]
         height_out = height_in = 0.0
         if project:
-            height_out = t[s_out, 0] * normals[v, 0] + t[s_out, 1] * normals[v, 1] + t[s_out, 2] * normals[v, 2]
-            height_in = t[s_in, 0] * normals[v, 0] + t[s_in, 1] * normals[v, 1] + t[s_in, 2] * normals[v, 2]
+            height_out = (
+                t[s_out, 0] * normals[v, 0]
+                + t[s_out, 1] * normals[v, 1]
+                + t[s_out, 2] * normals[v, 2]
+            )
+            height_in = (
+                t[s_in, 0] * normals[v, 0] + t[s_in, 1] * normals[v, 1] + t[s_in, 2] * normals[v, 2]
+            )
         for d in range(3):
             points[f, k, d] = x[v, d]
             points[f, 4 + 2 * k, d] = x[v, d] + (t[s_out, d] - height_out * normals[v, d]) / 3.0
@@ -368,19 +449,32 @@ def _assemble_kernel(
         # corner splits at A (q = q0, d_L, d_R, N) and at B (q = q2)
         for end in range(2):
             corner = h if end == 0 else h_next
-            n0, n1, n2 = corner_normals[corner, 0], corner_normals[corner, 1], corner_normals[corner, 2]
+            n0, n1, n2 = (
+                corner_normals[corner, 0],
+                corner_normals[corner, 1],
+                corner_normals[corner, 2],
+            )
             qx, qy, qz = (q0[0], q0[1], q0[2]) if end == 0 else (q2[0], q2[1], q2[2])
             lx, ly, lz = tangent[2 + 2 * end, 0], tangent[2 + 2 * end, 1], tangent[2 + 2 * end, 2]
             rx, ry, rz = tangent[3 + 2 * end, 0], tangent[3 + 2 * end, 1], tangent[3 + 2 * end, 2]
-            left = (qy * lz - qz * ly) * n0 + (qz * lx - qx * lz) * n1 + (qx * ly - qy * lx) * n2  # [q, d_L]
-            right = (ry * qz - rz * qy) * n0 + (rz * qx - rx * qz) * n1 + (rx * qy - ry * qx) * n2  # [d_R, q]
+            left = (
+                (qy * lz - qz * ly) * n0 + (qz * lx - qx * lz) * n1 + (qx * ly - qy * lx) * n2
+            )  # [q, d_L]
+            right = (
+                (ry * qz - rz * qy) * n0 + (rz * qx - rx * qz) * n1 + (rx * qy - ry * qx) * n2
+            )  # [d_R, q]
             total = left + right
             safe = total if total != 0.0 else 1.0
             split[end, 0] = 2.0 * right / safe
             split[end, 1] = 2.0 * left / safe
-            split[end, 2] = -2.0 * ((ly * rz - lz * ry) * n0 + (lz * rx - lx * rz) * n1 + (lx * ry - ly * rx) * n2) / safe
+            split[end, 2] = (
+                -2.0
+                * ((ly * rz - lz * ry) * n0 + (lz * rx - lx * rz) * n1 + (lx * ry - ly * rx) * n2)
+                / safe
+            )
             size = np.sqrt(qx * qx + qy * qy + qz * qz) * max(
-                np.sqrt(lx * lx + ly * ly + lz * lz), np.sqrt(rx * rx + ry * ry + rz * rz))
+                np.sqrt(lx * lx + ly * ly + lz * lz), np.sqrt(rx * rx + ry * ry + rz * rz)
+            )
             smaller = left if left < right else right
             if np.isnan(left) or np.isnan(right):
                 smaller = np.nan
@@ -423,14 +517,30 @@ def _assemble_kernel(
             dd = 0.0
             r_h = 0.0
             for i in range(4):
-                dd += along[i, 0] * along[i, 0] + along[i, 1] * along[i, 1] + along[i, 2] * along[i, 2]
-                r_h += (along[i, 0] * (r[i, 0] - const[i, 0]) + along[i, 1] * (r[i, 1] - const[i, 1])
-                        + along[i, 2] * (r[i, 2] - const[i, 2]))
+                dd += (
+                    along[i, 0] * along[i, 0]
+                    + along[i, 1] * along[i, 1]
+                    + along[i, 2] * along[i, 2]
+                )
+                r_h += (
+                    along[i, 0] * (r[i, 0] - const[i, 0])
+                    + along[i, 1] * (r[i, 1] - const[i, 1])
+                    + along[i, 2] * (r[i, 2] - const[i, 2])
+                )
             c_r, c_c = 0.0, 0.0
             for d in range(3):
-                c[d] = scalar[0] * along[0, d] + scalar[1] * along[1, d] + scalar[2] * along[2, d] + scalar[3] * along[3, d]
-                r_g[d] = (scalar[0] * (r[0, d] - const[0, d]) + scalar[1] * (r[1, d] - const[1, d])
-                          + scalar[2] * (r[2, d] - const[2, d]) + scalar[3] * (r[3, d] - const[3, d]))
+                c[d] = (
+                    scalar[0] * along[0, d]
+                    + scalar[1] * along[1, d]
+                    + scalar[2] * along[2, d]
+                    + scalar[3] * along[3, d]
+                )
+                r_g[d] = (
+                    scalar[0] * (r[0, d] - const[0, d])
+                    + scalar[1] * (r[1, d] - const[1, d])
+                    + scalar[2] * (r[2, d] - const[2, d])
+                    + scalar[3] * (r[3, d] - const[3, d])
+                )
                 c_r += c[d] * r_g[d]
                 c_c += c[d] * c[d]
             a *= 1.0 + ridge

@@ -47,7 +47,12 @@ from ..targets import Targets, halfedge_slots
 from .split4 import SplitStar, fan_walk
 
 __all__ = [
-    "GridRefinement", "grid_refinement", "gregory_targets", "refined_gregory_targets", "seam_stars", "split4_of_gregory",
+    "GridRefinement",
+    "grid_refinement",
+    "gregory_targets",
+    "refined_gregory_targets",
+    "seam_stars",
+    "split4_of_gregory",
     "surface_deviation",
 ]
 
@@ -101,10 +106,16 @@ def gregory_targets(network: PatchNetwork, *, cut: bool = False) -> tuple[Target
     positions[topology.faces.reshape(-1)] = corners.reshape(-1, 3)
     slot_out, slot_in = halfedge_slots(topology)
     tangents = np.zeros((int(topology.neighbor_offsets[-1]), 3))
-    tangents[slot_in] = (3.0 * (points[:, 5 + 2 * ((np.arange(4) + 1) % 4)] - np.roll(corners, -1, axis=1))).reshape(-1, 3)
+    tangents[slot_in] = (
+        3.0 * (points[:, 5 + 2 * ((np.arange(4) + 1) % 4)] - np.roll(corners, -1, axis=1))
+    ).reshape(-1, 3)
     tangents[slot_out] = (3.0 * (points[:, 4:12:2] - corners)).reshape(-1, 3)
     corner_normals = _corner_normals(patches)
-    if not cut and network.vertex_normals is not None and len(network.vertex_normals) == topology.n_vertices:
+    if (
+        not cut
+        and network.vertex_normals is not None
+        and len(network.vertex_normals) == topology.n_vertices
+    ):
         normals = network.vertex_normals
     else:
         normals = np.zeros((topology.n_vertices, 3))
@@ -113,8 +124,16 @@ def gregory_targets(network: PatchNetwork, *, cut: bool = False) -> tuple[Target
     seams = np.zeros(topology.n_edges, dtype=bool)
     if not cut:
         seams[topology.halfedge_edge] = network.seam.reshape(-1)
-    targets = Targets(topology, positions, normals, tangents, points[:, 12:].reshape(-1, 4, 2, 3),
-                      seams=seams, rule="gregory network", corner_normals=corner_normals)
+    targets = Targets(
+        topology,
+        positions,
+        normals,
+        tangents,
+        points[:, 12:].reshape(-1, 4, 2, 3),
+        seams=seams,
+        rule="gregory network",
+        corner_normals=corner_normals,
+    )
     return targets, frame
 
 
@@ -138,15 +157,25 @@ def grid_refinement(topology: QuadTopology, n: int) -> GridRefinement:
     first = topology.edge_halfedges[topology.halfedge_edge, 0] == np.arange(topology.n_halfedges)
     h = 4 * np.arange(count)[:, None] + np.arange(4)  # (F, 4)
     base = topology.n_vertices + (n - 1) * topology.halfedge_edge[h]
-    along = np.where(first[h][..., None], k - 1, n - 1 - k) + base[..., None]  # (F, 4, n − 1): point k/n from corner i
-    grid[:, k, 0], grid[:, n, k], grid[:, n - k, n], grid[:, 0, n - k] = (along[:, i] for i in range(4))
+    along = (
+        np.where(first[h][..., None], k - 1, n - 1 - k) + base[..., None]
+    )  # (F, 4, n − 1): point k/n from corner i
+    grid[:, k, 0], grid[:, n, k], grid[:, n - k, n], grid[:, 0, n - k] = (
+        along[:, i] for i in range(4)
+    )
     inner = topology.n_vertices + (n - 1) * topology.n_edges
     grid[:, 1:n, 1:n] = inner + np.arange(count * (n - 1) ** 2).reshape(count, n - 1, n - 1)
-    cells = np.stack([grid[:, :-1, :-1], grid[:, 1:, :-1], grid[:, 1:, 1:], grid[:, :-1, 1:]], axis=-1)
-    return GridRefinement(QuadTopology.from_faces(cells.reshape(-1, 4), inner + count * (n - 1) ** 2), grid, n)
+    cells = np.stack(
+        [grid[:, :-1, :-1], grid[:, 1:, :-1], grid[:, 1:, 1:], grid[:, :-1, 1:]], axis=-1
+    )
+    return GridRefinement(
+        QuadTopology.from_faces(cells.reshape(-1, 4), inner + count * (n - 1) ** 2), grid, n
+    )
 
 
-def _refined_seams(topology: QuadTopology, seam_halfedges: NDArray[np.bool_], n: int) -> NDArray[np.bool_]:
+def _refined_seams(
+    topology: QuadTopology, seam_halfedges: NDArray[np.bool_], n: int
+) -> NDArray[np.bool_]:
     """(R, 4) which half-edges of the :func:`grid_refinement` lie on the ``seam_halfedges`` (4F,) of ``topology``."""
     seam = seam_halfedges.reshape(-1, 4)
     refined = np.zeros((topology.n_faces, n, n, 4), dtype=bool)
@@ -157,8 +186,9 @@ def _refined_seams(topology: QuadTopology, seam_halfedges: NDArray[np.bool_], n:
     return refined.reshape(-1, 4)
 
 
-def refined_gregory_targets(network: PatchNetwork, refinement: GridRefinement, *, cut: bool = False
-                            ) -> tuple[Targets, Frame, FloatArray]:
+def refined_gregory_targets(
+    network: PatchNetwork, refinement: GridRefinement, *, cut: bool = False
+) -> tuple[Targets, Frame, FloatArray]:
     """The targets of a Gregory network's own surface on a :func:`grid_refinement` of its mesh (cut
     or not: ``refinement.topology``'s faces are the patches' n × n cells), with the guide nets of
     the cells (:func:`guide_nets` of each cell's piece of its patch), in the local coordinates of
@@ -171,9 +201,15 @@ def refined_gregory_targets(network: PatchNetwork, refinement: GridRefinement, *
     topology, grid, n = refinement
     patches: GregoryPatchSet = network.patches  # type: ignore[assignment]
     frame = patches.frame or Frame.of_points(patches.points[:, :4])
-    local = patches.local() if patches.frame is not None else GregoryPatchSet(frame.to_local(patches.points))
+    local = (
+        patches.local()
+        if patches.frame is not None
+        else GregoryPatchSet(frame.to_local(patches.points))
+    )
     steps = np.linspace(0.0, 1.0, n + 1)
-    uv = np.stack(np.meshgrid(steps, steps, indexing="ij"), axis=-1).reshape(-1, 2)  # (a, b) → a (n + 1) + b
+    uv = np.stack(np.meshgrid(steps, steps, indexing="ij"), axis=-1).reshape(
+        -1, 2
+    )  # (a, b) → a (n + 1) + b
     count = len(local)
     at = local.evaluate(uv).reshape(count, n + 1, n + 1, 3)
     d_u = local.evaluate(uv, 1, 0).reshape(count, n + 1, n + 1, 3) / n
@@ -184,7 +220,9 @@ def refined_gregory_targets(network: PatchNetwork, refinement: GridRefinement, *
     normal[:, [0, n, n, 0], [0, 0, n, n]] = _corner_normals(local)
     positions = np.empty((topology.n_vertices, 3))
     positions[grid.reshape(-1)] = at.reshape(-1, 3)
-    cell = np.stack(np.meshgrid(np.arange(n), np.arange(n), indexing="ij"), axis=-1).reshape(-1, 2)  # (n², 2)
+    cell = np.stack(np.meshgrid(np.arange(n), np.arange(n), indexing="ij"), axis=-1).reshape(
+        -1, 2
+    )  # (n², 2)
     corner_ab = cell[:, None] + np.array([[0, 0], [1, 0], [1, 1], [0, 1]])  # (n², 4, 2)
     face = np.repeat(np.arange(count), n * n)[:, None]
     a, b = np.tile(corner_ab[..., 0], (count, 1)), np.tile(corner_ab[..., 1], (count, 1))  # (R, 4)
@@ -193,8 +231,12 @@ def refined_gregory_targets(network: PatchNetwork, refinement: GridRefinement, *
     nxt = (np.arange(4) + 1) % 4
     sign = np.array([1.0, 1.0, -1.0, -1.0])[:, None]
     along_u = np.array([True, False, True, False])
-    derivative = np.where(along_u[None, :, None], d_u[face, a, b], d_v[face, a, b])  # at corner k, along edge k's axis
-    derivative_next = np.where(along_u[None, :, None], d_u[face, a[:, nxt], b[:, nxt]], d_v[face, a[:, nxt], b[:, nxt]])
+    derivative = np.where(
+        along_u[None, :, None], d_u[face, a, b], d_v[face, a, b]
+    )  # at corner k, along edge k's axis
+    derivative_next = np.where(
+        along_u[None, :, None], d_u[face, a[:, nxt], b[:, nxt]], d_v[face, a[:, nxt], b[:, nxt]]
+    )
     slot_out, slot_in = halfedge_slots(topology)
     tangents = np.zeros((int(topology.neighbor_offsets[-1]), 3))
     tangents[slot_out.reshape(-1, 4)] = sign * derivative
@@ -202,12 +244,25 @@ def refined_gregory_targets(network: PatchNetwork, refinement: GridRefinement, *
     normals = np.zeros((topology.n_vertices, 3))
     np.add.at(normals, topology.faces.reshape(-1), corner_normals.reshape(-1, 3))
     normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-    if not cut and network.vertex_normals is not None and len(network.vertex_normals) == network.n_corners:
-        normals[:network.n_corners] = network.vertex_normals
+    if (
+        not cut
+        and network.vertex_normals is not None
+        and len(network.vertex_normals) == network.n_corners
+    ):
+        normals[: network.n_corners] = network.vertex_normals
     guide, bicubic = _cell_fits(local, n)
-    interior = np.repeat(bicubic[:, INTERIOR_INDEX[:, 0], INTERIOR_INDEX[:, 1], None], 2, axis=2)  # (R, 4, 2, 3)
-    targets = Targets(topology, positions, normals, tangents, interior, rule=f"gregory network, {n}×{n} per patch",
-                      corner_normals=corner_normals)
+    interior = np.repeat(
+        bicubic[:, INTERIOR_INDEX[:, 0], INTERIOR_INDEX[:, 1], None], 2, axis=2
+    )  # (R, 4, 2, 3)
+    targets = Targets(
+        topology,
+        positions,
+        normals,
+        tangents,
+        interior,
+        rule=f"gregory network, {n}×{n} per patch",
+        corner_normals=corner_normals,
+    )
     return targets, frame, guide
 
 
@@ -215,21 +270,28 @@ def refined_gregory_targets(network: PatchNetwork, refinement: GridRefinement, *
 STRAIGHT_CREASE_DEG = 150.0
 
 
-def _straight_creases(targets: Targets, topology: QuadTopology, seam_halfedges: NDArray[np.bool_]) -> Targets:
+def _straight_creases(
+    targets: Targets, topology: QuadTopology, seam_halfedges: NDArray[np.bool_]
+) -> Targets:
     """Where exactly two seams pass through a vertex nearly straight (:data:`STRAIGHT_CREASE_DEG`),
     their tangents made opposite, ``±(t_1 − t_2)/2``, in every copy: a sector's regular star
     through both then exists (its turn is π), and both sides still share them."""
     slot_out, slot_in = halfedge_slots(targets.topology)
     h = np.flatnonzero(seam_halfedges)
     slots = np.concatenate([slot_out[h], slot_in[h]])  # every seam slot of every copy
-    key = np.concatenate([topology.faces.reshape(-1)[h], topology.target(h)]) * topology.n_edges + np.tile(
-        topology.halfedge_edge[h], 2)  # (original vertex, seam edge)
+    key = np.concatenate(
+        [topology.faces.reshape(-1)[h], topology.target(h)]
+    ) * topology.n_edges + np.tile(topology.halfedge_edge[h], 2)  # (original vertex, seam edge)
     pairs, first, which = np.unique(key, return_index=True, return_inverse=True)
     vertex = pairs // topology.n_edges
     count = np.bincount(vertex, minlength=topology.n_vertices)
-    one = np.flatnonzero((count[vertex] == 2) & (np.r_[True, vertex[1:] != vertex[:-1]]))  # first pair of a 2-seam vertex
+    one = np.flatnonzero(
+        (count[vertex] == 2) & (np.r_[True, vertex[1:] != vertex[:-1]])
+    )  # first pair of a 2-seam vertex
     t1, t2 = targets.tangents[slots[first[one]]], targets.tangents[slots[first[one + 1]]]
-    cosine = np.einsum("nd,nd->n", t1, t2) / (np.linalg.norm(t1, axis=1) * np.linalg.norm(t2, axis=1))
+    cosine = np.einsum("nd,nd->n", t1, t2) / (
+        np.linalg.norm(t1, axis=1) * np.linalg.norm(t2, axis=1)
+    )
     straight = cosine <= np.cos(np.radians(STRAIGHT_CREASE_DEG))
     if not straight.any():
         return targets
@@ -242,7 +304,9 @@ def _straight_creases(targets: Targets, topology: QuadTopology, seam_halfedges: 
     return targets.with_changes(tangents=tangents)
 
 
-def seam_stars(targets: Targets, seam_halfedges: NDArray[np.bool_], *, equal_sectors: bool = False) -> SplitStar:
+def seam_stars(
+    targets: Targets, seam_halfedges: NDArray[np.bool_], *, equal_sectors: bool = False
+) -> SplitStar:
     """split4's stars on a topology cut along seams (``seam_halfedges``: the cut's boundary
     half-edges that were seams), where both sides of a seam must keep its tangents exactly.
 
@@ -264,11 +328,15 @@ def seam_stars(targets: Targets, seam_halfedges: NDArray[np.bool_], *, equal_sec
     slot_out, slot_in = halfedge_slots(topology)
     seam_at[slot_out[seam_halfedges]] = True
     seam_at[slot_in[seam_halfedges]] = True
-    copies = np.unique(np.concatenate([origin[seam_halfedges], topology.target(np.flatnonzero(seam_halfedges))]))
+    copies = np.unique(
+        np.concatenate([origin[seam_halfedges], topology.target(np.flatnonzero(seam_halfedges))])
+    )
     k = topology.face_count[copies]
     first, last = offsets[copies], offsets[copies + 1] - 1
     single = copies[k == 1]
-    star[offsets[single][:, None] + np.arange(2)] = targets.tangents[offsets[single][:, None] + np.arange(2)]
+    star[offsets[single][:, None] + np.arange(2)] = targets.tangents[
+        offsets[single][:, None] + np.arange(2)
+    ]
     factor[single] = 1.0
     many = k >= 2
     copies, k, first, last = copies[many], k[many], first[many], last[many]
@@ -283,14 +351,26 @@ def seam_stars(targets: Targets, seam_halfedges: NDArray[np.bool_], *, equal_sec
     c, sn = np.cos(phi), np.sin(phi)
     residual = t - c[:, None] * anchor[owner]
     free = j != e[owner]
-    b = np.stack([np.bincount(owner, np.where(free, sn * residual[:, d], 0.0), minlength=copies.size) for d in range(3)], axis=1)
-    b /= np.maximum(np.bincount(owner, np.where(free, sn * sn, 0.0), minlength=copies.size), 1e-300)[:, None]
+    b = np.stack(
+        [
+            np.bincount(owner, np.where(free, sn * residual[:, d], 0.0), minlength=copies.size)
+            for d in range(3)
+        ],
+        axis=1,
+    )
+    b /= np.maximum(
+        np.bincount(owner, np.where(free, sn * sn, 0.0), minlength=copies.size), 1e-300
+    )[:, None]
     both = seam_at[first] & seam_at[last]
     sin_total = np.sin(total)
     exact = both & (np.abs(sin_total) >= SIN_FLOOR)
-    b[exact] = (targets.tangents[last[exact]] - np.cos(total[exact])[:, None] * anchor[exact]) / sin_total[exact, None]
+    b[exact] = (
+        targets.tangents[last[exact]] - np.cos(total[exact])[:, None] * anchor[exact]
+    ) / sin_total[exact, None]
     fitted = c[:, None] * anchor[owner] + sn[:, None] * b[owner]
-    fitted[seam_at[slot]] = t[seam_at[slot]]  # the seams' own tangents, bit for bit: both sides share them
+    fitted[seam_at[slot]] = t[
+        seam_at[slot]
+    ]  # the seams' own tangents, bit for bit: both sides share them
     star[slot] = fitted
     cosine[slot] = np.cos(theta)[owner]
     factor[copies] = 1.0
@@ -314,7 +394,9 @@ def _fit_operators(samples: int) -> tuple[FloatArray, FloatArray]:
     expand = np.zeros((7, 6))
     expand[[0, 1, 2, 4, 5, 6], [0, 1, 2, 3, 4, 5]] = 1.0
     expand[3, 2:4] = 0.5
-    bernstein = np.linalg.pinv(BSpline.design_matrix(t, np.r_[np.zeros(4), np.ones(4)], 3).toarray())
+    bernstein = np.linalg.pinv(
+        BSpline.design_matrix(t, np.r_[np.zeros(4), np.ones(4)], 3).toarray()
+    )
     return expand @ inverse, bernstein
 
 
@@ -324,10 +406,14 @@ def guide_nets(patches: GregoryPatchSet, samples: int = GUIDE_SAMPLES) -> FloatA
     written out (row and column 3 the midpoints of their neighbours). Local coordinates."""
     operator = _fit_operators(samples)[0]
     t = np.linspace(0.0, 1.0, samples)
-    return np.einsum("ia,fabd,jb->fijd", operator, patches.local().evaluate_grid(t, t), operator, optimize=True)
+    return np.einsum(
+        "ia,fabd,jb->fijd", operator, patches.local().evaluate_grid(t, t), operator, optimize=True
+    )
 
 
-def _cell_fits(local: GregoryPatchSet, n: int, samples: int = GUIDE_SAMPLES) -> tuple[FloatArray, FloatArray]:
+def _cell_fits(
+    local: GregoryPatchSet, n: int, samples: int = GUIDE_SAMPLES
+) -> tuple[FloatArray, FloatArray]:
     """Per cell r = f n² + a n + b of an n × n grid over each patch (local coordinates), the
     :func:`guide_nets` macro net (R, 7, 7, 3) and the least-squares bicubic Bézier net (R, 4, 4, 3)
     of the patch's piece over the cell, from ``samples``² points of the piece."""
@@ -335,13 +421,19 @@ def _cell_fits(local: GregoryPatchSet, n: int, samples: int = GUIDE_SAMPLES) -> 
     t = np.linspace(0.0, 1.0, n * (samples - 1) + 1)
     values = local.evaluate_grid(t, t)  # (F, m, m, 3)
     window = np.arange(n)[:, None] * (samples - 1) + np.arange(samples)  # (n, samples)
-    pieces = values[:, window[:, None, :, None], window[None, :, None, :]]  # (F, n, n, samples, samples, 3)
+    pieces = values[
+        :, window[:, None, :, None], window[None, :, None, :]
+    ]  # (F, n, n, samples, samples, 3)
     pieces = pieces.reshape(-1, samples, samples, 3)
-    return (np.einsum("ia,rabd,jb->rijd", guide, pieces, guide, optimize=True),
-            np.einsum("ia,rabd,jb->rijd", bicubic, pieces, bicubic, optimize=True))
+    return (
+        np.einsum("ia,rabd,jb->rijd", guide, pieces, guide, optimize=True),
+        np.einsum("ia,rabd,jb->rijd", bicubic, pieces, bicubic, optimize=True),
+    )
 
 
-def split4_of_gregory(network: PatchNetwork, *, guided: bool = True, refine: int = 1) -> PatchNetwork:
+def split4_of_gregory(
+    network: PatchNetwork, *, guided: bool = True, refine: int = 1
+) -> PatchNetwork:
     """The split4 network (:func:`~g1patch.construct.split4.split4_network_from_targets`) of a
     Gregory network's targets (:func:`gregory_targets`): exactly G1, polynomial, through the same
     corners; with ``guided`` its interiors follow the Gregory surface (:func:`guide_nets`). Its
@@ -375,32 +467,62 @@ def split4_of_gregory(network: PatchNetwork, *, guided: bool = True, refine: int
         topology = uncut.topology
     if not cut:
         mesh = QuadMesh(frame.to_world(targets.positions), targets.topology)
-        parts = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide, split4_star(targets, equal_sectors=True))
-        return split4_network_from_targets(mesh, targets, frame, provenance, guide=guide, parts=parts)
+        parts = split4_patches(
+            targets,
+            targets.positions,
+            np.zeros(3),
+            1.0,
+            guide,
+            split4_star(targets, equal_sectors=True),
+        )
+        return split4_network_from_targets(
+            mesh, targets, frame, provenance, guide=guide, parts=parts
+        )
     cut_topology = targets.topology
     seam_halfedges = (cut_topology.twin < 0) & (topology.twin >= 0)
     if not np.array_equal(seams, seam_halfedges):
-        raise ConstructionError("split4: cutting the network along its seams leaves a seam uncut "
-                                "(a seam edge whose both ends have one sector)")
+        raise ConstructionError(
+            "split4: cutting the network along its seams leaves a seam uncut "
+            "(a seam edge whose both ends have one sector)"
+        )
     targets = _straight_creases(targets, topology, seam_halfedges)
-    patches, extra, extra_normals, stars = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide,
-                                                          seam_stars(targets, seam_halfedges, equal_sectors=True))
+    patches, extra, extra_normals, stars = split4_patches(
+        targets,
+        targets.positions,
+        np.zeros(3),
+        1.0,
+        guide,
+        seam_stars(targets, seam_halfedges, equal_sectors=True),
+    )
     patches = patches.with_frame(frame)
     edge_of = np.empty(topology.n_edges, dtype=np.int64)
     edge_of[topology.halfedge_edge] = cut_topology.halfedge_edge
-    points = np.concatenate([frame.to_world(extra[edge_of]), frame.to_world(extra[cut_topology.n_edges:])])
-    point_normals = np.concatenate([extra_normals[edge_of], extra_normals[cut_topology.n_edges:]])
+    points = np.concatenate(
+        [frame.to_world(extra[edge_of]), frame.to_world(extra[cut_topology.n_edges :])]
+    )
+    point_normals = np.concatenate([extra_normals[edge_of], extra_normals[cut_topology.n_edges :]])
     vertices = np.zeros((topology.n_vertices, 3))
-    vertices[topology.faces.reshape(-1)] = frame.to_world(targets.positions[cut_topology.faces.reshape(-1)])
+    vertices[topology.faces.reshape(-1)] = frame.to_world(
+        targets.positions[cut_topology.faces.reshape(-1)]
+    )
     vertex_normals = np.zeros((topology.n_vertices, 3))
-    vertex_normals[topology.faces.reshape(-1)] = targets.normals[cut_topology.faces.reshape(-1)]  # one sector's
+    vertex_normals[topology.faces.reshape(-1)] = targets.normals[
+        cut_topology.faces.reshape(-1)
+    ]  # one sector's
     if network.vertex_normals is not None and len(network.vertex_normals) == network.n_corners:
-        vertex_normals[:network.n_corners] = network.vertex_normals
-    result = _split4_network(topology, patches, np.concatenate([vertices, points]),
-                             np.concatenate([vertex_normals, point_normals]), provenance)
+        vertex_normals[: network.n_corners] = network.vertex_normals
+    result = _split4_network(
+        topology,
+        patches,
+        np.concatenate([vertices, points]),
+        np.concatenate([vertex_normals, point_normals]),
+        provenance,
+    )
     seam_edges = np.zeros(topology.n_edges, dtype=bool)
     seam_edges[topology.halfedge_edge] = seams
-    return result.with_seams(np.concatenate([np.repeat(seam_edges, 2), np.zeros(4 * topology.n_faces, dtype=bool)]))
+    return result.with_seams(
+        np.concatenate([np.repeat(seam_edges, 2), np.zeros(4 * topology.n_faces, dtype=bool)])
+    )
 
 
 #: Gauss–Newton steps of :func:`surface_deviation`'s foot points
@@ -413,7 +535,9 @@ FOOT_STARTS = 4
 SEARCH_SAMPLES = 17
 
 
-def _grid_starts(points: FloatArray, tree: object, t: FloatArray, count: int) -> tuple[IntArray, FloatArray]:
+def _grid_starts(
+    points: FloatArray, tree: object, t: FloatArray, count: int
+) -> tuple[IntArray, FloatArray]:
     """Each point's ``count`` nearest samples of the :data:`SEARCH_SAMPLES`² grid ``t`` × ``t`` of
     every patch (``tree`` over them): their patches (P, count) and parameters (P, count, 2)."""
     nearest = tree.query(points, k=count)[1].reshape(len(points), count)  # type: ignore[attr-defined]
@@ -421,7 +545,9 @@ def _grid_starts(points: FloatArray, tree: object, t: FloatArray, count: int) ->
     return patch, np.stack([t[rest // len(t)], t[rest % len(t)]], axis=-1)
 
 
-def _foot_distances(points: FloatArray, local: FloatArray, patch: IntArray, at: FloatArray) -> FloatArray:
+def _foot_distances(
+    points: FloatArray, local: FloatArray, patch: IntArray, at: FloatArray
+) -> FloatArray:
     """Per point an upper bound of its distance to the Gregory surface of nets ``local`` (F, 20, 3):
     from each of its starts (patches ``patch`` (P, S), parameters ``at`` (P, S, 2))
     :data:`FOOT_STEPS` Gauss–Newton steps ``(JᵀJ) δ = Jᵀ (p − g)``, ``J = [g_u g_v]``, clamped to
@@ -434,7 +560,9 @@ def _foot_distances(points: FloatArray, local: FloatArray, patch: IntArray, at: 
     nets = local[patch]
 
     def value(du: int = 0, dv: int = 0) -> FloatArray:
-        return np.einsum("nm,nmd->nd", gregory_weights(at[:, 0], at[:, 1], du, dv), nets, optimize=True)
+        return np.einsum(
+            "nm,nmd->nd", gregory_weights(at[:, 0], at[:, 1], du, dv), nets, optimize=True
+        )
 
     residual = points - value()  # at the current foot points, kept from step to step
     best = np.linalg.norm(residual, axis=-1)
@@ -444,14 +572,19 @@ def _foot_distances(points: FloatArray, local: FloatArray, patch: IntArray, at: 
         r_u, r_v = np.einsum("nd,nd->n", g_u, residual), np.einsum("nd,nd->n", g_v, residual)
         det = a * c - b * b
         regular = det > 1e-300
-        step = np.stack([c * r_u - b * r_v, a * r_v - b * r_u], axis=-1) / np.where(regular, det, 1.0)[:, None]
+        step = (
+            np.stack([c * r_u - b * r_v, a * r_v - b * r_u], axis=-1)
+            / np.where(regular, det, 1.0)[:, None]
+        )
         at = np.clip(at + np.where(regular[:, None], step, 0.0), 0.0, 1.0)
         residual = points - value()
         best = np.minimum(best, np.linalg.norm(residual, axis=-1))  # a clamped step may lead away
     return best.reshape(-1, starts).min(axis=1)
 
 
-def surface_deviation(network: PatchNetwork, split4: PatchNetwork, samples: int = 5) -> tuple[float, float]:
+def surface_deviation(
+    network: PatchNetwork, split4: PatchNetwork, samples: int = 5
+) -> tuple[float, float]:
     """How far the split4 surface ``s`` lies from the Gregory surface ``g``, model units:
     ``(parametric, geometric)``, maxima over a ``samples``² grid per quad (``samples`` odd;
     sub-patch ``4r + k`` covers ``((a, b) + (uv + corner_k) / 2) / n`` of patch f, for quad
@@ -475,14 +608,22 @@ def surface_deviation(network: PatchNetwork, split4: PatchNetwork, samples: int 
     half = np.linspace(0.0, 1.0, (samples + 1) // 2)
     uv = np.stack(np.meshgrid(half, half, indexing="ij"), axis=-1).reshape(-1, 2)  # (K, 2)
     corner = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
-    points = frame.to_local(split4.patches.evaluate(uv).reshape(-1, 3))  # sub-patch by sub-patch: (4R K, 3)
+    points = frame.to_local(
+        split4.patches.evaluate(uv).reshape(-1, 3)
+    )  # sub-patch by sub-patch: (4R K, 3)
     n = math.isqrt(len(split4.patches) // (4 * len(local)))
-    cell = np.stack(np.meshgrid(np.arange(n), np.arange(n), indexing="ij"), axis=-1).reshape(-1, 1, 1, 2)
-    at = np.tile((cell + 0.5 * (uv[None, None] + corner[None, :, None])) / n, (len(local), 1, 1, 1)).reshape(-1, 2)
+    cell = np.stack(np.meshgrid(np.arange(n), np.arange(n), indexing="ij"), axis=-1).reshape(
+        -1, 1, 1, 2
+    )
+    at = np.tile(
+        (cell + 0.5 * (uv[None, None] + corner[None, :, None])) / n, (len(local), 1, 1, 1)
+    ).reshape(-1, 2)
     patch = np.repeat(np.arange(len(local)), 4 * n * n * len(uv))
 
     def value(du: int = 0, dv: int = 0) -> FloatArray:
-        return np.einsum("nm,nmd->nd", gregory_weights(at[:, 0], at[:, 1], du, dv), nets, optimize=True)
+        return np.einsum(
+            "nm,nmd->nd", gregory_weights(at[:, 0], at[:, 1], du, dv), nets, optimize=True
+        )
 
     nets = local[patch]  # each sample's patch points, gathered once per patch assignment
     parametric = float(np.linalg.norm(points - value(), axis=-1).max())

@@ -75,8 +75,19 @@ from ..patches import PatchSet
 from ..targets import Targets, halfedge_slots
 
 __all__ = [
-    "BSPLINE_KNOTS", "STAR_LENGTH_LIMIT", "FanWalk", "SplitStar", "bspline_nets", "fan_walk", "macro_nets",
-    "split4_network_from_parts", "split4_network_from_targets", "split4_patches", "split4_provenance", "split4_star", "target_nets",
+    "BSPLINE_KNOTS",
+    "STAR_LENGTH_LIMIT",
+    "FanWalk",
+    "SplitStar",
+    "bspline_nets",
+    "fan_walk",
+    "macro_nets",
+    "split4_network_from_parts",
+    "split4_network_from_targets",
+    "split4_patches",
+    "split4_provenance",
+    "split4_star",
+    "target_nets",
 ]
 
 #: knots of each quad's B-spline patch, in u and in v
@@ -89,9 +100,16 @@ IntArray = NDArray[np.int64]
 # _LOCAL[k, p, q] = (i, j) in sub-patch k's own 4×4 Bézier net, for p, q ∈ 0..3.
 _P, _Q = np.meshgrid(np.arange(4), np.arange(4), indexing="ij")
 _LOCAL = np.stack(
-    [np.stack([_P, _Q], -1), np.stack([3 - _Q, _P], -1), np.stack([3 - _P, 3 - _Q], -1), np.stack([_Q, 3 - _P], -1)]
+    [
+        np.stack([_P, _Q], -1),
+        np.stack([3 - _Q, _P], -1),
+        np.stack([3 - _P, 3 - _Q], -1),
+        np.stack([_Q, 3 - _P], -1),
+    ]
 )
-_SUB_ORIGIN = np.array([[0, 0], [3, 0], [3, 3], [0, 3]])  # (s, t)·3: where sub-patch k sits in the 7×7 net
+_SUB_ORIGIN = np.array(
+    [[0, 0], [3, 0], [3, 3], [0, 3]]
+)  # (s, t)·3: where sub-patch k sits in the 7×7 net
 
 
 def _unit(v: FloatArray) -> FloatArray:
@@ -102,7 +120,9 @@ def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
     return np.einsum("...d,...d->...", a, b)
 
 
-def _chain_shears(topology: QuadTopology, ends: FloatArray, *, compiled: bool = False) -> FloatArray:
+def _chain_shears(
+    topology: QuadTopology, ends: FloatArray, *, compiled: bool = False
+) -> FloatArray:
     """μ_e = λ(M_e → X_e) per edge, constant in size and alternating in sign along grid lines.
 
     Nodes ``2e + s`` are the ends of interior edge e (s = 0 at X, 1 at Y) and carry
@@ -122,14 +142,25 @@ def _chain_shears(topology: QuadTopology, ends: FloatArray, *, compiled: bool = 
     through = ~topology.is_boundary_vertex & (topology.valence == 4)
     h = topology.edge_halfedges[:, 0]
     x_of, y_of = topology.origin(h), topology.target(h)
-    node_cosine = np.ascontiguousarray(ends, dtype=np.float64).reshape(-1)  # c of node 2e + s at its own end
+    node_cosine = np.ascontiguousarray(ends, dtype=np.float64).reshape(
+        -1
+    )  # c of node 2e + s at its own end
     if compiled:
         from ..kernels import jit_kernel
 
         lam = np.zeros(nodes)
-        jit_kernel(_chain_kernel)(node_cosine, x_of, y_of, interior, through,
-                                  topology.ring_offsets, topology.ring_halfedges, topology.halfedge_edge,
-                                  topology.edge_halfedges, lam)
+        jit_kernel(_chain_kernel)(
+            node_cosine,
+            x_of,
+            y_of,
+            interior,
+            through,
+            topology.ring_offsets,
+            topology.ring_halfedges,
+            topology.halfedge_edge,
+            topology.edge_halfedges,
+            lam,
+        )
         return lam[0::2]
     ring = topology.ring_halfedges
     ring_edge = topology.halfedge_edge[ring]
@@ -140,7 +171,9 @@ def _chain_shears(topology: QuadTopology, ends: FloatArray, *, compiled: bool = 
     flip = np.stack([2 * inner, 2 * inner + 1], axis=1)
     rows = np.concatenate([same[:, 0], same[:, 0] + nodes, flip[:, 0], flip[:, 0] + nodes])
     cols = np.concatenate([same[:, 1], same[:, 1] + nodes, flip[:, 1] + nodes, flip[:, 1]])
-    graph = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(2 * nodes, 2 * nodes))
+    graph = coo_matrix(
+        (np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(2 * nodes, 2 * nodes)
+    )
     _, cover = connected_components(graph, directed=False)
     chain = np.minimum(cover[:nodes], cover[nodes:])
 
@@ -163,7 +196,13 @@ def _chain_shears(topology: QuadTopology, ends: FloatArray, *, compiled: bool = 
 
 
 def _edge_curves(
-    x: FloatArray, y: FloatArray, t_xy: FloatArray, t_yx: FloatArray, mu: FloatArray, c_x: FloatArray, c_y: FloatArray
+    x: FloatArray,
+    y: FloatArray,
+    t_xy: FloatArray,
+    t_yx: FloatArray,
+    mu: FloatArray,
+    c_x: FloatArray,
+    c_y: FloatArray,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """Edge points ``(P1, P2, M, P4, P5)`` of each edge X → Y.
 
@@ -207,14 +246,18 @@ def _even_vertex_shifts(
     canonical = topology.edge_halfedges[edge, 0] == ring
     p1, p2 = curve[edge, np.where(canonical, 0, 4)], curve[edge, np.where(canonical, 1, 3)]
     slope = np.where(canonical, mu[edge], -mu[edge])
-    terms = alternating[:, None] * (slope[:, None] * 3.0 * (p1 - origin) / (6.0 * lam[vs][row, None]) - p2)
+    terms = alternating[:, None] * (
+        slope[:, None] * 3.0 * (p1 - origin) / (6.0 * lam[vs][row, None]) - p2
+    )
     residual = np.add.reduceat(terms, np.r_[0, np.cumsum(counts[:-1])])
     moved, column = np.unique(edge, return_inverse=True)
     a = csc_matrix((alternating, (row, column)), shape=(vs.size, moved.size))
     normal = (a @ a.T).tocsc()
     y = np.asarray(spsolve(normal, residual)).reshape(vs.size, 3)
     shift = np.asarray(a.T @ y)
-    if not np.isfinite(shift).all() or np.abs(a @ shift - residual).max() > 1e-9 * (1.0 + np.abs(residual).max()):
+    if not np.isfinite(shift).all() or np.abs(a @ shift - residual).max() > 1e-9 * (
+        1.0 + np.abs(residual).max()
+    ):
         raise ConstructionError(
             f"split4: the even-valence midpoint system of {vs.size} vertices (valence ≥ 6) is singular: "
             "a cluster of adjacent even-valence vertices has no neighbour outside it"
@@ -241,7 +284,9 @@ def _min_norm(matrix: FloatArray, rhs: FloatArray, target: FloatArray) -> FloatA
     out = np.empty(target.shape)
     for g0 in range(0, len(target), _GROUPS):  # in blocks of groups: the temporaries stay in cache
         g1 = g0 + _GROUPS
-        stacked = np.concatenate([target[g0:g1], rhs[g0:g1]], axis=1).transpose(0, 2, 1)  # (g, 3, n + m)
+        stacked = np.concatenate([target[g0:g1], rhs[g0:g1]], axis=1).transpose(
+            0, 2, 1
+        )  # (g, 3, n + m)
         out[g0:g1] = (stacked @ operator.T).transpose(0, 2, 1)
     return out
 
@@ -258,7 +303,20 @@ def _cycle(n: int, closed: bool) -> FloatArray:
 _MIDPOINT = np.array([[1.0, 1, 0, 0], [0, 0, 1, 1], [1, 0, 1, 0], [0, 1, 0, 1]])  # (LX, RX, LY, RY)
 
 # de Casteljau halving of a cubic at ½: the 7 × 4 matrix from Bézier points to the two halves'
-_HALVE = np.array([[8.0, 0, 0, 0], [4, 4, 0, 0], [2, 4, 2, 0], [1, 3, 3, 1], [0, 2, 4, 2], [0, 0, 4, 4], [0, 0, 0, 8]]) / 8.0
+_HALVE = (
+    np.array(
+        [
+            [8.0, 0, 0, 0],
+            [4, 4, 0, 0],
+            [2, 4, 2, 0],
+            [1, 3, 3, 1],
+            [0, 2, 4, 2],
+            [0, 0, 4, 4],
+            [0, 0, 0, 8],
+        ]
+    )
+    / 8.0
+)
 # What the assembly takes over from a face's macro net (the targets' bicubic subdivided at ½, or a
 # guide), per half-edge h = 4f + k in the frame of corner k (points (p, q) of :func:`_macro_index`),
 # each as the net's detail over what its own boundary predicts, so that where G1 moves a curve
@@ -314,8 +372,12 @@ def target_nets(targets: Targets) -> FloatArray:
     corner = targets.positions[topology.faces]
     net = np.empty((topology.n_faces, 4, 4, 3))
     net[:, [0, 3, 3, 0], [0, 0, 3, 3]] = corner
-    net[:, [1, 3, 2, 0], [0, 1, 3, 2]] = corner + targets.tangents[slot_out[h]] / 3.0  # edge k, next to corner k
-    net[:, [2, 3, 1, 0], [0, 2, 3, 1]] = np.roll(corner, -1, axis=1) + targets.tangents[slot_in[h]] / 3.0  # next to k + 1
+    net[:, [1, 3, 2, 0], [0, 1, 3, 2]] = (
+        corner + targets.tangents[slot_out[h]] / 3.0
+    )  # edge k, next to corner k
+    net[:, [2, 3, 1, 0], [0, 2, 3, 1]] = (
+        np.roll(corner, -1, axis=1) + targets.tangents[slot_in[h]] / 3.0
+    )  # next to k + 1
     net[:, INTERIOR_INDEX[:, 0], INTERIOR_INDEX[:, 1]] = targets.corner_interior
     return net
 
@@ -323,30 +385,55 @@ def target_nets(targets: Targets) -> FloatArray:
 def _own_quantities(targets: Targets, guide: FloatArray | None) -> FloatArray:
     """Per half-edge h = 4f + k the (4F, 7, 3) :data:`_QUANTITIES` of face f's macro net: the
     ``guide`` (F, 7, 7, 3), or the targets' bicubic (:func:`target_nets`) subdivided at ½."""
-    nets, weights = (target_nets(targets).reshape(-1, 16, 3), _NET_WEIGHTS) if guide is None else (guide.reshape(-1, 49, 3), _MACRO_WEIGHTS)
-    return np.matmul(weights.reshape(-1, weights.shape[-1]), nets).reshape(-1, len(_QUANTITIES), 3)  # (F, 4·7, 3)
+    nets, weights = (
+        (target_nets(targets).reshape(-1, 16, 3), _NET_WEIGHTS)
+        if guide is None
+        else (guide.reshape(-1, 49, 3), _MACRO_WEIGHTS)
+    )
+    return np.matmul(weights.reshape(-1, weights.shape[-1]), nets).reshape(
+        -1, len(_QUANTITIES), 3
+    )  # (F, 4·7, 3)
 
 
 # Sources of the assembly, per half-edge h = 4f + k: 0 V, 1..7 the points of _assemble's
 # ``points`` (P1, P2 and M from the origin, P1 and P2 from the target, the seam point into f, b),
 # 8 C, 9..12 the twists at V, MID[k], MID[k−1], C. _FRAME[p, q] = (source, from prev(h)).
 _FRAME = {
-    (0, 0): (0, False), (1, 0): (1, False), (2, 0): (2, False), (3, 0): (3, False),
-    (0, 1): (4, True), (0, 2): (5, True), (0, 3): (3, True),
-    (3, 1): (6, False), (3, 2): (7, False), (3, 3): (8, False), (1, 3): (6, True), (2, 3): (7, True),
-    (1, 1): (9, False), (2, 1): (10, False), (1, 2): (11, False), (2, 2): (12, False),
+    (0, 0): (0, False),
+    (1, 0): (1, False),
+    (2, 0): (2, False),
+    (3, 0): (3, False),
+    (0, 1): (4, True),
+    (0, 2): (5, True),
+    (0, 3): (3, True),
+    (3, 1): (6, False),
+    (3, 2): (7, False),
+    (3, 3): (8, False),
+    (1, 3): (6, True),
+    (2, 3): (7, True),
+    (1, 1): (9, False),
+    (2, 1): (10, False),
+    (1, 2): (11, False),
+    (2, 2): (12, False),
 }
 _N_SOURCES = 13
 _PICK = np.empty((4, 4, 4), dtype=np.int64)  # [k, i, j] → row (corner kk) · 13 + source
 for (_p, _q), (_s, _from_prev) in _FRAME.items():
     for _k in range(4):
-        _PICK[_k, _LOCAL[_k, _p, _q, 0], _LOCAL[_k, _p, _q, 1]] = ((_k - _from_prev) % 4) * _N_SOURCES + _s
+        _PICK[_k, _LOCAL[_k, _p, _q, 0], _LOCAL[_k, _p, _q, 1]] = (
+            (_k - _from_prev) % 4
+        ) * _N_SOURCES + _s
 _GATHER = (3 * _PICK.reshape(-1, 1) + np.arange(3)).reshape(-1)  # per coordinate: 8-byte copies
 _BLOCK = 1024  # faces per assembly block: sources and output stay in cache
 
 
 def _assemble(
-    points: tuple[FloatArray, ...], centres: FloatArray, twist: FloatArray, corners: FloatArray, scale: float, centre: FloatArray
+    points: tuple[FloatArray, ...],
+    centres: FloatArray,
+    twist: FloatArray,
+    corners: FloatArray,
+    scale: float,
+    centre: FloatArray,
 ) -> FloatArray:
     """The (F, 4, 4, 4, 3) sub-patch controls from per-half-edge sources, in blocks of faces:
     every point ``x · scale + centre`` except the corners at mesh vertices, which are ``corners``."""
@@ -405,7 +492,9 @@ def edge_end_cosines(topology: QuadTopology, cosine: FloatArray) -> FloatArray:
     return np.stack([cosine[slot_out[h]], cosine[slot_in[h]]], axis=1)
 
 
-def split4_star(targets: Targets, *, compiled: bool | None = None, equal_sectors: bool = False) -> SplitStar:
+def split4_star(
+    targets: Targets, *, compiled: bool | None = None, equal_sectors: bool = False
+) -> SplitStar:
     """The stars split4 needs, fitted to the target fans: the regular star (at even interior
     valence the twist systems are solvable only for affine-regular stars) ``t_j = a cos θ_j + b sin θ_j``,
     ``c_v = cos`` of the angle step. With ``equal_sectors``, on the boundary and at odd valence
@@ -432,13 +521,37 @@ def split4_star(targets: Targets, *, compiled: bool | None = None, equal_sectors
         valid = np.empty(topology.n_vertices, dtype=bool)
         factor = np.empty(topology.n_vertices)
         kernel = jit_kernel(_star_kernel)
-        arrays = [np.ascontiguousarray(a, dtype=np.float64) for a in (targets.normals, wanted, targets.positions)]
-        in_chunks(lambda lo, hi: kernel(*arrays, topology.neighbor_offsets, topology.neighbors, topology.face_count,
-                                        topology.valence, topology.is_boundary_vertex, STAR_LENGTH_LIMIT, star, valid,
-                                        factor, lo, hi), topology.n_vertices)
+        arrays = [
+            np.ascontiguousarray(a, dtype=np.float64)
+            for a in (targets.normals, wanted, targets.positions)
+        ]
+        in_chunks(
+            lambda lo, hi: kernel(
+                *arrays,
+                topology.neighbor_offsets,
+                topology.neighbors,
+                topology.face_count,
+                topology.valence,
+                topology.is_boundary_vertex,
+                STAR_LENGTH_LIMIT,
+                star,
+                valid,
+                factor,
+                lo,
+                hi,
+            ),
+            topology.n_vertices,
+        )
         if valid.all():
-            step = np.where(topology.is_boundary_vertex, np.pi / topology.face_count, 2.0 * np.pi / topology.valence)
-            stars = _rim_stars(targets, SplitStar(star, _per_slot(topology, np.cos(step)), ~valid, factor < 1.0, factor))
+            step = np.where(
+                topology.is_boundary_vertex,
+                np.pi / topology.face_count,
+                2.0 * np.pi / topology.valence,
+            )
+            stars = _rim_stars(
+                targets,
+                SplitStar(star, _per_slot(topology, np.cos(step)), ~valid, factor < 1.0, factor),
+            )
             return _equal_area_fans(targets, stars) if equal_sectors else stars
     star, cosine, valid = fit_regular_star(topology, targets.normals, wanted)
     if not valid.all():
@@ -446,14 +559,23 @@ def split4_star(targets: Targets, *, compiled: bool | None = None, equal_sectors
         wanted = spread_fan(topology, targets.normals, wanted, chord, np.flatnonzero(~valid))
         star, cosine, _ = fit_regular_star(topology, targets.normals, wanted)
     slot_vertex = slot_vertices(topology)
-    shrink = _length_shrink(targets, star, wanted, np.arange(len(star)), slot_vertex, slot_vertex, topology.n_vertices)
+    shrink = _length_shrink(
+        targets, star, wanted, np.arange(len(star)), slot_vertex, slot_vertex, topology.n_vertices
+    )
     star *= shrink[slot_vertex, None]
     stars = _rim_stars(targets, SplitStar(star, cosine[slot_vertex], ~valid, shrink < 1.0, shrink))
     return _equal_area_fans(targets, stars) if equal_sectors else stars
 
 
-def _length_shrink(targets: Targets, star: FloatArray, wanted: FloatArray, slots: IntArray, vertex: IntArray,
-                   owner: IntArray, count: int) -> FloatArray:
+def _length_shrink(
+    targets: Targets,
+    star: FloatArray,
+    wanted: FloatArray,
+    slots: IntArray,
+    vertex: IntArray,
+    owner: IntArray,
+    count: int,
+) -> FloatArray:
     """:func:`split4_star`'s length safeguard: per owner (``count`` of them) ``min(1, 1 / max_j |t_j| / allowed_j)``
     over its ``slots`` at their ``vertex`` (star rows ``t_j``, target rows ``wanted``),
     ``allowed = limit · min(|s|, 2|d|²/(|d| + |P d|))``."""
@@ -462,7 +584,9 @@ def _length_shrink(targets: Targets, star: FloatArray, wanted: FloatArray, slots
     normal = targets.normals[vertex]
     chord = np.linalg.norm(edge, axis=1)
     in_plane = np.linalg.norm(edge - _dot(edge, normal)[:, None] * normal, axis=1)
-    arc = 2.0 * chord**2 / np.where(chord > 0, chord + in_plane, 1.0)  # the circle-aware Hermite length
+    arc = (
+        2.0 * chord**2 / np.where(chord > 0, chord + in_plane, 1.0)
+    )  # the circle-aware Hermite length
     allowed = STAR_LENGTH_LIMIT * np.minimum(np.linalg.norm(wanted, axis=1), arc)
     ratio = np.linalg.norm(star, axis=1) / np.where(allowed > 0, allowed, np.inf)
     worst = np.zeros(count)
@@ -524,14 +648,22 @@ def _rim_stars(targets: Targets, base: SplitStar) -> SplitStar:
         return base
     k = topology.face_count[rims]
     owner, j, slot, t, own = fan_walk(targets, rims)
-    narrow = np.clip((np.minimum(own, 2.0 * np.pi - own) - _RIM_TURN_NONE) / (_RIM_TURN_FULL - _RIM_TURN_NONE), 0.0, 1.0)
+    narrow = np.clip(
+        (np.minimum(own, 2.0 * np.pi - own) - _RIM_TURN_NONE) / (_RIM_TURN_FULL - _RIM_TURN_NONE),
+        0.0,
+        1.0,
+    )
     weight = narrow * narrow * (3.0 - 2.0 * narrow)
     total = weight * own + (1.0 - weight) * np.pi
     theta = j * (total / k)[owner]
     c, s = np.cos(theta), np.sin(theta)
     cc, cs, ss = (np.bincount(owner, w, minlength=rims.size) for w in (c * c, c * s, s * s))
-    moment_c = np.stack([np.bincount(owner, c * t[:, d], minlength=rims.size) for d in range(3)], axis=1)
-    moment_s = np.stack([np.bincount(owner, s * t[:, d], minlength=rims.size) for d in range(3)], axis=1)
+    moment_c = np.stack(
+        [np.bincount(owner, c * t[:, d], minlength=rims.size) for d in range(3)], axis=1
+    )
+    moment_s = np.stack(
+        [np.bincount(owner, s * t[:, d], minlength=rims.size) for d in range(3)], axis=1
+    )
     det = cc * ss - cs * cs
     safe = np.where(det > 0, det, 1.0)[:, None]
     a = (ss[:, None] * moment_c - cs[:, None] * moment_s) / safe
@@ -572,7 +704,9 @@ def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
     or the vertex was refitted."""
     topology = targets.topology
     boundary = topology.is_boundary_vertex
-    eligible = ~base.refitted & np.where(boundary, topology.face_count >= 2, topology.valence % 2 == 1)
+    eligible = ~base.refitted & np.where(
+        boundary, topology.face_count >= 2, topology.valence % 2 == 1
+    )
     star, cosine, factor = base.star.copy(), base.cosine.copy(), base.factor.copy()
     size = topology.face_count + boundary  # slots in the fan: k + 1 on the boundary, n inside
     keys = np.unique(2 * size[eligible] + boundary[eligible])  # one group per (fan size, boundary)
@@ -584,19 +718,33 @@ def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
         e1 = _unit(first - _dot(first, normal)[:, None] * normal)
         e2 = np.cross(normal, e1)
         wanted = targets.tangents[slots]
-        goal = np.stack([_dot(wanted, e1[:, None]), _dot(wanted, e2[:, None])], axis=-1)  # (g, m, 2) in the plane
+        goal = np.stack(
+            [_dot(wanted, e1[:, None]), _dot(wanted, e2[:, None])], axis=-1
+        )  # (g, m, 2) in the plane
         sectors = m - 1 if is_open else m
         j = np.arange(sectors)
         nxt = (j + 1) % m
+
         def areas(fan: FloatArray) -> FloatArray:
             """(g, sectors): ``t_j × t_{j+1}`` of plane fans (g, m, 2)."""
             return fan[:, j, 0] * fan[:, nxt, 1] - fan[:, j, 1] * fan[:, nxt, 0]
 
         start_area = areas(goal)
         start_length = np.linalg.norm(goal, axis=-1)
-        posed = (start_area >= EQUAL_AREA_SINE * start_length[:, j] * start_length[:, nxt]).all(axis=1)
-        posed &= (start_length > 0).all(axis=1)  # every sector turns forward: the projection is well posed
-        vs, slots, wanted, goal, e1, e2 = vs[posed], slots[posed], wanted[posed], goal[posed], e1[posed], e2[posed]
+        posed = (start_area >= EQUAL_AREA_SINE * start_length[:, j] * start_length[:, nxt]).all(
+            axis=1
+        )
+        posed &= (start_length > 0).all(
+            axis=1
+        )  # every sector turns forward: the projection is well posed
+        vs, slots, wanted, goal, e1, e2 = (
+            vs[posed],
+            slots[posed],
+            wanted[posed],
+            goal[posed],
+            e1[posed],
+            e2[posed],
+        )
         if not vs.size:
             continue
         fan = goal.copy()
@@ -606,26 +754,45 @@ def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
             grad = np.zeros((len(vs), sectors, m, 2))  # ∂A_j / ∂(u, w)
             grad[:, j, j, 0], grad[:, j, j, 1] = w[:, nxt], -u[:, nxt]
             grad[:, j, nxt, 0], grad[:, j, nxt, 1] = -w[:, j], u[:, j]
-            jac = (grad[:, :-1] - grad[:, 1:]).reshape(len(vs), sectors - 1, 2 * m)  # rows: A_j − A_{j+1}
+            jac = (grad[:, :-1] - grad[:, 1:]).reshape(
+                len(vs), sectors - 1, 2 * m
+            )  # rows: A_j − A_{j+1}
             gap = area[:, :-1] - area[:, 1:]
             back = (goal - fan).reshape(len(vs), 2 * m)
             normal_matrix = jac @ jac.transpose(0, 2, 1)
-            normal_matrix += 1e-14 * np.trace(normal_matrix, axis1=1, axis2=2)[:, None, None] * np.eye(sectors - 1)
+            normal_matrix += (
+                1e-14
+                * np.trace(normal_matrix, axis1=1, axis2=2)[:, None, None]
+                * np.eye(sectors - 1)
+            )
             rhs = np.einsum("gcz,gz->gc", jac, back) + gap
             multiplier = np.linalg.solve(normal_matrix, rhs[..., None])[..., 0]
             fan = fan + (back - np.einsum("gcz,gc->gz", jac, multiplier)).reshape(len(vs), m, 2)
         area = areas(fan)
         length = np.linalg.norm(fan, axis=-1)
         turn = area / np.maximum(length[:, j] * length[:, nxt], 1e-300)
-        good = ((np.abs(area - area.mean(axis=1, keepdims=True)) <= EQUAL_AREA_RTOL * np.abs(area).mean(axis=1, keepdims=True))
-                .all(axis=1) & (turn >= EQUAL_AREA_SINE).all(axis=1))
+        good = (
+            np.abs(area - area.mean(axis=1, keepdims=True))
+            <= EQUAL_AREA_RTOL * np.abs(area).mean(axis=1, keepdims=True)
+        ).all(axis=1) & (turn >= EQUAL_AREA_SINE).all(axis=1)
         tangents = fan[..., :1] * e1[:, None] + fan[..., 1:] * e2[:, None]  # (g, m, 3)
-        lam = _dot(np.roll(tangents, 1, axis=1) + np.roll(tangents, -1, axis=1), tangents) / _dot(tangents, tangents)
-        shrink = _length_shrink(targets, tangents.reshape(-1, 3), wanted.reshape(-1, 3), slots.reshape(-1),
-                                np.repeat(vs, m), np.repeat(np.arange(len(vs)), m), len(vs))
+        lam = _dot(np.roll(tangents, 1, axis=1) + np.roll(tangents, -1, axis=1), tangents) / _dot(
+            tangents, tangents
+        )
+        shrink = _length_shrink(
+            targets,
+            tangents.reshape(-1, 3),
+            wanted.reshape(-1, 3),
+            slots.reshape(-1),
+            np.repeat(vs, m),
+            np.repeat(np.arange(len(vs)), m),
+            len(vs),
+        )
         keep = np.flatnonzero(good)
         star[slots[keep]] = tangents[keep] * shrink[keep, None, None]
-        inner = slice(1, m - 1) if is_open else slice(0, m)  # a boundary fan's rim slots have no relation
+        inner = (
+            slice(1, m - 1) if is_open else slice(0, m)
+        )  # a boundary fan's rim slots have no relation
         cosine[slots[keep, inner]] = 0.5 * lam[keep, inner]
         factor[vs[keep]] = shrink[keep]
     return SplitStar(star, cosine, base.refitted, factor < 1.0, factor)
@@ -636,8 +803,14 @@ Split4Parts = tuple[PatchSet, FloatArray, FloatArray, SplitStar]
 
 
 def split4_patches(
-    targets: Targets, corners: FloatArray, centre: FloatArray, scale: float, guide: FloatArray | None = None,
-    star: SplitStar | None = None, *, compiled: bool | None = None,
+    targets: Targets,
+    corners: FloatArray,
+    centre: FloatArray,
+    scale: float,
+    guide: FloatArray | None = None,
+    star: SplitStar | None = None,
+    *,
+    compiled: bool | None = None,
 ) -> Split4Parts:
     """The 4 F Bézier sub-patches (sub-patch ``4 f + k`` at corner k of face f), and the positions
     and unit surface normals of the edge midpoints and face centres, each stacked as (E + F, 3).
@@ -657,7 +830,9 @@ def split4_patches(
     :data:`KERNEL_FACES` faces on. The two agree to rounding (tests/test_split4_kernels.py).
     """
     if guide is not None and np.shape(guide) != (targets.topology.n_faces, 7, 7, 3):
-        raise InputError(f"guide: expected shape ({targets.topology.n_faces}, 7, 7, 3), got {np.shape(guide)}")
+        raise InputError(
+            f"guide: expected shape ({targets.topology.n_faces}, 7, 7, 3), got {np.shape(guide)}"
+        )
     topology = targets.topology
     n_faces = topology.n_faces
     pos = targets.positions
@@ -673,11 +848,22 @@ def split4_patches(
     x_of, y_of = topology.origin(h_l), topology.target(h_l)
     mu = _chain_shears(topology, ends, compiled=compiled)
     if compiled:
-        control, extra, extra_normals = _compiled_patches(targets, corners, centre, scale, guide, stars, mu)
+        control, extra, extra_normals = _compiled_patches(
+            targets, corners, centre, scale, guide, stars, mu
+        )
         return PatchSet(control.reshape(-1, 4, 4, 3)), extra, extra_normals, stars
     slot_out, slot_in = halfedge_slots(topology)
     curve = np.stack(
-        _edge_curves(pos[x_of], pos[y_of], star[slot_out[h_l]], star[slot_in[h_l]], mu, ends[:, 0], ends[:, 1]), axis=1
+        _edge_curves(
+            pos[x_of],
+            pos[y_of],
+            star[slot_out[h_l]],
+            star[slot_in[h_l]],
+            mu,
+            ends[:, 0],
+            ends[:, 1],
+        ),
+        axis=1,
     )  # (E, 5, 3): P1, P2, M, P4, P5
     p1, p2, m, p4, p5 = (curve[:, i] for i in range(5))
     del star
@@ -693,7 +879,9 @@ def split4_patches(
         """Per half-edge, curve point ``at_x`` of its edge when ``origin_side`` is the X side, else ``at_y``."""
         return flat_curve[5 * edge_of + np.where(origin_side, at_x, at_y)]
 
-    moved, shift = _even_vertex_shifts(topology, 2.0 * stars.cosine[topology.neighbor_offsets[:-1]], curve, mu, pos)
+    moved, shift = _even_vertex_shifts(
+        topology, 2.0 * stars.cosine[topology.neighbor_offsets[:-1]], curve, mu, pos
+    )
     curve[moved, 1:4] += shift[:, None]
     o1, o2 = on_side(0, 4, canonical), on_side(1, 3, canonical)  # from the origin of h
     d1, d2 = on_side(0, 4, ~canonical), on_side(1, 3, ~canonical)  # from the target of h
@@ -705,7 +893,9 @@ def split4_patches(
     # shorter than the net's, so the net's full detail would overhang them
     own = _own_quantities(targets, guide)  # (4F, 7, 3) per half-edge, frame of its corner
     own[:, :_TWIST_VERTEX] *= np.repeat(stars.factor[topology.faces].min(axis=1), 4)[:, None, None]
-    own[:, _TWIST_VERTEX] *= stars.factor[topology.faces.reshape(-1), None]  # the twist at V shrinks with its star
+    own[:, _TWIST_VERTEX] *= stars.factor[
+        topology.faces.reshape(-1), None
+    ]  # the twist at V shrinks with its star
     prev = QuadTopology.prev(halfedges)
     t_x = 3.0 * (p2 - m)
 
@@ -714,7 +904,11 @@ def split4_patches(
     # stay opposite)
     mids = m[edge_of].reshape(n_faces, 4, 3)
     own_face = own.reshape(n_faces, 4, -1, 3)
-    centres = 0.5 * mids.sum(axis=1) - 0.25 * pos[topology.faces].sum(axis=1) + own_face[:, :, _CENTRE].mean(axis=1)
+    centres = (
+        0.5 * mids.sum(axis=1)
+        - 0.25 * pos[topology.faces].sum(axis=1)
+        + own_face[:, :, _CENTRE].mean(axis=1)
+    )
     arms = mids / 6.0 + 0.5 * own_face[:, :, _CROSS]
     b = centres[:, None] + arms - np.roll(arms, -2, axis=1)
     del own_face, arms
@@ -746,7 +940,9 @@ def split4_patches(
 
     # -- original vertices: F_{j−1} + F_j = R_j over the interior ring edges
     origin = topology.faces.reshape(-1)
-    lam = 2.0 * np.where(canonical, ends[edge_of, 0], ends[edge_of, 1])  # λ_j of the slot of h at its origin
+    lam = 2.0 * np.where(
+        canonical, ends[edge_of, 0], ends[edge_of, 1]
+    )  # λ_j of the slot of h at its origin
     rhs = 2.0 * o1 + (2.0 * lam[:, None] * (o2 - o1) - slope[:, None] * (o1 - pos[origin])) / 3.0
     del corner_points
     boundary = topology.is_boundary_vertex
@@ -779,14 +975,20 @@ def split4_patches(
     twist[pair[0], 1], twist[pair[1], 2] = solved[:, 0], solved[:, 1]
 
     # -- centres: K_k + K_{k+1} = 2 b_k (the C1 parallelogram rule)
-    twist[:, 3] = _min_norm(_cycle(4, closed=True), 2.0 * np.roll(b, 1, axis=1), twist[:, 3].reshape(-1, 4, 3)).reshape(-1, 3)
+    twist[:, 3] = _min_norm(
+        _cycle(4, closed=True), 2.0 * np.roll(b, 1, axis=1), twist[:, 3].reshape(-1, 4, 3)
+    ).reshape(-1, 3)
     del rhs
 
     # -- sub-patch k in the frame of corner k, back to the input coordinates, corners exact
-    control = _assemble((o1, o2, m_h, d1, d2, seam, b_flat), centres, twist, corners[topology.faces], scale, centre)
+    control = _assemble(
+        (o1, o2, m_h, d1, d2, seam, b_flat), centres, twist, corners[topology.faces], scale, centre
+    )
     del o1, o2, m_h, d1, d2, seam, twist
     extra = np.concatenate([m, centres]) * scale + centre
-    extra_normals = np.concatenate([_unit(n_m), _unit(np.cross(b[:, 0] - b[:, 2], b[:, 1] - b[:, 3]))])
+    extra_normals = np.concatenate(
+        [_unit(n_m), _unit(np.cross(b[:, 0] - b[:, 2], b[:, 1] - b[:, 3]))]
+    )
     return PatchSet(control.reshape(-1, 4, 4, 3)), extra, extra_normals, stars
 
 
@@ -795,7 +997,7 @@ def macro_nets(control: FloatArray) -> FloatArray:
     sub = control.reshape(-1, 4, 4, 4, 3)
     nets = np.empty((sub.shape[0], 7, 7, 3))
     for k, (a, b) in enumerate(_SUB_ORIGIN):
-        nets[:, a:a + 4, b:b + 4] = sub[:, k]
+        nets[:, a : a + 4, b : b + 4] = sub[:, k]
     return nets
 
 
@@ -807,14 +1009,21 @@ def bspline_nets(source: PatchNetwork | PatchSet) -> FloatArray:
     """
     patches = source.patches if isinstance(source, PatchNetwork) else source
     if not isinstance(patches, PatchSet) or patches.form != "bezier" or len(patches) % 4:
-        raise InputError("bspline_nets: expected the Bézier sub-patches of a split4 network (4 per quad)")
+        raise InputError(
+            "bspline_nets: expected the Bézier sub-patches of a split4 network (4 per quad)"
+        )
     keep = np.array([0, 1, 2, 4, 5, 6])
     return np.ascontiguousarray(macro_nets(patches.world_control())[:, keep][:, :, keep])
 
 
 def _split4_network(
-    topology: QuadTopology, patches: PatchSet, points: FloatArray, point_normals: FloatArray, provenance: dict[str, str],
-    *, compiled: bool | None = None,
+    topology: QuadTopology,
+    patches: PatchSet,
+    points: FloatArray,
+    point_normals: FloatArray,
+    provenance: dict[str, str],
+    *,
+    compiled: bool | None = None,
 ) -> PatchNetwork:
     """Connectivity of the 4 F sub-patches. Sub-patch k of face f has local corner k at V_k,
     k+1 at MID[k], k+2 at C, k+3 at MID[k−1]; its local edge k is the first half of half-edge
@@ -827,13 +1036,41 @@ def _split4_network(
     if (n_faces >= KERNEL_FACES) if compiled is None else compiled:
         from ..kernels import in_chunks, jit_kernel
 
-        corner, edge_id, neighbor, neighbor_edge = (np.empty((n_faces, 4, 4), dtype=np.int64) for _ in range(4))
+        corner, edge_id, neighbor, neighbor_edge = (
+            np.empty((n_faces, 4, 4), dtype=np.int64) for _ in range(4)
+        )
         reversed_ = np.empty((n_faces, 4, 4), dtype=bool)
         kernel = jit_kernel(_network_kernel)
-        in_chunks(lambda lo, hi: kernel(topology.faces, topology.halfedge_edge, topology.edge_halfedges, topology.twin,
-                                        nv, corner, edge_id, reversed_, neighbor, neighbor_edge, lo, hi), n_faces)
-        return _network_of(patches, n_edges, n_faces, corner, edge_id, reversed_, neighbor, neighbor_edge, points,
-                           point_normals, provenance)
+        in_chunks(
+            lambda lo, hi: kernel(
+                topology.faces,
+                topology.halfedge_edge,
+                topology.edge_halfedges,
+                topology.twin,
+                nv,
+                corner,
+                edge_id,
+                reversed_,
+                neighbor,
+                neighbor_edge,
+                lo,
+                hi,
+            ),
+            n_faces,
+        )
+        return _network_of(
+            patches,
+            n_edges,
+            n_faces,
+            corner,
+            edge_id,
+            reversed_,
+            neighbor,
+            neighbor_edge,
+            points,
+            point_normals,
+            provenance,
+        )
     h = np.arange(4 * n_faces).reshape(n_faces, 4)  # half-edge k = sub-patch k of face f
     k = np.arange(4)
     prev = QuadTopology.prev(h)
@@ -843,7 +1080,12 @@ def _split4_network(
     edge = topology.halfedge_edge
 
     corner = np.empty((n_faces, 4, 4), dtype=np.int64)  # [f, sub-patch, local corner]
-    by_role = [topology.faces, nv + edge[h], np.broadcast_to(nv + n_edges + np.arange(n_faces)[:, None], h.shape), nv + edge[prev]]
+    by_role = [
+        topology.faces,
+        nv + edge[h],
+        np.broadcast_to(nv + n_edges + np.arange(n_faces)[:, None], h.shape),
+        nv + edge[prev],
+    ]
     edge_id = np.empty_like(corner)
     reversed_ = np.empty(corner.shape, dtype=bool)
     neighbor = np.empty_like(corner)
@@ -856,9 +1098,24 @@ def _split4_network(
     second_half = 2 * edge[prev] + canonical[prev]
     twin_h, twin_prev = twin[h], twin[prev]
     cases = [
-        (first_half, ~canonical[h], np.where(twin_h >= 0, QuadTopology.next(twin_h), -1), twin_h & 3),
-        (seam, np.zeros(h.shape, bool), 4 * (h >> 2) + (k + 1) % 4, np.broadcast_to((k + 3) % 4, h.shape)),
-        (seam[:, (k - 1) % 4], np.ones(h.shape, bool), 4 * (h >> 2) + (k - 1) % 4, np.broadcast_to(k, h.shape)),
+        (
+            first_half,
+            ~canonical[h],
+            np.where(twin_h >= 0, QuadTopology.next(twin_h), -1),
+            twin_h & 3,
+        ),
+        (
+            seam,
+            np.zeros(h.shape, bool),
+            4 * (h >> 2) + (k + 1) % 4,
+            np.broadcast_to((k + 3) % 4, h.shape),
+        ),
+        (
+            seam[:, (k - 1) % 4],
+            np.ones(h.shape, bool),
+            4 * (h >> 2) + (k - 1) % 4,
+            np.broadcast_to(k, h.shape),
+        ),
         (second_half, ~canonical[prev], twin_prev, twin_prev & 3),
     ]
     for r, (ids, rev, other, other_edge) in enumerate(cases):
@@ -867,13 +1124,33 @@ def _split4_network(
         reversed_[:, rows[0], rows[1]] = rev[:, rows[0]]
         neighbor[:, rows[0], rows[1]] = np.where(other >= 0, other, -1)[:, rows[0]]
         neighbor_edge[:, rows[0], rows[1]] = np.where(other >= 0, other_edge, -1)[:, rows[0]]
-    return _network_of(patches, n_edges, n_faces, corner, edge_id, reversed_, neighbor, neighbor_edge, points,
-                       point_normals, provenance)
+    return _network_of(
+        patches,
+        n_edges,
+        n_faces,
+        corner,
+        edge_id,
+        reversed_,
+        neighbor,
+        neighbor_edge,
+        points,
+        point_normals,
+        provenance,
+    )
 
 
 def _network_of(
-    patches: PatchSet, n_edges: int, n_faces: int, corner: IntArray, edge_id: IntArray, reversed_: NDArray[np.bool_],
-    neighbor: IntArray, neighbor_edge: IntArray, points: FloatArray, point_normals: FloatArray, provenance: dict[str, str],
+    patches: PatchSet,
+    n_edges: int,
+    n_faces: int,
+    corner: IntArray,
+    edge_id: IntArray,
+    reversed_: NDArray[np.bool_],
+    neighbor: IntArray,
+    neighbor_edge: IntArray,
+    points: FloatArray,
+    point_normals: FloatArray,
+    provenance: dict[str, str],
 ) -> PatchNetwork:
     """The :class:`PatchNetwork` of the (F, 4, 4) connectivity arrays (sub-patch rows 4f + k)."""
     shape = (4 * n_faces, 4)
@@ -893,8 +1170,13 @@ def _network_of(
 
 
 def split4_network_from_targets(
-    mesh: QuadMesh, targets: Targets, frame: Frame, provenance: dict[str, str], seam_edges: ArrayLike | None = None,
-    guide: FloatArray | None = None, parts: Split4Parts | None = None,
+    mesh: QuadMesh,
+    targets: Targets,
+    frame: Frame,
+    provenance: dict[str, str],
+    seam_edges: ArrayLike | None = None,
+    guide: FloatArray | None = None,
+    parts: Split4Parts | None = None,
 ) -> PatchNetwork:
     """The 2×2-split bicubic network of ``targets`` (in the local coordinates of ``frame``):
     polynomial, exactly G1 on mesh edges and seams, C1 inside each quad, interpolating the mesh
@@ -909,11 +1191,21 @@ def split4_network_from_targets(
     if parts is None:
         parts = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide)
     patches, extra, extra_normals, stars = parts
-    return split4_network_from_parts(mesh, patches, extra, extra_normals, targets.normals, frame,
-                                     split4_provenance(provenance, targets, stars), seam_edges)
+    return split4_network_from_parts(
+        mesh,
+        patches,
+        extra,
+        extra_normals,
+        targets.normals,
+        frame,
+        split4_provenance(provenance, targets, stars),
+        seam_edges,
+    )
 
 
-def split4_provenance(provenance: dict[str, str], targets: Targets, stars: SplitStar) -> dict[str, str]:
+def split4_provenance(
+    provenance: dict[str, str], targets: Targets, stars: SplitStar
+) -> dict[str, str]:
     """``provenance`` with split4's counts: ``fallback_vertices``, the vertices whose rule fell back
     or whose fan was refitted to spread directions, and ``star_safeguard_vertices``, those whose
     star the length safeguard scaled down."""
@@ -925,8 +1217,14 @@ def split4_provenance(provenance: dict[str, str], targets: Targets, stars: Split
 
 
 def split4_network_from_parts(
-    mesh: QuadMesh, patches: PatchSet, extra: FloatArray, extra_normals: FloatArray, normals: FloatArray, frame: Frame,
-    provenance: dict[str, str], seam_edges: ArrayLike | None = None,
+    mesh: QuadMesh,
+    patches: PatchSet,
+    extra: FloatArray,
+    extra_normals: FloatArray,
+    normals: FloatArray,
+    frame: Frame,
+    provenance: dict[str, str],
+    seam_edges: ArrayLike | None = None,
 ) -> PatchNetwork:
     """:func:`split4_network_from_targets` of assembled parts (:func:`split4_patches`: ``patches``,
     the midpoints and centres ``extra`` and their normals, in the local coordinates of ``frame``)
@@ -934,16 +1232,24 @@ def split4_network_from_parts(
     targets and stars first builds the network's arrays without them (the build's peak, DESIGN §6)."""
     patches = patches.with_frame(frame)
     points = np.empty((mesh.topology.n_vertices + len(extra), 3))
-    points[:mesh.topology.n_vertices] = mesh.vertices
-    frame.to_world(extra, out=points[mesh.topology.n_vertices:])  # the midpoints and centres, without a copy
+    points[: mesh.topology.n_vertices] = mesh.vertices
+    frame.to_world(
+        extra, out=points[mesh.topology.n_vertices :]
+    )  # the midpoints and centres, without a copy
     point_normals = np.concatenate([normals, extra_normals])
     network = _split4_network(mesh.topology, patches, points, point_normals, provenance)
     if seam_edges is None:
         return network
     sharp = np.asarray(seam_edges)
     if sharp.shape != (mesh.topology.n_edges,):
-        raise InputError(f"seam_edges: expected shape ({mesh.topology.n_edges},), one per mesh edge, got {sharp.shape}")
-    return network.with_seams(np.concatenate([np.repeat(sharp, 2), np.zeros(4 * mesh.topology.n_faces, dtype=sharp.dtype)]))
+        raise InputError(
+            f"seam_edges: expected shape ({mesh.topology.n_edges},), one per mesh edge, got {sharp.shape}"
+        )
+    return network.with_seams(
+        np.concatenate(
+            [np.repeat(sharp, 2), np.zeros(4 * mesh.topology.n_faces, dtype=sharp.dtype)]
+        )
+    )
 
 
 # -- the compiled path of split4_patches: the same formulas, item by item, in five passes that write
@@ -970,13 +1276,23 @@ def _sparse(weights: FloatArray) -> tuple[IntArray, IntArray, FloatArray]:
     values = np.zeros(terms.shape)
     for k, c in np.ndindex(counts.shape):
         (nonzero,) = np.nonzero(weights[k, c])
-        terms[k, c, :nonzero.size], values[k, c, :nonzero.size] = nonzero, weights[k, c, nonzero]
+        terms[k, c, : nonzero.size], values[k, c, : nonzero.size] = nonzero, weights[k, c, nonzero]
     return counts, terms, values
 
 
-def _curve_kernel(pos: FloatArray, star: FloatArray, ends: FloatArray, mu: FloatArray, edge_halfedges: IntArray,
-                  origin: IntArray, slot_out: NDArray[np.int32], slot_in: NDArray[np.int32], curve: FloatArray,
-                  lo: int, hi: int) -> None:
+def _curve_kernel(
+    pos: FloatArray,
+    star: FloatArray,
+    ends: FloatArray,
+    mu: FloatArray,
+    edge_halfedges: IntArray,
+    origin: IntArray,
+    slot_out: NDArray[np.int32],
+    slot_in: NDArray[np.int32],
+    curve: FloatArray,
+    lo: int,
+    hi: int,
+) -> None:
     """:func:`_edge_curves` of edges ``lo:hi`` into ``curve`` (E, 5, 3): ``P1 = X + T_XY/6``,
     ``M = (X + Y)/2 + (T_XY + T_YX)/8``, ``P2, P4 = M ± δ (P1 − P5)/2``, ``P5 = Y + T_YX/6``."""
     for e in range(lo, hi):
@@ -998,13 +1314,36 @@ def _curve_kernel(pos: FloatArray, star: FloatArray, ends: FloatArray, mu: Float
             curve[e, 4, d] = p5
 
 
-def _face_kernel(pos: FloatArray, tangents: FloatArray, interior: FloatArray, faces: IntArray, halfedge_edge: IntArray,
-                 edge_halfedges: IntArray, slot_out: NDArray[np.int32], slot_in: NDArray[np.int32], curve: FloatArray,
-                 factor: FloatArray, counts: IntArray, terms: IntArray, weights: FloatArray, guide: FloatArray,
-                 use_guide: bool, place: IntArray, net_corner: IntArray, net_out: IntArray, net_in: IntArray,
-                 net_interior: IntArray, n_edges: int,
-                 scale: float, centre: FloatArray, control: FloatArray, extra: FloatArray, extra_normals: FloatArray,
-                 lo: int, hi: int) -> None:
+def _face_kernel(
+    pos: FloatArray,
+    tangents: FloatArray,
+    interior: FloatArray,
+    faces: IntArray,
+    halfedge_edge: IntArray,
+    edge_halfedges: IntArray,
+    slot_out: NDArray[np.int32],
+    slot_in: NDArray[np.int32],
+    curve: FloatArray,
+    factor: FloatArray,
+    counts: IntArray,
+    terms: IntArray,
+    weights: FloatArray,
+    guide: FloatArray,
+    use_guide: bool,
+    place: IntArray,
+    net_corner: IntArray,
+    net_out: IntArray,
+    net_in: IntArray,
+    net_interior: IntArray,
+    n_edges: int,
+    scale: float,
+    centre: FloatArray,
+    control: FloatArray,
+    extra: FloatArray,
+    extra_normals: FloatArray,
+    lo: int,
+    hi: int,
+) -> None:
     """Faces ``lo:hi``: the net's quantities ``Σ_n w[k, c, n] net_n`` (the targets' bicubic, or the
     guide; the nonzero weights in n order: ``counts[k, c]`` of them, at ``terms[k, c]``), scaled by the stars' factors; ``C = ΣM/2 − ΣV/4 + Σ own_centre/4``, arms
     ``a_k = M_k/6 + own_cross/2``, ``b_k = C + a_k − a_{k+2}``; the curve points, b and C into each
@@ -1027,7 +1366,9 @@ def _face_kernel(pos: FloatArray, tangents: FloatArray, interior: FloatArray, fa
                     net[net_out[k], d] = pos[a, d] + tangents[slot_out[h], d] / 3.0
                     net[net_in[k], d] = pos[z, d] + tangents[slot_in[h], d] / 3.0
                     net[net_interior[k], d] = 0.5 * (interior[f, k, 0, d] + interior[f, k, 1, d])
-        least = min(factor[faces[f, 0]], factor[faces[f, 1]], factor[faces[f, 2]], factor[faces[f, 3]])
+        least = min(
+            factor[faces[f, 0]], factor[faces[f, 1]], factor[faces[f, 2]], factor[faces[f, 3]]
+        )
         for k in range(4):
             for q in range(7):
                 total0, total1, total2 = 0.0, 0.0, 0.0
@@ -1037,7 +1378,11 @@ def _face_kernel(pos: FloatArray, tangents: FloatArray, interior: FloatArray, fa
                     total1 += w * net[n, 1]
                     total2 += w * net[n, 2]
                 scaled = least if q < 6 else factor[faces[f, k]]
-                own[k, q, 0], own[k, q, 1], own[k, q, 2] = total0 * scaled, total1 * scaled, total2 * scaled
+                own[k, q, 0], own[k, q, 1], own[k, q, 2] = (
+                    total0 * scaled,
+                    total1 * scaled,
+                    total2 * scaled,
+                )
         for d in range(3):
             mids, corners, centres = 0.0, 0.0, 0.0
             for k in range(4):
@@ -1046,8 +1391,14 @@ def _face_kernel(pos: FloatArray, tangents: FloatArray, interior: FloatArray, fa
                 centres += own[k, 0, d]
             c[d] = 0.5 * mids - 0.25 * corners + centres / 4.0
             for k in range(4):
-                b[k, d] = c[d] + (curve[halfedge_edge[4 * f + k], 2, d] / 6.0 + 0.5 * own[k, 1, d]) - (
-                    curve[halfedge_edge[4 * f + ((k + 2) & 3)], 2, d] / 6.0 + 0.5 * own[(k + 2) & 3, 1, d])
+                b[k, d] = (
+                    c[d]
+                    + (curve[halfedge_edge[4 * f + k], 2, d] / 6.0 + 0.5 * own[k, 1, d])
+                    - (
+                        curve[halfedge_edge[4 * f + ((k + 2) & 3)], 2, d] / 6.0
+                        + 0.5 * own[(k + 2) & 3, 1, d]
+                    )
+                )
         for k in range(4):
             h = 4 * f + k
             hp = 4 * f + ((k + 3) & 3)
@@ -1080,10 +1431,22 @@ def _face_kernel(pos: FloatArray, tangents: FloatArray, interior: FloatArray, fa
             extra[n_edges + f, d] = c[d] * scale + centre[d]
 
 
-def _edge_kernel(curve: FloatArray, mu: FloatArray, ends: FloatArray, edge_halfedges: IntArray,
-                 place: IntArray, inner_operator: FloatArray, outer_operator: FloatArray, scale: float,
-                 centre: FloatArray, control: FloatArray, extra: FloatArray, extra_normals: FloatArray,
-                 lo: int, hi: int) -> None:
+def _edge_kernel(
+    curve: FloatArray,
+    mu: FloatArray,
+    ends: FloatArray,
+    edge_halfedges: IntArray,
+    place: IntArray,
+    inner_operator: FloatArray,
+    outer_operator: FloatArray,
+    scale: float,
+    centre: FloatArray,
+    control: FloatArray,
+    extra: FloatArray,
+    extra_normals: FloatArray,
+    lo: int,
+    hi: int,
+) -> None:
     """Edges ``lo:hi``: the star at M, ``t_L + t_R = μ t_X`` with ``t_X = 3 (P2 − M)``, each side
     its seam slot's ``C − M + own`` minus half the gap; the seam points ``M + t/3`` on both sides of
     both sub-patches; the midpoint twists' targets (``P + e − M`` plus the net's offset) moved onto
@@ -1105,7 +1468,13 @@ def _edge_kernel(curve: FloatArray, mu: FloatArray, ends: FloatArray, edge_halfe
         nr = (hr & ~3) | ((hr + 1) & 3)
         fnr, knr = nr >> 2, nr & 3
         for d in range(3):
-            p1, p2, m, p4, p5 = curve[e, 0, d], curve[e, 1, d], curve[e, 2, d], curve[e, 3, d], curve[e, 4, d]
+            p1, p2, m, p4, p5 = (
+                curve[e, 0, d],
+                curve[e, 1, d],
+                curve[e, 2, d],
+                curve[e, 3, d],
+                curve[e, 4, d],
+            )
             seam_l = control[hl, place[kl, 3, 1] + d]
             seam_r = control[hr, place[kr, 3, 1] + d] if inside else 0.0
             t_x[d] = 3.0 * (p2 - m)
@@ -1120,8 +1489,12 @@ def _edge_kernel(curve: FloatArray, mu: FloatArray, ends: FloatArray, edge_halfe
                 stacked[1, d] = p2 + e_r[d] - m + control[nr, place[knr, 1, 2] + d]
                 stacked[2, d] = p4 + e_l[d] - m + control[nl, place[knl, 1, 2] + d]
                 stacked[3, d] = p4 + e_r[d] - m + control[hr, place[kr, 2, 1] + d]
-                stacked[4, d] = 2.0 * p2 + (2.0 * ends[e, 0] * (m - p2) - 2.0 * mu[e] * (p2 - p1)) / 3.0
-                stacked[5, d] = 2.0 * p4 + (2.0 * ends[e, 1] * (m - p4) + 2.0 * mu[e] * (p4 - p5)) / 3.0
+                stacked[4, d] = (
+                    2.0 * p2 + (2.0 * ends[e, 0] * (m - p2) - 2.0 * mu[e] * (p2 - p1)) / 3.0
+                )
+                stacked[5, d] = (
+                    2.0 * p4 + (2.0 * ends[e, 1] * (m - p4) + 2.0 * mu[e] * (p4 - p5)) / 3.0
+                )
                 stacked[6, d] = 2.0 * e_l[d]
                 stacked[7, d] = 2.0 * e_r[d]
             else:
@@ -1155,10 +1528,23 @@ def _edge_kernel(curve: FloatArray, mu: FloatArray, ends: FloatArray, edge_halfe
                 control[nl, place[knl, 1, 2] + d] = solved[1]
 
 
-def _vertex_kernel(pos: FloatArray, curve: FloatArray, mu: FloatArray, ends: FloatArray, halfedge_edge: IntArray,
-                   edge_halfedges: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray,
-                   is_boundary: NDArray[np.bool_], table: IntArray, operators: FloatArray, place: IntArray,
-                   control: FloatArray, lo: int, hi: int) -> None:
+def _vertex_kernel(
+    pos: FloatArray,
+    curve: FloatArray,
+    mu: FloatArray,
+    ends: FloatArray,
+    halfedge_edge: IntArray,
+    edge_halfedges: IntArray,
+    ring_offsets: IntArray,
+    ring_halfedges: IntArray,
+    is_boundary: NDArray[np.bool_],
+    table: IntArray,
+    operators: FloatArray,
+    place: IntArray,
+    control: FloatArray,
+    lo: int,
+    hi: int,
+) -> None:
     """Vertices ``lo:hi``: the twist targets at V of their ring's sub-patches (``P1 + P1' − V`` plus
     the net's offset in the slot) moved onto ``F_{j−1} + F_j = R_j``,
     ``R_j = 2 P1_j + (2 λ_j (P2_j − P1_j) − m_j (P1_j − v))/3`` (rows j ≥ 1 at a boundary vertex),
@@ -1183,7 +1569,9 @@ def _vertex_kernel(pos: FloatArray, curve: FloatArray, mu: FloatArray, ends: Flo
                 o1, o2 = curve[e, near, d], curve[e, 1 + near // 2, d]
                 stacked[j, d] = o1 + curve[ep, far, d] - pos[v, d] + control[h, slot + d]
                 if j >= is_open:
-                    stacked[n + j - is_open, d] = 2.0 * o1 + (2.0 * lam * (o2 - o1) - slope * (o1 - pos[v, d])) / 3.0
+                    stacked[n + j - is_open, d] = (
+                        2.0 * o1 + (2.0 * lam * (o2 - o1) - slope * (o1 - pos[v, d])) / 3.0
+                    )
         offset = table[is_open, n]
         columns = 2 * n - is_open
         for j in range(n):
@@ -1199,8 +1587,17 @@ def _vertex_kernel(pos: FloatArray, curve: FloatArray, mu: FloatArray, ends: Flo
                 control[h, slot + d] = total
 
 
-def _centre_kernel(corners: FloatArray, faces: IntArray, operator: FloatArray, place: IntArray, scale: float,
-                   centre: FloatArray, control: FloatArray, lo: int, hi: int) -> None:
+def _centre_kernel(
+    corners: FloatArray,
+    faces: IntArray,
+    operator: FloatArray,
+    place: IntArray,
+    scale: float,
+    centre: FloatArray,
+    control: FloatArray,
+    lo: int,
+    hi: int,
+) -> None:
     """Faces ``lo:hi``: the twists at C (``b_k + b_{k−1} − C`` plus the net's offset in the slot)
     moved onto ``K_k + K_{k+1} = 2 b_k`` by the min-norm operator; then every point to
     ``x · scale + centre``, the corners at mesh vertices ``corners``."""
@@ -1210,8 +1607,12 @@ def _centre_kernel(corners: FloatArray, faces: IntArray, operator: FloatArray, p
             h = 4 * f + k
             for d in range(3):
                 b_prev = control[h, place[k, 2, 3] + d]
-                stacked[k, d] = (control[h, place[k, 3, 2] + d] + b_prev
-                                 - control[h, place[k, 3, 3] + d] + control[h, place[k, 2, 2] + d])
+                stacked[k, d] = (
+                    control[h, place[k, 3, 2] + d]
+                    + b_prev
+                    - control[h, place[k, 3, 3] + d]
+                    + control[h, place[k, 2, 2] + d]
+                )
                 stacked[4 + k, d] = 2.0 * b_prev
         for k in range(4):
             h = 4 * f + k
@@ -1228,7 +1629,12 @@ def _centre_kernel(corners: FloatArray, faces: IntArray, operator: FloatArray, p
 
 
 def _compiled_patches(
-    targets: Targets, corners: FloatArray, centre: FloatArray, scale: float, guide: FloatArray | None, stars: SplitStar,
+    targets: Targets,
+    corners: FloatArray,
+    centre: FloatArray,
+    scale: float,
+    guide: FloatArray | None,
+    stars: SplitStar,
     mu: FloatArray,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """:func:`split4_patches`' controls (4F, 48), extra points and normals by the kernels
@@ -1241,33 +1647,98 @@ def _compiled_patches(
     pos = np.ascontiguousarray(targets.positions, dtype=np.float64)
     star = np.ascontiguousarray(stars.star)
     ends = np.ascontiguousarray(edge_end_cosines(topology, stars.cosine))
-    origin, edge_halfedges, halfedge_edge = topology.faces.reshape(-1), topology.edge_halfedges, topology.halfedge_edge
+    origin, edge_halfedges, halfedge_edge = (
+        topology.faces.reshape(-1),
+        topology.edge_halfedges,
+        topology.halfedge_edge,
+    )
     slot_out, slot_in = slot_tables(topology)
     centre = np.asarray(centre, dtype=np.float64).reshape(3)
     scale = float(scale)
 
     curve = np.empty((n_edges, 5, 3))
     kernel = jit_kernel(_curve_kernel)
-    in_chunks(lambda lo, hi: kernel(pos, star, ends, mu, edge_halfedges, origin, slot_out, slot_in, curve, lo, hi), n_edges)
-    moved, shift = _even_vertex_shifts(topology, 2.0 * stars.cosine[topology.neighbor_offsets[:-1]], curve, mu, pos)
+    in_chunks(
+        lambda lo, hi: kernel(
+            pos, star, ends, mu, edge_halfedges, origin, slot_out, slot_in, curve, lo, hi
+        ),
+        n_edges,
+    )
+    moved, shift = _even_vertex_shifts(
+        topology, 2.0 * stars.cosine[topology.neighbor_offsets[:-1]], curve, mu, pos
+    )
     curve[moved, 1:4] += shift[:, None]
 
     control = np.empty((4 * n_faces, 48))  # row h = 4f + k: sub-patch k's 4×4×3 points
     extra = np.empty((n_edges + n_faces, 3))
     extra_normals = np.empty((n_edges + n_faces, 3))
     counts, terms, weights = _sparse(_NET_WEIGHTS if guide is None else _MACRO_WEIGHTS)
-    nets = np.zeros((1, 49, 3)) if guide is None else np.ascontiguousarray(guide, dtype=np.float64).reshape(n_faces, 49, 3)
-    tangents, interior = np.ascontiguousarray(targets.tangents), np.ascontiguousarray(targets.interior)
+    nets = (
+        np.zeros((1, 49, 3))
+        if guide is None
+        else np.ascontiguousarray(guide, dtype=np.float64).reshape(n_faces, 49, 3)
+    )
+    tangents, interior = (
+        np.ascontiguousarray(targets.tangents),
+        np.ascontiguousarray(targets.interior),
+    )
     factor = np.ascontiguousarray(stars.factor)
     kernel = jit_kernel(_face_kernel)
-    in_chunks(lambda lo, hi: kernel(pos, tangents, interior, topology.faces, halfedge_edge, edge_halfedges, slot_out, slot_in,
-                                    curve, factor, counts, terms, weights, nets, guide is not None, _PLACE, _NET_CORNER, _NET_OUT, _NET_IN,
-                                    _NET_INTERIOR, n_edges, scale, centre, control, extra, extra_normals, lo, hi), n_faces)
+    in_chunks(
+        lambda lo, hi: kernel(
+            pos,
+            tangents,
+            interior,
+            topology.faces,
+            halfedge_edge,
+            edge_halfedges,
+            slot_out,
+            slot_in,
+            curve,
+            factor,
+            counts,
+            terms,
+            weights,
+            nets,
+            guide is not None,
+            _PLACE,
+            _NET_CORNER,
+            _NET_OUT,
+            _NET_IN,
+            _NET_INTERIOR,
+            n_edges,
+            scale,
+            centre,
+            control,
+            extra,
+            extra_normals,
+            lo,
+            hi,
+        ),
+        n_faces,
+    )
 
     inner, outer = _operator(_MIDPOINT), _operator(np.ones((1, 2)))
     kernel = jit_kernel(_edge_kernel)
-    in_chunks(lambda lo, hi: kernel(curve, mu, ends, edge_halfedges, _PLACE, inner, outer, scale, centre,
-                                    control, extra, extra_normals, lo, hi), n_edges)
+    in_chunks(
+        lambda lo, hi: kernel(
+            curve,
+            mu,
+            ends,
+            edge_halfedges,
+            _PLACE,
+            inner,
+            outer,
+            scale,
+            centre,
+            control,
+            extra,
+            extra_normals,
+            lo,
+            hi,
+        ),
+        n_edges,
+    )
 
     boundary = topology.is_boundary_vertex
     table = np.full((2, int(topology.face_count.max()) + 1), -1, dtype=np.int64)
@@ -1282,21 +1753,54 @@ def _compiled_patches(
                 size += operators[-1].size
     flat = np.concatenate(operators)
     kernel = jit_kernel(_vertex_kernel)
-    in_chunks(lambda lo, hi: kernel(pos, curve, mu, ends, halfedge_edge, edge_halfedges, topology.ring_offsets,
-                                    topology.ring_halfedges, boundary, table, flat, _PLACE, control, lo, hi),
-              topology.n_vertices)
+    in_chunks(
+        lambda lo, hi: kernel(
+            pos,
+            curve,
+            mu,
+            ends,
+            halfedge_edge,
+            edge_halfedges,
+            topology.ring_offsets,
+            topology.ring_halfedges,
+            boundary,
+            table,
+            flat,
+            _PLACE,
+            control,
+            lo,
+            hi,
+        ),
+        topology.n_vertices,
+    )
     del curve
 
     corners = np.ascontiguousarray(corners, dtype=np.float64)
     face_operator = _operator(_cycle(4, closed=True))
     kernel = jit_kernel(_centre_kernel)
-    in_chunks(lambda lo, hi: kernel(corners, topology.faces, face_operator, _PLACE, scale, centre, control, lo, hi), n_faces)
+    in_chunks(
+        lambda lo, hi: kernel(
+            corners, topology.faces, face_operator, _PLACE, scale, centre, control, lo, hi
+        ),
+        n_faces,
+    )
     return control, extra, extra_normals
 
 
-def _network_kernel(faces: IntArray, halfedge_edge: IntArray, edge_halfedges: IntArray, twin: IntArray, n_vertices: int,
-                    corner: IntArray, edge_id: IntArray, reversed_: NDArray[np.bool_], neighbor: IntArray,
-                    neighbor_edge: IntArray, lo: int, hi: int) -> None:
+def _network_kernel(
+    faces: IntArray,
+    halfedge_edge: IntArray,
+    edge_halfedges: IntArray,
+    twin: IntArray,
+    n_vertices: int,
+    corner: IntArray,
+    edge_id: IntArray,
+    reversed_: NDArray[np.bool_],
+    neighbor: IntArray,
+    neighbor_edge: IntArray,
+    lo: int,
+    hi: int,
+) -> None:
     """:func:`_split4_network`'s connectivity of faces ``lo:hi`` into the (F, 4, 4) arrays: local
     edge l of sub-patch k has role r = (l − k) mod 4 (0: first half of h, 1: seam k, 2: seam k − 1
     reversed, 3: second half of prev(h)), and its corner l is, by role, V_k, MID[k], C, MID[k−1]."""
@@ -1336,9 +1840,22 @@ def _network_kernel(faces: IntArray, halfedge_edge: IntArray, edge_halfedges: In
                     neighbor_edge[f, k, l] = other & 3 if other >= 0 else -1
 
 
-def _star_kernel(normals: FloatArray, wanted: FloatArray, positions: FloatArray, offsets: IntArray, neighbors: IntArray,
-                 face_count: IntArray, valence: IntArray, boundary: NDArray[np.bool_], limit: float, star: FloatArray,
-                 valid: NDArray[np.bool_], factor: FloatArray, lo: int, hi: int) -> None:
+def _star_kernel(
+    normals: FloatArray,
+    wanted: FloatArray,
+    positions: FloatArray,
+    offsets: IntArray,
+    neighbors: IntArray,
+    face_count: IntArray,
+    valence: IntArray,
+    boundary: NDArray[np.bool_],
+    limit: float,
+    star: FloatArray,
+    valid: NDArray[np.bool_],
+    factor: FloatArray,
+    lo: int,
+    hi: int,
+) -> None:
     """:func:`~g1patch.targets.interpolate.fit_regular_star` and :func:`split4_star`'s length
     safeguard for vertices ``lo:hi``: ``[a b] = Σ_j s_j [cos θ_j, sin θ_j] G⁻¹``, ``t_j = a cos θ_j + b sin θ_j``
     (a boundary corner keeps ``s``), valid where ``(a × b)·n > 1e-12 (|a|² + |b|²)``; then the
@@ -1364,22 +1881,35 @@ def _star_kernel(normals: FloatArray, wanted: FloatArray, positions: FloatArray,
         a /= half + 1.0 if boundary[v] else half
         b /= 1.0 if corner else half
         n = normals[v]
-        area = (a[1] * b[2] - a[2] * b[1]) * n[0] + (a[2] * b[0] - a[0] * b[2]) * n[1] + (a[0] * b[1] - a[1] * b[0]) * n[2]
-        valid[v] = corner or area > 1e-12 * ((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) + (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]))
+        area = (
+            (a[1] * b[2] - a[2] * b[1]) * n[0]
+            + (a[2] * b[0] - a[0] * b[2]) * n[1]
+            + (a[0] * b[1] - a[1] * b[0]) * n[2]
+        )
+        valid[v] = corner or area > 1e-12 * (
+            (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) + (b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
+        )
         worst = 0.0
         for s in range(start, stop):
             for d in range(3):
-                star[s, d] = wanted[s, d] if corner else a[d] * cos[s - start] + b[d] * sin[s - start]
+                star[s, d] = (
+                    wanted[s, d] if corner else a[d] * cos[s - start] + b[d] * sin[s - start]
+                )
             e = positions[neighbors[s]] - positions[v]
             chord = np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
             along = e[0] * n[0] + e[1] * n[1] + e[2] * n[2]
             p0, p1, p2 = e[0] - along * n[0], e[1] - along * n[1], e[2] - along * n[2]
             in_plane = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
-            arc = 2.0 * chord ** 2 / (chord + in_plane if chord > 0 else 1.0)
-            length = np.sqrt(wanted[s, 0] * wanted[s, 0] + wanted[s, 1] * wanted[s, 1] + wanted[s, 2] * wanted[s, 2])
+            arc = 2.0 * chord**2 / (chord + in_plane if chord > 0 else 1.0)
+            length = np.sqrt(
+                wanted[s, 0] * wanted[s, 0]
+                + wanted[s, 1] * wanted[s, 1]
+                + wanted[s, 2] * wanted[s, 2]
+            )
             allowed = limit * min(length, arc)
-            ratio = np.sqrt(star[s, 0] * star[s, 0] + star[s, 1] * star[s, 1] + star[s, 2] * star[s, 2]) / (
-                allowed if allowed > 0 else np.inf)
+            ratio = np.sqrt(
+                star[s, 0] * star[s, 0] + star[s, 1] * star[s, 1] + star[s, 2] * star[s, 2]
+            ) / (allowed if allowed > 0 else np.inf)
             if ratio > worst or np.isnan(ratio):
                 worst = ratio
         shrink = min(1.0, 1.0 / (worst if worst > 0 else 1.0))
@@ -1389,21 +1919,34 @@ def _star_kernel(normals: FloatArray, wanted: FloatArray, positions: FloatArray,
                 star[s, d] *= shrink
 
 
-def _chain_kernel(node_cosine: FloatArray, x_of: IntArray, y_of: IntArray, interior: NDArray[np.bool_],
-                  through: NDArray[np.bool_], ring_offsets: IntArray, ring_halfedges: IntArray, halfedge_edge: IntArray,
-                  edge_halfedges: IntArray, lam: FloatArray) -> None:
+def _chain_kernel(
+    node_cosine: FloatArray,
+    x_of: IntArray,
+    y_of: IntArray,
+    interior: NDArray[np.bool_],
+    through: NDArray[np.bool_],
+    ring_offsets: IntArray,
+    ring_halfedges: IntArray,
+    halfedge_edge: IntArray,
+    edge_halfedges: IntArray,
+    lam: FloatArray,
+) -> None:
     """:func:`_chain_shears` by walking each grid line from its first end (node ``2e + s``, s = 1
     at Y): across an edge λ changes sign, through a valence-4 vertex (``partner``) it keeps it. The
     line's dominant end is the one with the larger ``|c_end − c_next|`` (the smaller node on a tie),
     where λ = −(c_end − c_next); λ per node into ``lam`` (2E,), zero on closed lines."""
     nodes = lam.size
-    partner = np.full(nodes, -1, dtype=np.int64)  # the node through the valence-4 vertex: ring edge j ↔ j + 2
+    partner = np.full(
+        nodes, -1, dtype=np.int64
+    )  # the node through the valence-4 vertex: ring edge j ↔ j + 2
     ring = np.empty(4, dtype=np.int64)
     for v in range(through.size):
         if through[v]:
             for j in range(4):
                 h = ring_halfedges[ring_offsets[v] + j]
-                ring[j] = 2 * halfedge_edge[h] + (0 if edge_halfedges[halfedge_edge[h], 0] == h else 1)
+                ring[j] = 2 * halfedge_edge[h] + (
+                    0 if edge_halfedges[halfedge_edge[h], 0] == h else 1
+                )
             for j in range(4):
                 partner[ring[j]] = ring[(j + 2) & 3]
     done = np.zeros(nodes, dtype=np.bool_)

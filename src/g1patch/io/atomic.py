@@ -30,7 +30,9 @@ __all__ = ["TEMPORARY_PREFIX", "atomic_path"]
 TEMPORARY_PREFIX = ".g1patch-tmp-"
 #: the longest part of the target's name kept in a temporary's name (NAME_MAX is 255 bytes)
 _NAME_PART = 120
-_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+_SIGNALS = tuple(
+    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)
+)
 
 
 @contextmanager
@@ -62,7 +64,9 @@ def _create_temporary(target: Path) -> Path:
     for _ in range(100):
         candidate = directory / _temporary_name(target)
         try:
-            handle = os.open(candidate, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
+            handle = os.open(
+                candidate, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666
+            )
         except FileExistsError:
             continue
         try:
@@ -102,7 +106,9 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         existing = os.stat(target)
     except OSError:
         existing = None
-    if existing is not None and not (stat.S_ISREG(existing.st_mode) or stat.S_ISDIR(existing.st_mode)):
+    if existing is not None and not (
+        stat.S_ISREG(existing.st_mode) or stat.S_ISDIR(existing.st_mode)
+    ):
         try:
             yield target
         except OSError as error:

@@ -35,7 +35,9 @@ def read_bpt(path: str | os.PathLike[str]) -> PatchSet:
     try:
         size = source.stat().st_size
         if size > MAX_BPT_BYTES:
-            raise FormatError(source, f"{size} bytes, above the {MAX_BPT_BYTES} a .bpt file may have")
+            raise FormatError(
+                source, f"{size} bytes, above the {MAX_BPT_BYTES} a .bpt file may have"
+            )
         text = source.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise FormatError(source, "no such file") from None
@@ -49,7 +51,9 @@ def read_bpt(path: str | os.PathLike[str]) -> PatchSet:
         raise FormatError(source, "empty file; expected a patch count on the first line")
     number, words = lines[0]
     if len(words) != 1 or not (words[0].isascii() and words[0].isdigit()) or int(words[0]) < 1:
-        raise FormatError(source, f"expected a positive patch count, got {' '.join(words)!r}", number)
+        raise FormatError(
+            source, f"expected a positive patch count, got {' '.join(words)!r}", number
+        )
     count = int(words[0])
     expected_lines = 1 + 17 * count
     if len(lines) < expected_lines:
@@ -59,12 +63,18 @@ def read_bpt(path: str | os.PathLike[str]) -> PatchSet:
             lines[-1][0],
         )
     if len(lines) > expected_lines:
-        raise FormatError(source, f"unexpected content after {count} patches", lines[expected_lines][0])
+        raise FormatError(
+            source, f"unexpected content after {count} patches", lines[expected_lines][0]
+        )
     control = np.empty((count, 16, 3))
     for patch in range(count):
         number, words = lines[1 + 17 * patch]
         if words != ["3", "3"]:
-            raise FormatError(source, f"patch {patch + 1}: expected degrees '3 3', got {' '.join(words)!r}", number)
+            raise FormatError(
+                source,
+                f"patch {patch + 1}: expected degrees '3 3', got {' '.join(words)!r}",
+                number,
+            )
         for point in range(16):
             number, words = lines[2 + 17 * patch + point]
             try:
@@ -72,10 +82,18 @@ def read_bpt(path: str | os.PathLike[str]) -> PatchSet:
             except ValueError:
                 values = []
             if len(values) != 3 or not np.isfinite(values).all():
-                raise FormatError(source, f"patch {patch + 1}: expected three finite numbers 'x y z', got {' '.join(words)!r}", number)
+                raise FormatError(
+                    source,
+                    f"patch {patch + 1}: expected three finite numbers 'x y z', got {' '.join(words)!r}",
+                    number,
+                )
             if not max(map(abs, values)) <= MAX_COORDINATE:
-                raise FormatError(source, f"patch {patch + 1}: coordinate of magnitude {max(map(abs, values)):g} in "
-                                          f"{' '.join(words)!r} exceeds the bound |x| ≤ {MAX_COORDINATE:g}", number)
+                raise FormatError(
+                    source,
+                    f"patch {patch + 1}: coordinate of magnitude {max(map(abs, values)):g} in "
+                    f"{' '.join(words)!r} exceeds the bound |x| ≤ {MAX_COORDINATE:g}",
+                    number,
+                )
             control[patch, point] = values
     return PatchSet(control.reshape(count, 4, 4, 3), "bezier")
 

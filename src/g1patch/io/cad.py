@@ -69,7 +69,15 @@ from typing import Any, Literal, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import ConstructionError, FormatError, G1PatchError, InputError, MeshError, MissingDependencyError, check_choice
+from ..errors import (
+    ConstructionError,
+    FormatError,
+    G1PatchError,
+    InputError,
+    MeshError,
+    MissingDependencyError,
+    check_choice,
+)
 from ..frame import Frame
 from ..geometry import grid_row_chunks
 from ..network import Patches, PatchNetwork, edge_parameters, network_from_patch_points
@@ -107,7 +115,10 @@ CadMethod = Literal["auto", "split4", "fit"]
 #: (close, kinked), ``auto`` split4, or fit where split4 cannot re-assemble the network
 CAD_METHODS: tuple[CadMethod, ...] = ("auto", "split4", "fit")
 #: file extensions of each format
-CAD_FORMATS: dict[CadFormat, tuple[str, ...]] = {"step": (".step", ".stp"), "iges": (".iges", ".igs")}
+CAD_FORMATS: dict[CadFormat, tuple[str, ...]] = {
+    "step": (".step", ".stp"),
+    "iges": (".iges", ".igs"),
+}
 #: ``progress(stage, done, total)``; stages: split4, deviation, fit, faces, sew, solid, check, g1, write
 Progress = Callable[[str, int, int], None]
 
@@ -179,13 +190,19 @@ def _sharing(network: PatchNetwork | None, count: int) -> _Sharing:
     if network is None:  # every patch on its own
         ids = np.arange(4 * count, dtype=np.int64)
         return _Sharing(ids.reshape(count, 4), np.zeros((count, 4), bool), ids, ids)
-    _, rep, edge_of = np.unique(network.edge_ids.reshape(-1), return_index=True, return_inverse=True)
+    _, rep, edge_of = np.unique(
+        network.edge_ids.reshape(-1), return_index=True, return_inverse=True
+    )
     return _Sharing(network.corner_ids, network.edge_reversed, rep, edge_of.reshape(-1))
 
 
 def _boundary_control(
-    patches: Patches, x: NDArray[np.float64], basis: NDArray[np.float64], inner_pinv: NDArray[np.float64],
-    corner_points: NDArray[np.float64], share: _Sharing,
+    patches: Patches,
+    x: NDArray[np.float64],
+    basis: NDArray[np.float64],
+    inner_pinv: NDArray[np.float64],
+    corner_points: NDArray[np.float64],
+    share: _Sharing,
 ) -> NDArray[np.float64]:
     """Control nets ``(N, c, c, 3)`` whose boundary rows are the fitted edge curves (interior 0).
 
@@ -198,12 +215,20 @@ def _boundary_control(
     along_v = patches.evaluate_grid(np.array([0.0, 1.0]), x)  # (N, 2, m, 3)
     # counter-clockwise edge samples; edges 2 and 3 run backwards, at parameters 1 − x[::-1] = x
     # (the samples are symmetric), so one basis fits all four
-    samples = np.stack([along_u[:, :, 0], along_v[:, 1], along_u[:, ::-1, 1], along_v[:, 0, ::-1]], axis=1)
+    samples = np.stack(
+        [along_u[:, :, 0], along_v[:, 1], along_u[:, ::-1, 1], along_v[:, 0, ::-1]], axis=1
+    )
     rep = share.edge_rep
     start = corner_points[share.corner_ids.reshape(-1)[rep]]
     end = corner_points[np.roll(share.corner_ids, -1, axis=1).reshape(-1)[rep]]
-    residual = samples.reshape(4 * count, -1, 3)[rep] - basis[:, 0, None] * start[:, None] - basis[:, -1, None] * end[:, None]
-    curves = np.concatenate([start[:, None], np.einsum("im,emd->eid", inner_pinv, residual), end[:, None]], axis=1)
+    residual = (
+        samples.reshape(4 * count, -1, 3)[rep]
+        - basis[:, 0, None] * start[:, None]
+        - basis[:, -1, None] * end[:, None]
+    )
+    curves = np.concatenate(
+        [start[:, None], np.einsum("im,emd->eid", inner_pinv, residual), end[:, None]], axis=1
+    )
     flip = share.edge_reversed.reshape(-1)
     canonical = np.where(flip[rep, None, None], curves[:, ::-1], curves)
     ccw = canonical[share.edge_of]
@@ -223,7 +248,10 @@ def _span_samples(breaks: NDArray[np.float64], per_span: int) -> NDArray[np.floa
 
 
 def _fit_level(
-    patches: Patches, breaks: NDArray[np.float64], corner_points: NDArray[np.float64], share: _Sharing
+    patches: Patches,
+    breaks: NDArray[np.float64],
+    corner_points: NDArray[np.float64],
+    share: _Sharing,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], float, NDArray[np.float64]]:
     """Fit with the given knot ``breaks``: control ``(N, s+3, s+3, 3)``, knots, deviation, per-span deviation.
 
@@ -240,8 +268,12 @@ def _fit_level(
     control = _boundary_control(patches, x, basis, inner_pinv, corner_points, share)
     interior = np.zeros((len(patches), spans + 1, spans + 1, 3))
     for rows in grid_row_chunks(len(patches), len(x), len(x)):
-        residual = patches.evaluate_grid(x[rows], x) - np.einsum("ai,nijd,bj->nabd", basis[rows], control, basis, optimize=True)
-        interior += np.einsum("ia,nabd,jb->nijd", inner_pinv[:, rows], residual, inner_pinv, optimize=True)
+        residual = patches.evaluate_grid(x[rows], x) - np.einsum(
+            "ai,nijd,bj->nabd", basis[rows], control, basis, optimize=True
+        )
+        interior += np.einsum(
+            "ia,nabd,jb->nijd", inner_pinv[:, rows], residual, inner_pinv, optimize=True
+        )
     control[:, 1:-1, 1:-1] = interior
 
     check = _span_samples(breaks, 2 * SAMPLES_PER_SPAN)
@@ -307,7 +339,9 @@ def fit_bspline_surfaces(
     network = patches if isinstance(patches, PatchNetwork) else None
     surfaces = network.patches if network is not None else patches
     if not all(hasattr(surfaces, name) for name in ("evaluate", "evaluate_grid", "__len__")):
-        raise InputError(f"patches: expected patches with evaluate, evaluate_grid and len, got {type(surfaces).__name__}")
+        raise InputError(
+            f"patches: expected patches with evaluate, evaluate_grid and len, got {type(surfaces).__name__}"
+        )
     check_choice("refine", refine, ("adaptive", "uniform"))
     if not (isinstance(max_spans, (int, np.integer)) and max_spans >= 1):
         raise InputError(f"max_spans: expected a positive integer, got {max_spans!r}")
@@ -326,7 +360,11 @@ def fit_bspline_surfaces(
             return BSplineFit(poles, knots, knots.copy(), deviation * unit)
         # split symmetrically: a reversed edge curve is its reversed control points only on knots
         # symmetric under t → 1 − t (dyadic breaks keep that exact)
-        split = np.maximum(per_span, per_span[::-1]) > local_tolerance if refine == "adaptive" else np.ones(len(per_span), bool)
+        split = (
+            np.maximum(per_span, per_span[::-1]) > local_tolerance
+            if refine == "adaptive"
+            else np.ones(len(per_span), bool)
+        )
         split |= not split.any()  # the deviation may sit only on span ends: split all
         if len(breaks) - 1 + int(split.sum()) > max_spans:
             raise ConstructionError(
@@ -339,7 +377,11 @@ def fit_bspline_surfaces(
 def _tolerance(tolerance: float | None, diagonal: float) -> float:
     if tolerance is None:
         return FIT_RTOL * diagonal if diagonal > 0 else FIT_RTOL
-    if not (isinstance(tolerance, (int, float, np.floating)) and tolerance > 0 and np.isfinite(tolerance)):
+    if not (
+        isinstance(tolerance, (int, float, np.floating))
+        and tolerance > 0
+        and np.isfinite(tolerance)
+    ):
         raise InputError(f"tolerance: expected a positive distance, got {tolerance!r}")
     return float(tolerance)
 
@@ -351,7 +393,11 @@ def _tolerance(tolerance: float | None, diagonal: float) -> float:
 _OCC_NAMES: dict[str, tuple[str, ...]] = {
     "BRep": ("BRep_Builder", "BRep_Tool"),
     "BRepAdaptor": ("BRepAdaptor_Surface",),
-    "BRepBuilderAPI": ("BRepBuilderAPI_MakeFace", "BRepBuilderAPI_MakeSolid", "BRepBuilderAPI_Sewing"),
+    "BRepBuilderAPI": (
+        "BRepBuilderAPI_MakeFace",
+        "BRepBuilderAPI_MakeSolid",
+        "BRepBuilderAPI_Sewing",
+    ),
     "BRepCheck": ("BRepCheck_Analyzer",),
     "BRepGProp": ("BRepGProp",),
     "collections": ("Array1_double", "Array1_int", "Array2_gp_Pnt"),
@@ -378,8 +424,12 @@ def _occ() -> SimpleNamespace:
         importlib.import_module("OCP")  # first: a missing (or blocked) OCP fails here
         modules = {name: importlib.import_module(f"OCP.{name}") for name in _OCC_NAMES}
     except ImportError:
-        raise MissingDependencyError("cadquery-ocp-novtk", "cad", "STEP/IGES export and import") from None
-    return SimpleNamespace(**{n: getattr(modules[m], n) for m, names in _OCC_NAMES.items() for n in names})
+        raise MissingDependencyError(
+            "cadquery-ocp-novtk", "cad", "STEP/IGES export and import"
+        ) from None
+    return SimpleNamespace(
+        **{n: getattr(modules[m], n) for m, names in _OCC_NAMES.items() for n in names}
+    )
 
 
 @contextmanager
@@ -427,7 +477,9 @@ def _make_faces(
         for i, row in enumerate(net, start=1):
             for j, (x, y, z) in enumerate(row, start=1):
                 poles.SetValue(i, j, gp_Pnt(x, y, z))
-        faces.append(make_face(surface(poles, knots_u, knots_v, mults_u, mults_v, 3, 3), tolerance).Face())
+        faces.append(
+            make_face(surface(poles, knots_u, knots_v, mults_u, mults_v, 3, 3), tolerance).Face()
+        )
         if progress is not None and (n + 1) % 256 == 0:
             progress("faces", n + 1, count)
     return faces
@@ -443,9 +495,24 @@ SINGLE_SPAN_RTOL = 1e-12
 #: one face per patch
 _C1_RTOL = 1e-10
 # a cubic's Bézier points from its two halves' seven: b0, 2 h1 − b0, 2 h5 − b3, b3
-_EXTRACT = np.array([[1.0, 0, 0, 0, 0, 0, 0], [-1, 2, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 2, -1], [0, 0, 0, 0, 0, 0, 1]])
+_EXTRACT = np.array(
+    [[1.0, 0, 0, 0, 0, 0, 0], [-1, 2, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 2, -1], [0, 0, 0, 0, 0, 0, 1]]
+)
 # de Casteljau at ½: the two halves' seven points from a cubic's four
-_HALVE = np.array([[8.0, 0, 0, 0], [4, 4, 0, 0], [2, 4, 2, 0], [1, 3, 3, 1], [0, 2, 4, 2], [0, 0, 4, 4], [0, 0, 0, 8]]) / 8.0
+_HALVE = (
+    np.array(
+        [
+            [8.0, 0, 0, 0],
+            [4, 4, 0, 0],
+            [2, 4, 2, 0],
+            [1, 3, 3, 1],
+            [0, 2, 4, 2],
+            [0, 0, 4, 4],
+            [0, 0, 0, 8],
+        ]
+    )
+    / 8.0
+)
 # sub-patch 4f + k covers (uv + _QUARTER[k]) / 2 of quad f
 _QUARTER = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
 
@@ -477,7 +544,9 @@ def split4_quad_faces(network: PatchNetwork) -> QuadFaces | None:
         return None
     p = np.arange(len(patches))
     k = p % 4
-    seams = (network.neighbor[p, (k + 1) % 4] == p - k + (k + 1) % 4) & (network.neighbor[p, (k + 2) % 4] == p - k + (k + 3) % 4)
+    seams = (network.neighbor[p, (k + 1) % 4] == p - k + (k + 1) % 4) & (
+        network.neighbor[p, (k + 2) % 4] == p - k + (k + 3) % 4
+    )
     if not seams.all():
         return None
     bezier = patches.convert("bezier")
@@ -486,8 +555,10 @@ def split4_quad_faces(network: PatchNetwork) -> QuadFaces | None:
     diagonal = float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0)))
     if not (np.isfinite(diagonal) and diagonal > 0):
         return None
-    c1_gap = max(float(np.abs(nets[:, 3] - 0.5 * (nets[:, 2] + nets[:, 4])).max()),
-                 float(np.abs(nets[:, :, 3] - 0.5 * (nets[:, :, 2] + nets[:, :, 4])).max()))
+    c1_gap = max(
+        float(np.abs(nets[:, 3] - 0.5 * (nets[:, 2] + nets[:, 4])).max()),
+        float(np.abs(nets[:, :, 3] - 0.5 * (nets[:, :, 2] + nets[:, :, 4])).max()),
+    )
     if not c1_gap <= _C1_RTOL * diagonal:
         return None
     cubic = np.einsum("ai,fijd,bj->fabd", _EXTRACT, nets, _EXTRACT)
@@ -497,10 +568,16 @@ def split4_quad_faces(network: PatchNetwork) -> QuadFaces | None:
     two_span = np.ascontiguousarray(nets[~single][:, keep][:, :, keep])
     one = np.ascontiguousarray(cubic[single])
     if bezier.frame is not None:
-        one, two_span = bezier.frame.to_world(one, out=one), bezier.frame.to_world(two_span, out=two_span)
+        one, two_span = (
+            bezier.frame.to_world(one, out=one),
+            bezier.frame.to_world(two_span, out=two_span),
+        )
     knots = bezier_knots(1)
-    return QuadFaces(single, BSplineFit(one, knots, knots.copy(), 0.0),
-                     BSplineFit(two_span, BSPLINE_KNOTS.copy(), BSPLINE_KNOTS.copy(), 0.0))
+    return QuadFaces(
+        single,
+        BSplineFit(one, knots, knots.copy(), 0.0),
+        BSplineFit(two_span, BSPLINE_KNOTS.copy(), BSPLINE_KNOTS.copy(), 0.0),
+    )
 
 
 def _quad_groups(quads: QuadFaces) -> list[BSplineFit]:
@@ -508,17 +585,24 @@ def _quad_groups(quads: QuadFaces) -> list[BSplineFit]:
     return [group for group in (quads.bezier, quads.two_span) if len(group.control)]
 
 
-def _make_quad_faces(occ: SimpleNamespace, quads: QuadFaces, tolerance: float, progress: Progress | None) -> list[Any]:
+def _make_quad_faces(
+    occ: SimpleNamespace, quads: QuadFaces, tolerance: float, progress: Progress | None
+) -> list[Any]:
     """One face per quad, in quad order: single-span ones from ``quads.bezier``, the rest two-span."""
     faces: list[Any] = [None] * len(quads.single)
-    for rows, group in ((np.flatnonzero(quads.single), quads.bezier), (np.flatnonzero(~quads.single), quads.two_span)):
+    for rows, group in (
+        (np.flatnonzero(quads.single), quads.bezier),
+        (np.flatnonzero(~quads.single), quads.two_span),
+    ):
         if rows.size:
             for row, face in zip(rows.tolist(), _make_faces(occ, group, tolerance, progress)):
                 faces[row] = face
     return faces
 
 
-def _sew(occ: SimpleNamespace, faces: Sequence[Any], tolerance: float) -> tuple[Any, list[Any], int]:
+def _sew(
+    occ: SimpleNamespace, faces: Sequence[Any], tolerance: float
+) -> tuple[Any, list[Any], int]:
     """Sewn shape, the sewn face of every input face, number of free edges."""
     sewing = occ.BRepBuilderAPI_Sewing(tolerance)
     for face in faces:
@@ -593,20 +677,30 @@ class _OccBSpline(NamedTuple):
 def _occ_bspline(occ: SimpleNamespace, face: Any) -> _OccBSpline | None:
     """The B-spline data OCC holds for ``face`` (:class:`_OccBSpline`), None for any other surface."""
     surface = occ.BRep_Tool.Surface_s(face)
-    if (not isinstance(surface, occ.Geom_BSplineSurface) or surface.IsURational() or surface.IsVRational()
-            or surface.IsUPeriodic() or surface.IsVPeriodic()):
+    if (
+        not isinstance(surface, occ.Geom_BSplineSurface)
+        or surface.IsURational()
+        or surface.IsVRational()
+        or surface.IsUPeriodic()
+        or surface.IsVPeriodic()
+    ):
         return None
     pole, count_u, count_v = surface.Pole, surface.NbUPoles(), surface.NbVPoles()
-    net = np.array([pole(i, j).Coord() for i in range(1, count_u + 1) for j in range(1, count_v + 1)],
-                   dtype=np.float64).reshape(count_u, count_v, 3)
-    knots = [tuple(sequence.Value(i) for i in range(sequence.Lower(), sequence.Upper() + 1))
-             for sequence in (surface.UKnotSequence(), surface.VKnotSequence())]
+    net = np.array(
+        [pole(i, j).Coord() for i in range(1, count_u + 1) for j in range(1, count_v + 1)],
+        dtype=np.float64,
+    ).reshape(count_u, count_v, 3)
+    knots = [
+        tuple(sequence.Value(i) for i in range(sequence.Lower(), sequence.Upper() + 1))
+        for sequence in (surface.UKnotSequence(), surface.VKnotSequence())
+    ]
     sign = -1.0 if face.Orientation() == occ.TopAbs_REVERSED else 1.0
     return _OccBSpline(net, knots[0], knots[1], surface.UDegree(), surface.VDegree(), sign)
 
 
-def _basis_d1(knots: NDArray[np.float64], degree: int, x: NDArray[np.float64]
-              ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+def _basis_d1(
+    knots: NDArray[np.float64], degree: int, x: NDArray[np.float64]
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
     """The ``degree + 1`` B-spline basis functions that are nonzero at each ``x`` and their first
     derivatives (Cox–de Boor, The NURBS Book A2.2/A2.3, over all x at once): the index of the
     first one (n,), values (n, p+1), derivatives (n, p+1). ``x`` is clamped into the knots' range."""
@@ -625,15 +719,18 @@ def _basis_d1(knots: NDArray[np.float64], degree: int, x: NDArray[np.float64]
             saved = left[j - 1 - r] * temp
         level.append(saved)
     # N'_{i,p} = p N_{i,p-1} / (t[i+p] − t[i]) − p N_{i+1,p-1} / (t[i+p+1] − t[i+1]), i = span − p + k
-    below = np.stack([np.zeros_like(x), *lower, np.zeros_like(x)], axis=1)  # N_{span-p+k, p-1}, k = 0 … p+1
+    below = np.stack(
+        [np.zeros_like(x), *lower, np.zeros_like(x)], axis=1
+    )  # N_{span-p+k, p-1}, k = 0 … p+1
     k = np.arange(p + 2)
     width = knots[span[:, None] + k] - knots[span[:, None] + k - p]
     scaled = np.divide(p * below, width, out=np.zeros_like(below), where=width > 0)
     return span - p, np.stack(level, axis=1), scaled[:, :-1] - scaled[:, 1:]
 
 
-def _dense_basis(knots: tuple[float, ...], degree: int, count: int, x: NDArray[np.float64]
-                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _dense_basis(
+    knots: tuple[float, ...], degree: int, count: int, x: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """All ``count`` basis functions and their derivatives at ``x`` (any shape): (…, count) each."""
     first, values, derivatives = _basis_d1(np.asarray(knots), degree, x.reshape(-1))
     rows, columns = np.arange(x.size)[:, None], first[:, None] + np.arange(degree + 1)
@@ -654,8 +751,14 @@ def _distinct_rows(rows: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDAr
 
 def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
     """``a × b`` for coordinates on axis 1, (n, 3, …)."""
-    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
-                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
+    return np.stack(
+        [
+            a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
+            a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+            a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0],
+        ],
+        axis=1,
+    )
 
 
 #: a normal ``S_u × S_v`` shorter than this share of ``|S_u| |S_v|`` is rounding (its tangents are
@@ -665,8 +768,12 @@ DEGENERATE_NORMAL_RTOL = 64 * float(np.finfo(np.float64).eps)
 _ROW_CHUNK = 1 << 14
 
 
-def _bspline_iso_normals(surfaces: Sequence[_OccBSpline], face_of: NDArray[np.int64], uv: NDArray[np.float64],
-                         iso_u: NDArray[np.bool_]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _bspline_iso_normals(
+    surfaces: Sequence[_OccBSpline],
+    face_of: NDArray[np.int64],
+    uv: NDArray[np.float64],
+    iso_u: NDArray[np.bool_],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``±(S_u × S_v)`` of ``surfaces[face_of[r]]`` at ``uv[r, k]``, (R, K, 3), and ``|S_u| |S_v|``
     (the scale of its rounding), (R, K), for rows on iso-lines: u constant along row r where
     ``iso_u[r]``, else v. Vectorised over rows of faces with equal knots, degrees and pole counts:
@@ -675,7 +782,9 @@ def _bspline_iso_normals(surfaces: Sequence[_OccBSpline], face_of: NDArray[np.in
     normals, scale = np.empty(uv.shape[:2] + (3,)), np.empty(uv.shape[:2])
     groups: dict[tuple[Any, ...], list[int]] = {}
     for f, s in enumerate(surfaces):
-        groups.setdefault((s.knots_u, s.knots_v, s.degree_u, s.degree_v, s.poles.shape), []).append(f)
+        groups.setdefault((s.knots_u, s.knots_v, s.degree_u, s.degree_v, s.poles.shape), []).append(
+            f
+        )
     for (knots_u, knots_v, p, q, _), members in groups.items():
         nets = np.stack([surfaces[f].poles for f in members])  # (F, nu, nv, 3)
         signs = np.array([surfaces[f].sign for f in members])
@@ -685,7 +794,9 @@ def _bspline_iso_normals(surfaces: Sequence[_OccBSpline], face_of: NDArray[np.in
             # along the row runs v (u constant: poles transposed to (along, cross)) or u
             poles = nets.transpose(0, 2, 1, 3) if constant_u else nets
             along, cross = (1, 0) if constant_u else (0, 1)
-            (knots_a, p_a), (knots_c, p_c) = ((knots_v, q), (knots_u, p)) if constant_u else ((knots_u, p), (knots_v, q))
+            (knots_a, p_a), (knots_c, p_c) = (
+                ((knots_v, q), (knots_u, p)) if constant_u else ((knots_u, p), (knots_v, q))
+            )
             rows = np.flatnonzero((slot[face_of] >= 0) & (iso_u == constant_u))
             for chunk in np.array_split(rows, -(-len(rows) // _ROW_CHUNK)) if rows.size else ():
                 member = slot[face_of[chunk]]
@@ -698,10 +809,18 @@ def _bspline_iso_normals(surfaces: Sequence[_OccBSpline], face_of: NDArray[np.in
                 s_along = np.matmul(curve, d_a.transpose(0, 2, 1)[which])
                 s_cross = np.matmul(cross_curve, n_a.transpose(0, 2, 1)[which])
                 normal = _cross(s_cross, s_along) if constant_u else _cross(s_along, s_cross)
-                size = np.sqrt(np.einsum("rdk,rdk->rk", s_along, s_along) * np.einsum("rdk,rdk->rk", s_cross, s_cross))
+                size = np.sqrt(
+                    np.einsum("rdk,rdk->rk", s_along, s_along)
+                    * np.einsum("rdk,rdk->rk", s_cross, s_cross)
+                )
                 # a degenerate point (tangents parallel to rounding): no direction, the zero normal
-                degenerate = np.sqrt(np.einsum("rdk,rdk->rk", normal, normal)) <= DEGENERATE_NORMAL_RTOL * size
-                normal = np.where(degenerate[:, None], 0.0, normal * signs[member, None, None])  # +0: angle 0 to any normal
+                degenerate = (
+                    np.sqrt(np.einsum("rdk,rdk->rk", normal, normal))
+                    <= DEGENERATE_NORMAL_RTOL * size
+                )
+                normal = np.where(
+                    degenerate[:, None], 0.0, normal * signs[member, None, None]
+                )  # +0: angle 0 to any normal
                 normals[chunk] = normal.transpose(0, 2, 1)
                 scale[chunk] = size
     return normals, scale
@@ -711,8 +830,13 @@ def _bspline_iso_normals(surfaces: Sequence[_OccBSpline], face_of: NDArray[np.in
 NORMAL_AGREEMENT_RTOL = 1e-9
 
 
-def _shape_normals(occ: SimpleNamespace, faces: Sequence[Any], face_of: NDArray[np.int64], uv: NDArray[np.float64],
-                   progress: Progress | None) -> NDArray[np.float64]:
+def _shape_normals(
+    occ: SimpleNamespace,
+    faces: Sequence[Any],
+    face_of: NDArray[np.int64],
+    uv: NDArray[np.float64],
+    progress: Progress | None,
+) -> NDArray[np.float64]:
     """``±(S_u × S_v)`` of ``faces[face_of[r]]`` at ``uv[r, k]`` (R rows of K points), (R, K, 3), on
     the surfaces OCC holds.
 
@@ -735,12 +859,23 @@ def _shape_normals(occ: SimpleNamespace, faces: Sequence[Any], face_of: NDArray[
         rows = np.flatnonzero(fast)
         kept = [s for s in surfaces if s is not None]
         local = np.cumsum(known) - 1  # index among the kept surfaces
-        normals[rows], scale = _bspline_iso_normals(kept, local[index[face_of[rows]]], uv[rows], iso_u[rows])
-        checked, first = np.unique(face_of[rows], return_index=True)  # one row per face: its middle point
+        normals[rows], scale = _bspline_iso_normals(
+            kept, local[index[face_of[rows]]], uv[rows], iso_u[rows]
+        )
+        checked, first = np.unique(
+            face_of[rows], return_index=True
+        )  # one row per face: its middle point
         middle = uv.shape[1] // 2
-        by_occ = np.concatenate([_face_normals(occ, faces[f], uv[rows[r], middle:middle + 1])
-                                 for f, r in zip(checked.tolist(), first.tolist())])
-        off = np.linalg.norm(by_occ - normals[rows[first], middle], axis=-1) > NORMAL_AGREEMENT_RTOL * scale[first, middle]
+        by_occ = np.concatenate(
+            [
+                _face_normals(occ, faces[f], uv[rows[r], middle : middle + 1])
+                for f, r in zip(checked.tolist(), first.tolist())
+            ]
+        )
+        off = (
+            np.linalg.norm(by_occ - normals[rows[first], middle], axis=-1)
+            > NORMAL_AGREEMENT_RTOL * scale[first, middle]
+        )
         fast &= ~np.isin(face_of, checked[off])
     slow = np.flatnonzero(~fast)
     order = slow[np.argsort(face_of[slow], kind="stable")]
@@ -748,14 +883,20 @@ def _shape_normals(occ: SimpleNamespace, faces: Sequence[Any], face_of: NDArray[
     for n, (start, end) in enumerate(zip(starts.tolist(), [*starts[1:].tolist(), len(order)])):
         chosen = order[start:end]
         face = faces[int(face_of[chosen[0]])]
-        normals[chosen] = _face_normals(occ, face, uv[chosen].reshape(-1, 2)).reshape(len(chosen), -1, 3)
+        normals[chosen] = _face_normals(occ, face, uv[chosen].reshape(-1, 2)).reshape(
+            len(chosen), -1, 3
+        )
         if progress is not None and n % 256 == 0:
             progress("g1", n, len(starts))
     return normals
 
 
 def _occ_g1_angles(
-    occ: SimpleNamespace, faces: Sequence[Any], network: PatchNetwork, samples: int, progress: Progress | None,
+    occ: SimpleNamespace,
+    faces: Sequence[Any],
+    network: PatchNetwork,
+    samples: int,
+    progress: Progress | None,
     quads: bool = False,
 ) -> NDArray[np.float64]:
     """(E, samples) angles (degrees) between the two sewn faces' OCC normals along every shared edge.
@@ -772,23 +913,37 @@ def _occ_g1_angles(
     uv_b = edge_parameters(other_edge[:, None], t_other)
     face_a, face_b = patch, other
     if quads:
-        uv_a, uv_b = 0.5 * (uv_a + _QUARTER[patch % 4, None]), 0.5 * (uv_b + _QUARTER[other % 4, None])
+        uv_a, uv_b = (
+            0.5 * (uv_a + _QUARTER[patch % 4, None]),
+            0.5 * (uv_b + _QUARTER[other % 4, None]),
+        )
         face_a, face_b = patch // 4, other // 4
-    normals = _shape_normals(occ, faces, np.concatenate([face_a, face_b]), np.concatenate([uv_a, uv_b]), progress)
-    return angle_between(normals[:len(patch)], normals[len(patch):])
+    normals = _shape_normals(
+        occ, faces, np.concatenate([face_a, face_b]), np.concatenate([uv_a, uv_b]), progress
+    )
+    return angle_between(normals[: len(patch)], normals[len(patch) :])
 
 
 # ----------------------------------------------------------------------------------- guards
 #: the stage export_cad enters after each lap, for a failure's message
-_NEXT_STAGE = {"split4": "measuring the deviation", "deviation": "fitting the surfaces", "fit": "making the faces",
-               "faces": "sewing", "sew": "making solids", "solid": "checking the shape", "check": "measuring G1 angles",
-               "g1": "writing the file"}
+_NEXT_STAGE = {
+    "split4": "measuring the deviation",
+    "deviation": "fitting the surfaces",
+    "fit": "making the faces",
+    "faces": "sewing",
+    "sew": "making solids",
+    "solid": "checking the shape",
+    "check": "measuring G1 angles",
+    "g1": "writing the file",
+}
 
 
 def _raised_by_occ(error: BaseException) -> bool:
     """An exception from inside OCP: its classes live in ``OCP.*``, or pybind11's translation of a
     C++ exception it does not know (``RuntimeError``)."""
-    return type(error) is RuntimeError or any(cls.__module__.startswith("OCP") for cls in type(error).__mro__)
+    return type(error) is RuntimeError or any(
+        cls.__module__.startswith("OCP") for cls in type(error).__mro__
+    )
 
 
 @contextmanager
@@ -803,11 +958,19 @@ def _occ_failures(target: Path, doing: list[str]) -> Iterator[None]:
             raise
         text = str(error).strip()
         detail = text.splitlines()[0] if text else "no message"
-        raise OpenCascadeError(f"{target}: OpenCASCADE failed while {doing[0]} ({type(error).__name__}: {detail})") from error
+        raise OpenCascadeError(
+            f"{target}: OpenCASCADE failed while {doing[0]} ({type(error).__name__}: {detail})"
+        ) from error
 
 
 def _bound_message(value: float) -> str:
-    what = "is not a number" if np.isnan(value) else "is infinite" if np.isinf(value) else f"reaches magnitude {abs(value):.3g}"
+    what = (
+        "is not a number"
+        if np.isnan(value)
+        else "is infinite"
+        if np.isinf(value)
+        else f"reaches magnitude {abs(value):.3g}"
+    )
     return f"{what}; OpenCASCADE export needs finite coordinates of magnitude at most {MAX_COORDINATE:g}"
 
 
@@ -824,13 +987,17 @@ def _check_patch_coordinates(target: Path, patches: object) -> None:
     if isinstance(frame, Frame):
         largest = float(np.abs(frame.centre).max()) + frame.scale * largest
     if not largest <= MAX_COORDINATE:
-        raise InputError(f"{target}: cannot export: the largest of the patches' coordinates {_bound_message(largest)}")
+        raise InputError(
+            f"{target}: cannot export: the largest of the patches' coordinates {_bound_message(largest)}"
+        )
 
 
 def _check_diagonal(target: Path, diagonal: float) -> None:
     if not (np.isfinite(diagonal) and diagonal > 0):
         what = "0: all patch corners coincide" if diagonal == 0 else f"{diagonal!r}"
-        raise InputError(f"{target}: cannot export: the bounding-box diagonal of the patch corners is {what}")
+        raise InputError(
+            f"{target}: cannot export: the bounding-box diagonal of the patch corners is {what}"
+        )
 
 
 def _check_knots(target: Path, name: str, knots: NDArray[np.float64], poles: int) -> None:
@@ -849,9 +1016,13 @@ def _check_knots(target: Path, name: str, knots: NDArray[np.float64], poles: int
         if len(values) < 2 or not span > 0:
             problem = "spans nothing"
         elif counts[0] != 4 or counts[-1] != 4:
-            problem = f"has end multiplicities {counts[0]} and {counts[-1]} (a clamped cubic needs 4)"
+            problem = (
+                f"has end multiplicities {counts[0]} and {counts[-1]} (a clamped cubic needs 4)"
+            )
         elif len(counts) > 2 and counts[1:-1].max() > 3:
-            problem = f"has an interior knot of multiplicity {counts[1:-1].max()} (at most 3 for cubics)"
+            problem = (
+                f"has an interior knot of multiplicity {counts[1:-1].max()} (at most 3 for cubics)"
+            )
         elif np.diff(values).min() < 1e-12 * span:
             problem = f"has a span of {np.diff(values).min():.3g}, below 1e-12 of its range"
     if problem is not None:
@@ -863,11 +1034,15 @@ def _check_fit(target: Path, fit: BSplineFit, sewing_tolerance: float) -> None:
     no face smaller than OCC can sew (module docstring)."""
     control = np.asarray(fit.control)
     if control.ndim != 4 or control.shape[-1] != 3 or not control.shape[0]:
-        raise InputError(f"{target}: cannot export: expected control nets (N, nu, nv, 3), got {control.shape}")
+        raise InputError(
+            f"{target}: cannot export: expected control nets (N, nu, nv, 3), got {control.shape}"
+        )
     low, high = float(control.min()), float(control.max())
     if not (low >= -MAX_COORDINATE and high <= MAX_COORDINATE):
         bad = np.argwhere(~(np.abs(control) <= MAX_COORDINATE))[0]
-        raise InputError(f"{target}: cannot export: patch {bad[0]}: a B-spline pole {_bound_message(float(control[tuple(bad)]))}")
+        raise InputError(
+            f"{target}: cannot export: patch {bad[0]}: a B-spline pole {_bound_message(float(control[tuple(bad)]))}"
+        )
     _check_knots(target, "u", fit.knots_u, control.shape[1])
     _check_knots(target, "v", fit.knots_v, control.shape[2])
     if not (np.isfinite(sewing_tolerance) and sewing_tolerance > 0):
@@ -889,8 +1064,10 @@ def _check_sewn(target: Path, faces: Sequence[Any]) -> None:
     """Every input face has a sewn face: OCC segfaults evaluating the null face of one it dropped."""
     dropped = [n for n, face in enumerate(faces) if face.IsNull()]
     if dropped:
-        raise OpenCascadeError(f"{target}: OpenCASCADE's sewing dropped the face of patch {dropped[0]}"
-                               f"{f' (and {len(dropped) - 1} more)' if len(dropped) > 1 else ''}: a degenerate face")
+        raise OpenCascadeError(
+            f"{target}: OpenCASCADE's sewing dropped the face of patch {dropped[0]}"
+            f"{f' (and {len(dropped) - 1} more)' if len(dropped) > 1 else ''}: a degenerate face"
+        )
 
 
 # ----------------------------------------------------------------------------------- export
@@ -953,9 +1130,11 @@ class ExportResult:
         """One line: the file, its faces and verdicts, the method, OCC's G1 angle, the deviation."""
         shape = "solid" if self.solid else f"{self.free_edges} free edges"
         angle = f"OCC G1 ≤ {self.max_g1_angle_deg:.1e}°" if self.g1_measured else "G1 not measured"
-        return (f"<ExportResult {self.path.name}: {self.format}, {self.faces} faces, {shape}, "
-                f"{'valid' if self.valid else 'INVALID'}, {self.method}, {angle}, "
-                f"deviation {self.relative_deviation:.1e} of diagonal, {self.file_bytes:,} bytes>")
+        return (
+            f"<ExportResult {self.path.name}: {self.format}, {self.faces} faces, {shape}, "
+            f"{'valid' if self.valid else 'INVALID'}, {self.method}, {angle}, "
+            f"deviation {self.relative_deviation:.1e} of diagonal, {self.file_bytes:,} bytes>"
+        )
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready figures."""
@@ -970,7 +1149,9 @@ def _format_of(path: Path, wanted: CadFormat | None) -> CadFormat:
         if suffix in suffixes and wanted in (None, name):
             return name
     allowed = CAD_FORMATS[wanted] if wanted else sum(CAD_FORMATS.values(), ())
-    raise FormatError(path, f"unsupported extension {path.suffix!r}; expected one of {', '.join(allowed)}")
+    raise FormatError(
+        path, f"unsupported extension {path.suffix!r}; expected one of {', '.join(allowed)}"
+    )
 
 
 def _as_network(network: PatchNetwork | PatchSet) -> PatchNetwork:
@@ -978,7 +1159,9 @@ def _as_network(network: PatchNetwork | PatchSet) -> PatchNetwork:
         return network
     if isinstance(network, PatchSet):
         return network_from_patch_points(network)
-    raise InputError(f"network: expected a PatchNetwork or a PatchSet, got {type(network).__name__}")
+    raise InputError(
+        f"network: expected a PatchNetwork or a PatchSet, got {type(network).__name__}"
+    )
 
 
 def _name_step_faces(occ: SimpleNamespace, writer: Any, faces: Sequence[Any]) -> None:
@@ -1009,7 +1192,9 @@ class _StepOptions(NamedTuple):
     pcurves: bool
 
 
-_STEP_OPTIONS: ContextVar[_StepOptions] = ContextVar("_STEP_OPTIONS", default=_StepOptions((), True))
+_STEP_OPTIONS: ContextVar[_StepOptions] = ContextVar(
+    "_STEP_OPTIONS", default=_StepOptions((), True)
+)
 
 
 @contextmanager
@@ -1039,7 +1224,9 @@ def _write(occ: SimpleNamespace, shape: Any, path: Path, kind: CadFormat) -> Non
                 status = writer.Write(str(path))
             ok = status == occ.IFSelect_ReturnStatus.IFSelect_RetDone
         else:
-            writer = occ.IGESControl_Writer("MM", 1)  # 1: B-rep entities (solids and shells), not trimmed faces
+            writer = occ.IGESControl_Writer(
+                "MM", 1
+            )  # 1: B-rep entities (solids and shells), not trimmed faces
             ok = bool(writer.AddShape(shape))
             if ok:
                 writer.ComputeModel()
@@ -1077,8 +1264,10 @@ def _cad_method(target: Path, network: PatchNetwork, method: CadMethod) -> str:
         return "exact"
     if method == "fit" or not isinstance(network.patches, GregoryPatchSet):
         if method == "split4":
-            raise InputError(f"{target}: method 'split4' re-assembles Gregory networks; these patches are "
-                             f"{type(network.patches).__name__} (use method 'fit')")
+            raise InputError(
+                f"{target}: method 'split4' re-assembles Gregory networks; these patches are "
+                f"{type(network.patches).__name__} (use method 'fit')"
+            )
         return "fit"
     return "split4"
 
@@ -1095,7 +1284,10 @@ STEP_DIGITS = 15
 def _step_reals(values: NDArray[np.float64]) -> list[bytes]:
     """STEP reals with :data:`STEP_DIGITS` significant digits, each with its decimal point (``1.``, ``1.E+20``)."""
     texts = (f"%.{STEP_DIGITS}G," * values.size % tuple(values.tolist())).encode().split(b",")[:-1]
-    return [text if b"." in text else text.replace(b"E", b".E") if b"E" in text else text + b"." for text in texts]
+    return [
+        text if b"." in text else text.replace(b"E", b".E") if b"E" in text else text + b"."
+        for text in texts
+    ]
 
 
 #: a file's 12-digit pole and the exact one agree to this share of the model's size (:func:`compact_step`)
@@ -1110,7 +1302,9 @@ def _face_nets(faces: BSplineFit | QuadFaces) -> list[NDArray[np.float64]]:
     return [next(single) if one else next(two) for one in faces.single.tolist()]
 
 
-def compact_step(path: Path, nets: Sequence[NDArray[np.float64]] = (), tolerance: float = 0.0) -> None:
+def compact_step(
+    path: Path, nets: Sequence[NDArray[np.float64]] = (), tolerance: float = 0.0
+) -> None:
     """Rewrite a STEP file written by OCC: equal ``CARTESIAN_POINT`` entities become one, surface
     poles get :data:`STEP_DIGITS` digits, entities are numbered densely, without line breaks.
 
@@ -1133,10 +1327,16 @@ def compact_step(path: Path, nets: Sequence[NDArray[np.float64]] = (), tolerance
     bodies = {name.strip()[1:]: body.strip() for name, _, body in heads}
     first: dict[bytes, bytes] = {}
     # point number → the number of the first equal point
-    canonical = {number: first.setdefault(body, number) for number, body in bodies.items() if body.startswith(b"CARTESIAN_POINT(")}
+    canonical = {
+        number: first.setdefault(body, number)
+        for number, body in bodies.items()
+        if body.startswith(b"CARTESIAN_POINT(")
+    }
     points: list[bytes] = []  # every surface pole of a named face, as its canonical point …
     poles: list[NDArray[np.float64]] = []  # … and the exact net it belongs to
-    for face, surface in _NAMED_FACE.findall(b"".join(body for body in bodies.values() if b"ADVANCED_FACE" in body)):
+    for face, surface in _NAMED_FACE.findall(
+        b"".join(body for body in bodies.values() if b"ADVANCED_FACE" in body)
+    ):
         grid = _POLE_GRID.match(bodies.get(surface, b""))
         if grid is None or int(face) >= len(nets):
             continue
@@ -1150,24 +1350,44 @@ def compact_step(path: Path, nets: Sequence[NDArray[np.float64]] = (), tolerance
     if points:
         distinct = list(dict.fromkeys(points))
         where = {point: n for n, point in enumerate(distinct)}
-        written = np.array(b",".join(bodies[point].split(b"(")[-1].rstrip(b")") for point in distinct).split(b","),
-                           dtype=np.float64).reshape(len(distinct), 3)
+        written = np.array(
+            b",".join(bodies[point].split(b"(")[-1].rstrip(b")") for point in distinct).split(b","),
+            dtype=np.float64,
+        ).reshape(len(distinct), 3)
         pole = np.concatenate(poles)
         close = np.abs(written[[where[point] for point in points]] - pole).max(axis=1) <= tolerance
-        chosen = {points[k]: k for k in np.flatnonzero(close).tolist()}  # the last matching pole of each point
+        chosen = {
+            points[k]: k for k in np.flatnonzero(close).tolist()
+        }  # the last matching pole of each point
         reals = _step_reals(pole[list(chosen.values())].reshape(-1))
-        exact = {point: b"CARTESIAN_POINT('',(" + b",".join(reals[3 * n:3 * n + 3]) + b"))" for n, point in enumerate(chosen)}
-    kept = [(number, exact.get(number, body)) for number, body in bodies.items() if canonical.get(number, number) == number]
+        exact = {
+            point: b"CARTESIAN_POINT('',(" + b",".join(reals[3 * n : 3 * n + 3]) + b"))"
+            for n, point in enumerate(chosen)
+        }
+    kept = [
+        (number, exact.get(number, body))
+        for number, body in bodies.items()
+        if canonical.get(number, number) == number
+    ]
     renumber = {number: str(n).encode() for n, (number, _) in enumerate(kept, start=1)}
     renumber.update({number: renumber[point] for number, point in canonical.items()})
-    parts = _REFERENCE.split(b"".join(b"#" + number + b"=" + body + b";\n" for number, body in kept))
-    parts[1::2] = [b"#" + renumber[number] for number in parts[1::2]]  # every reference (and entity number) renumbered
+    parts = _REFERENCE.split(
+        b"".join(b"#" + number + b"=" + body + b";\n" for number, body in kept)
+    )
+    parts[1::2] = [
+        b"#" + renumber[number] for number in parts[1::2]
+    ]  # every reference (and entity number) renumbered
     data = b"".join(parts)
     path.write_bytes(text[:start] + b"\n" + data.rstrip(b"\n") + text[end:])
 
 
-def _split4_within(network: PatchNetwork, max_deviation: float, diagonal: float, fallback: bool,
-                   lap: Callable[[str], None]) -> tuple[PatchNetwork, float, int, str] | str:
+def _split4_within(
+    network: PatchNetwork,
+    max_deviation: float,
+    diagonal: float,
+    fallback: bool,
+    lap: Callable[[str], None],
+) -> tuple[PatchNetwork, float, int, str] | str:
     """The split4 re-assembly of a Gregory network (:func:`~g1patch.construct.polynomial.split4_of_gregory`)
     with n = 1, 2, 3, … (:data:`REFINE_STEPS`) cells per patch side until its distance to the Gregory surface is at most
     ``max_deviation × diagonal`` (split4's stars differ from the Gregory fans near the vertices, over a cell's size),
@@ -1179,7 +1399,9 @@ def _split4_within(network: PatchNetwork, max_deviation: float, diagonal: float,
     from ..construct.polynomial import split4_of_gregory, surface_deviation
     from ..continuity import folded_patches
 
-    tried: list[tuple[bool, float, int, PatchNetwork]] = []  # (folds more than n = 1, deviation, n, result)
+    tried: list[
+        tuple[bool, float, int, PatchNetwork]
+    ] = []  # (folds more than n = 1, deviation, n, result)
     base_folds, allowed = 0, max_deviation * diagonal
     for refine in REFINE_STEPS:
         if refine > 1 and refine * refine * network.n_patches > REFINE_QUADS:
@@ -1201,10 +1423,15 @@ def _split4_within(network: PatchNetwork, max_deviation: float, diagonal: float,
         if deviation <= allowed and not tried[-1][0]:
             break
     _, deviation, refine, converted = min(tried, key=lambda attempt: attempt[:2])
-    note = "" if deviation <= allowed else (
-        f"the re-assembly stays {deviation / diagonal:.2e} of the diagonal from the Gregory surface, above "
-        f"--max-deviation {max_deviation:g}, at {refine} × {refine} cells per patch"
-        + (" (finer cells folded)" if any(attempt[0] for attempt in tried) else ""))
+    note = (
+        ""
+        if deviation <= allowed
+        else (
+            f"the re-assembly stays {deviation / diagonal:.2e} of the diagonal from the Gregory surface, above "
+            f"--max-deviation {max_deviation:g}, at {refine} × {refine} cells per patch"
+            + (" (finer cells folded)" if any(attempt[0] for attempt in tried) else "")
+        )
+    )
     return converted, deviation, refine, note
 
 
@@ -1236,13 +1463,17 @@ def export_cad(
     target = Path(path)
     kind = _format_of(target, format)
     occ = _occ()
-    _check_patch_coordinates(target, network.patches if isinstance(network, PatchNetwork) else network)
+    _check_patch_coordinates(
+        target, network.patches if isinstance(network, PatchNetwork) else network
+    )
     network = _as_network(network)
     if not (isinstance(g1_samples, (int, np.integer)) and (g1_samples == 0 or g1_samples >= 2)):
         raise InputError(f"g1_samples: expected 0 or an integer ≥ 2, got {g1_samples!r}")
     if not (isinstance(max_deviation, (int, float, np.floating)) and 0.0 < max_deviation < np.inf):
-        raise InputError(f"max_deviation: expected a positive number (relative to the bounding-box diagonal), "
-                         f"got {max_deviation!r}")
+        raise InputError(
+            f"max_deviation: expected a positive number (relative to the bounding-box diagonal), "
+            f"got {max_deviation!r}"
+        )
     chosen = _cad_method(target, network, method)
     if chosen != "fit" and not isinstance(network.patches, PatchSet) and _bicubic(network.patches):
         network, chosen = replace(network, patches=_as_bicubics(network.patches)), "exact"
@@ -1253,7 +1484,9 @@ def export_cad(
     def lap(stage: str) -> None:
         nonlocal clock
         now = time.perf_counter()
-        seconds[stage] = seconds.get(stage, 0.0) + now - clock  # split4 and deviation: every n tried
+        seconds[stage] = (
+            seconds.get(stage, 0.0) + now - clock
+        )  # split4 and deviation: every n tried
         clock = now
         doing[0] = _NEXT_STAGE.get(stage, stage)
         if progress is not None:
@@ -1297,8 +1530,11 @@ def export_cad(
         lap("solid")
         valid = bool(occ.BRepCheck_Analyzer(shape).IsValid())
         lap("check")
-        angles = (_occ_g1_angles(occ, sewn_faces, network, g1_samples, progress, quads is not None) if g1_samples
-                  else np.zeros((0, 0)))
+        angles = (
+            _occ_g1_angles(occ, sewn_faces, network, g1_samples, progress, quads is not None)
+            if g1_samples
+            else np.zeros((0, 0))
+        )
         lap("g1")
         shared_patch, shared_edge = network.shared_edges()
         seam = network.seam[shared_patch, shared_edge]
@@ -1308,11 +1544,20 @@ def export_cad(
             _write(occ, shape, temporary, kind)
             if kind == "step":
                 nets = _face_nets(fit if quads is None else quads)
-                compact_step(temporary, nets, STEP_MATCH_RTOL * max(diagonal, max(float(np.abs(net).max()) for net in nets)))
+                compact_step(
+                    temporary,
+                    nets,
+                    STEP_MATCH_RTOL * max(diagonal, max(float(np.abs(net).max()) for net in nets)),
+                )
             file_bytes = temporary.stat().st_size
         lap("write")
-    note = ("measured on the surfaces OpenCASCADE holds (its poles and knots, each face checked against its own evaluator)" if smooth.size else
-            "not measured: g1_samples=0" if not g1_samples else "not measured: no shared edges but seams")
+    note = (
+        "measured on the surfaces OpenCASCADE holds (its poles and knots, each face checked against its own evaluator)"
+        if smooth.size
+        else "not measured: g1_samples=0"
+        if not g1_samples
+        else "not measured: no shared edges but seams"
+    )
     return ExportResult(
         path=target,
         format=kind,
@@ -1330,7 +1575,8 @@ def export_cad(
         sewing_tolerance=sewing_tolerance,
         max_g1_angle_deg=float(smooth.max()) if smooth.size else 0.0,
         mean_g1_angle_deg=float(smooth.mean()) if smooth.size else 0.0,
-        seam_edges=int(seam.sum()) // (2 if quads is not None else 1),  # a quad face's edge is two split4 halves
+        seam_edges=int(seam.sum())
+        // (2 if quads is not None else 1),  # a quad face's edge is two split4 halves
         seam_angle_min_deg=float(seam_angles.min()) if seam_angles.size else None,
         seam_angle_max_deg=float(seam_angles.max()) if seam_angles.size else None,
         volume=volume,
@@ -1344,23 +1590,49 @@ def export_cad(
 
 
 def export_step(
-    path: PathLike, network: PatchNetwork | PatchSet, *, tolerance: float | None = None,
-    progress: Progress | None = None, g1_samples: int = G1_SAMPLES, method: CadMethod = "auto",
+    path: PathLike,
+    network: PatchNetwork | PatchSet,
+    *,
+    tolerance: float | None = None,
+    progress: Progress | None = None,
+    g1_samples: int = G1_SAMPLES,
+    method: CadMethod = "auto",
     max_deviation: float = DEVIATION_RTOL,
 ) -> ExportResult:
     """Write a STEP file (``.step`` / ``.stp``, AP214); see :func:`export_cad`."""
-    return export_cad(path, network, format="step", tolerance=tolerance, progress=progress, g1_samples=g1_samples,
-                      method=method, max_deviation=max_deviation)
+    return export_cad(
+        path,
+        network,
+        format="step",
+        tolerance=tolerance,
+        progress=progress,
+        g1_samples=g1_samples,
+        method=method,
+        max_deviation=max_deviation,
+    )
 
 
 def export_iges(
-    path: PathLike, network: PatchNetwork | PatchSet, *, tolerance: float | None = None,
-    progress: Progress | None = None, g1_samples: int = G1_SAMPLES, method: CadMethod = "auto",
+    path: PathLike,
+    network: PatchNetwork | PatchSet,
+    *,
+    tolerance: float | None = None,
+    progress: Progress | None = None,
+    g1_samples: int = G1_SAMPLES,
+    method: CadMethod = "auto",
     max_deviation: float = DEVIATION_RTOL,
 ) -> ExportResult:
     """Write an IGES file (``.iges`` / ``.igs``, B-rep mode); see :func:`export_cad`."""
-    return export_cad(path, network, format="iges", tolerance=tolerance, progress=progress, g1_samples=g1_samples,
-                      method=method, max_deviation=max_deviation)
+    return export_cad(
+        path,
+        network,
+        format="iges",
+        tolerance=tolerance,
+        progress=progress,
+        g1_samples=g1_samples,
+        method=method,
+        max_deviation=max_deviation,
+    )
 
 
 # ----------------------------------------------------------------------------------- reading
@@ -1374,8 +1646,12 @@ class CadFace:
         self.face = face
         self.surface = occ.BRepAdaptor_Surface(face, False)
         #: (u_min, u_max, v_min, v_max) of the underlying surface (not trimmed to the face)
-        self.bounds = (self.surface.FirstUParameter(), self.surface.LastUParameter(),
-                       self.surface.FirstVParameter(), self.surface.LastVParameter())
+        self.bounds = (
+            self.surface.FirstUParameter(),
+            self.surface.LastUParameter(),
+            self.surface.FirstVParameter(),
+            self.surface.LastVParameter(),
+        )
 
     def evaluate(self, uv: ArrayLike) -> NDArray[np.float64]:
         """Points ``S(u, v)`` for ``uv`` of shape (K, 2), returned (K, 3)."""
@@ -1385,7 +1661,9 @@ class CadFace:
 
     def normals(self, uv: ArrayLike) -> NDArray[np.float64]:
         """Unit normals ``±(S_u × S_v)/|…|`` (outwards for a face of an oriented solid), (K, 3)."""
-        normals = _face_normals(self._occ, self.face, np.asarray(uv, dtype=np.float64).reshape(-1, 2))
+        normals = _face_normals(
+            self._occ, self.face, np.asarray(uv, dtype=np.float64).reshape(-1, 2)
+        )
         length = np.linalg.norm(normals, axis=-1, keepdims=True)
         return np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
 
@@ -1400,7 +1678,10 @@ class CadFace:
         else:
             return None
         return np.array(
-            [[surface.Pole(i, j).Coord() for j in range(1, surface.NbVPoles() + 1)] for i in range(1, surface.NbUPoles() + 1)]
+            [
+                [surface.Pole(i, j).Coord() for j in range(1, surface.NbVPoles() + 1)]
+                for i in range(1, surface.NbUPoles() + 1)
+            ]
         )
 
 
@@ -1422,7 +1703,9 @@ def read_cad_faces(path: PathLike) -> CadModel:
         reader = occ.STEPControl_Reader() if kind == "step" else occ.IGESControl_Reader()
         status = reader.ReadFile(str(source))
         if status != occ.IFSelect_ReturnStatus.IFSelect_RetDone:
-            raise FormatError(source, f"OpenCASCADE cannot read it as {kind.upper()} ({status.name})")
+            raise FormatError(
+                source, f"OpenCASCADE cannot read it as {kind.upper()} ({status.name})"
+            )
         reader.TransferRoots()
         shape = reader.OneShape()
         faces = [CadFace(occ, face) for face in _faces_of(occ, shape) if not face.IsNull()]
@@ -1434,18 +1717,26 @@ def read_cad_faces(path: PathLike) -> CadModel:
 def read_step_faces(path: PathLike) -> CadModel:
     """Read a STEP file (``STEPControl_Reader``): the shape and one evaluator per face."""
     if _format_of(Path(path), None) != "step":
-        raise FormatError(path, f"expected a STEP file ({', '.join(CAD_FORMATS['step'])}), got {Path(path).suffix!r}")
+        raise FormatError(
+            path,
+            f"expected a STEP file ({', '.join(CAD_FORMATS['step'])}), got {Path(path).suffix!r}",
+        )
     return read_cad_faces(path)
 
 
 def read_iges_faces(path: PathLike) -> CadModel:
     """Read an IGES file (``IGESControl_Reader``): the shape and one evaluator per face."""
     if _format_of(Path(path), None) != "iges":
-        raise FormatError(path, f"expected an IGES file ({', '.join(CAD_FORMATS['iges'])}), got {Path(path).suffix!r}")
+        raise FormatError(
+            path,
+            f"expected an IGES file ({', '.join(CAD_FORMATS['iges'])}), got {Path(path).suffix!r}",
+        )
     return read_cad_faces(path)
 
 
-def file_g1_angles(path: PathLike, network: PatchNetwork, samples: int = G1_SAMPLES) -> NDArray[np.float64]:
+def file_g1_angles(
+    path: PathLike, network: PatchNetwork, samples: int = G1_SAMPLES
+) -> NDArray[np.float64]:
     """(E, samples) angles (degrees) between the OCC normals of a *read-back* CAD file's faces
     along every shared edge of ``network``, the network that was written (for a Gregory network
     exported by split4, its :func:`~g1patch.construct.polynomial.split4_of_gregory`): what a CAD
@@ -1455,13 +1746,32 @@ def file_g1_angles(path: PathLike, network: PatchNetwork, samples: int = G1_SAMP
 
     model = read_cad_faces(path)
     quads = split4_quad_faces(network) is not None
-    middles = np.concatenate([face.evaluate(np.array([[0.5 * (face.bounds[0] + face.bounds[1]),
-                                                        0.5 * (face.bounds[2] + face.bounds[3])]])) for face in model.faces])
-    centres = (network.patches.evaluate(np.array([[1.0, 1.0]]))[::4, 0] if quads
-               else network.patches.evaluate(np.array([[0.5, 0.5]]))[:, 0])
+    middles = np.concatenate(
+        [
+            face.evaluate(
+                np.array(
+                    [
+                        [
+                            0.5 * (face.bounds[0] + face.bounds[1]),
+                            0.5 * (face.bounds[2] + face.bounds[3]),
+                        ]
+                    ]
+                )
+            )
+            for face in model.faces
+        ]
+    )
+    centres = (
+        network.patches.evaluate(np.array([[1.0, 1.0]]))[::4, 0]
+        if quads
+        else network.patches.evaluate(np.array([[0.5, 0.5]]))[:, 0]
+    )
     distance, order = cKDTree(middles).query(centres)
     if len(model.faces) != len(centres) or len(set(order.tolist())) != len(centres):
-        raise FormatError(path, f"its {len(model.faces)} faces do not match the network's {len(centres)} "
-                                f"{'quads' if quads else 'patches'} one to one")
+        raise FormatError(
+            path,
+            f"its {len(model.faces)} faces do not match the network's {len(centres)} "
+            f"{'quads' if quads else 'patches'} one to one",
+        )
     faces = [model.faces[i].face for i in order.tolist()]
     return _occ_g1_angles(_occ(), faces, network, samples, None, quads)

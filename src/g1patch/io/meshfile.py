@@ -54,7 +54,13 @@ OBJ_SKIPPED = frozenset(
 PathLike = str | os.PathLike[str]
 
 
-def read_mesh(path: PathLike, *, split: bool = True, sharp_angle: float | None = None, strict: bool | None = None) -> QuadMesh:
+def read_mesh(
+    path: PathLike,
+    *,
+    split: bool = True,
+    sharp_angle: float | None = None,
+    strict: bool | None = None,
+) -> QuadMesh:
     """Read an OBJ, PLY or OFF file into a validated :class:`QuadMesh` (tags from OBJ ``t`` lines).
 
     With ``split`` a mesh with non-quad faces is refined once into quads (see
@@ -68,7 +74,10 @@ def read_mesh(path: PathLike, *, split: bool = True, sharp_angle: float | None =
     suffix = path.suffix.lower()
     readers = {".obj": _read_obj, ".ply": _read_ply, ".off": _read_off}
     if suffix not in readers:
-        raise FormatError(path, f"unsupported extension {path.suffix!r}; expected one of {', '.join(READ_FORMATS)}")
+        raise FormatError(
+            path,
+            f"unsupported extension {path.suffix!r}; expected one of {', '.join(READ_FORMATS)}",
+        )
     try:
         data = path.read_bytes()
     except OSError as exc:
@@ -79,7 +88,9 @@ def read_mesh(path: PathLike, *, split: bool = True, sharp_angle: float | None =
     tags = parsed.tags
     if sharp_angle is not None:
         tags = tags + _sharp_angle_tags(path, parsed, sharp_angle)
-    return QuadMesh.from_arrays(parsed.vertices, parsed.faces, split=split, source=str(path), tags=tags, strict=strict)
+    return QuadMesh.from_arrays(
+        parsed.vertices, parsed.faces, split=split, source=str(path), tags=tags, strict=strict
+    )
 
 
 def _sharp_angle_tags(path: Path, parsed: _Parsed, degrees: float) -> tuple[Tag, ...]:
@@ -89,7 +100,13 @@ def _sharp_angle_tags(path: Path, parsed: _Parsed, degrees: float) -> tuple[Tag,
 
     corners, sizes = _as_polygons(parsed.faces)
     vertices = np.asarray(parsed.vertices, dtype=np.float64)
-    if sizes.size == 0 or corners.size == 0 or corners.min() < 0 or corners.max() >= len(vertices) or not np.isfinite(vertices).all():
+    if (
+        sizes.size == 0
+        or corners.size == 0
+        or corners.min() < 0
+        or corners.max() >= len(vertices)
+        or not np.isfinite(vertices).all()
+    ):
         return ()
     return sharp_angle_tags(vertices, corners, sizes, degrees)
 
@@ -107,7 +124,9 @@ def _decode(path: Path, data: bytes) -> list[str]:
         raise FormatError(path, f"not a text file (byte {exc.start} is not UTF-8)") from None
 
 
-def _finite_vertices(path: Path, vertices: NDArray[np.float64], lines: NDArray[np.int64] | None) -> None:
+def _finite_vertices(
+    path: Path, vertices: NDArray[np.float64], lines: NDArray[np.int64] | None
+) -> None:
     bad = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
     if bad.size:
         v = int(bad[0])
@@ -119,7 +138,11 @@ def _finite_vertices(path: Path, vertices: NDArray[np.float64], lines: NDArray[n
 
 
 def _faces_in_range(
-    path: Path, corners: NDArray[np.int64], sizes: NDArray[np.int64], n_vertices: int, lines: NDArray[np.int64] | None
+    path: Path,
+    corners: NDArray[np.int64],
+    sizes: NDArray[np.int64],
+    n_vertices: int,
+    lines: NDArray[np.int64] | None,
 ) -> None:
     bad = np.flatnonzero((corners < 0) | (corners >= n_vertices))
     if bad.size:
@@ -131,7 +154,9 @@ def _faces_in_range(
         )
 
 
-def _polygon_list(corners: NDArray[np.int64], sizes: NDArray[np.int64]) -> NDArray[np.int64] | list[NDArray[np.int64]]:
+def _polygon_list(
+    corners: NDArray[np.int64], sizes: NDArray[np.int64]
+) -> NDArray[np.int64] | list[NDArray[np.int64]]:
     """An (nf, n) table when all faces have n corners, else one index array per face."""
     if (sizes == sizes[0]).all():
         return corners.reshape(-1, int(sizes[0]))
@@ -178,7 +203,9 @@ class _Lines(NamedTuple):
         breaks = np.flatnonzero(np.diff(rows) != 1) + 1
         first, last = rows[np.r_[0, breaks]], rows[np.r_[breaks - 1, rows.size - 1]]
         text = self.text
-        return b"\n".join([text[s:e] for s, e in zip(self.starts[first].tolist(), self.ends[last].tolist())])
+        return b"\n".join(
+            [text[s:e] for s, e in zip(self.starts[first].tolist(), self.ends[last].tolist())]
+        )
 
 
 def _scan(data: bytes) -> _Lines | None:
@@ -198,7 +225,9 @@ def _scan(data: bytes) -> _Lines | None:
     # a run of spaces, or a space at either end of a line (two-byte searches are slow: found here)
     adjacent = np.flatnonzero(np.diff(separators) == 1)
     array = np.frombuffer(text, dtype=np.uint8)
-    messy = (array[separators[adjacent]] == ord(" ")) | (array[separators[adjacent + 1]] == ord(" "))
+    messy = (array[separators[adjacent]] == ord(" ")) | (
+        array[separators[adjacent + 1]] == ord(" ")
+    )
     if messy.any() or text.startswith(b" ") or text.endswith(b" "):
         text = _EDGE_SPACE.sub(b"", _SPACES.sub(b" ", text))
         array, separators = np.frombuffer(text, dtype=np.uint8), _separators(text)
@@ -207,8 +236,12 @@ def _scan(data: bytes) -> _Lines | None:
     if text and not text.endswith(b"\n"):
         ends, newlines = np.append(ends, len(text)), np.append(newlines, separators.size)
     starts = np.concatenate(([0], ends[:-1] + 1)).astype(np.int64)
-    spaces = np.diff(newlines, prepend=-1) - 1  # separators between a line's end and the previous one's
-    return _Lines(text, array, starts, ends.astype(np.int64), np.where(ends > starts, spaces + 1, 0))
+    spaces = (
+        np.diff(newlines, prepend=-1) - 1
+    )  # separators between a line's end and the previous one's
+    return _Lines(
+        text, array, starts, ends.astype(np.int64), np.where(ends > starts, spaces + 1, 0)
+    )
 
 
 def _separators(text: bytes) -> NDArray[np.int64] | None:
@@ -232,7 +265,9 @@ def _uncommented(text: bytes) -> bytes:
     return b"".join(parts)
 
 
-def _gather_floats(text: bytes, counts: NDArray[np.int64], columns: Sequence[int]) -> NDArray[np.float64] | None:
+def _gather_floats(
+    text: bytes, counts: NDArray[np.int64], columns: Sequence[int]
+) -> NDArray[np.float64] | None:
     """Tokens ``columns`` of each line of ``text`` (``counts`` tokens each) as floats, converted as
     ``float`` converts them; None if one is not a number."""
     tokens = np.array(text.split(), dtype=object)
@@ -246,10 +281,15 @@ def _gather_floats(text: bytes, counts: NDArray[np.int64], columns: Sequence[int
 
 
 #: the bytes a line of numbers may hold besides its keyword, and those that may follow a sign
-_NUMBER_BYTES = {np.int64: (b"0123456789+- \n", b"0123456789"), np.float64: (b"0123456789.eE+- \n", b"0123456789.")}
+_NUMBER_BYTES = {
+    np.int64: (b"0123456789+- \n", b"0123456789"),
+    np.float64: (b"0123456789.eE+- \n", b"0123456789."),
+}
 
 
-def _numbers(text: bytes, keyword: bytes, count: int, dtype: type[np.int64] | type[np.float64]) -> NDArray | None:
+def _numbers(
+    text: bytes, keyword: bytes, count: int, dtype: type[np.int64] | type[np.float64]
+) -> NDArray | None:
     """The ``count`` numbers of ``text`` (lines of ``keyword`` then numbers), each token converted as
     ``int`` or ``float`` converts it, by one ``np.fromstring`` (floats from :data:`KERNEL_BYTES` on,
     without a keyword: :func:`_floats_compiled`); None where ``text`` holds anything else, or a token
@@ -259,13 +299,20 @@ def _numbers(text: bytes, keyword: bytes, count: int, dtype: type[np.int64] | ty
     allowed, after_sign = _NUMBER_BYTES[dtype]
     if text.translate(None, allowed).replace(keyword, b"") != b"":
         return None
-    if b"-" in text or b"+" in text:  # numpy reads a lone sign at the end as 0; int and float refuse it
+    if (
+        b"-" in text or b"+" in text
+    ):  # numpy reads a lone sign at the end as 0; int and float refuse it
         array = np.frombuffer(text, dtype=np.uint8)
         signs = np.flatnonzero((array == ord("-")) | (array == ord("+")))
-        if signs[-1] + 1 == array.size or not np.isin(array[signs + 1], np.frombuffer(after_sign, dtype=np.uint8)).all():
+        if (
+            signs[-1] + 1 == array.size
+            or not np.isin(array[signs + 1], np.frombuffer(after_sign, dtype=np.uint8)).all()
+        ):
             return None
     try:
-        values = np.fromstring(text.replace(keyword, b" ") if keyword else text, dtype=dtype, sep=" ")
+        values = np.fromstring(
+            text.replace(keyword, b" ") if keyword else text, dtype=dtype, sep=" "
+        )
     except ValueError:  # a token it cannot read; a token it reads as two numbers changes the count
         return None
     return values if values.size == count else None
@@ -293,10 +340,14 @@ def _obj_fast(data: bytes) -> _Parsed | None:
     first, second, third = lines.byte(0), lines.byte(1), lines.byte(2)
     is_vertex = (first == ord("v")) & (second == ord(" "))
     is_face = (first == ord("f")) & (second == ord(" "))
-    skipped = (first == ord("v")) & np.isin(second, np.frombuffer(b"tnp", np.uint8)) & ((third == ord(" ")) | (lines.ends - lines.starts == 2))
+    skipped = (
+        (first == ord("v"))
+        & np.isin(second, np.frombuffer(b"tnp", np.uint8))
+        & ((third == ord(" ")) | (lines.ends - lines.starts == 2))
+    )
     tags: list[Tag] = []
     for row in np.flatnonzero((lines.tokens > 0) & ~(is_vertex | is_face | skipped)).tolist():
-        parts = lines.text[lines.starts[row]:lines.ends[row]].decode("ascii").split()
+        parts = lines.text[lines.starts[row] : lines.ends[row]].decode("ascii").split()
         if parts[0] == "t":
             try:
                 tags.append(_parse_tag(Path(), parts, row + 1))
@@ -306,10 +357,17 @@ def _obj_fast(data: bytes) -> _Parsed | None:
             return None  # unknown, or 'v' / 'f' alone
     vertex_rows, face_rows = np.flatnonzero(is_vertex), np.flatnonzero(is_face)
     vertex_tokens, sizes = lines.tokens[vertex_rows], lines.tokens[face_rows] - 1
-    if face_rows.size == 0 or (vertex_tokens < 4).any() or (vertex_tokens > 8).any() or (sizes < 3).any():
+    if (
+        face_rows.size == 0
+        or (vertex_tokens < 4).any()
+        or (vertex_tokens > 8).any()
+        or (sizes < 3).any()
+    ):
         return None
     text = lines.chunk(vertex_rows)
-    if (vertex_tokens == 4).all() and (values := _numbers(text, b"v", 3 * vertex_rows.size, np.float64)) is not None:
+    if (vertex_tokens == 4).all() and (
+        values := _numbers(text, b"v", 3 * vertex_rows.size, np.float64)
+    ) is not None:
         points = values.reshape(-1, 3)
     else:  # 'v x y z w', or tokens np.fromstring does not read as float does
         points = _gather_floats(text, vertex_tokens, (1, 2, 3))
@@ -351,12 +409,16 @@ def _read_obj_lines(path: Path, data: bytes) -> _Parsed:
         keyword = parts[0]
         if keyword == "v":
             if not 4 <= len(parts) <= 8:
-                raise FormatError(path, f"expected 'v x y z' with 3 numbers, got {line.strip()!r}", number)
+                raise FormatError(
+                    path, f"expected 'v x y z' with 3 numbers, got {line.strip()!r}", number
+                )
             vertex_tokens.append(parts[1:4])
             vertex_lines.append(number)
         elif keyword == "f":
             if len(parts) < 4:
-                raise FormatError(path, f"a face needs at least 3 corners, got {len(parts) - 1}", number)
+                raise FormatError(
+                    path, f"a face needs at least 3 corners, got {len(parts) - 1}", number
+                )
             indices = parts[1:]
             if "/" in line:  # v/vt/vn: keep v
                 indices = [token.partition("/")[0] for token in indices]
@@ -372,20 +434,32 @@ def _read_obj_lines(path: Path, data: bytes) -> _Parsed:
         raise FormatError(path, "no faces: expected 'f' lines")
 
     face_sizes = np.array(sizes, dtype=np.int64)
-    points = _convert(path, vertex_tokens, np.float64, "'v x y z' with 3 numbers", vertex_lines).reshape(-1, 3)
+    points = _convert(
+        path, vertex_tokens, np.float64, "'v x y z' with 3 numbers", vertex_lines
+    ).reshape(-1, 3)
     _finite_vertices(path, points, np.array(vertex_lines))
     token_lines = np.repeat(face_lines, face_sizes)
     written = _convert(path, face_tokens, np.int64, "'f' with integer vertex indices", token_lines)
     if (written == 0).any():
-        line = face_lines[int(np.searchsorted(np.cumsum(face_sizes), np.flatnonzero(written == 0)[0], side="right"))]
+        line = face_lines[
+            int(
+                np.searchsorted(
+                    np.cumsum(face_sizes), np.flatnonzero(written == 0)[0], side="right"
+                )
+            )
+        ]
         raise FormatError(path, "vertex index 0 in a face; OBJ indices start at 1", line)
     # 1-based; negative indices count back from the last vertex defined before the face
-    corners = np.where(written > 0, written - 1, np.repeat(vertices_before_face, face_sizes) + written)
+    corners = np.where(
+        written > 0, written - 1, np.repeat(vertices_before_face, face_sizes) + written
+    )
     _faces_in_range(path, corners, face_sizes, points.shape[0], np.array(face_lines))
     return _Parsed(points, _polygon_list(corners, face_sizes), tuple(tags))
 
 
-def _convert(path: Path, tokens: list, dtype: type, expected: str, lines: Sequence[int] | NDArray[np.int64]) -> NDArray:
+def _convert(
+    path: Path, tokens: list, dtype: type, expected: str, lines: Sequence[int] | NDArray[np.int64]
+) -> NDArray:
     """``np.array(tokens, dtype)``; on a bad token, a :class:`FormatError` naming its line (``lines`` per row)."""
     try:
         return np.array(tokens, dtype=dtype)
@@ -411,14 +485,18 @@ def _parse_tag(path: Path, parts: Sequence[str], line: int) -> Tag:
     values = parts[3:]
     if len(values) != n_ints + n_floats + n_strings:
         raise FormatError(
-            path, f"tag {parts[1]!r} announces {n_ints}/{n_floats}/{n_strings} values but has {len(values)}", line
+            path,
+            f"tag {parts[1]!r} announces {n_ints}/{n_floats}/{n_strings} values but has {len(values)}",
+            line,
         )
     try:
         ints = tuple(int(x) for x in values[:n_ints])
-        floats = tuple(float(x) for x in values[n_ints:n_ints + n_floats])
+        floats = tuple(float(x) for x in values[n_ints : n_ints + n_floats])
     except ValueError:
-        raise FormatError(path, f"tag {parts[1]!r}: expected {n_ints} integers then {n_floats} numbers", line) from None
-    return Tag(parts[1], ints, floats, tuple(values[n_ints + n_floats:]))
+        raise FormatError(
+            path, f"tag {parts[1]!r}: expected {n_ints} integers then {n_floats} numbers", line
+        ) from None
+    return Tag(parts[1], ints, floats, tuple(values[n_ints + n_floats :]))
 
 
 # -- compiled readers --------------------------------------------------------------------------
@@ -481,7 +559,9 @@ def _decimal(w: np.uint64, q: int, powers: NDArray[np.uint64]) -> int:
             lz += shift
     index = 2 * (q + 342)
     high, low = _product(w, powers[index])
-    if high & np.uint64(0x1FF) == np.uint64(0x1FF):  # the 55 bits needed may carry: the next 64 bits of 5^q
+    if high & np.uint64(0x1FF) == np.uint64(
+        0x1FF
+    ):  # the 55 bits needed may carry: the next 64 bits of 5^q
         high2, _ = _product(w, powers[index + 1])
         low += high2
         if high2 > low:
@@ -493,7 +573,12 @@ def _decimal(w: np.uint64, q: int, powers: NDArray[np.uint64]) -> int:
     power2 = ((217706 * q) >> 16) + 63 + upper - lz + 1023
     if power2 <= 0:
         return -1
-    if low <= one and -4 <= q <= 23 and mantissa & np.uint64(3) == one and (mantissa << np.uint64(upper + 9)) == high:
+    if (
+        low <= one
+        and -4 <= q <= 23
+        and mantissa & np.uint64(3) == one
+        and (mantissa << np.uint64(upper + 9)) == high
+    ):
         mantissa &= ~one  # exactly halfway: to even
     mantissa += mantissa & one
     mantissa >>= one
@@ -502,10 +587,14 @@ def _decimal(w: np.uint64, q: int, powers: NDArray[np.uint64]) -> int:
         power2 += 1
     if power2 >= 0x7FF:
         return -1
-    return np.int64((mantissa & ~(one << np.uint64(52))) | (np.uint64(power2) << np.uint64(52)))  # int64 as every return
+    return np.int64(
+        (mantissa & ~(one << np.uint64(52))) | (np.uint64(power2) << np.uint64(52))
+    )  # int64 as every return
 
 
-def _number(data: NDArray[np.uint8], classes: NDArray[np.uint8], first: int, powers: NDArray[np.uint64]) -> tuple[int, int]:
+def _number(
+    data: NDArray[np.uint8], classes: NDArray[np.uint8], first: int, powers: NDArray[np.uint64]
+) -> tuple[int, int]:
     """The float64 bits (as int64) of the token at ``first`` and where it ends, read in one pass: a
     token spelt ``[+-]digits[.digits][(e|E)[+-]digits]`` (or ``.digits``) correctly rounded as
     ``float`` rounds it; -1 for any other spelling, more than 19 significant digits, or a number
@@ -549,7 +638,9 @@ def _number(data: NDArray[np.uint8], classes: NDArray[np.uint8], first: int, pow
     if not seen or digits > 19:
         return -1, at
     bits = 0 if w == np.uint64(0) else _decimal(w, exponent - fraction, powers)
-    return (-1 if bits < 0 else bits | (_SIGN_BIT if negative else 0)), at  # -1: a NaN's bits, never a number's
+    return (
+        -1 if bits < 0 else bits | (_SIGN_BIT if negative else 0)
+    ), at  # -1: a NaN's bits, never a number's
 
 
 #: byte classes of the OBJ kernel: 0 a token's, 1 space or tab, 2 LF or CR, 3 '#', 4 any other (not
@@ -563,8 +654,14 @@ _BYTE_CLASSES[ord("#")] = _HASH
 
 
 def _obj_kernel(
-    data: NDArray[np.uint8], classes: NDArray[np.uint8], powers: NDArray[np.uint64], points: NDArray[np.uint64],
-    corners: NDArray[np.int64], sizes: NDArray[np.int64], hard: NDArray[np.int64], others: NDArray[np.int64],
+    data: NDArray[np.uint8],
+    classes: NDArray[np.uint8],
+    powers: NDArray[np.uint64],
+    points: NDArray[np.uint64],
+    corners: NDArray[np.int64],
+    sizes: NDArray[np.int64],
+    hard: NDArray[np.int64],
+    others: NDArray[np.int64],
 ) -> tuple[bool, int, int, int, int, int]:
     """Scan OBJ bytes once into the arrays given; returns ``valid`` and the items found: coordinates,
     faces, corners, hard numbers, other lines (those beyond an array's length are counted, not written).
@@ -587,7 +684,11 @@ def _obj_kernel(
             kind = 1
         elif keyword == 1 and data[start] == 102:
             kind = 2
-        elif keyword == 2 and data[start] == 118 and (data[start + 1] == 116 or data[start + 1] == 110 or data[start + 1] == 112):
+        elif (
+            keyword == 2
+            and data[start] == 118
+            and (data[start + 1] == 116 or data[start + 1] == 110 or data[start + 1] == 112)
+        ):
             kind = 3
         elif keyword > 0:
             kind = 4
@@ -603,7 +704,11 @@ def _obj_kernel(
                 bits, i = _number(data, classes, first, powers)
                 if bits == -1:
                     if n_hard < hard.shape[0]:
-                        hard[n_hard, 0], hard[n_hard, 1], hard[n_hard, 2] = first, i, n_points + tokens - 1
+                        hard[n_hard, 0], hard[n_hard, 1], hard[n_hard, 2] = (
+                            first,
+                            i,
+                            n_points + tokens - 1,
+                        )
                     n_hard += 1
                     bits = 0
                 if n_points + 3 <= points.size:
@@ -653,7 +758,10 @@ def _obj_kernel(
 
 
 def _floats_kernel(
-    data: NDArray[np.uint8], classes: NDArray[np.uint8], powers: NDArray[np.uint64], out: NDArray[np.uint64],
+    data: NDArray[np.uint8],
+    classes: NDArray[np.uint8],
+    powers: NDArray[np.uint64],
+    out: NDArray[np.uint64],
     hard: NDArray[np.int64],
 ) -> tuple[bool, int, int]:
     """The numbers of a text of numbers separated by spaces and line breaks, by :func:`_number`, into
@@ -720,11 +828,22 @@ def _floats_compiled(text: bytes, count: int) -> NDArray[np.float64] | None:
 def _obj_compiled(data: bytes) -> _Parsed | None:
     """The compiled OBJ reader (see above); None where the line-by-line one must read the file."""
     buffer, kernel = np.frombuffer(data, dtype=np.uint8), _compiled(_obj_kernel)
-    found = (3 * (len(data) // 24 + 64), len(data) // 6 + 64, len(data) // 24 + 64, 1024, 1024)  # most files fit
+    found = (
+        3 * (len(data) // 24 + 64),
+        len(data) // 6 + 64,
+        len(data) // 24 + 64,
+        1024,
+        1024,
+    )  # most files fit
     while True:
         n_points, n_corners, n_faces, n_hard, n_others = found
-        arrays = (np.empty(n_points, dtype=np.uint64), np.empty(n_corners, dtype=np.int64), np.empty(n_faces, dtype=np.int64),
-                  np.empty((n_hard, 3), dtype=np.int64), np.empty((n_others, 2), dtype=np.int64))
+        arrays = (
+            np.empty(n_points, dtype=np.uint64),
+            np.empty(n_corners, dtype=np.int64),
+            np.empty(n_faces, dtype=np.int64),
+            np.empty((n_hard, 3), dtype=np.int64),
+            np.empty((n_others, 2), dtype=np.int64),
+        )
         valid, *counts = kernel(buffer, _BYTE_CLASSES, _powers_of_five(), *arrays)
         found = (counts[0], counts[2], counts[1], counts[3], counts[4])
         if not valid or all(count <= len(array) for count, array in zip(found, arrays)):
@@ -773,22 +892,29 @@ def _off_fast(data: bytes) -> _Parsed | None:
     if lines is None:
         return None
     content = np.flatnonzero(lines.tokens > 0)
-    head = [lines.text[lines.starts[row]:lines.ends[row]].decode("ascii").split() for row in content[:2].tolist()]
+    head = [
+        lines.text[lines.starts[row] : lines.ends[row]].decode("ascii").split()
+        for row in content[:2].tolist()
+    ]
     if not head or head[0][0] not in OFF_HEADERS:
         return None
-    counts, body = (head[0][1:], content[1:]) if len(head[0]) > 1 or len(head) == 1 else (head[1], content[2:])
+    counts, body = (
+        (head[0][1:], content[1:]) if len(head[0]) > 1 or len(head) == 1 else (head[1], content[2:])
+    )
     try:
         n_vertices, n_faces = int(counts[0]), int(counts[1])
     except (IndexError, ValueError):
         return None
     if n_vertices < 0 or n_faces <= 0 or body.size < n_vertices + n_faces:
         return None
-    vertex_rows, face_rows = body[:n_vertices], body[n_vertices:n_vertices + n_faces]
+    vertex_rows, face_rows = body[:n_vertices], body[n_vertices : n_vertices + n_faces]
     vertex_tokens, face_tokens = lines.tokens[vertex_rows], lines.tokens[face_rows]
     if (vertex_tokens < 3).any():
         return None
     text = lines.chunk(vertex_rows)
-    if (vertex_tokens == 3).all() and (values := _numbers(text, b"", 3 * n_vertices, np.float64)) is not None:
+    if (vertex_tokens == 3).all() and (
+        values := _numbers(text, b"", 3 * n_vertices, np.float64)
+    ) is not None:
         points = values.reshape(-1, 3)
     else:  # more than x y z (colours), or tokens np.fromstring does not read as float does
         points = _gather_floats(text, vertex_tokens, (0, 1, 2))
@@ -822,7 +948,9 @@ def _read_off_lines(path: Path, data: bytes) -> _Parsed:
         if (parts := line.split("#", 1)[0].split())
     ]
     if not content or content[0][1][0] not in OFF_HEADERS:
-        raise FormatError(path, "expected the header 'OFF' on the first line", content[0][0] if content else 1)
+        raise FormatError(
+            path, "expected the header 'OFF' on the first line", content[0][0] if content else 1
+        )
     (counts_line, header), body = content[0], content[1:]
     counts = header[1:]  # the counts may follow the header on its line
     if not counts and body:
@@ -832,7 +960,9 @@ def _read_off_lines(path: Path, data: bytes) -> _Parsed:
         if n_vertices < 0 or n_faces < 0:
             raise ValueError
     except (IndexError, ValueError):
-        raise FormatError(path, "expected the counts 'n_vertices n_faces n_edges'", counts_line) from None
+        raise FormatError(
+            path, "expected the counts 'n_vertices n_faces n_edges'", counts_line
+        ) from None
     if len(body) < n_vertices + n_faces:
         last = content[-1][0]
         raise FormatError(
@@ -841,13 +971,15 @@ def _read_off_lines(path: Path, data: bytes) -> _Parsed:
             last,
         )
 
-    vertex_rows, face_rows = body[:n_vertices], body[n_vertices:n_vertices + n_faces]
+    vertex_rows, face_rows = body[:n_vertices], body[n_vertices : n_vertices + n_faces]
     points = np.empty((n_vertices, 3))
     for row, (number, parts) in enumerate(vertex_rows):
         try:
             points[row] = [float(x) for x in parts[:3]]
         except ValueError:
-            raise FormatError(path, f"expected a vertex 'x y z', got {' '.join(parts)!r}", number) from None
+            raise FormatError(
+                path, f"expected a vertex 'x y z', got {' '.join(parts)!r}", number
+            ) from None
     vertex_lines = np.array([number for number, _ in vertex_rows], dtype=np.int64)
     _finite_vertices(path, points, vertex_lines)
 
@@ -855,7 +987,7 @@ def _read_off_lines(path: Path, data: bytes) -> _Parsed:
     for number, parts in face_rows:
         try:
             size = int(parts[0])
-            corners = [int(x) for x in parts[1:1 + size]]
+            corners = [int(x) for x in parts[1 : 1 + size]]
             if size < 3 or len(corners) != size:
                 raise ValueError
         except ValueError:
@@ -865,7 +997,9 @@ def _read_off_lines(path: Path, data: bytes) -> _Parsed:
     sizes = np.fromiter(map(len, faces), dtype=np.int64, count=len(faces))
     if sizes.size == 0:
         raise FormatError(path, "no faces: the header announces 0 faces", counts_line)
-    corners = np.fromiter((i for face in faces for i in face), dtype=np.int64, count=int(sizes.sum()))
+    corners = np.fromiter(
+        (i for face in faces for i in face), dtype=np.int64, count=int(sizes.sum())
+    )
     _faces_in_range(path, corners, sizes, n_vertices, np.array([number for number, _ in face_rows]))
     return _Parsed(points, _polygon_list(corners, sizes))
 
@@ -892,7 +1026,9 @@ def _ply_header(path: Path, data: bytes) -> _PlyHeader:
         parts = line.split()
         if parts[:1] == ["element"]:
             if len(parts) != 3 or not parts[2].isdigit():
-                raise FormatError(path, f"expected 'element name count', got {line.strip()!r}", number)
+                raise FormatError(
+                    path, f"expected 'element name count', got {line.strip()!r}", number
+                )
             elements.append((parts[1], int(parts[2])))
     return _PlyHeader("format ascii" in data[:end].decode("ascii"), elements, len(header) + 1)
 
@@ -919,8 +1055,19 @@ def _read_ply(path: Path, data: bytes) -> _Parsed:
 #: PLY scalar types as NumPy codes (without the byte order), those of meshio's binary reader as it
 #: maps them (``uchar`` signed), so that a file reads the same by either path
 _PLY_TYPES = {
-    "uchar": "i1", "uint": "u4", "uint8": "u1", "uint16": "u2", "uint32": "u4", "uint64": "u8", "int": "i4",
-    "int8": "i1", "int32": "i4", "int64": "i8", "float": "f4", "float32": "f4", "double": "f8",
+    "uchar": "i1",
+    "uint": "u4",
+    "uint8": "u1",
+    "uint16": "u2",
+    "uint32": "u4",
+    "uint64": "u8",
+    "int": "i4",
+    "int8": "i1",
+    "int32": "i4",
+    "int64": "i8",
+    "float": "f4",
+    "float32": "f4",
+    "double": "f8",
 }
 _PLY_ORDER = {"format binary_little_endian 1.0": "<", "format binary_big_endian 1.0": ">"}
 
@@ -942,7 +1089,7 @@ def _ply_layout(data: bytes) -> _PlyLayout | None:
     """The layout of a PLY file whose header :func:`_ply_header` accepted, None if it is not the common one."""
     end = data.find(b"end_header")  # the header is ASCII before it
     lines = [line.strip() for line in data[:end].decode("ascii").splitlines()]
-    if data[end:end + 11] != b"end_header\n" or len(lines) < 2 or lines[0] != "ply":
+    if data[end : end + 11] != b"end_header\n" or len(lines) < 2 or lines[0] != "ply":
         return None
     elements: list[tuple[str, int, list[list[str]]]] = []
     for line in lines[2:]:
@@ -958,16 +1105,30 @@ def _ply_layout(data: bytes) -> _PlyLayout | None:
     (_, n_vertices, vertex_properties), (_, n_faces, face_properties) = elements
     names = [p[-1] for p in vertex_properties]
     if (
-        any(len(p) != 2 for p in vertex_properties) or len(set(names)) != len(names) or not {"x", "y", "z"} <= set(names)
-        or len(face_properties) != 1 or len(face_properties[0]) != 4 or face_properties[0][0] != "list"
+        any(len(p) != 2 for p in vertex_properties)
+        or len(set(names)) != len(names)
+        or not {"x", "y", "z"} <= set(names)
+        or len(face_properties) != 1
+        or len(face_properties[0]) != 4
+        or face_properties[0][0] != "list"
         or face_properties[0][3] != "vertex_indices"
     ):
         return None
     count_type, index_type = face_properties[0][1:3]
-    return _PlyLayout(lines[1], n_vertices, [(p[0], p[1]) for p in vertex_properties], n_faces, count_type, index_type, end + 11)
+    return _PlyLayout(
+        lines[1],
+        n_vertices,
+        [(p[0], p[1]) for p in vertex_properties],
+        n_faces,
+        count_type,
+        index_type,
+        end + 11,
+    )
 
 
-def _ply_records(data: bytes) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]] | None:
+def _ply_records(
+    data: bytes,
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]] | None:
     """Points, corners and sizes of a binary PLY file of the common layout (:func:`_ply_layout`),
     every face with as many corners and nothing after them, read as NumPy records; None for any
     other file."""
@@ -976,10 +1137,17 @@ def _ply_records(data: bytes) -> tuple[NDArray[np.float64], NDArray[np.int64], N
         return None
     order = _PLY_ORDER[layout.format]
     kinds = [kind for kind, _ in layout.vertex_properties] + [layout.count_type, layout.index_type]
-    if not set(kinds) <= _PLY_TYPES.keys() or {_PLY_TYPES[layout.count_type][0], _PLY_TYPES[layout.index_type][0]} & {"f"}:
+    if not set(kinds) <= _PLY_TYPES.keys() or {
+        _PLY_TYPES[layout.count_type][0],
+        _PLY_TYPES[layout.index_type][0],
+    } & {"f"}:
         return None
-    vertex_type = np.dtype([(name, order + _PLY_TYPES[kind]) for kind, name in layout.vertex_properties])
-    count_type, index_type = (np.dtype(order + _PLY_TYPES[kind]) for kind in (layout.count_type, layout.index_type))
+    vertex_type = np.dtype(
+        [(name, order + _PLY_TYPES[kind]) for kind, name in layout.vertex_properties]
+    )
+    count_type, index_type = (
+        np.dtype(order + _PLY_TYPES[kind]) for kind in (layout.count_type, layout.index_type)
+    )
     faces_start = layout.start + layout.n_vertices * vertex_type.itemsize
     if len(data) < faces_start + count_type.itemsize:
         return None
@@ -992,38 +1160,57 @@ def _ply_records(data: bytes) -> tuple[NDArray[np.float64], NDArray[np.int64], N
         return None
     vertices = np.frombuffer(data, vertex_type, layout.n_vertices, layout.start)
     points = np.stack([vertices[axis].astype(np.float64) for axis in "xyz"], axis=1)
-    return points, faces["i"].astype(np.int64).ravel(), np.full(layout.n_faces, corners, dtype=np.int64)
+    return (
+        points,
+        faces["i"].astype(np.int64).ravel(),
+        np.full(layout.n_faces, corners, dtype=np.int64),
+    )
 
 
 #: the PLY types of an ASCII file's faces the fast path reads (meshio's integer ones)
-_PLY_ASCII_INTEGERS = frozenset({"uchar", "uint8", "uint16", "uint", "uint32", "int", "int8", "int32", "int64", "uint64"})
+_PLY_ASCII_INTEGERS = frozenset(
+    {"uchar", "uint8", "uint16", "uint", "uint32", "int", "int8", "int32", "int64", "uint64"}
+)
 
 
-def _ply_text(data: bytes) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]] | None:
+def _ply_text(
+    data: bytes,
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]] | None:
     """Points, corners and sizes of an ASCII PLY file of the common layout (:func:`_ply_layout`)
     with x, y, z first and every vertex property ``double``, one line per vertex then per face
     with exactly its numbers, no blank line or comment among them: parsed as the OBJ and OFF text
     is; None for any other file (meshio reads it)."""
     layout = _ply_layout(data)
     if (
-        layout is None or layout.format != "format ascii 1.0"
+        layout is None
+        or layout.format != "format ascii 1.0"
         or [name for _, name in layout.vertex_properties[:3]] != ["x", "y", "z"]
         or any(kind not in ("double", "float64") for kind, _ in layout.vertex_properties)
         or not {layout.count_type, layout.index_type} <= _PLY_ASCII_INTEGERS
     ):
         return None
-    body = data[layout.start:]
-    lines = None if b"#" in body or b"\r" in body else _scan(body)  # meshio: '#' starts a comment, only LF ends a line
+    body = data[layout.start :]
+    lines = (
+        None if b"#" in body or b"\r" in body else _scan(body)
+    )  # meshio: '#' starts a comment, only LF ends a line
     n_vertices, n_faces, width = layout.n_vertices, layout.n_faces, len(layout.vertex_properties)
     if lines is None or lines.tokens.size < n_vertices + n_faces:
         return None
-    vertex_tokens, face_tokens = lines.tokens[:n_vertices], lines.tokens[n_vertices:n_vertices + n_faces]
+    vertex_tokens, face_tokens = (
+        lines.tokens[:n_vertices],
+        lines.tokens[n_vertices : n_vertices + n_faces],
+    )
     if (vertex_tokens != width).any() or (face_tokens == 0).any():
         return None
     values = _numbers(lines.chunk(np.arange(n_vertices)), b"", width * n_vertices, np.float64)
     if values is None or not np.isfinite(points := values.reshape(-1, width)[:, :3]).all():
         return None
-    numbers = _numbers(lines.chunk(np.arange(n_vertices, n_vertices + n_faces)), b"", int(face_tokens.sum()), np.int64)
+    numbers = _numbers(
+        lines.chunk(np.arange(n_vertices, n_vertices + n_faces)),
+        b"",
+        int(face_tokens.sum()),
+        np.int64,
+    )
     offsets = np.cumsum(face_tokens) - face_tokens
     if numbers is None or (numbers[offsets] != face_tokens - 1).any():
         return None
@@ -1033,21 +1220,48 @@ def _ply_text(data: bytes) -> tuple[NDArray[np.float64], NDArray[np.int64], NDAr
     return np.ascontiguousarray(points), corners, sizes
 
 
-def _ply_meshio(path: Path, header: _PlyHeader) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64] | None, NDArray[np.int64] | None]:
+def _ply_meshio(
+    path: Path, header: _PlyHeader
+) -> tuple[
+    NDArray[np.float64],
+    NDArray[np.int64],
+    NDArray[np.int64],
+    NDArray[np.int64] | None,
+    NDArray[np.int64] | None,
+]:
     """Points, corners, sizes and, for an ASCII file of vertices then faces, the vertices' and
     faces' lines, read by ``meshio.ply``."""
     counts = dict(header.elements)
     try:
-        with warnings.catch_warnings():  # numbers beyond the declared type: the finite-coordinate check names them
+        with (
+            warnings.catch_warnings()
+        ):  # numbers beyond the declared type: the finite-coordinate check names them
             warnings.simplefilter("ignore", RuntimeWarning)
             mesh = meshio.ply.read(str(path))
-    except (meshio.ReadError, ValueError, OverflowError, IndexError, KeyError, TypeError, AssertionError, EOFError) as exc:
+    except (
+        meshio.ReadError,
+        ValueError,
+        OverflowError,
+        IndexError,
+        KeyError,
+        TypeError,
+        AssertionError,
+        EOFError,
+    ) as exc:
         reason = f"{type(exc).__name__}: {' '.join(str(exc).split())}"  # one line, whatever the library wrote
-        raise FormatError(path, f"cannot read the PLY data, truncated or malformed ({reason})") from None
+        raise FormatError(
+            path, f"cannot read the PLY data, truncated or malformed ({reason})"
+        ) from None
     points = np.asarray(mesh.points, dtype=np.float64)
     polygon_types = ("triangle", "quad", "polygon")
-    blocks = [np.asarray(block.data, dtype=np.int64) for block in mesh.cells if block.type in polygon_types]
-    sizes = np.repeat([b.shape[1] if b.ndim == 2 else 0 for b in blocks], [len(b) for b in blocks]).astype(np.int64)
+    blocks = [
+        np.asarray(block.data, dtype=np.int64)
+        for block in mesh.cells
+        if block.type in polygon_types
+    ]
+    sizes = np.repeat(
+        [b.shape[1] if b.ndim == 2 else 0 for b in blocks], [len(b) for b in blocks]
+    ).astype(np.int64)
     if points.shape != (counts.get("vertex", 0), 3) or sizes.size != counts["face"]:
         raise FormatError(
             path,
@@ -1068,7 +1282,9 @@ def _write_format(path: Path) -> str:
     suffix = path.suffix.lower()
     if suffix not in WRITE_FORMATS:
         expected = ", ".join(WRITE_FORMATS)
-        raise FormatError(path, f"unsupported extension {path.suffix!r} for writing; expected one of {expected}")
+        raise FormatError(
+            path, f"unsupported extension {path.suffix!r} for writing; expected one of {expected}"
+        )
     return suffix
 
 
@@ -1103,10 +1319,10 @@ def _write_obj(path: Path, points: NDArray[np.float64], cells: NDArray[np.int64]
     with open(path, "w", encoding="ascii", newline="\n") as handle:
         handle.write("# written by g1patch\n")
         for start in range(0, len(points), _OBJ_ROWS):
-            block = points[start:start + _OBJ_ROWS]
+            block = points[start : start + _OBJ_ROWS]
             handle.write((vertex_row * len(block)) % tuple(block.ravel().tolist()))
         for start in range(0, len(cells), _OBJ_ROWS):
-            block = cells[start:start + _OBJ_ROWS] + 1
+            block = cells[start : start + _OBJ_ROWS] + 1
             handle.write((face_row * len(block)) % tuple(block.ravel().tolist()))
 
 
@@ -1122,22 +1338,28 @@ def _write_stl(path: Path, points: NDArray[np.float64], triangles: NDArray[np.in
         handle.write(header + b" " * (80 - len(header)))
         handle.write(np.array(len(triangles), dtype="<u4").tobytes())
         for start in range(0, len(triangles), _OBJ_ROWS):
-            corners = points[triangles[start:start + _OBJ_ROWS]]
+            corners = points[triangles[start : start + _OBJ_ROWS]]
             normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
             length = np.sqrt(np.einsum("ij,ij->i", normals, normals))[:, None]
             records = np.zeros(len(corners), dtype=_STL_RECORD)
-            records["normal"] = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+            records["normal"] = np.divide(
+                normals, length, out=np.zeros_like(normals), where=length > 0
+            )
             records["points"] = corners
             handle.write(records.tobytes())
 
 
-def _write(path: Path, suffix: str, points: NDArray[np.float64], cell_type: str, cells: NDArray[np.int64]) -> None:
+def _write(
+    path: Path, suffix: str, points: NDArray[np.float64], cell_type: str, cells: NDArray[np.int64]
+) -> None:
     if suffix in (".obj", ".stl"):
         writer = _write_obj if suffix == ".obj" else _write_stl
         with atomic_path(path) as temporary:
             writer(temporary, points, cells)
         return
-    index_type = np.int32 if cells.size == 0 or cells.max() < 2**31 else np.int64  # PLY wants 32-bit indices
+    index_type = (
+        np.int32 if cells.size == 0 or cells.max() < 2**31 else np.int64
+    )  # PLY wants 32-bit indices
     mesh = meshio.Mesh(points, [(cell_type, cells.astype(index_type))])
     with atomic_path(path) as temporary:
         meshio.ply.write(str(temporary), mesh, binary=True)
@@ -1148,7 +1370,9 @@ def write_triangles(path: PathLike, points: ArrayLike, triangles: ArrayLike) -> 
     path = Path(path)
     suffix = _write_format(path)
     points = _checked_points("points", points)
-    _write(path, suffix, points, "triangle", _checked_cells("triangles", triangles, 3, points.shape[0]))
+    _write(
+        path, suffix, points, "triangle", _checked_cells("triangles", triangles, 3, points.shape[0])
+    )
 
 
 def write_quads(path: PathLike, vertices: ArrayLike, faces: ArrayLike) -> None:

@@ -121,7 +121,15 @@ __all__ = [
 FORMAT_VERSION = 3
 #: the versions :func:`load_network` reads (1: no frame, 2: no seams)
 READABLE_VERSIONS = (1, 2, 3)
-_ARRAYS = ("corner_ids", "edge_ids", "edge_reversed", "neighbor", "neighbor_edge", "same_direction", "edge_collapsed")
+_ARRAYS = (
+    "corner_ids",
+    "edge_ids",
+    "edge_reversed",
+    "neighbor",
+    "neighbor_edge",
+    "same_direction",
+    "edge_collapsed",
+)
 #: the first version with a frame
 FRAME_VERSION = 2
 #: the first version with seams
@@ -152,18 +160,39 @@ _FLOAT_ARRAYS = ("points", "control", "vertices", "vertex_normals", "frame_centr
 _STRING_ARRAYS = ("header", "patch_kind", "form")
 #: shape of every array member, by its dimensions: P patches, E edges, V vertices
 _SHAPES: dict[str, tuple[str | int, ...]] = {
-    "corner_ids": ("P", 4), "edge_ids": ("P", 4), "neighbor": ("P", 4), "neighbor_edge": ("P", 4),
-    "edge_reversed": ("P", 4), "same_direction": ("P", 4), "seam": ("P", 4), "edge_collapsed": ("E",),
-    "points": ("P", 20, 3), "control": ("P", 4, 4, 3), "vertices": ("V", 3), "vertex_normals": ("V", 3),
-    "frame_centre": (3,), "frame_scale": (), "header": (), "patch_kind": (), "form": (),
+    "corner_ids": ("P", 4),
+    "edge_ids": ("P", 4),
+    "neighbor": ("P", 4),
+    "neighbor_edge": ("P", 4),
+    "edge_reversed": ("P", 4),
+    "same_direction": ("P", 4),
+    "seam": ("P", 4),
+    "edge_collapsed": ("E",),
+    "points": ("P", 20, 3),
+    "control": ("P", 4, 4, 3),
+    "vertices": ("V", 3),
+    "vertex_normals": ("V", 3),
+    "frame_centre": (3,),
+    "frame_scale": (),
+    "header": (),
+    "patch_kind": (),
+    "form": (),
 }
 _KIND_ARRAYS = {"bicubic": ("control", "form"), GregoryPatchSet.kind: ("points",)}
 
 _NETWORK = "a network file (.npz) written by g1patch build"
 _SUFFIX_KINDS = {
-    ".obj": "a Wavefront OBJ mesh", ".ply": "a PLY mesh", ".stl": "an STL mesh", ".off": "an OFF mesh",
-    ".bpt": "a Bézier patch file (.bpt)", ".step": "a STEP file", ".stp": "a STEP file",
-    ".iges": "an IGES file", ".igs": "an IGES file", ".png": "a PNG picture", ".npy": "a single NumPy array (.npy)",
+    ".obj": "a Wavefront OBJ mesh",
+    ".ply": "a PLY mesh",
+    ".stl": "an STL mesh",
+    ".off": "an OFF mesh",
+    ".bpt": "a Bézier patch file (.bpt)",
+    ".step": "a STEP file",
+    ".stp": "a STEP file",
+    ".iges": "an IGES file",
+    ".igs": "an IGES file",
+    ".png": "a PNG picture",
+    ".npy": "a single NumPy array (.npy)",
 }
 _MESH_SUFFIXES = (".obj", ".ply", ".stl", ".off")
 
@@ -196,7 +225,9 @@ def save_network_in_background(path: str | os.PathLike[str], network: PatchNetwo
         writer.shutdown(wait=False)
 
 
-def _members(path: str | os.PathLike[str], network: PatchNetwork) -> tuple[Path, dict[str, NDArray[Any]]]:
+def _members(
+    path: str | os.PathLike[str], network: PatchNetwork
+) -> tuple[Path, dict[str, NDArray[Any]]]:
     """The target path and the file's members of ``network``, checked as :func:`load_network` checks them."""
     target = Path(path)
     if target.suffix.lower() != ".npz":
@@ -234,7 +265,9 @@ _END64 = struct.Struct("<4sQHHIIQQQQ")
 _LOCATOR64 = struct.Struct("<4sIQI")
 _END = struct.Struct("<4sHHHHIIH")
 _ZIP64_VERSION = 45
-_DOS_DATE = (0 << 9) | (1 << 5) | 1  # 1980-01-01, as zipfile dates entries without one: files are reproducible
+_DOS_DATE = (
+    (0 << 9) | (1 << 5) | 1
+)  # 1980-01-01, as zipfile dates entries without one: files are reproducible
 _UNIX_FILE = 0o100644 << 16
 _FULL32 = 0xFFFFFFFF
 
@@ -262,13 +295,28 @@ def _write_stored_zip(handle: BinaryIO, members: Mapping[str, NDArray[Any]]) -> 
     with ThreadPoolExecutor(max_workers=1) as crc_thread:
         for name, array in members.items():
             npy = io.BytesIO()
-            np.lib.format.write_array_header_1_0(npy, np.lib.format.header_data_from_array_1_0(array))
+            np.lib.format.write_array_header_1_0(
+                npy, np.lib.format.header_data_from_array_1_0(array)
+            )
             header, data = npy.getvalue(), _as_bytes(array)
             size = len(header) + data.nbytes
             filename = f"{name}.npy".encode("ascii")
             offset = handle.tell()
-            handle.write(_LOCAL.pack(b"PK\x03\x04", _ZIP64_VERSION, 0, 0, 0, _DOS_DATE, 0, _FULL32, _FULL32,
-                                     len(filename), _LOCAL_ZIP64.size))
+            handle.write(
+                _LOCAL.pack(
+                    b"PK\x03\x04",
+                    _ZIP64_VERSION,
+                    0,
+                    0,
+                    0,
+                    _DOS_DATE,
+                    0,
+                    _FULL32,
+                    _FULL32,
+                    len(filename),
+                    _LOCAL_ZIP64.size,
+                )
+            )
             handle.write(filename)
             handle.write(_LOCAL_ZIP64.pack(1, 16, size, size))
             crc = crc_thread.submit(_crc, header, data)
@@ -282,19 +330,61 @@ def _write_stored_zip(handle: BinaryIO, members: Mapping[str, NDArray[Any]]) -> 
     handle.seek(end_of_data)
     directory = io.BytesIO()
     for filename, offset, size, crc in entries:
-        directory.write(_CENTRAL.pack(b"PK\x01\x02", _ZIP64_VERSION, 3, _ZIP64_VERSION, 0, 0, 0, 0, _DOS_DATE,
-                                      crc.result(), _FULL32, _FULL32, len(filename), _CENTRAL_ZIP64.size, 0, 0, 0,
-                                      _UNIX_FILE, _FULL32))
+        directory.write(
+            _CENTRAL.pack(
+                b"PK\x01\x02",
+                _ZIP64_VERSION,
+                3,
+                _ZIP64_VERSION,
+                0,
+                0,
+                0,
+                0,
+                _DOS_DATE,
+                crc.result(),
+                _FULL32,
+                _FULL32,
+                len(filename),
+                _CENTRAL_ZIP64.size,
+                0,
+                0,
+                0,
+                _UNIX_FILE,
+                _FULL32,
+            )
+        )
         directory.write(filename)
         directory.write(_CENTRAL_ZIP64.pack(1, 24, size, size, offset))
     count, listing = len(entries), directory.getvalue()
     handle.write(listing)
     end64 = end_of_data + len(listing)
-    handle.write(_END64.pack(b"PK\x06\x06", _END64.size - 12, _ZIP64_VERSION, _ZIP64_VERSION, 0, 0, count, count,
-                             len(listing), end_of_data))
+    handle.write(
+        _END64.pack(
+            b"PK\x06\x06",
+            _END64.size - 12,
+            _ZIP64_VERSION,
+            _ZIP64_VERSION,
+            0,
+            0,
+            count,
+            count,
+            len(listing),
+            end_of_data,
+        )
+    )
     handle.write(_LOCATOR64.pack(b"PK\x06\x07", 0, end64, 1))
-    handle.write(_END.pack(b"PK\x05\x06", 0, 0, min(count, 0xFFFF), min(count, 0xFFFF), min(len(listing), _FULL32),
-                           min(end_of_data, _FULL32), 0))
+    handle.write(
+        _END.pack(
+            b"PK\x05\x06",
+            0,
+            0,
+            min(count, 0xFFFF),
+            min(count, 0xFFFF),
+            min(len(listing), _FULL32),
+            min(end_of_data, _FULL32),
+            0,
+        )
+    )
 
 
 # ----------------------------------------------------------------------------------- loading
@@ -305,7 +395,9 @@ def describe_file(path: Path, head: bytes) -> str | None:
     None when it may be one (a ``.npz`` zip archive)."""
     suffix = path.suffix.lower()
     if suffix != ".npz":
-        return _SUFFIX_KINDS.get(suffix, f"a {suffix} file" if suffix else "a file without the .npz extension")
+        return _SUFFIX_KINDS.get(
+            suffix, f"a {suffix} file" if suffix else "a file without the .npz extension"
+        )
     if not head:
         return "an empty file"
     if head.startswith((b"PK\x03\x04", b"PK\x05\x06")):
@@ -344,12 +436,18 @@ def load_network(path: str | os.PathLike[str], *, expects: str | None = None) ->
     with handle:
         other = describe_file(source, handle.read(512))
         if other is not None:
-            hint = f" (make one from it: g1patch build {source} -o {source.with_suffix('.npz')})" if source.suffix.lower() in _MESH_SUFFIXES else ""
+            hint = (
+                f" (make one from it: g1patch build {source} -o {source.with_suffix('.npz')})"
+                if source.suffix.lower() in _MESH_SUFFIXES
+                else ""
+            )
             raise FormatError(source, f"not a g1patch network file but {other}; {wanted}{hint}")
         try:
             archive = zipfile.ZipFile(handle)
         except Exception as exc:  # zipfile parses untrusted bytes: BadZipFile, NotImplementedError, struct.error, …
-            raise FormatError(source, f"not a g1patch network file (a damaged or truncated zip archive: {exc})") from None
+            raise FormatError(
+                source, f"not a g1patch network file (a damaged or truncated zip archive: {exc})"
+            ) from None
         with archive:
             return _Reader(source, handle, archive).network()
 
@@ -393,29 +491,44 @@ class _Reader:
         for info in self.archive.infolist():
             label = info.filename
             if not label.endswith(".npy"):
-                raise self.fail(f"not a g1patch network file (member {label!r} is not a .npy array)")
+                raise self.fail(
+                    f"not a g1patch network file (member {label!r} is not a .npy array)"
+                )
             name = label[:-4]
             if name in members:
                 raise self.fail(f"corrupt network file: member {label!r} appears twice")
             if info.flag_bits & 0x1:
                 raise self.fail(f"member {label!r} is encrypted")
             if info.compress_type not in (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED):
-                raise self.fail(f"member {label!r} uses zip compression method {info.compress_type}; "
-                                f"network files are stored or deflated")
+                raise self.fail(
+                    f"member {label!r} uses zip compression method {info.compress_type}; "
+                    f"network files are stored or deflated"
+                )
             if info.file_size > MAX_BYTES:
-                raise self.fail(f"member {label!r} declares {_size(info.file_size)} uncompressed, above the cap of "
-                                f"{_size(MAX_BYTES)} per member")
+                raise self.fail(
+                    f"member {label!r} declares {_size(info.file_size)} uncompressed, above the cap of "
+                    f"{_size(MAX_BYTES)} per member"
+                )
             total += info.file_size
             members[name] = _Member(name, info)
         if total > MAX_BYTES:
-            raise self.fail(f"the members declare {_size(total)} uncompressed in all, above the cap of {_size(MAX_BYTES)}")
+            raise self.fail(
+                f"the members declare {_size(total)} uncompressed in all, above the cap of {_size(MAX_BYTES)}"
+            )
         return members
 
     # -------------------------------------------------------------- raw member access
     def stream(self, member: _Member) -> BinaryIO:
         try:
             return self.archive.open(member.info)  # type: ignore[return-value]
-        except (zipfile.BadZipFile, OSError, ValueError, EOFError, NotImplementedError, RuntimeError) as exc:
+        except (
+            zipfile.BadZipFile,
+            OSError,
+            ValueError,
+            EOFError,
+            NotImplementedError,
+            RuntimeError,
+        ) as exc:
             raise self.fail(f"member {member.info.filename!r} cannot be read ({exc})") from None
 
     def read_npy_header(self, member: _Member) -> None:
@@ -444,16 +557,28 @@ class _Reader:
                 stream.close()
         except FormatError:
             raise
-        except Exception as exc:  # numpy parses the header with ast (SyntaxError, TokenError, ValueError, …)
-            raise self.fail(f"member {label!r}: not a readable .npy array ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
+        except (
+            Exception
+        ) as exc:  # numpy parses the header with ast (SyntaxError, TokenError, ValueError, …)
+            raise self.fail(
+                f"member {label!r}: not a readable .npy array ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})"
+            ) from None
         if dtype.hasobject or dtype.fields is not None or dtype.subdtype is not None:
-            raise self.fail(f"member {label!r} holds {dtype} values (Python objects or records); network files hold plain numbers and strings")
-        member.shape, member.dtype, member.fortran = tuple(int(n) for n in shape), dtype, bool(fortran)
+            raise self.fail(
+                f"member {label!r} holds {dtype} values (Python objects or records); network files hold plain numbers and strings"
+            )
+        member.shape, member.dtype, member.fortran = (
+            tuple(int(n) for n in shape),
+            dtype,
+            bool(fortran),
+        )
         member.header_length = length
         declared = length + math.prod(member.shape) * dtype.itemsize
         if declared != member.info.file_size:
-            raise self.fail(f"member {label!r}: its .npy header describes {dtype} {member.shape} ({_size(declared)}), "
-                            f"but the zip directory says {_size(member.info.file_size)}")
+            raise self.fail(
+                f"member {label!r}: its .npy header describes {dtype} {member.shape} ({_size(declared)}), "
+                f"but the zip directory says {_size(member.info.file_size)}"
+            )
 
     def stored_start(self, member: _Member) -> int:
         """Offset of a stored member's bytes, from its local header; truncation is named."""
@@ -461,22 +586,37 @@ class _Reader:
         self.handle.seek(info.header_offset)
         local = self.handle.read(30)
         if len(local) < 30 or local[:4] != b"PK\x03\x04":
-            raise self.fail(f"corrupt network file: the local header of member {info.filename!r} is missing (truncated?)")
+            raise self.fail(
+                f"corrupt network file: the local header of member {info.filename!r} is missing (truncated?)"
+            )
         name_length, extra_length = struct.unpack("<HH", local[26:30])
         start = info.header_offset + 30 + name_length + extra_length
         if info.compress_size != info.file_size:
-            raise self.fail(f"corrupt network file: stored member {info.filename!r} has compressed size "
-                            f"{info.compress_size} ≠ its size {info.file_size}")
+            raise self.fail(
+                f"corrupt network file: stored member {info.filename!r} has compressed size "
+                f"{info.compress_size} ≠ its size {info.file_size}"
+            )
         if start + info.file_size > self.file_size:
-            raise self.fail(f"truncated: member {info.filename!r} needs bytes {start}..{start + info.file_size} "
-                            f"of the file, which has {self.file_size}")
+            raise self.fail(
+                f"truncated: member {info.filename!r} needs bytes {start}..{start + info.file_size} "
+                f"of the file, which has {self.file_size}"
+            )
         return start
 
-    def read_data(self, member: _Member, crc_thread: ThreadPoolExecutor, crcs: list[tuple[_Member, Future[int]]]) -> NDArray[Any]:
+    def read_data(
+        self,
+        member: _Member,
+        crc_thread: ThreadPoolExecutor,
+        crcs: list[tuple[_Member, Future[int]]],
+    ) -> NDArray[Any]:
         """The array of ``member`` (shape and size already checked); a stored member's CRC is queued."""
         shape, dtype = member.shape, member.dtype
         array = np.empty(shape[::-1], dtype).T if member.fortran else np.empty(shape, dtype)
-        view = memoryview(array.reshape(-1, order="A").view(np.uint8)) if array.size else memoryview(b"")
+        view = (
+            memoryview(array.reshape(-1, order="A").view(np.uint8))
+            if array.size
+            else memoryview(b"")
+        )
         label = member.info.filename
         if member.info.compress_type == zipfile.ZIP_STORED:
             # read in steps, each step's CRC queued as it arrives: the one CRC thread runs them in
@@ -486,10 +626,12 @@ class _Reader:
             crc: Future[int] = crc_thread.submit(lambda: running[0])
             done = 0
             while done < view.nbytes:
-                got = self.handle.readinto(view[done:done + _READ_STEP])
+                got = self.handle.readinto(view[done : done + _READ_STEP])
                 if not got:
-                    raise self.fail(f"truncated: member {label!r} ends after {done} of {view.nbytes} bytes")
-                crc = crc_thread.submit(_crc_step, running, view[done:done + got])
+                    raise self.fail(
+                        f"truncated: member {label!r} ends after {done} of {view.nbytes} bytes"
+                    )
+                crc = crc_thread.submit(_crc_step, running, view[done : done + got])
                 done += got
             crcs.append((member, crc))
             return array
@@ -498,22 +640,35 @@ class _Reader:
                 stream.read(member.header_length)
                 done, step = 0, 1 << 24
                 while done < view.nbytes:
-                    chunk = stream.readinto(view[done:done + step])  # type: ignore[attr-defined]
+                    chunk = stream.readinto(view[done : done + step])  # type: ignore[attr-defined]
                     if not chunk:
                         raise EOFError("the data ends early")
                     done += chunk
                 stream.read(1)  # reaching the end checks the CRC
-        except (zipfile.BadZipFile, EOFError, OSError, zlib.error, ValueError, NotImplementedError) as exc:
-            raise self.fail(f"corrupt network file: member {label!r} cannot be decompressed ({exc})") from None
+        except (
+            zipfile.BadZipFile,
+            EOFError,
+            OSError,
+            zlib.error,
+            ValueError,
+            NotImplementedError,
+        ) as exc:
+            raise self.fail(
+                f"corrupt network file: member {label!r} cannot be decompressed ({exc})"
+            ) from None
         return array
 
     def read_string(self, member: _Member, cap: int) -> str:
         label = member.info.filename
         if member.info.file_size > cap + _NPY_HEADER_BYTES:
-            raise self.fail(f"member {label!r} declares {_size(member.info.file_size)}, above the cap of {_size(cap)} for it")
+            raise self.fail(
+                f"member {label!r} declares {_size(member.info.file_size)}, above the cap of {_size(cap)} for it"
+            )
         self.read_npy_header(member)
         if member.shape != () or member.dtype.kind != "U":
-            raise self.fail(f"member {label!r}: expected one string, got {member.dtype} {member.shape}")
+            raise self.fail(
+                f"member {label!r}: expected one string, got {member.dtype} {member.shape}"
+            )
         with ThreadPoolExecutor(max_workers=1) as crc_thread:
             crcs: list[tuple[_Member, Future[int]]] = []
             value = self.read_data(member, crc_thread, crcs)
@@ -523,7 +678,9 @@ class _Reader:
     def check_crcs(self, crcs: list[tuple[_Member, Future[int]]]) -> None:
         for member, crc in crcs:
             if crc.result() != member.info.CRC:
-                raise self.fail(f"corrupt network file: member {member.info.filename!r} fails its CRC check")
+                raise self.fail(
+                    f"corrupt network file: member {member.info.filename!r} fails its CRC check"
+                )
 
     # -------------------------------------------------------------- the network
     def network(self) -> PatchNetwork:
@@ -539,10 +696,14 @@ class _Reader:
         version = header.get("version")
         if isinstance(version, bool) or version not in READABLE_VERSIONS:
             readable = ", ".join(map(str, READABLE_VERSIONS))
-            raise self.fail(f"network format version {version!r} is not supported (this g1patch reads {readable})")
+            raise self.fail(
+                f"network format version {version!r} is not supported (this g1patch reads {readable})"
+            )
         version = int(version)
         provenance = header.get("provenance", {})
-        if not isinstance(provenance, dict) or not all(v is None or isinstance(v, (str, int, float)) for v in provenance.values()):
+        if not isinstance(provenance, dict) or not all(
+            v is None or isinstance(v, (str, int, float)) for v in provenance.values()
+        ):
             raise self.fail("corrupt network file: header: provenance must map names to strings")
         if "patch_kind" not in members:
             raise self.fail("network file lacks patch_kind")
@@ -552,19 +713,36 @@ class _Reader:
 
         # which members this version and kind have
         ignored = set()
-        if version < FRAME_VERSION:  # version 1 has no frame: arrays of that name are not part of it
+        if (
+            version < FRAME_VERSION
+        ):  # version 1 has no frame: arrays of that name are not part of it
             ignored |= {"frame_centre", "frame_scale"}
         if version < SEAM_VERSION:  # seam-free: an array of that name is not part of it
             ignored.add("seam")
-        required = ("patch_kind", *_KIND_ARRAYS[kind], *_ARRAYS, *(("seam",) if version >= SEAM_VERSION else ()))
+        required = (
+            "patch_kind",
+            *_KIND_ARRAYS[kind],
+            *_ARRAYS,
+            *(("seam",) if version >= SEAM_VERSION else ()),
+        )
         optional = {"header", "vertices", "vertex_normals", "frame_centre", "frame_scale"} - ignored
         missing = [name for name in required if name not in members]
         if missing:
             raise self.fail(f"network file lacks {', '.join(missing)}")
-        unexpected = [m.info.filename for name, m in members.items() if name not in (*required, *optional, *ignored)]
+        unexpected = [
+            m.info.filename
+            for name, m in members.items()
+            if name not in (*required, *optional, *ignored)
+        ]
         if unexpected:
-            raise self.fail(f"corrupt network file: unexpected member {unexpected[0]!r} in a version {version} {kind} network file")
-        wanted = {name: m for name, m in members.items() if name not in ignored and name not in ("header", "patch_kind")}
+            raise self.fail(
+                f"corrupt network file: unexpected member {unexpected[0]!r} in a version {version} {kind} network file"
+            )
+        wanted = {
+            name: m
+            for name, m in members.items()
+            if name not in ignored and name not in ("header", "patch_kind")
+        }
 
         # caps from the directory alone: P ≤ corner_ids' size / 4 (an element is at least 1 byte)
         bound = min(MAX_PATCHES, wanted["corner_ids"].info.file_size // 4)
@@ -578,7 +756,9 @@ class _Reader:
             raise self.fail(f"member 'corner_ids.npy': expected shape (P, 4), got {corner.shape}")
         count = corner.shape[0]
         if not 1 <= count <= MAX_PATCHES:
-            raise self.fail(f"member 'corner_ids.npy' claims {count} patches; network files hold 1 to {MAX_PATCHES}")
+            raise self.fail(
+                f"member 'corner_ids.npy' claims {count} patches; network files hold 1 to {MAX_PATCHES}"
+            )
         dims = {"P": count}
         for name, dim in (("edge_collapsed", "E"), ("vertices", "V"), ("vertex_normals", "V")):
             if name in wanted and len(wanted[name].shape) == len(_SHAPES[name]):
@@ -591,17 +771,25 @@ class _Reader:
             template = _SHAPES[member.name]
             expected = tuple(dims.get(d, -1) if isinstance(d, str) else d for d in template)
             if member.shape != expected:
-                text = "(" + ", ".join(map(str, template)) + ("," if len(template) == 1 else "") + ")"
-                raise self.fail(f"member {member.info.filename!r}: expected shape {text} = {expected} for {count} patches, got {member.shape}")
+                text = (
+                    "(" + ", ".join(map(str, template)) + ("," if len(template) == 1 else "") + ")"
+                )
+                raise self.fail(
+                    f"member {member.info.filename!r}: expected shape {text} = {expected} for {count} patches, got {member.shape}"
+                )
         for dim in ("E", "V"):
             if dims.get(dim, 0) > 4 * count:
                 name = "edge_collapsed" if dim == "E" else "vertices"
-                raise self.fail(f"member '{name}.npy' has {dims[dim]} rows, more than 4 per patch ({4 * count})")
+                raise self.fail(
+                    f"member '{name}.npy' has {dims[dim]} rows, more than 4 per patch ({4 * count})"
+                )
         total = sum(member.info.file_size for member in wanted.values())
         budget = PER_PATCH_BYTES * count + _NPY_HEADER_BYTES * len(wanted)
         if total > budget:
-            raise self.fail(f"the arrays declare {_size(total)} in all, more than the {_size(budget)} a network of "
-                            f"{count} patches may hold ({PER_PATCH_BYTES} bytes a patch)")
+            raise self.fail(
+                f"the arrays declare {_size(total)} in all, more than the {_size(budget)} a network of "
+                f"{count} patches may hold ({PER_PATCH_BYTES} bytes a patch)"
+            )
 
         # the data, CRCs on a second thread while the values are checked
         try:
@@ -616,9 +804,15 @@ class _Reader:
                 self.check_crcs(crcs)
         except MemoryError:
             total = sum(m.info.file_size for m in wanted.values())
-            raise self.fail(f"not enough memory to load its {count} patches ({_size(total)} of arrays)") from None
+            raise self.fail(
+                f"not enough memory to load its {count} patches ({_size(total)} of arrays)"
+            ) from None
         try:
-            patches = PatchSet.from_arrays(arrays) if kind == "bicubic" else GregoryPatchSet.from_arrays(arrays)
+            patches = (
+                PatchSet.from_arrays(arrays)
+                if kind == "bicubic"
+                else GregoryPatchSet.from_arrays(arrays)
+            )
             return PatchNetwork(
                 patches=patches,
                 **{name: arrays[name] for name in _ARRAYS},
@@ -635,10 +829,14 @@ class _Reader:
         shape = _SHAPES[member.name]
         rows = {"P": patches, "E": 4 * patches, "V": 4 * patches}
         elements = math.prod(rows[d] if isinstance(d, str) else d for d in shape)
-        cap = _NPY_HEADER_BYTES + (elements * 8 if member.name not in _STRING_ARRAYS else _MAX_NAME_BYTES)
+        cap = _NPY_HEADER_BYTES + (
+            elements * 8 if member.name not in _STRING_ARRAYS else _MAX_NAME_BYTES
+        )
         if member.info.file_size > cap:
-            raise self.fail(f"member {member.info.filename!r} declares {_size(member.info.file_size)} uncompressed, more than "
-                            f"the {_size(cap)} it can take in a network of {qualifier}{patches} patches (from 'corner_ids.npy')")
+            raise self.fail(
+                f"member {member.info.filename!r} declares {_size(member.info.file_size)} uncompressed, more than "
+                f"the {_size(cap)} it can take in a network of {qualifier}{patches} patches (from 'corner_ids.npy')"
+            )
 
     def check_dtype(self, member: _Member) -> None:
         dtype, label = member.dtype, member.info.filename
@@ -647,7 +845,10 @@ class _Reader:
         elif member.name in _BOOL_ARRAYS:
             ok, wanted = dtype.kind == "b", "booleans"
         elif member.name in _FLOAT_ARRAYS:
-            ok, wanted = dtype.kind == "f" and dtype.itemsize <= 8, "floating-point numbers of at most 64 bits"
+            ok, wanted = (
+                dtype.kind == "f" and dtype.itemsize <= 8,
+                "floating-point numbers of at most 64 bits",
+            )
         else:
             ok, wanted = dtype.kind == "U", "a string"
         if not ok:
@@ -670,7 +871,15 @@ class _Checker:
         patches = np.asarray(arrays[patch_name])
         count = patches.shape[0] if patches.ndim else 0
         out = dict(arrays)
-        for name in ("corner_ids", "edge_ids", "neighbor", "neighbor_edge", "edge_reversed", "same_direction", "seam"):
+        for name in (
+            "corner_ids",
+            "edge_ids",
+            "neighbor",
+            "neighbor_edge",
+            "edge_reversed",
+            "same_direction",
+            "seam",
+        ):
             if name in arrays and np.shape(arrays[name]) != (count, 4):
                 raise self.fail(name, f"expected shape ({count}, 4), got {np.shape(arrays[name])}")
         for name in _BOOL_ARRAYS:
@@ -688,11 +897,22 @@ class _Checker:
             if rows > 4 * count:
                 raise self.fail(name, f"has {rows} rows, more than 4 per patch ({4 * count})")
         corner_limit = vertices[0] if vertices else 4 * count
-        limits = {"corner_ids": (0, corner_limit - 1, f"vertex indices of the {corner_limit} vertices" if vertices else
-                                 f"corner point ids, at most 4 per patch"),
-                  "edge_ids": (0, edges - 1, f"edge indices of the {edges} edges of 'edge_collapsed.npy'"),
-                  "neighbor": (-1, count - 1, f"patch indices of the {count} patches, or -1"),
-                  "neighbor_edge": (-1, 3, "patch edges 0..3, or -1")}
+        limits = {
+            "corner_ids": (
+                0,
+                corner_limit - 1,
+                f"vertex indices of the {corner_limit} vertices"
+                if vertices
+                else "corner point ids, at most 4 per patch",
+            ),
+            "edge_ids": (
+                0,
+                edges - 1,
+                f"edge indices of the {edges} edges of 'edge_collapsed.npy'",
+            ),
+            "neighbor": (-1, count - 1, f"patch indices of the {count} patches, or -1"),
+            "neighbor_edge": (-1, 3, "patch edges 0..3, or -1"),
+        }
         for name, (low, high, meaning) in limits.items():
             out[name] = self.indices(name, arrays[name], low, high, meaning)
         self.sharing(out["neighbor"], out["neighbor_edge"], out["edge_ids"])
@@ -705,8 +925,11 @@ class _Checker:
             raise self.fail(name, f"expected booleans, got an array of {array.dtype}")
         if array.size and np.ascontiguousarray(array).view(np.uint8).max() > 1:
             bad = np.argwhere(np.ascontiguousarray(array).view(np.uint8) > 1)[0]
-            raise self.fail(name, f"byte {int(np.ascontiguousarray(array).view(np.uint8)[tuple(bad)])} at {_where(bad)} "
-                                  f"is not a boolean (0 or 1)")
+            raise self.fail(
+                name,
+                f"byte {int(np.ascontiguousarray(array).view(np.uint8)[tuple(bad)])} at {_where(bad)} "
+                f"is not a boolean (0 or 1)",
+            )
         return array
 
     def coordinates(self, name: str, value: Any) -> tuple[NDArray[np.float64], float]:
@@ -722,27 +945,48 @@ class _Checker:
             return array, max(-low, high)
         bad = np.argwhere(~(np.abs(array) <= MAX_COORDINATE))[0]
         number = float(array[tuple(bad)])
-        problem = "is not a number" if np.isnan(number) else "is infinite" if np.isinf(number) else \
-            f"exceeds the bound |x| ≤ {MAX_COORDINATE:g} on coordinates"
+        problem = (
+            "is not a number"
+            if np.isnan(number)
+            else "is infinite"
+            if np.isinf(number)
+            else f"exceeds the bound |x| ≤ {MAX_COORDINATE:g} on coordinates"
+        )
         raise self.fail(name, f"value {number!r} at {_where(bad)} {problem}")
 
-    def indices(self, name: str, value: Any, low: int, high: int, meaning: str) -> NDArray[np.int64]:
+    def indices(
+        self, name: str, value: Any, low: int, high: int, meaning: str
+    ) -> NDArray[np.int64]:
         array = np.asarray(value)
         if array.dtype.kind not in "iu" or array.dtype.itemsize > 8:
             raise self.fail(name, f"expected integers, got an array of {array.dtype}")
         if array.size and not (int(array.min()) >= low and int(array.max()) <= high):
             bad = np.argwhere((array < low) | (array > high))[0]
-            raise self.fail(name, f"value {int(array[tuple(bad)])} at {_where(bad)} is out of range {low}..{high} ({meaning})")
-        return array.astype(np.int64, copy=False)  # what PatchNetwork keeps: no copy for the int64 we write
+            raise self.fail(
+                name,
+                f"value {int(array[tuple(bad)])} at {_where(bad)} is out of range {low}..{high} ({meaning})",
+            )
+        return array.astype(
+            np.int64, copy=False
+        )  # what PatchNetwork keeps: no copy for the int64 we write
 
-    def sharing(self, neighbor: NDArray[np.int64], neighbor_edge: NDArray[np.int64], edge_ids: NDArray[np.int64]) -> None:
+    def sharing(
+        self,
+        neighbor: NDArray[np.int64],
+        neighbor_edge: NDArray[np.int64],
+        edge_ids: NDArray[np.int64],
+    ) -> None:
         """−1 at the same places, every neighbour pointing back, both sides naming one edge id.
 
         On the flat half-edge numbering ``4 p + k``: ``twin = 4 neighbor + neighbor_edge`` (−5 on an
         open edge) must satisfy ``twin[twin[h]] = h`` on every shared edge (gathered modulo 4P, so
         open edges index harmlessly and are masked after). In chunks of :data:`_CHUNK` half-edges:
         the temporaries stay in the cache and no large array is allocated."""
-        flat_neighbor, flat_edge, flat_ids = neighbor.reshape(-1), neighbor_edge.reshape(-1), edge_ids.reshape(-1)
+        flat_neighbor, flat_edge, flat_ids = (
+            neighbor.reshape(-1),
+            neighbor_edge.reshape(-1),
+            edge_ids.reshape(-1),
+        )
         for start in range(0, len(flat_neighbor), _CHUNK):
             stop = min(start + _CHUNK, len(flat_neighbor))
             near, edge = flat_neighbor[start:stop], flat_edge[start:stop]
@@ -750,22 +994,33 @@ class _Checker:
             mismatch = shared != (edge >= 0)
             if mismatch.any():
                 at = start + int(np.argmax(mismatch))
-                raise self.fail("neighbor_edge", f"value {int(flat_edge[at])} at index ({at // 4}, {at % 4}) does not match "
-                                                 f"'neighbor.npy' ({int(flat_neighbor[at])}): -1 in both or in neither")
+                raise self.fail(
+                    "neighbor_edge",
+                    f"value {int(flat_edge[at])} at index ({at // 4}, {at % 4}) does not match "
+                    f"'neighbor.npy' ({int(flat_neighbor[at])}): -1 in both or in neither",
+                )
             twin = near * 4 + edge
-            back = np.take(flat_neighbor, twin, mode="wrap") * 4 + np.take(flat_edge, twin, mode="wrap")
+            back = np.take(flat_neighbor, twin, mode="wrap") * 4 + np.take(
+                flat_edge, twin, mode="wrap"
+            )
             wrong = (back != np.arange(start, stop)) & shared
             if wrong.any():
                 at = int(np.argmax(wrong))
                 h, q = start + at, int(twin[at])
-                raise self.fail("neighbor", f"patch {h // 4} edge {h % 4} points to patch {q // 4} edge {q % 4}, "
-                                            f"which does not point back")
+                raise self.fail(
+                    "neighbor",
+                    f"patch {h // 4} edge {h % 4} points to patch {q // 4} edge {q % 4}, "
+                    f"which does not point back",
+                )
             differs = (np.take(flat_ids, twin, mode="wrap") != flat_ids[start:stop]) & shared
             if differs.any():
                 at = int(np.argmax(differs))
                 h, q = start + at, int(twin[at])
-                raise self.fail("edge_ids", f"patch {h // 4} edge {h % 4} and its neighbour, patch {q // 4} edge {q % 4}, "
-                                            f"name different edges ({int(flat_ids[h])} and {int(flat_ids[q])})")
+                raise self.fail(
+                    "edge_ids",
+                    f"patch {h // 4} edge {h % 4} and its neighbour, patch {q // 4} edge {q % 4}, "
+                    f"name different edges ({int(flat_ids[h])} and {int(flat_ids[q])})",
+                )
 
     def frame(self, arrays: dict[str, Any], extent: dict[str, float], patch_name: str) -> None:
         """The frame's own checks (:meth:`Frame.from_arrays`: both arrays, shapes, finite, scale > 0), then
@@ -780,8 +1035,11 @@ class _Checker:
             arrays[name], extent[name] = self.coordinates(name, arrays[name])
         world = extent["frame_centre"] + frame.scale * extent[patch_name]
         if not world <= MAX_COORDINATE:
-            raise self.fail(patch_name, f"in world coordinates (centre + scale × value) the patches reach {world:g}, "
-                                        f"beyond the bound |x| ≤ {MAX_COORDINATE:g} on coordinates")
+            raise self.fail(
+                patch_name,
+                f"in world coordinates (centre + scale × value) the patches reach {world:g}, "
+                f"beyond the bound |x| ≤ {MAX_COORDINATE:g} on coordinates",
+            )
 
 
 def _extremes(array: NDArray[np.float64]) -> tuple[float, float]:
@@ -790,7 +1048,7 @@ def _extremes(array: NDArray[np.float64]) -> tuple[float, float]:
     flat = array.reshape(-1) if array.flags.c_contiguous else np.ravel(array)
     low, high = np.inf, -np.inf
     for start in range(0, len(flat), _CHUNK):
-        chunk = flat[start:start + _CHUNK]
+        chunk = flat[start : start + _CHUNK]
         chunk_low, chunk_high = float(chunk.min()), float(chunk.max())
         if chunk_low != chunk_low:  # NaN (numpy's min propagates it; Python's min would drop it)
             return np.nan, np.nan

@@ -36,7 +36,9 @@ def halfedge_slots(topology: QuadTopology) -> tuple[IntArray, IntArray]:
     ring_vertex = np.repeat(np.arange(topology.n_vertices), topology.face_count)
     slot_out = np.empty(topology.n_halfedges, dtype=np.int64)
     slot_out[topology.ring_halfedges] = (
-        np.arange(len(ring_vertex)) - topology.ring_offsets[ring_vertex] + topology.neighbor_offsets[ring_vertex]
+        np.arange(len(ring_vertex))
+        - topology.ring_offsets[ring_vertex]
+        + topology.neighbor_offsets[ring_vertex]
     )
     twin = topology.twin
     target = topology.target(np.arange(topology.n_halfedges))
@@ -96,11 +98,15 @@ class Targets:
             if value.shape != (size,):
                 raise InputError(f"targets.{name}: expected shape ({size},), got {value.shape}")
             object.__setattr__(self, name, value)
-        corner_normals = self.normals[topology.faces] if self.corner_normals is None else as_float_array(
-            "targets.corner_normals", self.corner_normals, (4, 3)
+        corner_normals = (
+            self.normals[topology.faces]
+            if self.corner_normals is None
+            else as_float_array("targets.corner_normals", self.corner_normals, (4, 3))
         )
         if corner_normals.shape != (topology.n_faces, 4, 3):
-            raise InputError(f"targets.corner_normals: expected shape ({topology.n_faces}, 4, 3), got {corner_normals.shape}")
+            raise InputError(
+                f"targets.corner_normals: expected shape ({topology.n_faces}, 4, 3), got {corner_normals.shape}"
+            )
         object.__setattr__(self, "corner_normals", corner_normals)
 
     @property
@@ -148,7 +154,9 @@ def slot_sector_normals(targets: Targets) -> tuple[FloatArray, FloatArray]:
     # left of slot j is ring face j − 1: cyclic inside, the slot's own face at a boundary's first slot
     shifted = np.where(position == 0, position + face_count[ring_vertex] - 1, position - 1)
     left[slot] = np.where(
-        ((position == 0) & boundary[ring_vertex])[:, None], corner, corner[topology.ring_offsets[ring_vertex] + shifted]
+        ((position == 0) & boundary[ring_vertex])[:, None],
+        corner,
+        corner[topology.ring_offsets[ring_vertex] + shifted],
     )
     left[last[boundary]] = right[last[boundary]]
     return left, right

@@ -32,7 +32,14 @@ from numpy.typing import NDArray
 from ..mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology, Sectors, sectors
 from .local import cross
 
-__all__ = ["INTERPOLATE_SHARPNESS", "crease_tangents", "sector_fan_normals", "seam_edges", "sharp_vertices", "spread_sectors"]
+__all__ = [
+    "INTERPOLATE_SHARPNESS",
+    "crease_tangents",
+    "sector_fan_normals",
+    "seam_edges",
+    "sharp_vertices",
+    "spread_sectors",
+]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -77,7 +84,10 @@ def sector_fan_normals(mesh: QuadMesh, found: Sectors) -> FloatArray:
     corner = cross(np.roll(here, -1, axis=1) - here, np.roll(here, 1, axis=1) - here).reshape(-1, 3)
     per_position = corner[topology.ring_halfedges]
     n_sectors = found.vertex.size
-    return np.stack([np.bincount(found.label, per_position[:, d], minlength=n_sectors) for d in range(3)], axis=1)
+    return np.stack(
+        [np.bincount(found.label, per_position[:, d], minlength=n_sectors) for d in range(3)],
+        axis=1,
+    )
 
 
 def _circle_lengths(chord: FloatArray, direction: FloatArray) -> FloatArray:
@@ -145,7 +155,13 @@ def crease_tangents(
     m = _unit(fan)
     unit_plane = _unit(plane)
     flat = np.linalg.norm(plane, axis=1) < _PARALLEL
-    n_corner = _unit(np.where(flat[:, None], m - _dot(m, t_a)[:, None] * t_a, np.where(_dot(plane, m)[:, None] < 0, -unit_plane, unit_plane)))
+    n_corner = _unit(
+        np.where(
+            flat[:, None],
+            m - _dot(m, t_a)[:, None] * t_a,
+            np.where(_dot(plane, m)[:, None] < 0, -unit_plane, unit_plane),
+        )
+    )
     # a two-seam corner whose tangents span a plane across its sectors (a ridge's apex) is a crease
     across = np.zeros(topology.n_vertices, dtype=bool)
     across[found.vertex[(found.start >= 0) & (np.abs(_dot(n_corner, m)) < _ACROSS)]] = True
@@ -162,9 +178,15 @@ def crease_tangents(
     n_sector[at_corner] = n_corner[at_corner]
 
     # smooth slots of creased vertices: the chord in the sector's plane, circle-aware
-    inner_position = np.flatnonzero(creased[np.repeat(np.arange(topology.n_vertices), topology.face_count)])
+    inner_position = np.flatnonzero(
+        creased[np.repeat(np.arange(topology.n_vertices), topology.face_count)]
+    )
     ring_vertex = np.repeat(np.arange(topology.n_vertices), topology.face_count)
-    inner_slot = offsets[ring_vertex[inner_position]] + inner_position - topology.ring_offsets[ring_vertex[inner_position]]
+    inner_slot = (
+        offsets[ring_vertex[inner_position]]
+        + inner_position
+        - topology.ring_offsets[ring_vertex[inner_position]]
+    )
     keep = ~slot_cut[inner_slot]
     inner_slot, inner_position = inner_slot[keep], inner_position[keep]
     n = n_sector[found.label[inner_position]]
@@ -178,7 +200,9 @@ def crease_tangents(
 
     corner_normals = np.zeros((topology.n_faces * 4, 3))
     corner_positions = np.flatnonzero(creased[ring_vertex])
-    corner_normals[topology.ring_halfedges[corner_positions]] = n_sector[found.label[corner_positions]]
+    corner_normals[topology.ring_halfedges[corner_positions]] = n_sector[
+        found.label[corner_positions]
+    ]
     return out, corner_normals.reshape(-1, 4, 3), creased, spread
 
 
@@ -203,7 +227,12 @@ def _reverse_slots(topology: QuadTopology) -> IntArray:
 
 
 def spread_sectors(
-    topology: QuadTopology, found: Sectors, tangents: FloatArray, n_sector: FloatArray, creased: BoolArray, chord: FloatArray
+    topology: QuadTopology,
+    found: Sectors,
+    tangents: FloatArray,
+    n_sector: FloatArray,
+    creased: BoolArray,
+    chord: FloatArray,
 ) -> BoolArray:
     """Check that each creased sector's slots turn counter-clockwise from its start to its end
     about its normal; where they do not, put the inner slots at even angles in between (length:
@@ -217,9 +246,17 @@ def spread_sectors(
     index = positions - topology.ring_offsets[vertex]  # position j in the ring = slot j
     label = found.label[positions]
     start = found.start[label]
-    rank = (index - (start - offsets[vertex])) % topology.face_count[vertex]  # 0 at the sector's first slot
+    rank = (index - (start - offsets[vertex])) % topology.face_count[
+        vertex
+    ]  # 0 at the sector's first slot
     order = np.lexsort((rank, label))
-    vertex, index, label, start, rank = vertex[order], index[order], label[order], start[order], rank[order]
+    vertex, index, label, start, rank = (
+        vertex[order],
+        index[order],
+        label[order],
+        start[order],
+        rank[order],
+    )
     slots = offsets[vertex] + index
     n = n_sector[label]
     e1 = _unit(tangents[start])

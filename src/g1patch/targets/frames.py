@@ -79,8 +79,8 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from ..kernels import in_chunks, jit_kernel
-from .local import cross, fan_normals
 from ..mesh import QuadMesh
+from .local import cross, fan_normals
 
 __all__ = ["VertexFrames", "vertex_frames", "RESIDUAL", "MAX_TILT", "MAX_STEEPNESS", "MIN_PIVOT"]
 
@@ -157,8 +157,17 @@ class _Ring:
         first = offsets[pair_owner] + step
         second = offsets[pair_owner] + (step + 1) % count[pair_owner]
         a, b = d[first], d[second]
-        return cls(offsets, owner, d, pair_owner, first, second, cross(a, b), np.einsum("pd,pd->p", a, b),
-                   topo.is_boundary_vertex)
+        return cls(
+            offsets,
+            owner,
+            d,
+            pair_owner,
+            first,
+            second,
+            cross(a, b),
+            np.einsum("pd,pd->p", a, b),
+            topo.is_boundary_vertex,
+        )
 
     def valid(self, n: FloatArray) -> BoolArray:
         """The projected ring goes once around ``n`` (V, 3) counter-clockwise (see the module doc)."""
@@ -211,7 +220,11 @@ def _gilbert(points: FloatArray, owner: IntArray, groups: int) -> FloatArray:
         score = np.einsum("pd,pd->p", points, x[owner])
         p = points[np.lexsort((score, owner))[bounds]]  # the lowest score of each group
         gap = x - p
-        t = np.clip(np.einsum("gd,gd->g", x, gap) / np.maximum(np.einsum("gd,gd->g", gap, gap), 1e-300), 0.0, 1.0)
+        t = np.clip(
+            np.einsum("gd,gd->g", x, gap) / np.maximum(np.einsum("gd,gd->g", gap, gap), 1e-300),
+            0.0,
+            1.0,
+        )
         x = x - t[:, None] * gap
     return x
 
@@ -244,8 +257,10 @@ def _face_rings(mesh: QuadMesh) -> tuple[_Hood, _Hood]:
     """Face 1-ring (vertices of the faces at v) and face 2-ring (vertices of the faces at those), from
     the vertex–face incidence ``I``: the patterns of ``I Iᵀ`` and ``(I Iᵀ)²``."""
     nv, nf = mesh.n_vertices, mesh.n_faces
-    incidence = sp.csr_matrix((np.ones(4 * nf, dtype=bool), (mesh.faces.ravel(), np.repeat(np.arange(nf), 4))),
-                              shape=(nv, nf))
+    incidence = sp.csr_matrix(
+        (np.ones(4 * nf, dtype=bool), (mesh.faces.ravel(), np.repeat(np.arange(nf), 4))),
+        shape=(nv, nf),
+    )
     one = (incidence @ incidence.T).tocsr()
     # through a hub (a face 1-ring of more than HUB_POINTS points) the 2-ring takes the hub alone
     hub = np.flatnonzero(np.diff(one.indptr) > HUB_POINTS)
@@ -286,21 +301,27 @@ def _solve(gram: FloatArray, rhs: FloatArray, leading: int) -> tuple[FloatArray,
         keep = pivot[j] > DROP_PIVOT
         column = np.where(keep, work[j:, j] / np.sqrt(np.where(keep, work[j, j], 1.0)), 0.0)
         lower[j:, j] = column
-        work[j + 1:, j + 1:] -= column[1:, None] * column[None, 1:]
+        work[j + 1 :, j + 1 :] -= column[1:, None] * column[None, 1:]
     kept = pivot > DROP_PIVOT
     root = np.where(kept, np.einsum("iib->ib", lower), 1.0)
     y = np.zeros(rhs.shape)
     for j in range(k):
-        y[j] = np.where(kept[j], (rhs[j] - np.einsum("lb,lb->b", lower[j, :j], y[:j])) / root[j], 0.0)
+        y[j] = np.where(
+            kept[j], (rhs[j] - np.einsum("lb,lb->b", lower[j, :j], y[:j])) / root[j], 0.0
+        )
     c = np.zeros(rhs.shape)
     for j in reversed(range(k)):
-        c[j] = np.where(kept[j], (y[j] - np.einsum("lb,lb->b", lower[j + 1:, j], c[j + 1:])) / root[j], 0.0)
+        c[j] = np.where(
+            kept[j], (y[j] - np.einsum("lb,lb->b", lower[j + 1 :, j], c[j + 1 :])) / root[j], 0.0
+        )
     determined = np.full(rhs.shape[1], np.inf)
     for j in range(leading):
         unit = np.zeros(rhs.shape)  # L⁻¹ e_j: zero above j
         unit[j] = np.where(kept[j], 1.0 / root[j], 0.0)
         for r in range(j + 1, k):
-            unit[r] = np.where(kept[r], -np.einsum("lb,lb->b", lower[r, j:r], unit[j:r]) / root[r], 0.0)
+            unit[r] = np.where(
+                kept[r], -np.einsum("lb,lb->b", lower[r, j:r], unit[j:r]) / root[r], 0.0
+            )
         inverse = np.sum(unit * unit, axis=0)
         column = np.where(kept[j], 1.0 / (gram[j, j] * np.where(kept[j], inverse, 1.0)), 0.0)
         determined = np.minimum(determined, np.where(np.isnan(column), -np.inf, column))
@@ -319,8 +340,15 @@ class _Fit:
         return cls(np.empty((size, 3)), np.empty((size, 3, 3)), np.empty(size), np.empty(size))
 
 
-def _circle_fit(q: FloatArray, mask: BoolArray, edges: FloatArray, edge_mask: BoolArray,
-                n: FloatArray, cubic: bool, tilt: bool) -> _Fit:
+def _circle_fit(
+    q: FloatArray,
+    mask: BoolArray,
+    edges: FloatArray,
+    edge_mask: BoolArray,
+    n: FloatArray,
+    cubic: bool,
+    tilt: bool,
+) -> _Fit:
     """The circle-aware fit (module doc) of points ``q`` (b, 3, m) relative to their vertex, padding ``mask`` (b, m).
 
     ``edges`` (b, 3, k) are the ring edges for h̄. With ``tilt`` the normal ``n`` (b, 3) is refitted
@@ -337,7 +365,9 @@ def _circle_fit(q: FloatArray, mask: BoolArray, edges: FloatArray, edge_mask: Bo
         n = out.normals[active]
         e1, e2 = _frame(n)
         height = np.matmul(n[:, None, :], edges)[:, 0]
-        hbar = np.sqrt(np.sum(np.where(edge_mask, edge_length2 - height**2, 0.0), axis=1) / count)[:, None]
+        hbar = np.sqrt(np.sum(np.where(edge_mask, edge_length2 - height**2, 0.0), axis=1) / count)[
+            :, None
+        ]
         x, y, z = np.matmul(np.stack([e1, e2, n], axis=1) / hbar[:, :, None], q).transpose(1, 0, 2)
         xx, xy, yy = x * x, x * y, y * y
         r2 = xx + yy
@@ -357,17 +387,23 @@ def _circle_fit(q: FloatArray, mask: BoolArray, edges: FloatArray, edge_mask: Bo
             np.multiply(yy, x / 2.0, out=design[:, h + 5])
             np.multiply(yy, y / 6.0, out=design[:, h + 6])
         weighted = design * w[:, None, :]
-        gram = np.ascontiguousarray(np.matmul(weighted, design.transpose(0, 2, 1)).transpose(1, 2, 0))
+        gram = np.ascontiguousarray(
+            np.matmul(weighted, design.transpose(0, 2, 1)).transpose(1, 2, 0)
+        )
         rhs = np.matmul(weighted, z[:, :, None])[:, :, 0].T
         c, determined = _solve(gram, rhs, 2 * tilt + 3)
         out.residual[active] = np.sqrt(
-            np.maximum(np.sum(w * z * z, axis=1) - np.einsum("kb,kb->b", c, rhs), 0.0) / np.sum(w, axis=1))
+            np.maximum(np.sum(w * z * z, axis=1) - np.einsum("kb,kb->b", c, rhs), 0.0)
+            / np.sum(w, axis=1)
+        )
         out.pivot[active] = determined
-        h11, h12, h22 = c[2 * tilt:2 * tilt + 3] / hbar[:, 0]
+        h11, h12, h22 = c[2 * tilt : 2 * tilt + 3] / hbar[:, 0]
         out.shape_operator[active] = (
             h11[:, None, None] * e1[:, :, None] * e1[:, None, :]
-            + h12[:, None, None] * (e1[:, :, None] * e2[:, None, :] + e2[:, :, None] * e1[:, None, :])
-            + h22[:, None, None] * e2[:, :, None] * e2[:, None, :])
+            + h12[:, None, None]
+            * (e1[:, :, None] * e2[:, None, :] + e2[:, :, None] * e1[:, None, :])
+            + h22[:, None, None] * e2[:, :, None] * e2[:, None, :]
+        )
         if tilt:
             out.normals[active] = _unit(n - c[0][:, None] * e1 - c[1][:, None] * e2)
             going = ~(np.hypot(c[0], c[1]) < STOP)
@@ -386,8 +422,16 @@ def _circle_fit(q: FloatArray, mask: BoolArray, edges: FloatArray, edge_mask: Bo
 SMALL_RING = 16
 
 
-def _rows_kernel(faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray, offsets: IntArray,
-                 points: IntArray, fill: bool, lo: int, hi: int) -> None:
+def _rows_kernel(
+    faces: IntArray,
+    ring_offsets: IntArray,
+    ring_halfedges: IntArray,
+    offsets: IntArray,
+    points: IntArray,
+    fill: bool,
+    lo: int,
+    hi: int,
+) -> None:
     """The rows of ``I Iᵀ`` (I the vertex–face incidence, :func:`_face_rings`) in scipy's order: per
     vertex the corners of its faces, the faces in increasing order and each face's corners in
     increasing order, each point once, reversed (scipy's sparse product lists a row's columns in
@@ -403,7 +447,9 @@ def _rows_kernel(faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArr
     ring_faces = np.empty(most, dtype=np.int64)
     ring = np.empty(4 * most, dtype=np.int64)
     corners = np.empty(4, dtype=np.int64)
-    in_row = np.full(offsets.size - 1 if most > SMALL_RING else 0, -1, dtype=np.int64)  # the last vertex whose row holds a point
+    in_row = np.full(
+        offsets.size - 1 if most > SMALL_RING else 0, -1, dtype=np.int64
+    )  # the last vertex whose row holds a point
     for v in range(lo, hi):
         first, count = ring_offsets[v], ring_offsets[v + 1] - ring_offsets[v]
         small = count <= SMALL_RING
@@ -444,9 +490,21 @@ def _rows_kernel(faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArr
             offsets[v + 1] = size
 
 
-def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_offsets: IntArray, neighbors: IntArray,
-                vertices: IntArray, start: FloatArray, tilt: bool, lanes: int, out_normals: FloatArray,
-                out_shape: FloatArray, out_residual: FloatArray, out_pivot: FloatArray) -> None:
+def _fit_kernel(
+    x: FloatArray,
+    row_offsets: IntArray,
+    rows: IntArray,
+    neighbor_offsets: IntArray,
+    neighbors: IntArray,
+    vertices: IntArray,
+    start: FloatArray,
+    tilt: bool,
+    lanes: int,
+    out_normals: FloatArray,
+    out_shape: FloatArray,
+    out_residual: FloatArray,
+    out_pivot: FloatArray,
+) -> None:
     """:func:`_circle_fit` of ``vertices``, compiled by :func:`~g1patch.kernels.jit_kernel`: each
     vertex goes through the same formulas and steps, in the same order, as in the NumPy reference
     one vertex at a time; ``lanes`` vertices (of one column count) are fitted side by side, so
@@ -470,7 +528,9 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
     key = np.empty(BLOCK, dtype=np.int64)
     order = np.empty(BLOCK, dtype=np.int64)
     large = np.int64(1) << 40  # key = size, + large for the cubic fits
-    relative = np.zeros(32 * 3 * lanes)  # the batch's points relative to their vertex, (most, 3, nl)
+    relative = np.zeros(
+        32 * 3 * lanes
+    )  # the batch's points relative to their vertex, (most, 3, nl)
     n = np.empty((3, lanes))
     e1 = np.empty((3, lanes))
     e2 = np.empty((3, lanes))
@@ -518,13 +578,17 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                     grown[j] = hood[j]
                 hood = grown
             m = 0
-            if tilt:  # the 2-ring: first encounter over the rows of v's row, written backwards (reversed)
+            if (
+                tilt
+            ):  # the 2-ring: first encounter over the rows of v's row, written backwards (reversed)
                 taken[v] = v  # without v
                 end = used + room
                 for at in range(row_offsets[v], row_offsets[v + 1]):
                     centre = rows[at]
                     size = row_offsets[centre + 1] - row_offsets[centre]
-                    hub = centre != v and size > HUB_POINTS  # through a hub the 2-ring takes the hub alone
+                    hub = (
+                        centre != v and size > HUB_POINTS
+                    )  # through a hub the 2-ring takes the hub alone
                     for j in range(1 if hub else size):
                         p = centre if hub else rows[row_offsets[centre] + j]
                         if taken[p] != v:
@@ -551,8 +615,12 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
         while first < count:
             cubic = key[order[first]] >= large
             nl = 1
-            while (nl < lanes and first + nl < count and (key[order[first + nl]] >= large) == cubic
-                   and hood_size[order[first + nl]] <= 2 * hood_size[order[first]] + CUBIC_POINTS):
+            while (
+                nl < lanes
+                and first + nl < count
+                and (key[order[first + nl]] >= large) == cubic
+                and hood_size[order[first + nl]] <= 2 * hood_size[order[first]] + CUBIC_POINTS
+            ):
                 nl += 1
             k = 3 + 2 * tilt + 4 * cubic
             h = 2 * tilt
@@ -563,7 +631,7 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                 most = max(most, hood_size[b])
             if relative.size < 3 * most * nl:
                 relative = np.zeros(max(3 * most * nl, 2 * relative.size))
-            q = relative[:3 * most * nl].reshape((most, 3, nl))
+            q = relative[: 3 * most * nl].reshape((most, 3, nl))
             for l in range(nl):
                 b = order[first + l]
                 v = vertices[low + b]
@@ -586,7 +654,9 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                     axis_e1[0], axis_e1[1], axis_e1[2] = 0.0, 0.0, 0.0
                     axis_e1[(axis + 1) % 3] = n[(axis + 2) % 3, l]
                     axis_e1[(axis + 2) % 3] = -n[(axis + 1) % 3, l]
-                    length = np.sqrt(axis_e1[0] * axis_e1[0] + axis_e1[1] * axis_e1[1] + axis_e1[2] * axis_e1[2])
+                    length = np.sqrt(
+                        axis_e1[0] * axis_e1[0] + axis_e1[1] * axis_e1[1] + axis_e1[2] * axis_e1[2]
+                    )
                     for d in range(3):
                         e1[d, l] = axis_e1[d] / length
                     e2[0, l] = n[1, l] * e1[2, l] - n[2, l] * e1[1, l]
@@ -622,7 +692,9 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                         zj = scaled[6, l] * px + scaled[7, l] * py + scaled[8, l] * pz
                         xx, xy, yy = xj * xj, xj * yj, yj * yj
                         r2 = xx + yy
-                        away = r2 if r2 > 1e-24 else 1.0  # a = ½(1 + z²) at the vertex itself (weight 0)
+                        away = (
+                            r2 if r2 > 1e-24 else 1.0
+                        )  # a = ½(1 + z²) at the vertex itself (weight 0)
                         a = 0.5 + 0.5 * zj * zj / away
                         row[0, l] = xj
                         row[1, l] = yj
@@ -710,7 +782,9 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                     stopped[l] = tilt and np.hypot(c[0, l], c[1, l]) < STOP
                     finishing[l] = active[l] and (sweep == sweeps - 1 or stopped[l])
                     finishing_any |= finishing[l]
-                if finishing_any:  # the determination of _solve, 1 / (G_jj |L⁻¹ e_j|²) over g, h, in every lane
+                if (
+                    finishing_any
+                ):  # the determination of _solve, 1 / (G_jj |L⁻¹ e_j|²) over g, h, in every lane
                     for l in range(nl):
                         smallest[l] = np.inf
                     for j in range(h + 3):
@@ -734,7 +808,9 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                                 inverse[l] += unit_r[l] * unit_r[l]
                         diagonal, kept = gram[j, j], pivot[j]
                         for l in range(nl):
-                            column = 1.0 / (diagonal[l] * inverse[l]) if kept[l] > DROP_PIVOT else 0.0
+                            column = (
+                                1.0 / (diagonal[l] * inverse[l]) if kept[l] > DROP_PIVOT else 0.0
+                            )
                             smallest[l] = min(smallest[l], -np.inf if np.isnan(column) else column)
                 going = False
                 for l in range(nl):
@@ -746,13 +822,22 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
                         for r in range(k):
                             explained += c[r, l] * rhs[r, l]
                         unexplained = sum_wzz[l] - explained
-                        out_residual[i] = np.sqrt((0.0 if unexplained < 0.0 else unexplained) / sum_w[l])
+                        out_residual[i] = np.sqrt(
+                            (0.0 if unexplained < 0.0 else unexplained) / sum_w[l]
+                        )
                         out_pivot[i] = smallest[l]
-                        h11, h12, h22 = c[h, l] / hbar[l], c[h + 1, l] / hbar[l], c[h + 2, l] / hbar[l]
+                        h11, h12, h22 = (
+                            c[h, l] / hbar[l],
+                            c[h + 1, l] / hbar[l],
+                            c[h + 2, l] / hbar[l],
+                        )
                         for r in range(3):
                             for s in range(3):
-                                frame_h[r, s, l] = (h11 * e1[r, l] * e1[s, l] + h12 * (e1[r, l] * e2[s, l] + e2[r, l] * e1[s, l])
-                                                    + h22 * e2[r, l] * e2[s, l])
+                                frame_h[r, s, l] = (
+                                    h11 * e1[r, l] * e1[s, l]
+                                    + h12 * (e1[r, l] * e2[s, l] + e2[r, l] * e1[s, l])
+                                    + h22 * e2[r, l] * e2[s, l]
+                                )
                     if tilt:
                         for d in range(3):
                             n[d, l] = n[d, l] - c[0, l] * e1[d, l] - c[1, l] * e2[d, l]
@@ -786,9 +871,17 @@ def _fit_kernel(x: FloatArray, row_offsets: IntArray, rows: IntArray, neighbor_o
             first += nl
 
 
-def _ring_kernel(x: FloatArray, neighbor_offsets: IntArray, neighbors: IntArray, face_count: IntArray,
-                 boundary: BoolArray, normals: FloatArray, vertices: IntArray, out_valid: BoolArray,
-                 out_steepness: FloatArray) -> None:
+def _ring_kernel(
+    x: FloatArray,
+    neighbor_offsets: IntArray,
+    neighbors: IntArray,
+    face_count: IntArray,
+    boundary: BoolArray,
+    normals: FloatArray,
+    vertices: IntArray,
+    out_valid: BoolArray,
+    out_steepness: FloatArray,
+) -> None:
     """:meth:`_Ring.valid` and :meth:`_Ring.steepness` of ``normals[v]`` at ``vertices``, vertex by vertex
     (row i for ``vertices[i]``): turning angles ``atan2(N·(d_i × d_{i+1}), d_i·d_{i+1} − (N·d_i)(N·d_{i+1}))``
     summed over the ring's consecutive pairs, and the largest ``|N·d|/|d|``. An interior vertex of
@@ -808,9 +901,13 @@ def _ring_kernel(x: FloatArray, neighbor_offsets: IntArray, neighbors: IntArray,
             sine = n0 * (ay * bz - az * by) + n1 * (az * bx - ax * bz) + n2 * (ax * by - ay * bx)
             folded |= not sine > 0
             if turns:
-                cosine = (ax * bx + ay * by + az * bz) - (ax * n0 + ay * n1 + az * n2) * (bx * n0 + by * n1 + bz * n2)
+                cosine = (ax * bx + ay * by + az * bz) - (ax * n0 + ay * n1 + az * n2) * (
+                    bx * n0 + by * n1 + bz * n2
+                )
                 total += np.arctan2(sine, cosine)
-        once = not turns or (total < 2.0 * np.pi if boundary[v] else abs(total - 2.0 * np.pi) < np.pi)
+        once = not turns or (
+            total < 2.0 * np.pi if boundary[v] else abs(total - 2.0 * np.pi) < np.pi
+        )
         out_valid[i] = once and not folded
         steepest = 0.0
         for j in range(first, first + count):
@@ -822,31 +919,55 @@ def _ring_kernel(x: FloatArray, neighbor_offsets: IntArray, neighbors: IntArray,
         out_steepness[i] = steepest
 
 
-def _ring_checks(mesh: QuadMesh, normals: FloatArray, vertices: IntArray) -> tuple[BoolArray, FloatArray]:
+def _ring_checks(
+    mesh: QuadMesh, normals: FloatArray, vertices: IntArray
+) -> tuple[BoolArray, FloatArray]:
     """:func:`_ring_kernel`: validity and steepness of ``normals`` at ``vertices``."""
     topo = mesh.topology
     valid = np.empty(vertices.size, dtype=bool)
     steepness = np.empty(vertices.size)
-    jit_kernel(_ring_kernel)(mesh.vertices, topo.neighbor_offsets, topo.neighbors, topo.face_count, topo.is_boundary_vertex,
-                           normals, vertices, valid, steepness)
+    jit_kernel(_ring_kernel)(
+        mesh.vertices,
+        topo.neighbor_offsets,
+        topo.neighbors,
+        topo.face_count,
+        topo.is_boundary_vertex,
+        normals,
+        vertices,
+        valid,
+        steepness,
+    )
     return valid, steepness
 
 
-def _fit_all(mesh: QuadMesh, ring: _Ring, hood: _Hood, vertices: IntArray, n: FloatArray,
-             cubic: bool, tilt: bool) -> _Fit:
+def _fit_all(
+    mesh: QuadMesh,
+    ring: _Ring,
+    hood: _Hood,
+    vertices: IntArray,
+    n: FloatArray,
+    cubic: bool,
+    tilt: bool,
+) -> _Fit:
     """:func:`_circle_fit` of ``vertices`` with neighbourhoods ``hood`` and start normals ``n`` (V, 3), row i for
     ``vertices[i]``, block by block in NumPy (the reference of :func:`_fit_kernel`)."""
     out = _Fit.empty(vertices.size)
     x = mesh.vertices
     order = np.argsort(hood.sizes[vertices], kind="stable")
-    for rows in (order[s:s + BLOCK] for s in range(0, order.size, BLOCK)):
+    for rows in (order[s : s + BLOCK] for s in range(0, order.size, BLOCK)):
         block = vertices[rows]
         where, mask = _padded(block, hood.offsets)
         q = (x[hood.points[where]] - x[block, None, :]).transpose(0, 2, 1)
         edge_where, edge_mask = _padded(block, ring.offsets)
-        fit = _circle_fit(q, mask, ring.d[edge_where].transpose(0, 2, 1), edge_mask, n[block], cubic, tilt)
+        fit = _circle_fit(
+            q, mask, ring.d[edge_where].transpose(0, 2, 1), edge_mask, n[block], cubic, tilt
+        )
         out.normals[rows], out.shape_operator[rows], out.residual[rows], out.pivot[rows] = (
-            fit.normals, fit.shape_operator, fit.residual, fit.pivot)
+            fit.normals,
+            fit.shape_operator,
+            fit.residual,
+            fit.pivot,
+        )
     return out
 
 
@@ -855,24 +976,56 @@ def _face_ring_rows(mesh: QuadMesh) -> tuple[IntArray, IntArray]:
     topo = mesh.topology
     offsets = np.zeros(mesh.n_vertices + 1, dtype=np.int64)
     kernel = jit_kernel(_rows_kernel)
-    in_chunks(lambda lo, hi: kernel(topo.faces, topo.ring_offsets, topo.ring_halfedges, offsets, np.empty(0, dtype=np.int32),
-                                    False, lo, hi), mesh.n_vertices)
+    in_chunks(
+        lambda lo, hi: kernel(
+            topo.faces,
+            topo.ring_offsets,
+            topo.ring_halfedges,
+            offsets,
+            np.empty(0, dtype=np.int32),
+            False,
+            lo,
+            hi,
+        ),
+        mesh.n_vertices,
+    )
     np.cumsum(offsets, out=offsets)
     points = np.empty(int(offsets[-1]), dtype=np.int32)
-    in_chunks(lambda lo, hi: kernel(topo.faces, topo.ring_offsets, topo.ring_halfedges, offsets, points, True, lo, hi),
-              mesh.n_vertices)
+    in_chunks(
+        lambda lo, hi: kernel(
+            topo.faces, topo.ring_offsets, topo.ring_halfedges, offsets, points, True, lo, hi
+        ),
+        mesh.n_vertices,
+    )
     return offsets, points
 
 
-def _fit_compiled(mesh: QuadMesh, rows: tuple[IntArray, IntArray], vertices: IntArray, n: FloatArray, tilt: bool) -> _Fit:
+def _fit_compiled(
+    mesh: QuadMesh, rows: tuple[IntArray, IntArray], vertices: IntArray, n: FloatArray, tilt: bool
+) -> _Fit:
     """:func:`_fit_kernel` of ``vertices`` (row i for ``vertices[i]``) with start normals ``n`` (V, 3), in
     ranges of rows side by side (:func:`~g1patch.kernels.in_chunks`)."""
     topo = mesh.topology
     out = _Fit.empty(vertices.size)
     kernel = jit_kernel(_fit_kernel)
-    in_chunks(lambda lo, hi: kernel(mesh.vertices, rows[0], rows[1], topo.neighbor_offsets, topo.neighbors, vertices[lo:hi], n,
-                                    tilt, LANES, out.normals[lo:hi], out.shape_operator[lo:hi], out.residual[lo:hi],
-                                    out.pivot[lo:hi]), vertices.size)
+    in_chunks(
+        lambda lo, hi: kernel(
+            mesh.vertices,
+            rows[0],
+            rows[1],
+            topo.neighbor_offsets,
+            topo.neighbors,
+            vertices[lo:hi],
+            n,
+            tilt,
+            LANES,
+            out.normals[lo:hi],
+            out.shape_operator[lo:hi],
+            out.residual[lo:hi],
+            out.pivot[lo:hi],
+        ),
+        vertices.size,
+    )
     return out
 
 
@@ -888,7 +1041,9 @@ def vertex_frames(mesh: QuadMesh, *, compiled: bool = True) -> VertexFrames:
     ring = None if compiled else _Ring.of(mesh)
     start = fan_normals(mesh, compiled=compiled)
     repaired = np.zeros(nv, dtype=bool)
-    bad = np.flatnonzero(~(_ring_checks(mesh, start, everything)[0] if compiled else ring.valid(start)))
+    bad = np.flatnonzero(
+        ~(_ring_checks(mesh, start, everything)[0] if compiled else ring.valid(start))
+    )
     if bad.size:
         ring = ring or _Ring.of(mesh)
         start, done = ring.repair(start, bad)
@@ -898,7 +1053,12 @@ def vertex_frames(mesh: QuadMesh, *, compiled: bool = True) -> VertexFrames:
         if compiled:
             rows = _face_ring_rows(mesh)
             fit = _fit_compiled(mesh, rows, everything, start, True)
-            normals, shape_operator, residual, pivot = fit.normals, fit.shape_operator, fit.residual, fit.pivot
+            normals, shape_operator, residual, pivot = (
+                fit.normals,
+                fit.shape_operator,
+                fit.residual,
+                fit.pivot,
+            )
         else:
             one, two = _face_rings(mesh)
             normals = np.empty((nv, 3))
@@ -910,7 +1070,11 @@ def vertex_frames(mesh: QuadMesh, *, compiled: bool = True) -> VertexFrames:
                 vertices = np.flatnonzero(large == cubic)
                 fit = _fit_all(mesh, ring, hood, vertices, start, cubic, True)
                 normals[vertices], shape_operator[vertices], residual[vertices], pivot[vertices] = (
-                    fit.normals, fit.shape_operator, fit.residual, fit.pivot)
+                    fit.normals,
+                    fit.shape_operator,
+                    fit.residual,
+                    fit.pivot,
+                )
         fitted = (
             ~mesh.topology.is_boundary_vertex  # a one-sided neighbourhood extrapolates the normal
             & np.isfinite(normals).all(axis=1)
@@ -929,7 +1093,11 @@ def vertex_frames(mesh: QuadMesh, *, compiled: bool = True) -> VertexFrames:
         rest = np.flatnonzero(~fitted)
         normals[rest] = start[rest]
         if rest.size:
-            held = _fit_compiled(mesh, rows, rest, start, False) if compiled else _fit_all(mesh, ring, one, rest, start, False, False)
+            held = (
+                _fit_compiled(mesh, rows, rest, start, False)
+                if compiled
+                else _fit_all(mesh, ring, one, rest, start, False, False)
+            )
             shape_operator[rest] = np.nan_to_num(held.shape_operator)
     if compiled:
         jit_kernel(_symmetric_kernel)(shape_operator)

@@ -46,16 +46,33 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from .creases import INTERPOLATE_SHARPNESS, crease_tangents, seam_edges, sharp_vertices
-from .local import TANGENTS, TangentRule, corner_tangents, cross, fan_normals, in_vertex_planes, slot_tables
-from ..kernels import in_chunks, jit_kernel
 from ..errors import ConstructionError, check_choice
+from ..kernels import in_chunks, jit_kernel
 from ..mesh import QuadMesh, QuadTopology
 from . import Targets
+from .creases import INTERPOLATE_SHARPNESS, crease_tangents, seam_edges, sharp_vertices
+from .local import (
+    TANGENTS,
+    TangentRule,
+    corner_tangents,
+    cross,
+    fan_normals,
+    in_vertex_planes,
+    slot_tables,
+)
 
 __all__ = [
-    "SHAPES", "ShapeRule", "fit_regular_star", "interpolate_targets", "legacy_targets", "safeguarded_fans", "shape_targets",
-    "retreat", "slot_vertices", "spread_fan", "tangent_stars",
+    "SHAPES",
+    "ShapeRule",
+    "fit_regular_star",
+    "interpolate_targets",
+    "legacy_targets",
+    "safeguarded_fans",
+    "shape_targets",
+    "retreat",
+    "slot_vertices",
+    "spread_fan",
+    "tangent_stars",
 ]
 
 ShapeRule = Literal["interpolate", "limit", "limit-interpolate", "legacy"]
@@ -95,7 +112,9 @@ def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
     return np.einsum("...d,...d->...", a, b)
 
 
-def _star_angles(topology: QuadTopology, slot_vertex: IntArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+def _star_angles(
+    topology: QuadTopology, slot_vertex: IntArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """θ_j of every slot (2πj/n inside, πj/k at a boundary vertex with k faces) and the
     per-vertex angle step."""
     offsets = topology.neighbor_offsets
@@ -120,7 +139,9 @@ def fit_regular_star(
     cos, sin, step = _star_angles(topology, slot_vertex)
     boundary = topology.is_boundary_vertex
     corner = boundary & (topology.face_count == 1)
-    moments = np.add.reduceat(np.concatenate([cos[:, None] * s, sin[:, None] * s], axis=1), offsets[:-1])
+    moments = np.add.reduceat(
+        np.concatenate([cos[:, None] * s, sin[:, None] * s], axis=1), offsets[:-1]
+    )
     half = 0.5 * np.where(boundary, topology.face_count, topology.valence)
     a = moments[:, :3] / np.where(boundary, half + 1.0, half)[:, None]
     b = moments[:, 3:] / np.where(corner, 1.0, half)[:, None]
@@ -132,7 +153,9 @@ def fit_regular_star(
     return star, np.cos(step), valid
 
 
-def tangent_stars(mesh: QuadMesh, normals: FloatArray, tangents: TangentRule = "arc") -> tuple[FloatArray, FloatArray]:
+def tangent_stars(
+    mesh: QuadMesh, normals: FloatArray, tangents: TangentRule = "arc"
+) -> tuple[FloatArray, FloatArray]:
     """The previous release's star: the regular star fitted to the projected edge tangents
     (:func:`~g1patch.targets.local.corner_tangents`, ``tangents`` lengths), and ``c_v``.
 
@@ -142,7 +165,10 @@ def tangent_stars(mesh: QuadMesh, normals: FloatArray, tangents: TangentRule = "
     topology = mesh.topology
     slot_vertex = slot_vertices(topology)
     s = corner_tangents(
-        mesh.vertices[slot_vertex], mesh.vertices[topology.neighbors], normals[slot_vertex], tangents,
+        mesh.vertices[slot_vertex],
+        mesh.vertices[topology.neighbors],
+        normals[slot_vertex],
+        tangents,
         np.stack([slot_vertex, topology.neighbors], axis=1),
     )
     star, cosine, valid = fit_regular_star(topology, normals, s)
@@ -162,7 +188,14 @@ def legacy_targets(mesh: QuadMesh, tangents: TangentRule = "arc") -> Targets:
     normals = fan_normals(mesh)
     star, _ = tangent_stars(mesh, normals, tangents)
     interior = _interior_targets(topology, mesh.vertices, star, normals, None)
-    return Targets(topology, mesh.vertices, normals, star, np.stack([interior, interior], axis=2), rule="legacy")
+    return Targets(
+        topology,
+        mesh.vertices,
+        normals,
+        star,
+        np.stack([interior, interior], axis=2),
+        rule="legacy",
+    )
 
 
 def _projected_tangents(
@@ -176,7 +209,16 @@ def _projected_tangents(
     if compiled:
         out, chord = np.empty((len(topology.neighbors), 3)), np.empty(len(topology.neighbors))
         parallel = np.empty(topology.n_vertices, dtype=bool)
-        jit_kernel(_projected_kernel)(x, normals, topology.neighbor_offsets, topology.neighbors, _PARALLEL, out, chord, parallel)
+        jit_kernel(_projected_kernel)(
+            x,
+            normals,
+            topology.neighbor_offsets,
+            topology.neighbors,
+            _PARALLEL,
+            out,
+            chord,
+            parallel,
+        )
         return out, chord, parallel
     slot_vertex = slot_vertices(topology)
     d = x[topology.neighbors] - x[slot_vertex]
@@ -187,11 +229,23 @@ def _projected_tangents(
     parallel = ~(in_plane > _PARALLEL * chord)
     length = 2.0 * chord**2 / (chord + in_plane)
     scale = np.where(parallel, 0.0, length / np.where(parallel, 1.0, in_plane))
-    return s * scale[:, None], chord, np.bincount(slot_vertex, parallel, minlength=topology.n_vertices) > 0
+    return (
+        s * scale[:, None],
+        chord,
+        np.bincount(slot_vertex, parallel, minlength=topology.n_vertices) > 0,
+    )
 
 
-def _projected_kernel(x: FloatArray, normals: FloatArray, offsets: IntArray, neighbors: IntArray, parallel_share: float,
-                      out: FloatArray, chord: FloatArray, parallel: NDArray[np.bool_]) -> None:
+def _projected_kernel(
+    x: FloatArray,
+    normals: FloatArray,
+    offsets: IntArray,
+    neighbors: IntArray,
+    parallel_share: float,
+    out: FloatArray,
+    chord: FloatArray,
+    parallel: NDArray[np.bool_],
+) -> None:
     """:func:`_projected_tangents` vertex by vertex: ``s = d − (N·d) N``, ``s · 2|d|²/(|d| + |s|)/|s|``."""
     for v in range(offsets.size - 1):
         n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
@@ -222,7 +276,12 @@ def _turn(p: FloatArray, a: FloatArray, q: FloatArray, n: FloatArray) -> FloatAr
 
 
 def _along_smooth_lines(
-    mesh: QuadMesh, normals: FloatArray, raw: FloatArray, *, compiled: bool = True, out: FloatArray | None = None
+    mesh: QuadMesh,
+    normals: FloatArray,
+    raw: FloatArray,
+    *,
+    compiled: bool = True,
+    out: FloatArray | None = None,
 ) -> FloatArray:
     """``raw`` with the slots of mesh lines that run on smoothly through a regular vertex turned
     along the line (module docstring): at an interior vertex A of valence 4, the line B' → A → B of
@@ -237,9 +296,23 @@ def _along_smooth_lines(
     out = raw.copy() if out is None else out
     if compiled:
         kernel = jit_kernel(_lines_kernel)
-        in_chunks(lambda lo, hi: kernel(mesh.vertices, normals, topology.neighbor_offsets, topology.neighbors,
-                                        topology.face_count, topology.is_boundary_vertex, _LINE_SHARE, _LINE_SLACK,
-                                        raw, out, lo, hi), topology.n_vertices)
+        in_chunks(
+            lambda lo, hi: kernel(
+                mesh.vertices,
+                normals,
+                topology.neighbor_offsets,
+                topology.neighbors,
+                topology.face_count,
+                topology.is_boundary_vertex,
+                _LINE_SHARE,
+                _LINE_SLACK,
+                raw,
+                out,
+                lo,
+                hi,
+            ),
+            topology.n_vertices,
+        )
         return out
     x, offsets, neighbors = mesh.vertices, topology.neighbor_offsets, topology.neighbors
     regular = ~topology.is_boundary_vertex & (topology.face_count == 4)
@@ -257,8 +330,14 @@ def _along_smooth_lines(
         a, fore, back = vertices, neighbors[s_fore], neighbors[s_back]
         total, count = np.zeros(len(a)), np.zeros(len(a))
         for ok, turn in (
-            (regular[fore], lambda i: _turn(x[a[i]], x[fore[i]], x[beyond(fore[i], a[i])], normals[fore[i]])),
-            (regular[back], lambda i: _turn(x[beyond(back[i], a[i])], x[back[i]], x[a[i]], normals[back[i]])),
+            (
+                regular[fore],
+                lambda i: _turn(x[a[i]], x[fore[i]], x[beyond(fore[i], a[i])], normals[fore[i]]),
+            ),
+            (
+                regular[back],
+                lambda i: _turn(x[beyond(back[i], a[i])], x[back[i]], x[a[i]], normals[back[i]]),
+            ),
         ):
             total[ok] += turn(np.flatnonzero(ok))
             count += ok
@@ -268,7 +347,10 @@ def _along_smooth_lines(
         along = _dot(d_back, d_back)[:, None] * d_fore - _dot(d_fore, d_fore)[:, None] * d_back
         along -= _dot(along, normals[a])[:, None] * normals[a]
         size = np.linalg.norm(along, axis=1)
-        smooth = (count > 0) & (np.abs(at_a - mean) <= _LINE_SHARE * np.maximum(np.abs(at_a), np.abs(mean)) + _LINE_SLACK)
+        smooth = (count > 0) & (
+            np.abs(at_a - mean)
+            <= _LINE_SHARE * np.maximum(np.abs(at_a), np.abs(mean)) + _LINE_SLACK
+        )
         smooth &= (size > 0) & (lengths[s_fore] > 0) & (lengths[s_back] > 0)
         direction = along[smooth] / size[smooth, None]
         out[s_fore[smooth]] = direction * lengths[s_fore[smooth], None]
@@ -276,17 +358,34 @@ def _along_smooth_lines(
     return out
 
 
-def _lines_kernel(x: FloatArray, normals: FloatArray, offsets: IntArray, neighbors: IntArray, face_count: IntArray,
-                  boundary: NDArray[np.bool_], share: float, slack: float, raw: FloatArray, out: FloatArray, lo: int, hi: int) -> None:
+def _lines_kernel(
+    x: FloatArray,
+    normals: FloatArray,
+    offsets: IntArray,
+    neighbors: IntArray,
+    face_count: IntArray,
+    boundary: NDArray[np.bool_],
+    share: float,
+    slack: float,
+    raw: FloatArray,
+    out: FloatArray,
+    lo: int,
+    hi: int,
+) -> None:
     """:func:`_along_smooth_lines` for vertices ``lo`` to ``hi``: the same formulas, in the same order."""
     turn = np.empty(3)
     for v in range(lo, hi):
         if boundary[v] or face_count[v] != 4:
             continue
         for line in range(2):
-            ends = (neighbors[offsets[v] + line + 2], neighbors[offsets[v] + line])  # back B', fore B
+            ends = (
+                neighbors[offsets[v] + line + 2],
+                neighbors[offsets[v] + line],
+            )  # back B', fore B
             total, count = 0.0, 0
-            for side in range(3):  # 0: at B (A → B → beyond), 1: at B' (beyond → B' → A), 2: at A (B' → A → B)
+            for side in range(
+                3
+            ):  # 0: at B (A → B → beyond), 1: at B' (beyond → B' → A), 2: at A (B' → A → B)
                 if side < 2:
                     b = ends[1 - side]
                     if boundary[b] or face_count[b] != 4:
@@ -307,7 +406,9 @@ def _lines_kernel(x: FloatArray, normals: FloatArray, offsets: IntArray, neighbo
                 h = (w0 * n0 + w1 * n1) + w2 * n2
                 w0, w1, w2 = w0 - h * n0, w1 - h * n1, w2 - h * n2
                 c0, c1, c2 = u1 * w2 - u2 * w1, u2 * w0 - u0 * w2, u0 * w1 - u1 * w0
-                turn[side] = np.arctan2((c0 * n0 + c1 * n1) + c2 * n2, (u0 * w0 + u1 * w1) + u2 * w2)
+                turn[side] = np.arctan2(
+                    (c0 * n0 + c1 * n1) + c2 * n2, (u0 * w0 + u1 * w1) + u2 * w2
+                )
                 if side < 2:
                     total += turn[side]
                     count += 1
@@ -326,12 +427,26 @@ def _lines_kernel(x: FloatArray, normals: FloatArray, offsets: IntArray, neighbo
             h = (a0 * n0 + a1 * n1) + a2 * n2
             a0, a1, a2 = a0 - h * n0, a1 - h * n1, a2 - h * n2
             size = np.sqrt((a0 * a0 + a1 * a1) + a2 * a2)
-            fore_length = np.sqrt((raw[s_fore, 0] * raw[s_fore, 0] + raw[s_fore, 1] * raw[s_fore, 1]) + raw[s_fore, 2] * raw[s_fore, 2])
-            back_length = np.sqrt((raw[s_back, 0] * raw[s_back, 0] + raw[s_back, 1] * raw[s_back, 1]) + raw[s_back, 2] * raw[s_back, 2])
+            fore_length = np.sqrt(
+                (raw[s_fore, 0] * raw[s_fore, 0] + raw[s_fore, 1] * raw[s_fore, 1])
+                + raw[s_fore, 2] * raw[s_fore, 2]
+            )
+            back_length = np.sqrt(
+                (raw[s_back, 0] * raw[s_back, 0] + raw[s_back, 1] * raw[s_back, 1])
+                + raw[s_back, 2] * raw[s_back, 2]
+            )
             if not (size > 0.0 and fore_length > 0.0 and back_length > 0.0):
                 continue
-            out[s_fore, 0], out[s_fore, 1], out[s_fore, 2] = a0 / size * fore_length, a1 / size * fore_length, a2 / size * fore_length
-            out[s_back, 0], out[s_back, 1], out[s_back, 2] = -(a0 / size) * back_length, -(a1 / size) * back_length, -(a2 / size) * back_length
+            out[s_fore, 0], out[s_fore, 1], out[s_fore, 2] = (
+                a0 / size * fore_length,
+                a1 / size * fore_length,
+                a2 / size * fore_length,
+            )
+            out[s_back, 0], out[s_back, 1], out[s_back, 2] = (
+                -(a0 / size) * back_length,
+                -(a1 / size) * back_length,
+                -(a2 / size) * back_length,
+            )
 
 
 def _smooth_boundary_tangents(mesh: QuadMesh, normals: FloatArray, raw: FloatArray) -> FloatArray:
@@ -371,7 +486,9 @@ def _smooth_boundary_tangents(mesh: QuadMesh, normals: FloatArray, raw: FloatArr
     return out
 
 
-def _fan_gaps(topology: QuadTopology, normals: FloatArray, t: FloatArray) -> tuple[FloatArray, IntArray, IntArray]:
+def _fan_gaps(
+    topology: QuadTopology, normals: FloatArray, t: FloatArray
+) -> tuple[FloatArray, IntArray, IntArray]:
     """Signed turn from every face's first slot to its second about the normal, (G,), with the
     vertex of each gap. Gap j of vertex v runs from slot j to slot j + 1 (cyclically inside);
     a boundary vertex with k faces has k gaps, an interior one n."""
@@ -388,13 +505,24 @@ def _fan_gaps(topology: QuadTopology, normals: FloatArray, t: FloatArray) -> tup
     return gaps, gap_vertex, first
 
 
-def _valid_fans(topology: QuadTopology, normals: FloatArray, t: FloatArray, *, compiled: bool = True) -> NDArray[np.bool_]:
+def _valid_fans(
+    topology: QuadTopology, normals: FloatArray, t: FloatArray, *, compiled: bool = True
+) -> NDArray[np.bool_]:
     """Per vertex: every consecutive turn in (ε, 180° − ε), once around inside, less than once at a
     boundary (``compiled``: vertex by vertex in :func:`_valid_fans_kernel`)."""
     if compiled:
         valid = np.empty(topology.n_vertices, dtype=bool)
-        jit_kernel(_valid_fans_kernel)(normals, t, topology.neighbor_offsets, topology.face_count, topology.valence,
-                                       topology.is_boundary_vertex, _MIN_GAP, _MIN_GAP_SHARE, valid)
+        jit_kernel(_valid_fans_kernel)(
+            normals,
+            t,
+            topology.neighbor_offsets,
+            topology.face_count,
+            topology.valence,
+            topology.is_boundary_vertex,
+            _MIN_GAP,
+            _MIN_GAP_SHARE,
+            valid,
+        )
         return valid
     gaps, gap_vertex, first = _fan_gaps(topology, normals, t)
     n = np.maximum(topology.valence, 3)
@@ -403,13 +531,28 @@ def _valid_fans(topology: QuadTopology, normals: FloatArray, t: FloatArray, *, c
     ok_gap = (gaps > eps) & (gaps < np.pi - eps) & (length[first] > 0)
     valid = np.bincount(gap_vertex, weights=~ok_gap, minlength=topology.n_vertices) == 0
     total = np.bincount(gap_vertex, weights=gaps, minlength=topology.n_vertices)
-    once = np.where(topology.is_boundary_vertex, total < 2.0 * np.pi - _MIN_GAP, np.abs(total - 2.0 * np.pi) < 1e-6)
-    last = topology.neighbor_offsets[1:] - 1  # a boundary vertex's last slot ends no gap: check its length too
+    once = np.where(
+        topology.is_boundary_vertex,
+        total < 2.0 * np.pi - _MIN_GAP,
+        np.abs(total - 2.0 * np.pi) < 1e-6,
+    )
+    last = (
+        topology.neighbor_offsets[1:] - 1
+    )  # a boundary vertex's last slot ends no gap: check its length too
     return valid & once & (length[last] > 0)
 
 
-def _valid_fans_kernel(normals: FloatArray, t: FloatArray, offsets: IntArray, face_count: IntArray, valence: IntArray,
-                       boundary: NDArray[np.bool_], min_gap: float, min_gap_share: float, valid: NDArray[np.bool_]) -> None:
+def _valid_fans_kernel(
+    normals: FloatArray,
+    t: FloatArray,
+    offsets: IntArray,
+    face_count: IntArray,
+    valence: IntArray,
+    boundary: NDArray[np.bool_],
+    min_gap: float,
+    min_gap_share: float,
+    valid: NDArray[np.bool_],
+) -> None:
     """:func:`_valid_fans` vertex by vertex: the turns ``atan2((a × b)·N, a·b)`` of the gaps (:func:`_fan_gaps`)."""
     for v in range(offsets.size - 1):
         n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
@@ -421,8 +564,10 @@ def _valid_fans_kernel(normals: FloatArray, t: FloatArray, offsets: IntArray, fa
             a, b = first + j, first + (j + 1) % size
             a0, a1, a2 = t[a, 0], t[a, 1], t[a, 2]
             b0, b1, b2 = t[b, 0], t[b, 1], t[b, 2]
-            gap = np.arctan2((a1 * b2 - a2 * b1) * n0 + (a2 * b0 - a0 * b2) * n1 + (a0 * b1 - a1 * b0) * n2,
-                             a0 * b0 + a1 * b1 + a2 * b2)
+            gap = np.arctan2(
+                (a1 * b2 - a2 * b1) * n0 + (a2 * b0 - a0 * b2) * n1 + (a0 * b1 - a1 * b0) * n2,
+                a0 * b0 + a1 * b1 + a2 * b2,
+            )
             ok &= gap > eps and gap < np.pi - eps and np.sqrt(a0 * a0 + a1 * a1 + a2 * a2) > 0
             total += gap
         last = first + size - 1
@@ -430,23 +575,37 @@ def _valid_fans_kernel(normals: FloatArray, t: FloatArray, offsets: IntArray, fa
         valid[v] = ok and once and np.sqrt(t[last, 0] ** 2 + t[last, 1] ** 2 + t[last, 2] ** 2) > 0
 
 
-def spread_fan(topology: QuadTopology, normals: FloatArray, t: FloatArray, chord: FloatArray, vertices: IntArray) -> FloatArray:
+def spread_fan(
+    topology: QuadTopology,
+    normals: FloatArray,
+    t: FloatArray,
+    chord: FloatArray,
+    vertices: IntArray,
+) -> FloatArray:
     """Evenly spread slot directions at ``vertices`` (2π/n apart inside, π/max(k, 2) at a
     boundary), starting from the first slot's direction, with the slots' own lengths (their
     chords where a slot has none)."""
     offsets = topology.neighbor_offsets
     counts = np.diff(offsets)[vertices]
-    slots = np.repeat(offsets[vertices] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+    slots = np.repeat(offsets[vertices] - np.cumsum(counts) + counts, counts) + np.arange(
+        counts.sum()
+    )
     owner = np.repeat(vertices, counts)
     local = slots - offsets[owner]
     n = normals[owner]
     first = t[offsets[owner]]
     first = first - _dot(first, n)[:, None] * n
-    reference = np.where(np.linalg.norm(first, axis=1, keepdims=True) > 0, first, _any_perpendicular(n))
+    reference = np.where(
+        np.linalg.norm(first, axis=1, keepdims=True) > 0, first, _any_perpendicular(n)
+    )
     e1 = reference / np.linalg.norm(reference, axis=1, keepdims=True)
     e2 = np.cross(n, e1)
     boundary = topology.is_boundary_vertex[owner]
-    step = np.where(boundary, np.pi / np.maximum(topology.face_count[owner], 2), 2.0 * np.pi / topology.valence[owner])
+    step = np.where(
+        boundary,
+        np.pi / np.maximum(topology.face_count[owner], 2),
+        2.0 * np.pi / topology.valence[owner],
+    )
     angle = local * step
     length = np.linalg.norm(t[slots], axis=1)
     length = np.where(length > 0, length, chord[slots])
@@ -461,7 +620,9 @@ def _any_perpendicular(n: FloatArray) -> FloatArray:
     return np.cross(n, axis)
 
 
-def _narrowed_straight_corners(topology: QuadTopology, normals: FloatArray, t: FloatArray, corners: IntArray) -> FloatArray:
+def _narrowed_straight_corners(
+    topology: QuadTopology, normals: FloatArray, t: FloatArray, corners: IntArray
+) -> FloatArray:
     """At one-face ``corners`` whose two tangents turn by ``θ ≥ 180° − ε`` about the normal, both
     rotated in the tangent plane by ``δ = (θ − 180° + 3ε/2)/2`` towards each other (the first slot
     counter-clockwise, the second clockwise); the other corners unchanged."""
@@ -473,7 +634,9 @@ def _narrowed_straight_corners(topology: QuadTopology, normals: FloatArray, t: F
     a_plane = a - _dot(a, n)[:, None] * n
     b_plane = b - _dot(b, n)[:, None] * n
     turn = np.arctan2(_dot(cross(a_plane, b_plane), n), _dot(a_plane, b_plane))
-    eps = np.minimum(_MIN_GAP, _MIN_GAP_SHARE * 2.0 * np.pi / np.maximum(topology.valence[corners], 3))
+    eps = np.minimum(
+        _MIN_GAP, _MIN_GAP_SHARE * 2.0 * np.pi / np.maximum(topology.valence[corners], 3)
+    )
     delta = np.where(turn >= np.pi - eps, 0.5 * (turn - np.pi + 1.5 * eps), 0.0)[:, None]
     out[first] = a - a_plane + np.cos(delta) * a_plane + np.sin(delta) * cross(n, a_plane)
     out[first + 1] = b - b_plane + np.cos(delta) * b_plane - np.sin(delta) * cross(n, b_plane)
@@ -490,7 +653,9 @@ def safeguarded_fans(
     needs = ~valid
     if not needs.any():
         return raw, needs
-    t = _narrowed_straight_corners(topology, normals, raw, np.flatnonzero(needs & (topology.face_count == 1)))
+    t = _narrowed_straight_corners(
+        topology, normals, raw, np.flatnonzero(needs & (topology.face_count == 1))
+    )
     pending = needs & ~_valid_fans(topology, normals, t)
     if not pending.any():
         return t, needs
@@ -527,13 +692,24 @@ def _local_twist_weights(planar: FloatArray, reach: FloatArray) -> FloatArray:
     """The share of the second fundamental form in each corner's twist: 1 where ``planar ≤
     _TWIST_LOCAL · reach``, 0 from ``_TWIST_BILINEAR · reach`` on, smoothstep between (the
     kernel inlines the same formula)."""
-    u = np.clip((_TWIST_BILINEAR * reach - planar) / np.where(reach > 0, (_TWIST_BILINEAR - _TWIST_LOCAL) * reach, 1.0), 0.0, 1.0)
+    u = np.clip(
+        (_TWIST_BILINEAR * reach - planar)
+        / np.where(reach > 0, (_TWIST_BILINEAR - _TWIST_LOCAL) * reach, 1.0),
+        0.0,
+        1.0,
+    )
     return np.where(reach > 0, u * u * (3.0 - 2.0 * u), planar == 0)
 
 
 def _interior_targets(
-    topology: QuadTopology, positions: FloatArray, tangents: FloatArray, normals: FloatArray, shape_operator: FloatArray | None,
-    *, compiled: bool = True, out: FloatArray | None = None,
+    topology: QuadTopology,
+    positions: FloatArray,
+    tangents: FloatArray,
+    normals: FloatArray,
+    shape_operator: FloatArray | None,
+    *,
+    compiled: bool = True,
+    out: FloatArray | None = None,
 ) -> FloatArray:
     """``Ft = A + (t_AB + t_AD)/3 + w/9`` per face corner, ``w = A − B + C − D``; with a shape
     operator S = dN (:class:`~g1patch.targets.frames.VertexFrames`) the normal part of w is replaced by
@@ -550,8 +726,23 @@ def _interior_targets(
         curved = shape_operator is not None
         kernel = jit_kernel(_interior_kernel)
         operator = shape_operator if curved else np.zeros((1, 3, 3))
-        in_chunks(lambda lo, hi: kernel(positions, faces, topology.ring_offsets, topology.ring_halfedges, topology.neighbor_offsets,
-                                        tangents, normals, operator, curved, out, lo, hi), topology.n_vertices)
+        in_chunks(
+            lambda lo, hi: kernel(
+                positions,
+                faces,
+                topology.ring_offsets,
+                topology.ring_halfedges,
+                topology.neighbor_offsets,
+                tangents,
+                normals,
+                operator,
+                curved,
+                out,
+                lo,
+                hi,
+            ),
+            topology.n_vertices,
+        )
         return out
     slot_out, slot_in = halfedge_slots(topology)
     x = positions[faces]  # (F, 4, 3): A at corner k
@@ -566,13 +757,27 @@ def _interior_targets(
         planar = np.sqrt(np.maximum(_dot(w, w) - normal**2, 0.0))
         reach = np.linalg.norm(t_next, axis=-1) + np.linalg.norm(t_prev, axis=-1)
         weight = _local_twist_weights(planar, reach)
-        w = w - ((normal + np.einsum("fki,fkij,fkj->fk", t_next, s, t_prev)) * weight)[..., None] * n
+        w = (
+            w
+            - ((normal + np.einsum("fki,fkij,fkj->fk", t_next, s, t_prev)) * weight)[..., None] * n
+        )
     return x + (t_next + t_prev) / 3.0 + w / 9.0
 
 
-def _interior_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, ring_halfedges: IntArray, slot_offsets: IntArray,
-                     tangents: FloatArray, normals: FloatArray, shape_operator: FloatArray, curved: bool,
-                     out: FloatArray, first: int, stop: int) -> None:
+def _interior_kernel(
+    x: FloatArray,
+    faces: IntArray,
+    ring_offsets: IntArray,
+    ring_halfedges: IntArray,
+    slot_offsets: IntArray,
+    tangents: FloatArray,
+    normals: FloatArray,
+    shape_operator: FloatArray,
+    curved: bool,
+    out: FloatArray,
+    first: int,
+    stop: int,
+) -> None:
     """:func:`_interior_targets` of the vertices ``first ≤ a < stop``, vertex by vertex, over its ring:
     the corner of ring face i is between slots i (A → B) and i + 1 (A → D, cyclic inside), so no
     slot table is needed."""
@@ -593,16 +798,31 @@ def _interior_kernel(x: FloatArray, faces: IntArray, ring_offsets: IntArray, rin
                     for j in range(3):
                         bend += tangents[s_next, r] * shape_operator[a, r, j] * tangents[s_prev, j]
                 normal = w[0] * n0 + w[1] * n1 + w[2] * n2
-                planar = np.sqrt(max(w[0] * w[0] + w[1] * w[1] + w[2] * w[2] - normal * normal, 0.0))
-                reach = np.sqrt(tangents[s_next, 0] ** 2 + tangents[s_next, 1] ** 2 + tangents[s_next, 2] ** 2)
-                reach += np.sqrt(tangents[s_prev, 0] ** 2 + tangents[s_prev, 1] ** 2 + tangents[s_prev, 2] ** 2)
+                planar = np.sqrt(
+                    max(w[0] * w[0] + w[1] * w[1] + w[2] * w[2] - normal * normal, 0.0)
+                )
+                reach = np.sqrt(
+                    tangents[s_next, 0] ** 2 + tangents[s_next, 1] ** 2 + tangents[s_next, 2] ** 2
+                )
+                reach += np.sqrt(
+                    tangents[s_prev, 0] ** 2 + tangents[s_prev, 1] ** 2 + tangents[s_prev, 2] ** 2
+                )
                 u = 1.0 if planar == 0 else 0.0
                 if reach > 0:
-                    u = min(max((_TWIST_BILINEAR * reach - planar) / ((_TWIST_BILINEAR - _TWIST_LOCAL) * reach), 0.0), 1.0)
+                    u = min(
+                        max(
+                            (_TWIST_BILINEAR * reach - planar)
+                            / ((_TWIST_BILINEAR - _TWIST_LOCAL) * reach),
+                            0.0,
+                        ),
+                        1.0,
+                    )
                 along = (normal + bend) * u * u * (3.0 - 2.0 * u)
                 w[0], w[1], w[2] = w[0] - along * n0, w[1] - along * n1, w[2] - along * n2
             for j in range(3):
-                out[f, k, j] = x[a, j] + (tangents[s_next, j] + tangents[s_prev, j]) / 3.0 + w[j] / 9.0
+                out[f, k, j] = (
+                    x[a, j] + (tangents[s_next, j] + tangents[s_prev, j]) / 3.0 + w[j] / 9.0
+                )
 
 
 #: faces whose corner normals turn by less than this keep the local twist targets; from here to
@@ -627,7 +847,9 @@ def _bernstein(t: FloatArray, derivative: bool = False) -> FloatArray:
     """Cubic Bernstein values (or derivatives) at ``t``, shape ``t.shape + (4,)``."""
     s = 1.0 - t
     if derivative:
-        return np.stack([-3 * s * s, 3 * s * s - 6 * t * s, 6 * t * s - 3 * t * t, 3 * t * t], axis=-1)
+        return np.stack(
+            [-3 * s * s, 3 * s * s - 6 * t * s, 6 * t * s - 3 * t * t, 3 * t * t], axis=-1
+        )
     return np.stack([s**3, 3 * t * s * s, 3 * t * t * s, t**3], axis=-1)
 
 
@@ -643,7 +865,9 @@ def _normal_along(tangent: FloatArray, n0: FloatArray, n1: FloatArray, t: FloatA
     return _unit_rows(n - _dot(n, tangent)[..., None] * tangent)
 
 
-def _circle_section(p: FloatArray, q: FloatArray, n_p: FloatArray, n_q: FloatArray, s: FloatArray) -> tuple[FloatArray, FloatArray]:
+def _circle_section(
+    p: FloatArray, q: FloatArray, n_p: FloatArray, n_q: FloatArray, s: FloatArray
+) -> tuple[FloatArray, FloatArray]:
     """Point and normal at ``s`` of the circle-aware Hermite cubic from p to q (tangents: q − p
     projected onto each end's plane, length ``2|d|²/(|d| + |s|)``), the normal blended along it."""
     d = q - p
@@ -652,7 +876,10 @@ def _circle_section(p: FloatArray, q: FloatArray, n_p: FloatArray, n_q: FloatArr
     def tangent(direction: FloatArray, n: FloatArray) -> FloatArray:
         projected = direction - _dot(direction, n)[..., None] * n
         length = np.linalg.norm(projected, axis=-1)
-        return projected * (2.0 * chord**2 / (chord + length) / np.where(length > 0, length, 1.0))[..., None]
+        return (
+            projected
+            * (2.0 * chord**2 / (chord + length) / np.where(length > 0, length, 1.0))[..., None]
+        )
 
     net = (p, p + tangent(d, n_p) / 3.0, q + tangent(-d, n_q) / 3.0, q)
     b, db = _bernstein(s), _bernstein(s, True)
@@ -661,7 +888,9 @@ def _circle_section(p: FloatArray, q: FloatArray, n_p: FloatArray, n_q: FloatArr
     return point, _normal_along(along, n_p, n_q, s)
 
 
-def _round_interior(boundary: FloatArray, corner_normals: FloatArray, start: FloatArray) -> FloatArray:
+def _round_interior(
+    boundary: FloatArray, corner_normals: FloatArray, start: FloatArray
+) -> FloatArray:
     """Interior Bézier points (b11, b21, b22, b12) per face that best fit the circle sections.
 
     ``boundary`` (F, 4, 4, 3): the four boundary cubics, edge k from corner k to k + 1;
@@ -679,7 +908,9 @@ def _round_interior(boundary: FloatArray, corner_normals: FloatArray, start: Flo
     def curve(k: int, t: FloatArray) -> tuple[FloatArray, FloatArray]:
         pos = np.einsum("sk,fkd->fsd", _bernstein(t), boundary[:, k])
         along = np.einsum("sk,fkd->fsd", _bernstein(t, True), boundary[:, k])
-        return pos, _normal_along(along, corner_normals[:, k, None], corner_normals[:, (k + 1) % 4, None], t[None, :])
+        return pos, _normal_along(
+            along, corner_normals[:, k, None], corner_normals[:, (k + 1) % 4, None], t[None, :]
+        )
 
     (bottom, n_bottom), (top, n_top) = curve(0, u), curve(2, 1.0 - u)
     (left, n_left), (right, n_right) = curve(3, 1.0 - v), curve(1, v)
@@ -711,7 +942,9 @@ def _bezier_net(boundary: FloatArray, interior: FloatArray) -> FloatArray:
     return net
 
 
-def _turns_within(boundary: FloatArray, interior: FloatArray, corner_normals: FloatArray) -> NDArray[np.bool_]:
+def _turns_within(
+    boundary: FloatArray, interior: FloatArray, corner_normals: FloatArray
+) -> NDArray[np.bool_]:
     """Per face: does the bicubic with this boundary and interior keep its normal within
     ``_ROUND_MAX_TURN`` of the bilinear blend of its corner normals on a 5 × 5 grid?"""
     net = _bezier_net(boundary, interior)
@@ -722,7 +955,12 @@ def _turns_within(boundary: FloatArray, interior: FloatArray, corner_normals: Fl
     normal = _unit_rows(np.cross(p_u, p_v))
     u, v = g[:, None, None], g[None, :, None]
     n = corner_normals[:, :, None, None, :]
-    blend = _unit_rows((1 - u) * (1 - v) * n[:, 0] + u * (1 - v) * n[:, 1] + u * v * n[:, 2] + (1 - u) * v * n[:, 3])
+    blend = _unit_rows(
+        (1 - u) * (1 - v) * n[:, 0]
+        + u * (1 - v) * n[:, 1]
+        + u * v * n[:, 2]
+        + (1 - u) * v * n[:, 3]
+    )
     return (_dot(normal, blend) >= np.cos(_ROUND_MAX_TURN)).all(axis=(1, 2))
 
 
@@ -740,7 +978,9 @@ def _sphere_misfit(x: FloatArray, n: FloatArray) -> FloatArray:
     return np.sqrt(_dot(residual, residual).mean(axis=1)) / np.where(size > 0, size, 1.0)
 
 
-def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, corner_normals: FloatArray, interior: FloatArray) -> FloatArray:
+def _round_coarse_faces(
+    mesh: QuadMesh, tangents: FloatArray, corner_normals: FloatArray, interior: FloatArray
+) -> FloatArray:
     """Blend the circle-section fit (:func:`_round_interior`) into the twist targets of coarse
     faces: weight ``smoothstep((θ − 10°)/30°)`` of the largest angle θ between the normals at
     the ends of the face's edges, so fine meshes keep the local targets (and their order) and
@@ -762,7 +1002,9 @@ def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, corner_normals: Fl
     chosen = np.flatnonzero(weight > 0)
     if not chosen.size:
         return interior
-    weight[chosen] *= np.clip(1.0 - _sphere_misfit(mesh.vertices[faces[chosen]], n[chosen]) / _ROUND_MISFIT, 0.0, 1.0)
+    weight[chosen] *= np.clip(
+        1.0 - _sphere_misfit(mesh.vertices[faces[chosen]], n[chosen]) / _ROUND_MISFIT, 0.0, 1.0
+    )
     chosen = chosen[weight[chosen] > 0]
     if not chosen.size:
         return interior
@@ -770,10 +1012,12 @@ def _round_coarse_faces(mesh: QuadMesh, tangents: FloatArray, corner_normals: Fl
     x = mesh.vertices
     out = interior.copy()
     for low in range(0, chosen.size, _ROUND_BLOCK):
-        block = chosen[low:low + _ROUND_BLOCK]
+        block = chosen[low : low + _ROUND_BLOCK]
         h = (4 * block[:, None] + np.arange(4)).ravel()
         a, b = x[topology.origin(h)], x[topology.target(h)]
-        boundary = np.stack([a, a + tangents[slot_out[h]] / 3.0, b + tangents[slot_in[h]] / 3.0, b], axis=1).reshape(-1, 4, 4, 3)
+        boundary = np.stack(
+            [a, a + tangents[slot_out[h]] / 3.0, b + tangents[slot_in[h]] / 3.0, b], axis=1
+        ).reshape(-1, 4, 4, 3)
         change = _round_interior(boundary, n[block], interior[block]) - interior[block]
         scale = weight[block]
         pending = np.ones(len(block), dtype=bool)
@@ -816,9 +1060,13 @@ def interpolate_targets(mesh: QuadMesh) -> Targets:
     fallback = guarded | frames.repaired | parallel
     seams = seam_edges(mesh, INTERPOLATE_SHARPNESS)
     corner_normals = normals[topology.faces]
-    both = np.empty((topology.n_faces, 4, 2, 3))  # Targets.interior: the same target for both edges at a corner
+    both = np.empty(
+        (topology.n_faces, 4, 2, 3)
+    )  # Targets.interior: the same target for both edges at a corner
     first = both[:, :, 0]
-    interior = _interior_targets(topology, mesh.vertices, tangents, normals, frames.shape_operator, out=first)
+    interior = _interior_targets(
+        topology, mesh.vertices, tangents, normals, frames.shape_operator, out=first
+    )
     if seams.any():
         tangents, sector_normals, creased, spread = crease_tangents(
             mesh, seams, tangents, sharp_vertices(mesh, INTERPOLATE_SHARPNESS)
@@ -831,12 +1079,24 @@ def interpolate_targets(mesh: QuadMesh) -> Targets:
         interior = np.where(at_crease[..., None], bilinear, interior)
         fallback = (fallback & ~creased) | spread
     rounded = _round_coarse_faces(mesh, tangents, corner_normals, interior)
-    if seams.any():  # the circle sections model one sphere through a face's corners: not across a crease
+    if (
+        seams.any()
+    ):  # the circle sections model one sphere through a face's corners: not across a crease
         rounded = np.where(at_crease.any(axis=1)[:, None, None], interior, rounded)
     if rounded is not first:
         first[:] = rounded
     both[:, :, 1] = first
-    return Targets(topology, mesh.vertices, normals, tangents, both, seams, fallback, "interpolate", corner_normals)
+    return Targets(
+        topology,
+        mesh.vertices,
+        normals,
+        tangents,
+        both,
+        seams,
+        fallback,
+        "interpolate",
+        corner_normals,
+    )
 
 
 def retreat(targets: Targets, vertices: IntArray, weight: float) -> Targets:
@@ -850,7 +1110,9 @@ def retreat(targets: Targets, vertices: IntArray, weight: float) -> Targets:
     chosen = np.zeros(topology.n_vertices, dtype=bool)
     chosen[vertices] = True
     sectored = np.zeros(topology.n_vertices, dtype=bool)
-    sectored[topology.faces[(targets.corner_normals != targets.normals[topology.faces]).any(axis=2)]] = True
+    sectored[
+        topology.faces[(targets.corner_normals != targets.normals[topology.faces]).any(axis=2)]
+    ] = True
     chosen &= ~sectored  # a creased vertex keeps its sectors' planes
     fan = fan_normals(QuadMesh(targets.positions, topology))
     normals = targets.normals.copy()
@@ -867,13 +1129,21 @@ def retreat(targets: Targets, vertices: IntArray, weight: float) -> Targets:
     corners = chosen[topology.faces]
     interior = targets.interior.copy()
     interior[corners] = (1.0 - weight) * interior[corners] + weight * bilinear[corners][:, None, :]
-    corner_normals = np.where(sectored[topology.faces][..., None], targets.corner_normals, normals[topology.faces])
+    corner_normals = np.where(
+        sectored[topology.faces][..., None], targets.corner_normals, normals[topology.faces]
+    )
     return targets.with_changes(
-        normals=normals, tangents=tangents, interior=interior, fallback=targets.fallback | chosen, corner_normals=corner_normals
+        normals=normals,
+        tangents=tangents,
+        interior=interior,
+        fallback=targets.fallback | chosen,
+        corner_normals=corner_normals,
     )
 
 
-def shape_targets(mesh: QuadMesh, shape: ShapeRule = "interpolate", *, tangents: TangentRule = "arc") -> Targets:
+def shape_targets(
+    mesh: QuadMesh, shape: ShapeRule = "interpolate", *, tangents: TangentRule = "arc"
+) -> Targets:
     """The targets of ``mesh`` by the named rule: ``interpolate`` (this module), ``limit`` (the
     Catmull–Clark limit of the mesh as a control cage, :mod:`g1patch.targets.limit`) or ``legacy``."""
     check_choice("shape", shape, SHAPES)

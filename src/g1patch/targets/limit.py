@@ -36,18 +36,24 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..kernels import jit_kernel
-from .local import cross, fan_normals, slot_tables
-from ..gregory import INTERIOR_INDEX
-from ..errors import MeshError
-from ..mesh import QuadMesh, QuadTopology, Sectors, Tag, sectors
 from .. import subdivision
+from ..errors import MeshError
+from ..gregory import INTERIOR_INDEX
+from ..kernels import jit_kernel
+from ..mesh import QuadMesh, QuadTopology, Sectors, Tag, sectors
 from ..subdivision import (
-    boundary_mode, corner_vertices, limit_corner_normals, limit_data, limit_normals, limit_points, refine_grids,
+    boundary_mode,
+    corner_vertices,
+    limit_corner_normals,
+    limit_data,
+    limit_normals,
+    limit_points,
+    refine_grids,
 )
 from . import Targets, halfedge_slots, slot_sector_normals
 from .creases import seam_edges, spread_sectors
 from .interpolate import safeguarded_fans, slot_vertices
+from .local import cross, fan_normals, slot_tables
 
 __all__ = ["FIT_LEVELS", "bspline_slots", "limit_targets", "regular_faces"]
 
@@ -76,7 +82,10 @@ _PARAMETRIC_INTERIOR = 0.05
 _DEGENERATE = 1e-9
 #: edge k of a face as grid positions (i, j) at parameter t = s/m, from corner k to corner k + 1
 _EDGE_GRID = (
-    lambda s, m: (s, 0 * s), lambda s, m: (m + 0 * s, s), lambda s, m: (m - s, m + 0 * s), lambda s, m: (0 * s, m - s),
+    lambda s, m: (s, 0 * s),
+    lambda s, m: (m + 0 * s, s),
+    lambda s, m: (m - s, m + 0 * s),
+    lambda s, m: (0 * s, m - s),
 )
 
 
@@ -119,12 +128,20 @@ def _plane_bases(normals: FloatArray, a: FloatArray) -> tuple[FloatArray, FloatA
     """Orthonormal ``(e1, e2)`` of each tangent plane, e1 along ``a`` projected (any direction in the plane where that vanishes)."""
     e1 = a - _dot(a, normals)[:, None] * normals
     length = np.linalg.norm(e1, axis=1, keepdims=True)
-    other = np.cross(normals, np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]]))
-    e1 = np.where(length > 1e-12, e1 / np.where(length > 0, length, 1.0), other / np.linalg.norm(other, axis=1, keepdims=True))
+    other = np.cross(
+        normals, np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    )
+    e1 = np.where(
+        length > 1e-12,
+        e1 / np.where(length > 0, length, 1.0),
+        other / np.linalg.norm(other, axis=1, keepdims=True),
+    )
     return e1, np.cross(normals, e1)
 
 
-def _fitted_edges(topology: QuadTopology, free: BoolArray, slots: tuple[IntArray, IntArray]) -> IntArray:
+def _fitted_edges(
+    topology: QuadTopology, free: BoolArray, slots: tuple[IntArray, IntArray]
+) -> IntArray:
     """Canonical half-edges of the interior edges with a free end (their tangents are fitted);
     ``slots``: :func:`~g1patch.targets.halfedge_slots`."""
     slot_out, slot_in = slots
@@ -146,10 +163,22 @@ def _subset_tags(mesh: QuadMesh, inside: IntArray) -> tuple[Tag, ...]:
     tags = [tag for tag in mesh.tags if tag.name in ("interpolateboundary", "creasemethod")]
     creased = np.flatnonzero(present & (features.edge_sharpness > 0))
     if creased.size:
-        tags.append(Tag("crease", tuple(topology.edges[creased].ravel().tolist()), tuple(features.edge_sharpness[creased].tolist())))
+        tags.append(
+            Tag(
+                "crease",
+                tuple(topology.edges[creased].ravel().tolist()),
+                tuple(features.edge_sharpness[creased].tolist()),
+            )
+        )
     cornered = np.flatnonzero(used & (features.vertex_sharpness > 0))
     if cornered.size:
-        tags.append(Tag("corner", tuple(cornered.tolist()), tuple(features.vertex_sharpness[cornered].tolist())))
+        tags.append(
+            Tag(
+                "corner",
+                tuple(cornered.tolist()),
+                tuple(features.vertex_sharpness[cornered].tolist()),
+            )
+        )
     return tuple(tags)
 
 
@@ -159,7 +188,9 @@ def _pinched_vertices(topology: QuadTopology, keep: BoolArray) -> BoolArray:
     ring_vertex = np.repeat(np.arange(topology.n_vertices), topology.face_count)
     position = np.arange(ring_vertex.size) - topology.ring_offsets[ring_vertex]
     kept = keep[topology.ring_halfedges >> 2]
-    previous = np.where(position == 0, topology.ring_offsets[ring_vertex + 1] - 1, np.arange(ring_vertex.size) - 1)
+    previous = np.where(
+        position == 0, topology.ring_offsets[ring_vertex + 1] - 1, np.arange(ring_vertex.size) - 1
+    )
     continued = kept[previous] & ~((position == 0) & topology.is_boundary_vertex[ring_vertex])
     return np.bincount(ring_vertex[kept & ~continued], minlength=topology.n_vertices) > 1
 
@@ -190,7 +221,9 @@ def _limit_samples(mesh: QuadMesh, faces: IntArray, levels: int) -> tuple[FloatA
         inside = np.flatnonzero(keep)
         tags = _subset_tags(mesh, inside)
         try:
-            source = QuadMesh.from_arrays(mesh.vertices, topology.faces[inside], tags=tags, strict=True)
+            source = QuadMesh.from_arrays(
+                mesh.vertices, topology.faces[inside], tags=tags, strict=True
+            )
             rows = np.searchsorted(inside, faces)
         except MeshError:
             source, rows = mesh, faces
@@ -199,8 +232,18 @@ def _limit_samples(mesh: QuadMesh, faces: IntArray, levels: int) -> tuple[FloatA
 
 
 def _fit_tangents(
-    mesh: QuadMesh, x: FloatArray, t: FloatArray, free: BoolArray, planes: FloatArray, plane_of: IntArray | None,
-    samples: FloatArray, sample_normals: FloatArray, row: IntArray, m: int, slots: tuple[IntArray, IntArray], h: IntArray,
+    mesh: QuadMesh,
+    x: FloatArray,
+    t: FloatArray,
+    free: BoolArray,
+    planes: FloatArray,
+    plane_of: IntArray | None,
+    samples: FloatArray,
+    sample_normals: FloatArray,
+    row: IntArray,
+    m: int,
+    slots: tuple[IntArray, IntArray],
+    h: IntArray,
 ) -> FloatArray:
     """The free slot tangents fitted in their tangent planes: per interior edge A → B with a free end
     the least-squares fit of ``H(s) = B0 A + B1 (A + t_A/3) + B2 (B + t_B/3) + B3 B`` to the limit
@@ -215,7 +258,11 @@ def _fit_tangents(
     if not h.size:
         return out
     sa, sb = slot_out[h], slot_in[h]
-    plane_a, plane_b = (planes[sa], planes[sb]) if plane_of is None else (planes[plane_of[sa]], planes[plane_of[sb]])
+    plane_a, plane_b = (
+        (planes[sa], planes[sb])
+        if plane_of is None
+        else (planes[plane_of[sa]], planes[plane_of[sb]])
+    )
     face, k = row[h >> 2], h & 3
     s = np.arange(m + 1)
     positions = np.stack([np.stack(edge(s, m), axis=0) for edge in _EDGE_GRID])  # (4, 2, m + 1)
@@ -223,13 +270,24 @@ def _fit_tangents(
     normal = sample_normals[face[:, None], positions[k, 0], positions[k, 1]]
     w = _bernstein(s / m)
     va, vb = topology.origin(h), topology.target(h)
-    base = (w[:, 0] + w[:, 1])[None, :, None] * x[va][:, None] + (w[:, 2] + w[:, 3])[None, :, None] * x[vb][:, None] - curve
+    base = (
+        (w[:, 0] + w[:, 1])[None, :, None] * x[va][:, None]
+        + (w[:, 2] + w[:, 3])[None, :, None] * x[vb][:, None]
+        - curve
+    )
     (e1a, e2a), (e1b, e2b) = _plane_bases(plane_a, t[sa]), _plane_bases(plane_b, t[sb])
-    columns = np.stack([  # ∂H/∂(α_A, β_A, α_B, β_B): (E, 4, m + 1, 3)
-        w[None, :, 1, None] * e1a[:, None] / 3.0, w[None, :, 1, None] * e2a[:, None] / 3.0,
-        w[None, :, 2, None] * e1b[:, None] / 3.0, w[None, :, 2, None] * e2b[:, None] / 3.0,
-    ], axis=1)
-    known = np.stack([_dot(t[sa], e1a), _dot(t[sa], e2a), _dot(t[sb], e1b), _dot(t[sb], e2b)], axis=1)
+    columns = np.stack(
+        [  # ∂H/∂(α_A, β_A, α_B, β_B): (E, 4, m + 1, 3)
+            w[None, :, 1, None] * e1a[:, None] / 3.0,
+            w[None, :, 1, None] * e2a[:, None] / 3.0,
+            w[None, :, 2, None] * e1b[:, None] / 3.0,
+            w[None, :, 2, None] * e2b[:, None] / 3.0,
+        ],
+        axis=1,
+    )
+    known = np.stack(
+        [_dot(t[sa], e1a), _dot(t[sa], e2a), _dot(t[sb], e1b), _dot(t[sb], e2b)], axis=1
+    )
     unknown = np.repeat(np.stack([free[sa], free[sb]], axis=1), 2, axis=1)  # (E, 4)
     fixed_part = np.einsum("ec,ecsd->esd", np.where(unknown, 0.0, known), columns)
     weighted = _weigh(columns, normal[:, None])
@@ -247,7 +305,9 @@ def _fit_tangents(
     return out
 
 
-def _boundary_nets(mesh: QuadMesh, x: FloatArray, t: FloatArray, faces: IntArray, slots: tuple[IntArray, IntArray]) -> FloatArray:
+def _boundary_nets(
+    mesh: QuadMesh, x: FloatArray, t: FloatArray, faces: IntArray, slots: tuple[IntArray, IntArray]
+) -> FloatArray:
     """The 4 × 4 Bézier nets ``b[f, i, j]`` of ``faces`` with corners and edge points set, interior
     zero; ``slots``: :func:`~g1patch.targets.halfedge_slots`."""
     topology = mesh.topology
@@ -263,13 +323,17 @@ def _boundary_nets(mesh: QuadMesh, x: FloatArray, t: FloatArray, faces: IntArray
     return net
 
 
-def _fit_interior(net: FloatArray, samples: FloatArray, sample_normals: FloatArray, m: int) -> FloatArray:
+def _fit_interior(
+    net: FloatArray, samples: FloatArray, sample_normals: FloatArray, m: int
+) -> FloatArray:
     """Interior points (F, 4, 3) at corners 0..3 (b11, b21, b22, b12) minimising
     ``Σ rᵀ (n nᵀ + ρ I) r``, ``r = p(i/m, j/m) − S_ij``, over the interior samples with the boundary
     of ``net`` fixed: a 12 × 12 solve per face."""
     g = np.arange(1, m) / m
     w = _bernstein(g)
-    basis = (w[:, None, :, None] * w[None, :, None, :]).reshape(-1, 4, 4)  # (K, 4, 4): B_i(u) B_j(v)
+    basis = (w[:, None, :, None] * w[None, :, None, :]).reshape(
+        -1, 4, 4
+    )  # (K, 4, 4): B_i(u) B_j(v)
     inner = basis[:, INTERIOR_INDEX[:, 0], INTERIOR_INDEX[:, 1]]  # (K, 4)
     count = len(net)
     known = np.einsum("kij,fijd->fkd", basis, net)
@@ -304,15 +368,23 @@ def _guarded(
     slot_vertex = slot_vertices(topology)
     if _kernels_wanted(topology):
         chord = np.empty(slot_vertex.size)
-        jit_kernel(_chord_kernel)(mesh.vertices, topology.neighbors, topology.neighbor_offsets, chord)
+        jit_kernel(_chord_kernel)(
+            mesh.vertices, topology.neighbors, topology.neighbor_offsets, chord
+        )
     else:
-        chord = np.linalg.norm(mesh.vertices[topology.neighbors] - mesh.vertices[slot_vertex], axis=1)
+        chord = np.linalg.norm(
+            mesh.vertices[topology.neighbors] - mesh.vertices[slot_vertex], axis=1
+        )
     _, fitted_bad = safeguarded_fans(topology, normals, fitted, chord)
     fitted_bad &= ~(topology.is_boundary_vertex & (topology.face_count == 1)) & ~keep
     if not fitted_bad.any():
         return fitted, fitted_bad
     guarded_star, star_bad = safeguarded_fans(topology, normals, star, chord)
-    out = np.where(fitted_bad[slot_vertex, None], np.where(star_bad[slot_vertex, None], guarded_star, star), fitted)
+    out = np.where(
+        fitted_bad[slot_vertex, None],
+        np.where(star_bad[slot_vertex, None], guarded_star, star),
+        fitted,
+    )
     return out, fitted_bad & star_bad
 
 
@@ -339,7 +411,11 @@ def _sector_slots(mesh: QuadMesh, seams: BoolArray) -> tuple[Sectors, BoolArray,
     corner = corner_vertices(mesh) | (found.cuts > 2)
     size = np.bincount(found.label, minlength=found.vertex.size)
     ring_vertex = np.repeat(np.arange(topology.n_vertices), topology.face_count)
-    slot = topology.neighbor_offsets[ring_vertex] + np.arange(ring_vertex.size) - topology.ring_offsets[ring_vertex]
+    slot = (
+        topology.neighbor_offsets[ring_vertex]
+        + np.arange(ring_vertex.size)
+        - topology.ring_offsets[ring_vertex]
+    )
     two_face = np.zeros_like(bound)
     two_face[slot] = (size[found.label] == 2) & ~corner[ring_vertex]
     inner_exact = found.creased[slot_vertex] & ~bound & two_face
@@ -363,13 +439,29 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
         creased = np.zeros(topology.n_vertices, dtype=bool)
     corner_normals = normals[topology.faces]
     if creased.any():
-        corner_normals = np.where(creased[topology.faces][..., None], limit_corner_normals(mesh), corner_normals)
-        plane = Targets(topology, x, normals, np.zeros((slot_vertex.size, 3)), np.zeros((topology.n_faces, 4, 2, 3)),
-                        seams, corner_normals=corner_normals)
-        n, plane_of = slot_sector_normals(plane)[1], None  # each slot's sector plane (the right-hand face's)
+        corner_normals = np.where(
+            creased[topology.faces][..., None], limit_corner_normals(mesh), corner_normals
+        )
+        plane = Targets(
+            topology,
+            x,
+            normals,
+            np.zeros((slot_vertex.size, 3)),
+            np.zeros((topology.n_faces, 4, 2, 3)),
+            seams,
+            corner_normals=corner_normals,
+        )
+        n, plane_of = (
+            slot_sector_normals(plane)[1],
+            None,
+        )  # each slot's sector plane (the right-hand face's)
         projected = star - _dot(star, n)[:, None] * n
-        star = np.where(bound[:, None], star, projected)  # crease tangents lie in both sectors' planes already
-        exact = np.where(creased[slot_vertex], bound | inner_exact, bspline_slots(mesh) & ~touched[slot_vertex])
+        star = np.where(
+            bound[:, None], star, projected
+        )  # crease tangents lie in both sectors' planes already
+        exact = np.where(
+            creased[slot_vertex], bound | inner_exact, bspline_slots(mesh) & ~touched[slot_vertex]
+        )
     else:  # every slot's sector plane is its vertex's
         n, plane_of = normals, slot_vertex
         if _kernels_wanted(topology):
@@ -391,7 +483,9 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
         row[needed] = np.arange(needed.size)
         samples, sample_normals = _limit_samples(mesh, needed, levels)
         m = 2**levels
-        fitted = _fit_tangents(mesh, x, star, free, n, plane_of, samples, sample_normals, row, m, slots, fitted_edges)
+        fitted = _fit_tangents(
+            mesh, x, star, free, n, plane_of, samples, sample_normals, row, m, slots, fitted_edges
+        )
     t, guarded = _guarded(mesh, normals, fitted, star, creased)
     spread = np.zeros(topology.n_vertices, dtype=bool)
     if creased.any():
@@ -403,8 +497,20 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
     interior = _bspline_interior(mesh)
     if irregular.size:
         net = _boundary_nets(mesh, x, t, irregular, slots)
-        interior[irregular] = _fit_interior(net, samples[row[irregular]], sample_normals[row[irregular]], m)[:, :, None]
-    return Targets(topology, x, normals, t, interior, seams, guarded | degenerate | spread, "limit", corner_normals)
+        interior[irregular] = _fit_interior(
+            net, samples[row[irregular]], sample_normals[row[irregular]], m
+        )[:, :, None]
+    return Targets(
+        topology,
+        x,
+        normals,
+        t,
+        interior,
+        seams,
+        guarded | degenerate | spread,
+        "limit",
+        corner_normals,
+    )
 
 
 def _bspline_interior(mesh: QuadMesh) -> FloatArray:
@@ -417,7 +523,12 @@ def _bspline_interior(mesh: QuadMesh) -> FloatArray:
         return out
     corner = [mesh.vertices[topology.faces[:, c]] for c in range(4)]
     for c in range(4):
-        out[:, c, 0] = (4.0 * corner[c] + 2.0 * corner[(c + 1) % 4] + 2.0 * corner[(c + 3) % 4] + corner[(c + 2) % 4]) / 9.0
+        out[:, c, 0] = (
+            4.0 * corner[c]
+            + 2.0 * corner[(c + 1) % 4]
+            + 2.0 * corner[(c + 3) % 4]
+            + corner[(c + 2) % 4]
+        ) / 9.0
     out[:, :, 1] = out[:, :, 0]
     return out
 
@@ -432,7 +543,12 @@ def _interior_kernel(x: FloatArray, faces: IntArray, out: FloatArray) -> None:
     """:func:`_bspline_interior` face by face, the same operations in the same order."""
     for f in range(faces.shape[0]):
         for c in range(4):
-            p, q, r, s = faces[f, c], faces[f, (c + 1) % 4], faces[f, (c + 2) % 4], faces[f, (c + 3) % 4]
+            p, q, r, s = (
+                faces[f, c],
+                faces[f, (c + 1) % 4],
+                faces[f, (c + 2) % 4],
+                faces[f, (c + 3) % 4],
+            )
             for d in range(3):
                 value = (4.0 * x[p, d] + 2.0 * x[q, d] + 2.0 * x[s, d] + x[r, d]) / 9.0
                 out[f, c, 0, d] = value

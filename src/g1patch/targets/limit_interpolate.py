@@ -50,8 +50,14 @@ from . import Targets
 from .limit import limit_targets
 
 __all__ = [
-    "LSMR_ITERATIONS", "LSMR_TOLERANCE", "MAX_CONDITION", "MAX_RESIDUAL", "CageSolution", "interpolating_cage",
-    "limit_interpolate_targets", "limit_matrix",
+    "LSMR_ITERATIONS",
+    "LSMR_TOLERANCE",
+    "MAX_CONDITION",
+    "MAX_RESIDUAL",
+    "CageSolution",
+    "interpolating_cage",
+    "limit_interpolate_targets",
+    "limit_matrix",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -83,7 +89,11 @@ def limit_matrix(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> sp.csr_m
     :class:`InputError`: its limit reads more than the 1-ring masks (refine past it first)."""
     topology = mesh.topology
     nv = topology.n_vertices
-    edge = mesh.features.edge_sharpness if sharpness is None else np.asarray(sharpness, dtype=np.float64)
+    edge = (
+        mesh.features.edge_sharpness
+        if sharpness is None
+        else np.asarray(sharpness, dtype=np.float64)
+    )
     for name, values in (("edge", edge), ("vertex", mesh.features.vertex_sharpness)):
         semi = np.flatnonzero((values > 0) & (values < INFINITE_SHARPNESS))
         if semi.size:
@@ -106,11 +116,18 @@ def limit_matrix(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> sp.csr_m
     crease_rows, crease_columns = np.concatenate([ends, ends[:, ::-1]]).T
     at_crease = crease[crease_rows]
     rows = np.concatenate([np.arange(nv), origin, origin, crease_rows[at_crease]])
-    columns = np.concatenate([
-        np.arange(nv), topology.target(h), topology.origin(QuadTopology.next(QuadTopology.next(h))), crease_columns[at_crease],
-    ])
+    columns = np.concatenate(
+        [
+            np.arange(nv),
+            topology.target(h),
+            topology.origin(QuadTopology.next(QuadTopology.next(h))),
+            crease_columns[at_crease],
+        ]
+    )
     diagonal = np.select([smooth, crease], [n / (n + 5.0), 2.0 / 3.0], 1.0)
-    weights = np.concatenate([diagonal, 4.0 * ring_weight, ring_weight, np.full(int(at_crease.sum()), 1.0 / 6.0)])
+    weights = np.concatenate(
+        [diagonal, 4.0 * ring_weight, ring_weight, np.full(int(at_crease.sum()), 1.0 / 6.0)]
+    )
     return sp.csr_matrix((weights, (rows, columns)), shape=(nv, nv))
 
 
@@ -134,8 +151,10 @@ def _condition(matrix: sp.csr_matrix, lu: SuperLU) -> float:
     """``κ₁ = ‖L‖₁ · est ‖L⁻¹‖₁`` by Hager–Higham's estimator (``onenormest``) on the LU's solves."""
     size = matrix.shape[0]
     inverse = LinearOperator(
-        (size, size), matvec=lambda x: lu.solve(np.asarray(x, dtype=np.float64)),
-        rmatvec=lambda x: lu.solve(np.asarray(x, dtype=np.float64), trans="T"), dtype=np.float64,
+        (size, size),
+        matvec=lambda x: lu.solve(np.asarray(x, dtype=np.float64)),
+        rmatvec=lambda x: lu.solve(np.asarray(x, dtype=np.float64), trans="T"),
+        dtype=np.float64,
     )
     return float(abs(matrix).sum(axis=0).max() * onenormest(inverse))
 
@@ -151,7 +170,12 @@ def _solve(matrix: sp.csr_matrix, rhs: FloatArray) -> tuple[FloatArray, float, S
         condition = _condition(matrix, lu)
         if condition <= MAX_CONDITION:
             return lu.solve(rhs), condition, "lu"
-    columns = [lsmr(matrix, rhs[:, d], atol=LSMR_TOLERANCE, btol=LSMR_TOLERANCE, maxiter=LSMR_ITERATIONS)[0] for d in range(3)]
+    columns = [
+        lsmr(matrix, rhs[:, d], atol=LSMR_TOLERANCE, btol=LSMR_TOLERANCE, maxiter=LSMR_ITERATIONS)[
+            0
+        ]
+        for d in range(3)
+    ]
     return np.stack(columns, axis=1), condition, "lsmr"
 
 
@@ -169,7 +193,9 @@ def interpolating_cage(mesh: QuadMesh) -> CageSolution:
     try:
         cage = mesh.with_vertices(x + correction)
     except MeshError as error:
-        raise ConstructionError(f"limit-interpolate: the interpolating cage is degenerate ({error})") from None
+        raise ConstructionError(
+            f"limit-interpolate: the interpolating cage is degenerate ({error})"
+        ) from None
     residual = float(np.linalg.norm(limit_points(cage) - x, axis=1).max() / diagonal)
     if not residual <= MAX_RESIDUAL:
         singular = ", numerically singular" if condition > _SINGULAR else ""
@@ -190,7 +216,9 @@ def limit_interpolate_targets(mesh: QuadMesh) -> Targets:
     solution = interpolating_cage(mesh)
     _logger.info(
         "limit-interpolate: cage solved by %s, relative residual %.1e, condition estimate %.1e",
-        solution.solver, solution.residual, solution.condition,
+        solution.solver,
+        solution.residual,
+        solution.condition,
     )
     targets = limit_targets(mesh.with_vertices(solution.cage))
     return targets.with_changes(positions=mesh.vertices, rule="limit-interpolate")

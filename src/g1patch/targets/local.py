@@ -21,8 +21,16 @@ from ..kernels import jit_kernel
 from ..mesh import QuadMesh, QuadTopology
 
 __all__ = [
-    "NORMALS", "TANGENTS", "NormalRule", "TangentRule", "corner_tangents", "cross", "fan_normals", "in_vertex_planes",
-    "least_squares_normals", "slot_tables",
+    "NORMALS",
+    "TANGENTS",
+    "NormalRule",
+    "TangentRule",
+    "corner_tangents",
+    "cross",
+    "fan_normals",
+    "in_vertex_planes",
+    "least_squares_normals",
+    "slot_tables",
 ]
 
 NormalRule = Literal["fan", "paper"]
@@ -42,7 +50,10 @@ def cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]
 
 
 def in_vertex_planes(
-    tangents: NDArray[np.float64], normals: NDArray[np.float64], offsets: NDArray[np.int64], out: NDArray[np.float64] | None = None
+    tangents: NDArray[np.float64],
+    normals: NDArray[np.float64],
+    offsets: NDArray[np.int64],
+    out: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """Slot vectors moved into their vertex's tangent plane, ``t − (N·t) N`` (N the unit normal of
     the slot's vertex, slots ``offsets[v]:offsets[v + 1]``), by a numba kernel; ``out`` may be ``tangents``."""
@@ -51,8 +62,12 @@ def in_vertex_planes(
     return out
 
 
-def _plane_kernel(tangents: NDArray[np.float64], normals: NDArray[np.float64], offsets: NDArray[np.int64],
-                  out: NDArray[np.float64]) -> None:
+def _plane_kernel(
+    tangents: NDArray[np.float64],
+    normals: NDArray[np.float64],
+    offsets: NDArray[np.int64],
+    out: NDArray[np.float64],
+) -> None:
     """``out = t − (N·t) N`` slot by slot."""
     for v in range(offsets.size - 1):
         n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
@@ -70,14 +85,27 @@ def slot_tables(topology: QuadTopology) -> tuple[NDArray[np.int32], NDArray[np.i
     of B where A → B is a boundary half-edge)."""
     slot_out = np.empty(topology.n_halfedges, dtype=np.int32)
     slot_in = np.empty(topology.n_halfedges, dtype=np.int32)
-    jit_kernel(_slots_kernel)(topology.faces.reshape(-1), topology.twin, topology.ring_offsets, topology.ring_halfedges,
-                              topology.neighbor_offsets, slot_out, slot_in)
+    jit_kernel(_slots_kernel)(
+        topology.faces.reshape(-1),
+        topology.twin,
+        topology.ring_offsets,
+        topology.ring_halfedges,
+        topology.neighbor_offsets,
+        slot_out,
+        slot_in,
+    )
     return slot_out, slot_in
 
 
-def _slots_kernel(origin: NDArray[np.int64], twin: NDArray[np.int64], ring_offsets: NDArray[np.int64],
-                  ring_halfedges: NDArray[np.int64], neighbor_offsets: NDArray[np.int64], slot_out: NDArray[np.int32],
-                  slot_in: NDArray[np.int32]) -> None:
+def _slots_kernel(
+    origin: NDArray[np.int64],
+    twin: NDArray[np.int64],
+    ring_offsets: NDArray[np.int64],
+    ring_halfedges: NDArray[np.int64],
+    neighbor_offsets: NDArray[np.int64],
+    slot_out: NDArray[np.int32],
+    slot_in: NDArray[np.int32],
+) -> None:
     """Ring position j of the outgoing half-edge ``ring_halfedges[ring_offsets[v] + j]`` → slot
     ``neighbor_offsets[v] + j``; ``slot_in[h] = slot_out[twin[h]]``."""
     for v in range(ring_offsets.size - 1):
@@ -94,7 +122,9 @@ def _unit_or_fail(vectors: NDArray[np.float64], what: str) -> NDArray[np.float64
     length = np.linalg.norm(vectors, axis=-1, keepdims=True)
     if not (length > 0).all():
         bad = int(np.argmin(length[:, 0]))
-        raise ConstructionError(f"{what}: vertex {bad} has no defined normal (its faces are degenerate or cancel out)")
+        raise ConstructionError(
+            f"{what}: vertex {bad} has no defined normal (its faces are degenerate or cancel out)"
+        )
     return vectors / length
 
 
@@ -117,11 +147,15 @@ def fan_normals(mesh: QuadMesh, *, compiled: bool = True) -> NDArray[np.float64]
     to_prev = np.roll(here, 1, axis=1) - here
     corner_normals = cross(to_next, to_prev).reshape(-1, 3)
     corners = faces.reshape(-1)
-    total = np.stack([np.bincount(corners, corner_normals[:, d], minlength=len(x)) for d in range(3)], axis=1)
+    total = np.stack(
+        [np.bincount(corners, corner_normals[:, d], minlength=len(x)) for d in range(3)], axis=1
+    )
     return _unit_or_fail(total, "fan normal")
 
 
-def _fan_kernel(x: NDArray[np.float64], faces: NDArray[np.int64], total: NDArray[np.float64]) -> None:
+def _fan_kernel(
+    x: NDArray[np.float64], faces: NDArray[np.int64], total: NDArray[np.float64]
+) -> None:
     """``total[A] += (x_next − A) × (x_prev − A)`` for every face corner A, in corner order."""
     for f in range(faces.shape[0]):
         for k in range(4):
@@ -186,6 +220,8 @@ def corner_tangents(
     if not (in_plane > 0).all():
         where = np.argwhere(~(in_plane > 0))[0]
         edge = "" if labels is None else f" {labels[tuple(where)][0]}→{labels[tuple(where)][1]}"
-        raise ConstructionError(f"tangents: mesh edge{edge} is parallel to its vertex normal; its tangent is undefined")
+        raise ConstructionError(
+            f"tangents: mesh edge{edge} is parallel to its vertex normal; its tangent is undefined"
+        )
     length = 2.0 * chord**2 / (chord + in_plane) if rule == "arc" else chord
     return s * (length / in_plane)[..., None]

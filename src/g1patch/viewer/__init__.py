@@ -54,7 +54,14 @@ from ..io.atomic import atomic_path
 from ..network import PatchNetwork
 from ..tessellate import TRIANGLE_BUDGET, _size_text, choose_resolution, triangle_count
 
-__all__ = ["MODES", "VENDORED_THREE_VERSION", "ViewTooLargeError", "page_size", "view_html", "write_view"]
+__all__ = [
+    "MODES",
+    "VENDORED_THREE_VERSION",
+    "ViewTooLargeError",
+    "page_size",
+    "view_html",
+    "write_view",
+]
 
 #: three.js release inlined into every page (vendor/README.md says how to refresh it)
 VENDORED_THREE_VERSION = "0.170.0"
@@ -71,7 +78,14 @@ _SEAM_SIDE, _OPEN_SIDE = -1.0, -2.0
 
 
 #: the options of :func:`view_html` when not given
-_DEFAULTS: dict[str, Any] = {"resolution": None, "force": False, "report": None, "title": None, "up": "auto", "view": "auto"}
+_DEFAULTS: dict[str, Any] = {
+    "resolution": None,
+    "force": False,
+    "report": None,
+    "title": None,
+    "up": "auto",
+    "view": "auto",
+}
 
 
 class ViewTooLargeError(InputError):
@@ -104,7 +118,9 @@ def _eye(samples: _Samples, up: str, view: tuple[float, float] | str) -> tuple[s
     from ..render import AUTO, _Camera, auto_camera
 
     if up == AUTO or view == AUTO:
-        chosen_up, chosen_view = auto_camera(samples.positions.reshape(-1, 3), samples.area.reshape(-1), up=up)
+        chosen_up, chosen_view = auto_camera(
+            samples.positions.reshape(-1, 3), samples.area.reshape(-1), up=up
+        )
         up, view = chosen_up, chosen_view if view == AUTO else view
     return up, _Camera.from_view(view, up).eye.tolist()  # type: ignore[arg-type]
 
@@ -127,7 +143,11 @@ def _resolution(n_patches: int, resolution: object, force: bool) -> int:
     without ``force`` a :class:`ViewTooLargeError` with the sizes."""
     if resolution is None:
         resolution = choose_resolution(n_patches)
-    if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) or resolution < 2:
+    if (
+        isinstance(resolution, bool)
+        or not isinstance(resolution, (int, np.integer))
+        or resolution < 2
+    ):
         raise InputError(f"resolution: expected an integer ≥ 2, got {resolution!r}")
     r = int(resolution)
     triangles = triangle_count(n_patches, r)
@@ -144,9 +164,8 @@ def _resolution(n_patches: int, resolution: object, force: bool) -> int:
 def _sample(network: PatchNetwork, r: int) -> _Samples:
     """Positions and exact unit normals of every patch on its ``r × r`` grid, a block of patches at
     a time; a degenerate normal (a collapsed edge) takes the mean of its grid neighbours."""
-    from ..render import _fill_degenerate
-
     from ..continuity import _cross3, _norm3, _planar
+    from ..render import _fill_degenerate
 
     patches = network.patches
     count = len(patches)
@@ -158,18 +177,23 @@ def _sample(network: PatchNetwork, r: int) -> _Samples:
     diagonal = network.bounding_box_diagonal() or 1.0
     for start in range(0, count, step):
         block = patches.take(np.arange(start, min(start + step, count)))
-        points[start:start + step] = block.evaluate_grid(grid, grid)
-        normal = _cross3(_planar(block.evaluate_grid(grid, grid, 1, 0)), _planar(block.evaluate_grid(grid, grid, 0, 1)))
-        length = area[start:start + step] = _norm3(normal)
+        points[start : start + step] = block.evaluate_grid(grid, grid)
+        normal = _cross3(
+            _planar(block.evaluate_grid(grid, grid, 1, 0)),
+            _planar(block.evaluate_grid(grid, grid, 0, 1)),
+        )
+        length = area[start : start + step] = _norm3(normal)
         usable = length > DEGENERATE_RTOL * diagonal**2
         normal /= np.where(usable, length, 1.0)
         unit = np.moveaxis(normal, 0, -1)
-        normals[start:start + step] = unit if usable.all() else _fill_degenerate(unit, usable)
+        normals[start : start + step] = unit if usable.all() else _fill_degenerate(unit, usable)
     flat = points.reshape(-1, 3)
     centre = 0.5 * (flat.min(axis=0) + flat.max(axis=0))
     flat -= centre
     radius = float(_norm3(_planar(flat)).max(initial=0.0))
-    return _Samples(flat.astype(np.float32).reshape(points.shape), normals, area, centre, radius or 1.0)
+    return _Samples(
+        flat.astype(np.float32).reshape(points.shape), normals, area, centre, radius or 1.0
+    )
 
 
 def _side_values(network: PatchNetwork, report: ContinuityReport) -> NDArray[np.float32]:
@@ -177,15 +201,21 @@ def _side_values(network: PatchNetwork, report: ContinuityReport) -> NDArray[np.
     from ..render import _band_angles
 
     angles, seams = _band_angles(network, report)
-    return np.where(seams, _SEAM_SIDE, np.where(np.isnan(angles), _OPEN_SIDE, angles)).astype(np.float32)
+    return np.where(seams, _SEAM_SIDE, np.where(np.isnan(angles), _OPEN_SIDE, angles)).astype(
+        np.float32
+    )
 
 
 def _seam_segments(samples: _Samples, report: ContinuityReport) -> NDArray[np.float32]:
     """Line segments (S, r − 1, 2, 3) along every seam, from one side's grid samples."""
     r = samples.positions.shape[1]
     t, last = np.arange(r), np.full(r, r - 1)
-    rows = np.stack([t, last, t[::-1], np.zeros(r, dtype=np.int64)])  # side k's samples along i (u) …
-    columns = np.stack([np.zeros(r, dtype=np.int64), t, last, t[::-1]])  # … and j (v), counter-clockwise
+    rows = np.stack(
+        [t, last, t[::-1], np.zeros(r, dtype=np.int64)]
+    )  # side k's samples along i (u) …
+    columns = np.stack(
+        [np.zeros(r, dtype=np.int64), t, last, t[::-1]]
+    )  # … and j (v), counter-clockwise
     seam = report.edge_seam
     patch, side = report.edge_patches[seam, 0], report.edge_sides[seam, 0]
     curves = samples.positions[patch[:, None], rows[side], columns[side]]  # (S, r, 3)
@@ -206,8 +236,14 @@ def _colour_scale(side_values: NDArray[np.float32]) -> dict[str, Any]:
         ticks = [10.0**k for k in decades[:: max(1, math.ceil(len(decades) / 6))]]
     else:
         ticks = list(np.linspace(0.0, high, 5))
-    return {"low": low, "high": high, "log": scale.log, "lut": lut.round(4).reshape(-1).tolist(),
-            "ticks": [float(t) for t in ticks], "exact": EXACT_G1_DEG}
+    return {
+        "low": low,
+        "high": high,
+        "log": scale.log,
+        "lut": lut.round(4).reshape(-1).tolist(),
+        "ticks": [float(t) for t in ticks],
+        "exact": EXACT_G1_DEG,
+    }
 
 
 def _summary(report: ContinuityReport) -> list[list[str]]:
@@ -219,8 +255,13 @@ def _summary(report: ContinuityReport) -> list[list[str]]:
         ["folds", f"{report.folds}"],
     ]
     if report.seam_edges:
-        rows.append(["seams (sharp on purpose)", f"{report.seam_edges}, "
-                     f"{report.seam_angle_min_deg:.3g}°–{report.seam_angle_max_deg:.3g}°"])
+        rows.append(
+            [
+                "seams (sharp on purpose)",
+                f"{report.seam_edges}, "
+                f"{report.seam_angle_min_deg:.3g}°–{report.seam_angle_max_deg:.3g}°",
+            ]
+        )
     else:
         rows.append(["seams", "none"])
     return rows
@@ -231,7 +272,9 @@ def _verdict(report: ContinuityReport) -> str:
         return "exactly G1" + (" apart from the seams" if report.seam_edges else "") + ", no folds"
     parts = [f"{report.folds} folded patches"] if report.folds else []
     if not report.is_g1():
-        parts.append(f"not G1: kinks up to {max(report.max_edge_angle_deg, report.max_corner_angle_deg):.3g}°")
+        parts.append(
+            f"not G1: kinks up to {max(report.max_edge_angle_deg, report.max_corner_angle_deg):.3g}°"
+        )
     if not report.seams_closed():
         parts.append(f"seams open by {report.seam_g0_max:.2g} of the diagonal")
     return ", ".join(parts)
@@ -279,7 +322,11 @@ def _page(
     sides = _side_values(network, report)
     seams = _seam_segments(samples, report)
     provenance = network.provenance
-    name = title or Path(provenance.get("source", "")).name or f"{provenance.get('method', 'patch')} network"
+    name = (
+        title
+        or Path(provenance.get("source", "")).name
+        or f"{provenance.get('method', 'patch')} network"
+    )
     method = ", ".join(part for part in (provenance.get("method"), provenance.get("shape")) if part)
     meta = {
         "title": name,
@@ -342,7 +389,9 @@ def view_html(
     ``up``, ``view``: the first camera, as for :func:`g1patch.render.render` (``"auto"``: by
     :func:`g1patch.render.auto_camera`); R in the page returns to it.
     """
-    pieces = _page(network, resolution=resolution, force=force, report=report, title=title, up=up, view=view)
+    pieces = _page(
+        network, resolution=resolution, force=force, report=report, title=title, up=up, view=view
+    )
     return b"".join(pieces).decode("utf-8")
 
 
@@ -353,8 +402,11 @@ def write_view(path: str | os.PathLike[str], network: PatchNetwork, **options: A
     if target.suffix.lower() not in (".html", ".htm"):
         from ..errors import FormatError
 
-        raise FormatError(target, f"the viewer writes an HTML page: expected a .html file name, got "
-                                  f"{target.suffix or '(no extension)'!r}")
+        raise FormatError(
+            target,
+            f"the viewer writes an HTML page: expected a .html file name, got "
+            f"{target.suffix or '(no extension)'!r}",
+        )
     pieces = _page(network, **{**_DEFAULTS, **options})
     with atomic_path(target) as temporary, open(temporary, "wb") as file:
         file.writelines(pieces)
