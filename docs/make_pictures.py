@@ -37,7 +37,8 @@ WIDE = (900, 300)
 
 
 def save_small(draw: Callable[[Path], None], name: str) -> Path:
-    """Draw into a temporary PNG, reduce it to a 256-colour palette and write ``docs/images/name``."""
+    """Draw into a temporary PNG, reduce it to a 256-colour palette and write
+    ``docs/images/name``."""
     from PIL import Image
 
     target = IMAGES / name
@@ -56,7 +57,8 @@ def save_small(draw: Callable[[Path], None], name: str) -> Path:
 
 
 def flat_triangles(network: PatchNetwork, resolution: int) -> TriangleMesh:
-    """The triangles ``export`` writes at ``resolution``, each lit by its own normal (facets show)."""
+    """The triangles ``export`` writes at ``resolution``, each lit by its own normal (facets
+    show)."""
     mesh = tessellate(network, resolution)
     corners = mesh.points[mesh.triangles]
     normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
@@ -95,7 +97,8 @@ def generated() -> None:
 
 
 def shared() -> None:
-    """Pictures of the shared Spot cow (y-up OBJ), OpenSubdiv's creased cube and the Utah teapot (z-up Bézier patches)."""
+    """Pictures of the shared Spot cow (y-up OBJ), OpenSubdiv's creased cube and the Utah teapot
+    (z-up Bézier patches)."""
     spot_mesh = read_mesh(SHARED / "spot_quadrangulated.obj")
     spot = build_gregory_network(spot_mesh)
     for mode in ("shaded", "zebra", "deviation"):

@@ -33,7 +33,8 @@ MESH_FORMATS = (".obj", ".ply", ".off")
 
 @dataclass
 class Outcome:
-    """One command of a case: arguments, exit code, stderr, an escaped exception, leftovers, time."""
+    """One command of a case: arguments, exit code, stderr, an escaped exception, leftovers,
+    time."""
 
     argv: list[str]
     code: int | None
@@ -262,7 +263,8 @@ def _mutated(
     rng: np.random.Generator, name: str, array: np.ndarray, kind: int, edits: list[str]
 ) -> np.ndarray:
     """One member's array changed one way (kind 1–7): a bad index, a bad float, a row short, bools
-    as 2s, another dtype, a replaced header, another shape (unchanged where the kind does not apply)."""
+    as 2s, another dtype, a replaced header, another shape (unchanged where the kind does not
+    apply)."""
     if kind == 1 and array.dtype.kind in "iu" and array.size:
         array = array.astype(np.int64)
         array.flat[int(rng.integers(array.size))] = int(rng.choice([-5, 10**6, 2**40]))
@@ -318,12 +320,13 @@ def make_case(seed: int, directory: Path) -> Case:
     return Case(seed, "network", path, edits)
 
 
-# -- running and judging ------------------------------------------------------------------------------
+# -- running and judging
+# ------------------------------------------------------------------------------
 
 
 def _run(argv: list[str], directory: Path) -> Outcome:
-    """``g1patch.cli.main(argv)`` with stdout and stderr captured; files created in ``directory`` by a
-    failing command are its leftovers."""
+    """``g1patch.cli.main(argv)`` with stdout and stderr captured; files created in ``directory`` by
+    a failing command are its leftovers."""
     from g1patch.cli import main
 
     before = set(directory.iterdir())
@@ -417,7 +420,8 @@ def problems(case: Case, outcomes: list[Outcome]) -> list[str]:
     """Every broken promise of the case's commands (module docstring), as one-line descriptions."""
     found = []
     for outcome in outcomes:
-        what = f"seed {case.seed} ({case.kind}: {', '.join(case.edits) or 'clean'}): {' '.join(outcome.argv[:1])}"
+        edits = ", ".join(case.edits) or "clean"
+        what = f"seed {case.seed} ({case.kind}: {edits}): {' '.join(outcome.argv[:1])}"
         if outcome.exception is not None:
             found.append(f"{what}: traceback: {outcome.exception.strip().splitlines()[-1]}")
             continue

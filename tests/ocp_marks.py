@@ -10,5 +10,6 @@ import pytest
 HAVE_OCP = importlib.util.find_spec("OCP") is not None
 requires_ocp = pytest.mark.skipif(
     not HAVE_OCP,
-    reason="OCP is not installed (extra 'cad': pip install 'g1patch[cad]', i.e. cadquery-ocp-novtk)",
+    reason="OCP is not installed (extra 'cad': pip install 'g1patch[cad]', i.e. "
+    "cadquery-ocp-novtk)",
 )

@@ -124,7 +124,8 @@ def conversion_matrix(source: str, target: str) -> sp.Matrix:
 
 # --------------------------------------------------------------------- rationals
 def rational(value) -> sp.Expr:
-    """Exact sympy number for a Fraction, float (its exact binary value), int; symbols pass through."""
+    """Exact sympy number for a Fraction, float (its exact binary value), int; symbols pass
+    through."""
     if isinstance(value, sp.Basic):
         return value
     if isinstance(value, Fraction):
@@ -169,7 +170,8 @@ def patch_polynomials(form: str, control) -> list[sp.Poly]:
     The paper's eq. (3) for every form: ``x(u, v) = u^T M^T X M v`` with ``u = [u^3, u^2, u, 1]``,
     i.e. ``Σ_ij A_ij u^(3-i) v^(3-j)`` with ``A = M^T X M`` in exact rationals. For Hermite ``M`` is
     the paper's ``M_H`` as typed in; for the other forms it is read off the independently derived
-    basis polynomials (``Σ_ij b_i(u) X_ij b_j(v)`` — cross-checked against the tensor sum in the tests).
+    basis polynomials (``Σ_ij b_i(u) X_ij b_j(v)`` — cross-checked against the tensor sum in the
+    tests).
     """
     control = np.asarray(control, dtype=object)
     key = (form, control.shape, tuple(control.ravel().tolist()))
@@ -212,7 +214,8 @@ def restrict(polys: list[sp.Poly], uu, vv) -> list[sp.Poly]:
 
 
 def coefficients(expr, degree: int = 6) -> list[sp.Rational]:
-    """Ascending coefficients of a polynomial (expression or Poly) in t, padded to ``degree + 1``."""
+    """Ascending coefficients of a polynomial (expression or Poly) in t, padded to ``degree +
+    1``."""
     poly = expr if isinstance(expr, sp.Poly) else sp.Poly(expr, t)
     return [poly.coeff_monomial(t**k) for k in range(degree + 1)]
 

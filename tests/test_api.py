@@ -1,4 +1,5 @@
-"""The top-level API (``g1patch.read``, ``g1patch.smooth``, ``Surface``), reprs and Jupyter displays, import time."""
+"""The top-level API (``g1patch.read``, ``g1patch.smooth``, ``Surface``), reprs and Jupyter
+displays, import time."""
 
 from __future__ import annotations
 
@@ -142,7 +143,8 @@ def test_planar_points_get_z_zero() -> None:
 
 def test_meshio_mesh_with_quads_triangles_polygons_and_lines() -> None:
     meshio = pytest.importorskip("meshio")
-    # a prism: two triangles and three quads, with a polygon block (one quad as a 4-gon) and a line block
+    # a prism: two triangles and three quads, with a polygon block (one quad as a 4-gon) and a line
+    # block
     vertices = np.array(
         [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]], dtype=float
     )
@@ -360,7 +362,8 @@ def test_reprs_are_short(
         text = repr(value)
         assert text.startswith(f"<{name} ") and text.endswith(">") and len(text) < 200, text
         assert "array(" not in text and "\n" not in text, text
-    sphere = "bbox (-1.732, -1.732, -1.732)…(1.732, 1.732, 1.732)"  # the cube comes out a sphere through its corners
+    # the cube comes out a sphere through its corners
+    sphere = "bbox (-1.732, -1.732, -1.732)…(1.732, 1.732, 1.732)"
     assert repr(cube.network) == f"<PatchNetwork 6 gregory patches, interpolate, {sphere}>"
     assert repr(cube) == f"<Surface 6 gregory patches, interpolate, {sphere}>"
     assert repr(cube.patches) == f"<GregoryPatchSet 6 patches, {sphere}>"
@@ -400,7 +403,8 @@ def test_jupyter_skips_large_networks(
 
 
 def test_import_is_fast_and_light() -> None:
-    code = "import sys, g1patch; print(sorted(m for m in ('numpy', 'scipy', 'matplotlib', 'numba', 'meshio') if m in sys.modules))"
+    heavy = "('numpy', 'scipy', 'matplotlib', 'numba', 'meshio')"
+    code = f"import sys, g1patch; print(sorted(m for m in {heavy} if m in sys.modules))"
     loaded = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     ).stdout.strip()

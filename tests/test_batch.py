@@ -1,5 +1,6 @@
 """``g1patch batch`` on Dask: an embedded LocalCluster, a shared one by address, a scheduler started
-apart; good files converted, a broken one reported and the others untouched by it, re-runs skipped."""
+apart; good files converted, a broken one reported and the others untouched by it, re-runs
+skipped."""
 
 from __future__ import annotations
 
@@ -215,7 +216,8 @@ def test_rerun_rebuilds_changed_inputs_and_changed_options(
 def test_scheduler_started_separately(
     meshes: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """``dask scheduler`` and ``dask worker`` as their own processes on 127.0.0.1, joined by address."""
+    """``dask scheduler`` and ``dask worker`` as their own processes on 127.0.0.1, joined by
+    address."""
     needs_dask()
     (meshes / "broken.obj").unlink()
     dask_cli = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
@@ -400,7 +402,10 @@ def test_missing_dask_names_the_extra(
 
 
 def test_import_g1patch_and_its_cli_import_no_dask() -> None:
-    code = "import sys, g1patch, g1patch.cli, g1patch.batch; print(sorted({'dask', 'distributed'} & set(sys.modules)))"
+    code = (
+        "import sys, g1patch, g1patch.cli, g1patch.batch; "
+        "print(sorted({'dask', 'distributed'} & set(sys.modules)))"
+    )
     assert (
         subprocess.run(
             [sys.executable, "-c", code], capture_output=True, text=True, check=True
@@ -435,7 +440,8 @@ def test_convert_returns_a_record_and_never_raises(meshes: Path, tmp_path: Path)
 def test_interrupt_writes_the_summary_so_far(
     meshes: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """Ctrl-C during a batch: the records done are kept, the others marked cancelled, and it is raised again."""
+    """Ctrl-C during a batch: the records done are kept, the others marked cancelled, and it is
+    raised again."""
     import g1patch.batch as batch
 
     def run(

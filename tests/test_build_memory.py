@@ -2,7 +2,8 @@
 
 The targets (tangents, twists, corner normals: ~460 B a quad) and split4's stars were still held
 while the connectivity was built, which set both builds' peaks (Gregory 1044 -> 972 B a quad,
-split4 3040 -> 2696 at 250k quads). Here: no targets array is alive once the network's arrays are made."""
+split4 3040 -> 2696 at 250k quads). Here: no targets array is alive once the network's arrays are
+made."""
 
 from __future__ import annotations
 
@@ -23,7 +24,8 @@ from g1patch.targets import Targets
 def _watching(
     monkeypatch: pytest.MonkeyPatch, module: Any, name: str, seen: list[weakref.ref[np.ndarray]]
 ) -> None:
-    """Wrap ``module.name`` (returns Targets) so that weak references to its results' arrays land in ``seen``."""
+    """Wrap ``module.name`` (returns Targets) so that weak references to its results' arrays land in
+    ``seen``."""
     original: Callable[..., Targets] = getattr(module, name)
 
     def watched(*args: Any, **kwargs: Any) -> Targets:
@@ -44,7 +46,8 @@ def _asserting_freed(
     seen: list[weakref.ref[np.ndarray]],
     calls: list[str],
 ) -> None:
-    """Wrap ``module.name`` (makes the network's arrays) to assert that every array in ``seen`` is gone."""
+    """Wrap ``module.name`` (makes the network's arrays) to assert that every array in ``seen`` is
+    gone."""
     original = getattr(module, name)
 
     def checked(*args: Any, **kwargs: Any) -> Any:

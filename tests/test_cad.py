@@ -55,7 +55,8 @@ def closed_network(name: str, request: pytest.FixtureRequest) -> PatchNetwork:
     return build_corner_network(CLOSED[name](data))
 
 
-# --------------------------------------------------------------------------- a smooth non-polynomial surface
+# --------------------------------------------------------------------------- a smooth
+# non-polynomial surface
 
 
 @dataclasses.dataclass(frozen=True)
@@ -63,7 +64,8 @@ class OnSphere:
     """Patches pushed onto the unit sphere, ``q = p / |p|``: smooth, not polynomial.
 
     ``q_u = (p_u − q (q · p_u)) / |p|`` (the chain rule). Neighbours share boundaries exactly,
-    as the base patches do, and a closed base network star-shaped about 0 maps onto the whole sphere.
+    as the base patches do, and a closed base network star-shaped about 0 maps onto the whole
+    sphere.
     """
 
     base: PatchSet
@@ -113,7 +115,8 @@ def boundary_rows(control: NDArray[np.float64]) -> NDArray[np.float64]:
     )
 
 
-# ------------------------------------------------------------------------------------------------ fitting
+# ------------------------------------------------------------------------------------------------
+# fitting
 
 
 def test_fit_reproduces_bicubic_patches_with_the_bezier_knots() -> None:
@@ -207,11 +210,13 @@ def test_fit_rejects_what_is_not_patches() -> None:
         fit_bspline_surfaces(np.zeros((2, 4, 4, 3)))  # type: ignore[arg-type]
 
 
-# ------------------------------------------------------------------------------------------------ volume
+# ------------------------------------------------------------------------------------------------
+# volume
 
 
 def flat_box(lower: ArrayLike, upper: ArrayLike) -> PatchSet:
-    """The six faces of an axis-aligned box as flat Bézier patches, counter-clockwise from outside."""
+    """The six faces of an axis-aligned box as flat Bézier patches, counter-clockwise from
+    outside."""
     lo, hi = np.asarray(lower, float), np.asarray(upper, float)
     mesh = shapes.cube()  # corners (±1, ±1, ±1), faces oriented outwards
     x = lo + (mesh.vertices + 1.0) / 2.0 * (hi - lo)
@@ -269,7 +274,8 @@ def test_volume_rejects_what_is_not_patches() -> None:
         network_volume(np.zeros(3))  # type: ignore[arg-type]
 
 
-# ------------------------------------------------------------------------------------------------ export
+# ------------------------------------------------------------------------------------------------
+# export
 
 
 def matched_faces(model: cad.CadModel, network: PatchNetwork) -> list[int]:
@@ -393,7 +399,8 @@ def test_step_export_of_fitted_non_polynomial_patches(tmp_path: Path) -> None:
 def test_step_round_trip_of_gregory_networks(
     name: str, request: pytest.FixtureRequest, tmp_path: Path
 ) -> None:
-    """Rational Gregory patches fitted (method "fit"): a valid closed solid within the export tolerance."""
+    """Rational Gregory patches fitted (method "fit"): a valid closed solid within the export
+    tolerance."""
     from g1patch.build import build_gregory_network
 
     data = request.getfixturevalue("shared_data") if name in SHARED else None
@@ -480,7 +487,8 @@ def test_patch_sets_export_through_their_shared_control_points(
     assert len(read_step_faces(result.path).faces) == len(teapot)
 
 
-# ------------------------------------------------------------------------------------------------ bad input
+# ------------------------------------------------------------------------------------------------
+# bad input
 
 
 @pytest.mark.parametrize("name", ["out.obj", "out.stl", "out", "out.step.tmp"])

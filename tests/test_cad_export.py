@@ -1,4 +1,5 @@
-"""CAD export of Gregory networks by their split4 re-assembly (issue 15): exact G1 in CAD, compact, honest.
+"""CAD export of Gregory networks by their split4 re-assembly (issue 15): exact G1 in CAD, compact,
+honest.
 
 The figures are checked against independent measurements: OCC's normals on the file read back
 (:func:`file_g1_angles`), a dense sampling of the Gregory surface for the deviation, the poles
@@ -154,7 +155,8 @@ def test_cutting_the_patches_brings_the_reassembly_closer(
 ) -> None:
     """Where split4's stars differ from the Gregory fans (a dart's end, crease ends) the distance
     shrinks with the cells' size (measured: dart 7.8, 2.8, 0.92e-3 of the diagonal at n = 1, 2, 4;
-    tent 4.5, 1.5, 0.43e-3), every result exactly G1, seams kept, the mesh's vertices interpolated."""
+    tent 4.5, 1.5, 0.43e-3), every result exactly G1, seams kept, the mesh's vertices
+    interpolated."""
     from g1patch.continuity import check
 
     network = gregory(name, shared_data)
@@ -223,7 +225,8 @@ def test_default_export_of_a_gregory_network_is_g1_in_opencascade(
 ) -> None:
     """The acceptance: valid (a solid where the mesh is closed), OCC's normals of the file read
     back agree across every shared edge but seams to ≤ 1e-7°, seams kept, the deviation reported
-    is the re-assembly's and at most 1e-3 of the diagonal (each patch cut into n × n where needed)."""
+    is the re-assembly's and at most 1e-3 of the diagonal (each patch cut into n × n where
+    needed)."""
     from g1patch.io.cad import export_step, file_g1_angles
 
     network = gregory(name, shared_data)
@@ -285,7 +288,8 @@ def test_a_degenerate_corner_takes_the_normal_just_inside_it() -> None:
 
 def test_seams_stay_seams_and_close(shared_data: Path) -> None:
     """A seamed network cut open for split4: exactly G1 off the seams, the seams closed (G0 to
-    rounding: both sides share each seam curve) and marked, crease angles as the Gregory network's."""
+    rounding: both sides share each seam curve) and marked, crease angles as the Gregory
+    network's."""
     from g1patch.continuity import check
 
     network = gregory("catmark_cube_creases2", shared_data)
@@ -327,7 +331,8 @@ def test_compact_step_shares_points_and_keeps_the_poles_to_15_digits(
         errors[0] <= 1e-14 * scale < 1e-13 * scale <= errors[1] <= 1e-11 * scale
     )  # 15 digits vs OCC's 12
     counts = [r.path.read_text().count("CARTESIAN_POINT(") for r in (compact, plain)]
-    # 6 faces of 6 × 6 poles, 12 edge curves of 6, 8 vertices; shared: 8 corners, 12 × 4 edge poles, 6 × 16 inside
+    # 6 faces of 6 × 6 poles, 12 edge curves of 6, 8 vertices; shared: 8 corners, 12 × 4 edge poles,
+    # 6 × 16 inside
     assert counts == [8 + 12 * 4 + 6 * 16 + 1, 6 * 36 + 12 * 6 + 8 + 1]  # + the placement's origin
     assert compact.file_bytes < 0.75 * plain.file_bytes
 
@@ -415,15 +420,16 @@ def test_max_deviation_chooses_the_cells(
     shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """``--max-deviation`` (default 1e-3 of the diagonal) picks the fewest cells per patch side that
-    reach it (n = 1, 2, 3, 4, 6, 8), the export says how many; where none does, the closest is written and the
-    note says so; a bound that is not a positive number is refused, exit 2, nothing written."""
+    reach it (n = 1, 2, 3, 4, 6, 8), the export says how many; where none does, the closest is
+    written and the note says so; a bound that is not a positive number is refused, exit 2, nothing
+    written."""
     from g1patch.io.cad import REFINE_STEPS, export_step
 
     save_network(tmp_path / "dart.npz", gregory("catmark_dart_edgecorner", shared_data))
     assert main(["export", str(tmp_path / "dart.npz"), "-o", str(tmp_path / "a.step"), "-q"]) == 0
     assert (
-        "wrote 256 exact B-spline faces of the split4 re-assembly (exact G1, each Gregory patch as 4 × 4 quads)"
-        in capsys.readouterr().out
+        "wrote 256 exact B-spline faces of the split4 re-assembly (exact G1, each Gregory patch "
+        "as 4 × 4 quads)" in capsys.readouterr().out
     )
     assert (
         main(
@@ -549,7 +555,8 @@ def test_auto_fits_what_split4_cannot_reassemble_and_says_so(
 
 
 def test_step_reals_always_carry_their_decimal_point() -> None:
-    """ISO 10303-21 reals need the point ('1.E-05', not '1E-05'); 15 significant digits: relative error ≤ 5e-15."""
+    """ISO 10303-21 reals need the point ('1.E-05', not '1E-05'); 15 significant digits: relative
+    error ≤ 5e-15."""
     from g1patch.io.cad import _step_reals
 
     assert _step_reals(

@@ -27,7 +27,8 @@ pytestmark = requires_ocp
 
 
 def sewn_faces(network: PatchNetwork) -> tuple[list[object], bool]:
-    """The sewn OCC faces of a network, as export_cad makes them, and whether they are split4 quads."""
+    """The sewn OCC faces of a network, as export_cad makes them, and whether they are split4
+    quads."""
     from g1patch.io import cad
 
     occ = cad._occ()

@@ -2,16 +2,16 @@
 
 Counts, folds, their locations and the turn histogram must be equal; the turn maximum to
 :data:`TURN_RTOL`, or to ``continuity.TENSOR_TURN_ATOL`` where more than
-``continuity.EXACT_TURN_CANDIDATES`` patches tie for it (the kernels recompute its pair as the reference sums it, but the reference's
-products go through BLAS, whose tail kernels round a row differently: one ULP on the coarse
-torus's largest turn once its tangents ran straight along the mesh lines). Angles and gaps may differ by the rounding
-of the tangents: the kernels sum the edge and corner samples as OpenBLAS's dgemm micro-kernel does
-(a sequential fused multiply-add), which equals the reference except on the rows OpenBLAS gives
-its tail kernels; there a tangent differs by a few ULP of ``Σ |w_m| |P_m|``, and so does a normal,
-so an angle (atan2 of vectors of that accuracy) differs by at most :data:`ANGLE_ATOL` (measured
-≤ 4.0e-13° = 32 ε rad on the shared meshes, spot's Gregory network), and a gap by
-:data:`GAP_ATOL` of the diagonal. The reference is no steadier: its own gaps move as much with its
-``chunk`` (which rows fall in BLAS's tail kernels)."""
+``continuity.EXACT_TURN_CANDIDATES`` patches tie for it (the kernels recompute its pair as the
+reference sums it, but the reference's products go through BLAS, whose tail kernels round a row
+differently: one ULP on the coarse torus's largest turn once its tangents ran straight along the
+mesh lines). Angles and gaps may differ by the rounding of the tangents: the kernels sum the edge
+and corner samples as OpenBLAS's dgemm micro-kernel does (a sequential fused multiply-add), which
+equals the reference except on the rows OpenBLAS gives its tail kernels; there a tangent differs by
+a few ULP of ``Σ |w_m| |P_m|``, and so does a normal, so an angle (atan2 of vectors of that
+accuracy) differs by at most :data:`ANGLE_ATOL` (measured ≤ 4.0e-13° = 32 ε rad on the shared
+meshes, spot's Gregory network), and a gap by :data:`GAP_ATOL` of the diagonal. The reference is no
+steadier: its own gaps move as much with its ``chunk`` (which rows fall in BLAS's tail kernels)."""
 
 from __future__ import annotations
 

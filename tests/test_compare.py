@@ -52,7 +52,8 @@ def brute_force_distance(points: np.ndarray, triangles: np.ndarray) -> np.ndarra
     return best.min(axis=1)
 
 
-# -- samples and exact surfaces ---------------------------------------------------------------------
+# -- samples and exact surfaces
+# ---------------------------------------------------------------------
 
 
 def test_surface_samples_shapes_and_unit_normals() -> None:
@@ -77,7 +78,8 @@ def test_deviation_from_a_plane() -> None:
 
 
 def test_distance_to_sphere_of_the_sphere_mesh_corners() -> None:
-    """A patch through points of the unit sphere is 0 away at its corners and inside between them."""
+    """A patch through points of the unit sphere is 0 away at its corners and inside between
+    them."""
     mesh = shapes.sphere_quads(2)
     corners = mesh.vertices[mesh.faces]  # a bilinear patch per quad, as Bézier control points
     weights = np.linspace(0.0, 1.0, 4)
@@ -104,7 +106,8 @@ def test_patch_samples_follow_the_face_grid() -> None:
         compare.patch_samples(split, 5)
 
 
-# -- distance to a triangulated mesh ----------------------------------------------------------------
+# -- distance to a triangulated mesh
+# ----------------------------------------------------------------
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -165,7 +168,8 @@ def test_mesh_distance_rejects_bad_faces() -> None:
 
 
 def test_network_normal_turns_of_a_parabolic_sheet() -> None:
-    """z = u²: the normal (−2u, 0, 1) turns by atan(2u') − atan(2u) along u and not at all along v."""
+    """z = u²: the normal (−2u, 0, 1) turns by atan(2u') − atan(2u) along u and not at all along
+    v."""
     turns = compare.network_normal_turns(sheet_network(SQUARE), 9)
     u = np.linspace(0.0, 1.0, 9)
     along_u = np.degrees(np.diff(np.arctan(2.0 * u)))
@@ -197,7 +201,8 @@ def test_turn_percentiles() -> None:
 
 def test_compare_fairness_like_with_like() -> None:
     """A reference sampled from the same sheet at 3 levels is compared at 9 samples per patch: p99
-    within the one-sided vertex normals of the border; at 5 samples (twice the step) it would double."""
+    within the one-sided vertex normals of the border; at 5 samples (twice the step) it would
+    double."""
     network = sheet_network(SQUARE)
     u, v = np.meshgrid(np.linspace(0.0, 1.0, 9), np.linspace(0.0, 1.0, 9), indexing="ij")
     points = np.stack([u, v, u**2], axis=-1).reshape(-1, 3)

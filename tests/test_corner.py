@@ -160,7 +160,8 @@ def test_twist_rules() -> None:
     assert not zero[:, 2:, 2:].any()
     x = mesh.vertices[mesh.faces]
     np.testing.assert_array_equal(bilinear[:, 2, 2], x[:, 0] - x[:, 1] + x[:, 2] - x[:, 3])
-    # The cube is symmetric: the S-/HS closure vanishes and both diagonals are cubic (paper, Fig. 3).
+    # The cube is symmetric: the S-/HS closure vanishes and both diagonals are cubic (paper, Fig.
+    # 3).
     assert np.abs(coons.closure()).max() <= 8 * EPS
     from g1patch.patches import polynomial_degree
 

@@ -80,7 +80,8 @@ def test_power_coefficients_match_sympy(form, rational_curves):
                 for p in ref.curve_polynomials(form, rational_curves[n])
             ]
         ).T
-        # coefficient k = Σ_i x_i M[i, 3-k]: a 4-term sum with exactly representable (or 1/6) weights
+        # coefficient k = Σ_i x_i M[i, 3-k]: a 4-term sum with exactly representable (or 1/6)
+        # weights
         scale = np.abs(np.array(ref.basis_matrix(form).tolist(), dtype=float)).T[::-1] @ np.abs(
             control[n]
         )
@@ -118,7 +119,8 @@ def test_batch_shapes_and_per_curve_parameters():
     assert own.shape == (2, 3, 7, 2)
     for a, b in itertools.product(range(2), range(3)):
         single = CubicCurves(control[a, b], "bspline").evaluate(t_own[a, b], 1)
-        # same arithmetic up to summation order: both within CURVE_EVAL_ULPS·eps·S of the exact value
+        # same arithmetic up to summation order: both within CURVE_EVAL_ULPS·eps·S of the exact
+        # value
         bound = 2 * CURVE_EVAL_ULPS * EPS * curve_abs_sum("bspline", control[a, b], t_own[a, b], 1)
         assert np.all(np.abs(own[a, b] - single) <= bound)
     assert curves.control.flags.c_contiguous and curves.control.dtype == np.float64
@@ -205,7 +207,8 @@ def test_conversion_keeps_the_curve(control, t, source, target):
 @settings(deadline=None, max_examples=60)
 @given(control=CURVE_CONTROL, source=st.sampled_from(FORMS), target=st.sampled_from(FORMS))
 def test_round_trip_returns_the_control_values(control, source, target):
-    """x → C_AB x → C_BA C_AB x = x up to 4 eps (|C_BA| |C_AB| |x|): the Skeel condition of the pair."""
+    """x → C_AB x → C_BA C_AB x = x up to 4 eps (|C_BA| |C_AB| |x|): the Skeel condition of the
+    pair."""
     back = CubicCurves(control, source).convert(target).convert(source)
     assert back.form == source
     abs_ab = np.abs(np.array(ref.conversion_matrix(source, target).tolist(), dtype=float))

@@ -25,7 +25,8 @@ EPS = np.finfo(float).eps
 
 def flat_sheet(fold: bool = False) -> PatchSet:
     """A 2 × 2 sheet of flat Bézier patches in z = 0; with ``fold`` the interior control points of
-    patch 0 are pushed across each other along x, so p_u reverses inside it (the sheet laps over itself)."""
+    patch 0 are pushed across each other along x, so p_u reverses inside it (the sheet laps over
+    itself)."""
     s = np.arange(4) / 3.0
     control = []
     for x0, y0 in ((0, 0), (1, 0), (1, 1), (0, 1)):
@@ -83,7 +84,8 @@ def test_teapot_curls_need_the_17_grid(shared_data: Path) -> None:
 
 
 def quadratic_patch(a: float, b: float, c: float) -> PatchSet:
-    """p(u, v) = (u, v, a u² + b uv + c v²) as a bicubic Bézier patch (u² has coefficients 0, 0, ⅓, 1)."""
+    """p(u, v) = (u, v, a u² + b uv + c v²) as a bicubic Bézier patch (u² has coefficients 0, 0, ⅓,
+    1)."""
     s = np.arange(4) / 3.0
     square = np.array([0.0, 0.0, 1.0 / 3.0, 1.0])
     z = a * square[:, None] + b * s[:, None] * s[None, :] + c * square[None, :]
@@ -98,7 +100,8 @@ def test_thin_plate_energy_of_a_quadratic_is_exact(samples: int) -> None:
     patches = quadratic_patch(a, b, c)
     corners = patches.corners().reshape(-1, 3)
     diagonal = np.linalg.norm(corners.max(axis=0) - corners.min(axis=0))
-    # p_uu = (0, 0, 2a), p_uv = (0, 0, b), p_vv = (0, 0, 2c): ∫∫ 4a² + 2b² + 4c²; differences of p_u, p_v are exact
+    # p_uu = (0, 0, 2a), p_uv = (0, 0, b), p_vv = (0, 0, 2c): ∫∫ 4a² + 2b² + 4c²; differences of
+    # p_u, p_v are exact
     figures = fairness(network_from_patch_points(patches), samples=samples)
     assert figures["thin_plate"] == pytest.approx(
         (4 * a * a + 2 * b * b + 4 * c * c) / diagonal**2, rel=1e-12

@@ -1,4 +1,5 @@
-"""Frames (g1patch.frame): framed patch sets evaluate, convert, store and export as the world surface.
+"""Frames (g1patch.frame): framed patch sets evaluate, convert, store and export as the world
+surface.
 
 A framed set holds local control ``P`` and the frame ``(c, s)``; the same patches given directly in
 world coordinates hold ``P_w = fl(c + s P)`` (Hermite derivative entries ``fl(s P)``). Two exact
@@ -91,7 +92,8 @@ def assert_normals_close(
     p_v: NDArray[np.float64],
     error: NDArray[np.float64],
 ) -> None:
-    """World normals from tangents known to ``error`` each: |δn| ≤ 2 (|δa| |b| + |a| |δb|) / |a × b| + 4 eps."""
+    """World normals from tangents known to ``error`` each: |δn| ≤ 2 (|δa| |b| + |a| |δb|) / |a × b|
+    + 4 eps."""
     direct = np.cross(p_u, p_v)
     length = np.linalg.norm(direct, axis=-1)
     bound = (
@@ -382,7 +384,8 @@ def test_property_framed_equals_world_for_any_frame(
 
 
 def gregory_local(n: int, seed: int) -> NDArray[np.float64]:
-    """Points of Gregory patches over the unit square with distinct interior pairs (not a Bézier patch)."""
+    """Points of Gregory patches over the unit square with distinct interior pairs (not a Bézier
+    patch)."""
     net = local_control(n, seed)
     steps = np.arange(4) / 3.0 - 0.5
     net[..., :2] = 0.2 * net[..., :2] + np.stack(np.meshgrid(steps, steps, indexing="ij"), axis=-1)
@@ -412,7 +415,8 @@ def test_framed_gregory_patches_equal_the_world_ones() -> None:
         )
         assert_close_ulps(got, world.evaluate(UV, du, dv), weights, size)
         per_patch = np.broadcast_to(UV, (len(framed),) + UV.shape)
-        # per-patch weights take a batched product, shared ones one matrix product: BLAS may sum them in another order
+        # per-patch weights take a batched product, shared ones one matrix product: BLAS may sum
+        # them in another order
         assert_close_ulps(framed.evaluate(per_patch, du, dv), got, weights, size)
         grid_weights = np.abs(gregory_weights(GRID_U[:, None], GRID_V[None, :], du, dv)).sum(
             axis=-1
@@ -444,7 +448,8 @@ def test_framed_gregory_patches_equal_the_world_ones() -> None:
 
 
 def framed_cube(frame: Frame = FAR) -> tuple[PatchNetwork, PatchNetwork]:
-    """A corner network of the cube (unit-sized control, taken as local), framed and in world coordinates."""
+    """A corner network of the cube (unit-sized control, taken as local), framed and in world
+    coordinates."""
     network = build_corner_network(shapes.cube())
     framed = network.patches.with_frame(frame)  # type: ignore[attr-defined]
     vertices = frame.to_world(network.vertices)
@@ -564,7 +569,8 @@ def test_volume_tessellation_and_fit_are_in_world_coordinates() -> None:
     np.testing.assert_allclose(
         mesh.points, reference.points, rtol=0, atol=ULPS * EPS * magnitude(framed.patches) * 4
     )  # type: ignore[arg-type]
-    # the world set's tangents carry the rounding of its control, ≈ eps |c| against tangents of size ≈ s
+    # the world set's tangents carry the rounding of its control, ≈ eps |c| against tangents of size
+    # ≈ s
     np.testing.assert_allclose(
         mesh.normals,
         reference.normals,

@@ -1,4 +1,5 @@
-"""Vertex frames: exact on spheres, O(h³)-type normals on smooth meshes, fan normal where the fit is not trusted."""
+"""Vertex frames: exact on spheres, O(h³)-type normals on smooth meshes, fan normal where the fit is
+not trusted."""
 
 from __future__ import annotations
 
@@ -45,7 +46,8 @@ def ellipsoid(level: int) -> tuple[QuadMesh, np.ndarray]:
 def torus(
     n_major: int, n_minor: int, R: float = 2.0, r: float = 0.7
 ) -> tuple[QuadMesh, np.ndarray, np.ndarray]:
-    """The mesh, exact normals and exact shape operators (principal curvatures 1/r and cos φ/(R + r cos φ))."""
+    """The mesh, exact normals and exact shape operators (principal curvatures 1/r and cos φ/(R + r
+    cos φ))."""
     mesh = shapes.torus(n_major, n_minor, R, r)
     u = np.repeat(np.linspace(0.0, 2.0 * np.pi, n_major, endpoint=False), n_minor)
     phi = np.tile(np.linspace(0.0, 2.0 * np.pi, n_minor, endpoint=False), n_major)
@@ -60,7 +62,8 @@ def torus(
 
 
 def goes_once_around(mesh: QuadMesh, v: int, n: np.ndarray) -> bool:
-    """The ring edges of interior vertex ``v`` projected on the plane ⊥ n turn CCW and once around."""
+    """The ring edges of interior vertex ``v`` projected on the plane ⊥ n turn CCW and once
+    around."""
     d = mesh.vertices[mesh.topology.one_ring(v)] - mesh.vertices[v]
     e1 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
     e1 /= np.linalg.norm(e1)
@@ -126,7 +129,8 @@ def test_torus_normals_and_shape_operator_converge() -> None:
 
 
 def test_coarse_torus_keeps_the_fan_normal() -> None:
-    """12 × 6 quads on r = 0.25: the 2-ring fit is off by up to 4°, the (symmetric) fan normal exact."""
+    """12 × 6 quads on r = 0.25: the 2-ring fit is off by up to 4°, the (symmetric) fan normal
+    exact."""
     mesh, exact_n, _ = torus(12, 6, 1.0, 0.25)
     frames = vertex_frames(mesh)
     assert not frames.fitted.any()
@@ -171,7 +175,8 @@ def test_noisy_coarse_sphere(seed: int) -> None:
 
 
 def test_folded_ring_is_repaired() -> None:
-    """One long, steep edge (towards −y) tilts the fan normal until the short ring edges fold over."""
+    """One long, steep edge (towards −y) tilts the fan normal until the short ring edges fold
+    over."""
     mesh = shapes.grid(2, 2, size=(2.0, 2.0))
     x = mesh.vertices - [1.0, 1.0, 0.0]
     x[[1, 3, 5, 7]] = [
@@ -224,9 +229,9 @@ def split_polygon(n: int) -> QuadMesh:
 
 @pytest.mark.parametrize("n", [16, 1000])
 def test_hub_of_a_split_polygon_keeps_the_fan_normal(n: int) -> None:
-    """On one circle the slope columns x, y of the fit are combinations of cubic ones (x r² = x³ + xy²),
-    so the fit is not trusted there: the hub keeps its fan normal, z by the 3-fold symmetry (the fit
-    tilted it 20° at n = 1000)."""
+    """On one circle the slope columns x, y of the fit are combinations of cubic ones (x r² = x³ +
+    xy²), so the fit is not trusted there: the hub keeps its fan normal, z by the 3-fold symmetry
+    (the fit tilted it 20° at n = 1000)."""
     mesh = split_polygon(n)
     hub = int(np.argmax(np.bincount(mesh.faces.ravel())))
     frames = vertex_frames(mesh)
@@ -240,7 +245,8 @@ def test_compiled_kernel_matches_the_numpy_reference(index: int) -> None:
     largest entry.
 
     The normal equations' condition amplifies the different rounding of the sums: ≤ 63 ε measured
-    on the smooth and noisy meshes, 4.6e3 ε at a corner of the folded 2 × 2 grid (fixed-normal fit)."""
+    on the smooth and noisy meshes, 4.6e3 ε at a corner of the folded 2 × 2 grid (fixed-normal
+    fit)."""
     mesh = _reference_meshes()[index]
     fast, reference = vertex_frames(mesh), vertex_frames(mesh, compiled=False)
     eps = np.finfo(np.float64).eps
@@ -327,7 +333,8 @@ def test_fit_kernel_residual_and_determination_match_the_numpy_reference(
     np.testing.assert_allclose(
         fast.pivot, pivot, rtol=0.0, atol=eps
     )  # a sin² in [0, 1]; near-dropped columns differ ~1e-15
-    # residual² is a difference of sums (exact fits: rounding either side of 0, clipped), so compared squared
+    # residual² is a difference of sums (exact fits: rounding either side of 0, clipped), so
+    # compared squared
     np.testing.assert_allclose(
         fast.residual**2, residual**2, rtol=0.0, atol=eps * max(1.0, float((residual**2).max()))
     )

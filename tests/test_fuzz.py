@@ -31,7 +31,8 @@ def test_hostile_inputs_keep_the_command_line_promises(seed: int) -> None:
 @pytest.mark.parametrize("seed", [1623, 7417])
 def test_cases_the_ten_thousand_found(seed: int) -> None:
     """split4 on a tagged mesh it then refused printed its crease warning before the error: two
-    lines on a failure (benchmarks/fuzz.py, 10,000 cases); the warning now follows a built network."""
+    lines on a failure (benchmarks/fuzz.py, 10,000 cases); the warning now follows a built
+    network."""
     with tempfile.TemporaryDirectory() as directory:
         case = fuzzing.make_case(seed, Path(directory))
         found = fuzzing.problems(case, fuzzing.run_case(case, render=False))

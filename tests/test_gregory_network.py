@@ -132,15 +132,19 @@ def fd_normals(network: PatchNetwork, t: np.ndarray, h: float) -> np.ndarray:
 
 
 def fd_edge_angles(network: PatchNetwork, t: np.ndarray, h: float) -> np.ndarray:
-    """Angles (deg) between the two sides' finite-difference normals at the samples of every shared edge."""
+    """Angles (deg) between the two sides' finite-difference normals at the samples of every shared
+    edge."""
     normals = fd_normals(network, t, h)
     patch, edge = network.shared_edges()
     other, other_edge = network.neighbor[patch, edge], network.neighbor_edge[patch, edge]
     return angle_between(normals[patch, edge], normals[other, other_edge, ::-1])  # t ↔ 1 − t
 
 
-@pytest.mark.parametrize("mesh", [shapes.cube(), perturbed(shapes.fan(7, 2), NOISE, 1), perturbed(shapes.genus2(), NOISE, 2)],
-                         ids=["cube", "fan7", "genus2"])  # fmt: skip
+@pytest.mark.parametrize(
+    "mesh",
+    [shapes.cube(), perturbed(shapes.fan(7, 2), NOISE, 1), perturbed(shapes.genus2(), NOISE, 2)],
+    ids=["cube", "fan7", "genus2"],
+)
 def test_finite_difference_normals_agree_across_edges(mesh: QuadMesh) -> None:
     """The FD angle between the two sides is truncation error O(h²) (rounding, eps/h ≈ 1e-9°, is far
     below): measured ≤ 4.4e-5° at h = 1e-4 and ≤ 4.4e-7° at h = 1e-5, i.e. it falls 100× per 10×
@@ -162,8 +166,15 @@ def expected_cosines(mesh: QuadMesh) -> np.ndarray:
     )
 
 
-@pytest.mark.parametrize("mesh", [perturbed(shapes.fan(6, 2), NOISE, 3), perturbed(shapes.boundary_fan(4), NOISE, 4),
-                                  perturbed(shapes.cube_sphere(1), NOISE, 5)], ids=["fan6", "boundary_fan4", "sphere"])  # fmt: skip
+@pytest.mark.parametrize(
+    "mesh",
+    [
+        perturbed(shapes.fan(6, 2), NOISE, 3),
+        perturbed(shapes.boundary_fan(4), NOISE, 4),
+        perturbed(shapes.cube_sphere(1), NOISE, 5),
+    ],
+    ids=["fan6", "boundary_fan4", "sphere"],
+)
 def test_the_g1_equation_holds_as_a_vector_identity(mesh: QuadMesh) -> None:
     """Regular stars (the legacy rule): D_L + D_R = Φ c' with Φ(t) = 2 c_A (1 − t) − 2 c_B t on
     every interior edge (t from A); flexible fans use the general form (test_targets.py)."""
@@ -191,10 +202,14 @@ def test_the_g1_equation_holds_as_a_vector_identity(mesh: QuadMesh) -> None:
     assert np.abs(residual).max() <= 1e-13 * scale
 
 
-@pytest.mark.parametrize("mesh", [perturbed(shapes.fan(5, 2), NOISE, 6), perturbed(shapes.grid(3, 2, height=height), NOISE, 7)],
-                         ids=["fan5", "grid"])  # fmt: skip
+@pytest.mark.parametrize(
+    "mesh",
+    [perturbed(shapes.fan(5, 2), NOISE, 6), perturbed(shapes.grid(3, 2, height=height), NOISE, 7)],
+    ids=["fan5", "grid"],
+)
 def test_tangent_stars_are_regular(mesh: QuadMesh) -> None:
-    """t_{j−1} + t_{j+1} = 2c t_j on interior edges, t_j ⊥ N; a corner (k = 1) keeps its corner tangents."""
+    """t_{j−1} + t_{j+1} = 2c t_j on interior edges, t_j ⊥ N; a corner (k = 1) keeps its corner
+    tangents."""
     normals = fan_normals(mesh)
     star, cosine = tangent_stars(mesh, normals, "chord")
     topology = mesh.topology
@@ -221,10 +236,18 @@ def test_tangent_stars_are_regular(mesh: QuadMesh) -> None:
             )
 
 
-@pytest.mark.parametrize("mesh", [perturbed(shapes.fan(7, 1), NOISE, 9), perturbed(shapes.boundary_fan(5), NOISE, 10),
-                                  perturbed(shapes.boundary_fan(2), NOISE, 11)], ids=["fan7", "boundary_fan5", "boundary_fan2"])  # fmt: skip
+@pytest.mark.parametrize(
+    "mesh",
+    [
+        perturbed(shapes.fan(7, 1), NOISE, 9),
+        perturbed(shapes.boundary_fan(5), NOISE, 10),
+        perturbed(shapes.boundary_fan(2), NOISE, 11),
+    ],
+    ids=["fan7", "boundary_fan5", "boundary_fan2"],
+)
 def test_stars_are_least_squares_fits(mesh: QuadMesh) -> None:
-    """The closed-form fit equals a least-squares solve of t_j = cos θ_j a + sin θ_j b ≈ s_j at vertex 0."""
+    """The closed-form fit equals a least-squares solve of t_j = cos θ_j a + sin θ_j b ≈ s_j at
+    vertex 0."""
     normals = fan_normals(mesh)
     star, _ = tangent_stars(mesh, normals, "arc")
     topology = mesh.topology
@@ -291,7 +314,8 @@ def test_cube_to_sphere_deviation() -> None:
 # ------------------------------------------------------------------------------ errors
 def test_a_folded_ring_is_reported_by_the_legacy_rule_and_repaired_by_the_default() -> None:
     """A valence-6 ring that winds twice, with a clockwise part: its fitted star turns clockwise.
-    The legacy rule refuses it; the default falls back at that vertex, counts it, and stays exact."""
+    The legacy rule refuses it; the default falls back at that vertex, counts it, and stays
+    exact."""
     theta = 2 * np.pi * np.arange(6) / 6
     z = np.exp(2j * theta) + 0.3 * np.exp(-1j * theta)
     ring = np.stack([z.real, z.imag, np.zeros(6)], axis=1)

@@ -87,10 +87,18 @@ def exact_value(expr: sp.Expr, uu: Fraction, vv: Fraction) -> float:
 
 
 SYMPY_UV = [
-    (Fraction(0), Fraction(0)), (Fraction(1), Fraction(0)), (Fraction(1), Fraction(1)), (Fraction(0), Fraction(1)),
-    (Fraction(1, 3), Fraction(0)), (Fraction(1), Fraction(2, 5)), (Fraction(3, 7), Fraction(1)), (Fraction(0), Fraction(5, 6)),
-    (Fraction(1, 5), Fraction(2, 7)), (Fraction(5, 8), Fraction(3, 4)), (Fraction(9, 10), Fraction(1, 9)),
-]  # fmt: skip
+    (Fraction(0), Fraction(0)),
+    (Fraction(1), Fraction(0)),
+    (Fraction(1), Fraction(1)),
+    (Fraction(0), Fraction(1)),
+    (Fraction(1, 3), Fraction(0)),
+    (Fraction(1), Fraction(2, 5)),
+    (Fraction(3, 7), Fraction(1)),
+    (Fraction(0), Fraction(5, 6)),
+    (Fraction(1, 5), Fraction(2, 7)),
+    (Fraction(5, 8), Fraction(3, 4)),
+    (Fraction(9, 10), Fraction(1, 9)),
+]
 
 
 @pytest.mark.parametrize("du, dv", [(0, 0), (1, 0), (0, 1)])
@@ -112,7 +120,8 @@ def test_matches_the_sympy_derivation(du: int, dv: int) -> None:
 
 # ------------------------------------------------------------------------------ structure
 def test_equal_pairs_give_the_bicubic_bezier_patch() -> None:
-    """With Fn = Fp every blend is that point: the patch is the Bézier net of to_bezier_control()."""
+    """With Fn = Fp every blend is that point: the patch is the Bézier net of
+    to_bezier_control()."""
     points = random_points(1)
     points[:, 13::2] = points[:, 12::2]
     gregory = GregoryPatchSet(points)
@@ -126,10 +135,17 @@ def test_equal_pairs_give_the_bicubic_bezier_patch() -> None:
 
 
 def test_layout_is_rotation_symmetric() -> None:
-    """Relabelling corner k as k − 1 is the patch with the parameters turned: Q(u, v) = P(1 − v, u)."""
+    """Relabelling corner k as k − 1 is the patch with the parameters turned: Q(u, v) = P(1 − v,
+    u)."""
     points = random_points(3)
-    rolled = np.concatenate([np.roll(points[:, :4], -1, axis=1), np.roll(points[:, 4:12], -2, axis=1),
-                             np.roll(points[:, 12:], -2, axis=1)], axis=1)  # fmt: skip
+    rolled = np.concatenate(
+        [
+            np.roll(points[:, :4], -1, axis=1),
+            np.roll(points[:, 4:12], -2, axis=1),
+            np.roll(points[:, 12:], -2, axis=1),
+        ],
+        axis=1,
+    )
     P, Q = GregoryPatchSet(points), GregoryPatchSet(rolled)
     uv = scattered(4)
     turned = np.stack([1.0 - uv[:, 1], uv[:, 0]], axis=1)
@@ -146,7 +162,8 @@ def test_layout_is_rotation_symmetric() -> None:
 @pytest.mark.parametrize("edge", range(4))
 def test_an_edge_sees_only_its_own_interior_points(edge: int) -> None:
     """Position and both first derivatives on edge k do not depend on the interior points of the
-    other edges: on edge k only Fn_k and Fp_{k+1} act (their blend weights there are exactly 0/1)."""
+    other edges: on edge k only Fn_k and Fp_{k+1} act (their blend weights there are exactly
+    0/1)."""
     points = random_points(5)
     own = {12 + 2 * edge, 13 + 2 * ((edge + 1) % 4)}
     others = [m for m in range(12, 20) if m not in own]
@@ -161,7 +178,8 @@ def test_an_edge_sees_only_its_own_interior_points(edge: int) -> None:
 
 
 def test_cross_derivative_on_an_edge_is_the_bezier_row() -> None:
-    """On v = 0: ∂p/∂v = 3 Σ B_i(t) (g_i − b_i) with rows b = (P0, E+0, E-1, P1), g = (E-0, Fn0, Fp1, E+1)."""
+    """On v = 0: ∂p/∂v = 3 Σ B_i(t) (g_i − b_i) with rows b = (P0, E+0, E-1, P1), g = (E-0, Fn0,
+    Fp1, E+1)."""
     points = random_points(6)
     t = np.linspace(0.0, 1.0, 9)
     bernstein = np.stack([(1 - t) ** 3, 3 * t * (1 - t) ** 2, 3 * t**2 * (1 - t), t**3], axis=1)
@@ -172,7 +190,8 @@ def test_cross_derivative_on_an_edge_is_the_bezier_row() -> None:
 
 
 def test_corner_values_and_derivatives_are_exact_limits() -> None:
-    """At the corners the blends are 0/0; the result is the limit: p = P_k, p_u, p_v from the edge points."""
+    """At the corners the blends are 0/0; the result is the limit: p = P_k, p_u, p_v from the edge
+    points."""
     points = random_points(8)
     patches = GregoryPatchSet(points)
     np.testing.assert_array_equal(patches.corners(), points[:, :4])
@@ -209,7 +228,8 @@ def test_no_nan_next_to_the_corners(tiny: float) -> None:
     st.floats(0.02, 0.98),
 )
 def test_derivatives_match_central_differences(seed: int, uu: float, vv: float) -> None:
-    """Central differences with h = 1e-6: truncation h² |p'''| ≲ 1e-9 here, rounding eps |p|/h ≈ 1e-10."""
+    """Central differences with h = 1e-6: truncation h² |p'''| ≲ 1e-9 here, rounding eps |p|/h ≈
+    1e-10."""
     patches = GregoryPatchSet(random_points(seed, 2))
     h = 1e-6
     uv = np.array([[uu, vv]])
@@ -229,7 +249,8 @@ unit_parameter = st.one_of(st.sampled_from([0.0, 1.0]), st.floats(0.0, 1.0))
     st.lists(st.tuples(unit_parameter, unit_parameter), min_size=1, max_size=6),
 )
 def test_affine_invariance(seed: int, params: list[tuple[float, float]]) -> None:
-    """Weights sum to 1 (positions) and to 0 (derivatives): p(A x + c) = A p(x) + c, p_u(A x + c) = A p_u(x)."""
+    """Weights sum to 1 (positions) and to 0 (derivatives): p(A x + c) = A p(x) + c, p_u(A x + c) =
+    A p_u(x)."""
     rng = np.random.default_rng(seed)
     points = rng.normal(size=(2, 20, 3))
     matrix, shift = rng.normal(size=(3, 3)), rng.normal(size=3)

@@ -12,9 +12,9 @@ Tolerances are ULP-scaled forward-error bounds, per entry:
   cross product of the evaluated p_u, p_v. Either way a term of component d meets at most
   4 (u-contraction) + 3 (product, difference) + 1 (basis product) + 16 (sum over j, k) = 24
   roundings, and expands to the same terms, so |c_kernel − c_ref| ≤ 2 γ_24 |S| ≤ 48 eps |S| with
-  S_d = |p_u|_i |p_v|_k + |p_u|_k |p_v|_i in absolute-value evaluations |p_u| = Σ |dwu_i| |P_ij| |wv_j|
-  (and likewise |p_v|). Normalising turns an absolute error δ of c into ≤ 2 δ / |c| in direction,
-  plus ≤ 4 eps for the two normalisations: tolerance 96 eps |S| / |c| + 4 eps.
+  S_d = |p_u|_i |p_v|_k + |p_u|_k |p_v|_i in absolute-value evaluations |p_u| = Σ |dwu_i| |P_ij|
+  |wv_j| (and likewise |p_v|). Normalising turns an absolute error δ of c into ≤ 2 δ / |c| in
+  direction, plus ≤ 4 eps for the two normalisations: tolerance 96 eps |S| / |c| + 4 eps.
 
 The compiled kernels (``compiled=True``) compute the same 16-term sums, u first, then v (each term
 ≤ 8 roundings, as above), and c as the cross product of the evaluated tangents (≤ 8 + 2 roundings
@@ -57,7 +57,8 @@ def reference_unit(vectors):
 
 
 def make_control(n, seed=0):
-    """Random nets at different scales (10^-3 .. 10^3), so that the tolerances are tested as relative."""
+    """Random nets at different scales (10^-3 .. 10^3), so that the tolerances are tested as
+    relative."""
     rng = np.random.default_rng(seed)
     scale = 10.0 ** rng.integers(-3, 4, size=(n, 1, 1, 1))
     return rng.uniform(-1.0, 1.0, size=(n, 4, 4, 3)) * scale
@@ -133,7 +134,8 @@ def test_single_patch_and_wide_grids(block_points, form, compiled):
 
 @COMPILED
 def test_large_grid_uses_row_blocks_and_matches(compiled):
-    """One patch on a 200 × 150 grid: more points than a block, so the rows are split inside the patch."""
+    """One patch on a 200 × 150 grid: more points than a block, so the rows are split inside the
+    patch."""
     assert 200 * 150 > _grid.BLOCK_POINTS
     control = make_control(2, seed=9)
     u, v = np.linspace(0.0, 1.0, 200), np.linspace(0.0, 1.0, 150)
@@ -214,10 +216,11 @@ def test_positions_and_normals_equal_the_separate_kernels(block_points, form, co
 @pytest.mark.parametrize("block_points", BLOCKS, indirect=True)
 @pytest.mark.parametrize("form", ["bezier", "hermite"])
 def test_collapsed_edge_gives_zero_normals_not_nan(block_points, form, compiled):
-    """u = 0 edge collapsed to the origin: p_v(0, v) = 0 exactly, so the normal there is exactly zero.
+    """u = 0 edge collapsed to the origin: p_v(0, v) = 0 exactly, so the normal there is exactly
+    zero.
 
-    In Bézier form the edge is the control row i = 0; in Hermite form it is the rows i = 0 (positions and
-    v-derivatives along u = 0), so zeroing them collapses the edge exactly in both.
+    In Bézier form the edge is the control row i = 0; in Hermite form it is the rows i = 0
+    (positions and v-derivatives along u = 0), so zeroing them collapses the edge exactly in both.
     """
     control = make_control(5, seed=13)
     control[:, 0] = 0.0
@@ -239,7 +242,8 @@ def test_collapsed_edge_gives_zero_normals_not_nan(block_points, form, compiled)
 
 @COMPILED
 def test_point_patch_away_from_origin_is_finite(compiled):
-    """Collapsed to a point that is not the origin, p_u and p_v are rounding noise: finite, never NaN."""
+    """Collapsed to a point that is not the origin, p_u and p_v are rounding noise: finite, never
+    NaN."""
     control = np.broadcast_to(np.array([0.3, -1.7, 2.9]), (2, 4, 4, 3)).copy()
     for form in FORMS:
         _, normals = _grid.positions_and_normals(
@@ -260,9 +264,9 @@ def test_point_patch_away_from_origin_is_finite(compiled):
     seed=st.integers(0, 2**32 - 1),
 )
 def test_compiled_kernels_match_the_numpy_reference(count, gu, gv, form, seed):
-    """The compiled kernels against ``compiled=False`` within the ULP bounds of the module docstring:
-    16 eps · A for positions, 96 eps |S| / |c| + 4 eps for unit normals (any sizes: odd row lengths
-    leave a scalar tail after the vectorised part of each row)."""
+    """The compiled kernels against ``compiled=False`` within the ULP bounds of the module
+    docstring: 16 eps · A for positions, 96 eps |S| / |c| + 4 eps for unit normals (any sizes: odd
+    row lengths leave a scalar tail after the vectorised part of each row)."""
     control = make_control(count, seed=seed % 1000)
     u, v = parameters(max(gu, 2), seed % 997)[:gu], parameters(max(gv, 2), seed % 991)[:gv]
     positions, normals = _grid.positions_and_normals(control, form, u, v, compiled=True)

@@ -57,13 +57,15 @@ def cube(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def torus(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """20 000 patches: the default export makes ~2 M triangles and takes a few seconds to write as OBJ."""
+    """20 000 patches: the default export makes ~2 M triangles and takes a few seconds to write as
+    OBJ."""
     path = tmp_path_factory.mktemp("torus") / "torus.npz"
     save_network(path, build_corner_network(shapes.large_torus(20_000)))
     return path
 
 
-# --------------------------------------------------------------------------- files like a Unix tool's
+# --------------------------------------------------------------------------- files like a Unix
+# tool's
 @pytest.mark.parametrize("umask", [0o022, 0o077])
 def test_outputs_get_the_mode_the_umask_gives(tmp_path: Path, cube: Path, umask: int) -> None:
     mesh = tmp_path / "cube.obj"
@@ -106,7 +108,8 @@ def test_a_signal_during_export_leaves_no_file(
     tmp_path: Path, torus: Path, signum: int, code: int, words: str
 ) -> None:
     output = tmp_path / "out.obj"
-    # a job started in the background by a shell inherits SIGINT ignored, and Python then keeps it so:
+    # a job started in the background by a shell inherits SIGINT ignored, and Python then keeps it
+    # so:
     # give the child the default disposition, as a terminal's foreground job has
     process = subprocess.Popen(
         [sys.executable, "-m", "g1patch.cli", "export", str(torus), "-o", str(output)],
@@ -350,7 +353,8 @@ def test_deviation_without_a_report_measures_the_edges_as_check_does() -> None:
 
 # --------------------------------------------------------------------------- check memory
 def traced_check_peak(valence: int) -> tuple[float, float]:
-    """The tracemalloc peak (bytes) and seconds of check on the corner network of a fan of ``valence``."""
+    """The tracemalloc peak (bytes) and seconds of check on the corner network of a fan of
+    ``valence``."""
     from g1patch.continuity import check
 
     mesh = shapes.fan(valence)
@@ -380,7 +384,8 @@ def test_check_at_valence_10000_within_500_mb() -> None:
     _, seconds = traced_check_peak(1000)
     if seconds * 100 > 60 and not os.environ.get("G1PATCH_SLOW_TESTS"):
         pytest.skip(
-            f"would take ~{seconds * 100:.0f} s here (set G1PATCH_SLOW_TESTS=1, or run benchmarks/bench_bounds.py)"
+            f"would take ~{seconds * 100:.0f} s here (set G1PATCH_SLOW_TESTS=1, or run "
+            "benchmarks/bench_bounds.py)"
         )
     peak, _ = traced_check_peak(10_000)
     assert peak <= 500e6, f"{peak / 1e6:.0f} MB"

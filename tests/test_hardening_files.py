@@ -1,4 +1,5 @@
-"""Hardened network files (issue 12): a damaged, hostile or wrong file is one clear error, never a crash.
+"""Hardened network files (issue 12): a damaged, hostile or wrong file is one clear error, never a
+crash.
 
 Every case the issue measured is reproduced here, through the command line (``g1patch.cli.main``):
 exit 2, exactly one line on stderr naming the user's file, and the output directory left as it
@@ -78,7 +79,8 @@ def rewrite(
     compressed: bool = False,
     **arrays: object,
 ) -> Path:
-    """``source``'s members, some dropped or replaced, written by numpy (as a user's script would)."""
+    """``source``'s members, some dropped or replaced, written by numpy (as a user's script
+    would)."""
     members = {name: value for name, value in contents(source).items() if name not in drop}
     if version is not None:
         header = json.loads(str(members["header"]))
@@ -111,7 +113,8 @@ def refused(
     *,
     contains: str = "",
 ) -> str:
-    """Run the CLI; assert exit 2, one line on stderr naming ``path``, ``out`` untouched. Returns the line."""
+    """Run the CLI; assert exit 2, one line on stderr naming ``path``, ``out`` untouched. Returns
+    the line."""
     before = sorted(out.iterdir())
     code = main(args)
     captured = capsys.readouterr()
@@ -359,7 +362,8 @@ def _patch_central_size(path: Path, member: str, size: int) -> None:
 
 
 def _bomb(good: Path, target: Path, *, member: str = "vertices", rows: int = 2**22) -> Path:
-    """``good`` with ``member`` replaced by ``rows`` × 3 float64 zeros, deflated: 100 MB in a ~100 kB file."""
+    """``good`` with ``member`` replaced by ``rows`` × 3 float64 zeros, deflated: 100 MB in a ~100
+    kB file."""
     with (
         zipfile.ZipFile(good) as source,
         zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as bomb,
@@ -385,7 +389,8 @@ def test_a_zip_bomb_is_refused_before_it_expands(
     tracemalloc.start()
     with pytest.raises(
         FormatError,
-        match=r"member 'vertices\.npy' declares 100\.7 MB \(100663424 bytes\) uncompressed, more than "
+        match=r"member 'vertices\.npy' declares 100\.7 MB \(100663424 bytes\) uncompressed, more "
+        r"than "
         r"the 31\.5 kB \(31520 bytes\) it can take in a network of at most 224 patches",
     ):
         load_network(bomb)
@@ -399,12 +404,14 @@ def test_a_zip_bomb_is_refused_before_it_expands(
 
 
 def test_a_member_claiming_4_gb_in_the_zip_directory(gregory_file: Path, tmp_path: Path) -> None:
-    """The issue's bomb: the directory declares ~4 GB for one member; refused from the directory alone."""
+    """The issue's bomb: the directory declares ~4 GB for one member; refused from the directory
+    alone."""
     bad = rewrite(gregory_file, tmp_path / "claims.npz")
     _patch_central_size(bad, "vertices.npy", 0xFFFFFFFE)
     with pytest.raises(
         FormatError,
-        match=r"member 'vertices\.npy' declares 4\.3 GB \(4294967294 bytes\) uncompressed, more than "
+        match=r"member 'vertices\.npy' declares 4\.3 GB \(4294967294 bytes\) uncompressed, more "
+        r"than "
         r"the .* it can take in a network of at most \d+ patches",
     ):
         load_network(bad)
@@ -434,7 +441,8 @@ def test_a_member_above_the_absolute_cap(gregory_file: Path, tmp_path: Path) -> 
 
 
 def test_a_npy_header_larger_than_its_member(gregory_file: Path, tmp_path: Path) -> None:
-    """A ``.npy`` header claiming a billion rows in a member of a few bytes: refused, nothing allocated."""
+    """A ``.npy`` header claiming a billion rows in a member of a few bytes: refused, nothing
+    allocated."""
     bad = rewrite(gregory_file, tmp_path / "liar.npz")
     with zipfile.ZipFile(gregory_file) as source, zipfile.ZipFile(bad, "w") as target:
         for info in source.infolist():
@@ -718,7 +726,8 @@ def test_save_refuses_what_load_would_refuse(tmp_path: Path) -> None:
     huge = dataclasses.replace(network, patches=GregoryPatchSet(network.patches.points * 1e200))  # type: ignore[attr-defined]
     with pytest.raises(
         FormatError,
-        match=r"n\.npz: cannot store this network: member 'points\.npy': value .* exceeds the bound",
+        match=r"n\.npz: cannot store this network: member 'points\.npy': value .* exceeds the "
+        r"bound",
     ):
         save_network(tmp_path / "n.npz", huge)
     assert list(tmp_path.iterdir()) == []
@@ -769,7 +778,8 @@ def test_nothing_reaches_opencascade_unchecked(
 def test_a_sewn_away_face_is_an_error_not_a_crash(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """With the size check off, the collapsed patch reaches OCC: its dropped face is caught after sewing."""
+    """With the size check off, the collapsed patch reaches OCC: its dropped face is caught after
+    sewing."""
     from g1patch.io import cad
 
     monkeypatch.setattr(cad, "_check_fit", lambda *args: None)
@@ -870,7 +880,8 @@ def test_random_damage_is_always_a_format_error(compressed: bool, tmp_path: Path
 @pytest.mark.parametrize("at", [0, 1 << 17, (1 << 17) + 5, 3 * (1 << 17) - 1])
 @pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf, -1e31])
 def test_the_bound_check_sees_every_chunk(at: int, value: float) -> None:
-    """The coordinate check runs in chunks: a bad value in any of them, first or last element, is found."""
+    """The coordinate check runs in chunks: a bad value in any of them, first or last element, is
+    found."""
     from g1patch.io.network_file import _Checker, _extremes
 
     array = np.zeros(3 * (1 << 17))

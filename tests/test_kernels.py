@@ -1,4 +1,5 @@
-"""Kernels run in ranges side by side (g1patch.kernels.in_chunks) give the one-range result, bit for bit."""
+"""Kernels run in ranges side by side (g1patch.kernels.in_chunks) give the one-range result, bit for
+bit."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""The numba kernels of the default build against the NumPy code they replace (kept as the reference).
+"""The numba kernels of the default build against the NumPy code they replace (kept as the
+reference).
 
 Each kernel does the same arithmetic in the same order one vertex, slot, face or edge at a time,
 so the two agree to rounding: ≤ 1e-12 relative to each array's largest entry (measured: equal,
@@ -75,8 +76,8 @@ def test_assembly_of_a_random_fan_takes_the_kh_fit() -> None:
 
 
 def test_targets_kernels(mesh: QuadMesh) -> None:
-    """Projected tangents, their turn along smooth mesh lines, fan validity (on the raw fans, valid or not), interior targets with and
-    without the shape operator, and the coarse-face turn."""
+    """Projected tangents, their turn along smooth mesh lines, fan validity (on the raw fans, valid
+    or not), interior targets with and without the shape operator, and the coarse-face turn."""
     from g1patch.kernels import jit_kernel
     from g1patch.targets import interpolate
     from g1patch.targets.frames import vertex_frames

@@ -1,4 +1,5 @@
-"""Catmull–Clark limit targets (g1patch.targets.limit): exact on B-spline regions, exactly G1 everywhere, close to OpenSubdiv."""
+"""Catmull–Clark limit targets (g1patch.targets.limit): exact on B-spline regions, exactly G1
+everywhere, close to OpenSubdiv."""
 
 from __future__ import annotations
 
@@ -91,7 +92,8 @@ def test_any_valence_gives_valid_exactly_g1_targets(valence: int) -> None:
 def test_reference_meshes_are_exactly_g1_and_close(
     shared_data, name: str, refinements: int
 ) -> None:
-    """Exactly G1, no folds, within the distance bound; unrefined, the p99 normal turn within 1.3 × the reference's."""
+    """Exactly G1, no folds, within the distance bound; unrefined, the p99 normal turn within 1.3 ×
+    the reference's."""
     mesh = refine(read_mesh(shared_data / f"{name}.obj"), refinements)
     reference = load_reference(shared_data / "reference" / f"{name}.limit.npz")
     network = gregory_network(mesh)
@@ -127,7 +129,8 @@ def test_kernels_give_the_numpy_targets_bit_for_bit(shared_data, monkeypatch) ->
     """Above the kernels' size threshold (subdivision.KERNEL_VERTICES) the stencils, the plane
     projection of the stars, the chords and the B-spline interior points run as numba kernels in the
     NumPy code's order of operations: every target is the same float. Shared meshes (creases, darts,
-    corners, boundaries, semi-sharp), a noisy cage whose fit moves many slots, a fan of valence 7."""
+    corners, boundaries, semi-sharp), a noisy cage whose fit moves many slots, a fan of valence
+    7."""
     from g1patch import shapes, subdivision
 
     tagged = read_mesh(shared_data / "catmark_torus_creases0.obj")

@@ -1,4 +1,5 @@
-"""Interpolating Catmull–Clark targets (g1patch.targets.limit_interpolate): through the vertices, exactly G1, fair."""
+"""Interpolating Catmull–Clark targets (g1patch.targets.limit_interpolate): through the vertices,
+exactly G1, fair."""
 
 from __future__ import annotations
 
@@ -27,9 +28,11 @@ SHARED = (
 #: on the one-ring disks the surface through the vertices is itself more curved than the limit of
 #: the mesh as a cage: the exact Catmull–Clark limit of the interpolating cage has 1.91 × (interior)
 #: and 1.98 × (boundary) the reference's p99 normal turn; Gregory is within 1.1 × of that surface
-#: (Gregory: 1.02, 1.04), and against the original's limit to 1.1 × the exact ratio (Gregory: 1.94, 2.06)
+# : (Gregory: 1.02, 1.04), and against the original's limit to 1.1 × the exact ratio (Gregory: 1.94,
+# 2.06)
 INTERPOLATION_TURN = {"catmark_xord_interior": 1.91, "catmark_xord_boundary": 1.98}
-#: split4's p99 turn on the xord disks is its own (its "limit" shape: 1.71 and 2.07), not checked here
+# : split4's p99 turn on the xord disks is its own (its "limit" shape: 1.71 and 2.07), not checked
+# here
 FAIRNESS_BAR = 1.5
 GENERATED = {
     "cube": shapes.cube,
@@ -40,13 +43,15 @@ GENERATED = {
 
 
 def own_reference(mesh: QuadMesh, levels: int = 4) -> Reference:
-    """The Catmull–Clark limit of ``mesh`` as a reference: refined ``levels`` times, projected to the limit."""
+    """The Catmull–Clark limit of ``mesh`` as a reference: refined ``levels`` times, projected to
+    the limit."""
     fine = refine(mesh, levels)
     return Reference(limit_points(fine), fine.faces, levels, Path("generated"))
 
 
 def check_network(mesh: QuadMesh, method: str, reference: Reference) -> float:
-    """Build, assert vertices interpolated to 1e-10 of the diagonal, exactly G1 and no folds; the p99 turn ratio."""
+    """Build, assert vertices interpolated to 1e-10 of the diagonal, exactly G1 and no folds; the
+    p99 turn ratio."""
     network = build_network(mesh, method, "limit-interpolate")  # type: ignore[arg-type]
     report = continuity.check(network)
     assert report.max_vertex_deviation is not None and report.max_vertex_deviation <= 1e-10
@@ -77,7 +82,8 @@ def boundary_grid(mode: int) -> QuadMesh:
     ids=["cube", "torus", "sphere", "genus2", "fan7", "grid-edge-only", "grid-edge-and-corner"],
 )
 def test_limit_matrix_is_limit_points(mesh: QuadMesh) -> None:
-    """``L x = limit_points`` for any positions on the topology (boundary modes, corners, a crease)."""
+    """``L x = limit_points`` for any positions on the topology (boundary modes, corners, a
+    crease)."""
     rng = np.random.default_rng(0)
     moved = mesh.with_vertices(
         mesh.vertices + 0.05 * mesh.bounding_box_diagonal * rng.standard_normal(mesh.vertices.shape)
@@ -128,8 +134,8 @@ def test_jittered_cube_has_no_interpolating_cage() -> None:
 @pytest.mark.parametrize("method", ["gregory", "split4"])
 @pytest.mark.parametrize("name", SHARED)
 def test_shared_meshes(shared_data: Path, name: str, method: str) -> None:
-    """Through the vertices, exactly G1, no folds; p99 turn ≤ 1.5 × the original's Catmull–Clark limit
-    (on the xord disks: against the interpolating cage's own limit, module constants)."""
+    """Through the vertices, exactly G1, no folds; p99 turn ≤ 1.5 × the original's Catmull–Clark
+    limit (on the xord disks: against the interpolating cage's own limit, module constants)."""
     obj = shared_data / f"{name}.obj"
     mesh = read_mesh(obj)
     ratio = check_network(mesh, method, load_reference(reference_path(obj)))

@@ -47,9 +47,13 @@ NEEDS_MALLINFO2 = pytest.mark.skipif(
 
 
 def _in_child(code: str, environment: dict[str, str] | None = None) -> str:
-    """``code``'s standard output in a fresh interpreter (its allocator untouched by earlier tests), with
-    this folder importable and ``environment`` added."""
-    prologue = f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); import numpy as np; from test_memory import _mapped_blocks; "
+    """``code``'s standard output in a fresh interpreter (its allocator untouched by earlier tests),
+    with this folder importable and ``environment`` added."""
+    here = str(Path(__file__).parent)
+    prologue = (
+        f"import sys; sys.path.insert(0, {here!r}); import numpy as np; "
+        "from test_memory import _mapped_blocks; "
+    )
     return subprocess.run(
         [sys.executable, "-c", prologue + code],
         capture_output=True,
@@ -63,8 +67,10 @@ def _in_child(code: str, environment: dict[str, str] | None = None) -> str:
 def test_kept_memory_serves_large_arrays_from_the_heap_and_defaults_map_them() -> None:
     code = (
         "from g1patch import memory; before = _mapped_blocks(); assert memory.keep_freed_memory(); "
-        "kept = np.ones(2**23); print(_mapped_blocks() - before); assert memory.keep_freed_memory(False); "
-        "mapped = np.ones(2**24); print(_mapped_blocks() - before)"  # 64 and 128 MiB: above every mmap threshold
+        "kept = np.ones(2**23); print(_mapped_blocks() - before); assert "
+        "memory.keep_freed_memory(False); "
+        # 64 and 128 MiB: above every mmap threshold
+        "mapped = np.ones(2**24); print(_mapped_blocks() - before)"
     )
     assert _in_child(code).split() == ["0", "1"]
 
@@ -98,7 +104,9 @@ def test_tuning_leaves_numpys_huge_page_advice_as_numpy_sets_it() -> None:
     """The command line's settings keep 2 MiB pages for large arrays (5–10× faster first touch on
     the development VM, DESIGN §6); ``without_huge_page_advice`` still turns them off."""
     code = _ADVICE + (
-        "default = advise(True); advise(default); from g1patch import memory; memory.tune_for_large_arrays(); "
-        "print(advise(default) == default); memory.without_huge_page_advice(); print(advise(default))"
+        "default = advise(True); advise(default); from g1patch import memory; "
+        "memory.tune_for_large_arrays(); "
+        "print(advise(default) == default); memory.without_huge_page_advice(); "
+        "print(advise(default))"
     )
     assert _in_child(code).split() == ["True", "False"]

@@ -1,4 +1,5 @@
-"""QuadTopology / QuadMesh: half-edge invariants, counter-clockwise rings, validation errors, splitting."""
+"""QuadTopology / QuadMesh: half-edge invariants, counter-clockwise rings, validation errors,
+splitting."""
 
 from __future__ import annotations
 
@@ -155,7 +156,8 @@ def test_invariants_on_shared_meshes(shared_data) -> None:
     ids=["grid", "fan5x2", "fan12", "boundary_fan4"],
 )
 def test_rings_are_counter_clockwise_in_the_plane(mesh: QuadMesh) -> None:
-    """Planar meshes facing +z: neighbour angles about a vertex increase, by one full turn inside, less outside."""
+    """Planar meshes facing +z: neighbour angles about a vertex increase, by one full turn inside,
+    less outside."""
     t = mesh.topology
     for v in range(t.n_vertices):
         offsets = mesh.vertices[t.one_ring(v)] - mesh.vertices[v]
@@ -480,7 +482,8 @@ def test_relabelling_gives_an_isomorphic_topology(mesh: QuadMesh, seed: int) -> 
 @settings(max_examples=40, deadline=None)
 @given(mesh=small_meshes)
 def test_subdivision_counts(mesh: QuadMesh) -> None:
-    """One Catmull–Clark topology step: V' = V + E + F, E' = 2E + 4F, F' = 4F, χ and valences kept."""
+    """One Catmull–Clark topology step: V' = V + E + F, E' = 2E + 4F, F' = 4F, χ and valences
+    kept."""
     t = mesh.topology
     r = shapes.subdivide(mesh).topology
     assert (r.n_vertices, r.n_edges, r.n_faces) == (

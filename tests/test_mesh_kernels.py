@@ -1,4 +1,5 @@
-"""The compiled connectivity and face-area kernels of :mod:`g1patch.mesh` against their NumPy references.
+"""The compiled connectivity and face-area kernels of :mod:`g1patch.mesh` against their NumPy
+references.
 
 ``_connect(..., compiled=True)`` must return every array of the reference (``compiled=False``,
 the half-edge pairing by one argsort) bit for bit, on quads and on polygons, closed and open, and
@@ -150,7 +151,8 @@ def test_face_area_kernel_gives_the_reference_verdict(scale: float) -> None:
 
 
 def test_from_arrays_of_a_large_mesh_is_the_reference(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The whole QuadMesh through the kernels and through the NumPy code: every topology array equal."""
+    """The whole QuadMesh through the kernels and through the NumPy code: every topology array
+    equal."""
     mesh = shapes.large_torus(30_000)
     assert (
         mesh.n_faces >= meshmodule.KERNEL_FACES and 4 * mesh.n_faces >= meshmodule.KERNEL_HALFEDGES

@@ -1,4 +1,5 @@
-"""Mesh files: the shared meshes' statistics, OBJ/PLY/OFF details, the malformed corpus, atomic writes."""
+"""Mesh files: the shared meshes' statistics, OBJ/PLY/OFF details, the malformed corpus, atomic
+writes."""
 
 from __future__ import annotations
 
@@ -253,7 +254,8 @@ def test_obj_with_polygons_is_refined_once(tmp_path: Path, caplog) -> None:
     with caplog.at_level(logging.INFO, logger="g1patch"):
         mesh = read_mesh(path)
     assert [r.getMessage() for r in caplog.records] == [
-        f"{path}: 2 of 3 faces are not quads; refined the whole mesh once (every n-gon into n quads, new points on a smooth surface through the vertices)"
+        f"{path}: 2 of 3 faces are not quads; refined the whole mesh once (every n-gon into n "
+        "quads, new points on a smooth surface through the vertices)"
     ]
     assert (mesh.n_faces, mesh.n_vertices) == (12, 8 + 10 + 3)
     with pytest.raises(MeshError, match=r"mixed\.obj: 2 faces are not quads .* \(--no-split\)"):
@@ -309,8 +311,10 @@ def test_ply_binary_round_trip(tmp_path: Path) -> None:
 def test_ply_ascii_with_mixed_faces_keeps_their_order(tmp_path: Path) -> None:
     path = tmp_path / "mixed.ply"
     header = (
-        "ply\nformat ascii 1.0\ncomment two quads and a triangle\nelement vertex 7\nproperty float x\n"
-        "property float y\nproperty float z\nelement face 3\nproperty list uchar int vertex_indices\nend_header\n"
+        "ply\nformat ascii 1.0\ncomment two quads and a triangle\nelement vertex 7\nproperty "
+        "float x\n"
+        "property float y\nproperty float z\nelement face 3\nproperty list uchar int "
+        "vertex_indices\nend_header\n"
     )
     body = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n2 1 0\n1 -1 0\n4 0 1 2 3\n3 0 6 1\n4 1 4 5 2\n"
     path.write_text(header + body)

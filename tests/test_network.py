@@ -12,7 +12,8 @@ from g1patch.patches import PatchSet
 
 
 def _first_sides(network: PatchNetwork) -> list[tuple[int, int]]:
-    """Each shared edge's side (patch, edge) that comes first, (patch, edge) < its neighbour's, by a loop."""
+    """Each shared edge's side (patch, edge) that comes first, (patch, edge) < its neighbour's, by a
+    loop."""
     return [
         (p, e)
         for p in range(network.n_patches)
@@ -23,7 +24,8 @@ def _first_sides(network: PatchNetwork) -> list[tuple[int, int]]:
 
 
 def _self_adjacent() -> PatchNetwork:
-    """Patch 0's edges 1 and 3 glued to each other (a one-patch cylinder), its edge 2 to patch 1's edge 0."""
+    """Patch 0's edges 1 and 3 glued to each other (a one-patch cylinder), its edge 2 to patch 1's
+    edge 0."""
     neighbor = np.array([[-1, 0, 1, 0], [0, -1, -1, -1]])
     neighbor_edge = np.array([[-1, 3, 0, 1], [2, -1, -1, -1]])
     four = np.zeros((2, 4), dtype=bool)

@@ -131,7 +131,8 @@ def test_kernel_declines_what_float_refuses() -> None:
 
 
 def test_read_mesh_of_a_large_obj_is_the_reference(tmp_path: Path) -> None:
-    """A file beyond KERNEL_BYTES: read_mesh takes the kernel and gives the written mesh bit for bit."""
+    """A file beyond KERNEL_BYTES: read_mesh takes the kernel and gives the written mesh bit for
+    bit."""
     mesh = shapes.large_torus(40_000)
     path = tmp_path / "torus.obj"
     write_quads(path, mesh.vertices, mesh.faces)
@@ -178,7 +179,8 @@ def test_large_malformed_obj_keeps_the_line_numbered_message(
 )
 def test_floats_kernel_is_numbers(tokens: list[str], separator: str) -> None:
     """``_floats_compiled`` returns what the NumPy ``_numbers`` returns where that accepts the text
-    (the same bits), and declines the same texts, but for the numbers np.fromstring cannot be trusted with."""
+    (the same bits), and declines the same texts, but for the numbers np.fromstring cannot be
+    trusted with."""
     text = separator.join(tokens).encode() + b"\n"
     compiled = meshfile._floats_compiled(text, len(tokens))
     numpy = meshfile._numbers(text, b"", len(tokens), np.float64)
@@ -193,7 +195,8 @@ def test_floats_kernel_is_numbers(tokens: list[str], separator: str) -> None:
 
 
 def test_large_off_and_ascii_ply_are_the_references(tmp_path: Path) -> None:
-    """Past KERNEL_BYTES, OFF and ASCII PLY coordinates go through the kernel: the reference's mesh bit for bit."""
+    """Past KERNEL_BYTES, OFF and ASCII PLY coordinates go through the kernel: the reference's mesh
+    bit for bit."""
     mesh = shapes.large_torus(40_000)
     off = tmp_path / "torus.off"
     off.write_text(

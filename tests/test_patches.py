@@ -36,10 +36,12 @@ FORMS = ("hermite", "bezier", "bspline")
 UNDERFLOW = 1e-300
 
 # Evaluation error budget, in eps · S:
-#   each basis value by Horner: γ_6 B = 3 eps B, + rounding of the parameter ≤ |t b'(t)| u ≤ 1.5 eps B,
+#   each basis value by Horner: γ_6 B = 3 eps B, + rounding of the parameter ≤ |t b'(t)| u ≤ 1.5 eps
+# B,
 #   + rounded 1/6 coefficients ≤ 0.5 eps B  →  5 eps per direction, 10 eps for b_i(u) b_j(v);
 #   rounding of the rational control values 0.5 eps; the 16-term contraction (two 4-term stages
-#   or one 16-term sum, with the products) ≤ γ_5 + γ_5 ≈ 5 eps; the reference's final rounding 0.5 eps.
+#   or one 16-term sum, with the products) ≤ γ_5 + γ_5 ≈ 5 eps; the reference's final rounding 0.5
+# eps.
 #   Total ≈ 16 eps. Asserted: 1e-14 ≈ 45 eps.
 EVAL_REL = 1e-14
 
@@ -102,8 +104,8 @@ def reference(request):
 
 
 def assert_close_to_exact(got, exact, scale, rel=EVAL_REL):
-    """|got − exact| ≤ rel·S per component; and the plain norm-wise relative error ≤ rel wherever the
-    exact value is not the result of heavy cancellation (|p| ≥ |S|/1000 — there ≤ 45 eps·S would
+    """|got − exact| ≤ rel·S per component; and the plain norm-wise relative error ≤ rel wherever
+    the exact value is not the result of heavy cancellation (|p| ≥ |S|/1000 — there ≤ 45 eps·S would
     allow up to 1000× more than 1e-14 of |p|, so the S-based bound is the meaningful one)."""
     err = np.abs(got - exact)
     assert np.all(err <= rel * scale + UNDERFLOW), (
@@ -263,8 +265,9 @@ def exact_unit_normals(reference, uv_per_patch):
 
 def normal_tolerance(reference, uv):
     """|n̂ − n| ≤ 2|δc|/|c| + 3 eps with c = p_u × p_v and
-    |δc| ≤ e_u |p_v| + |p_u| e_v + e_u e_v + 2γ_2 |p_u||p_v|  (e_* = EVAL_REL·|S_*|, the derivative bounds);
-    the final normalisation (norm, divide) adds ≤ 2 eps and the reference's rounding 0.5 eps."""
+    |δc| ≤ e_u |p_v| + |p_u| e_v + e_u e_v + 2γ_2 |p_u||p_v|  (e_* = EVAL_REL·|S_*|, the derivative
+    bounds); the final normalisation (norm, divide) adds ≤ 2 eps and the reference's rounding 0.5
+    eps."""
     patches = PatchSet(reference.control, reference.form)
     p_u, p_v = patches.tangents(uv)
     e_u = np.linalg.norm(
@@ -345,8 +348,8 @@ def test_hermite_layout_is_the_papers_eq_4():
 
 # -------------------------------------------------------------------- conversions
 def conversion_scale(source, target, control, uv):
-    """Bound on the magnitude of the sums for P' = C P C^T evaluated in ``target`` vs P in ``source``:
-    S = Σ_ij B^T_i(u) (|C| |P| |C|^T)_ij B^T_j(v) + Σ_ij B^S_i(u) |P_ij| B^S_j(v).
+    """Bound on the magnitude of the sums for P' = C P C^T evaluated in ``target`` vs P in
+    ``source``: S = Σ_ij B^T_i(u) (|C| |P| |C|^T)_ij B^T_j(v) + Σ_ij B^S_i(u) |P_ij| B^S_j(v).
     Converting is a 16-term sum of products with rounded C (≤ ~γ_9 |C||P||C|^T); evaluating each
     form errs by ≤ ~16 eps of its own S. |C||P||C|^T carries the conditioning of the conversion."""
     abs_c = np.abs(np.array(ref.conversion_matrix(source, target).tolist(), dtype=float))
@@ -427,7 +430,8 @@ def test_convert_same_form_is_identity_and_uses_exact_matrices(reference):
 
 @pytest.mark.parametrize("target", FORMS)
 def test_converted_rational_patches_match_sympy(reference, target):
-    """The converted patch is the same polynomial: compare with the exact source at rational (u, v)."""
+    """The converted patch is the same polynomial: compare with the exact source at rational (u,
+    v)."""
     converted = PatchSet(reference.control, reference.form).convert(target)
     uv = floats(UV)
     got = converted.evaluate(uv, 1, 1)
@@ -463,8 +467,10 @@ def test_boundary_curves_match_sympy_restrictions(reference):
                 for e in ref.restrict(reference.polys[n], uu, vv)
             ]
         ).T
-        # boundary control c_i = Σ_j b_j(end) P_ij (|b_j(end)| ≤ 1; ≤ 3 eps with the rounded 1/6, 4/6),
-        # then coefficient p = Σ_i c_i M[i, 3-p] (≤ γ_4 = 2 eps): ≤ 5 eps·colsum|M|·max_i Σ_j |P|, plus
+        # boundary control c_i = Σ_j b_j(end) P_ij (|b_j(end)| ≤ 1; ≤ 3 eps with the rounded 1/6,
+        # 4/6),
+        # then coefficient p = Σ_i c_i M[i, 3-p] (≤ γ_4 = 2 eps): ≤ 5 eps·colsum|M|·max_i Σ_j |P|,
+        # plus
         # the reference's rounding; asserted with 8 eps.
         abs_m = np.abs(np.array(ref.basis_matrix(reference.form).tolist(), dtype=float))
         net = np.abs(reference.control[n])
@@ -490,7 +496,8 @@ def test_boundary_curves_are_the_patch_restricted_to_its_edges(form):
     along = curves.evaluate(t)  # (4, 4 edges, 17, 3)
     for k, uv in on_patch.items():
         expected = patches.evaluate(uv)
-        # boundary control Σ_j b_j(end) P_ij (≤ 3 eps), curve evaluation (≤ 8 eps of Σ B_i |c_i|, and
+        # boundary control Σ_j b_j(end) P_ij (≤ 3 eps), curve evaluation (≤ 8 eps of Σ B_i |c_i|,
+        # and
         # Σ B_i |c_i| ≤ S since B_j(end) = |b_j(end)|), patch evaluation (≤ 16 eps S): ≤ 27 eps S.
         scale = ref.abs_patch_sum(form, patches.control, uv)
         assert np.all(np.abs(along[:, k] - expected) <= EVAL_REL * scale), k
@@ -555,7 +562,8 @@ def random_integer_hermite(seed, n=4, low=-20, high=21):
 
 
 def test_hermite_diagonals_are_exact_for_integer_data():
-    """Integer control: every float operation is exact, so the coefficients equal sympy's exactly."""
+    """Integer control: every float operation is exact, so the coefficients equal sympy's
+    exactly."""
     X = random_integer_hermite(12)
     D, E = PatchSet(X, "hermite").diagonal_polynomials()
     for n in range(len(X)):
@@ -644,7 +652,8 @@ def test_hs_patch_is_the_coons_patch_of_its_boundary(form):
     assert hs.form == form and hs.control.shape == patches.control.shape
     # Magnitudes along with_coons_twists: X → form (F0) → Hermite (N1) → twists (H) → form (F).
     # Each conversion errs by ≤ ~4 eps of its |C| N |C|^T, each twist sum by ≤ 4 eps of its 8 terms;
-    # propagated through the |C| these stay ≤ 16 eps of F, plus ≤ 16 eps·S_F to evaluate: ≤ 45 eps·S_F.
+    # propagated through the |C| these stay ≤ 16 eps of F, plus ≤ 16 eps·S_F to evaluate: ≤ 45
+    # eps·S_F.
     F0 = abs_convert("hermite", form, np.abs(X))
     F = abs_convert("hermite", form, abs_hs_net(abs_convert(form, "hermite", F0)))
     uv = floats(UV)
@@ -713,14 +722,16 @@ def test_closure_and_hs_degree_in_every_form(form):
     X = random_integer_hermite(18, n=5)
     patches = PatchSet(X, "hermite").convert(form)
     C = closure(X)
-    # closure() converts back to Hermite: entries err by ≤ 4 eps of N1 = |C_fh||C_hf||X|..., then the
+    # closure() converts back to Hermite: entries err by ≤ 4 eps of N1 = |C_fh||C_hf||X|..., then
+    # the
     # 12-term closure sum adds ≤ γ_12 = 6 eps of closure_abs: ≤ 10 eps·closure_abs(N1).
     N1 = abs_convert(form, "hermite", abs_convert("hermite", form, np.abs(X)))
     assert np.all(np.abs(patches.closure() - C) <= 12 * EPS * closure_abs(N1))
     D, E = patches.with_coons_twists().diagonal_polynomials()
     np.testing.assert_array_equal(polynomial_degree(D), 4)
     np.testing.assert_array_equal(polynomial_degree(E), 4)
-    # HS net in this form errs by ≤ 16 eps of F (see the Coons test), the power form and the diagonal
+    # HS net in this form errs by ≤ 16 eps of F (see the Coons test), the power form and the
+    # diagonal
     # sums by ≤ 16 eps of the diagonal scale: ≤ 32 eps·diagonal_scale(F).
     F = abs_convert("hermite", form, abs_hs_net(N1))
     assert np.all(np.abs(D[:, 4] - C) <= 32 * EPS * diagonal_scale(form, F))
@@ -810,12 +821,14 @@ def test_cube_example_with_irrational_scale_and_a_moved_tangent():
     assert np.linalg.norm(C[0]) > 0.5
     D, E = PatchSet(X, "hermite").with_coons_twists().diagonal_polynomials()
     assert polynomial_degree(D)[0] == 4 and polynomial_degree(E)[0] == 4
-    # twists (≤ 4 eps of the 8 terms) then power form and diagonal (≤ 16 eps): ≤ 32 eps·diagonal scale
+    # twists (≤ 4 eps of the 8 terms) then power form and diagonal (≤ 16 eps): ≤ 32 eps·diagonal
+    # scale
     bound = 32 * EPS * diagonal_scale("hermite", abs_hs_net(np.abs(X)))
     assert np.all(np.abs(D[0, 4] - C[0]) <= bound[0])
     # Move p_u(1,1) by −C: closure vanishes, both diagonals cubic again.
     X[0, 3, 1] -= C[0]
-    # new C = (old C − computed C) + rounding of the subtraction and of the new sum: ≤ 16 eps·closure_abs
+    # new C = (old C − computed C) + rounding of the subtraction and of the new sum: ≤ 16
+    # eps·closure_abs
     assert np.all(np.abs(closure(X)) <= 16 * EPS * closure_abs(np.abs(X)))
     D, E = PatchSet(X, "hermite").with_coons_twists().diagonal_polynomials()
     np.testing.assert_array_equal(polynomial_degree(D), 3)
@@ -866,7 +879,8 @@ def test_non_finite_control_is_named(value):
 
 
 def test_all_finite_tells_overflow_from_non_finite_entries():
-    """The fast test sums: finite entries that overflow the sum are still finite; one NaN or ±inf anywhere is not."""
+    """The fast test sums: finite entries that overflow the sum are still finite; one NaN or ±inf
+    anywhere is not."""
     from g1patch.errors import all_finite
 
     huge = np.full(1000, np.finfo(float).max)

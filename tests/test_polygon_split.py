@@ -1,4 +1,5 @@
-"""Splitting non-quad faces: new points on a smooth surface through the vertices (issue 9, build 4)."""
+"""Splitting non-quad faces: new points on a smooth surface through the vertices (issue 9, build
+4)."""
 
 from __future__ import annotations
 
@@ -65,7 +66,8 @@ def dodecahedron() -> tuple[NDArray[np.float64], Faces]:
 
 
 def icosidodecahedron() -> tuple[NDArray[np.float64], Faces]:
-    """20 triangles and 12 pentagons, vertices at the icosahedron's edge midpoints on the unit sphere."""
+    """20 triangles and 12 pentagons, vertices at the icosahedron's edge midpoints on the unit
+    sphere."""
     ico, triangles = icosahedron()
     tri = np.array(triangles)
     pairs = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
@@ -144,7 +146,8 @@ def test_face_point_is_the_coons_centre() -> None:
 
 
 def planar_patchwork() -> tuple[NDArray[np.float64], Faces]:
-    """An open planar mesh in z = 0: a row of three pentagons with a triangle below each, jittered in x, y."""
+    """An open planar mesh in z = 0: a row of three pentagons with a triangle below each, jittered
+    in x, y."""
     xs = np.arange(4, dtype=float)
     vertices = [(x, 0.0, 0.0) for x in xs] + [(x, 1.0, 0.0) for x in xs]  # 0..3 bottom, 4..7 top
     vertices += [(x + 0.5, 1.3, 0.0) for x in xs[:3]]  # 8..10 roof tips of the pentagons
@@ -203,7 +206,8 @@ def test_subdivide_stays_linear() -> None:
     np.testing.assert_array_equal(refined.vertices, flat)
 
 
-# -- (e) safeguards ---------------------------------------------------------------------------------
+# -- (e) safeguards
+# ---------------------------------------------------------------------------------
 
 
 def _wall_fan(w: tuple[float, float, float]) -> tuple[NDArray[np.float64], Faces]:

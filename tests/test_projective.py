@@ -139,7 +139,8 @@ def test_generalized_cross_equals_exact_minors(rows: np.ndarray) -> None:
 @settings(max_examples=60, deadline=None)
 @given(rows=int_rows(2, 7), data=st.data())
 def test_cross_is_the_determinant_with_a_first_row(rows: np.ndarray, data: st.DataObject) -> None:
-    """v·ξ = det[v; α_1; …; α_{n−1}] for every v: the definition, checked independently of minors."""
+    """v·ξ = det[v; α_1; …; α_{n−1}] for every v: the definition, checked independently of
+    minors."""
     n = rows.shape[1]
     v = data.draw(int_matrix(1, n))
     expected = exact_det([[Fraction(float(x)) for x in r] for r in np.vstack([v, rows])])
@@ -177,7 +178,9 @@ def test_swapping_two_rows_flips_the_sign(rows: np.ndarray, data: st.DataObject)
         expected = -pj.generalized_cross(rows, method=method)
         if method == "cofactor":
             assert np.array_equal(pj.generalized_cross(swapped, method=method), expected)
-        else:  # a different pivot order: equal up to LU rounding, ~n·eps of Π‖α_i‖ (Hadamard's bound on a minor)
+        # a different pivot order: equal up to LU rounding, ~n·eps of Π‖α_i‖ (Hadamard's bound on a
+        # minor)
+        else:
             scale = float(np.prod(np.linalg.norm(rows, axis=1)))
             assert np.allclose(
                 pj.generalized_cross(swapped, method=method),

@@ -30,7 +30,8 @@ SETTINGS = settings(
 )
 PATH = Path("mesh.obj")
 
-#: how a coordinate may be spelt; the fast path reads those with '_' as float() does, not by np.fromstring
+# : how a coordinate may be spelt; the fast path reads those with '_' as float() does, not by
+# np.fromstring
 PLAIN_COORDINATES = st.one_of(
     st.floats(-1e6, 1e6, allow_nan=False).map(repr),
     st.floats(allow_nan=False, allow_infinity=False).map(repr),
@@ -239,11 +240,14 @@ def test_off_fast_path_is_the_reference(data: bytes) -> None:
 
 
 def test_read_mesh_gives_the_reference_mesh(tmp_path: Path) -> None:
-    """The whole read: the same QuadMesh (vertices bitwise, faces, tags) as the reference's arrays give."""
+    """The whole read: the same QuadMesh (vertices bitwise, faces, tags) as the reference's arrays
+    give."""
     path = tmp_path / "squares.obj"
     path.write_bytes(
-        b"# two squares\r\nv 0 0 0 1\r\nv 1 0 0\r\nv\t1 1 0\r\nv 0 1 0\r\nvt 0 0\r\nf 1/1 2/1 3/1 4/1\r\n"
-        b"v 2 0 0\r\nv 2 1 0\r\n  f 2//1 -2//1 -1//1 3//1   # negative\r\nt crease 2/1/0 1 2 4.5\r\n"
+        b"# two squares\r\nv 0 0 0 1\r\nv 1 0 0\r\nv\t1 1 0\r\nv 0 1 0\r\nvt 0 0\r\nf 1/1 2/1 3/1 "
+        b"4/1\r\n"
+        b"v 2 0 0\r\nv 2 1 0\r\n  f 2//1 -2//1 -1//1 3//1   # negative\r\nt crease 2/1/0 1 2 "
+        b"4.5\r\n"
     )
     data = path.read_bytes()
     assert meshfile._obj_fast(data) is not None

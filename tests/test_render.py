@@ -1,4 +1,5 @@
-"""Pictures: exact pixel size, not blank, every mode; zebra stripes jump across creases and only there."""
+"""Pictures: exact pixel size, not blank, every mode; zebra stripes jump across creases and only
+there."""
 
 from __future__ import annotations
 
@@ -32,7 +33,8 @@ from g1patch.tessellate import tessellate
 def bspline_torus(
     n_major: int = 8, n_minor: int = 6, R: float = 1.0, r: float = 0.4
 ) -> PatchNetwork:
-    """A closed torus of uniform bicubic B-spline patches over a periodic control net: C2, so exactly G1."""
+    """A closed torus of uniform bicubic B-spline patches over a periodic control net: C2, so
+    exactly G1."""
     u = 2 * np.pi * np.arange(n_major) / n_major
     v = 2 * np.pi * np.arange(n_minor) / n_minor
     U, V = np.meshgrid(u, v, indexing="ij")
@@ -202,7 +204,8 @@ def test_render_surfaces_draws_triangle_meshes(tmp_path: Path, corner_cube: Patc
     assert_picture(path, (420, 210))
 
 
-# --------------------------------------------------------------------------- stripes measure smoothness
+# --------------------------------------------------------------------------- stripes measure
+# smoothness
 def test_stripes_jump_across_creases_and_flow_across_g1_edges(
     corner_cube: PatchNetwork, smooth_torus: PatchNetwork
 ) -> None:
@@ -377,7 +380,8 @@ def test_deviation_map_keeps_the_edges_of_patches_seen_edge_on(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """A coarse sphere's patches at the silhouette are seen edge-on but are large: their edges stay
-    lines, none is filled (their projected spacing is ~0; their spacing at the picture's scale is not)."""
+    lines, none is filled (their projected spacing is ~0; their spacing at the picture's scale is
+    not)."""
     from g1patch.build import build_split4_network
 
     filled_counts: list[int] = []

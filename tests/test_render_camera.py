@@ -199,7 +199,8 @@ def test_the_default_picture_of_spot_is_upright_from_the_front_three_quarter(
     y, turned 35° from Spot's front (−z) towards its left (−x), set up here independently of the
     renderer: the silhouette's box has that projection's aspect, fills 90 % of the picture, and
     the mesh vertices (which the interpolating surface passes through) land on the silhouette, the
-    horns at its top and the hooves at its bottom. The picture drawn on its back (z-up) fails all."""
+    horns at its top and the hooves at its bottom. The picture drawn on its back (z-up) fails
+    all."""
     network, vertices = spot
     size = (480, 400)
     path = tmp_path / "spot.png"
@@ -316,7 +317,8 @@ def test_render_and_demo_take_auto_and_explicit_cameras(
 
 
 def test_a_long_title_fits_its_panel(tmp_path: Path) -> None:
-    """The title's font shrinks until its longest line fits: no text runs off the picture's sides."""
+    """The title's font shrinks until its longest line fits: no text runs off the picture's
+    sides."""
     path = tmp_path / "titled.png"
     render(
         path,

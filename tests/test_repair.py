@@ -33,7 +33,8 @@ Faces = np.ndarray | list[list[int]]
 Case = tuple[np.ndarray, Faces]
 
 
-# -- meshes the checks refuse, generated here -------------------------------------------------------
+# -- meshes the checks refuse, generated here
+# -------------------------------------------------------
 
 
 def bumpy_grid(n: int = 4) -> tuple[np.ndarray, np.ndarray]:
@@ -66,7 +67,8 @@ def book(pages: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def two_cubes() -> tuple[np.ndarray, np.ndarray]:
-    """Two cubes sharing one corner (vertex 7): every edge is fine, the corner has two closed fans."""
+    """Two cubes sharing one corner (vertex 7): every edge is fine, the corner has two closed
+    fans."""
     cube = shapes.cube()
     return np.concatenate([cube.vertices, cube.vertices[1:] + 2.0]), np.concatenate(
         [cube.faces, cube.faces + 7]
@@ -74,7 +76,8 @@ def two_cubes() -> tuple[np.ndarray, np.ndarray]:
 
 
 def two_pyramids() -> tuple[np.ndarray, list[list[int]]]:
-    """Three sides of each of two square pyramids touching apex to apex: two open fans at vertex 0."""
+    """Three sides of each of two square pyramids touching apex to apex: two open fans at vertex
+    0."""
     base = np.array([[1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0.0]])
     vertices = np.vstack([[[0, 0, 0]], base + [0, 0, 1], base - [0, 0, 1]])
     up = [[0, 1 + k, 1 + (k + 1) % 4] for k in range(3)]
@@ -99,7 +102,8 @@ def cube_with_repeated_corner() -> tuple[np.ndarray, list[list[int]]]:
 
 
 def moebius(n: int = 12, width: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
-    """A Möbius strip of n quads: vertex 2 i + j at angle 2πi/n, side j; the last quad joins side 0 to side 1."""
+    """A Möbius strip of n quads: vertex 2 i + j at angle 2πi/n, side j; the last quad joins side 0
+    to side 1."""
     t = 2 * np.pi * np.arange(n)[:, None] / n
     s = np.array([-width, width])[None, :]
     radius = 1 + s * np.cos(t / 2)
@@ -125,7 +129,8 @@ def assert_builds_exactly(mesh: QuadMesh) -> None:
     assert report.max_edge_angle_deg <= 1e-9 and report.max_corner_angle_deg <= 1e-9
 
 
-# -- every case: repaired by default, refused with strict ---------------------------------------------
+# -- every case: repaired by default, refused with strict
+# ---------------------------------------------
 
 SPLIT_EDGE = (
     r"^1 non-manifold edge \(0, 1\) with {} faces split into sheets \(\+{} vertex copies\)$"
@@ -224,7 +229,8 @@ def test_a_closed_pillow_leaves_nothing_and_says_so() -> None:
         QuadMesh.from_arrays(square, [[0, 1, 2, 3], [0, 3, 2, 1]], strict=True)
 
 
-# -- non-manifold edges and vertices ----------------------------------------------------------------
+# -- non-manifold edges and vertices
+# ----------------------------------------------------------------
 
 
 @pytest.mark.parametrize("pages", [3, 4, 100])
@@ -250,7 +256,8 @@ def test_two_cubes_at_a_corner_become_two_cubes() -> None:
     assert np.flatnonzero(mesh.features.corner_vertices).tolist() == [7, 15]
 
 
-# -- repeated vertices ------------------------------------------------------------------------------
+# -- repeated vertices
+# ------------------------------------------------------------------------------
 
 
 def test_repeated_vertices_cut_faces_into_simple_polygons() -> None:
@@ -265,7 +272,8 @@ def test_repeated_vertices_cut_faces_into_simple_polygons() -> None:
     )
     assert mesh.n_faces == 3
     assert mesh.tags == (Tag("hole", ()),)
-    # a face that touches itself at the centre 4: the triangles (4, 0, 1) and (4, 8, 7), corner to corner
+    # a face that touches itself at the centre 4: the triangles (4, 0, 1) and (4, 8, 7), corner to
+    # corner
     mesh = QuadMesh.from_arrays(vertices, [[4, 0, 1, 4, 8, 7]])
     assert mesh.repairs == (
         "1 face repeating a vertex (0) reduced to 2 simple polygons",
@@ -318,11 +326,13 @@ def test_what_no_repair_mends_still_raises() -> None:
         QuadMesh.from_arrays(vertices, out_of_range)
 
 
-# -- tags through repairs ------------------------------------------------------------------------------
+# -- tags through repairs
+# ------------------------------------------------------------------------------
 
 
 def test_tags_follow_the_repairs() -> None:
-    """Holes and creases survive a dissolution; a crease on a dissolved edge is dropped and said so."""
+    """Holes and creases survive a dissolution; a crease on a dissolved edge is dropped and said
+    so."""
     vertices, faces = bumpy_grid()
     folded_vertices, folded = fold_in(vertices, faces, 5)
     v, a, x, b = folded[-2]
@@ -343,7 +353,8 @@ def test_tags_follow_the_repairs() -> None:
     assert_builds_exactly(mesh)
 
 
-# -- the command line --------------------------------------------------------------------------------
+# -- the command line
+# --------------------------------------------------------------------------------
 
 
 def write_obj(path: Path, vertices: np.ndarray, faces: Faces) -> Path:
@@ -386,17 +397,20 @@ def test_cli_as_a_user_runs_it(tmp_path: Path) -> None:
     result = subprocess.run(run, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr
     assert result.stderr.splitlines() == [
-        f"g1patch: {source}: repaired: 1 non-manifold edge (0, 1) with 100 faces split into sheets (+198 vertex copies)"
+        f"g1patch: {source}: repaired: 1 non-manifold edge (0, 1) with 100 faces split into "
+        "sheets (+198 vertex copies)"
     ]
     out.unlink()
     result = subprocess.run([*run, "--strict"], capture_output=True, text=True, timeout=300)
     assert result.returncode == 2 and not out.exists()
     assert result.stderr.splitlines() == [
-        f"g1patch: error: {source}: edge (0, 1) is used by 100 faces (0, 1, 2, 3, 4 and 95 more); an edge may have at most 2"
+        f"g1patch: error: {source}: edge (0, 1) is used by 100 faces (0, 1, 2, 3, 4 and 95 more); "
+        "an edge may have at most 2"
     ]
 
 
-# -- large polygons: linear in time and memory -----------------------------------------------------------
+# -- large polygons: linear in time and memory
+# -----------------------------------------------------------
 
 
 def regular_polygon(n: int) -> np.ndarray:
@@ -414,7 +428,8 @@ def peak_memory(build: Callable[[], QuadMesh]) -> tuple[int, QuadMesh]:
 
 
 def test_one_large_polygon_splits_in_linear_memory() -> None:
-    """10 000 and 100 000 sides: the peak grows by at most 15× (it was quadratic: 37 GiB at 100 000)."""
+    """10 000 and 100 000 sides: the peak grows by at most 15× (it was quadratic: 37 GiB at 100
+    000)."""
     peaks = {}
     for n in (10_000, 100_000):
         peaks[n], mesh = peak_memory(
@@ -439,7 +454,8 @@ def test_a_cylinder_with_one_large_cap() -> None:
     "make", [lambda: shapes.fan(300), lambda: shapes.boundary_fan(300)], ids=["closed", "boundary"]
 )
 def test_rings_beyond_the_walk_are_ranked_in_order(make: Callable[[], QuadMesh]) -> None:
-    """A 300-face fan: the first positions are walked, the rest ranked; either way h_{i+1} = twin(prev(h_i))."""
+    """A 300-face fan: the first positions are walked, the rest ranked; either way h_{i+1} =
+    twin(prev(h_i))."""
     topology = make().topology
     ring = topology.ring(0)
     assert ring.size == 300 and np.unique(ring).size == 300
@@ -451,7 +467,8 @@ def test_rings_beyond_the_walk_are_ranked_in_order(make: Callable[[], QuadMesh])
 
 
 def test_two_large_closed_fans_at_one_vertex() -> None:
-    """Two 40-quad disks sharing their centre: the walk stays in one of them, the ranking finds the other."""
+    """Two 40-quad disks sharing their centre: the walk stays in one of them, the ranking finds the
+    other."""
     disk = shapes.fan(40)
     n = disk.n_vertices
     vertices = np.concatenate([disk.vertices, disk.vertices[1:] + [0, 0, 1]])

@@ -1,4 +1,5 @@
-"""Seams: edges sharp on purpose (OpenSubdiv creases) in the network, the check, the file, the pictures and CAD.
+"""Seams: edges sharp on purpose (OpenSubdiv creases) in the network, the check, the file, the
+pictures and CAD.
 
 A seam is only meant to be G0: the report lists seams apart (count, G0 gap, angle range), never
 counts them as G1 failures or folds, and compares corner normals only within a sector (the
@@ -32,7 +33,8 @@ EXACT = 1e-9
 
 
 def bilinear_nets(corners: np.ndarray) -> np.ndarray:
-    """Bézier nets (F, 4, 4, 3) of the bilinear patches through quad corners (F, 4, 3), counter-clockwise."""
+    """Bézier nets (F, 4, 4, 3) of the bilinear patches through quad corners (F, 4, 3),
+    counter-clockwise."""
     s = np.arange(4) / 3.0
     u, v = s[None, :, None, None], s[None, None, :, None]
     c0, c1, c2, c3 = (corners[:, k, None, None] for k in range(4))
@@ -50,7 +52,8 @@ SEAM_ROUNDING = 4 * np.finfo(float).eps
 
 
 def seamed_cube(shift: float = 0.0) -> PatchNetwork:
-    """The cube [-1, 1]³ as 6 flat bicubic patches, all 12 edges seams; face 0 moved out by ``shift``."""
+    """The cube [-1, 1]³ as 6 flat bicubic patches, all 12 edges seams; face 0 moved out by
+    ``shift``."""
     mesh = shapes.cube()
     control = flat_patches(mesh).control.copy()
     control[0, ..., 0] -= shift  # face 0 is x = −1
@@ -145,7 +148,8 @@ def test_seam_flags_are_validated_and_errors_name_the_edge() -> None:
     other, other_edge = network.neighbor[0, 0], network.neighbor_edge[0, 0]
     with pytest.raises(
         InputError,
-        match=rf"patch {other} edge {other_edge} is a seam but its other side, patch 0 edge 0, is not",
+        match=rf"patch {other} edge {other_edge} is a seam but its other side, patch 0 edge 0, is "
+        r"not",
     ):
         dataclasses.replace(network, seam=one_sided)
     with pytest.raises(InputError, match=r"seam: expected shape \(6, 4\)"):

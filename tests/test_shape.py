@@ -1,4 +1,5 @@
-"""Surfaces a person accepts (issue 9): round where the data are round, convergent, no folds, no refusals.
+"""Surfaces a person accepts (issue 9): round where the data are round, convergent, no folds, no
+refusals.
 
 Distances are to the exact surfaces the meshes are sampled from (closest points by
 :mod:`g1patch.shapes`' projections, independent of the construction); folds and exactness by the

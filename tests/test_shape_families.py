@@ -1,5 +1,5 @@
-"""Generated refinement families and fold-provoking cages: counts, closedness, valences, orientation,
-and the exact closest-point helpers of the smooth surfaces they are sampled from."""
+"""Generated refinement families and fold-provoking cages: counts, closedness, valences,
+orientation, and the exact closest-point helpers of the smooth surfaces they are sampled from."""
 
 from __future__ import annotations
 
@@ -14,7 +14,8 @@ AXES = np.array([1.0, 0.7, 0.5])
 
 
 def signed_volume(mesh: QuadMesh) -> float:
-    """Σ det(p0, p1, p2) + det(p0, p2, p3) over the quads, / 6: positive when faces point outward."""
+    """Σ det(p0, p1, p2) + det(p0, p2, p3) over the quads, / 6: positive when faces point
+    outward."""
     p = mesh.vertices[mesh.faces]
     volume = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])) + np.einsum(
         "ij,ij->i", p[:, 0], np.cross(p[:, 2], p[:, 3])
@@ -146,7 +147,8 @@ def test_flat_fan(valence: int) -> None:
     assert (turn > 0).all()
 
 
-# -- exact closest points ---------------------------------------------------------------------------
+# -- exact closest points
+# ---------------------------------------------------------------------------
 
 
 def near_points(seed: int, count: int = 2000) -> np.ndarray:
@@ -163,7 +165,8 @@ def near_points(seed: int, count: int = 2000) -> np.ndarray:
 def assert_closest(
     points: np.ndarray, closest: np.ndarray, normals: np.ndarray, gradient: np.ndarray
 ) -> None:
-    """Normals unit, along the surface gradient at the closest point (outward), and p − q along the normal."""
+    """Normals unit, along the surface gradient at the closest point (outward), and p − q along the
+    normal."""
     np.testing.assert_allclose(np.linalg.norm(normals, axis=-1), 1.0, atol=1e-15)
     unit_gradient = gradient / np.linalg.norm(gradient, axis=-1, keepdims=True)
     np.testing.assert_allclose(normals, unit_gradient, atol=1e-14)

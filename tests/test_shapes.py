@@ -1,4 +1,5 @@
-"""Generated shapes: counts, orientation (outward / +z), geometry, and one Catmull–Clark topology step."""
+"""Generated shapes: counts, orientation (outward / +z), geometry, and one Catmull–Clark topology
+step."""
 
 from __future__ import annotations
 
@@ -11,7 +12,8 @@ from g1patch.mesh import QuadMesh
 
 
 def signed_volume(mesh: QuadMesh) -> float:
-    """Σ over the triangles (p0, p1, p2), (p0, p2, p3) of det(a, b, c) / 6: positive when faces point outward."""
+    """Σ over the triangles (p0, p1, p2), (p0, p2, p3) of det(a, b, c) / 6: positive when faces
+    point outward."""
     p = mesh.vertices[mesh.faces]
     volume = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2]))
     volume += np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 2], p[:, 3]))
@@ -19,7 +21,8 @@ def signed_volume(mesh: QuadMesh) -> float:
 
 
 def signed_areas_xy(mesh: QuadMesh) -> np.ndarray:
-    """Shoelace area of each face projected on the xy plane: positive when counter-clockwise seen from +z."""
+    """Shoelace area of each face projected on the xy plane: positive when counter-clockwise seen
+    from +z."""
     p = mesh.vertices[mesh.faces][:, :, :2]
     q = np.roll(p, -1, axis=1)
     return 0.5 * (p[:, :, 0] * q[:, :, 1] - q[:, :, 0] * p[:, :, 1]).sum(axis=1)
@@ -136,7 +139,8 @@ def test_voxel_surface_rejects_cubes_touching_along_an_edge() -> None:
 
 
 def test_subdivide_is_linear() -> None:
-    """Old vertices stay, new ones sit at edge midpoints and face centroids; a planar grid keeps its area."""
+    """Old vertices stay, new ones sit at edge midpoints and face centroids; a planar grid keeps its
+    area."""
     mesh = shapes.grid(2, 3, height=lambda x, y: 0 * x)
     refined = shapes.subdivide(mesh)
     t = mesh.topology

@@ -1,4 +1,5 @@
-"""The 2×2-split bicubic network (g1patch.construct.split4): polynomial, exactly G1, C1 inside quads.
+"""The 2×2-split bicubic network (g1patch.construct.split4): polynomial, exactly G1, C1 inside
+quads.
 
 Acceptance measures come from continuity.check over the 4 F sub-patches, whose network covers
 both the mesh edges (each split in two halves) and the internal seams:
@@ -134,7 +135,8 @@ def test_generated_meshes_are_exactly_g1(drawn: tuple[QuadMesh, str]) -> None:
 
 @pytest.mark.parametrize("valence", range(3, 13))
 def test_every_interior_valence(valence: int) -> None:
-    """A lifted, noisy fan: interior valence n next to valence-4 and -3 vertices and the boundary."""
+    """A lifted, noisy fan: interior valence n next to valence-4 and -3 vertices and the
+    boundary."""
     mesh = shapes.fan(valence, 3)
     lifted = mesh.with_vertices(
         mesh.vertices + np.c_[0 * mesh.vertices[:, :2], 0.1 * mesh.vertices[:, 0] ** 2]
@@ -164,7 +166,8 @@ COLLAPSE_BASES: dict[str, Callable[[int], QuadMesh]] = {
 def test_collapsed_meshes_are_exactly_g1(
     base: str, n: int, picks: list[int], amplitude: float, seed: int
 ) -> None:
-    """Diagonal collapses: valence 3, 5, 6, 8, … with adjacent even-valence (≥ 6) vertices, open and closed."""
+    """Diagonal collapses: valence 3, 5, 6, 8, … with adjacent even-valence (≥ 6) vertices, open and
+    closed."""
     mesh = COLLAPSE_BASES[base](n)
     mesh = collapsed(mesh, sorted({p % mesh.topology.n_faces for p in picks}))
     assume(mesh is not None)
@@ -197,7 +200,8 @@ LONG_GRID = shapes.grid(40, 3, size=(40.0, 3.0), height=lambda x, y: 0.3 * np.si
 
 @pytest.mark.parametrize("mesh", [LONG_GRID, shapes.torus(60, 5)], ids=["grid", "torus"])
 def test_long_grid_lines(mesh: QuadMesh) -> None:
-    """One collapse sends sheared grid lines of ~40–60 edges through valence-4 vertices (closed ones on the torus)."""
+    """One collapse sends sheared grid lines of ~40–60 edges through valence-4 vertices (closed ones
+    on the torus)."""
     picked = collapsed(mesh, [mesh.topology.n_faces // 2 + 1])
     assert picked is not None
     mu = _shears(picked)
@@ -214,7 +218,8 @@ def _shears(mesh: QuadMesh) -> np.ndarray:
 
 
 def walked_shears(mesh: QuadMesh) -> np.ndarray:
-    """Reference: walk each grid line edge by edge (Python), |μ| = max end mismatch, signs alternating."""
+    """Reference: walk each grid line edge by edge (Python), |μ| = max end mismatch, signs
+    alternating."""
     t = mesh.topology
     _, cosine = tangent_stars(mesh, fan_normals(mesh))
     through = ~t.is_boundary_vertex & (t.valence == 4)
@@ -230,7 +235,8 @@ def walked_shears(mesh: QuadMesh) -> np.ndarray:
     for start in range(t.n_edges):
         if start in seen or t.is_boundary_edge[start]:
             continue
-        # run back to an end (or all round a closed line), then forward collecting (edge, far vertex)
+        # run back to an end (or all round a closed line), then forward collecting (edge, far
+        # vertex)
         e, v = start, int(x_of[start])
         for _ in range(t.n_edges):
             if not through[v]:
@@ -297,8 +303,13 @@ def test_chain_shears_match_a_walk_on_collapsed_grids(n: int, picks: list[int]) 
 
 
 # ------------------------------------------------------------------------------ inside a quad
-C1_MESHES = [perturbed(shapes.fan(7, 2), NOISE, 1), perturbed(collapsed(shapes.grid(6, 6, height=height), [14, 21]), 0.02, 2),
-             perturbed(shapes.genus2(), NOISE, 3), perturbed(shapes.boundary_fan(5), NOISE, 4)]  # fmt: skip
+C1_MESHES = [
+    perturbed(shapes.fan(7, 2), NOISE, 1),
+    perturbed(collapsed(shapes.grid(6, 6, height=height), [14, 21]), 0.02, 2),
+    # fmt: skip
+    perturbed(shapes.genus2(), NOISE, 3),
+    perturbed(shapes.boundary_fan(5), NOISE, 4),
+]
 C1_IDS = ["fan7", "collapsed", "genus2", "boundary_fan"]
 
 
@@ -326,7 +337,8 @@ def test_pieces_join_c1_inside_each_quad(mesh: QuadMesh) -> None:
 
 @pytest.mark.parametrize("mesh", C1_MESHES, ids=C1_IDS)
 def test_bspline_nets_evaluate_to_the_pieces(mesh: QuadMesh) -> None:
-    """scipy's NdBSpline on the (F, 6, 6, 3) nets with knots [0,0,0,0,½,½,1,1,1,1] equals the pieces."""
+    """scipy's NdBSpline on the (F, 6, 6, 3) nets with knots [0,0,0,0,½,½,1,1,1,1] equals the
+    pieces."""
     network = build_split4_network(mesh)
     nets = bspline_nets(network)
     assert nets.shape == (mesh.topology.n_faces, 6, 6, 3)
@@ -344,7 +356,8 @@ def test_bspline_nets_evaluate_to_the_pieces(mesh: QuadMesh) -> None:
 
 
 def test_macro_net_rows_three_are_midpoints() -> None:
-    """Row and column 3 of every 7×7 macro net are the midpoints of their neighbours (C1 ⇔ double knot)."""
+    """Row and column 3 of every 7×7 macro net are the midpoints of their neighbours (C1 ⇔ double
+    knot)."""
     nets = macro_nets(
         build_split4_network(perturbed(shapes.cube_sphere(1), NOISE, 8)).patches.world_control()
     )
@@ -371,7 +384,8 @@ def test_network_connectivity_and_points() -> None:
 
 
 def test_similarity_invariance() -> None:
-    """Built in centred, unit-scaled coordinates: a moved and scaled mesh gives the moved and scaled surface."""
+    """Built in centred, unit-scaled coordinates: a moved and scaled mesh gives the moved and scaled
+    surface."""
     mesh = perturbed(shapes.cube_sphere(1), NOISE, 10)
     moved = mesh.with_vertices(1000.0 + 250.0 * mesh.vertices)
     a = build_split4_network(mesh).patches.world_control()
@@ -498,8 +512,9 @@ def test_equal_sector_fans_are_nearer_than_regular_stars(mesh: QuadMesh) -> None
 def test_the_deviation_finds_foot_points_in_the_next_patch() -> None:
     """``surface_deviation`` against the distance to a fine triangulation of the Gregory surface (64
     steps a patch) from the same split4 samples: the same to 2 % (an upper bound: never below it by
-    more than the chords lie off the surface, measured at the cells' middles), where searching from one start, stuck
-    at the edge of its patch, overestimated 4.7× (lifted boundary_fan(3): 1.4e-2 against 3.0e-3)."""
+    more than the chords lie off the surface, measured at the cells' middles), where searching from
+    one start, stuck at the edge of its patch, overestimated 4.7× (lifted boundary_fan(3): 1.4e-2
+    against 3.0e-3)."""
     from g1patch.compare import mesh_distance, surface_samples
     from g1patch.construct.polynomial import split4_of_gregory, surface_deviation
 

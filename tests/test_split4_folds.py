@@ -107,7 +107,8 @@ def test_box_cage_safeguard_is_not_a_fallback() -> None:
 @pytest.mark.parametrize("valence", [16, 360])
 def test_seams_stay_inside_thin_wedges(valence: int) -> None:
     """On the flat fan every sub-patch control point lies in its own kite's angular wedge (up to
-    rounding): the seam tangents at the midpoints are sized from the face's width, not the edge length."""
+    rounding): the seam tangents at the midpoints are sized from the face's width, not the edge
+    length."""
     mesh = shapes.flat_fan(valence)
     control = build_split4_network(mesh).patches.world_control().reshape(valence, -1, 3)
     angle = np.arctan2(control[..., 1], control[..., 0])

@@ -77,7 +77,8 @@ def local_targets(mesh: QuadMesh, shape: str = "interpolate") -> tuple[Targets, 
 def assert_close(
     mesh: QuadMesh, reference: split4.Split4Parts, compiled: split4.Split4Parts
 ) -> None:
-    """Points within POINT_ULPS ε · max|x|, normals within NORMAL_ULPS ε · max|x| / ℓ_min (module docstring)."""
+    """Points within POINT_ULPS ε · max|x|, normals within NORMAL_ULPS ε · max|x| / ℓ_min (module
+    docstring)."""
     size = np.abs(reference[0].control).max()
     np.testing.assert_array_less(
         np.abs(compiled[0].control - reference[0].control), POINT_ULPS * EPS * size
@@ -169,7 +170,8 @@ def test_the_line_walk_gives_the_shears_bit_for_bit(name: str) -> None:
 @pytest.mark.parametrize("name", MESHES)
 def test_the_star_kernel_gives_the_reference_stars(name: str) -> None:
     """The fit and the safeguard as NumPy's, to rounding (sums in another order); the same shrunk
-    vertices. A shrunk star is tested on the fan whose tangents are made 3× too long at one vertex."""
+    vertices. A shrunk star is tested on the fan whose tangents are made 3× too long at one
+    vertex."""
     mesh = MESHES[name]()
     targets, _ = local_targets(mesh)
     long = targets.tangents.copy()

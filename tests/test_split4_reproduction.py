@@ -1,4 +1,5 @@
-"""split4 reproduces targets that already meet its G1 conditions (g1patch.construct.split4, DESIGN §1).
+"""split4 reproduces targets that already meet its G1 conditions (g1patch.construct.split4, DESIGN
+§1).
 
 On an all-regular closed cage the Catmull–Clark limit is the uniform bicubic B-spline, and its
 limit targets are that B-spline's Bézier data; every grid line is closed, so μ = 0 and the split's
@@ -34,8 +35,9 @@ REPRODUCTION_RTOL = 1e-12
 
 
 def control_rings(topology: QuadTopology, faces: np.ndarray | None = None) -> np.ndarray:
-    """(F, 4, 4) cage vertices of the control ring of each of ``faces`` (default all), ``ring[f, i, j]``:
-    i along edge 0, the face's own corners at (1, 1), (2, 1), (2, 2), (1, 2). Needs valence-4 interior corners."""
+    """(F, 4, 4) cage vertices of the control ring of each of ``faces`` (default all), ``ring[f, i,
+    j]``: i along edge 0, the face's own corners at (1, 1), (2, 1), (2, 2), (1, 2). Needs valence-4
+    interior corners."""
     faces = np.arange(topology.n_faces) if faces is None else np.asarray(faces)
     ring = np.full((len(faces), 4, 4), -1, dtype=np.int64)
     rows = np.arange(len(faces))
@@ -61,7 +63,8 @@ def control_rings(topology: QuadTopology, faces: np.ndarray | None = None) -> np
 
 
 def halved(nets: np.ndarray) -> np.ndarray:
-    """(F, 4, 4, 3) Bézier nets subdivided at ½ in u and v by de Casteljau: (F, 7, 7, 3) macro nets."""
+    """(F, 4, 4, 3) Bézier nets subdivided at ½ in u and v by de Casteljau: (F, 7, 7, 3) macro
+    nets."""
 
     def along(c: np.ndarray, axis: int) -> np.ndarray:
         c = np.moveaxis(c, axis, 1)
@@ -74,7 +77,8 @@ def halved(nets: np.ndarray) -> np.ndarray:
 
 
 def bspline_macro_nets(mesh: QuadMesh, faces: np.ndarray | None = None) -> np.ndarray:
-    """The uniform bicubic B-spline of the cage on each of ``faces`` (default all), subdivided at ½: (F, 7, 7, 3)."""
+    """The uniform bicubic B-spline of the cage on each of ``faces`` (default all), subdivided at ½:
+    (F, 7, 7, 3)."""
     control = mesh.vertices[control_rings(mesh.topology, faces)]
     return halved(np.einsum("ai,fijd,bj->fabd", B_TO_BEZIER, control, B_TO_BEZIER))
 
@@ -246,7 +250,8 @@ def read_back(
 @pytest.mark.parametrize("name", ["torus_8_4", "cube", "collapsed_torus"])
 def test_limit_split4_step_is_one_face_per_quad(name: str, tmp_path: Path) -> None:
     """A valid solid, one face per quad named after it, single-span where the quad is one bicubic,
-    the surface itself to the file's decimals, and OCC's own normals agree across every mesh edge."""
+    the surface itself to the file's decimals, and OCC's own normals agree across every mesh
+    edge."""
     from test_split4 import collapsed
 
     from g1patch.io.cad import export_step, split4_quad_faces
@@ -332,7 +337,8 @@ def test_quads_that_are_not_one_bicubic_keep_two_spans() -> None:
         )
         is None
     )
-    # bare sub-patches in split4's order are recognised from their shared points; in any other order they are not
+    # bare sub-patches in split4's order are recognised from their shared points; in any other order
+    # they are not
     bare = network.patches.world_control()
     assert split4_quad_faces(network_from_patch_points(PatchSet(bare))) is not None
     assert split4_quad_faces(network_from_patch_points(PatchSet(np.roll(bare, 1, axis=0)))) is None

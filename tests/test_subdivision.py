@@ -1,4 +1,5 @@
-"""Catmull–Clark refinement and limit stencils (g1patch.subdivision) against B-splines and OpenSubdiv's limit."""
+"""Catmull–Clark refinement and limit stencils (g1patch.subdivision) against B-splines and
+OpenSubdiv's limit."""
 
 from __future__ import annotations
 
@@ -31,7 +32,8 @@ REFERENCE_MESHES = [
 def grid_torus(
     n: int = 8, m: int = 6, R: float = 2.0, r: float = 0.7, noise: float = 0.0
 ) -> QuadMesh:
-    """A periodic n × m control grid on a torus; vertex (i, j) is i·m + j, face (i, j) runs (i,j), (i+1,j), (i+1,j+1), (i,j+1)."""
+    """A periodic n × m control grid on a torus; vertex (i, j) is i·m + j, face (i, j) runs (i,j),
+    (i+1,j), (i+1,j+1), (i,j+1)."""
     u, v = np.meshgrid(2 * np.pi * np.arange(n) / n, 2 * np.pi * np.arange(m) / m, indexing="ij")
     points = np.stack(
         [(R + r * np.cos(v)) * np.cos(u), (R + r * np.cos(v)) * np.sin(u), r * np.sin(v)], axis=-1
@@ -62,7 +64,8 @@ def bspline(t: np.ndarray, derivative: bool = False) -> np.ndarray:
 def torus_surface(
     points: np.ndarray, n: int, m: int, s: np.ndarray, du: int = 0, dv: int = 0
 ) -> np.ndarray:
-    """The uniform bicubic B-spline of the periodic grid at parameters s × s of every face, (n·m, S, S, 3)."""
+    """The uniform bicubic B-spline of the periodic grid at parameters s × s of every face, (n·m, S,
+    S, 3)."""
     grid = points.reshape(n, m, 3)
     i, j = np.meshgrid(np.arange(n), np.arange(m), indexing="ij")
     a = np.arange(-1, 3)
@@ -93,7 +96,8 @@ def test_torus_tangents_are_the_bspline_hermite_tangents() -> None:
     du = torus_surface(mesh.vertices, 8, 6, zero, du=1)[:, 0, 0]  # at corner 0 along edge 0
     dv = torus_surface(mesh.vertices, 8, 6, zero, dv=1)[:, 0, 0]
     np.testing.assert_allclose(t[:, 0], du, atol=1e-13)
-    # corner 0's edge 3 runs corner 3 → corner 0; the slot of corner 0 towards corner 3 is the reverse of that edge
+    # corner 0's edge 3 runs corner 3 → corner 0; the slot of corner 0 towards corner 3 is the
+    # reverse of that edge
     _, slot_in = halfedge_slots(topology)
     np.testing.assert_allclose(
         limit_tangents(mesh)[slot_in[4 * np.arange(topology.n_faces) + 3]], dv, atol=1e-13
@@ -181,7 +185,8 @@ def test_sharp_creases_follow_the_crease_rule() -> None:
     np.testing.assert_allclose(
         fine.vertices[v], (x[(v + 1) % 6] + 6 * x[v] + x[(v - 1) % 6]) / 8, atol=1e-14
     )
-    # semi-sharp (tests/test_subdivision_creases.py): s = 2 is two steps of the crease rule, then smooth
+    # semi-sharp (tests/test_subdivision_creases.py): s = 2 is two steps of the crease rule, then
+    # smooth
     semi = np.where(crease, 2.0, 0.0)
     np.testing.assert_allclose(
         refine(mesh, 2, semi).vertices, refine(mesh, 2, sharpness).vertices, atol=1e-14
@@ -191,7 +196,8 @@ def test_sharp_creases_follow_the_crease_rule() -> None:
 
 
 def _stencil_cages(shared_data) -> list[QuadMesh]:
-    """Shared meshes (creases, darts, corners, boundaries) and generated cages with valences 3 to 7."""
+    """Shared meshes (creases, darts, corners, boundaries) and generated cages with valences 3 to
+    7."""
     from g1patch import shapes
 
     meshes = [read_mesh(path) for path in sorted(shared_data.glob("*.obj"))]
@@ -232,8 +238,8 @@ def test_stencil_kernels_equal_the_numpy_reference_bit_for_bit(shared_data) -> N
 
 
 def test_public_limits_with_kernels_equal_those_without(shared_data, monkeypatch) -> None:
-    """:func:`limit_data` and :func:`limit_corner_normals` above and below the kernels' size threshold,
-    semi-sharp meshes included (their refined neighbourhood takes the same path)."""
+    """:func:`limit_data` and :func:`limit_corner_normals` above and below the kernels' size
+    threshold, semi-sharp meshes included (their refined neighbourhood takes the same path)."""
     import g1patch.subdivision as subdivision
 
     for mesh in _stencil_cages(shared_data):

@@ -88,7 +88,8 @@ def test_refined_limit_matches_opensubdiv(shared_data, name: str) -> None:
 
 @pytest.mark.parametrize("name", CREASED)
 def test_cage_limit_points_match_opensubdiv(shared_data, name: str) -> None:
-    """``limit_points`` of the unrefined crease cages (refined near the semi-sharp features inside)."""
+    """``limit_points`` of the unrefined crease cages (refined near the semi-sharp features
+    inside)."""
     mesh = read_mesh(shared_data / f"{name}.obj")
     reference = load_reference(shared_data / "reference" / f"{name}.limit.npz")
     error = (
@@ -169,7 +170,8 @@ def test_fractional_sharpness_blends_the_first_step(s: float) -> None:
 
 
 def test_sharpness_one_is_one_sharp_step_then_smooth() -> None:
-    """s = 1: the first step is the infinitely sharp one (fractional weight 1); nothing is sharp after it."""
+    """s = 1: the first step is the infinitely sharp one (fractional weight 1); nothing is sharp
+    after it."""
     mesh, line = crease_line()
     one = with_tags(mesh, *crease_tags(line, 1.0, (12, 1.0)))
     infinite = with_tags(mesh, *crease_tags(line, 10.0, (12, 10.0)))
@@ -312,7 +314,8 @@ def decay_levels(mesh: QuadMesh) -> int:
 @pytest.mark.parametrize("name", SEMI)
 def test_semi_sharp_limits_are_those_of_the_decayed_refinement(shared_data, name: str) -> None:
     """The local refinement around the semi-sharp features gives the whole mesh's refined masks:
-    positions, slot tangents (× 2^levels), stars and per-corner normals, at every affected vertex."""
+    positions, slot tangents (× 2^levels), stars and per-corner normals, at every affected
+    vertex."""
     mesh = read_mesh(shared_data / f"{name}.obj")
     levels = decay_levels(mesh)
     fine = refine(mesh, levels)
@@ -435,7 +438,8 @@ def test_crease_tangents_are_the_crease_curve_tangents() -> None:
             if w < 6:
                 other = [u for u in tagged.topology.one_ring(v) if u < 6 and u != w][0]
                 np.testing.assert_allclose(t[slot], (x[w] - x[other]) / 2, atol=1e-14)
-            # the fine neighbour along this edge is the edge point chain: slot j of v in the fine mesh
+            # the fine neighbour along this edge is the edge point chain: slot j of v in the fine
+            # mesh
             near = fine.topology.one_ring(v)[j]
             estimate = 2**levels * (fine_points[near] - fine_points[v])
             assert np.linalg.norm(t[slot] - estimate) < 0.05 * np.linalg.norm(t[slot])

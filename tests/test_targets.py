@@ -1,4 +1,5 @@
-"""Targets → assembly: the Gregory assembly is exactly G1 for any valid fan and keeps targets that already are.
+"""Targets → assembly: the Gregory assembly is exactly G1 for any valid fan and keeps targets that
+already are.
 
 Reference data are independent of the assembly: a periodic uniform bicubic B-spline surface (its
 Bézier pieces by the exact change of basis, so C2 across every edge) and random fans drawn by
@@ -32,7 +33,8 @@ from g1patch.targets.interpolate import (
 
 
 def _torus_grid(n: int, m: int) -> QuadMesh:
-    """A periodic n × m grid on the torus; vertex i m + j, face (i, j) = [(i, j), (i+1, j), (i+1, j+1), (i, j+1)]."""
+    """A periodic n × m grid on the torus; vertex i m + j, face (i, j) = [(i, j), (i+1, j), (i+1,
+    j+1), (i, j+1)]."""
     return shapes.torus(n, m, 2.0, 0.7)
 
 
@@ -50,7 +52,8 @@ def _bspline_patches(mesh: QuadMesh, n: int, m: int, seed: int) -> np.ndarray:
 
 
 def _targets_of_bezier(mesh: QuadMesh, nets: np.ndarray) -> Targets:
-    """Targets read off C1 Bézier nets: corners, edge tangents 3 (b_10 − b_00), interior points b_11."""
+    """Targets read off C1 Bézier nets: corners, edge tangents 3 (b_10 − b_00), interior points
+    b_11."""
     topology = mesh.topology
     corner_index = [(0, 0), (3, 0), (3, 3), (0, 3)]
     toward_next = [(1, 0), (3, 1), (2, 3), (0, 2)]  # edge point on edge k next to corner k
@@ -80,7 +83,8 @@ def _targets_of_bezier(mesh: QuadMesh, nets: np.ndarray) -> Targets:
 
 @pytest.mark.parametrize("seed", range(3))
 def test_c1_targets_come_back_unchanged(seed: int) -> None:
-    """A bicubic B-spline surface already satisfies G1 (C2): the assembly must keep its Bézier points."""
+    """A bicubic B-spline surface already satisfies G1 (C2): the assembly must keep its Bézier
+    points."""
     n, m = 7, 5
     mesh = _torus_grid(n, m)
     nets = _bspline_patches(mesh, n, m, seed)
@@ -141,7 +145,8 @@ def _random_fan_targets(mesh: QuadMesh, seed: int) -> Targets:
     st.integers(0, 2**32 - 1),
 )
 def test_any_valid_fan_assembles_exactly_g1(kind: str, size: int, seed: int) -> None:
-    """Flexible fans: lengths scaled at random per slot, interior targets anywhere: still exactly G1."""
+    """Flexible fans: lengths scaled at random per slot, interior targets anywhere: still exactly
+    G1."""
     makers = {
         "fan": lambda k: shapes.fan(3 + k % 10, 1 + k % 2),
         "boundary_fan": lambda k: shapes.boundary_fan(1 + k % 7),
@@ -187,7 +192,8 @@ def test_corner_split_solves_the_fan_equation() -> None:
 
 
 def test_an_invalid_fan_is_refused_by_the_assembly() -> None:
-    """The assembly never guesses shape: a fan that turns clockwise at a vertex is an error naming it."""
+    """The assembly never guesses shape: a fan that turns clockwise at a vertex is an error naming
+    it."""
     mesh = shapes.fan(5, 1)
     targets = legacy_targets(mesh)
     tangents = targets.tangents.copy()

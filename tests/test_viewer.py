@@ -48,7 +48,8 @@ def cube_page(cube: g1patch.Surface, tmp_path_factory: pytest.TempPathFactory) -
 
 @pytest.fixture(scope="module")
 def creased() -> g1patch.Surface:
-    """The corner method on the cube: G1 at corners only, every edge creased (a visible deviation)."""
+    """The corner method on the cube: G1 at corners only, every edge creased (a visible
+    deviation)."""
     return g1patch.smooth(DATA / "cube.obj", method="corner")
 
 
@@ -207,7 +208,8 @@ def _browser() -> str | None:
 
 
 class DevTools:
-    """Headless Chromium driven over ``--remote-debugging-pipe``: commands in, replies and events out."""
+    """Headless Chromium driven over ``--remote-debugging-pipe``: commands in, replies and events
+    out."""
 
     def __init__(self, executable: str, profile: Path) -> None:
         command_read, self._command_write = os.pipe()
@@ -347,7 +349,8 @@ def browser(tmp_path_factory: pytest.TempPathFactory) -> Iterator[DevTools]:
 
 
 def shoot(browser: DevTools, page: Path, mode: str) -> tuple[np.ndarray, np.ndarray]:
-    """Load ``page`` in ``mode`` (its URL hash); the screenshot (H, W, 3) and the canvas's coverage (H, W)."""
+    """Load ``page`` in ``mode`` (its URL hash); the screenshot (H, W, 3) and the canvas's coverage
+    (H, W)."""
     from PIL import Image
 
     browser.send("Page.navigate", url="about:blank")
@@ -397,7 +400,8 @@ def _requests(browser: DevTools) -> set[str]:
 
 
 def _alternations(row: np.ndarray, covered: np.ndarray) -> int:
-    """Light/dark changes along a scanline inside the surface (grey levels split at their median)."""
+    """Light/dark changes along a scanline inside the surface (grey levels split at their
+    median)."""
     grey = row[covered].mean(axis=-1)
     if grey.size < 20:
         return 0
@@ -454,7 +458,8 @@ def test_browser_draws_every_mode(
         difference = np.abs(deviation.astype(int) - shaded.astype(int))[covered].max(axis=-1)
         assert (difference > 30).mean() > 0.5  # the deviation mode is a different picture
 
-    # the creased cube's edges are coloured by their angle (plasma's yellow end), the exact one's not
+    # the creased cube's edges are coloured by their angle (plasma's yellow end), the exact one's
+    # not
     def yellowish(image: np.ndarray, covered: np.ndarray) -> int:
         surface = image[covered].astype(int)
         return int(((surface[:, 0] > 200) & (surface[:, 1] > 120) & (surface[:, 2] < 110)).sum())

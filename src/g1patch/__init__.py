@@ -3,8 +3,8 @@
 ::
 
     import g1patch
-    surface = g1patch.smooth("mesh.obj")     # a path, (vertices, faces), a meshio.Mesh, a trimesh, a QuadMesh
-    print(surface.check())                   # G1 angles, gaps, folds, fairness
+    surface = g1patch.smooth("mesh.obj")     # a path, (vertices, faces), a meshio.Mesh, a trimesh,
+    a QuadMesh print(surface.check())                   # G1 angles, gaps, folds, fairness
     surface.export("mesh.step")              # .npz .obj .ply .stl .step .iges .bpt, by suffix
     surface.render("zebra.png", mode="zebra")
 

@@ -13,20 +13,19 @@ work block by block (a few patches, or part of one patch's grid) and use matrix 
 
 Unit normals. Along a grid row (fixed n, a) both tangents are cubics in v with known coefficients,
 ``p_u = Σ_j U_j wv_j(v)`` and ``p_v = Σ_k V_k dwv_k(v)`` (U, V: the rows of step 1 for dwu and wu),
-so ``(p_u × p_v)_d = Σ_jk C_d[j, k] wv_j(v) dwv_k(v)`` with ``C_d[j, k] = U_i[j] V_l[k] − U_l[j] V_i[k]``,
-(d, i, l) cyclic.
-The 16 coefficients per row and component are formed with contiguous ufuncs (48 per row, against
-3 per grid point for a pointwise cross product), then one GEMM per component against the
-``16 × Gv`` table of basis products gives the three planar components on the whole row. Every
-term of that sum is a term of the pointwise cross product, so the rounding error is bounded by the
-same local quantity ``|p_u|_abs |p_v|_abs`` as for ``cross(p_u, p_v)`` (no error from far away on the
-patch, unlike an interpolated or power-form normal). The length (one ``einsum``), ``sqrt`` and the
-division into the interleaved output are ``out=`` ufuncs on cache-sized scratch; nothing the size of
-the output is allocated besides the output.
+so ``(p_u × p_v)_d = Σ_jk C_d[j, k] wv_j(v) dwv_k(v)`` with ``C_d[j, k] = U_i[j] V_l[k] − U_l[j]
+V_i[k]``, (d, i, l) cyclic. The 16 coefficients per row and component are formed with contiguous
+ufuncs (48 per row, against 3 per grid point for a pointwise cross product), then one GEMM per
+component against the ``16 × Gv`` table of basis products gives the three planar components on the
+whole row. Every term of that sum is a term of the pointwise cross product, so the rounding error is
+bounded by the same local quantity ``|p_u|_abs |p_v|_abs`` as for ``cross(p_u, p_v)`` (no error from
+far away on the patch, unlike an interpolated or power-form normal). The length (one ``einsum``),
+``sqrt`` and the division into the interleaved output are ``out=`` ufuncs on cache-sized scratch;
+nothing the size of the output is allocated besides the output.
 
-Blocks hold about :data:`BLOCK_POINTS` grid points: the scratch stays in the L2 cache, and every GEMM
-stays below the size (M·N·K ≈ 10^6) at which OpenBLAS splits a product over threads; on a 2-core
-machine shared with other work that split made the small products several times slower.
+Blocks hold about :data:`BLOCK_POINTS` grid points: the scratch stays in the L2 cache, and every
+GEMM stays below the size (M·N·K ≈ 10^6) at which OpenBLAS splits a product over threads; on a
+2-core machine shared with other work that split made the small products several times slower.
 
 Degenerate points: where ``p_u × p_v = 0`` the normal is the zero vector, never NaN — the squared
 length is clamped to the smallest normal float before the square root and ``0 / 1.5e-154 = 0``. (A
@@ -96,7 +95,8 @@ def _check_out(
         return np.empty(shape)
     if out.shape != shape or out.dtype != np.float64 or not out.flags.c_contiguous:
         raise InputError(
-            f"{name}: expected a C-contiguous float64 array of shape {shape}, got {out.dtype} {out.shape}"
+            f"{name}: expected a C-contiguous float64 array of shape {shape}, got {out.dtype} "
+            f"{out.shape}"
         )
     return out
 
@@ -110,7 +110,8 @@ def _layout(n: int, gu: int, gv: int) -> tuple[int, int]:
 
 
 def _use_kernels(points: int, compiled: bool | None) -> bool:
-    """Whether to run the compiled kernels: ``compiled`` when given, else from :data:`KERNEL_POINTS` on."""
+    """Whether to run the compiled kernels: ``compiled`` when given, else from :data:`KERNEL_POINTS`
+    on."""
     return points >= KERNEL_POINTS if compiled is None else compiled
 
 
@@ -121,7 +122,8 @@ def contract(
     out: NDArray[np.float64] | None = None,
     compiled: bool | None = None,
 ) -> NDArray[np.float64]:
-    """``out[n, a, b, :] = Σ_ij wu[a, i] P[n, i, j, :] wv[b, j]``, C-contiguous ``(N, Gu, Gv, 3)``."""
+    """``out[n, a, b, :] = Σ_ij wu[a, i] P[n, i, j, :] wv[b, j]``, C-contiguous ``(N, Gu, Gv,
+    3)``."""
     n, gu, gv = control.shape[0], weights_u.shape[0], weights_v.shape[0]
     out = _check_out("out", out, (n, gu, gv, 3))
     if out.size == 0:
@@ -148,7 +150,8 @@ def positions_and_normals(
     normals_out: NDArray[np.float64] | None = None,
     compiled: bool | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Positions and unit normals ``p_u × p_v / |p_u × p_v|`` on the grid ``u × v`` (zero where degenerate)."""
+    """Positions and unit normals ``p_u × p_v / |p_u × p_v|`` on the grid ``u × v`` (zero where
+    degenerate)."""
     shape = (control.shape[0], u.shape[0], v.shape[0], 3)
     out = _check_out("out", out, shape)
     return out, _normals_into(control, form, u, v, out, normals_out, compiled)
@@ -209,7 +212,8 @@ def _run(
     positions: NDArray[np.float64] | None,
     normals: NDArray[np.float64] | None,
 ) -> None:
-    """Fill ``positions`` (weights wu, wv) and/or unit ``normals`` (from dwu, wv and wu, dwv) block by block."""
+    """Fill ``positions`` (weights wu, wv) and/or unit ``normals`` (from dwu, wv and wu, dwv) block
+    by block."""
     n, gu, gv = control.shape[0], wu.shape[0], wv.shape[0]
     per_block, rows = _layout(n, gu, gv)
     by_coordinate = control.transpose(3, 2, 0, 1)  # [e, j, n, i]
@@ -223,7 +227,8 @@ def _run(
         assert dwu is not None and dwv is not None
         dwu_t = np.ascontiguousarray(dwu.T)
         r_du = np.empty(12 * per_block * gu)
-        # products[(j, k), b] = wv[b, j] dwv[b, k]; along a grid row (p_u × p_v)_d = Σ_jk C_d[j, k] products[(j, k), b]
+        # products[(j, k), b] = wv[b, j] dwv[b, k]; along a grid row (p_u × p_v)_d = Σ_jk C_d[j, k]
+        # products[(j, k), b]
         products = np.ascontiguousarray((wv[:, :, None] * dwv[:, None, :]).reshape(gv, 16).T)
         coeff_buf, tmp_buf = np.empty(16 * rows), np.empty(16 * rows)
         u_rep_buf, v_tile_buf = np.empty(48 * rows), np.empty(48 * rows)
@@ -250,7 +255,8 @@ def _run(
             if normals is None:
                 continue
             m = hi - lo
-            # u_rep[e, (j, k)] = U_e[j] and v_tile[e, (j, k)] = V_e[k]: the products below are then contiguous
+            # u_rep[e, (j, k)] = U_e[j] and v_tile[e, (j, k)] = V_e[k]: the products below are then
+            # contiguous
             # (a broadcast operand makes NumPy's multiply about 3x slower)
             u_rep, v_tile = (
                 u_rep_buf[: 48 * m].reshape(3, 16, m),
@@ -261,7 +267,8 @@ def _run(
             coeff, tmp = coeff_buf[: 16 * m].reshape(16, m), tmp_buf[: 16 * m].reshape(16, m)
             nrm, length_m = cross[:, :m], length[:m]
             for d, i, l in _CROSS:
-                # C_d[(j, k)] = U_i[j] V_l[k] - U_l[j] V_i[k] for every grid row, then one GEMM along v
+                # C_d[(j, k)] = U_i[j] V_l[k] - U_l[j] V_i[k] for every grid row, then one GEMM
+                # along v
                 np.multiply(u_rep[i], v_tile[l], out=coeff)
                 np.multiply(u_rep[l], v_tile[i], out=tmp)
                 np.subtract(coeff, tmp, out=coeff)
@@ -296,7 +303,8 @@ def _row_curves(
     rows: NDArray[np.float64],
     first: int,
 ) -> None:
-    """``rows[first + 3 j + e, a] = Σ_i weights_t[i, a] P[n, i, j, e]``: patch n's row curves at every u, vectorised over a."""
+    """``rows[first + 3 j + e, a] = Σ_i weights_t[i, a] P[n, i, j, e]``: patch n's row curves at
+    every u, vectorised over a."""
     for k in range(12):
         j, e = k // 3, k % 3
         p0, p1, p2, p3 = (
@@ -322,7 +330,8 @@ def _contract_kernel(
     lo: int,
     hi: int,
 ) -> None:
-    """``out[n, a, b, e] = Σ_j r_j[e] wv_t[j, b]`` with ``r_j = Σ_i wu_t[i, a] P[n, i, j]``, patches ``lo ≤ n < hi``."""
+    """``out[n, a, b, e] = Σ_j r_j[e] wv_t[j, b]`` with ``r_j = Σ_i wu_t[i, a] P[n, i, j]``, patches
+    ``lo ≤ n < hi``."""
     gu, gv = wu_t.shape[1], wv_t.shape[1]
     rows = np.empty((12, gu))
     line = np.empty((3, gv))
@@ -355,10 +364,10 @@ def _normals_kernel(
     lo: int,
     hi: int,
 ) -> None:
-    """Unit normals ``c / sqrt(max(|c|², tiny))``, ``c = p_u × p_v``, for patches ``lo ≤ n < hi``, and the
-    positions as :func:`_contract_kernel` computes them unless ``positions`` is empty. Row curves
-    ``r_j`` (weights wu) and ``s_j`` (dwu); along a row ``p = Σ r_j wv_j``, ``p_u = Σ s_j wv_j``,
-    ``p_v = Σ r_j dwv_j``."""
+    """Unit normals ``c / sqrt(max(|c|², tiny))``, ``c = p_u × p_v``, for patches ``lo ≤ n < hi``,
+    and the positions as :func:`_contract_kernel` computes them unless ``positions`` is empty. Row
+    curves ``r_j`` (weights wu) and ``s_j`` (dwu); along a row ``p = Σ r_j wv_j``, ``p_u = Σ s_j
+    wv_j``, ``p_v = Σ r_j dwv_j``."""
     gu, gv = wu_t.shape[1], wv_t.shape[1]
     with_positions = positions.shape[0] > 0
     tiny = 2.2250738585072014e-308  # the smallest normal float64

@@ -5,8 +5,8 @@ One import does the whole job, in the style of ``trimesh.load`` and ``meshio.rea
     import g1patch
     surface = g1patch.smooth("mesh.obj")            # or (vertices, faces), a meshio.Mesh, a trimesh
     print(surface.check())                          # the continuity report
-    surface.export("mesh.step")                     # by suffix: .npz .obj .ply .stl .step .iges .bpt
-    surface.render("zebra.png", mode="zebra")
+    surface.export("mesh.step")                     # by suffix: .npz .obj .ply .stl .step .iges
+    .bpt surface.render("zebra.png", mode="zebra")
 
 A :class:`Surface` is a thin wrapper around the :class:`~g1patch.network.PatchNetwork` it holds
 (``surface.network``), so everything in the deep modules keeps working on that. Heavy modules
@@ -69,7 +69,8 @@ PREVIEW_SIZE = (400, 400)
 PREVIEW_MAX_PATCHES = 20_000
 
 _SOURCES = (
-    "a mesh file path (.obj, .ply, .off), a (vertices, faces) pair of arrays or lists, a meshio.Mesh, "
+    "a mesh file path (.obj, .ply, .off), a (vertices, faces) pair of arrays or lists, a "
+    "meshio.Mesh, "
     "an object with vertices and faces (trimesh), a pyvista.PolyData or a QuadMesh"
 )
 
@@ -119,7 +120,8 @@ def short_source(source: object) -> str:
 
 
 def patch_kind(patches: object) -> str:
-    """``"gregory"`` for Gregory patches, the form (``"bezier"``, ``"hermite"``, ``"bspline"``) for bicubics."""
+    """``"gregory"`` for Gregory patches, the form (``"bezier"``, ``"hermite"``, ``"bspline"``) for
+    bicubics."""
     return getattr(patches, "kind", None) or str(getattr(patches, "form", type(patches).__name__))
 
 
@@ -132,7 +134,8 @@ _BLOCK = 1 << 16
 def surface_box(patches: Any, samples: int = BOX_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
     """(lowest, highest) corner of the box around the surface sampled on a ``samples²`` grid per
     patch (world coordinates): one batched product of the grid's weights with the stored points,
-    a block of patches at a time and without copies, so a million patches take well under a second."""
+    a block of patches at a time and without copies, so a million patches take well under a
+    second."""
     from .basis import basis_values
     from .gregory import GregoryPatchSet, gregory_weights
 
@@ -164,7 +167,8 @@ def network_box(network: PatchNetwork) -> tuple[np.ndarray, np.ndarray]:
 def network_repr(
     network: PatchNetwork, name: str = "PatchNetwork", notes: Sequence[str] = ()
 ) -> str:
-    """``<PatchNetwork 6 gregory patches, interpolate, bbox (-1.732, -1.732, -1.732)…(1.732, 1.732, 1.732)>``."""
+    """``<PatchNetwork 6 gregory patches, interpolate, bbox (-1.732, -1.732, -1.732)…(1.732, 1.732,
+    1.732)>``."""
     provenance = network.provenance
     method = provenance.get("method")
     kind = method if method and method != "file" else patch_kind(network.patches)
@@ -201,7 +205,8 @@ def network_png(
 
 
 def mesh_png(mesh: QuadMesh, size: tuple[int, int] = PREVIEW_SIZE) -> bytes:
-    """The PNG bytes of a quad mesh drawn flat-shaded (each quad as two triangles with its own normal)."""
+    """The PNG bytes of a quad mesh drawn flat-shaded (each quad as two triangles with its own
+    normal)."""
     from .render import render_surfaces
     from .tessellate import TriangleMesh
 
@@ -299,7 +304,8 @@ def _sharp_tags(vertices: Any, faces: Any, degrees: float | None) -> tuple[Tag, 
 
 
 def _planar_to_space(vertices: Any) -> Any:
-    """(n, 2) points as (n, 3) with z = 0 (meshio and trimesh keep 2-D meshes so); others unchanged."""
+    """(n, 2) points as (n, 3) with z = 0 (meshio and trimesh keep 2-D meshes so); others
+    unchanged."""
     array = np.asarray(vertices)
     if array.ndim == 2 and array.shape[1] == 2 and array.dtype != object:
         return np.column_stack([array, np.zeros(len(array))])
@@ -346,8 +352,10 @@ def _meshio_faces(mesh: Any) -> Any:
             skipped.append(kind)
         else:
             raise InputError(
-                f"meshio.Mesh: cell block {index} holds {kind!r} cells; g1patch smooths surfaces made of "
-                "linear triangle, quad and polygon cells (give the corner points only, without mid-edge nodes, "
+                f"meshio.Mesh: cell block {index} holds {kind!r} cells; g1patch smooths surfaces "
+                "made of "
+                "linear triangle, quad and polygon cells (give the corner points only, without "
+                "mid-edge nodes, "
                 "and the boundary of a volume mesh)"
             )
     if skipped:
@@ -364,7 +372,8 @@ def _meshio_faces(mesh: Any) -> Any:
 
 
 def _vtk_faces(flat: Any) -> Any:
-    """VTK's padded cell array ``[n0, i…, n1, j…, …]`` (pyvista's ``PolyData.faces``) as polygons."""
+    """VTK's padded cell array ``[n0, i…, n1, j…, …]`` (pyvista's ``PolyData.faces``) as
+    polygons."""
     cells = np.asarray(flat, dtype=np.int64).ravel()
     faces = []
     position = 0
@@ -372,7 +381,8 @@ def _vtk_faces(flat: Any) -> Any:
         size = int(cells[position])
         if size < 1 or position + 1 + size > len(cells):
             raise InputError(
-                f"faces: not a VTK cell array (a cell of {size} points at entry {position} of {len(cells)})"
+                f"faces: not a VTK cell array (a cell of {size} points at entry {position} of "
+                f"{len(cells)})"
             )
         faces.append(cells[position + 1 : position + 1 + size])
         position += 1 + size
@@ -408,8 +418,10 @@ def as_mesh(
         suffix = path.suffix.lower()
         if suffix in NETWORK_SUFFIXES:
             raise InputError(
-                f"{path}: is a {'network' if suffix == '.npz' else 'Bézier patch'} file, already a surface, "
-                "not a mesh to smooth; open it with g1patch.read(path) or g1patch.Surface(g1patch.read(path))"
+                f"{path}: is a {'network' if suffix == '.npz' else 'Bézier patch'} file, already "
+                "a surface, "
+                "not a mesh to smooth; open it with g1patch.read(path) or "
+                "g1patch.Surface(g1patch.read(path))"
             )
         from .io.meshfile import read_mesh
 
@@ -492,7 +504,8 @@ def as_network(surface: Any, name: str = "surface") -> PatchNetwork:
     if isinstance(surface, PatchSet):
         return network_from_patch_points(surface, source="PatchSet")
     if isinstance(surface, GregoryPatchSet):
-        # the boundary curves are the Bézier net's boundary rows: match those, keep the Gregory patches
+        # the boundary curves are the Bézier net's boundary rows: match those, keep the Gregory
+        # patches
         bezier = PatchSet(surface.to_bezier_control(), "bezier", surface.frame)
         return replace(network_from_patch_points(bezier, source="GregoryPatchSet"), patches=surface)
     if isinstance(surface, (str, os.PathLike)) and Path(surface).suffix.lower() in NETWORK_SUFFIXES:
@@ -545,7 +558,8 @@ class Surface:
 
     @property
     def provenance(self) -> dict[str, str]:
-        """How it was made: method, shape, refine, repairs, source… (:attr:`PatchNetwork.provenance`)."""
+        """How it was made: method, shape, refine, repairs, source…
+        (:attr:`PatchNetwork.provenance`)."""
         return self.network.provenance
 
     @property
@@ -595,7 +609,8 @@ class Surface:
     ) -> tuple[np.ndarray, np.ndarray]:
         """``(points (P, 3), triangles (T, 3))``: every patch sampled on a ``resolution²`` grid,
         welded along shared edges (:func:`g1patch.tessellate.tessellate`; None: about 2 M
-        triangles at most, 17 samples a side for small networks; ``force`` allows more than 20 M)."""
+        triangles at most, 17 samples a side for small networks; ``force`` allows more than 20
+        M)."""
         from .tessellate import tessellate
 
         mesh = tessellate(self.network, resolution, force=force)
@@ -743,7 +758,8 @@ def smooth(
     split: bool = True,
     tangents: str = "arc",
 ) -> Surface:
-    """The smooth surface of a mesh: exactly G1 bicubic patches (:func:`g1patch.build.build_network`).
+    """The smooth surface of a mesh: exactly G1 bicubic patches
+    (:func:`g1patch.build.build_network`).
 
     ``source``: a mesh file path, a ``(vertices, faces)`` pair, a ``meshio.Mesh``, a trimesh, a
     pyvista PolyData or a QuadMesh (:func:`as_mesh`). ``shape``: ``interpolate`` (through the
@@ -776,12 +792,14 @@ def check(surface: Any, **options: Any) -> ContinuityReport:
 
 
 def export(surface: Any, path: PathLike, **options: Any) -> Path | ExportResult:
-    """:meth:`Surface.export` of a Surface, PatchNetwork, PatchSet, GregoryPatchSet or network file."""
+    """:meth:`Surface.export` of a Surface, PatchNetwork, PatchSet, GregoryPatchSet or network
+    file."""
     wrapped = surface if isinstance(surface, Surface) else Surface(as_network(surface))
     return wrapped.export(path, **options)
 
 
 def view(surface: Any, path: PathLike | None = None, **options: Any) -> Path | str:
-    """:meth:`Surface.view` of a Surface, PatchNetwork, PatchSet, GregoryPatchSet or network file."""
+    """:meth:`Surface.view` of a Surface, PatchNetwork, PatchSet, GregoryPatchSet or network
+    file."""
     wrapped = surface if isinstance(surface, Surface) else Surface(as_network(surface))
     return wrapped.view(path, **options)

@@ -138,7 +138,8 @@ def _conversion(source: Form, target: Form) -> NDArray[np.float64]:
 
 
 def exact_conversion_matrix(source: Form, target: Form) -> RationalMatrix:
-    """Exact ``C = (M_source M_target^-1)^T``: control values ``y = C x`` describe the same cubic."""
+    """Exact ``C = (M_source M_target^-1)^T``: control values ``y = C x`` describe the same
+    cubic."""
     return _exact_conversion(
         check_choice("source", source, FORMS), check_choice("target", target, FORMS)
     )

@@ -71,7 +71,8 @@ _OPTION_KEYS = ("method", "shape", "refine", "sharp_angle", "strict")
 
 @dataclass(frozen=True)
 class BuildOptions:
-    """The options of ``g1patch build`` a batch applies to every file (see :func:`g1patch.smooth`)."""
+    """The options of ``g1patch build`` a batch applies to every file (see
+    :func:`g1patch.smooth`)."""
 
     method: str = "gregory"
     shape: str = "interpolate"
@@ -110,8 +111,9 @@ class Job:
 
 
 def parse_formats(text: str | Sequence[str]) -> tuple[str, ...]:
-    """``"npz,step,obj"`` (or a sequence of names) as ``("npz", "step", "obj")``: lower case, without
-    dots, each once; an unknown one, or none, raises :class:`InputError` listing :data:`FORMATS`."""
+    """``"npz,step,obj"`` (or a sequence of names) as ``("npz", "step", "obj")``: lower case,
+    without dots, each once; an unknown one, or none, raises :class:`InputError` listing
+    :data:`FORMATS`."""
     names = [name for name in (text.split(",") if isinstance(text, str) else text) if name.strip()]
     if not names:
         raise InputError(f"--formats: give at least one of {', '.join(FORMATS)}")
@@ -129,7 +131,8 @@ def parse_formats(text: str | Sequence[str]) -> tuple[str, ...]:
 
 
 def _check_formats(formats: Sequence[str], options: BuildOptions) -> None:
-    """Refuse, before any work, what every file would fail on: .bpt of rational patches, CAD without OCP."""
+    """Refuse, before any work, what every file would fail on: .bpt of rational patches, CAD without
+    OCP."""
     if "bpt" in formats and options.method == "gregory":
         raise InputError(
             "--formats bpt: .bpt holds polynomial Bézier patches and gregory patches are rational; "
@@ -143,9 +146,10 @@ def _check_formats(formats: Sequence[str], options: BuildOptions) -> None:
 
 
 def collect_inputs(paths: Sequence[PathLike]) -> list[Path]:
-    """The mesh files to convert, absolute, each once, in the order given: files as they are, folders
-    by the mesh files directly inside them (``.obj .ply .off``, hidden ones left out, sorted). A
-    missing path, a file of another kind or a folder without meshes raises :class:`InputError`."""
+    """The mesh files to convert, absolute, each once, in the order given: files as they are,
+    folders by the mesh files directly inside them (``.obj .ply .off``, hidden ones left out,
+    sorted). A missing path, a file of another kind or a folder without meshes raises
+    :class:`InputError`."""
     found: dict[Path, None] = {}
     for given in paths:
         path = Path(given)
@@ -159,7 +163,8 @@ def collect_inputs(paths: Sequence[PathLike]) -> list[Path]:
             )
             if not inside:
                 raise InputError(
-                    f"{path}: a folder with no mesh files ({', '.join(MESH_SUFFIXES)}) directly inside it"
+                    f"{path}: a folder with no mesh files ({', '.join(MESH_SUFFIXES)}) directly "
+                    "inside it"
                 )
             found.update(dict.fromkeys(child.resolve() for child in inside))
         elif path.is_file():
@@ -188,7 +193,8 @@ def _outputs(
         for target in targets:
             if target in writer:
                 raise InputError(
-                    f"{writer[target]} and {source} would both write {target}; rename one, or batch "
+                    f"{writer[target]} and {source} would both write {target}; rename one, or "
+                    "batch "
                     "them into different --out folders"
                 )
             writer[target] = source
@@ -197,7 +203,8 @@ def _outputs(
     for target, source in writer.items():
         if target in inputs:
             raise InputError(
-                f"{source}: its output {target} would overwrite the input {target}; choose another --out "
+                f"{source}: its output {target} would overwrite the input {target}; choose "
+                "another --out "
                 "folder or other --formats"
             )
     return result
@@ -242,7 +249,8 @@ def _reusable(previous: dict[str, Any] | None, options: BuildOptions) -> bool:
 def plan(
     sources: Sequence[Path], out: Path, formats: Sequence[str], options: BuildOptions
 ) -> tuple[list[Job], dict[str, dict[str, Any]]]:
-    """(jobs to run, records of the files skipped, by input path): see the module docstring for when a file is skipped."""
+    """(jobs to run, records of the files skipped, by input path): see the module docstring for when
+    a file is skipped."""
     previous = _previous_records(out)
     jobs, skipped = [], {}
     for source, targets in _outputs(sources, out, formats).items():
@@ -402,7 +410,8 @@ def _embedded_worker_setup() -> Any:
 def _client(
     stack: ExitStack, scheduler: str | None, workers: int | None, n_jobs: int
 ) -> tuple[Any, str]:
-    """A connected ``distributed.Client`` (closed by ``stack``) and a phrase saying where it runs."""
+    """A connected ``distributed.Client`` (closed by ``stack``) and a phrase saying where it
+    runs."""
     Client, LocalCluster = _distributed().Client, _distributed().LocalCluster
     if scheduler is None:
         count = workers or min(_cores(), n_jobs)
@@ -413,7 +422,8 @@ def _client(
                 processes=True,
                 host="127.0.0.1",
                 dashboard_address=None,
-                silence_logs=logging.CRITICAL,  # a record says what failed; no shutdown races on stderr
+                # a record says what failed; no shutdown races on stderr
+                silence_logs=logging.CRITICAL,
             )
         )
         client = stack.enter_context(Client(cluster))
@@ -495,7 +505,8 @@ def run_batch(
     workers: int | None = None,
     progress: bool = False,
 ) -> list[dict[str, Any]]:
-    """Convert ``inputs`` (mesh files and folders of them) into ``out``: the records, in input order.
+    """Convert ``inputs`` (mesh files and folders of them) into ``out``: the records, in input
+    order.
 
     ``formats``: what to write per file (:data:`FORMATS`, e.g. ``"npz,step,obj"``). ``options``:
     the build options. ``scheduler``: the address of an existing Dask scheduler; without it an

@@ -194,14 +194,15 @@ def _guarded(
 ) -> tuple[A, Targets]:
     """Assemble, and where faces fold retreat their vertices' targets (module docstring). Only the
     faces at risk (:func:`_faces_at_risk`) of ``patches_of(assemble(targets))`` are tested (an
-    assembly may return more than the patches: the caller gets the best attempt's whole result); the retreated set only grows, each step
-    starts again from the rule's own targets, and from the second step on it takes in the faces'
-    1-rings too (a face depends on its corners' targets only, but a fully retreated corner next to
-    an untouched one can fold the face between). The guard returns the attempt with the fewest
-    folded faces: a retreat can fold more than it mends (where the 1-ring of a folded face is
-    most of the mesh, as around the centre of a large polygon's split), and the guard never makes
-    a surface worse than the rule's own. Faces a step does not test kept their corners' targets
-    (every retreated corner is a fallback, so its faces are at risk), hence their state."""
+    assembly may return more than the patches: the caller gets the best attempt's whole result); the
+    retreated set only grows, each step starts again from the rule's own targets, and from the
+    second step on it takes in the faces' 1-rings too (a face depends on its corners' targets only,
+    but a fully retreated corner next to an untouched one can fold the face between). The guard
+    returns the attempt with the fewest folded faces: a retreat can fold more than it mends (where
+    the 1-ring of a folded face is most of the mesh, as around the centre of a large polygon's
+    split), and the guard never makes a surface worse than the rule's own. Faces a step does not
+    test kept their corners' targets (every retreated corner is a fallback, so its faces are at
+    risk), hence their state."""
     topology = targets.topology
     assembled = assemble(targets)
     retreated = np.zeros(topology.n_vertices, dtype=bool)
@@ -260,7 +261,8 @@ def build_network(
     (``arc`` or ``chord``) applies to ``legacy`` only. ``refine``: Catmull–Clark steps applied to
     the mesh first (:func:`g1patch.subdivision.refine`); the limit shapes refine at least
     :func:`semi_sharp_levels` steps, so semi-sharp creases follow OpenSubdiv's limit. The network's
-    provenance records the choices (the steps actually taken) and how many vertices needed a fallback.
+    provenance records the choices (the steps actually taken) and how many vertices needed a
+    fallback.
     """
     check_choice("method", method, METHODS)
     check_choice("shape", shape, SHAPES)
@@ -296,7 +298,9 @@ def build_network(
         def assemble_split4(t: Targets) -> Split4Parts:
             return split4_patches(t, t.positions, np.zeros(3), 1.0)
 
-        if guard:  # the guard's best assembly is the network's: built once (interpolate's positions are the vertices)
+        # the guard's best assembly is the network's: built once (interpolate's positions are the
+        # vertices)
+        if guard:
             parts, targets = _guarded(targets, assemble_split4, 4, lambda p: p[0])
         else:
             parts = assemble_split4(targets)
@@ -320,7 +324,8 @@ def build_network(
             )
         if mesh.features.holes.any():
             logger.warning(
-                "split4 does not leave holes open yet: the %d hole faces get patches (use --method gregory)",
+                "split4 does not leave holes open yet: the %d hole faces get patches (use "
+                "--method gregory)",
                 int(mesh.features.holes.sum()),
             )
         return network

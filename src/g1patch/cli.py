@@ -1,10 +1,11 @@
 """The ``g1patch`` command line: a thin shell over build, check, export, render, demo and batch.
 
-Exit codes: 0 success; 1 a check failed (``check --max-angle``) or a file of a batch failed; 2 bad input or any other
-error g1patch reports (one line on stderr naming the path given and the reason, no partial output
-file); 130 interrupted (Ctrl-C, SIGINT), 143 terminated (SIGTERM), 129 hung up (SIGHUP): one line
-on stderr, the output file not written and its temporary removed; 141 standard output is a closed
-pipe (``g1patch check x.npz | head -1``): quietly, as a Unix tool killed by SIGPIPE.
+Exit codes: 0 success; 1 a check failed (``check --max-angle``) or a file of a batch failed; 2 bad
+input or any other error g1patch reports (one line on stderr naming the path given and the reason,
+no partial output file); 130 interrupted (Ctrl-C, SIGINT), 143 terminated (SIGTERM), 129 hung up
+(SIGHUP): one line on stderr, the output file not written and its temporary removed; 141 standard
+output is a closed pipe (``g1patch check x.npz | head -1``): quietly, as a Unix tool killed by
+SIGPIPE.
 
 Outputs are written like a Unix tool's: mode ``0o666 & ~umask`` (see :mod:`g1patch.io.atomic`),
 complete or not at all. Sizes are bounded by default: ``export`` to a mesh aims at about 2 M
@@ -42,12 +43,12 @@ CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
 _EXAMPLES = {
     "build": """examples:
   g1patch build mesh.obj -o surface.npz                  # exact G1 (Gregory), the default
-  g1patch build mesh.ply -o surface.npz --check          # and the continuity report, measured while the file is written
+  g1patch build mesh.ply -o surface.npz --check          # and the report, while the file is written
   g1patch build cube.obj -o cube.npz --method corner     # the paper's corner-G1 patches
   g1patch build mesh.obj -o cad.npz --method split4      # exact G1, polynomial: exact in STEP
-  g1patch build cage.obj -o limit.npz --shape limit      # the Catmull–Clark limit of a control cage, exactly G1
+  g1patch build cage.obj -o limit.npz --shape limit      # the Catmull–Clark limit of a cage
   g1patch build cage.obj -o fine.npz --shape limit --refine 1
-  g1patch build mesh.off -o old.npz --shape legacy --tangents chord   # the first release's rules""",
+  g1patch build mesh.off -o old.npz --shape legacy --tangents chord  # the first rules""",
     "check": """examples:
   g1patch check surface.npz
   g1patch check teapot.bpt --json
@@ -55,8 +56,8 @@ _EXAMPLES = {
     "export": """examples:
   g1patch export surface.npz -o surface.obj            # about 2 M triangles at most
   g1patch export surface.npz -o surface.obj --resolution 33
-  g1patch export surface.npz -o surface.step            # exact G1 B-splines (Gregory: its split4 re-assembly)
-  g1patch export surface.npz -o surface.step --json     # the figures (faces, bytes, deviation, OCC's G1 angle) as JSON
+  g1patch export surface.npz -o surface.step            # exact G1 B-splines
+  g1patch export surface.npz -o surface.step --json     # faces, bytes, deviation, OCC's angle
   g1patch export surface.npz -o patches.bpt             # Bezier patches (polynomial networks)""",
     "render": """examples:
   g1patch render surface.npz -o surface.png
@@ -69,9 +70,9 @@ _EXAMPLES = {
     "demo": """example:
   g1patch demo --out out""",
     "batch": """examples:
-  g1patch batch meshes/ --out out                        # every .obj .ply .off inside, on a local cluster
+  g1patch batch meshes/ --out out                        # every .obj .ply .off, local cluster
   g1patch batch a.obj b.ply --out out --formats npz,step,obj --method split4
-  g1patch batch meshes/ --out out --workers 2 -q         # again: skips files whose outputs are newer
+  g1patch batch meshes/ --out out --workers 2 -q         # again: skips what is up to date
   g1patch batch meshes/ --out out --scheduler tcp://127.0.0.1:8786   # an existing Dask cluster""",
 }
 
@@ -84,7 +85,8 @@ def _parser() -> argparse.ArgumentParser:
 
     parser = argparse.ArgumentParser(
         prog="g1patch",
-        description="Quad meshes to smooth bicubic patch networks, with a continuity report that proves it.",
+        description="Quad meshes to smooth bicubic patch networks, with a continuity report that "
+        "proves it.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog="run 'g1patch COMMAND --help' for a command's options and examples",
     )
@@ -118,7 +120,8 @@ def _parser() -> argparse.ArgumentParser:
         "--shape",
         choices=SHAPES,
         default="interpolate",
-        help="interpolate: through the vertices, fitted normals, flexible tangent fans, curvature-carrying "
+        help="interpolate: through the vertices, fitted normals, flexible tangent fans, "
+        "curvature-carrying "
         "twists (default); limit: the Catmull–Clark limit of the mesh as a control cage; "
         "legacy: the first release's rules (fan normal, regular star, bilinear twist)",
     )
@@ -163,12 +166,14 @@ def _parser() -> argparse.ArgumentParser:
         type=float,
         metavar="DEG",
         help="keep edges whose faces' normals differ by more than DEG degrees sharp (creases), and "
-        "vertices with three such edges as corners (default: off; the file's own tags always count)",
+        "vertices with three such edges as corners (default: off; the file's own tags always "
+        "count)",
     )
     build.add_argument(
         "--check",
         action="store_true",
-        help="also measure the network's continuity, as 'g1patch check' does, while the file is written, "
+        help="also measure the network's continuity, as 'g1patch check' does, while the file is "
+        "written, "
         "and print the report",
     )
 
@@ -180,7 +185,8 @@ def _parser() -> argparse.ArgumentParser:
         "--max-angle",
         type=float,
         metavar="DEG",
-        help="exit 1 if a G1 angle (seams aside) exceeds DEG degrees, the surface folds or a seam is open (G0)",
+        help="exit 1 if a G1 angle (seams aside) exceeds DEG degrees, the surface folds or a seam "
+        "is open (G0)",
     )
     check.add_argument(
         "--samples", type=int, default=33, help="samples per edge, both ends included (default: 33)"
@@ -217,13 +223,15 @@ def _parser() -> argparse.ArgumentParser:
         "--tolerance",
         type=float,
         metavar="REL",
-        help="CAD: fit tolerance for rational patches, relative to the bbox diagonal (default: 1e-6)",
+        help="CAD: fit tolerance for rational patches, relative to the bbox diagonal (default: "
+        "1e-6)",
     )
     export.add_argument(
         "--cad-method",
         choices=CAD_METHODS,
         default="auto",
-        help="CAD, Gregory networks: split4 = re-assemble their targets polynomially (exact G1 in CAD), "
+        help="CAD, Gregory networks: split4 = re-assemble their targets polynomially (exact G1 in "
+        "CAD), "
         "fit = fit each patch (closest, but CAD sees kinks); auto (default): split4, or fit where "
         "split4 cannot re-assemble the network",
     )
@@ -232,8 +240,10 @@ def _parser() -> argparse.ArgumentParser:
         type=float,
         metavar="REL",
         default=DEVIATION_RTOL,
-        help="CAD, split4 re-assembly of Gregory networks: cut each patch into n × n quads (n = 2, 3, 4, 6, 8) "
-        "until the exact surface lies within REL × the bbox diagonal of the network's (default: %(default)g)",
+        help="CAD, split4 re-assembly of Gregory networks: cut each patch into n × n quads (n = "
+        "2, 3, 4, 6, 8) "
+        "until the exact surface lies within REL × the bbox diagonal of the network's (default: "
+        "%(default)g)",
     )
     export.add_argument(
         "--json", action="store_true", help="CAD: print the figures as one JSON object"
@@ -294,7 +304,8 @@ def _parser() -> argparse.ArgumentParser:
 
     batch = command(
         "batch",
-        "build, check and export many meshes on a Dask cluster, with a summary (needs g1patch[batch])",
+        "build, check and export many meshes on a Dask cluster, with a summary (needs "
+        "g1patch[batch])",
     )
     batch.add_argument(
         "inputs",
@@ -313,7 +324,8 @@ def _parser() -> argparse.ArgumentParser:
         "--formats",
         default="npz",
         metavar="LIST",
-        help="comma-separated formats to write per file: npz (network), obj, ply, stl, step, iges, bpt "
+        help="comma-separated formats to write per file: npz (network), obj, ply, stl, step, "
+        "iges, bpt "
         "(default: npz)",
     )
     batch.add_argument(
@@ -384,7 +396,8 @@ def _camera_options(args: argparse.Namespace) -> dict[str, Any]:
 
 @contextmanager
 def _progress(label: str, quiet: bool) -> Iterator[Callable[[int, int], None]]:
-    """A ``progress(done, total)`` callback drawing a bar on stderr; silent when quiet or not a terminal."""
+    """A ``progress(done, total)`` callback drawing a bar on stderr; silent when quiet or not a
+    terminal."""
     if quiet or not sys.stderr.isatty():
         yield lambda done, total: None
         return
@@ -411,7 +424,10 @@ def _load_surface(path: Path) -> Any:
     from .io.network_file import describe_file, load_network
     from .network import network_from_patch_points
 
-    expects = "check and render read a network file (.npz) written by g1patch build, or Bézier patches (.bpt)"
+    expects = (
+        "check and render read a network file (.npz) written by g1patch build, "
+        "or Bézier patches (.bpt)"
+    )
     suffix = path.suffix.lower()
     if suffix == ".bpt":
         return network_from_patch_points(read_bpt(path), source=str(path))
@@ -621,14 +637,16 @@ def _cad_export_text(result: Any, corner_only: bool) -> str:
     lines = [
         f"wrote {result.faces} {kind}{', a closed solid' if result.solid else ''}, "
         f"{_size_text(result.file_bytes, 'B')} -> {result.path}",
-        f"max deviation from the network's surface: {result.deviation:.3e} ({result.relative_deviation:.2e} of the "
+        f"max deviation from the network's surface: {result.deviation:.3e} "
+        f"({result.relative_deviation:.2e} of the "
         f"bbox diagonal{', split4 vs Gregory' if result.method == 'split4' else ''})",
     ]
     if result.method_note:
         lines.append(result.method_note)
     if result.g1_measured:
         lines.append(
-            f"max G1 angle across shared edges, measured on OpenCASCADE's surfaces: {result.max_g1_angle_deg:.3e}°"
+            "max G1 angle across shared edges, measured on OpenCASCADE's surfaces: "
+            f"{result.max_g1_angle_deg:.3e}°"
         )
     else:
         lines.append(f"G1 angle across shared edges: {result.g1_note}")
@@ -640,7 +658,8 @@ def _cad_export_text(result: Any, corner_only: bool) -> str:
         angles = (
             ""
             if result.seam_angle_min_deg is None
-            else f", their faces meet at {result.seam_angle_min_deg:.4g}° to {result.seam_angle_max_deg:.4g}°"
+            else f", their faces meet at {result.seam_angle_min_deg:.4g}° to "
+            f"{result.seam_angle_max_deg:.4g}°"
         )
         lines.append(f"{result.seam_edges} seams kept as sharp edges{angles}")
     return "\n".join(lines)
@@ -648,7 +667,8 @@ def _cad_export_text(result: Any, corner_only: bool) -> str:
 
 def _estimated_file_size(suffix: str, n_points: int, n_triangles: int) -> int:
     """Bytes of a triangle mesh file, about: OBJ ~60 bytes a point (shortest round-trip digits)
-    and 3 indices a triangle; binary PLY 24 bytes a point, 13 a triangle; binary STL 50 a triangle."""
+    and 3 indices a triangle; binary PLY 24 bytes a point, 13 a triangle; binary STL 50 a
+    triangle."""
     if suffix == ".obj":
         return 60 * n_points + (3 * (len(str(max(n_points, 1))) + 1) + 2) * n_triangles
     if suffix == ".ply":
@@ -657,7 +677,8 @@ def _estimated_file_size(suffix: str, n_points: int, n_triangles: int) -> int:
 
 
 def _check_export_size(n_patches: int, resolution: int, suffix: str, force: bool) -> None:
-    """Refuse (exit 2) an explicit ``--resolution`` above the triangle cap without ``--force``, with the sizes."""
+    """Refuse (exit 2) an explicit ``--resolution`` above the triangle cap without ``--force``, with
+    the sizes."""
     from .errors import InputError
     from .tessellate import MAX_TRIANGLES, _size_text, estimated_memory, triangle_count
 
@@ -671,7 +692,8 @@ def _check_export_size(n_patches: int, resolution: int, suffix: str, force: bool
     size = _size_text(_estimated_file_size(suffix, points, triangles), "B")
     memory = _size_text(estimated_memory(n_patches, resolution), "B")
     raise InputError(
-        f"--resolution {resolution} on {n_patches} patches would write {_size_text(triangles)} triangles "
+        f"--resolution {resolution} on {n_patches} patches would write {_size_text(triangles)} "
+        "triangles "
         f"(~{size}, ~{memory} of memory); use --force or a lower resolution "
         f"(at most {largest} stays within {_size_text(MAX_TRIANGLES)} triangles)"
     )
@@ -737,7 +759,8 @@ def _view(args: argparse.Namespace) -> int:
         args.output, resolution=resolution, force=args.force, **_camera_options(args)
     )
     print(
-        f"wrote a viewer of {network.n_patches} patches, {triangle_count(network.n_patches, resolution)} triangles "
+        f"wrote a viewer of {network.n_patches} patches, "
+        f"{triangle_count(network.n_patches, resolution)} triangles "
         f"({_size_text(path.stat().st_size, 'B')}) -> {path}"
     )
     return EXIT_OK
@@ -772,14 +795,16 @@ def _demo(args: argparse.Namespace) -> int:
     diagonal, anti = hermite.diagonal_polynomials()
     print(
         f"   Degrees of its diagonal and anti-diagonal: {int(polynomial_degree(diagonal)[0])} and "
-        f"{int(polynomial_degree(anti)[0])} (S-/HS closure |C| = {np.linalg.norm(hermite.closure()[0]):.1e})."
+        f"{int(polynomial_degree(anti)[0])} (S-/HS closure |C| = "
+        f"{np.linalg.norm(hermite.closure()[0]):.1e})."
     )
     print("2. g1patch's default: the interpolating Gregory network, G1 along every edge.")
     print(
         "3. g1patch's polynomial option: 2x2 bicubic pieces per quad, G1 everywhere, exact in CAD."
     )
     print(
-        "4. The cube as a subdivision cage: the Catmull–Clark limit (what a SubD modeller shows), exactly G1.\n"
+        "4. The cube as a subdivision cage: the Catmull–Clark limit (what a SubD modeller shows), "
+        "exactly G1.\n"
     )
     reports = [check(network) for network in (corner, gregory, split4, limit)]
     corner_report, gregory_report, split4_report, limit_report = reports
@@ -798,16 +823,20 @@ def _demo(args: argparse.Namespace) -> int:
     limit_radius = np.linalg.norm(limit.patches.evaluate_grid(np.linspace(0, 1, 17)), axis=-1)
     exact = max(report.max_edge_angle_deg for report in reports[1:])
     print(
-        "\nThe paper's conditions hold at the corners (angle ~1e-14°) but its patches crease along every"
+        "\nThe paper's conditions hold at the corners (angle ~1e-14°) but its patches crease "
+        "along every"
     )
     print(
-        f"edge by {corner_report.max_edge_angle_deg:.1f}°; the other three are G1 everywhere (max {exact:.1e}°)."
+        f"edge by {corner_report.max_edge_angle_deg:.1f}°; the other three are G1 everywhere (max "
+        f"{exact:.1e}°)."
     )
     print(
-        f"The interpolating Gregory cube is a sphere: radius {radius.min():.4f}..{radius.max():.4f} (√3 = 1.7321);"
+        "The interpolating Gregory cube is a sphere: radius "
+        f"{radius.min():.4f}..{radius.max():.4f} (√3 = 1.7321);"
     )
     print(
-        f"the limit surface lies inside the cage: radius {limit_radius.min():.4f}..{limit_radius.max():.4f}."
+        "the limit surface lies inside the cage: radius "
+        f"{limit_radius.min():.4f}..{limit_radius.max():.4f}."
     )
 
     args.out.mkdir(parents=True, exist_ok=True)
@@ -866,7 +895,8 @@ def _raise_terminated(signum: int, frame: object) -> None:
 @contextmanager
 def _signal_handlers() -> Iterator[None]:
     """SIGTERM and SIGHUP raise :class:`Terminated` while the command runs (unless ignored, as under
-    ``nohup``); the previous handlers come back afterwards. SIGINT keeps Python's KeyboardInterrupt."""
+    ``nohup``); the previous handlers come back afterwards. SIGINT keeps Python's
+    KeyboardInterrupt."""
     installed: dict[int, Any] = {}
     try:
         for name in ("SIGTERM", "SIGHUP"):
@@ -910,7 +940,8 @@ def _os_error_text(error: OSError) -> str:
 
 
 def _quiet_stdout() -> None:
-    """After EPIPE on stdout: point it at /dev/null, so that the interpreter's last flush is silent."""
+    """After EPIPE on stdout: point it at /dev/null, so that the interpreter's last flush is
+    silent."""
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
@@ -953,7 +984,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         except MemoryError as error:
             detail = f" ({error})" if str(error) else ""
             _say(
-                f"g1patch: error: out of memory{detail}; try a lower --resolution, --samples or --size"
+                f"g1patch: error: out of memory{detail}; try a lower --resolution, --samples or "
+                "--size"
             )
             return EXIT_ERROR
 

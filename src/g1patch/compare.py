@@ -87,7 +87,8 @@ def patch_samples(network: PatchNetwork, face_steps: int) -> int:
 
 
 def surface_samples(network: PatchNetwork, samples: int) -> tuple[FloatArray, FloatArray]:
-    """Positions and unit normals on a uniform ``samples × samples`` grid per patch, both ``(N, S, S, 3)``.
+    """Positions and unit normals on a uniform ``samples × samples`` grid per patch, both ``(N, S,
+    S, 3)``.
 
     Normals are ``p_u × p_v`` normalised (works for :class:`PatchSet` and :class:`GregoryPatchSet`);
     the zero vector where that cross product is exactly zero.
@@ -108,7 +109,8 @@ def surface_samples(network: PatchNetwork, samples: int) -> tuple[FloatArray, Fl
 
 @dataclass(frozen=True)
 class Deviation:
-    """Distance of a network's samples from an exact surface, and the angle of its normals from the surface's."""
+    """Distance of a network's samples from an exact surface, and the angle of its normals from the
+    surface's."""
 
     max_distance: float
     mean_distance: float
@@ -158,8 +160,8 @@ def distance_to_torus(
 
 @dataclass(frozen=True)
 class Reference:
-    """A reference surface as a quad mesh: ``points`` (M, 3), ``faces`` (K, 4) and the refinement ``levels``
-    that made it from the cage (so its edges are 2^-levels of a cage edge)."""
+    """A reference surface as a quad mesh: ``points`` (M, 3), ``faces`` (K, 4) and the refinement
+    ``levels`` that made it from the cage (so its edges are 2^-levels of a cage edge)."""
 
     points: FloatArray
     faces: NDArray[np.int64]
@@ -172,13 +174,15 @@ class Reference:
 
 
 def reference_path(mesh_file: str | Path) -> Path:
-    """Where the Catmull–Clark reference of a shared mesh file lives: ``reference/NAME.limit.npz`` beside it."""
+    """Where the Catmull–Clark reference of a shared mesh file lives: ``reference/NAME.limit.npz``
+    beside it."""
     mesh_file = Path(mesh_file)
     return mesh_file.parent / "reference" / f"{mesh_file.stem}.limit.npz"
 
 
 def load_reference(path: str | Path) -> Reference:
-    """Read a ``NAME.limit.npz`` reference: arrays ``points`` (M, 3), ``faces`` (K, 4), ``levels`` (scalar).
+    """Read a ``NAME.limit.npz`` reference: arrays ``points`` (M, 3), ``faces`` (K, 4), ``levels``
+    (scalar).
 
     Points are returned as float64, faces as int64. Raises :class:`FormatError` naming the file
     when it cannot be read, is not an ``.npz`` archive, lacks an array, or has wrong shapes,
@@ -201,7 +205,8 @@ def load_reference(path: str | Path) -> Reference:
         if missing:
             raise FormatError(
                 path,
-                f"missing array(s) {', '.join(missing)}; the archive has {', '.join(archive.files) or 'none'}",
+                f"missing array(s) {', '.join(missing)}; the archive has "
+                f"{', '.join(archive.files) or 'none'}",
             )
         try:
             raw = {name: archive[name] for name in ("points", "faces", "levels")}
@@ -220,7 +225,8 @@ def load_reference(path: str | Path) -> Reference:
     if faces.ndim != 2 or faces.shape[1] != 4 or faces.dtype.kind not in "iu" or not len(faces):
         raise FormatError(
             path,
-            f"faces: expected an integer array of shape (K, 4), K ≥ 1, got {faces.dtype} {faces.shape}",
+            f"faces: expected an integer array of shape (K, 4), K ≥ 1, got {faces.dtype} "
+            f"{faces.shape}",
         )
     if faces.min() < 0 or faces.max() >= len(points):
         raise FormatError(
@@ -230,13 +236,15 @@ def load_reference(path: str | Path) -> Reference:
     if levels.shape != () or levels.dtype.kind not in "iu" or int(levels) < 0:
         raise FormatError(
             path,
-            f"levels: expected a non-negative integer scalar, got {levels.dtype} {levels.shape} {levels!r}",
+            f"levels: expected a non-negative integer scalar, got {levels.dtype} {levels.shape} "
+            f"{levels!r}",
         )
     return Reference(points.astype(np.float64), faces.astype(np.int64), int(levels), path)
 
 
 def _triangles(points: FloatArray, faces: NDArray[np.int64]) -> FloatArray:
-    """The corner positions (T, 3, 3) of the triangles of ``faces``: triangles as given, quads split along 0–2."""
+    """The corner positions (T, 3, 3) of the triangles of ``faces``: triangles as given, quads split
+    along 0–2."""
     if faces.shape[1] == 4:
         faces = np.concatenate([faces[:, [0, 1, 2]], faces[:, [0, 2, 3]]])
     return points[faces]
@@ -278,7 +286,8 @@ def _barycentric_closest(
 def closest_points_on_triangles(
     points: ArrayLike, a: ArrayLike, b: ArrayLike, c: ArrayLike
 ) -> FloatArray:
-    """The closest point to each of ``points`` on triangle (a, b, c); all (..., 3), broadcast together."""
+    """The closest point to each of ``points`` on triangle (a, b, c); all (..., 3), broadcast
+    together."""
     p, a, b, c = np.broadcast_arrays(
         *(as_float_array(name, value, (3,)) for name, value in zip("pabc", (points, a, b, c)))
     )
@@ -296,7 +305,8 @@ def closest_points_on_triangles(
 @dataclass(frozen=True)
 class _TriangleSearch:
     """Triangles prepared for :func:`mesh_distance`: corner a, edges ab, ac, their Gram entries,
-    each triangle's reach (largest centroid-to-corner distance), and a k-d tree over the centroids."""
+    each triangle's reach (largest centroid-to-corner distance), and a k-d tree over the
+    centroids."""
 
     a: FloatArray
     ab: FloatArray
@@ -362,7 +372,8 @@ class _TriangleSearch:
 
 
 def mesh_distance(samples: ArrayLike, points: ArrayLike, faces: ArrayLike) -> FloatArray:
-    """Exact distance from each sample point (..., 3) to the triangulated mesh ``points``, ``faces``.
+    """Exact distance from each sample point (..., 3) to the triangulated mesh ``points``,
+    ``faces``.
 
     ``faces`` (K, 3) triangles or (K, 4) quads (split along the diagonal 0–2). The distance to
     the nearest mesh vertex is an upper bound; a triangle whose centroid is r away is at least
@@ -384,7 +395,8 @@ def mesh_distance(samples: ArrayLike, points: ArrayLike, faces: ArrayLike) -> Fl
         )
     if polygons.min() < 0 or polygons.max() >= len(vertices):
         raise InputError(
-            f"faces: indices must lie in 0..{len(vertices) - 1}, found {polygons.min()}..{polygons.max()}"
+            f"faces: indices must lie in 0..{len(vertices) - 1}, found "
+            f"{polygons.min()}..{polygons.max()}"
         )
     triangles = _triangles(vertices, polygons)
     reach = np.linalg.norm(triangles - triangles.mean(axis=1, keepdims=True), axis=-1).max(axis=1)
@@ -433,8 +445,8 @@ def reference_vertex_normals(points: ArrayLike, faces: ArrayLike) -> FloatArray:
 
 
 def reference_normal_turns(points: ArrayLike, faces: ArrayLike) -> FloatArray:
-    """The turn, in degrees, between the vertex normals (:func:`reference_vertex_normals`) at the two
-    ends of every edge of the quad mesh, each edge once."""
+    """The turn, in degrees, between the vertex normals (:func:`reference_vertex_normals`) at the
+    two ends of every edge of the quad mesh, each edge once."""
     quads = as_index_array("faces", faces, (4,))
     normals = reference_vertex_normals(points, quads)
     ends = np.stack([quads, np.roll(quads, -1, axis=1)], axis=-1).reshape(-1, 2)
@@ -468,7 +480,8 @@ def turn_percentiles(turns: ArrayLike) -> dict[str, float]:
 
 @dataclass(frozen=True)
 class FairnessComparison:
-    """Normal-turn percentiles (degrees) of a network and of its reference, on grids of the same step."""
+    """Normal-turn percentiles (degrees) of a network and of its reference, on grids of the same
+    step."""
 
     network: dict[str, float]
     reference: dict[str, float]
@@ -476,7 +489,8 @@ class FairnessComparison:
 
     @property
     def p99_ratio(self) -> float:
-        """Network p99 / reference p99: the DESIGN §5 bar is ≤ 1.5 (interpolating), ≤ 1.1 (limit mode)."""
+        """Network p99 / reference p99: the DESIGN §5 bar is ≤ 1.5 (interpolating), ≤ 1.1 (limit
+        mode)."""
         return self.network["p99"] / self.reference["p99"]
 
 

@@ -1,4 +1,5 @@
-"""How smooth is a patch network? G0 gaps and G1 angles on every shared edge and corner, folds, fairness.
+"""How smooth is a patch network? G0 gaps and G1 angles on every shared edge and corner, folds,
+fairness.
 
 For every interior edge shared by patches L and R the edge is sampled at K ≥ 33 parameters,
 both ends included, from both sides; exact first derivatives give the normals
@@ -115,7 +116,8 @@ def angle_between(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.
 
 @dataclass(frozen=True)
 class ContinuityReport:
-    """The measured smoothness of a network (angles in degrees, gaps relative to the bbox diagonal)."""
+    """The measured smoothness of a network (angles in degrees, gaps relative to the bbox
+    diagonal)."""
 
     patches: int
     shared_edges: int
@@ -156,7 +158,8 @@ class ContinuityReport:
 
     @property
     def worst_edge(self) -> dict[str, Any] | None:
-        """The smooth (non-seam) shared edge with the largest G1 angle: its patches, edges, angle and gap."""
+        """The smooth (non-seam) shared edge with the largest G1 angle: its patches, edges, angle
+        and gap."""
         if self.shared_edges == self.seam_edges:
             return None
         index = int(np.argmax(np.where(self.edge_seam, -np.inf, self.edge_angle_deg)))
@@ -243,7 +246,8 @@ class ContinuityReport:
             ("folds", f"{self.folds}"),
             (
                 "normal turn median / p99 / max",
-                f"{self.turn_median_deg:.3g}° / {self.turn_p99_deg:.3g}° / {self.turn_max_deg:.3g}°",
+                f"{self.turn_median_deg:.3g}° / {self.turn_p99_deg:.3g}° / "
+                f"{self.turn_max_deg:.3g}°",
             ),
             ("thin-plate energy (of diag²)", f"{self.thin_plate:.4g}"),
         ]
@@ -309,7 +313,8 @@ class ContinuityReport:
         return f"{g1}, {folds}{seams}"
 
     def __repr__(self) -> str:
-        return f"<ContinuityReport {self.patches} patches, {self.shared_edges} shared edges: {self.verdict()}>"
+        edges = f"{self.shared_edges} shared edges"
+        return f"<ContinuityReport {self.patches} patches, {edges}: {self.verdict()}>"
 
     def __str__(self) -> str:
         return self.summary()
@@ -320,7 +325,8 @@ class ContinuityReport:
 
         verdict = "passes" if self.passes() else "fails"
         cells = "".join(
-            f"<tr><td style='text-align:left'>{escape(label)}</td><td style='text-align:left'>{escape(value)}</td></tr>"
+            f"<tr><td style='text-align:left'>{escape(label)}</td><td "
+            f"style='text-align:left'>{escape(value)}</td></tr>"
             for label, value in self.rows()
         )
         return (
@@ -351,7 +357,8 @@ KERNEL_PATCHES = 20_000
 
 
 def _kernels_wanted(compiled: bool | None, count: int) -> bool:
-    """Whether to use the kernels: ``compiled`` when given, else from :data:`KERNEL_PATCHES` patches on."""
+    """Whether to use the kernels: ``compiled`` when given, else from :data:`KERNEL_PATCHES` patches
+    on."""
     return count >= KERNEL_PATCHES if compiled is None else compiled
 
 
@@ -578,10 +585,10 @@ def _grid_measures(
 
 
 def _patch_block(resolution: int) -> int:
-    """Patches per block of the grid measures: about :data:`g1patch._grid.BLOCK_POINTS` grid samples,
-    so the block's arrays stay in the L2 cache and its GEMMs below the size at which OpenBLAS
-    splits them over threads (measured: 33 µs per patch at 17² samples in blocks of 64 patches,
-    83 µs in blocks of 467)."""
+    """Patches per block of the grid measures: about :data:`g1patch._grid.BLOCK_POINTS` grid
+    samples, so the block's arrays stay in the L2 cache and its GEMMs below the size at which
+    OpenBLAS splits them over threads (measured: 33 µs per patch at 17² samples in blocks of 64
+    patches, 83 µs in blocks of 467)."""
     return max(1, BLOCK_POINTS // resolution**2)
 
 
@@ -625,13 +632,15 @@ def _check_count(name: str, value: object, least: int) -> None:
 
 
 def _local(patches: Patches) -> Patches:
-    """The patches in their local coordinates (frame-free), or the patches when they have no frame."""
+    """The patches in their local coordinates (frame-free), or the patches when they have no
+    frame."""
     return patches.local() if hasattr(patches, "local") else patches  # type: ignore[no-any-return]
 
 
 def _diagonal(points: NDArray[np.float64]) -> float:
     """Length of the diagonal of the bounding box of ``points`` (..., 3) (each coordinate's extremes
-    over its strided column: NumPy reduces ``axis=0`` of ``(M, 3)`` 3 values at a time, 20× slower)."""
+    over its strided column: NumPy reduces ``axis=0`` of ``(M, 3)`` 3 values at a time, 20×
+    slower)."""
     flat = points.reshape(-1, 3)
     if not len(flat):
         return 0.0
@@ -648,8 +657,8 @@ def _corner_points(patches: Patches) -> NDArray[np.float64]:
 
 
 def _world_diagonal(network: PatchNetwork, corners: NDArray[np.float64]) -> float:
-    """:meth:`PatchNetwork.bounding_box_diagonal` from the local ``corners`` of its patches (the same
-    ``c + s x`` that the patches' world evaluation applies)."""
+    """:meth:`PatchNetwork.bounding_box_diagonal` from the local ``corners`` of its patches (the
+    same ``c + s x`` that the patches' world evaluation applies)."""
     patches = network.patches
     if isinstance(patches, GregoryPatchSet) and patches.frame is not None:
         return _diagonal(patches.frame.to_world(corners))
@@ -659,9 +668,9 @@ def _world_diagonal(network: PatchNetwork, corners: NDArray[np.float64]) -> floa
 def _world_extent_diagonal(
     network: PatchNetwork, low: NDArray[np.float64], high: NDArray[np.float64]
 ) -> float:
-    """:func:`_world_diagonal` from the local corners' box ``low``, ``high``: ``c + s x`` is monotone in
-    each coordinate (both roundings are), so the world corners' extremes are the images of the
-    local ones, exactly."""
+    """:func:`_world_diagonal` from the local corners' box ``low``, ``high``: ``c + s x`` is
+    monotone in each coordinate (both roundings are), so the world corners' extremes are the images
+    of the local ones, exactly."""
     patches = network.patches
     if isinstance(patches, GregoryPatchSet) and patches.frame is not None:
         ends = patches.frame.to_world(np.stack([low, high]))
@@ -732,7 +741,8 @@ def _edge_samples(
     backwards: NDArray[np.bool_],
     t: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Points and normals ``p_u × p_v`` at ``t`` along the given patch edges, each planar ``(3, E, K)``.
+    """Points and normals ``p_u × p_v`` at ``t`` along the given patch edges, each planar ``(3, E,
+    K)``.
 
     Edge k is run counter-clockwise, or from its far end where ``backwards``. The eight
     (edge, direction) groups share their parameters, so each group is one batched product.
@@ -845,7 +855,8 @@ def _turn_deg(chord2: float) -> float:
 
 
 class _GridMeasures:
-    """Degenerate normals, folds and fairness on a ``resolution²`` grid per patch, accumulated block by block.
+    """Degenerate normals, folds and fairness on a ``resolution²`` grid per patch, accumulated block
+    by block.
 
     Folds are flagged per patch, located at the first offending sample (row-major, u first). The
     turns go into a histogram (see ``_EDGES``), their maximum is exact (``atan2`` of the worst
@@ -865,7 +876,8 @@ class _GridMeasures:
         self.histogram = np.zeros(_BINS, dtype=np.int64)
         self.max_turn_deg = 0.0
         self.energy = np.zeros(count)
-        # trapezoid weights across the differences: ∫∫|∂_u f|² ≈ Σ_ij w_j |f_(i+1)j − f_ij|² (midpoint rule
+        # trapezoid weights across the differences: ∫∫|∂_u f|² ≈ Σ_ij w_j |f_(i+1)j − f_ij|²
+        # (midpoint rule
         # along u, the h = 1/(G − 1) of the difference quotient and of both rules cancel)
         self.weights = np.ones(resolution)
         self.weights[[0, -1]] = 0.5
@@ -1077,7 +1089,8 @@ class _GridMeasures:
 
 # ---------------------------------------------------------------------------------------------
 # Compiled kernels (``compiled=True``, the default of :func:`check`, :func:`fairness` and
-# :func:`folded_patches` from KERNEL_PATCHES patches on); the NumPy code above is their reference (``compiled=False``), and
+# :func:`folded_patches` from KERNEL_PATCHES patches on); the NumPy code above is their reference
+# (``compiled=False``), and
 # tests/test_check_kernels.py holds the two to one report.
 #
 # Patches enter the kernels as ``points (N, M, 3)`` and weight tables: Gregory patches their 20
@@ -1130,7 +1143,8 @@ prange = range  # numba.prange once a kernel is compiled
 #: scratch, ~0.7 MB, stays in a core's L2)
 _LANES = 64
 
-#: shared edges the edge kernel measures side by side (its vector lanes; a run-time argument, as _LANES)
+# : shared edges the edge kernel measures side by side (its vector lanes; a run-time argument, as
+# _LANES)
 _EDGE_LANES = 32
 
 #: functions the kernels call, compiled (and rebound) with the first kernel
@@ -1138,7 +1152,8 @@ _KERNEL_HELPERS = ("_pair_angle", "_hull_corners")
 
 
 def _fma(a: float, b: float, c: float) -> float:
-    """``a b + c`` rounded once; bound to an LLVM intrinsic by :func:`_compiled` (numba has no math.fma)."""
+    """``a b + c`` rounded once; bound to an LLVM intrinsic by :func:`_compiled` (numba has no
+    math.fma)."""
     raise NotImplementedError("_fma runs compiled only")
 
 
@@ -1169,7 +1184,8 @@ def _compiled(kernel: Callable[..., Any]) -> Callable[..., Any]:
 
 @cache
 def _serial(kernel: Callable[..., Any]) -> Callable[..., Any]:
-    """A kernel without a parallel loop, compiled once per process (:func:`g1patch.kernels.jit_kernel`)."""
+    """A kernel without a parallel loop, compiled once per process
+    (:func:`g1patch.kernels.jit_kernel`)."""
     from .kernels import jit_kernel
 
     return jit_kernel(kernel)  # type: ignore[return-value]
@@ -1464,11 +1480,11 @@ def _corner_extent_compiled(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
     """The low and high corner of the box around the patch corners (the first four points of
     ``points (N, M, 3)``: a Gregory patch's corners, or evaluated corners ``(N, 4, 3)``), and the
-    largest squared distance ``(d₀² + d₁²) + d₂²`` of a corner to its vertex ``vertices[corner_ids]``
-    (0 without vertices), in one pass over the corners without copying them: what
-    :func:`_diagonal` and ``np.linalg.norm(corners - vertices[ids], axis=-1)`` read (each
-    coordinate's extremes are exact; the norm is monotone in its square, so its maximum is the
-    root of the largest square)."""
+    largest squared distance ``(d₀² + d₁²) + d₂²`` of a corner to its vertex
+    ``vertices[corner_ids]`` (0 without vertices), in one pass over the corners without copying
+    them: what :func:`_diagonal` and ``np.linalg.norm(corners - vertices[ids], axis=-1)`` read (each
+    coordinate's extremes are exact; the norm is monotone in its square, so its maximum is the root
+    of the largest square)."""
     chunks = _chunks(len(points))
     low, high, far = np.empty((chunks, 3)), np.empty((chunks, 3)), np.empty(chunks)
     _compiled(_corner_extent_kernel)(
@@ -1564,7 +1580,8 @@ def _corner_normal_kernel(
 def _max_corner_angle_compiled(
     network: PatchNetwork, normals: NDArray[np.float64], degenerate_level: float, oriented: bool
 ) -> float:
-    """:func:`_max_corner_angle` from the corner normals ``(N, 4, 3)``, sector by sector in a kernel."""
+    """:func:`_max_corner_angle` from the corner normals ``(N, 4, 3)``, sector by sector in a
+    kernel."""
     normals = normals.reshape(-1, 3)
     ids = network.corner_sectors().reshape(-1).astype(np.int64)
     if not len(ids):
@@ -1711,7 +1728,8 @@ def _grid_tables(form: str, grid: NDArray[np.float64]) -> tuple[NDArray[Any], ..
 
 
 def _gregory_grid_weights(grid: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The point weights of p_u and p_v on the grid, ``(2, G², 20)``, as :meth:`_GridMeasures._tangents` forms them."""
+    """The point weights of p_u and p_v on the grid, ``(2, G², 20)``, as
+    :meth:`_GridMeasures._tangents` forms them."""
     u, v = grid[:, None], grid[None, :]
     return np.stack([gregory_weights(u, v, du, dv).reshape(-1, 20) for du, dv in ((1, 0), (0, 1))])
 
@@ -2049,7 +2067,9 @@ def _grid_kernel(
                     continue
                 for plane in range(
                     2
-                ):  # thin plate: squared differences of p_u, p_v along u (per column), along v (per row)
+                    # thin plate: squared differences of p_u, p_v along u (per column), along v (per
+                    # row)
+                ):
                     t, ahead = (tu, tu_ahead) if plane == 0 else (tv, tv_ahead)
                     if a > 0:
                         for s in range(gl):
@@ -2071,7 +2091,9 @@ def _grid_kernel(
                         for lane in range(lanes):
                             along_v[plane, a, lane] += chord2[b, lane]
             degenerate[chunk] += lost
-            if fairness:  # per lane and axis the first largest chord in row-major order: the largest of the columns', first
+            # per lane and axis the first largest chord in row-major order: the largest of the
+            # columns', first
+            if fairness:
                 for axis in range(2):
                     for lane in range(lanes):
                         value, at = -1.0, -1

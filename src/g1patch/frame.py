@@ -90,7 +90,8 @@ class Frame:
         return as_float_array("d", d, (3,)) / self.scale
 
     def to_world(self, x: ArrayLike, out: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
-        """Positions ``c + s x``, shape (..., 3); written into ``out`` when given (``out=x`` maps in place)."""
+        """Positions ``c + s x``, shape (..., 3); written into ``out`` when given (``out=x`` maps in
+        place)."""
         points = as_float_array("x", x, (3,), finite=False)
         target = _check_out(out, points.shape)
         if not (points.flags.c_contiguous and target.flags.c_contiguous):
@@ -109,14 +110,16 @@ class Frame:
     def vectors_to_world(
         self, d: ArrayLike, out: NDArray[np.float64] | None = None
     ) -> NDArray[np.float64]:
-        """Vectors ``s d`` (a derivative of any order by u, v), shape (..., 3); into ``out`` when given."""
+        """Vectors ``s d`` (a derivative of any order by u, v), shape (..., 3); into ``out`` when
+        given."""
         vectors = as_float_array("d", d, (3,), finite=False)
         return np.multiply(vectors, self.scale, out=_check_out(out, vectors.shape))
 
     def derivative_to_world(
         self, values: NDArray[np.float64], order: int, out: NDArray[np.float64] | None = None
     ) -> NDArray[np.float64]:
-        """A surface's ``∂^order p`` by its parameters: positions (order 0) ``c + s x``, else ``s x``."""
+        """A surface's ``∂^order p`` by its parameters: positions (order 0) ``c + s x``, else ``s
+        x``."""
         return self.to_world(values, out) if order == 0 else self.vectors_to_world(values, out)
 
     # ------------------------------------------------------------------ files
@@ -132,7 +135,8 @@ class Frame:
             return None
         if len(present) == 1:
             raise InputError(
-                f"arrays: a frame needs both 'frame_centre' and 'frame_scale', got only {present[0]!r}"
+                "arrays: a frame needs both 'frame_centre' and 'frame_scale', got only "
+                f"{present[0]!r}"
             )
         scale = np.asarray(arrays["frame_scale"])
         if scale.shape != () or not np.issubdtype(scale.dtype, np.number):

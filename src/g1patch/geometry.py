@@ -12,8 +12,9 @@ The integral is Gauss–Legendre quadrature, G points per direction, exact for d
 For a bicubic patch p has degree 3 and p_u × p_v degree 5 in each direction, so the integrand
 has degree 8 ≤ 9 and G = 5 is exact. Patches with a frame ``(c_f, s)`` (:mod:`g1patch.frame`) are
 integrated in their local coordinates and the volume scaled by ``s³`` (the world volume, without
-the cancellation of world coordinates far from the origin). Other patches (rational Gregory patches, any object with
-``evaluate_grid`` and ``__len__``) double G from 8 until two estimates agree to ``rtol``.
+the cancellation of world coordinates far from the origin). Other patches (rational Gregory patches,
+any object with ``evaluate_grid`` and ``__len__``) double G from 8 until two estimates agree to
+``rtol``.
 """
 
 from __future__ import annotations
@@ -66,7 +67,8 @@ def _patches_of(surface: PatchNetwork | Patches) -> Patches:
     patches = surface.patches if isinstance(surface, PatchNetwork) else surface
     if not (hasattr(patches, "evaluate_grid") and hasattr(patches, "__len__")):
         raise InputError(
-            f"network: expected a PatchNetwork or patches with evaluate_grid, got {type(surface).__name__}"
+            "network: expected a PatchNetwork or patches with evaluate_grid, got "
+            f"{type(surface).__name__}"
         )
     return patches
 

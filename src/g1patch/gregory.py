@@ -1,4 +1,5 @@
-"""Batched Gregory patches: bicubic boundary curves, rational interior, ``points`` of shape (N, 20, 3).
+"""Batched Gregory patches: bicubic boundary curves, rational interior, ``points`` of shape (N, 20,
+3).
 
 A Gregory patch is the bicubic Bézier patch ``p(u, v) = Σ_ij B_i(u) B_j(v) b_ij`` whose four
 interior points are blends of two points each, one per edge meeting at that corner (Gregory 1974;
@@ -83,13 +84,15 @@ def _check_domain(name: str, params: NDArray[np.float64]) -> NDArray[np.float64]
     if outside.any():
         bad = np.argwhere(outside)[0]
         raise InputError(
-            f"{name}: Gregory patches are defined on [0, 1]², got {params[tuple(bad)]} at index {tuple(int(i) for i in bad)}"
+            f"{name}: Gregory patches are defined on [0, 1]², got {params[tuple(bad)]} at index "
+            f"{tuple(int(i) for i in bad)}"
         )
     return params
 
 
 def gregory_weights(u: ArrayLike, v: ArrayLike, du: int = 0, dv: int = 0) -> NDArray[np.float64]:
-    """Weights of the 20 points in ``∂^(du+dv) p / ∂u^du ∂v^dv`` at (u, v), shape ``broadcast + (20,)``.
+    """Weights of the 20 points in ``∂^(du+dv) p / ∂u^du ∂v^dv`` at (u, v), shape ``broadcast +
+    (20,)``.
 
     ``p = Σ_m W[m] points[m]`` (see the module docstring); du + dv ≤ 1, (u, v) in [0, 1]².
     """
@@ -141,8 +144,8 @@ def _contract(weights: NDArray[np.float64], points: NDArray[np.float64]) -> NDAr
 
 @dataclass(frozen=True)
 class GregoryPatchSet:
-    """``N`` Gregory patches: ``points`` of shape ``(N, 20, 3)`` in the layout of the module docstring,
-    local to ``frame`` if set."""
+    """``N`` Gregory patches: ``points`` of shape ``(N, 20, 3)`` in the layout of the module
+    docstring, local to ``frame`` if set."""
 
     points: NDArray[np.float64]
     #: the surface is ``frame.to_world(p)``; None: points in world coordinates
@@ -160,8 +163,8 @@ class GregoryPatchSet:
         return int(self.points.shape[0])
 
     def __repr__(self) -> str:
-        """``<GregoryPatchSet 6 patches, bbox (-1, -1, -1)…(1, 1, 1)>`` (the box of the surface sampled at
-        3 × 3 points a patch, world coordinates), never the arrays."""
+        """``<GregoryPatchSet 6 patches, bbox (-1, -1, -1)…(1, 1, 1)>`` (the box of the surface
+        sampled at 3 × 3 points a patch, world coordinates), never the arrays."""
         from .api import bbox_text, surface_box
 
         box = f", {bbox_text(*surface_box(self))}" if len(self) else ""
@@ -173,7 +176,8 @@ class GregoryPatchSet:
 
     # ----------------------------------------------------------------- frame
     def local(self) -> GregoryPatchSet:
-        """The same points without the frame: the patches in local coordinates (``self`` if no frame)."""
+        """The same points without the frame: the patches in local coordinates (``self`` if no
+        frame)."""
         return self if self.frame is None else GregoryPatchSet(self.points)
 
     def with_frame(self, frame: Frame | None) -> GregoryPatchSet:
@@ -181,11 +185,13 @@ class GregoryPatchSet:
         return GregoryPatchSet(self.points, check_frame(frame))
 
     def world_points(self) -> NDArray[np.float64]:
-        """Points in world coordinates, ``c + s P`` (``points`` itself without a frame), (N, 20, 3)."""
+        """Points in world coordinates, ``c + s P`` (``points`` itself without a frame), (N, 20,
+        3)."""
         return self.points if self.frame is None else self.frame.to_world(self.points)
 
     def _to_world(self, values: NDArray[np.float64], du: int, dv: int) -> NDArray[np.float64]:
-        """Local values of ``∂^(du+dv) p`` mapped to world in place (:meth:`Frame.derivative_to_world`)."""
+        """Local values of ``∂^(du+dv) p`` mapped to world in place
+        (:meth:`Frame.derivative_to_world`)."""
         return (
             values
             if self.frame is None
@@ -205,7 +211,8 @@ class GregoryPatchSet:
                 _contract(gregory_weights(params[:, 0], params[:, 1], du, dv), self.points), du, dv
             )
         if params.ndim == 3 and params.shape[0] == len(self):
-            # Per-patch parameters usually repeat (edge samples, grids): weigh each distinct (u, v) once.
+            # Per-patch parameters usually repeat (edge samples, grids): weigh each distinct (u, v)
+            # once.
             keys, inverse = np.unique(
                 params.view(np.complex128)[..., 0], return_inverse=True
             )  # u + iv
@@ -218,7 +225,8 @@ class GregoryPatchSet:
     def evaluate_grid(
         self, u: ArrayLike, v: ArrayLike | None = None, du: int = 0, dv: int = 0
     ) -> NDArray[np.float64]:
-        """Position or first derivative on the grid ``u × v``: shape ``(N, len(u), len(v), 3)``, world values."""
+        """Position or first derivative on the grid ``u × v``: shape ``(N, len(u), len(v), 3)``,
+        world values."""
         u_params = _check_parameters("u", u)
         v_params = u_params if v is None else _check_parameters("v", v)
         weights = gregory_weights(u_params[:, None], v_params[None, :], du, dv)
@@ -226,7 +234,8 @@ class GregoryPatchSet:
         return self._to_world(values, du, dv).reshape(len(self), len(u_params), len(v_params), 3)
 
     def normals(self, uv: ArrayLike) -> NDArray[np.float64]:
-        """Unit normals ``p_u × p_v / |p_u × p_v|``, ``(N, K, 3)``; the zero vector where degenerate.
+        """Unit normals ``p_u × p_v / |p_u × p_v|``, ``(N, K, 3)``; the zero vector where
+        degenerate.
 
         Computed from the local tangents (the frame does not turn normals)."""
         local = self.local()
@@ -238,8 +247,8 @@ class GregoryPatchSet:
 
     # ----------------------------------------------------------- conversions
     def boundary_curves(self) -> CubicCurves:
-        """The four boundary curves in Bézier form (world), batch (N, 4), counter-clockwise: edge k is
-        ``(P_k, E+_k, E-_{k+1}, P_{k+1})``."""
+        """The four boundary curves in Bézier form (world), batch (N, 4), counter-clockwise: edge k
+        is ``(P_k, E+_k, E-_{k+1}, P_{k+1})``."""
         k = np.arange(4)
         following = (k + 1) % 4
         index = np.stack(

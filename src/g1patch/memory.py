@@ -1,4 +1,5 @@
-"""Process-wide memory settings for runs over large arrays: what the command line sets up (DESIGN §6).
+"""Process-wide memory settings for runs over large arrays: what the command line sets up (DESIGN
+§6).
 
 A build or a check of millions of patches allocates and frees many arrays of hundreds of
 megabytes. With glibc's defaults each one is a fresh ``mmap`` that the kernel faults in page by
@@ -39,15 +40,18 @@ __all__ = [
 _M_TRIM_THRESHOLD = -1
 _M_MMAP_THRESHOLD = -3
 _M_MMAP_MAX = -4
-#: glibc's defaults for them (mallopt(3)): 128 KiB, 128 KiB (raised dynamically up to 32 MiB), 65,536 maps
+# : glibc's defaults for them (mallopt(3)): 128 KiB, 128 KiB (raised dynamically up to 32 MiB),
+# 65,536 maps
 _DEFAULTS = {_M_TRIM_THRESHOLD: 128 * 1024, _M_MMAP_THRESHOLD: 128 * 1024, _M_MMAP_MAX: 65_536}
-#: the trim threshold that disables trimming (mallopt(3)); as an environment variable, any value above every heap
+# : the trim threshold that disables trimming (mallopt(3)); as an environment variable, any value
+# above every heap
 _NEVER_TRIM = -1
 _NEVER_TRIM_ENVIRONMENT = str(2**62)
 
 
 def without_huge_page_advice() -> None:
-    """Stop NumPy asking the kernel for huge pages for its large arrays (``madvise(MADV_HUGEPAGE)``).
+    """Stop NumPy asking the kernel for huge pages for its large arrays
+    (``madvise(MADV_HUGEPAGE)``).
 
     Where the kernel's ``transparent_hugepage/defrag`` is ``madvise`` (a common default) each such
     request may compact memory first. On a host where that stalls (measured once on the
@@ -61,7 +65,8 @@ def without_huge_page_advice() -> None:
 
 
 def _glibc() -> bool:
-    """Whether this process runs on glibc (``confstr(_CS_GNU_LIBC_VERSION)``: musl, macOS and Windows have none)."""
+    """Whether this process runs on glibc (``confstr(_CS_GNU_LIBC_VERSION)``: musl, macOS and
+    Windows have none)."""
     try:
         return os.confstr("CS_GNU_LIBC_VERSION").startswith("glibc ")
     except (AttributeError, ValueError, OSError):
@@ -92,8 +97,8 @@ def keep_freed_memory(keep: bool = True) -> bool:
 
 
 def tune_for_large_arrays() -> None:
-    """The process settings the command line runs with (module docstring): :func:`keep_freed_memory`,
-    with NumPy's huge-page advice left as NumPy sets it."""
+    """The process settings the command line runs with (module docstring):
+    :func:`keep_freed_memory`, with NumPy's huge-page advice left as NumPy sets it."""
     keep_freed_memory()
 
 

@@ -133,13 +133,15 @@ def _check_index_range(corners: IntArray, sizes: IntArray, n_vertices: int) -> N
         )
 
 
-#: faces of at most this many corners are checked for a repeated vertex pair by pair (n (n - 1) / 2 pairs)
+# : faces of at most this many corners are checked for a repeated vertex pair by pair (n (n - 1) / 2
+# pairs)
 _PAIRWISE_SIZE = 8
 
 
 def _check_repeated_vertices(corners: IntArray, sizes: IntArray, n_vertices: int) -> None:
     """A face may not visit a vertex twice: compare corner pairs (all faces of one small size, at
-    most :data:`_PAIRWISE_SIZE` corners) or sort (face, vertex) keys (linear in memory for any size)."""
+    most :data:`_PAIRWISE_SIZE` corners) or sort (face, vertex) keys (linear in memory for any
+    size)."""
     if sizes[0] <= _PAIRWISE_SIZE and (sizes == sizes[0]).all():
         table = corners.reshape(-1, int(sizes[0]))
         repeats = np.zeros(table.shape[0], dtype=bool)
@@ -224,7 +226,8 @@ def _pair_halfedges(
 
 @dataclass(frozen=True, eq=False)
 class QuadTopology:
-    """Half-edge connectivity of a manifold, consistently oriented quad mesh; build it with :meth:`from_faces`.
+    """Half-edge connectivity of a manifold, consistently oriented quad mesh; build it with
+    :meth:`from_faces`.
 
     All arrays are int64 (or bool) and read-only. Edges are sorted vertex pairs in lexicographic
     order; ``edge_halfedges`` lists an edge's half-edges by increasing id.
@@ -271,7 +274,8 @@ class QuadTopology:
         unused = np.flatnonzero(connectivity.face_count == 0)
         if unused.size:
             raise MeshError(
-                f"vertices {_few(unused)} are used by no face; QuadMesh.from_arrays drops unused vertices"
+                f"vertices {_few(unused)} are used by no face; QuadMesh.from_arrays drops unused "
+                "vertices"
             )
         is_boundary_edge = connectivity.edge_halfedges[:, 1] < 0
         return cls(
@@ -313,7 +317,8 @@ class QuadTopology:
         return self.faces.ravel()[_next(h)]
 
     def next_ccw(self, h: ArrayLike) -> IntArray:
-        """The next outgoing half-edge counter-clockwise about ``origin(h)``: ``twin(prev(h))`` (-1 past a boundary)."""
+        """The next outgoing half-edge counter-clockwise about ``origin(h)``: ``twin(prev(h))`` (-1
+        past a boundary)."""
         return self.twin[_prev(h)]
 
     def ring(self, v: int) -> IntArray:
@@ -404,7 +409,8 @@ class _Connectivity(NamedTuple):
     neighbors: IntArray
 
 
-#: from this many half-edges on (``compiled=None``) :func:`_connect` runs :func:`_connect_kernel` (20 000 quads,
+# : from this many half-edges on (``compiled=None``) :func:`_connect` runs :func:`_connect_kernel`
+# (20 000 quads,
 #: as ``continuity.KERNEL_PATCHES``: a fresh install's first use compiles it, a few seconds)
 KERNEL_HALFEDGES = 80_000
 
@@ -462,8 +468,8 @@ def _connect(
     low = np.flatnonzero(~is_boundary_vertex & (face_count > 0) & (valence < 3))
     if low.size:
         raise ValenceError(
-            f"interior vertex {low[0]} has valence {valence[low[0]]}; an interior vertex needs at least 3 edges"
-            + _all_of(low, "vertices")
+            f"interior vertex {low[0]} has valence {valence[low[0]]}; an interior vertex needs at "
+            "least 3 edges" + _all_of(low, "vertices")
         )
 
     # neighbours: the ring's targets, then at a boundary vertex the origin of prev(last)
@@ -650,7 +656,8 @@ def _walk_rings(
     corners: IntArray,
     face_ends: IntArray,
 ) -> IntArray:
-    """Write ``h_{i+1} = twin(prev(h_i))`` from ``start`` for every vertex at once, one rotation step at a time.
+    """Write ``h_{i+1} = twin(prev(h_i))`` from ``start`` for every vertex at once, one rotation
+    step at a time.
 
     Vertices are sorted by decreasing face count, so the vertices still walking at step ``i`` are
     a prefix of that order. Running into the boundary early means a second fan. After
@@ -694,7 +701,8 @@ def _rank_ring_tails(
     corners: IntArray,
     face_ends: IntArray,
 ) -> None:
-    """Ring positions ``_WALK_STEPS`` onwards of the vertices ``tail``, whose walk has reached ``first``.
+    """Ring positions ``_WALK_STEPS`` onwards of the vertices ``tail``, whose walk has reached
+    ``first``.
 
     The half-edges left are those of ``tail`` not yet written; each points to its successor
     ``twin(prev(h))`` among them (the walk ends at the boundary or back at a written one).
@@ -768,8 +776,9 @@ class Sectors:
 
 
 def sectors(topology: QuadTopology | _Connectivity, seams: NDArray[np.bool_]) -> Sectors:
-    """Cut every ring at its seam slots and its boundary (:class:`Sectors`), by segmented sums; ``topology``
-    may be a quad topology or the connectivity of polygons (:func:`_connect`), ``seams`` per edge."""
+    """Cut every ring at its seam slots and its boundary (:class:`Sectors`), by segmented sums;
+    ``topology`` may be a quad topology or the connectivity of polygons (:func:`_connect`),
+    ``seams`` per edge."""
     face_count = topology.face_count
     nv = face_count.size
     ring_vertex = np.repeat(np.arange(nv), face_count)
@@ -792,7 +801,8 @@ def sectors(topology: QuadTopology | _Connectivity, seams: NDArray[np.bool_]) ->
     start = np.full(vertex.size, -1, dtype=np.int64)
     slot = topology.neighbor_offsets[ring_vertex] + position
     start[label[cut]] = slot[cut]
-    # a sector ends where the next one (counter-clockwise) starts; a boundary's last at its virtual slot
+    # a sector ends where the next one (counter-clockwise) starts; a boundary's last at its virtual
+    # slot
     following = (
         sector_offsets[vertex]
         + (np.arange(vertex.size) - sector_offsets[vertex] + 1) % count[vertex]
@@ -822,12 +832,13 @@ def _check_finite(vertices: FloatArray) -> None:
     huge = np.flatnonzero((np.abs(vertices) > MAX_COORDINATE).any(axis=1))
     if huge.size:
         raise InputError(
-            f"vertex {huge[0]} has a coordinate beyond ±{MAX_COORDINATE:g}: {tuple(vertices[huge[0]].tolist())}"
-            + _all_of(huge, "vertices")
+            f"vertex {huge[0]} has a coordinate beyond ±{MAX_COORDINATE:g}: "
+            f"{tuple(vertices[huge[0]].tolist())}" + _all_of(huge, "vertices")
         )
 
 
-#: from this many faces on (``compiled=None``) :func:`_check_face_areas` first runs :func:`_face_area_kernel`
+# : from this many faces on (``compiled=None``) :func:`_check_face_areas` first runs
+# :func:`_face_area_kernel`
 KERNEL_FACES = 20_000
 #: faces the kernel finds within this relative margin of the tolerance go to the NumPy check
 _AREA_MARGIN = 1e-6
@@ -836,7 +847,8 @@ _AREA_MARGIN = 1e-6
 def _check_face_areas(
     vertices: FloatArray, faces: IntArray, *, compiled: bool | None = None
 ) -> None:
-    """Zero area: ``|d1 × d2| <= tol · max(|d1|, |d2|)²`` for the diagonals d1 = p2 − p0, d2 = p3 − p1.
+    """Zero area: ``|d1 × d2| <= tol · max(|d1|, |d2|)²`` for the diagonals d1 = p2 − p0, d2 = p3 −
+    p1.
 
     ``compiled`` (default: from :data:`KERNEL_FACES` faces on): :func:`_face_area_kernel` passes
     the mesh when every face clears the tolerance by the margin :data:`_AREA_MARGIN` (far beyond
@@ -1193,7 +1205,8 @@ def _crease_edges(
 def _refine_tags(
     tags: Sequence[Tag], corners: IntArray, sizes: IntArray, n_vertices: int
 ) -> tuple[Tag, ...]:
-    """Carry tags through :func:`refine_polygons`: crease (a, b) becomes (a, m), (m, b); a hole its quads."""
+    """Carry tags through :func:`refine_polygons`: crease (a, b) becomes (a, m), (m, b); a hole its
+    quads."""
     edge_keys = np.unique(_edge_keys(corners, sizes, n_vertices))
     refined = []
     for tag in tags:
@@ -1249,7 +1262,8 @@ def _quads_from_polygons(
     source: str | None,
     tags: tuple[Tag, ...],
 ) -> tuple[FloatArray, IntArray, tuple[Tag, ...]]:
-    """Drop unused vertices and split non-quads of checked polygons (see :meth:`QuadMesh.from_arrays`).
+    """Drop unused vertices and split non-quads of checked polygons (see
+    :meth:`QuadMesh.from_arrays`).
 
     When anything is dropped or split, the polygon topology is validated first, so that errors
     name the input's faces and vertices.
@@ -1260,7 +1274,8 @@ def _quads_from_polygons(
         return points, corners.reshape(-1, 4), tags
     if non_quads.size and not split:
         raise MeshError(
-            f"{non_quads.size} faces are not quads (face {non_quads[0]} has {sizes[non_quads[0]]} corners; "
+            f"{non_quads.size} faces are not quads (face {non_quads[0]} has {sizes[non_quads[0]]} "
+            "corners; "
             f"faces {_few(non_quads)}) and splitting is off (--no-split)"
         )
     _connect(corners, sizes, points.shape[0])
@@ -1361,7 +1376,8 @@ class Features:
 
 
 def _tag_values(tag: Tag, count: int) -> FloatArray:
-    """One sharpness per item: the tag's floats, or its one float for all of them (10 if it has none)."""
+    """One sharpness per item: the tag's floats, or its one float for all of them (10 if it has
+    none)."""
     floats = np.asarray(tag.floats, dtype=np.float64)
     if floats.size == count:
         values = floats
@@ -1369,7 +1385,8 @@ def _tag_values(tag: Tag, count: int) -> FloatArray:
         values = np.full(count, floats[0] if floats.size else INFINITE_SHARPNESS)
     else:
         raise MeshError(
-            f"tag {tag.name!r} has {count} items but {floats.size} sharpness values; expected 1 or {count}"
+            f"tag {tag.name!r} has {count} items but {floats.size} sharpness values; expected 1 "
+            f"or {count}"
         )
     bad = np.flatnonzero(~np.isfinite(values) | (values < 0))
     if bad.size:
@@ -1383,7 +1400,8 @@ def features_from_tags(topology: QuadTopology, tags: Sequence[Tag]) -> Features:
     """The :class:`Features` of OpenSubdiv tags on ``topology``: ``crease`` (vertex pairs, one
     sharpness each or one for all), ``corner`` (vertices), ``hole`` (faces), ``interpolateboundary``
     (0/1/2) and ``creasemethod`` (``normal``/``chaikin``); repeated items keep their largest
-    sharpness, other tags are ignored. A crease pair that is not an edge raises :class:`MeshError`."""
+    sharpness, other tags are ignored. A crease pair that is not an edge raises
+    :class:`MeshError`."""
     nv = topology.n_vertices
     edge_keys = topology.edges[:, 0] * nv + topology.edges[:, 1]
     edge = np.zeros(topology.n_edges)
@@ -1415,7 +1433,8 @@ def features_from_tags(topology: QuadTopology, tags: Sequence[Tag]) -> Features:
         elif tag.name == "creasemethod" and tag.strings:
             if tag.strings[0] not in CREASE_METHODS:
                 raise MeshError(
-                    f"tag 'creasemethod' has value {tag.strings[0]!r}; expected 'normal' or 'chaikin'"
+                    f"tag 'creasemethod' has value {tag.strings[0]!r}; expected 'normal' or "
+                    "'chaikin'"
                 )
             method = tag.strings[0]
     return Features(edge, vertex, holes, boundary, method)
@@ -1434,7 +1453,8 @@ def _named_errors(source: str | None) -> Iterator[None]:
 
 @dataclass(frozen=True, eq=False)
 class QuadMesh:
-    """Positions ``vertices`` (nv, 3) on a :class:`QuadTopology`, with the OpenSubdiv tags of its file.
+    """Positions ``vertices`` (nv, 3) on a :class:`QuadTopology`, with the OpenSubdiv tags of its
+    file.
 
     Validated on construction: finite coordinates, and no face of zero area
     (:data:`DEGENERATE_AREA_TOLERANCE`). ``repairs`` names what :meth:`from_arrays` repaired
@@ -1452,7 +1472,8 @@ class QuadMesh:
             vertices = as_float_array("vertices", self.vertices, (3,), finite=False)
             if vertices.shape != (self.topology.n_vertices, 3):
                 raise InputError(
-                    f"vertices: expected shape ({self.topology.n_vertices}, 3) for this topology, got {vertices.shape}"
+                    f"vertices: expected shape ({self.topology.n_vertices}, 3) for this topology, "
+                    f"got {vertices.shape}"
                 )
             _check_finite(vertices)
             _check_face_areas(vertices, self.topology.faces)
@@ -1471,17 +1492,19 @@ class QuadMesh:
         tags: Sequence[Tag] = (),
         strict: bool | None = None,
     ) -> QuadMesh:
-        """Validate and build a quad mesh from positions and faces ((nf, 4) array or lists of indices).
+        """Validate and build a quad mesh from positions and faces ((nf, 4) array or lists of
+        indices).
 
         Unused vertices are dropped (one ``logging`` info line). If any face has 3 or ≥ 5 corners
         the whole mesh is refined once (:func:`refine_polygons`, new points on a smooth surface
         through the vertices) with ``split``, else a :class:`MeshError` is raised. A mesh the
         checks refuse (:data:`REPAIRABLE`: repeated vertices, non-manifold edges or vertices,
-        inconsistent orientation, interior valence 2) is repaired (:func:`g1patch.repair.repair_polygons`,
-        one info line, the repairs kept in :attr:`repairs`), unless ``strict`` (default: the one
-        of :func:`strict_meshes`, else False), which raises the check's error. Non-finite
-        coordinates, out-of-range indices, faces of < 3 corners, zero area and non-orientable
-        components raise either way. Errors name ``source`` (a file name) when given.
+        inconsistent orientation, interior valence 2) is repaired
+        (:func:`g1patch.repair.repair_polygons`, one info line, the repairs kept in
+        :attr:`repairs`), unless ``strict`` (default: the one of :func:`strict_meshes`, else False),
+        which raises the check's error. Non-finite coordinates, out-of-range indices, faces of < 3
+        corners, zero area and non-orientable components raise either way. Errors name ``source`` (a
+        file name) when given.
         """
         strict = _STRICT.get() if strict is None else strict
         tags = tuple(Tag(*tag) for tag in tags)
@@ -1510,8 +1533,8 @@ class QuadMesh:
         return cls(quad_points, topology, quad_tags, source, repairs)
 
     def __repr__(self) -> str:
-        """``<QuadMesh 8 vertices, 6 quads, 12 edges, closed, bbox (-1, -1, -1)…(1, 1, 1), cube.obj>``:
-        counts, tags, repairs, the box and the file name, never the arrays."""
+        """``<QuadMesh 8 vertices, 6 quads, 12 edges, closed, bbox (-1, -1, -1)…(1, 1, 1),
+        cube.obj>``: counts, tags, repairs, the box and the file name, never the arrays."""
         from .api import bbox_text, short_source
 
         parts = [self.topology._counts()]
@@ -1539,12 +1562,14 @@ class QuadMesh:
 
     @property
     def repair_note(self) -> str:
-        """The repairs as one line, ``"repaired: 1 valence-2 vertex (137) dissolved, …"``; empty if none."""
+        """The repairs as one line, ``"repaired: 1 valence-2 vertex (137) dissolved, …"``; empty if
+        none."""
         return "repaired: " + ", ".join(self.repairs) if self.repairs else ""
 
     @cached_property
     def features(self) -> Features:
-        """Sharpness per edge and vertex, holes and boundary rule from the tags (:func:`features_from_tags`)."""
+        """Sharpness per edge and vertex, holes and boundary rule from the tags
+        (:func:`features_from_tags`)."""
         with _named_errors(self.source):
             return features_from_tags(self.topology, self.tags)
 

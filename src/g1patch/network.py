@@ -117,13 +117,15 @@ class PatchNetwork:
         if lonely.size:
             p, k = patch[lonely[0]], edge[lonely[0]]
             raise InputError(
-                f"seam: patch {p} edge {k} is marked a seam but has no neighbour (open or collapsed edge)"
+                f"seam: patch {p} edge {k} is marked a seam but has no neighbour (open or "
+                "collapsed edge)"
             )
         back = seam[other, self.neighbor_edge[patch, edge]]
         if not back.all():
             bad = int(np.argmin(back))
             raise InputError(
-                f"seam: patch {patch[bad]} edge {edge[bad]} is a seam but its other side, patch {other[bad]} "
+                f"seam: patch {patch[bad]} edge {edge[bad]} is a seam but its other side, patch "
+                f"{other[bad]} "
                 f"edge {self.neighbor_edge[patch[bad], edge[bad]]}, is not"
             )
         return seam
@@ -192,13 +194,15 @@ class PatchNetwork:
 
     def __repr__(self) -> str:
         """``<PatchNetwork 6 gregory patches, interpolate, bbox (-1, -1, -1)…(1, 1, 1)>``: counts,
-        method and shape (or source), seams, the surface's box (3 × 3 samples a patch); never the arrays."""
+        method and shape (or source), seams, the surface's box (3 × 3 samples a patch); never the
+        arrays."""
         from .api import network_repr
 
         return network_repr(self)
 
     def _repr_png_(self) -> bytes | None:
-        """A small shaded picture for Jupyter (None above :data:`g1patch.api.PREVIEW_MAX_PATCHES`)."""
+        """A small shaded picture for Jupyter (None above
+        :data:`g1patch.api.PREVIEW_MAX_PATCHES`)."""
         from .api import network_png, preview_png
 
         return preview_png(lambda: network_png(self), self.n_patches)
@@ -339,7 +343,8 @@ def check_consistent(network: PatchNetwork) -> None:
     if not back.all():
         bad = int(np.argmin(back))
         raise G1PatchError(
-            f"network: patch {patch[bad]} edge {edge[bad]} points to patch {other[bad]} edge {other_edge[bad]}, which does not point back"
+            f"network: patch {patch[bad]} edge {edge[bad]} points to patch {other[bad]} edge "
+            f"{other_edge[bad]}, which does not point back"
         )
 
 

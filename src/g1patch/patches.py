@@ -67,7 +67,8 @@ def _curve_control_to_world(
 
 @dataclass(frozen=True)
 class PatchSet:
-    """``N`` bicubic patches: ``control`` of shape ``(N, 4, 4, 3)`` in ``form``, local to ``frame`` if set."""
+    """``N`` bicubic patches: ``control`` of shape ``(N, 4, 4, 3)`` in ``form``, local to ``frame``
+    if set."""
 
     control: NDArray[np.float64]
     form: Form = "bezier"
@@ -86,8 +87,8 @@ class PatchSet:
         return int(self.control.shape[0])
 
     def __repr__(self) -> str:
-        """``<PatchSet 6 bezier patches, bbox (-1, -1, -1)…(1, 1, 1)>`` (the box of the surface sampled at
-        3 × 3 points a patch, world coordinates), never the arrays."""
+        """``<PatchSet 6 bezier patches, bbox (-1, -1, -1)…(1, 1, 1)>`` (the box of the surface
+        sampled at 3 × 3 points a patch, world coordinates), never the arrays."""
         from .api import bbox_text, surface_box
 
         box = f", {bbox_text(*surface_box(self))}" if len(self) else ""
@@ -99,7 +100,8 @@ class PatchSet:
 
     # ----------------------------------------------------------------- frame
     def local(self) -> PatchSet:
-        """The same control without the frame: the patches in local coordinates (``self`` if no frame)."""
+        """The same control without the frame: the patches in local coordinates (``self`` if no
+        frame)."""
         return self if self.frame is None else PatchSet(self.control, self.form)
 
     def with_frame(self, frame: Frame | None) -> PatchSet:
@@ -110,7 +112,8 @@ class PatchSet:
         """Control in world coordinates (``control`` itself without a frame), (N, 4, 4, 3).
 
         Bézier and B-spline control points map as positions, ``c + s P``; in Hermite form only the
-        corner positions ``P[:, :2, :2]`` do, the derivative and twist entries map as vectors, ``s P``.
+        corner positions ``P[:, :2, :2]`` do, the derivative and twist entries map as vectors, ``s
+        P``.
         """
         if self.frame is None:
             return self.control
@@ -132,7 +135,8 @@ class PatchSet:
         """Inverse of :meth:`to_arrays`."""
         if "control" not in arrays or "form" not in arrays:
             raise InputError(
-                f"arrays: bicubic patches need the arrays 'control' and 'form', got {sorted(arrays)}"
+                "arrays: bicubic patches need the arrays 'control' and 'form', got "
+                f"{sorted(arrays)}"
             )
         form = str(np.asarray(arrays["form"]))
         return cls(np.asarray(arrays["control"]), form, Frame.from_arrays(arrays))  # type: ignore[arg-type]
@@ -152,8 +156,8 @@ class PatchSet:
         )
 
     def power_coefficients(self) -> NDArray[np.float64]:
-        """``A = M^T P M`` per coordinate, shape (N, 4, 4, 3): ``p = Σ A_ij u^(3-i) v^(3-j)``, in world
-        coordinates (with a frame: ``s A``, plus ``c`` on the constant term ``A_33``)."""
+        """``A = M^T P M`` per coordinate, shape (N, 4, 4, 3): ``p = Σ A_ij u^(3-i) v^(3-j)``, in
+        world coordinates (with a frame: ``s A``, plus ``c`` on the constant term ``A_33``)."""
         matrix = basis_matrix(self.form)
         power = np.einsum("ip,nijd,jq->npqd", matrix, self.control, matrix, optimize=True)
         if self.frame is not None:
@@ -162,7 +166,8 @@ class PatchSet:
         return power
 
     def _to_world(self, values: NDArray[np.float64], du: int, dv: int) -> NDArray[np.float64]:
-        """Local values of ``∂^(du+dv) p`` mapped to world in place (:meth:`Frame.derivative_to_world`)."""
+        """Local values of ``∂^(du+dv) p`` mapped to world in place
+        (:meth:`Frame.derivative_to_world`)."""
         return (
             values
             if self.frame is None
@@ -178,7 +183,8 @@ class PatchSet:
         dv: int = 0,
         out: NDArray[np.float64] | None = None,
     ) -> NDArray[np.float64]:
-        """``∂^(du+dv) p / ∂u^du ∂v^dv`` on the grid ``u × v``: shape ``(N, len(u), len(v), 3)``, world values.
+        """``∂^(du+dv) p / ∂u^du ∂v^dv`` on the grid ``u × v``: shape ``(N, len(u), len(v), 3)``,
+        world values.
 
         ``out``: a C-contiguous float64 array of that shape to write into (saves the page faults
         of a fresh allocation when a grid is evaluated repeatedly).
@@ -204,7 +210,8 @@ class PatchSet:
         params = as_float_array("uv", uv, (2,))
         count = len(self)
         if params.ndim == 2:
-            # p[n, k] = Σ_(i,j) (wu[k, i] wv[k, j]) P[n, i, j]: one (K × 16) @ (16 × 3) product per patch
+            # p[n, k] = Σ_(i,j) (wu[k, i] wv[k, j]) P[n, i, j]: one (K × 16) @ (16 × 3) product per
+            # patch
             weights_u = basis_values(self.form, params[:, 0], du)
             weights_v = basis_values(self.form, params[:, 1], dv)
             tensor = (weights_u[:, :, None] * weights_v[:, None, :]).reshape(-1, 16)
@@ -250,7 +257,8 @@ class PatchSet:
         out: NDArray[np.float64] | None = None,
         normals_out: NDArray[np.float64] | None = None,
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Positions and unit normals on the grid ``u × v``, each ``(N, len(u), len(v), 3)``, in one pass.
+        """Positions and unit normals on the grid ``u × v``, each ``(N, len(u), len(v), 3)``, in one
+        pass.
 
         Equal to ``(evaluate_grid(u, v), normals_grid(u, v))``; the normal is zero where degenerate.
         ``out`` / ``normals_out``: arrays to write into, as in :meth:`evaluate_grid`.
@@ -268,7 +276,8 @@ class PatchSet:
 
     # ------------------------------------------------------------------ curves
     def boundary_curves(self) -> CubicCurves:
-        """The four boundary curves (world), batch shape (N, 4), counter-clockwise: edge k runs corner k → k+1.
+        """The four boundary curves (world), batch shape (N, 4), counter-clockwise: edge k runs
+        corner k → k+1.
 
         Curve v = v0 in the u-form: ``c_i = Σ_j b_j(v0) P_ij``: exact in Hermite and Bézier form
         (the weights are 0 and 1), rounded in B-spline form (weights 1/6, 4/6, 1/6); then mapped
@@ -296,7 +305,8 @@ class PatchSet:
         return diagonal_polynomials(self.power_coefficients())
 
     def with_coons_twists(self) -> PatchSet:
-        """The S-/HS-patch: the same boundary, twists from the 12 boundary vectors (:func:`hs_twists`).
+        """The S-/HS-patch: the same boundary, twists from the 12 boundary vectors
+        (:func:`hs_twists`).
 
         Computed on the local control; the frame is kept."""
         hermite = self.convert("hermite").control.copy()
@@ -304,7 +314,8 @@ class PatchSet:
         return PatchSet(hermite, "hermite", self.frame).convert(self.form)
 
     def closure(self) -> NDArray[np.float64]:
-        """The vector ``C`` of :func:`closure` (world: ``s C_local``), shape (N, 3): both diagonals cubic iff ``C = 0``."""
+        """The vector ``C`` of :func:`closure` (world: ``s C_local``), shape (N, 3): both diagonals
+        cubic iff ``C = 0``."""
         value = closure(self.convert("hermite").control)
         return value if self.frame is None else self.frame.vectors_to_world(value, out=value)
 
@@ -348,7 +359,8 @@ def hs_twists(hermite: ArrayLike) -> NDArray[np.float64]:
 def closure(hermite: ArrayLike) -> NDArray[np.float64]:
     """The closure vector of an S-/HS-patch with Hermite control ``(N, 4, 4, 3)``, shape (N, 3).
 
-        C = 4δ + [p_u(0,1) + p_u(1,1) − p_u(0,0) − p_u(1,0)] + [p_v(1,0) + p_v(1,1) − p_v(0,0) − p_v(0,1)]
+        C = 4δ + [p_u(0,1) + p_u(1,1) − p_u(0,0) − p_u(1,0)] + [p_v(1,0) + p_v(1,1) − p_v(0,0) −
+        p_v(0,1)]
 
     With Coons twists the diagonal and anti-diagonal have t^4 coefficients +C and −C: both are
     cubic iff ``C = 0``. C depends on the boundary only.

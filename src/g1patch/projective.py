@@ -115,7 +115,8 @@ def _as_rows(name: str, value: ArrayLike) -> NDArray[np.float64]:
     rows = as_float_array(name, value, (None, None))
     if rows.shape[-1] != rows.shape[-2] + 1 or rows.shape[-1] < 2:
         raise InputError(
-            f"{name}: expected shape (..., n-1, n) with n >= 2 (n-1 vectors of length n), got {rows.shape}"
+            f"{name}: expected shape (..., n-1, n) with n >= 2 (n-1 vectors of length n), got "
+            f"{rows.shape}"
         )
     return rows
 
@@ -123,7 +124,8 @@ def _as_rows(name: str, value: ArrayLike) -> NDArray[np.float64]:
 def _as_vectors(
     names: tuple[str, ...], values: tuple[ArrayLike, ...], length: int
 ) -> NDArray[np.float64]:
-    """Check ``len(values)`` vectors of shape ``(..., length)``; broadcast and stack them as rows."""
+    """Check ``len(values)`` vectors of shape ``(..., length)``; broadcast and stack them as
+    rows."""
     arrays = []
     for name, value in zip(names, values):
         array = as_float_array(name, value, (None,))
@@ -370,7 +372,8 @@ def classify(
         array = _as_rows("rows", rows)
         if array.shape[-1] != n:
             raise InputError(
-                f"rows: expected shape (..., {n - 1}, {n}) to match xi {vectors.shape}, got {array.shape}"
+                f"rows: expected shape (..., {n - 1}, {n}) to match xi {vectors.shape}, got "
+                f"{array.shape}"
             )
         try:
             np.broadcast_shapes(vectors.shape[:-1], array.shape[:-2])
@@ -403,7 +406,8 @@ def homogeneous(points: ArrayLike, w: float = 1.0) -> NDArray[np.float64]:
 def to_euclidean(
     h: ArrayLike, rows: ArrayLike | None = None, *, rtol: float | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """Euclidean points ``x / w`` from ``[x : w]`` (``(..., n)`` → ``(..., n−1)``) and a ``finite`` mask.
+    """Euclidean points ``x / w`` from ``[x : w]`` (``(..., n)`` → ``(..., n−1)``) and a ``finite``
+    mask.
 
     Where :func:`classify` (same ``rows`` and ``rtol``) does not say FINITE, the point is replaced
     by something explicit, never NaN: the unit direction ``x / ‖x‖`` for a point at infinity (its
@@ -432,7 +436,8 @@ def rescale(h: ArrayLike) -> NDArray[np.float64]:
 
 
 def join_points_2d(x1: ArrayLike, x2: ArrayLike) -> NDArray[np.float64]:
-    """Line ``[a, b, c]`` through homogeneous points ``[x, y : w]`` of shape ``(..., 3)``: ``x1 × x2``.
+    """Line ``[a, b, c]`` through homogeneous points ``[x, y : w]`` of shape ``(..., 3)``: ``x1 ×
+    x2``.
 
     Paper, eqs. 6–7. Zero (DEGENERATE) when the points coincide.
     """
@@ -448,7 +453,8 @@ def meet_lines_2d(l1: ArrayLike, l2: ArrayLike) -> NDArray[np.float64]:
 
 
 def plane_through_points(x1: ArrayLike, x2: ArrayLike, x3: ArrayLike) -> NDArray[np.float64]:
-    """Plane ``[a, b, c, d]`` through homogeneous points ``[x, y, z : w]`` (``(..., 4)``): ``x1 × x2 × x3``.
+    """Plane ``[a, b, c, d]`` through homogeneous points ``[x, y, z : w]`` (``(..., 4)``): ``x1 × x2
+    × x3``.
 
     Paper, eq. 9. Zero (DEGENERATE) when the points are collinear.
     """

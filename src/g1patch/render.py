@@ -118,7 +118,8 @@ DEFAULT_STRIPES = 12
 TRIANGLE_BUDGET = 200_000
 #: resolutions chosen for you lie in this range (samples per patch side)
 RESOLUTION_RANGE = (2, 129)
-#: a resolution chosen for you samples at most this many points per network (unless 2 per side is more)
+# : a resolution chosen for you samples at most this many points per network (unless 2 per side is
+# more)
 MAX_SAMPLES = 4_000_000
 #: a resolution chosen for you puts a sample about every this many pixels along a patch (the
 #: 90th percentile of the patches' projected sizes sets it)
@@ -131,7 +132,8 @@ EDGE_SPACING_PX = 8.0
 #: most this many samples per pixel of the picture, fewer (down to :data:`MIN_EDGE_SAMPLES`) for
 #: networks with more edges
 EDGE_SAMPLES_PER_PIXEL = 4
-#: the fewest samples per edge of the deviation mode without a report (the ends, the middle, the quarters)
+# : the fewest samples per edge of the deviation mode without a report (the ends, the middle, the
+# quarters)
 MIN_EDGE_SAMPLES = 5
 #: check's samples per edge
 _CHECK_SAMPLES = 33
@@ -159,7 +161,8 @@ _CMAP_RANGE = (0.0, 0.88)  # plasma without its palest yellow, which vanishes on
 # --------------------------------------------------------------------------- camera and stripes
 @dataclass(frozen=True)
 class _Camera:
-    """Orthographic camera: ``eye`` points from the scene towards the viewer; ``right``, ``up`` span the screen."""
+    """Orthographic camera: ``eye`` points from the scene towards the viewer; ``right``, ``up`` span
+    the screen."""
 
     eye: NDArray[np.float64]
     right: NDArray[np.float64]
@@ -198,8 +201,8 @@ def stripe_phase(
 ) -> NDArray[np.float64]:
     """Zebra stripe phase φ (radians) at unit ``normals`` (…, 3); white where ``sin φ ≥ 0``.
 
-    ``r = d − 2 (d·n) n`` with d the viewing direction of ``view``; ``φ = stripes · atan2(r·b, r·a)``
-    about the stripe axis (see the module docstring). A function of the normal alone.
+    ``r = d − 2 (d·n) n`` with d the viewing direction of ``view``; ``φ = stripes · atan2(r·b,
+    r·a)`` about the stripe axis (see the module docstring). A function of the normal alone.
     """
     view, stripes, up = (
         _check_view(view, auto=False),
@@ -225,14 +228,17 @@ AUTO = "auto"
 AUTO_SLAB_RATIO = 0.9
 #: a principal axis "is" a coordinate axis when they are at most this many degrees apart
 AUTO_AXIS_TOLERANCE_DEG = 25.0
-#: the horizontal footprint has a long axis when its shorter spread is at most this fraction of its longer
+# : the horizontal footprint has a long axis when its shorter spread is at most this fraction of its
+# longer
 AUTO_LONG_RATIO = 0.9
-#: height and position along the long axis are uncorrelated below this correlation (the front is then +axis)
+# : height and position along the long axis are uncorrelated below this correlation (the front is
+# then +axis)
 AUTO_CORRELATION = 0.05
 #: the camera's elevation in degrees: the first for a surface as tall as it is wide, rising to the
 #: second for a flat one (so that a flat surface is not seen edge-on)
 AUTO_ELEVATION = (25.0, 45.0)
-#: front three-quarter: the camera is turned this many degrees from the front towards the model's left
+# : front three-quarter: the camera is turned this many degrees from the front towards the model's
+# left
 AUTO_TURN_DEG = 35.0
 #: patches sampled by :func:`auto_camera` on a network (evenly spaced through it), 4 × 4 points each
 _AUTO_PATCHES = 65_536
@@ -271,7 +277,8 @@ def auto_camera(
     *,
     up: str = AUTO,
 ) -> tuple[str, tuple[float, float]]:
-    """The up axis and ``(elevation, azimuth)`` that :func:`render` uses for ``up`` / ``view`` = ``"auto"``.
+    """The up axis and ``(elevation, azimuth)`` that :func:`render` uses for ``up`` / ``view`` =
+    ``"auto"``.
 
     ``surface``: a :class:`~g1patch.network.PatchNetwork` or a
     :class:`~g1patch.tessellate.TriangleMesh` (sampled for you, area-weighted), or points (N, 3)
@@ -298,8 +305,8 @@ def auto_camera(
       position along the axis correlate: an animal holds its head up; the axis's + end when the
       correlation is below :data:`AUTO_CORRELATION` in size), and the camera looks from
       :data:`AUTO_TURN_DEG` off the front towards the model's left (front three-quarter: the
-      front points to the left of the picture). A footprint without a long axis (the cube, a sphere, a
-      flat torus) has no front: the azimuth of :data:`DEFAULT_VIEW`.
+      front points to the left of the picture). A footprint without a long axis (the cube, a sphere,
+      a flat torus) has no front: the azimuth of :data:`DEFAULT_VIEW`.
 
     A heuristic on the shape alone, right on the shared Spot and teapot and on the generated
     shapes; it misreads e.g. a z-up animal (thin along x, so taken as y-up: it lies on its side), a
@@ -310,7 +317,8 @@ def auto_camera(
     if isinstance(surface, (PatchNetwork, TriangleMesh)):
         if weights is not None:
             raise InputError(
-                "weights: a network or mesh is weighted by its own area; pass weights with points only"
+                "weights: a network or mesh is weighted by its own area; pass weights with points "
+                "only"
             )
         points, area = _area_samples(surface)
     else:
@@ -393,7 +401,8 @@ def stripe_jumps(
     directions' angle about the stripe axis (wrapped to (−π, π]) times ``stripes`` / 2π is the
     jump. 0 on an exactly G1 edge (up to rounding); about ``stripes · 2 θ / 360°`` on a crease of
     θ degrees whose normals turn about the stripe axis. Degenerate normals are left out. The camera
-    is :func:`render`'s: ``view`` and ``up`` ``"auto"`` choose it as the picture does (:func:`auto_camera`).
+    is :func:`render`'s: ``view`` and ``up`` ``"auto"`` choose it as the picture does
+    (:func:`auto_camera`).
     """
     _check_network(network)
     view, stripes, up = (
@@ -464,13 +473,15 @@ def _check_view(view: Any, auto: bool = True) -> tuple[float, float] | str:
         if auto and view == AUTO:
             return AUTO
         raise InputError(
-            f"view: expected (elevation, azimuth) in degrees{' or auto' if auto else ''}, got {view!r}"
+            f"view: expected (elevation, azimuth) in degrees{' or auto' if auto else ''}, got "
+            f"{view!r}"
         )
     try:
         elev, azim = (float(x) for x in view)
     except (TypeError, ValueError):
         raise InputError(
-            f"view: expected (elevation, azimuth) in degrees{' or auto' if auto else ''}, got {view!r}"
+            f"view: expected (elevation, azimuth) in degrees{' or auto' if auto else ''}, got "
+            f"{view!r}"
         ) from None
     if not (math.isfinite(elev) and math.isfinite(azim)):
         raise InputError(f"view: expected finite angles, got {view!r}")
@@ -517,7 +528,8 @@ def _check_path(path: object) -> Path:
     target = Path(path)
     if target.suffix.lower() != ".png":
         raise InputError(
-            f"path: pictures are written as PNG; expected a name ending in .png, got {str(target)!r}"
+            "path: pictures are written as PNG; expected a name ending in .png, got "
+            f"{str(target)!r}"
         )
     return target
 
@@ -577,7 +589,8 @@ def _matplotlib() -> Any:
 def choose_resolution(
     n_patches: int, panels: int = 1, budget: int = TRIANGLE_BUDGET, closed: bool = True
 ) -> int:
-    """Samples per patch side r so that ``panels`` pictures of ``n_patches`` draw about ``budget`` triangles.
+    """Samples per patch side r so that ``panels`` pictures of ``n_patches`` draw about ``budget``
+    triangles.
 
     ``2 (r − 1)² n_patches · panels ≤ budget`` (twice the budget for a ``closed`` surface, whose
     back half is not drawn), clamped to :data:`RESOLUTION_RANGE`. Closed, one panel: the cube
@@ -788,7 +801,8 @@ def _lights(
 def _diffuse(
     normals: NDArray[np.float64], camera: _Camera
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Diffuse light in [0, 1] (ambient + key + fill) and the highlight, for normals facing the viewer."""
+    """Diffuse light in [0, 1] (ambient + key + fill) and the highlight, for normals facing the
+    viewer."""
     key, fill, half = _lights(camera)
     diffuse = (
         0.42 + 0.48 * np.clip(normals @ key, 0.0, 1.0) + 0.18 * np.clip(normals @ fill, 0.0, 1.0)
@@ -866,7 +880,8 @@ def _angle_scale(
 def _deviation_caption(report: ContinuityReport | _EdgeAngles) -> str:
     """The deviation panel's figure line: the largest G1 angle on the smooth edges, and the seams
     (and the samples per edge when fewer than check's 33)."""
-    caption = f"max G1 angle {report.max_edge_angle_deg:.3g}° on {report.shared_edges - report.seam_edges} edges"
+    smooth_edges = report.shared_edges - report.seam_edges
+    caption = f"max G1 angle {report.max_edge_angle_deg:.3g}° on {smooth_edges} edges"
     if report.samples_per_edge < _CHECK_SAMPLES:
         caption += f" ({report.samples_per_edge} samples each)"
     return caption + (f", {report.seam_edges} seams" if report.seam_edges else "")
@@ -875,7 +890,8 @@ def _deviation_caption(report: ContinuityReport | _EdgeAngles) -> str:
 def _band_angles(
     network: PatchNetwork, report: ContinuityReport | _EdgeAngles
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """G1 angle of every patch side (N, 4), NaN on open, collapsed and seam sides; and the seam sides (N, 4)."""
+    """G1 angle of every patch side (N, 4), NaN on open, collapsed and seam sides; and the seam
+    sides (N, 4)."""
     angles = np.full((network.n_patches, 4), np.nan)
     seams = np.zeros((network.n_patches, 4), dtype=bool)
     for column in (0, 1):
@@ -899,7 +915,8 @@ def _deviation_colours(
     each, the colour of their edge's G1 angle (a corner cell lies on two sides: the larger), or
     the seam colour where a side is a seam (it wins at corner cells: seams stay unbroken lines).
     A filled patch's triangles lie on all four sides: the colour of its worst side, the seam
-    colour if it has a seam side, and the grey surface if it has neither (open or collapsed sides)."""
+    colour if it has a seam side, and the grey surface if it has neither (open or collapsed
+    sides)."""
     assert surface.band_patch is not None and surface.band_mask is not None
     triangles = surface.triangles[keep]
     colours = vertex_colours[triangles]
@@ -956,7 +973,8 @@ def _visible(
 
 
 def _facing(normals: NDArray[np.float64], camera: _Camera) -> NDArray[np.float64]:
-    """Normals turned towards the viewer (two-sided lighting for open or mixed-orientation surfaces)."""
+    """Normals turned towards the viewer (two-sided lighting for open or mixed-orientation
+    surfaces)."""
     return normals * np.where(normals @ camera.eye < 0.0, -1.0, 1.0)[..., None]
 
 
@@ -973,7 +991,8 @@ def _panel(
     target: NDArray[np.float64] | None = None,
 ) -> _Panel:
     """Colour every point of ``surface`` for ``mode`` and sort the visible triangles back to front.
-    ``sides``: the deviation mode's G1 angle and seam flag of every patch side (:func:`_band_angles`).
+    ``sides``: the deviation mode's G1 angle and seam flag of every patch side
+    (:func:`_band_angles`).
 
     The picture shows the whole surface (its screen box filling :data:`FILL` of the panel's width
     or height, whichever binds) magnified ``zoom`` times about the
@@ -1195,7 +1214,8 @@ def _edge_angles(network: PatchNetwork, samples: int) -> _EdgeAngles:
 
 def _edge_samples(edge_counts: Sequence[int], size: tuple[int, int]) -> int:
     """Samples per edge of the deviation mode without a report: 33 while the picture's edges take
-    at most :data:`EDGE_SAMPLES_PER_PIXEL` samples per pixel, fewer for more, at least :data:`MIN_EDGE_SAMPLES`."""
+    at most :data:`EDGE_SAMPLES_PER_PIXEL` samples per pixel, fewer for more, at least
+    :data:`MIN_EDGE_SAMPLES`."""
     budget = EDGE_SAMPLES_PER_PIXEL * size[0] * size[1]
     return int(np.clip(budget // max(sum(edge_counts), 1), MIN_EDGE_SAMPLES, _CHECK_SAMPLES))
 
@@ -1232,8 +1252,9 @@ def render(
     view when the footprint has a long axis). The surface's screen box fills :data:`FILL` of the
     picture. ``zoom`` magnifies the picture
     about the world point ``target`` (default: the middle of the surface); the resolution chosen
-    for you then grows with the zoom (at most :data:`MAX_SAMPLES` points). Bad arguments raise :class:`InputError`; without
-    matplotlib, :class:`MissingDependencyError`. The file appears complete or not at all.
+    for you then grows with the zoom (at most :data:`MAX_SAMPLES` points). Bad arguments raise
+    :class:`InputError`; without matplotlib, :class:`MissingDependencyError`. The file appears
+    complete or not at all.
     """
     render_side_by_side(
         path,
@@ -1286,7 +1307,8 @@ def render_side_by_side(
         raise InputError(f"target: expected one point (x, y, z), got shape {target_point.shape}")
     if isinstance(networks, PatchNetwork) or not isinstance(networks, Sequence) or not networks:
         raise InputError(
-            f"networks: expected a non-empty sequence of PatchNetwork, got {type(networks).__name__}"
+            "networks: expected a non-empty sequence of PatchNetwork, got "
+            f"{type(networks).__name__}"
         )
     for index, network in enumerate(networks):
         if not isinstance(network, PatchNetwork):

@@ -1,4 +1,5 @@
-"""Repairs of polygon meshes that :meth:`QuadMesh.from_arrays <g1patch.mesh.QuadMesh.from_arrays>` would refuse.
+"""Repairs of polygon meshes that :meth:`QuadMesh.from_arrays <g1patch.mesh.QuadMesh.from_arrays>`
+would refuse.
 
 Polygons are flat ``corners`` with ``sizes`` per face (corner ``i`` runs to the next corner of its
 face). The rules, in this order, each vectorised over the whole mesh (Python loops run over rounds
@@ -240,7 +241,8 @@ def _sheets(p: _Polygons, notes: _Notes) -> tuple[_Polygons, bool]:
     if twisted.size:
         bad = np.unique(p.source[twisted])
         raise OrientationError(
-            f"face {bad[0]} lies on a non-orientable sheet (like a Möbius strip): its faces cannot all be "
+            f"face {bad[0]} lies on a non-orientable sheet (like a Möbius strip): its faces "
+            "cannot all be "
             f"oriented consistently ({_plural(bad.size, 'face')} on such sheets: {_few(bad)})"
         )
     component = np.minimum(up, down)
@@ -336,7 +338,8 @@ def _dissolve(p: _Polygons, notes: _Notes) -> _Polygons:
 
 
 class _EdgeTable(NamedTuple):
-    """The repaired edges ``(a, b)`` sorted by the input edge they come from, and the input's edges."""
+    """The repaired edges ``(a, b)`` sorted by the input edge they come from, and the input's
+    edges."""
 
     a: IntArray
     b: IntArray
@@ -354,7 +357,8 @@ def _edge_table(p: _Polygons, corners: IntArray, sizes: IntArray, n_input: int) 
 
 
 def _matches(sorted_keys: IntArray, wanted: IntArray) -> tuple[IntArray, IntArray]:
-    """For each wanted key, the positions of its matches in ``sorted_keys`` (concatenated), and their counts."""
+    """For each wanted key, the positions of its matches in ``sorted_keys`` (concatenated), and
+    their counts."""
     start = np.searchsorted(sorted_keys, wanted, side="left")
     counts = np.searchsorted(sorted_keys, wanted, side="right") - start
     offsets = np.cumsum(counts) - counts
@@ -379,7 +383,8 @@ def _carry_tags(
     notes: _Notes,
 ) -> tuple[Tag, ...]:
     """Corners to every copy of their vertex, crease pairs to every edge between copies of their
-    ends, holes to the faces made from holes (module docstring); ``corners``, ``sizes`` are the input's."""
+    ends, holes to the faces made from holes (module docstring); ``corners``, ``sizes`` are the
+    input's."""
     by_origin = np.argsort(p.origin, kind="stable")
     edges = (
         _edge_table(p, corners, sizes, n_input)
@@ -443,7 +448,8 @@ def _phrases(notes: _Notes) -> tuple[str, ...]:
     vertices = np.unique(notes.get("vertices"))
     if vertices.size:
         lines.append(
-            f"{_plural(vertices.size, 'non-manifold vertex', 'non-manifold vertices')} ({_few(vertices)}) split into "
+            f"{_plural(vertices.size, 'non-manifold vertex', 'non-manifold vertices')} "
+            f"({_few(vertices)}) split into "
             f"one copy per fan (+{_plural(notes.get('vertices').size, 'vertex', 'vertices')})"
         )
     flipped = np.unique(notes.get("flipped"))
@@ -460,7 +466,8 @@ def _phrases(notes: _Notes) -> tuple[str, ...]:
     orphans = np.unique(notes.get("orphans"))
     if orphans.size:
         lines.append(
-            f"{_plural(orphans.size, 'vertex', 'vertices')} left without a face ({_few(orphans)}) dropped"
+            f"{_plural(orphans.size, 'vertex', 'vertices')} left without a face ({_few(orphans)}) "
+            "dropped"
         )
     tag_items = notes.get("tag items")
     if tag_items.size:

@@ -1,4 +1,5 @@
-"""Generated quad meshes for tests, demos and benchmarks; every face counter-clockwise seen from outside.
+"""Generated quad meshes for tests, demos and benchmarks; every face counter-clockwise seen from
+outside.
 
 All shapes are built with vectorised NumPy and validated through :meth:`QuadMesh.from_arrays`.
 Planar shapes lie in z = 0 and face +z. :func:`subdivide` (one Catmull–Clark topology step with
@@ -53,7 +54,8 @@ def _check_count(name: str, value: int, least: int) -> int:
 
 
 def cube() -> QuadMesh:
-    """The cube [-1, 1]^3: 8 vertices (vertex ``4 x + 2 y + z`` for x, y, z ∈ {0, 1}), 6 outward quads."""
+    """The cube [-1, 1]^3: 8 vertices (vertex ``4 x + 2 y + z`` for x, y, z ∈ {0, 1}), 6 outward
+    quads."""
     bits = (np.arange(8)[:, None] >> np.array([2, 1, 0])) & 1
     faces = [
         [0, 1, 3, 2],  # x = -1
@@ -83,7 +85,8 @@ def grid(
 ) -> QuadMesh:
     """An open nx × ny grid over [0, size_x] × [0, size_y].
 
-    Vertex ``j (nx + 1) + i`` sits at (x_i, y_j, height(x_i, y_j)); faces are counter-clockwise about +z.
+    Vertex ``j (nx + 1) + i`` sits at (x_i, y_j, height(x_i, y_j)); faces are counter-clockwise
+    about +z.
     """
     nx, ny = _check_count("nx", nx, 1), _check_count("ny", ny, 1)
     x, y = np.meshgrid(np.linspace(0.0, size[0], nx + 1), np.linspace(0.0, size[1], ny + 1))
@@ -100,7 +103,8 @@ def strip(n: int) -> QuadMesh:
 
 
 def torus(n_major: int, n_minor: int, R: float = 1.0, r: float = 0.25) -> QuadMesh:
-    """The torus ((R + r cos v) cos u, (R + r cos v) sin u, r sin v) on an n_major × n_minor grid of (u, v).
+    """The torus ((R + r cos v) cos u, (R + r cos v) sin u, r sin v) on an n_major × n_minor grid of
+    (u, v).
 
     Vertex ``i n_minor + j`` sits at u = 2πi/n_major, v = 2πj/n_minor; every vertex has valence 4.
     """
@@ -120,7 +124,8 @@ def torus(n_major: int, n_minor: int, R: float = 1.0, r: float = 0.25) -> QuadMe
 
 
 def large_torus(n_quads: int) -> QuadMesh:
-    """A torus of about ``n_quads`` quads (n_major ≈ 4 n_minor), for benchmarks: 1 M → 2000 × 500."""
+    """A torus of about ``n_quads`` quads (n_major ≈ 4 n_minor), for benchmarks: 1 M → 2000 ×
+    500."""
     n_minor = max(3, round(np.sqrt(_check_count("n_quads", n_quads, 36) / 4.0)))
     return torus(max(3, round(n_quads / n_minor)), n_minor)
 
@@ -163,8 +168,8 @@ def fan(valence: int, rings: int = 1) -> QuadMesh:
 
 
 def boundary_fan(k: int) -> QuadMesh:
-    """``k`` planar quads around boundary vertex 0 (valence k + 1): spokes e_i at angles iπ/(k + 1), i = 0..k,
-    and quads (0, e_i, e_i + e_{i+1}, e_{i+1})."""
+    """``k`` planar quads around boundary vertex 0 (valence k + 1): spokes e_i at angles iπ/(k + 1),
+    i = 0..k, and quads (0, e_i, e_i + e_{i+1}, e_{i+1})."""
     k = _check_count("k", k, 1)
     spokes = _spokes(np.pi * np.arange(k + 1) / (k + 1))
     vertices = np.concatenate([np.zeros((1, 3)), spokes, spokes[:-1] + spokes[1:]])
@@ -174,7 +179,8 @@ def boundary_fan(k: int) -> QuadMesh:
 
 
 def voxel_surface(filled: NDArray[np.bool_]) -> QuadMesh:
-    """The outward boundary surface of the unit cubes ``filled[i, j, k]`` (cube [i, i+1] × [j, j+1] × [k, k+1]).
+    """The outward boundary surface of the unit cubes ``filled[i, j, k]`` (cube [i, i+1] × [j, j+1]
+    × [k, k+1]).
 
     One quad per pair of face-adjacent cubes with one filled. The surface is manifold unless two
     filled cubes touch only along an edge or at a corner (then a :class:`MeshError` says where).
@@ -191,7 +197,8 @@ def voxel_surface(filled: NDArray[np.bool_]) -> QuadMesh:
         point[:, :, axis] = p[:, None] + 1
         point[:, :, a] = q[:, None] + [0, 1, 1, 0]
         point[:, :, b] = r[:, None] + [0, 0, 1, 1]
-        # these corners run counter-clockwise about +axis; reverse them where the solid is on the + side
+        # these corners run counter-clockwise about +axis; reverse them where the solid is on the +
+        # side
         inward = cells[p + 1, q, r]
         point[inward] = point[inward][:, ::-1]
         faces.append(point)
@@ -239,7 +246,8 @@ def slotted_block(
 
 
 def genus2() -> QuadMesh:
-    """A closed genus-2 surface (Euler characteristic −2): a 5 × 3 × 1 slab of cubes with two holes, centred."""
+    """A closed genus-2 surface (Euler characteristic −2): a 5 × 3 × 1 slab of cubes with two holes,
+    centred."""
     filled = np.ones((5, 3, 1), dtype=bool)
     filled[1, 1, 0] = filled[3, 1, 0] = False
     mesh = voxel_surface(filled)
@@ -273,7 +281,8 @@ def _split_projected(vertices: FloatArray, faces: IntArray, level: int) -> QuadM
 
 
 def sphere_quads(level: int) -> QuadMesh:
-    """The unit sphere from the cube: 6·4^level quads, projected onto the sphere after *each* 2×2 split.
+    """The unit sphere from the cube: 6·4^level quads, projected onto the sphere after *each* 2×2
+    split.
 
     Level 0 is the cube scaled by 1/√3. Unlike :func:`cube_sphere` (which projects only once,
     at the end) every split is made on the sphere, so the quads stay close to equal in size:
@@ -340,7 +349,8 @@ def icosa_ellipsoid(level: int, axes: Sequence[float] = (1.0, 0.7, 0.5)) -> Quad
     return mesh.with_vertices(mesh.vertices * _check_axes(axes))
 
 
-# -- cages that provoke folds -----------------------------------------------------------------------
+# -- cages that provoke folds
+# -----------------------------------------------------------------------
 
 
 def _box_surface(coordinates: Sequence[FloatArray]) -> QuadMesh:
@@ -358,7 +368,8 @@ def _shortest_edge(mesh: QuadMesh) -> float:
 
 
 def _jittered(mesh: QuadMesh, amplitude: float, seed: int) -> QuadMesh:
-    """Every coordinate moved by a uniform random amount in ±``amplitude`` (NumPy generator ``seed``)."""
+    """Every coordinate moved by a uniform random amount in ±``amplitude`` (NumPy generator
+    ``seed``)."""
     noise = np.random.default_rng(seed).uniform(-amplitude, amplitude, mesh.vertices.shape)
     return mesh.with_vertices(mesh.vertices + noise)
 
@@ -370,7 +381,8 @@ def box_cage(
     jitter_seed: int | None = None,
     jitter: float = 0.1,
 ) -> QuadMesh:
-    """The surface of a centred box of side ``lengths``, gridded with alternating short and long edges.
+    """The surface of a centred box of side ``lengths``, gridded with alternating short and long
+    edges.
 
     Along each axis the grid steps alternate 1 : 4 (short, long, short, …), so every vertex
     inside a grid line has one short and one long edge along it: the case where a tangent fan
@@ -399,7 +411,8 @@ def thin_slab(
     divisions: tuple[int, int] = (8, 4),
     rim: int = 2,
 ) -> QuadMesh:
-    """A thin centred box ``size`` × ``thickness`` on a uniform grid: flat faces meeting at 90° rims.
+    """A thin centred box ``size`` × ``thickness`` on a uniform grid: flat faces meeting at 90°
+    rims.
 
     The top and bottom have ``divisions`` quads; ``rim`` quads run across the thickness of each
     side wall, so every rim vertex sees one long edge across the face and short edges down the wall.
@@ -434,7 +447,8 @@ def noisy_sphere(level: int, noise: float = 0.08, seed: int = 0) -> QuadMesh:
 
 
 def flat_fan(valence: int) -> QuadMesh:
-    """A planar disk of ``valence`` convex quads around vertex 0, an interior vertex of that valence.
+    """A planar disk of ``valence`` convex quads around vertex 0, an interior vertex of that
+    valence.
 
     Spoke ends (vertices 1..n) sit at radius 0.9 at angles 2πi/n, rim points (n+1..2n) at radius
     1 halfway between them, and quad i is (0, spoke i, rim i, spoke i+1): a kite, convex and of
@@ -450,14 +464,16 @@ def flat_fan(valence: int) -> QuadMesh:
     return QuadMesh.from_arrays(np.concatenate([np.zeros((1, 3)), spokes, rim]), faces, strict=True)
 
 
-# -- exact closest points and normals of the sampled surfaces ---------------------------------------
+# -- exact closest points and normals of the sampled surfaces
+# ---------------------------------------
 
 #: Newton steps of :func:`ellipsoid_project` at most; it converges in 3–6 near the surface
 _ELLIPSOID_NEWTON_STEPS = 100
 
 
 def sphere_project(points: ArrayLike, radius: float = 1.0) -> tuple[FloatArray, FloatArray]:
-    """Closest points on the sphere of ``radius`` about the origin, and the outward unit normals there.
+    """Closest points on the sphere of ``radius`` about the origin, and the outward unit normals
+    there.
 
     ``points`` (..., 3), not at the centre; returns two arrays of the same shape.
     """
@@ -495,7 +511,8 @@ def ellipsoid_project(
 def torus_project(
     points: ArrayLike, R: float = 2.0, r: float = 0.7
 ) -> tuple[FloatArray, FloatArray]:
-    """Closest points on the torus of :func:`torus` (axis z, radii ``R`` > ``r``) and the outward normals.
+    """Closest points on the torus of :func:`torus` (axis z, radii ``R`` > ``r``) and the outward
+    normals.
 
     The closest point lies on the tube circle in the half-plane through p: ``c + r n`` with
     ``c`` the nearest point of the core circle and ``n = (p − c) / |p − c|``. ``points`` (..., 3),

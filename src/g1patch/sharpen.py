@@ -22,7 +22,8 @@ __all__ = ["sharp_angle_tags"]
 def _polygon_normals(
     vertices: NDArray[np.float64], corners: NDArray[np.int64], sizes: NDArray[np.int64]
 ) -> NDArray[np.float64]:
-    """Unit Newell normals of polygons given as flat ``corners`` with ``sizes`` (zero where degenerate)."""
+    """Unit Newell normals of polygons given as flat ``corners`` with ``sizes`` (zero where
+    degenerate)."""
     here = vertices[corners]
     there = vertices[corners[_following_corner(sizes)]]
     face = np.repeat(np.arange(sizes.size), sizes)

@@ -4,9 +4,10 @@ Every rule is a gather and a segmented sum (``np.bincount``) over half-edges or 
 Python loops run over refinement levels or coordinates. From :data:`KERNEL_VERTICES` vertices on,
 the smooth vertices' limit stencils (positions, stars, slot tangents) run as numba kernels, vertex
 by vertex, that add the same terms in the same order: the same floats as the NumPy code, which
-stays as the reference (and does the crease and corner vertices). With ``n`` faces at a smooth vertex V,
-ring neighbours ``E_i`` (counter-clockwise, ring order of :class:`~g1patch.mesh.QuadTopology`),
-``D_i`` the corner of face i (between ``E_i`` and ``E_{i+1}``) opposite V, and face points ``F_i``:
+stays as the reference (and does the crease and corner vertices). With ``n`` faces at a smooth
+vertex V, ring neighbours ``E_i`` (counter-clockwise, ring order of
+:class:`~g1patch.mesh.QuadTopology`), ``D_i`` the corner of face i (between ``E_i`` and ``E_{i+1}``)
+opposite V, and face points ``F_i``:
 
 * **refinement** (:func:`refine`): face point = centroid; smooth edge point
   ``(A + B + F_L + F_R)/4``, sharp edge point ``(A + B)/2``; smooth vertex
@@ -16,23 +17,23 @@ ring neighbours ``E_i`` (counter-clockwise, ring order of :class:`~g1patch.mesh.
   crease ``(4V + A + B)/6``, corner ``V``;
 * **limit tangents** (:func:`limit_tangents`), per ring slot: at a smooth vertex the eigen
   tangents ``A = Σ 4 cos(iθ) E_i + c (cos iθ + cos(i+1)θ) D_i`` and the same ``B`` with sines,
-  ``θ = 2π/n``, ``c = 1/(4λ − 1)``, ``λ = 5/16 + (cos θ + cos(θ/2) √(2(9 + cos θ)))/16`` (OpenSubdiv's
-  mask; its rotation by one slot is ``cos θ A + sin θ B``), so slot j gets ``s_n (cos jθ A + sin jθ B)``;
-  in a crease sector with k faces between the sharp slots ``E_0`` (leading, counter-clockwise
-  first) and ``E_k`` those two slots get ``±(E_0 − E_k)/2`` and slot j ``cos(jπ/k) a + sin(jπ/k) b``
-  with ``a = (E_0 − E_k)/2`` and b the cross eigen-mask of the sector (:func:`_cross_mask`; for
-  k = 2 the B-spline's). A boundary vertex is a crease vertex with one sector; an interior crease
-  vertex has two, each with its own b (the sectors do not see each other's faces). At a corner
-  every slot gets its chord ``E_j − V`` (OpenSubdiv's corner tangent mask; exact on the sharp
-  slots, whose limit curves are end-interpolating B-splines; a corner sector with ≥ 3 faces has a
-  subdominant eigenvalue above 1/2, so its inner slots have no exact tangent). Scale: every
-  smooth star is normalised so that the planar fan of unit spokes at even angles with
-  parallelogram faces gets unit tangents, ``s_n = 1/(2n + c n (1 + cos θ))``. On a regular
-  region (valence 4 inside, two faces on a boundary or crease) this is exactly the uniform
+  ``θ = 2π/n``, ``c = 1/(4λ − 1)``, ``λ = 5/16 + (cos θ + cos(θ/2) √(2(9 + cos θ)))/16``
+  (OpenSubdiv's mask; its rotation by one slot is ``cos θ A + sin θ B``), so slot j gets ``s_n (cos
+  jθ A + sin jθ B)``; in a crease sector with k faces between the sharp slots ``E_0`` (leading,
+  counter-clockwise first) and ``E_k`` those two slots get ``±(E_0 − E_k)/2`` and slot j ``cos(jπ/k)
+  a + sin(jπ/k) b`` with ``a = (E_0 − E_k)/2`` and b the cross eigen-mask of the sector
+  (:func:`_cross_mask`; for k = 2 the B-spline's). A boundary vertex is a crease vertex with one
+  sector; an interior crease vertex has two, each with its own b (the sectors do not see each
+  other's faces). At a corner every slot gets its chord ``E_j − V`` (OpenSubdiv's corner tangent
+  mask; exact on the sharp slots, whose limit curves are end-interpolating B-splines; a corner
+  sector with ≥ 3 faces has a subdominant eigenvalue above 1/2, so its inner slots have no exact
+  tangent). Scale: every smooth star is normalised so that the planar fan of unit spokes at even
+  angles with parallelogram faces gets unit tangents, ``s_n = 1/(2n + c n (1 + cos θ))``. On a
+  regular region (valence 4 inside, two faces on a boundary or crease) this is exactly the uniform
   bicubic B-spline's Hermite tangent (``s_4 = 1/12``), i.e. 3 × (Bézier edge point − corner); at an
-  extraordinary vertex the limit surface has no finite non-zero derivative along the edge
-  (speed ``~ (2λ)^m`` after m steps), so any length is a choice: this one is the regular
-  case's reading of the same fan; :mod:`g1patch.targets.limit` fits it to the limit curve.
+  extraordinary vertex the limit surface has no finite non-zero derivative along the edge (speed ``~
+  (2λ)^m`` after m steps), so any length is a choice: this one is the regular case's reading of the
+  same fan; :mod:`g1patch.targets.limit` fits it to the limit curve.
 
 **Features** come from :attr:`QuadMesh.features <g1patch.mesh.QuadMesh.features>` (OpenSubdiv's
 ``t crease``, ``t corner``, ``t hole``, ``t interpolateboundary``, ``t creasemethod`` tags); the
@@ -52,7 +53,8 @@ edge sharpness of the tags. OpenSubdiv's (Sdc) rules, per level:
   and where the child's rule differs (some sharpness decayed to 0 this step) ``w·parent +
   (1 − w)·child`` with w the mean of the decaying sharpness values (OpenSubdiv's
   ``ComputeFractionalWeightAtVertex``: the vertex sharpness if it decays, every incident edge
-  with ``0 < s ≤ 1`` — or, with Chaikin, every edge whose child at this vertex decays — clamped to 1);
+  with ``0 < s ≤ 1`` — or, with Chaikin, every edge whose child at this vertex decays — clamped to
+  1);
 * child sharpness: ``s − 1`` (0 once ≤ 0) for edges and vertices, ∞ (≥ 10) stays ∞; with
   ``creasemethod chaikin`` each child edge takes ``0.75 s + 0.25 s̄ − 1`` where s̄ is the mean of
   the other semi-sharp edges at the end vertex it touches (plain ``s − 1`` if there is none);
@@ -125,7 +127,8 @@ _FEATURE_TAGS = frozenset({"crease", "corner", "hole"})
 
 
 def boundary_mode(mesh: QuadMesh) -> BoundaryMode:
-    """The mesh's boundary rule (``features.boundary``): ``edge-and-corner``, or ``edge-only`` (also for ``none``)."""
+    """The mesh's boundary rule (``features.boundary``): ``edge-and-corner``, or ``edge-only`` (also
+    for ``none``)."""
     return "edge-and-corner" if mesh.features.boundary == "edge-and-corner" else "edge-only"
 
 
@@ -143,13 +146,15 @@ def _edge_override(topology: QuadTopology, sharpness: ArrayLike) -> FloatArray:
     negative = np.flatnonzero(values < 0)
     if negative.size:
         raise InputError(
-            f"sharpness: edge {negative[0]} has sharpness {values[negative[0]]:g}; a sharpness is ≥ 0"
+            f"sharpness: edge {negative[0]} has sharpness {values[negative[0]]:g}; a sharpness is "
+            "≥ 0"
         )
     return values
 
 
 def sharp_edges(mesh: QuadMesh | QuadTopology, sharpness: ArrayLike | None = None) -> BoolArray:
-    """Per edge: infinitely sharp at every level, i.e. a boundary edge or sharpness ≥ :data:`INFINITE_SHARPNESS`.
+    """Per edge: infinitely sharp at every level, i.e. a boundary edge or sharpness ≥
+    :data:`INFINITE_SHARPNESS`.
 
     The sharpness is ``sharpness`` where given, else the mesh's features (a bare topology has none).
     Semi-sharp edges are not in it (they are sharp for a few levels only)."""
@@ -236,7 +241,8 @@ def _decrement(s: FloatArray) -> FloatArray:
 
 
 def _child_edge_halves(level: _Level) -> tuple[FloatArray, FloatArray]:
-    """Sharpness of each edge's two children, the one at ``edges[:, 0]`` and the one at ``edges[:, 1]``."""
+    """Sharpness of each edge's two children, the one at ``edges[:, 0]`` and the one at ``edges[:,
+    1]``."""
     s = level.edge
     if not level.chaikin:
         child = _decrement(s)
@@ -260,7 +266,8 @@ def _child_edge_halves(level: _Level) -> tuple[FloatArray, FloatArray]:
 
 
 def _rules(vertex_sharpness: FloatArray, sharp_count: IntArray) -> IntArray:
-    """OpenSubdiv's vertex rule: corner if the vertex is sharp or more than two edges are, crease with two."""
+    """OpenSubdiv's vertex rule: corner if the vertex is sharp or more than two edges are, crease
+    with two."""
     return np.select(
         [(vertex_sharpness > 0) | (sharp_count > 2), sharp_count == 2], [_CORNER, _CREASE], _SMOOTH
     )
@@ -276,7 +283,8 @@ def _end_sums(
 
 def _step(level: _Level) -> _Level:
     """One Catmull–Clark step with OpenSubdiv's creasing (module docstring), numbered like
-    :func:`~g1patch.mesh.refine_polygons`: the V vertex points, one per edge (``edges`` order), one per face."""
+    :func:`~g1patch.mesh.refine_polygons`: the V vertex points, one per edge (``edges`` order), one
+    per face."""
     topology, x = level.topology, level.x
     nv, ne = topology.n_vertices, topology.n_edges
     edges = topology.edges
@@ -323,7 +331,8 @@ def _step(level: _Level) -> _Level:
             [smooth, child_crease],
             x,
         )
-        # the fractional weight of the transition: the mean of the sharpness values that decay to 0 here
+        # the fractional weight of the transition: the mean of the sharpness values that decay to 0
+        # here
         if level.chaikin:
             decay_a, decay_b = sharp & (half_a <= 0), sharp & (half_b <= 0)
         else:
@@ -398,16 +407,17 @@ def _level_tags(tags: tuple[Tag, ...], level: _Level) -> tuple[Tag, ...]:
 
 
 def catmull_clark_points(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArray:
-    """One Catmull–Clark step's positions (module docstring), numbered like :func:`~g1patch.mesh.refine_polygons`:
-    the V vertex points, then one point per edge (``topology.edges`` order), then one per face."""
+    """One Catmull–Clark step's positions (module docstring), numbered like
+    :func:`~g1patch.mesh.refine_polygons`: the V vertex points, then one point per edge
+    (``topology.edges`` order), then one per face."""
     return _step(_level_of(mesh, sharpness)).x
 
 
 def refine(mesh: QuadMesh, levels: int = 1, sharpness: ArrayLike | None = None) -> QuadMesh:
-    """``levels`` Catmull–Clark steps (module docstring) on the topology of :func:`~g1patch.mesh.subdivide`
-    (old vertices, then one per edge, then one per face). Features from the mesh's tags, edge
-    sharpness overridden by ``sharpness`` where given; the result's tags carry the child
-    features (the other tags are kept). ``levels = 0`` returns the mesh itself."""
+    """``levels`` Catmull–Clark steps (module docstring) on the topology of
+    :func:`~g1patch.mesh.subdivide` (old vertices, then one per edge, then one per face). Features
+    from the mesh's tags, edge sharpness overridden by ``sharpness`` where given; the result's tags
+    carry the child features (the other tags are kept). ``levels = 0`` returns the mesh itself."""
     return refine_grids(mesh, levels, sharpness)[0]
 
 
@@ -417,7 +427,8 @@ def refine_grids(
     """:func:`refine`, and per original face the refined vertices as a grid ``(F, m + 1, m + 1)``,
     ``m = 2^levels``: ``grid[f, i, j]`` sits at parameter ``(i/m, j/m)`` of face f (u from corner 0
     to 1, v from corner 0 to 3). Cell (i, j) of a level is the face holding the half-edge
-    ``grid[i, j] → grid[i + 1, j]`` (refinement keeps orientation), its face point the cell's centre."""
+    ``grid[i, j] → grid[i + 1, j]`` (refinement keeps orientation), its face point the cell's
+    centre."""
     if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or levels < 0:
         raise InputError(f"levels: expected a non-negative integer, got {levels!r}")
     level = _level_of(mesh, sharpness)
@@ -454,7 +465,8 @@ def refine_grids(
 
 
 def _limit_rules(level: _Level) -> IntArray:
-    """The rules of the limit masks (no fractional sharpness left): from the infinitely sharp features."""
+    """The rules of the limit masks (no fractional sharpness left): from the infinitely sharp
+    features."""
     sharp = level.edge >= INFINITE_SHARPNESS
     count = np.bincount(level.topology.edges[sharp].ravel(), minlength=level.topology.n_vertices)
     return _rules(np.where(level.vertex >= INFINITE_SHARPNESS, 1.0, 0.0), count)
@@ -462,13 +474,15 @@ def _limit_rules(level: _Level) -> IntArray:
 
 def vertex_rules(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> IntArray:
     """Per vertex the rule of its limit masks, :data:`RULE_SMOOTH` / :data:`RULE_CREASE` /
-    :data:`RULE_CORNER`: that of the infinitely sharp features (semi-sharp ones decay before the limit)."""
+    :data:`RULE_CORNER`: that of the infinitely sharp features (semi-sharp ones decay before the
+    limit)."""
     return _limit_rules(_level_of(mesh, sharpness))
 
 
 def _limit_positions(level: _Level, compiled: bool | None = None) -> FloatArray:
     """Limit positions (module docstring). ``compiled`` (None: from :data:`KERNEL_VERTICES` vertices
-    on): the smooth vertices by :func:`_positions_kernel`, bit for bit the NumPy reference's values."""
+    on): the smooth vertices by :func:`_positions_kernel`, bit for bit the NumPy reference's
+    values."""
     topology, x = level.topology, level.x
     nv = topology.n_vertices
     rule = _limit_rules(level)
@@ -503,7 +517,8 @@ def _limit_positions(level: _Level, compiled: bool | None = None) -> FloatArray:
 
 
 def _kernel_wanted(compiled: bool | None, count: int) -> bool:
-    """Whether the limit stencils run as numba kernels: ``compiled`` when given, else from :data:`KERNEL_VERTICES` on."""
+    """Whether the limit stencils run as numba kernels: ``compiled`` when given, else from
+    :data:`KERNEL_VERTICES` on."""
     return count >= KERNEL_VERTICES if compiled is None else compiled
 
 
@@ -515,8 +530,9 @@ def _positions_kernel(
     smooth: BoolArray,
     points: FloatArray,
 ) -> None:
-    """``points[v] = (n² V + 4ΣE_i + ΣD_i)/(n(n + 5))`` at the smooth vertices, the sums in half-edge
-    order as :func:`_segment_sum` adds them (the ring sorted), so the values are the reference's."""
+    """``points[v] = (n² V + 4ΣE_i + ΣD_i)/(n(n + 5))`` at the smooth vertices, the sums in
+    half-edge order as :func:`_segment_sum` adds them (the ring sorted), so the values are the
+    reference's."""
     order = np.empty(max(1, int(np.max(ring_offsets[1:] - ring_offsets[:-1]))), dtype=np.int64)
     for v in range(smooth.size):
         if not smooth[v]:
@@ -551,7 +567,8 @@ def _positions_kernel(
 def _by_valence(
     n: IntArray, i: IntArray, table: Callable[[IntArray, IntArray], tuple[FloatArray, ...]]
 ) -> tuple[FloatArray, ...]:
-    """``table(n, i)`` for many entries, evaluated once per distinct ``(n, i)`` (valences repeat)."""
+    """``table(n, i)`` for many entries, evaluated once per distinct ``(n, i)`` (valences
+    repeat)."""
     valences = np.unique(n)
     if len(valences) * int(valences.max(initial=0)) > len(n):
         return table(n, i)
@@ -564,7 +581,8 @@ def _by_valence(
 def _interior_mask_weights(
     n: IntArray, i: IntArray
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Weights of ``E_i`` and ``D_i`` in the scaled eigen tangents A (cosines) and B (sines) at valence n."""
+    """Weights of ``E_i`` and ``D_i`` in the scaled eigen tangents A (cosines) and B (sines) at
+    valence n."""
     theta = 2.0 * np.pi / n
     cos_t = np.cos(theta)
     lam = 5.0 / 16.0 + (cos_t + np.cos(0.5 * theta) * np.sqrt(2.0 * (9.0 + cos_t))) / 16.0
@@ -581,7 +599,8 @@ def _interior_mask_weights(
 
 @cache
 def _cross_mask(k: int) -> tuple[float, FloatArray, FloatArray]:
-    """The across-crease tangent mask of a crease sector with k faces: ``(w_V, w_E (k + 1), w_D (k))``.
+    """The across-crease tangent mask of a crease sector with k faces: ``(w_V, w_E (k + 1), w_D
+    (k))``.
 
     k = 2: the B-spline's ``(−4V − E_0 + 4E_1 − E_2 + D_0 + D_1)/6``; k = 1 (its subdominant
     eigenvalue 1/4 is double): OpenSubdiv's ``3(E_0 + E_1) − 6V``. Otherwise the left eigenvector
@@ -622,8 +641,8 @@ def _cross_mask(k: int) -> tuple[float, FloatArray, FloatArray]:
 
 
 class _Limit(NamedTuple):
-    """Limit data of a level: positions (V, 3); or slot tangents (S, 3), the stars ``a``, ``b`` (V, 3)
-    and where asked the unit normal of each ring entry's sector (``ring_halfedges`` order)."""
+    """Limit data of a level: positions (V, 3); or slot tangents (S, 3), the stars ``a``, ``b`` (V,
+    3) and where asked the unit normal of each ring entry's sector (``ring_halfedges`` order)."""
 
     points: FloatArray | None
     tangents: FloatArray | None = None
@@ -664,7 +683,8 @@ def _limit_frames(level: _Level, corners: bool = False, compiled: bool | None = 
     a = np.zeros((nv, 3))
     b = np.zeros((nv, 3))
     kernel = _kernel_wanted(compiled, nv)
-    # the vertices the NumPy code below handles (all, or those the kernel leaves), their slots and ring entries
+    # the vertices the NumPy code below handles (all, or those the kernel leaves), their slots and
+    # ring entries
     chosen = np.flatnonzero(~smooth) if kernel else np.arange(nv)
     slot_vertex = np.repeat(chosen, slot_count[chosen])
     slot = np.arange(len(slot_vertex)) - np.repeat(
@@ -847,7 +867,8 @@ def _stars_kernel(
 ) -> None:
     """At each smooth vertex the stars ``A = Σ w_E,i E_i + w_D,i D_i`` (``weights[0:2]``), B
     (``weights[2:4]``), in ring order as :func:`_segment_sum` adds them, and slot j's tangent
-    ``cos φ_j A + sin φ_j B`` (``rotation``); the tables' row for valence n, entry i, is ``start_of[n] + i``."""
+    ``cos φ_j A + sin φ_j B`` (``rotation``); the tables' row for valence n, entry i, is
+    ``start_of[n] + i``."""
     for v in range(smooth.size):
         if not smooth[v]:
             continue
@@ -882,7 +903,8 @@ def _stars_kernel(
 
 
 def _affected(level: _Level) -> BoolArray:
-    """Vertices whose limit sees a semi-sharp feature: a semi-sharp vertex, or an incident semi-sharp edge."""
+    """Vertices whose limit sees a semi-sharp feature: a semi-sharp vertex, or an incident
+    semi-sharp edge."""
     semi_edge = (level.edge > 0) & (level.edge < INFINITE_SHARPNESS)
     out = (level.vertex > 0) & (level.vertex < INFINITE_SHARPNESS)
     out[level.topology.edges[semi_edge].ravel()] = True
@@ -890,7 +912,8 @@ def _affected(level: _Level) -> BoolArray:
 
 
 def _sublevel(level: _Level, faces: BoolArray) -> tuple[_Level, IntArray]:
-    """The faces as a level of their own (vertices renumbered in order), and the new index of every vertex (-1 outside)."""
+    """The faces as a level of their own (vertices renumbered in order), and the new index of every
+    vertex (-1 outside)."""
     topology = level.topology
     kept = topology.faces[faces]
     used = np.zeros(topology.n_vertices, dtype=bool)
@@ -922,7 +945,8 @@ def _neighbourhood(level: _Level, vertices: BoolArray, rings: int) -> BoolArray:
 
 
 def _decayed(level: _Level) -> tuple[_Level, int]:
-    """Refined until no fractional sharpness is left (at most ⌈max s⌉ ≤ 10 steps), and the steps taken."""
+    """Refined until no fractional sharpness is left (at most ⌈max s⌉ ≤ 10 steps), and the steps
+    taken."""
     steps = 0
     while level.semi_sharp:
         level = _step(level)
@@ -939,7 +963,8 @@ def _limit(
     if not level.semi_sharp:
         return _limit_frames(level, corners) if frames else _Limit(_limit_positions(level))
     affected = _affected(level)
-    # the limit of v reads its 1-ring and the sharpness at v; with Chaikin also that at its neighbours
+    # the limit of v reads its 1-ring and the sharpness at v; with Chaikin also that at its
+    # neighbours
     rings = 2 if level.chaikin else 1
     sub, index = level, np.arange(level.topology.n_vertices)
     for extra in range(3):
@@ -998,11 +1023,11 @@ def limit_stars(
 
 
 def limit_tangents(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArray:
-    """Per ring slot the limit tangent along its edge, (S, 3) (module docstring): ``cos φ_j a + sin φ_j b``
-    over the star of the slot's sector (``φ_j = 2πj/n`` at a smooth vertex, ``πj/k`` in a crease
-    sector with k faces), the crease tangent ``±(E_p − E_q)/2`` on the two sharp slots of a crease,
-    ``E_j − V`` at a corner. Along a sharp edge it is the tangent of the crease curve, the same for
-    the sectors on both sides."""
+    """Per ring slot the limit tangent along its edge, (S, 3) (module docstring): ``cos φ_j a + sin
+    φ_j b`` over the star of the slot's sector (``φ_j = 2πj/n`` at a smooth vertex, ``πj/k`` in a
+    crease sector with k faces), the crease tangent ``±(E_p − E_q)/2`` on the two sharp slots of a
+    crease, ``E_j − V`` at a corner. Along a sharp edge it is the tangent of the crease curve, the
+    same for the sectors on both sides."""
     return _limit(mesh, sharpness, frames=True).tangents
 
 
@@ -1015,7 +1040,8 @@ def limit_normals(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatAr
 
 
 class LimitData(NamedTuple):
-    """What :func:`limit_points`, :func:`limit_stars`, :func:`limit_tangents` and :func:`limit_normals` return."""
+    """What :func:`limit_points`, :func:`limit_stars`, :func:`limit_tangents` and
+    :func:`limit_normals` return."""
 
     points: FloatArray
     a: FloatArray
@@ -1039,7 +1065,8 @@ def limit_data(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> LimitData:
 def limit_corner_normals(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArray:
     """Per face corner ``[f, c]`` (F, 4, 3) the unit normal of the limit surface at vertex
     ``faces[f, c]`` on the sector holding face f: the sectors of a vertex are the runs of faces
-    between its infinitely sharp edges (boundary edges included), one sector where there are fewer than two.
+    between its infinitely sharp edges (boundary edges included), one sector where there are fewer
+    than two.
 
     * smooth vertex (fewer than two sharp edges): the vertex normal of :func:`limit_normals`;
     * crease vertex: ``a × b`` of the sector's own star, a the crease tangent ``(E_0 − E_k)/2``

@@ -6,10 +6,10 @@ Without a resolution, ``r`` follows :data:`TRIANGLE_BUDGET` (about 2 M triangles
 only a network of more than a million patches exceeds it); an explicit resolution that would make
 more than :data:`MAX_TRIANGLES` triangles needs ``force=True`` (:func:`check_size`).
 
-Points on a shared corner or edge get one index for all patches that touch them (edge samples are numbered in the edge's
-canonical direction), so the triangle mesh has no cracks by construction: on a closed network
-every triangle edge has exactly two triangles. Samples on a collapsed edge all become the
-corner point, and the triangles that lose an area there are dropped.
+Points on a shared corner or edge get one index for all patches that touch them (edge samples are
+numbered in the edge's canonical direction), so the triangle mesh has no cracks by construction: on
+a closed network every triangle edge has exactly two triangles. Samples on a collapsed edge all
+become the corner point, and the triangles that lose an area there are dropped.
 """
 
 from __future__ import annotations
@@ -87,18 +87,20 @@ def _grid_indices(network: PatchNetwork, resolution: int) -> tuple[NDArray[np.in
 
 
 def triangle_count(n_patches: int, resolution: int) -> int:
-    """Triangles of a tessellation of ``n_patches`` at ``resolution`` (an upper bound: collapsed edges drop some)."""
+    """Triangles of a tessellation of ``n_patches`` at ``resolution`` (an upper bound: collapsed
+    edges drop some)."""
     return 2 * (int(resolution) - 1) ** 2 * int(n_patches)
 
 
 def estimated_memory(n_patches: int, resolution: int) -> int:
-    """Bytes of memory, about, that tessellating and writing ``n_patches`` at ``resolution`` takes."""
+    """Bytes of memory, about, that tessellating and writing ``n_patches`` at ``resolution``
+    takes."""
     return BYTES_PER_TRIANGLE * triangle_count(n_patches, resolution)
 
 
 def choose_resolution(n_patches: int, budget: int = TRIANGLE_BUDGET) -> int:
-    """Samples per patch side r for about ``budget`` triangles: the largest r ≤ :data:`DEFAULT_RESOLUTION`
-    with ``2 (r − 1)² n_patches ≤ budget``, and at least 2.
+    """Samples per patch side r for about ``budget`` triangles: the largest r ≤
+    :data:`DEFAULT_RESOLUTION` with ``2 (r − 1)² n_patches ≤ budget``, and at least 2.
 
     Spot split4 (11 712 patches): 10, 1.9 M triangles; the cube (6 patches): 17.
     """
@@ -126,8 +128,10 @@ def check_size(
     triangles = triangle_count(n_patches, resolution)
     if triangles > max_triangles and not force:
         raise TooLargeError(
-            f"resolution {resolution} on {n_patches} patches would make {_size_text(triangles)} triangles "
-            f"(~{_size_text(estimated_memory(n_patches, resolution), 'B')} of memory), above the cap of "
+            f"resolution {resolution} on {n_patches} patches would make {_size_text(triangles)} "
+            "triangles "
+            f"(~{_size_text(estimated_memory(n_patches, resolution), 'B')} of memory), above the "
+            "cap of "
             f"{_size_text(max_triangles)}; pass force=True or a lower resolution"
         )
     return triangles

@@ -94,9 +94,9 @@ def assemble_corner(targets: Targets) -> PatchSet:
     """The paper's patches from any targets: one Hermite patch per quad, G1 at corners only.
 
     Corner tangents are the target tangents (⊥ the target normal, eq. 13); the twist at corner k
-    is read off the interior target ``Ft = A + (t_AB + t_AD)/3 + w/9`` as ``w = 9 (Ft − A) − 3 (t_AB + t_AD)``,
-    in the corner's own frame (u along A → B, v along A → D), which is ``±p_uv`` (+ at corners 0
-    and 2, − at 1 and 3, where one axis runs backwards).
+    is read off the interior target ``Ft = A + (t_AB + t_AD)/3 + w/9`` as ``w = 9 (Ft − A) − 3 (t_AB
+    + t_AD)``, in the corner's own frame (u along A → B, v along A → D), which is ``±p_uv`` (+ at
+    corners 0 and 2, − at 1 and 3, where one axis runs backwards).
     """
     from ..targets import halfedge_slots
     from .gregory import tangent_plane_tangents

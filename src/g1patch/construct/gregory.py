@@ -24,8 +24,9 @@ which makes ``c' × D_L`` and ``D_R × c'`` parallel for every t: the tangent pl
   (``G → G + σ c'`` with ``h_L → h_L − σ β``, ``h_R → h_R + σ α`` changes nothing), which leaves
   G1 (a vector) and h_L1 free: fitted to the four interior targets by ridge least squares.
   Interior Bézier coefficients of the product forms:
-  ``d1 = (2β0 G1 + β1 G0)/3 + (2 h0 q1 + h1 q0)/3``, ``d2 = (β0 G2 + 2β1 G1)/3 + (h0 q2 + 2 h1 q1)/3``
-  (L; R with −α for β and h_R), ``q1 = 3(b2 − b1)``; interior points ``b1 + d1/3``, ``b2 + d2/3``.
+  ``d1 = (2β0 G1 + β1 G0)/3 + (2 h0 q1 + h1 q0)/3``, ``d2 = (β0 G2 + 2β1 G1)/3 + (h0 q2 + 2 h1
+  q1)/3`` (L; R with −α for β and h_R), ``q1 = 3(b2 − b1)``; interior points ``b1 + d1/3``, ``b2 +
+  d2/3``.
 * **Symmetric edges** (α ≡ β ≡ 1 at both ends, as on any C1 data): there the k-h family is a
   4-dimensional part of the 6-dimensional solution set ``D_L + D_R = Φ c'`` with Φ linear, so
   those edges take the minimum-norm correction of their targets onto it instead: both sides
@@ -88,7 +89,8 @@ def _bracket(a: FloatArray, b: FloatArray, n: FloatArray) -> FloatArray:
 def corner_split(
     q: FloatArray, d_left: FloatArray, d_right: FloatArray, normal: FloatArray
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """``(α, β, φ, Δ-sign check)`` with ``α d_L + β d_R = φ q`` and ``α + β = 2`` (module docstring).
+    """``(α, β, φ, Δ-sign check)`` with ``α d_L + β d_R = φ q`` and ``α + β = 2`` (module
+    docstring).
 
     The last value is ``min([q, d_L], [d_R, q])`` relative to the vectors' sizes: positive iff
     d_L and d_R lie on opposite sides of q, counter-clockwise and clockwise from it.
@@ -108,7 +110,8 @@ def corner_split(
 
 
 def tangent_plane_tangents(targets: Targets, *, compiled: bool = True) -> FloatArray:
-    """The target tangents moved into their sectors' tangent planes, which is all G1 asks at a corner.
+    """The target tangents moved into their sectors' tangent planes, which is all G1 asks at a
+    corner.
 
     A smooth slot: ``t − (N·t) N`` with its sector's normal N. A slot on a seam or on the
     boundary between two different sector planes: onto their common line, ``(t·l) l`` with
@@ -140,14 +143,16 @@ def _raise_invalid(topology: QuadTopology, bad: int, end: int, edge: int, margin
         h = int(topology.edge_halfedges[edge, 0])
         v = int(topology.origin(h) if end == 0 else topology.target(h))
         raise ConstructionError(
-            f"gregory: the target tangents at vertex {v} (valence {topology.valence[v]}) do not turn "
+            f"gregory: the target tangents at vertex {v} (valence {topology.valence[v]}) do not "
+            "turn "
             f"counter-clockwise about its normal (margin {margin:.3g}); the targets rule must "
             f"supply a valid fan ({bad} edge ends affected)"
         )
 
 
 def assemble_gregory(targets: Targets, *, compiled: bool = True) -> GregoryPatchSet:
-    """The Gregory patches of ``targets``, one per face, exactly G1 on every interior edge (module docstring).
+    """The Gregory patches of ``targets``, one per face, exactly G1 on every interior edge (module
+    docstring).
 
     ``compiled`` runs the assembly in a numba kernel (:func:`_assemble_kernel`, which moves the
     tangents into their vertex planes as it reads them where there are no seams); ``False`` runs
@@ -194,7 +199,8 @@ def assemble_gregory(targets: Targets, *, compiled: bool = True) -> GregoryPatch
             *edges,
         )
 
-    # the corners and targets of every face first, then the edges overwrite the interior points they solve
+    # the corners and targets of every face first, then the edges overwrite the interior points they
+    # solve
     in_chunks(lambda lo, hi: run((lo, hi), (0, 0)), origin.size)
     ranges = in_chunks(lambda lo, hi: run((0, 0), (lo, hi)), topology.n_edges)
     bad = sum(found[0] for found in ranges)
@@ -214,8 +220,9 @@ def _assemble_numpy(
     points: FloatArray,
     margins: FloatArray,
 ) -> None:
-    """The NumPy reference of :func:`_assemble_kernel`: gathers, scatters and batched closed-form solves over
-    edges (corner-split margins into ``margins`` (2, E), raising where one is not positive)."""
+    """The NumPy reference of :func:`_assemble_kernel`: gathers, scatters and batched closed-form
+    solves over edges (corner-split margins into ``margins`` (2, E), raising where one is not
+    positive)."""
     topology = targets.topology
     faces = topology.faces
     count = topology.n_faces
@@ -378,9 +385,10 @@ def _assemble_kernel(
     first_edge: int,
     stop_edge: int,
 ) -> tuple[int, int, float, int, float]:
-    """:func:`_assemble_numpy` one half-edge, then one edge at a time, straight into ``points`` (F, 20, 3),
-    for the half-edges ``first_halfedge ≤ i < stop_halfedge`` and the edges ``first_edge ≤ e < stop_edge``
-    (an edge's interior points overwrite its half-edges' targets: all half-edges go first).
+    """:func:`_assemble_numpy` one half-edge, then one edge at a time, straight into ``points`` (F,
+    20, 3), for the half-edges ``first_halfedge ≤ i < stop_halfedge`` and the edges ``first_edge ≤ e
+    < stop_edge`` (an edge's interior points overwrite its half-edges' targets: all half-edges go
+    first).
 
     Each slot tangent is read as ``t − (N·t) N`` with its vertex's normal N when ``project`` (the
     seam-free :func:`tangent_plane_tangents`, same operations), else as given. Per half-edge:

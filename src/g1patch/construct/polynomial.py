@@ -11,15 +11,17 @@ exactly. Per Gregory patch f (one per quad, patch edge k = half-edge ``4 f + k``
   B (``slot_in[4f + k]``) ``t = 3 (E-_{k+1} − P_{k+1})`` (the network is G0: both faces of an edge
   give the same numbers);
 * ``interior``: the interior pairs ``(Fn_k, Fp_k)``, as the Gregory assembly made them;
-* ``normals``: the network's vertex normals; ``corner_normals``: the patches' normals at their corners;
+* ``normals``: the network's vertex normals; ``corner_normals``: the patches' normals at their
+  corners;
 * ``seams``: the network's seams per mesh edge.
 
-split4's interiors are then guided by a least-squares fit of each Gregory patch (:func:`guide_nets`).
-split4 keeps no seams itself, so a network with seams is re-assembled on its mesh *cut open* along
-them (one vertex per corner sector, each seam two boundary edges), with stars that keep every seam
-tangent exactly (:func:`seam_stars`; a nearly straight crease first gets opposite tangents,
-:func:`_straight_creases`): both sides of a seam then compute the same boundary curve, bit for bit,
-and the sub-patches are connected on the uncut mesh with those edges marked as seams.
+split4's interiors are then guided by a least-squares fit of each Gregory patch
+(:func:`guide_nets`). split4 keeps no seams itself, so a network with seams is re-assembled on its
+mesh *cut open* along them (one vertex per corner sector, each seam two boundary edges), with stars
+that keep every seam tangent exactly (:func:`seam_stars`; a nearly straight crease first gets
+opposite tangents, :func:`_straight_creases`): both sides of a seam then compute the same boundary
+curve, bit for bit, and the sub-patches are connected on the uncut mesh with those edges marked as
+seams.
 
 The result is compared with the Gregory surface itself (:func:`surface_deviation`). split4's
 stars cannot hold every Gregory fan (a V-shaped fan at a dart's end, unequal opposite tangents),
@@ -66,7 +68,8 @@ IntArray = NDArray[np.int64]
 
 def _topology_of(network: PatchNetwork, cut: bool) -> QuadTopology:
     """The quad mesh a one-patch-per-quad network was built on (faces = ``corner_ids``); ``cut``:
-    cut open along its seams, one vertex per corner *sector* (:meth:`PatchNetwork.corner_sectors`)."""
+    cut open along its seams, one vertex per corner *sector*
+    (:meth:`PatchNetwork.corner_sectors`)."""
     if not isinstance(network.patches, GregoryPatchSet):
         raise InputError(f"network: expected Gregory patches, got {type(network.patches).__name__}")
     if not cut:
@@ -82,8 +85,8 @@ CORNER_INSET = 1e-6
 
 
 def _corner_normals(patches: GregoryPatchSet) -> FloatArray:
-    """(F, 4, 3) unit normals of the patches at their corners; at a degenerate corner (normal of zero
-    length) the normal at :data:`CORNER_INSET` along its diagonal instead."""
+    """(F, 4, 3) unit normals of the patches at their corners; at a degenerate corner (normal of
+    zero length) the normal at :data:`CORNER_INSET` along its diagonal instead."""
     normals = patches.normals(CORNER_PARAMETERS)
     face, corner = np.nonzero(np.linalg.norm(normals, axis=-1) < 0.5)
     if face.size:
@@ -139,8 +142,9 @@ def gregory_targets(network: PatchNetwork, *, cut: bool = False) -> tuple[Target
 
 class GridRefinement(NamedTuple):
     """Each quad of a topology cut into an n × n grid in its own parameters: refined face
-    ``r = f n² + a n + b`` covers ``u ∈ [a/n, (a+1)/n]``, ``v ∈ [b/n, (b+1)/n]`` of face f, its corners
-    in f's order (so it turns the same way); ``grid[f, a, b]`` is the vertex at ``(a/n, b/n)`` of face f."""
+    ``r = f n² + a n + b`` covers ``u ∈ [a/n, (a+1)/n]``, ``v ∈ [b/n, (b+1)/n]`` of face f, its
+    corners in f's order (so it turns the same way); ``grid[f, a, b]`` is the vertex at ``(a/n,
+    b/n)`` of face f."""
 
     topology: QuadTopology
     grid: NDArray[np.int64]
@@ -148,8 +152,9 @@ class GridRefinement(NamedTuple):
 
 
 def grid_refinement(topology: QuadTopology, n: int) -> GridRefinement:
-    """:class:`GridRefinement` of ``topology``: vertices are the mesh's, then n − 1 per edge (from the
-    origin of its first half-edge on), then (n − 1)² per face; an edge's points are shared by its faces."""
+    """:class:`GridRefinement` of ``topology``: vertices are the mesh's, then n − 1 per edge (from
+    the origin of its first half-edge on), then (n − 1)² per face; an edge's points are shared by
+    its faces."""
     faces, count = topology.faces, topology.n_faces
     grid = np.empty((count, n + 1, n + 1), dtype=np.int64)
     grid[:, [0, n, n, 0], [0, 0, n, n]] = faces
@@ -176,7 +181,8 @@ def grid_refinement(topology: QuadTopology, n: int) -> GridRefinement:
 def _refined_seams(
     topology: QuadTopology, seam_halfedges: NDArray[np.bool_], n: int
 ) -> NDArray[np.bool_]:
-    """(R, 4) which half-edges of the :func:`grid_refinement` lie on the ``seam_halfedges`` (4F,) of ``topology``."""
+    """(R, 4) which half-edges of the :func:`grid_refinement` lie on the ``seam_halfedges`` (4F,) of
+    ``topology``."""
     seam = seam_halfedges.reshape(-1, 4)
     refined = np.zeros((topology.n_faces, n, n, 4), dtype=bool)
     refined[:, :, 0, 0] = seam[:, 0, None]
@@ -310,12 +316,13 @@ def seam_stars(
     """split4's stars on a topology cut along seams (``seam_halfedges``: the cut's boundary
     half-edges that were seams), where both sides of a seam must keep its tangents exactly.
 
-    Elsewhere :func:`~g1patch.construct.split4.split4_star` (``equal_sectors`` passed on). At a vertex copy with k ≥ 2 faces
-    and a seam slot e (0 or k): the regular star ``t_j = t_e cos φ_j + b sin φ_j``, ``φ_j = |j − e| θ``,
-    ``θ = Φ / k`` (Φ the fan's turn from slot 0 to slot k about the sector normal), b by least
-    squares over the other slots, or from the other end's seam tangent,
-    ``b = (t_k − t_0 cos Φ) / sin Φ``, where both ends are seams and ``|sin Φ| ≥`` :data:`SIN_FLOOR`;
-    ``c_v = cos θ``, no length safeguard. A one-face sector keeps its tangents (as split4 does).
+    Elsewhere :func:`~g1patch.construct.split4.split4_star` (``equal_sectors`` passed on). At a
+    vertex copy with k ≥ 2 faces and a seam slot e (0 or k): the regular star ``t_j = t_e cos φ_j +
+    b sin φ_j``, ``φ_j = |j − e| θ``, ``θ = Φ / k`` (Φ the fan's turn from slot 0 to slot k about
+    the sector normal), b by least squares over the other slots, or from the other end's seam
+    tangent, ``b = (t_k − t_0 cos Φ) / sin Φ``, where both ends are seams and ``|sin Φ| ≥``
+    :data:`SIN_FLOOR`; ``c_v = cos θ``, no length safeguard. A one-face sector keeps its tangents
+    (as split4 does).
     """
     from .split4 import split4_star
 
@@ -377,14 +384,16 @@ def seam_stars(
     return SplitStar(star, cosine, base.refitted, base.shrunk & (factor < 1.0), factor)
 
 
-#: samples per direction and patch of the guide fit (:func:`guide_nets`): 2× the 6 unknowns, both ends
+# : samples per direction and patch of the guide fit (:func:`guide_nets`): 2× the 6 unknowns, both
+# ends
 GUIDE_SAMPLES = 13
 
 
 def _fit_operators(samples: int) -> tuple[FloatArray, FloatArray]:
     """Least-squares operators on ``samples`` equally spaced parameters of [0, 1]: (7, samples) to
-    the macro row of the C1 2×2 cubic B-spline (knots ``[0,0,0,0,½,½,1,1,1,1]``, the double knot at ½
-    written out: row 3 the midpoint of its neighbours), and (4, samples) to one cubic's Bézier row."""
+    the macro row of the C1 2×2 cubic B-spline (knots ``[0,0,0,0,½,½,1,1,1,1]``, the double knot at
+    ½ written out: row 3 the midpoint of its neighbours), and (4, samples) to one cubic's Bézier
+    row."""
     from scipy.interpolate import BSpline
 
     from .split4 import BSPLINE_KNOTS

@@ -20,8 +20,8 @@ so G1 is a star plus a twist system at every refined vertex:
   ``R_j = 2 P1_j + (2 λ_j (P2_j − P1_j) − m_j (P1_j − v))/3``, ``m_j = λ(M_j → v)``. Where that
   twist system has compatibility conditions (even valence: valence 4 and ≥ 6 below) the star is
   regular (one λ_v); on the boundary and at odd valence any fan whose sectors have equal areas
-  will do (the re-assembly of a Gregory network takes the nearest to its fan, :func:`_equal_area_fans`;
-  a build the regular star);
+  will do (the re-assembly of a Gregory network takes the nearest to its fan,
+  :func:`_equal_area_fans`; a build the regular star);
 * midpoint M of edge X → Y: sheared star ``t_L + t_R = μ t_X`` (μ = λ(M → X), λ(M → Y) = −μ),
   compatible iff ``D (5 μ + c_X − c_Y) = 2 μ (P1 − P5)`` for ``D = P2 − P4`` (:func:`_edge_curves`);
 * centre C: a plain cross (λ = 0), so every seam is C1.
@@ -38,15 +38,15 @@ are one bicubic (corners, slot tangents, :attr:`~g1patch.targets.Targets.corner_
 :func:`target_nets`), subdivided at ½ into a 7×7 net (or a ``guide`` net instead). The free
 choices take that net's *detail over what its boundary predicts*, added to what the split curves
 predict (:data:`_QUANTITIES`): the centre ``ΣM/2 − ΣV/4 + (C° − ΣM°/2 + ΣV/4)``, the cross arms
-over ``(M_k − M_{k+2})/6``, the seam tangents at M over ``C − M`` (their star gap ``t_L + t_R − μ t_X``
-split equally), and every twist target the parallelogram of its three neighbours plus the net's
-twist offset. So where the star, the shear or an even-valence shift moves a curve point, the
-interior moves with it and keeps the targets' shape; where the split curves are the targets'
-own (a C1 bicubic B-spline with μ = 0: a regular torus under ``limit``) the targets are
-reproduced, the min-norm twist changes vanish and each quad is one bicubic. The star length
-safeguard stays everywhere: a star longer than it allows (B-spline tangents on a strongly graded
-cage, a 1 : 4 box) is shrunk, and a face with a shrunk corner takes the net's detail scaled by the
-smallest factor (its curves are that much shorter than the net's).
+over ``(M_k − M_{k+2})/6``, the seam tangents at M over ``C − M`` (their star gap ``t_L + t_R − μ
+t_X`` split equally), and every twist target the parallelogram of its three neighbours plus the
+net's twist offset. So where the star, the shear or an even-valence shift moves a curve point, the
+interior moves with it and keeps the targets' shape; where the split curves are the targets' own (a
+C1 bicubic B-spline with μ = 0: a regular torus under ``limit``) the targets are reproduced, the
+min-norm twist changes vanish and each quad is one bicubic. The star length safeguard stays
+everywhere: a star longer than it allows (B-spline tangents on a strongly graded cage, a 1 : 4 box)
+is shrunk, and a face with a shrunk corner takes the net's detail scaled by the smallest factor (its
+curves are that much shorter than the net's).
 
 From :data:`KERNEL_FACES` faces on, the stars, the grid-line shears, the assembly and the network's
 connectivity run in numba kernels (:func:`_compiled_patches`: the curves edge by edge, the net's
@@ -133,8 +133,8 @@ def _chain_shears(
     linear time. The size is set at a line's dominant end, the end with the largest
     ``|c_end − c_next|``, to λ = −(c_end − c_next), making δ = ½ there and δ ∈ [⅓, ½] everywhere;
     ``ends`` (E, 2) holds each edge's c at X and at Y (:func:`edge_end_cosines`).
-    Closed lines (all valence 4) get μ = 0. ``compiled``: by walking the lines (:func:`_chain_kernel`,
-    the same values bit for bit).
+    Closed lines (all valence 4) get μ = 0. ``compiled``: by walking the lines
+    (:func:`_chain_kernel`, the same values bit for bit).
     """
     n_edges = topology.n_edges
     nodes = 2 * n_edges
@@ -259,20 +259,22 @@ def _even_vertex_shifts(
         1.0 + np.abs(residual).max()
     ):
         raise ConstructionError(
-            f"split4: the even-valence midpoint system of {vs.size} vertices (valence ≥ 6) is singular: "
+            f"split4: the even-valence midpoint system of {vs.size} vertices (valence ≥ 6) is "
+            "singular: "
             "a cluster of adjacent even-valence vertices has no neighbour outside it"
         )
     return moved, shift
 
 
 _GROUPS = 32768  # systems per block in _min_norm
-#: faces from which :func:`split4_patches` runs its numba kernels (below, loading them costs more than they save)
+# : faces from which :func:`split4_patches` runs its numba kernels (below, loading them costs more
+# than they save)
 KERNEL_FACES = 20_000
 
 
 def _operator(matrix: FloatArray) -> FloatArray:
-    """``[I − B⁺B, B⁺]`` (n, n + m) of B (m, n): the min-norm change of a target τ onto ``B x = b`` is
-    this matrix times ``[τ; b]``."""
+    """``[I − B⁺B, B⁺]`` (n, n + m) of B (m, n): the min-norm change of a target τ onto ``B x = b``
+    is this matrix times ``[τ; b]``."""
     inverse = np.linalg.pinv(matrix)
     return np.concatenate([np.eye(matrix.shape[1]) - inverse @ matrix, inverse], axis=1)
 
@@ -321,9 +323,12 @@ _HALVE = (
 # guide), per half-edge h = 4f + k in the frame of corner k (points (p, q) of :func:`_macro_index`),
 # each as the net's detail over what its own boundary predicts, so that where G1 moves a curve
 # point the interior moves with it:
-# * the centre over the bilinear Coons centre ``ΣM/2 − ΣV/4``: ``(3,3) − 2 (3,0) + (0,0)`` (its mean over k);
-# * the cross arm ``b_k − C`` over ``(M_k − M_{k+2})/6``: ``(3,2) − (3,0)/3`` (taken as ``(a_k − a_{k+2})/2``);
-# * the seam tangent ``3 (e − M)`` at M_k into the face over ``C − M``: ``3 (3,1) − 2 (3,0) − (3,3)``;
+# * the centre over the bilinear Coons centre ``ΣM/2 − ΣV/4``: ``(3,3) − 2 (3,0) + (0,0)`` (its mean
+# over k);
+# * the cross arm ``b_k − C`` over ``(M_k − M_{k+2})/6``: ``(3,2) − (3,0)/3`` (taken as ``(a_k −
+# a_{k+2})/2``);
+# * the seam tangent ``3 (e − M)`` at M_k into the face over ``C − M``: ``3 (3,1) − 2 (3,0) −
+# (3,3)``;
 # * the twist offsets, each twist point minus the parallelogram of its three neighbours, at
 #   MID[k] (2,1), MID[k−1] (1,2), C (2,2) and V (1,1).
 _CENTRE, _CROSS, _SEAM, _TWIST_MID, _TWIST_PREV, _TWIST_CENTRE, _TWIST_VERTEX = range(7)
@@ -339,12 +344,14 @@ _QUANTITIES: tuple[dict[tuple[int, int], float], ...] = (
 
 
 def _macro_index(k: int, p: int, q: int) -> tuple[int, int]:
-    """Index (i, j) in the 7×7 macro net of point (p, q) in the frame of corner k (as :data:`_LOCAL`, on 0..6)."""
+    """Index (i, j) in the 7×7 macro net of point (p, q) in the frame of corner k (as
+    :data:`_LOCAL`, on 0..6)."""
     return [(p, q), (6 - q, p), (6 - p, 6 - q), (q, 6 - p)][k]
 
 
 def _quantity_weights() -> FloatArray:
-    """[k, quantity, 7 i + j]: weights of :data:`_QUANTITIES` over the 7×7 macro net, frame of corner k."""
+    """[k, quantity, 7 i + j]: weights of :data:`_QUANTITIES` over the 7×7 macro net, frame of
+    corner k."""
     weights = np.zeros((4, len(_QUANTITIES), 49))
     for k in range(4):
         for c, terms in enumerate(_QUANTITIES):
@@ -436,7 +443,8 @@ def _assemble(
     centre: FloatArray,
 ) -> FloatArray:
     """The (F, 4, 4, 4, 3) sub-patch controls from per-half-edge sources, in blocks of faces:
-    every point ``x · scale + centre`` except the corners at mesh vertices, which are ``corners``."""
+    every point ``x · scale + centre`` except the corners at mesh vertices, which are
+    ``corners``."""
     n_faces = len(centres)
     control = np.empty((n_faces, 4, 4, 4, 3))
     flat = control.reshape(n_faces, 192)
@@ -466,9 +474,9 @@ STAR_LENGTH_LIMIT = 1.5
 
 
 class SplitStar(NamedTuple):
-    """The stars of :func:`split4_star`: tangents per ring slot (S, 3); per slot j the half ``c_j`` of
-    its star coefficient, ``t_{j−1} + t_{j+1} = 2 c_j t_j`` (S,) (a regular star's slots all have the
-    cosine of its angle step); the vertices whose fan was refitted to spread directions
+    """The stars of :func:`split4_star`: tangents per ring slot (S, 3); per slot j the half ``c_j``
+    of its star coefficient, ``t_{j−1} + t_{j+1} = 2 c_j t_j`` (S,) (a regular star's slots all have
+    the cosine of its angle step); the vertices whose fan was refitted to spread directions
     (``refitted``: a real fallback), those whose star the length safeguard scaled down (``shrunk``)
     and the scale factor (≤ 1) per vertex."""
 
@@ -496,19 +504,20 @@ def split4_star(
     targets: Targets, *, compiled: bool | None = None, equal_sectors: bool = False
 ) -> SplitStar:
     """The stars split4 needs, fitted to the target fans: the regular star (at even interior
-    valence the twist systems are solvable only for affine-regular stars) ``t_j = a cos θ_j + b sin θ_j``,
-    ``c_v = cos`` of the angle step. With ``equal_sectors``, on the boundary and at odd valence
-    the nearest fan of equal sectors instead (:func:`_equal_area_fans`): for reproducing a surface
-    whose fans are given (a Gregory network's, :mod:`~g1patch.construct.polynomial`); a build keeps
-    the regular stars, which are fairer where the targets' angles are uneven (a genus-2 cage's
-    odd vertices: turn p99 5.2° against 6.4°) and closer to the Catmull–Clark limit (Spot, limit:
-    3.8e-4 of the diagonal against 5.0e-4). A star that does not turn counter-clockwise is refitted to evenly spread target
-    directions (a fallback). Length safeguard: each vertex's star is scaled down uniformly (it stays
-    regular) until no tangent is longer than :data:`STAR_LENGTH_LIMIT` × the shorter of its target's
-    and the circle-aware Hermite length of its edge (``2|d|²/(|d| + |P d|)``, P the projection onto
-    the tangent plane: what the interpolate rule's tangents are). ``compiled``: vertex by vertex in
-    :func:`_star_kernel` (ranges side by side), default from :data:`KERNEL_FACES` faces on; where
-    a fan needs the refit, the NumPy reference.
+    valence the twist systems are solvable only for affine-regular stars) ``t_j = a cos θ_j + b sin
+    θ_j``, ``c_v = cos`` of the angle step. With ``equal_sectors``, on the boundary and at odd
+    valence the nearest fan of equal sectors instead (:func:`_equal_area_fans`): for reproducing a
+    surface whose fans are given (a Gregory network's, :mod:`~g1patch.construct.polynomial`); a
+    build keeps the regular stars, which are fairer where the targets' angles are uneven (a genus-2
+    cage's odd vertices: turn p99 5.2° against 6.4°) and closer to the Catmull–Clark limit (Spot,
+    limit: 3.8e-4 of the diagonal against 5.0e-4). A star that does not turn counter-clockwise is
+    refitted to evenly spread target directions (a fallback). Length safeguard: each vertex's star
+    is scaled down uniformly (it stays regular) until no tangent is longer than
+    :data:`STAR_LENGTH_LIMIT` × the shorter of its target's and the circle-aware Hermite length of
+    its edge (``2|d|²/(|d| + |P d|)``, P the projection onto the tangent plane: what the interpolate
+    rule's tangents are). ``compiled``: vertex by vertex in :func:`_star_kernel` (ranges side by
+    side), default from :data:`KERNEL_FACES` faces on; where a fan needs the refit, the NumPy
+    reference.
     """
     from ..targets.interpolate import fit_regular_star, slot_vertices, spread_fan
 
@@ -576,9 +585,9 @@ def _length_shrink(
     owner: IntArray,
     count: int,
 ) -> FloatArray:
-    """:func:`split4_star`'s length safeguard: per owner (``count`` of them) ``min(1, 1 / max_j |t_j| / allowed_j)``
-    over its ``slots`` at their ``vertex`` (star rows ``t_j``, target rows ``wanted``),
-    ``allowed = limit · min(|s|, 2|d|²/(|d| + |P d|))``."""
+    """:func:`split4_star`'s length safeguard: per owner (``count`` of them) ``min(1, 1 / max_j
+    |t_j| / allowed_j)`` over its ``slots`` at their ``vertex`` (star rows ``t_j``, target rows
+    ``wanted``), ``allowed = limit · min(|s|, 2|d|²/(|d| + |P d|))``."""
     topology = targets.topology
     edge = targets.positions[topology.neighbors[slots]] - targets.positions[vertex]
     normal = targets.normals[vertex]
@@ -608,7 +617,8 @@ class FanWalk(NamedTuple):
 
 
 def fan_walk(targets: Targets, vertices: IntArray) -> FanWalk:
-    """:class:`FanWalk` of the fans of ``vertices`` (boundary vertices, k = face count slots + 1)."""
+    """:class:`FanWalk` of the fans of ``vertices`` (boundary vertices, k = face count slots +
+    1)."""
     topology = targets.topology
     k = topology.face_count[vertices]
     owner = np.repeat(np.arange(vertices.size), k + 1)
@@ -690,18 +700,17 @@ EQUAL_AREA_SINE = 0.05
 
 def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
     """``base`` with the fans of boundary vertices (k ≥ 2 faces) and of interior vertices of odd
-    valence replaced by the nearest fan (least squares over its tangents, in the tangent plane) whose
-    sectors all have the same area ``t_j × t_{j+1}``: then ``t_{j−1} + t_{j+1} = λ_j t_j`` at every
-    slot (cross both sides with t_j), ``λ_j = (t_{j−1} + t_{j+1})·t_j / |t_j|²``, which is all
+    valence replaced by the nearest fan (least squares over its tangents, in the tangent plane)
+    whose sectors all have the same area ``t_j × t_{j+1}``: then ``t_{j−1} + t_{j+1} = λ_j t_j`` at
+    every slot (cross both sides with t_j), ``λ_j = (t_{j−1} + t_{j+1})·t_j / |t_j|²``, which is all
     split4's G1 needs there, their twist systems having no compatibility condition (a path, an odd
-    cycle). Regular stars are such fans too, but most target fans are not regular (a coarse
-    cage's boundary corner, a valence-3 or 5 vertex with unequal angles), and a regular star
-    turned their tangents by degrees. The nearest fan is the
-    projection onto ``A_j − A_{j+1} = 0`` by Gauss–Newton from the targets (:data:`EQUAL_AREA_STEPS`
-    steps ``δ = r − Jᵀ (J Jᵀ)⁻¹ (J r + h)``, r the way back to the targets). The same length safeguard
-    as the regular stars. ``base`` is kept where the areas do not agree to :data:`EQUAL_AREA_RTOL`,
-    a sector of the target fan or of the result turns by less than :data:`EQUAL_AREA_SINE` (sine),
-    or the vertex was refitted."""
+    cycle). Regular stars are such fans too, but most target fans are not regular (a coarse cage's
+    boundary corner, a valence-3 or 5 vertex with unequal angles), and a regular star turned their
+    tangents by degrees. The nearest fan is the projection onto ``A_j − A_{j+1} = 0`` by
+    Gauss–Newton from the targets (:data:`EQUAL_AREA_STEPS` steps ``δ = r − Jᵀ (J Jᵀ)⁻¹ (J r + h)``,
+    r the way back to the targets). The same length safeguard as the regular stars. ``base`` is kept
+    where the areas do not agree to :data:`EQUAL_AREA_RTOL`, a sector of the target fan or of the
+    result turns by less than :data:`EQUAL_AREA_SINE` (sine), or the vertex was refitted."""
     topology = targets.topology
     boundary = topology.is_boundary_vertex
     eligible = ~base.refitted & np.where(
@@ -798,7 +807,8 @@ def _equal_area_fans(targets: Targets, base: SplitStar) -> SplitStar:
     return SplitStar(star, cosine, base.refitted, factor < 1.0, factor)
 
 
-#: what :func:`split4_patches` returns: sub-patches, edge-midpoint and centre positions, their normals, the stars
+# : what :func:`split4_patches` returns: sub-patches, edge-midpoint and centre positions, their
+# normals, the stars
 Split4Parts = tuple[PatchSet, FloatArray, FloatArray, SplitStar]
 
 
@@ -814,11 +824,13 @@ def split4_patches(
 ) -> Split4Parts:
     """The 4 F Bézier sub-patches (sub-patch ``4 f + k`` at corner k of face f), and the positions
     and unit surface normals of the edge midpoints and face centres, each stacked as (E + F, 3).
-    The normal at M is ``t_L × t_X`` (⊥ the curve and seam tangents of its star); at C it is ``(b_0 − b_2) × (b_1 − b_3)``, the cross of the centre's star. Also returns the star
+    The normal at M is ``t_L × t_X`` (⊥ the curve and seam tangents of its star); at C it is ``(b_0
+    − b_2) × (b_1 − b_3)``, the cross of the centre's star. Also returns the star
     (:func:`split4_star`: which vertices were refitted or shrunk).
 
     ``targets`` are in local coordinates ``(x − centre) / scale``; the sub-patches are mapped
-    back and their corners at mesh vertices set to ``corners`` (the input positions, (V, 3)) exactly.
+    back and their corners at mesh vertices set to ``corners`` (the input positions, (V, 3))
+    exactly.
 
     ``guide`` (F, 7, 7, 3), local coordinates: a macro net per face (:func:`macro_nets`) whose
     interior the split should follow instead of the targets' bicubic, e.g. a fit of another surface
@@ -876,7 +888,8 @@ def split4_patches(
     flat_curve = curve.reshape(-1, 3)
 
     def on_side(at_x: int, at_y: int, origin_side: NDArray[np.bool_]) -> FloatArray:
-        """Per half-edge, curve point ``at_x`` of its edge when ``origin_side`` is the X side, else ``at_y``."""
+        """Per half-edge, curve point ``at_x`` of its edge when ``origin_side`` is the X side, else
+        ``at_y``."""
         return flat_curve[5 * edge_of + np.where(origin_side, at_x, at_y)]
 
     moved, shift = _even_vertex_shifts(
@@ -886,9 +899,11 @@ def split4_patches(
     o1, o2 = on_side(0, 4, canonical), on_side(1, 3, canonical)  # from the origin of h
     d1, d2 = on_side(0, 4, ~canonical), on_side(1, 3, ~canonical)  # from the target of h
 
-    # -- the free choices follow the face's own macro net (the targets' bicubic subdivided at ½, or the
+    # -- the free choices follow the face's own macro net (the targets' bicubic subdivided at ½, or
+    # the
     # guide): what its boundary predicts from the split curves plus the net's detail over that
-    # (:data:`_QUANTITIES`); G1 then moves them as little as it requires. A face whose corners' stars
+    # (:data:`_QUANTITIES`); G1 then moves them as little as it requires. A face whose corners'
+    # stars
     # the safeguard shrank takes the detail scaled by the smallest factor: its curves are that much
     # shorter than the net's, so the net's full detail would overhang them
     own = _own_quantities(targets, guide)  # (4F, 7, 3) per half-edge, frame of its corner
@@ -913,8 +928,10 @@ def split4_patches(
     b = centres[:, None] + arms - np.roll(arms, -2, axis=1)
     del own_face, arms
 
-    # -- midpoint stars t_L + t_R = μ t_X: C − M plus the net's detail on either side, the gap of the
-    # star split equally (the least change); a boundary midpoint keeps its own; seam points e = M + t/3
+    # -- midpoint stars t_L + t_R = μ t_X: C − M plus the net's detail on either side, the gap of
+    # the
+    # star split equally (the least change); a boundary midpoint keeps its own; seam points e = M +
+    # t/3
     own_seam = np.repeat(centres, 4, axis=0) - m[edge_of] + own[:, _SEAM]
     star_gap = own_seam[h_l] + np.where(interior[:, None], own_seam[h_r], 0.0) - mu[:, None] * t_x
     t_l = own_seam[h_l] - np.where(interior, 0.5, 0.0)[:, None] * star_gap
@@ -993,7 +1010,8 @@ def split4_patches(
 
 
 def macro_nets(control: FloatArray) -> FloatArray:
-    """The (F, 7, 7, 3) macro nets of sub-patch controls (4F, 4, 4, 3) (sub-patch 4f+k at corner k)."""
+    """The (F, 7, 7, 3) macro nets of sub-patch controls (4F, 4, 4, 3) (sub-patch 4f+k at corner
+    k)."""
     sub = control.reshape(-1, 4, 4, 4, 3)
     nets = np.empty((sub.shape[0], 7, 7, 3))
     for k, (a, b) in enumerate(_SUB_ORIGIN):
@@ -1186,8 +1204,9 @@ def split4_network_from_targets(
 
     ``seam_edges`` (E,) bool, in ``mesh.topology.edges`` order: mesh edges sharp on purpose; both
     halves of each (edge ids 2e, 2e + 1) become :attr:`PatchNetwork.seam` edges on both sides (the
-    split's own inner seams M–C never are). ``guide``: per-face macro nets to follow (:func:`split4_patches`).
-    ``parts``: ``split4_patches(targets, targets.positions, 0, 1)`` when the caller has it already."""
+    split's own inner seams M–C never are). ``guide``: per-face macro nets to follow
+    (:func:`split4_patches`). ``parts``: ``split4_patches(targets, targets.positions, 0, 1)`` when
+    the caller has it already."""
     if parts is None:
         parts = split4_patches(targets, targets.positions, np.zeros(3), 1.0, guide)
     patches, extra, extra_normals, stars = parts
@@ -1229,7 +1248,8 @@ def split4_network_from_parts(
     """:func:`split4_network_from_targets` of assembled parts (:func:`split4_patches`: ``patches``,
     the midpoints and centres ``extra`` and their normals, in the local coordinates of ``frame``)
     and the unit ``normals`` at the mesh vertices, without the targets: a caller that drops its
-    targets and stars first builds the network's arrays without them (the build's peak, DESIGN §6)."""
+    targets and stars first builds the network's arrays without them (the build's peak, DESIGN
+    §6)."""
     patches = patches.with_frame(frame)
     points = np.empty((mesh.topology.n_vertices + len(extra), 3))
     points[: mesh.topology.n_vertices] = mesh.vertices
@@ -1243,7 +1263,8 @@ def split4_network_from_parts(
     sharp = np.asarray(seam_edges)
     if sharp.shape != (mesh.topology.n_edges,):
         raise InputError(
-            f"seam_edges: expected shape ({mesh.topology.n_edges},), one per mesh edge, got {sharp.shape}"
+            f"seam_edges: expected shape ({mesh.topology.n_edges},), one per mesh edge, got "
+            f"{sharp.shape}"
         )
     return network.with_seams(
         np.concatenate(
@@ -1255,7 +1276,8 @@ def split4_network_from_parts(
 # -- the compiled path of split4_patches: the same formulas, item by item, in five passes that write
 # straight into the (F, 4, 4, 4, 3) controls (its twist and seam slots hold the net's offsets until
 # the passes that solve them), so no (4F, ·, 3) temporary is made. Each pass writes only its own
-# items' points (a face's, an edge's seam and midpoint twists, a vertex's ring twists), so the ranges
+# items' points (a face's, an edge's seam and midpoint twists, a vertex's ring twists), so the
+# ranges
 # run side by side (g1patch.kernels.in_chunks) with the one-range result.
 
 #: where in the target net (4 i + j of the 4×4 net) corner k's points go: the corner, the edge
@@ -1264,7 +1286,8 @@ _NET_CORNER = np.array([0, 12, 15, 3])
 _NET_OUT = np.array([4, 13, 11, 2])
 _NET_IN = np.array([8, 14, 7, 1])
 _NET_INTERIOR = np.array([5, 9, 10, 6])
-#: [k, p, q]: where point (p, q) of corner k's frame sits in sub-patch k's 48 coordinates, 3 (4 i + j)
+# : [k, p, q]: where point (p, q) of corner k's frame sits in sub-patch k's 48 coordinates, 3 (4 i +
+# j)
 _PLACE = 3 * (4 * _LOCAL[..., 0] + _LOCAL[..., 1])
 
 
@@ -1345,11 +1368,12 @@ def _face_kernel(
     hi: int,
 ) -> None:
     """Faces ``lo:hi``: the net's quantities ``Σ_n w[k, c, n] net_n`` (the targets' bicubic, or the
-    guide; the nonzero weights in n order: ``counts[k, c]`` of them, at ``terms[k, c]``), scaled by the stars' factors; ``C = ΣM/2 − ΣV/4 + Σ own_centre/4``, arms
-    ``a_k = M_k/6 + own_cross/2``, ``b_k = C + a_k − a_{k+2}``; the curve points, b and C into each
-    sub-patch, ``C − M_k + own_seam`` into its seam slot and the twist offsets into its twist slots
-    (the later passes replace them); ``C · scale + centre`` and ``unit((b_0 − b_2) × (b_1 − b_3))``
-    into ``extra``, ``extra_normals`` at ``n_edges + f``."""
+    guide; the nonzero weights in n order: ``counts[k, c]`` of them, at ``terms[k, c]``), scaled by
+    the stars' factors; ``C = ΣM/2 − ΣV/4 + Σ own_centre/4``, arms ``a_k = M_k/6 + own_cross/2``,
+    ``b_k = C + a_k − a_{k+2}``; the curve points, b and C into each sub-patch, ``C − M_k +
+    own_seam`` into its seam slot and the twist offsets into its twist slots (the later passes
+    replace them); ``C · scale + centre`` and ``unit((b_0 − b_2) × (b_1 − b_3))`` into ``extra``,
+    ``extra_normals`` at ``n_edges + f``."""
     net = np.empty((49 if use_guide else 16, 3))
     own = np.empty((4, 7, 3))
     b = np.empty((4, 3))
@@ -1857,9 +1881,10 @@ def _star_kernel(
     hi: int,
 ) -> None:
     """:func:`~g1patch.targets.interpolate.fit_regular_star` and :func:`split4_star`'s length
-    safeguard for vertices ``lo:hi``: ``[a b] = Σ_j s_j [cos θ_j, sin θ_j] G⁻¹``, ``t_j = a cos θ_j + b sin θ_j``
-    (a boundary corner keeps ``s``), valid where ``(a × b)·n > 1e-12 (|a|² + |b|²)``; then the
-    star scaled by ``min(1, 1 / max_j |t_j| / allowed_j)``, ``allowed = limit · min(|s|, 2|d|²/(|d| + |P d|))``."""
+    safeguard for vertices ``lo:hi``: ``[a b] = Σ_j s_j [cos θ_j, sin θ_j] G⁻¹``, ``t_j = a cos θ_j
+    + b sin θ_j`` (a boundary corner keeps ``s``), valid where ``(a × b)·n > 1e-12 (|a|² + |b|²)``;
+    then the star scaled by ``min(1, 1 / max_j |t_j| / allowed_j)``, ``allowed = limit · min(|s|,
+    2|d|²/(|d| + |P d|))``."""
     width = 1
     for v in range(lo, hi):
         width = max(width, offsets[v + 1] - offsets[v])

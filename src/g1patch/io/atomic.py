@@ -37,8 +37,8 @@ _SIGNALS = tuple(
 
 @contextmanager
 def _signals_blocked() -> Iterator[None]:
-    """Hold SIGINT, SIGTERM and SIGHUP back (delivered on exit) while a temporary is created or removed,
-    so that an interrupt can never fall between creating the file and knowing its name."""
+    """Hold SIGINT, SIGTERM and SIGHUP back (delivered on exit) while a temporary is created or
+    removed, so that an interrupt can never fall between creating the file and knowing its name."""
     if not hasattr(signal, "pthread_sigmask"):
         yield
         return
@@ -50,11 +50,13 @@ def _signals_blocked() -> Iterator[None]:
 
 
 def _temporary_name(target: Path) -> str:
-    return f"{TEMPORARY_PREFIX}{target.name[:_NAME_PART]}.{secrets.token_hex(4)}{target.suffix or '.tmp'}"
+    name, suffix = target.name[:_NAME_PART], target.suffix or ".tmp"
+    return f"{TEMPORARY_PREFIX}{name}.{secrets.token_hex(4)}{suffix}"
 
 
 def _create_temporary(target: Path) -> Path:
-    """A new empty file beside ``target``, mode ``0o666 & ~umask`` or the mode of the file it will replace."""
+    """A new empty file beside ``target``, mode ``0o666 & ~umask`` or the mode of the file it will
+    replace."""
     directory = target.parent
     try:
         existing = os.stat(target)
@@ -79,7 +81,8 @@ def _create_temporary(target: Path) -> Path:
 
 
 def _renamed(error: OSError, target: Path, temporary: Path | None) -> OSError:
-    """``error`` about the temporary (or about no file at all) as the same error about ``target``."""
+    """``error`` about the temporary (or about no file at all) as the same error about
+    ``target``."""
     about = error.filename
     if isinstance(about, (str, bytes, os.PathLike)):
         ours = os.path.basename(os.fsdecode(about)).startswith(TEMPORARY_PREFIX)

@@ -30,7 +30,8 @@ MAX_BPT_BYTES = 2**30
 
 
 def read_bpt(path: str | os.PathLike[str]) -> PatchSet:
-    """Read a ``.bpt`` file into Bézier patches; a malformed file raises FormatError naming the line."""
+    """Read a ``.bpt`` file into Bézier patches; a malformed file raises FormatError naming the
+    line."""
     source = Path(path)
     try:
         size = source.stat().st_size
@@ -59,7 +60,8 @@ def read_bpt(path: str | os.PathLike[str]) -> PatchSet:
     if len(lines) < expected_lines:
         raise FormatError(
             source,
-            f"truncated: {count} patches need {expected_lines} non-empty lines, the file has {len(lines)}",
+            f"truncated: {count} patches need {expected_lines} non-empty lines, the file has "
+            f"{len(lines)}",
             lines[-1][0],
         )
     if len(lines) > expected_lines:
@@ -84,7 +86,8 @@ def read_bpt(path: str | os.PathLike[str]) -> PatchSet:
             if len(values) != 3 or not np.isfinite(values).all():
                 raise FormatError(
                     source,
-                    f"patch {patch + 1}: expected three finite numbers 'x y z', got {' '.join(words)!r}",
+                    f"patch {patch + 1}: expected three finite numbers 'x y z', got "
+                    f"{' '.join(words)!r}",
                     number,
                 )
             if not max(map(abs, values)) <= MAX_COORDINATE:

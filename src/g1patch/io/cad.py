@@ -119,7 +119,8 @@ CAD_FORMATS: dict[CadFormat, tuple[str, ...]] = {
     "step": (".step", ".stp"),
     "iges": (".iges", ".igs"),
 }
-#: ``progress(stage, done, total)``; stages: split4, deviation, fit, faces, sew, solid, check, g1, write
+# : ``progress(stage, done, total)``; stages: split4, deviation, fit, faces, sew, solid, check, g1,
+# write
 Progress = Callable[[str, int, int], None]
 
 #: default fit tolerance, relative to the bounding-box diagonal
@@ -149,7 +150,8 @@ MIN_FACE_SEWING = 10.0
 
 
 class OpenCascadeError(ConstructionError):
-    """OpenCASCADE failed on the geometry: an exception raised inside OCP, or a face its sewing dropped."""
+    """OpenCASCADE failed on the geometry: an exception raised inside OCP, or a face its sewing
+    dropped."""
 
 
 # ----------------------------------------------------------------------------------- fitting
@@ -253,7 +255,8 @@ def _fit_level(
     corner_points: NDArray[np.float64],
     share: _Sharing,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], float, NDArray[np.float64]]:
-    """Fit with the given knot ``breaks``: control ``(N, s+3, s+3, 3)``, knots, deviation, per-span deviation.
+    """Fit with the given knot ``breaks``: control ``(N, s+3, s+3, 3)``, knots, deviation, per-span
+    deviation.
 
     Interior points by separable least squares with the boundary fixed, ``X = B_I⁺ R B_I⁺ᵀ`` with
     ``R = S − B C_boundary Bᵀ``, accumulated over row blocks of the sample grid. The deviation is
@@ -316,21 +319,22 @@ def fit_bspline_surfaces(
 
     All patches share one knot vector, the same in u and v, symmetric under t → 1 − t. Each span
     is sampled at 4 equal steps per direction. First the boundary: corners are interpolated, each
-    edge curve is the least-squares fit of its samples with its ends fixed; then the interior control
-    points, by least squares with the boundary fixed. The deviation ``max |fit − patch|`` is measured
-    on a grid with twice the samples. While it exceeds ``tolerance`` (default ``1e-6`` × the
-    bounding-box diagonal) knots are inserted at span midpoints: with ``refine="uniform"`` in every
-    span (s = 1, 2, 4, …), with ``"adaptive"`` only in spans whose strip ``u ∈ span`` or ``v ∈ span``
-    (or its mirror image) exceeds the tolerance. Gregory patches are C¹ but not C² at their corners,
-    so the fit converges there as O(h²) only: adaptive refinement grades the knots towards the
-    patch ends and needs 46 spans where uniform needs 128 (cube, 1e-6). The first step, s = 1, is
-    the Bézier knot vector, so bicubic patches are reproduced at once, up to rounding.
+    edge curve is the least-squares fit of its samples with its ends fixed; then the interior
+    control points, by least squares with the boundary fixed. The deviation ``max |fit − patch|`` is
+    measured on a grid with twice the samples. While it exceeds ``tolerance`` (default ``1e-6`` ×
+    the bounding-box diagonal) knots are inserted at span midpoints: with ``refine="uniform"`` in
+    every span (s = 1, 2, 4, …), with ``"adaptive"`` only in spans whose strip ``u ∈ span`` or ``v ∈
+    span`` (or its mirror image) exceeds the tolerance. Gregory patches are C¹ but not C² at their
+    corners, so the fit converges there as O(h²) only: adaptive refinement grades the knots towards
+    the patch ends and needs 46 spans where uniform needs 128 (cube, 1e-6). The first step, s = 1,
+    is the Bézier knot vector, so bicubic patches are reproduced at once, up to rounding.
 
     Pass a :class:`PatchNetwork` to share boundaries: every shared edge is fitted once and copied to
     both sides (reversed where they run against each other: exact on symmetric dyadic knots), so
-    neighbouring faces get bit-identical boundary control points. Bare patches are fitted each on its
-    own (neighbours then agree to rounding). The arithmetic is batched over patches and chunked over
-    grid rows. Raises :class:`ConstructionError` when ``max_spans`` spans do not reach the tolerance.
+    neighbouring faces get bit-identical boundary control points. Bare patches are fitted each on
+    its own (neighbours then agree to rounding). The arithmetic is batched over patches and chunked
+    over grid rows. Raises :class:`ConstructionError` when ``max_spans`` spans do not reach the
+    tolerance.
 
     Patches with a frame (:mod:`g1patch.frame`) are fitted in their local coordinates, with the
     tolerance ``tolerance / s``; the poles are then mapped to world, ``c + s X`` (identical local
@@ -340,7 +344,8 @@ def fit_bspline_surfaces(
     surfaces = network.patches if network is not None else patches
     if not all(hasattr(surfaces, name) for name in ("evaluate", "evaluate_grid", "__len__")):
         raise InputError(
-            f"patches: expected patches with evaluate, evaluate_grid and len, got {type(surfaces).__name__}"
+            "patches: expected patches with evaluate, evaluate_grid and len, got "
+            f"{type(surfaces).__name__}"
         )
     check_choice("refine", refine, ("adaptive", "uniform"))
     if not (isinstance(max_spans, (int, np.integer)) and max_spans >= 1):
@@ -368,8 +373,10 @@ def fit_bspline_surfaces(
         split |= not split.any()  # the deviation may sit only on span ends: split all
         if len(breaks) - 1 + int(split.sum()) > max_spans:
             raise ConstructionError(
-                f"fit_bspline_surfaces: {len(breaks) - 1} knot spans per direction leave a deviation of "
-                f"{deviation * unit:.3e}, above the tolerance {local_tolerance * unit:.3e}; raise max_spans (now {max_spans}) or the tolerance"
+                f"fit_bspline_surfaces: {len(breaks) - 1} knot spans per direction leave a "
+                "deviation of "
+                f"{deviation * unit:.3e}, above the tolerance {local_tolerance * unit:.3e}; raise "
+                f"max_spans (now {max_spans}) or the tolerance"
             )
         breaks = np.sort(np.concatenate([breaks, 0.5 * (breaks[:-1] + breaks[1:])[split]]))
 
@@ -535,7 +542,8 @@ def split4_quad_faces(network: PatchNetwork) -> QuadFaces | None:
     A quad is single-span when its 7×7 macro net is, to :data:`SINGLE_SPAN_RTOL` of the diagonal,
     the de Casteljau subdivision at ½ of the bicubic read off its corners (the Bézier points of each
     corner's 2×2 block, ``b1 = 2 h1 − b0``): then the four pieces are that bicubic and nothing is
-    lost. The tests run in the patches' working coordinates (their frame), the poles are mapped to world.
+    lost. The tests run in the patches' working coordinates (their frame), the poles are mapped to
+    world.
     """
     from ..construct.split4 import BSPLINE_KNOTS, macro_nets
 
@@ -588,7 +596,8 @@ def _quad_groups(quads: QuadFaces) -> list[BSplineFit]:
 def _make_quad_faces(
     occ: SimpleNamespace, quads: QuadFaces, tolerance: float, progress: Progress | None
 ) -> list[Any]:
-    """One face per quad, in quad order: single-span ones from ``quads.bezier``, the rest two-span."""
+    """One face per quad, in quad order: single-span ones from ``quads.bezier``, the rest
+    two-span."""
     faces: list[Any] = [None] * len(quads.single)
     for rows, group in (
         (np.flatnonzero(quads.single), quads.bezier),
@@ -650,7 +659,8 @@ def _volume(occ: SimpleNamespace, shape: Any) -> float:
 
 
 def _face_normals(occ: SimpleNamespace, face: Any, uv: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``±(S_u × S_v)`` (not normalised) by ``BRepAdaptor_Surface::D1``, sign of the face orientation."""
+    """``±(S_u × S_v)`` (not normalised) by ``BRepAdaptor_Surface::D1``, sign of the face
+    orientation."""
     surface = occ.BRepAdaptor_Surface(face, False)
     point, d_u, d_v = occ.gp_Pnt(), occ.gp_Vec(), occ.gp_Vec()
     out = []
@@ -675,7 +685,8 @@ class _OccBSpline(NamedTuple):
 
 
 def _occ_bspline(occ: SimpleNamespace, face: Any) -> _OccBSpline | None:
-    """The B-spline data OCC holds for ``face`` (:class:`_OccBSpline`), None for any other surface."""
+    """The B-spline data OCC holds for ``face`` (:class:`_OccBSpline`), None for any other
+    surface."""
     surface = occ.BRep_Tool.Surface_s(face)
     if (
         not isinstance(surface, occ.Geom_BSplineSurface)
@@ -703,7 +714,8 @@ def _basis_d1(
 ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
     """The ``degree + 1`` B-spline basis functions that are nonzero at each ``x`` and their first
     derivatives (Cox–de Boor, The NURBS Book A2.2/A2.3, over all x at once): the index of the
-    first one (n,), values (n, p+1), derivatives (n, p+1). ``x`` is clamped into the knots' range."""
+    first one (n,), values (n, p+1), derivatives (n, p+1). ``x`` is clamped into the knots'
+    range."""
     p = degree
     x = np.clip(x, knots[p], knots[-p - 1])
     span = np.clip(np.searchsorted(knots, x, side="right") - 1, p, len(knots) - p - 2)
@@ -718,7 +730,8 @@ def _basis_d1(
             level.append(saved + right[r] * temp)
             saved = left[j - 1 - r] * temp
         level.append(saved)
-    # N'_{i,p} = p N_{i,p-1} / (t[i+p] − t[i]) − p N_{i+1,p-1} / (t[i+p+1] − t[i+1]), i = span − p + k
+    # N'_{i,p} = p N_{i,p-1} / (t[i+p] − t[i]) − p N_{i+1,p-1} / (t[i+p+1] − t[i+1]), i = span − p +
+    # k
     below = np.stack(
         [np.zeros_like(x), *lower, np.zeros_like(x)], axis=1
     )  # N_{span-p+k, p-1}, k = 0 … p+1
@@ -899,10 +912,10 @@ def _occ_g1_angles(
     progress: Progress | None,
     quads: bool = False,
 ) -> NDArray[np.float64]:
-    """(E, samples) angles (degrees) between the two sewn faces' OCC normals along every shared edge.
-    With ``quads`` the faces are a split4 network's quads (:func:`split4_quad_faces`): sub-patch
-    ``4f + k`` is evaluated on its quarter of face f, so the seams inside a quad compare the one
-    surface with itself (0), and every mesh edge compares the two quads' surfaces."""
+    """(E, samples) angles (degrees) between the two sewn faces' OCC normals along every shared
+    edge. With ``quads`` the faces are a split4 network's quads (:func:`split4_quad_faces`):
+    sub-patch ``4f + k`` is evaluated on its quarter of face f, so the seams inside a quad compare
+    the one surface with itself (0), and every mesh edge compares the two quads' surfaces."""
     from ..continuity import angle_between
 
     patch, edge = network.shared_edges()
@@ -948,7 +961,8 @@ def _raised_by_occ(error: BaseException) -> bool:
 
 @contextmanager
 def _occ_failures(target: Path, doing: list[str]) -> Iterator[None]:
-    """Turn an exception raised inside OCP into :class:`OpenCascadeError` naming ``target`` and the stage."""
+    """Turn an exception raised inside OCP into :class:`OpenCascadeError` naming ``target`` and the
+    stage."""
     try:
         yield
     except G1PatchError:
@@ -971,7 +985,8 @@ def _bound_message(value: float) -> str:
         if np.isinf(value)
         else f"reaches magnitude {abs(value):.3g}"
     )
-    return f"{what}; OpenCASCADE export needs finite coordinates of magnitude at most {MAX_COORDINATE:g}"
+    limit = f"finite coordinates of magnitude at most {MAX_COORDINATE:g}"
+    return f"{what}; OpenCASCADE export needs {limit}"
 
 
 def _check_patch_coordinates(target: Path, patches: object) -> None:
@@ -988,7 +1003,8 @@ def _check_patch_coordinates(target: Path, patches: object) -> None:
         largest = float(np.abs(frame.centre).max()) + frame.scale * largest
     if not largest <= MAX_COORDINATE:
         raise InputError(
-            f"{target}: cannot export: the largest of the patches' coordinates {_bound_message(largest)}"
+            f"{target}: cannot export: the largest of the patches' coordinates "
+            f"{_bound_message(largest)}"
         )
 
 
@@ -1041,7 +1057,8 @@ def _check_fit(target: Path, fit: BSplineFit, sewing_tolerance: float) -> None:
     if not (low >= -MAX_COORDINATE and high <= MAX_COORDINATE):
         bad = np.argwhere(~(np.abs(control) <= MAX_COORDINATE))[0]
         raise InputError(
-            f"{target}: cannot export: patch {bad[0]}: a B-spline pole {_bound_message(float(control[tuple(bad)]))}"
+            f"{target}: cannot export: patch {bad[0]}: a B-spline pole "
+            f"{_bound_message(float(control[tuple(bad)]))}"
         )
     _check_knots(target, "u", fit.knots_u, control.shape[1])
     _check_knots(target, "v", fit.knots_v, control.shape[2])
@@ -1054,14 +1071,17 @@ def _check_fit(target: Path, fit: BSplineFit, sewing_tolerance: float) -> None:
         first = int(small[0])
         others = f" (and {small.size - 1} more)" if small.size > 1 else ""
         raise InputError(
-            f"{target}: cannot export: patch {first}{others} spans {extent[first]:.3g} (its control net's diagonal), "
-            f"below {smallest:.3g}, the least OpenCASCADE can sew (100 × its fixed precision 1e-7, at least "
+            f"{target}: cannot export: patch {first}{others} spans {extent[first]:.3g} (its "
+            "control net's diagonal), "
+            f"below {smallest:.3g}, the least OpenCASCADE can sew (100 × its fixed precision "
+            "1e-7, at least "
             f"10 × the sewing tolerance): a degenerate or too small patch"
         )
 
 
 def _check_sewn(target: Path, faces: Sequence[Any]) -> None:
-    """Every input face has a sewn face: OCC segfaults evaluating the null face of one it dropped."""
+    """Every input face has a sewn face: OCC segfaults evaluating the null face of one it
+    dropped."""
     dropped = [n for n, face in enumerate(faces) if face.IsNull()]
     if dropped:
         raise OpenCascadeError(
@@ -1087,7 +1107,8 @@ class ExportResult:
     free_edges: int
     #: polynomial patches written exactly (their Bézier control nets)
     exact: bool
-    #: how the faces were made: ``exact`` (polynomial patches, or Gregory patches that are bicubics), ``split4`` (a Gregory network's
+    # : how the faces were made: ``exact`` (polynomial patches, or Gregory patches that are
+    # bicubics), ``split4`` (a Gregory network's
     #: targets re-assembled polynomially, then exact) or ``fit`` (fitted B-splines)
     method: str
     #: why ``auto`` fitted a Gregory network without seams (split4 failed on it), else ""
@@ -1097,11 +1118,13 @@ class ExportResult:
     #: cells per patch side of the split4 re-assembly (1: one quad per patch; n: n × n, face
     #: ``r = f n² + a n + b`` covers cell (a, b) of patch f), 0 for other methods
     refine: int
-    #: max |surface − patch| of the fit, measured on a grid twice as fine as its samples; 0.0 when exact
+    # : max |surface − patch| of the fit, measured on a grid twice as fine as its samples; 0.0 when
+    # exact
     fit_deviation: float
     fit_tolerance: float
     sewing_tolerance: float
-    #: G1 angles of the exported surfaces on shared edges but seams, measured by OCC (max and mean of per-edge max)
+    # : G1 angles of the exported surfaces on shared edges but seams, measured by OCC (max and mean
+    # of per-edge max)
     max_g1_angle_deg: float
     mean_g1_angle_deg: float
     #: seams (edges sharp on purpose), each one sharp B-rep edge, and the range of the angle
@@ -1112,7 +1135,8 @@ class ExportResult:
     #: OCC's volume of the solid (BRepGProp::VolumeProperties), None when no solid was made
     volume: float | None
     #: max distance of the written surface from the network's own surface (model units): 0 when
-    #: exact, the fit deviation when fitted, the foot-point distance to the Gregory surface for split4
+    # : exact, the fit deviation when fitted, the foot-point distance to the Gregory surface for
+    # split4
     deviation: float
     #: :attr:`deviation` / the bounding-box diagonal
     relative_deviation: float
@@ -1210,9 +1234,9 @@ def _step_options(faces: Sequence[Any], pcurves: bool) -> Iterator[None]:
 
 def _write(occ: SimpleNamespace, shape: Any, path: Path, kind: CadFormat) -> None:
     """Write ``shape``. In STEP the faces of :func:`_step_options` are named after their index (IGES
-    faces carry no names here), and without its ``pcurves`` the edges carry no parameter-space curves
-    (``write.surfacecurve.mode`` 0): every face written here is a whole B-spline surface, its edges
-    the iso-lines u, v ∈ {0, 1}, which a reader rebuilds exactly."""
+    faces carry no names here), and without its ``pcurves`` the edges carry no parameter-space
+    curves (``write.surfacecurve.mode`` 0): every face written here is a whole B-spline surface, its
+    edges the iso-lines u, v ∈ {0, 1}, which a reader rebuilds exactly."""
     options = _STEP_OPTIONS.get()
     with _quiet(occ):
         if kind == "step":
@@ -1240,7 +1264,8 @@ BICUBIC_RTOL = 1e-12
 
 
 def _bicubic(patches: Any) -> bool:
-    """Whether Gregory patches are bicubics already (every pair ``Fn_k = Fp_k``, to :data:`BICUBIC_RTOL`)."""
+    """Whether Gregory patches are bicubics already (every pair ``Fn_k = Fp_k``, to
+    :data:`BICUBIC_RTOL`)."""
     from ..gregory import GregoryPatchSet
 
     if not isinstance(patches, GregoryPatchSet):
@@ -1251,7 +1276,8 @@ def _bicubic(patches: Any) -> bool:
 
 
 def _as_bicubics(patches: Any) -> PatchSet:
-    """Gregory patches that are bicubics (:func:`_bicubic`) as Bézier patches: the same surface, exactly."""
+    """Gregory patches that are bicubics (:func:`_bicubic`) as Bézier patches: the same surface,
+    exactly."""
     return PatchSet(patches.to_bezier_control(), "bezier").with_frame(patches.frame)
 
 
@@ -1282,7 +1308,8 @@ STEP_DIGITS = 15
 
 
 def _step_reals(values: NDArray[np.float64]) -> list[bytes]:
-    """STEP reals with :data:`STEP_DIGITS` significant digits, each with its decimal point (``1.``, ``1.E+20``)."""
+    """STEP reals with :data:`STEP_DIGITS` significant digits, each with its decimal point (``1.``,
+    ``1.E+20``)."""
     texts = (f"%.{STEP_DIGITS}G," * values.size % tuple(values.tolist())).encode().split(b",")[:-1]
     return [
         text if b"." in text else text.replace(b"E", b".E") if b"E" in text else text + b"."
@@ -1290,7 +1317,8 @@ def _step_reals(values: NDArray[np.float64]) -> list[bytes]:
     ]
 
 
-#: a file's 12-digit pole and the exact one agree to this share of the model's size (:func:`compact_step`)
+# : a file's 12-digit pole and the exact one agree to this share of the model's size
+# (:func:`compact_step`)
 STEP_MATCH_RTOL = 1e-10
 
 
@@ -1388,14 +1416,15 @@ def _split4_within(
     fallback: bool,
     lap: Callable[[str], None],
 ) -> tuple[PatchNetwork, float, int, str] | str:
-    """The split4 re-assembly of a Gregory network (:func:`~g1patch.construct.polynomial.split4_of_gregory`)
-    with n = 1, 2, 3, … (:data:`REFINE_STEPS`) cells per patch side until its distance to the Gregory surface is at most
-    ``max_deviation × diagonal`` (split4's stars differ from the Gregory fans near the vertices, over a cell's size),
-    or a cut would make more than :data:`REFINE_QUADS` quads: ``(network, deviation, n, note)``.
-    A cut that folds more sub-patches than n = 1 (small cells of a coarse cage can) is not taken;
-    of those tried the closest one that does not, and the note says when it is above the bound.
-    A network split4 cannot re-assemble raises, or with ``fallback`` returns the note for a fit (where
-    only its cells cannot be, the fewer cells are kept)."""
+    """The split4 re-assembly of a Gregory network
+    (:func:`~g1patch.construct.polynomial.split4_of_gregory`) with n = 1, 2, 3, …
+    (:data:`REFINE_STEPS`) cells per patch side until its distance to the Gregory surface is at most
+    ``max_deviation × diagonal`` (split4's stars differ from the Gregory fans near the vertices,
+    over a cell's size), or a cut would make more than :data:`REFINE_QUADS` quads: ``(network,
+    deviation, n, note)``. A cut that folds more sub-patches than n = 1 (small cells of a coarse
+    cage can) is not taken; of those tried the closest one that does not, and the note says when it
+    is above the bound. A network split4 cannot re-assemble raises, or with ``fallback`` returns the
+    note for a fit (where only its cells cannot be, the fewer cells are kept)."""
     from ..construct.polynomial import split4_of_gregory, surface_deviation
     from ..continuity import folded_patches
 
@@ -1427,7 +1456,8 @@ def _split4_within(
         ""
         if deviation <= allowed
         else (
-            f"the re-assembly stays {deviation / diagonal:.2e} of the diagonal from the Gregory surface, above "
+            f"the re-assembly stays {deviation / diagonal:.2e} of the diagonal from the Gregory "
+            "surface, above "
             f"--max-deviation {max_deviation:g}, at {refine} × {refine} cells per patch"
             + (" (finer cells folded)" if any(attempt[0] for attempt in tried) else "")
         )
@@ -1552,7 +1582,8 @@ def export_cad(
             file_bytes = temporary.stat().st_size
         lap("write")
     note = (
-        "measured on the surfaces OpenCASCADE holds (its poles and knots, each face checked against its own evaluator)"
+        "measured on the surfaces OpenCASCADE holds (its poles and knots, each face checked "
+        "against its own evaluator)"
         if smooth.size
         else "not measured: g1_samples=0"
         if not g1_samples
@@ -1693,7 +1724,8 @@ class CadModel(NamedTuple):
 
 
 def read_cad_faces(path: PathLike) -> CadModel:
-    """Read a STEP or IGES file (by extension) with OCC's readers into a shape and face evaluators."""
+    """Read a STEP or IGES file (by extension) with OCC's readers into a shape and face
+    evaluators."""
     source = Path(path)
     kind = _format_of(source, None)
     occ = _occ()

@@ -1,4 +1,5 @@
-"""Quad mesh files: read OBJ / PLY / OFF into a :class:`QuadMesh`; write triangles or quads as OBJ / PLY / STL.
+"""Quad mesh files: read OBJ / PLY / OFF into a :class:`QuadMesh`; write triangles or quads as OBJ /
+PLY / STL.
 
 * OBJ is read by a small parser of its own (``v``, ``f``, OpenSubdiv ``t`` tag lines; other OBJ
   statements are skipped, unknown ones are errors) so that every error names its line and mixed
@@ -47,8 +48,10 @@ WRITE_FORMATS = (".obj", ".ply", ".stl")
 #: OBJ statements that carry nothing a quad mesh needs (normals, texture, grouping, materials,
 #: free-form geometry); they are skipped. Any other keyword is an error.
 OBJ_SKIPPED = frozenset(
-    "vt vn vp g o s usemtl mtllib l p lod bevel c_interp d_interp shadow_obj trace_obj maplib usemap "
-    "cstype deg bmat step curv curv2 surf parm trim hole scrv sp end con mg ctech stech call csh".split()
+    "vt vn vp g o s usemtl mtllib l p lod bevel c_interp d_interp shadow_obj trace_obj maplib "
+    "usemap "
+    "cstype deg bmat step curv curv2 surf parm trim hole scrv sp end con mg ctech stech call "
+    "csh".split()
 )
 
 PathLike = str | os.PathLike[str]
@@ -94,7 +97,8 @@ def read_mesh(
 
 
 def _sharp_angle_tags(path: Path, parsed: _Parsed, degrees: float) -> tuple[Tag, ...]:
-    """The ``--sharp-angle`` tags of a parsed file, on its own polygons (index errors are left to the mesh checks)."""
+    """The ``--sharp-angle`` tags of a parsed file, on its own polygons (index errors are left to
+    the mesh checks)."""
     from ..mesh import _as_polygons
     from ..sharpen import sharp_angle_tags
 
@@ -149,7 +153,8 @@ def _faces_in_range(
         face = int(np.searchsorted(np.cumsum(sizes), bad[0], side="right"))
         raise FormatError(
             path,
-            f"face {face} names vertex {corners[bad[0]]} (0-based), but the file has {n_vertices} vertices",
+            f"face {face} names vertex {corners[bad[0]]} (0-based), but the file has {n_vertices} "
+            "vertices",
             None if lines is None else int(lines[face]),
         )
 
@@ -173,7 +178,8 @@ def _polygon_list(
 # the file) it returns None, and the line-by-line parser reads the file again, so every result and
 # every message is that parser's.
 
-#: bytes ``str.splitlines`` or ``str.split`` treat as line breaks or spaces; the fast path declines a file with one
+# : bytes ``str.splitlines`` or ``str.split`` treat as line breaks or spaces; the fast path declines
+# a file with one
 _ODD_BYTES = (b"\x0b", b"\x0c", b"\x1c", b"\x1d", b"\x1e", b"\x1f")
 _SPACES = re.compile(rb" {2,}")
 _EDGE_SPACE = re.compile(rb"(?m)^ | $")
@@ -181,7 +187,8 @@ _SLASHED = re.compile(rb"/[^ \n]*")
 
 
 class _Lines(NamedTuple):
-    """A normalised text and its lines: line ``i`` is ``text[starts[i]:ends[i]]``, line ``i + 1`` of the file."""
+    """A normalised text and its lines: line ``i`` is ``text[starts[i]:ends[i]]``, line ``i + 1`` of
+    the file."""
 
     text: bytes
     array: NDArray[np.uint8]
@@ -197,7 +204,8 @@ class _Lines(NamedTuple):
         return np.where(self.ends - self.starts > column, self.array[at], 0).astype(np.uint8)
 
     def chunk(self, rows: NDArray[np.int64]) -> bytes:
-        """The text of lines ``rows`` (increasing), one per line: consecutive lines are sliced at once."""
+        """The text of lines ``rows`` (increasing), one per line: consecutive lines are sliced at
+        once."""
         if rows.size == 0:
             return b""
         breaks = np.flatnonzero(np.diff(rows) != 1) + 1
@@ -290,10 +298,10 @@ _NUMBER_BYTES = {
 def _numbers(
     text: bytes, keyword: bytes, count: int, dtype: type[np.int64] | type[np.float64]
 ) -> NDArray | None:
-    """The ``count`` numbers of ``text`` (lines of ``keyword`` then numbers), each token converted as
-    ``int`` or ``float`` converts it, by one ``np.fromstring`` (floats from :data:`KERNEL_BYTES` on,
-    without a keyword: :func:`_floats_compiled`); None where ``text`` holds anything else, or a token
-    that ``np.fromstring`` might read otherwise."""
+    """The ``count`` numbers of ``text`` (lines of ``keyword`` then numbers), each token converted
+    as ``int`` or ``float`` converts it, by one ``np.fromstring`` (floats from :data:`KERNEL_BYTES`
+    on, without a keyword: :func:`_floats_compiled`); None where ``text`` holds anything else, or a
+    token that ``np.fromstring`` might read otherwise."""
     if dtype is np.float64 and not keyword and len(text) >= KERNEL_BYTES:
         return _floats_compiled(text, count)
     allowed, after_sign = _NUMBER_BYTES[dtype]
@@ -460,7 +468,8 @@ def _read_obj_lines(path: Path, data: bytes) -> _Parsed:
 def _convert(
     path: Path, tokens: list, dtype: type, expected: str, lines: Sequence[int] | NDArray[np.int64]
 ) -> NDArray:
-    """``np.array(tokens, dtype)``; on a bad token, a :class:`FormatError` naming its line (``lines`` per row)."""
+    """``np.array(tokens, dtype)``; on a bad token, a :class:`FormatError` naming its line
+    (``lines`` per row)."""
     try:
         return np.array(tokens, dtype=dtype)
     except (ValueError, OverflowError):
@@ -486,7 +495,8 @@ def _parse_tag(path: Path, parts: Sequence[str], line: int) -> Tag:
     if len(values) != n_ints + n_floats + n_strings:
         raise FormatError(
             path,
-            f"tag {parts[1]!r} announces {n_ints}/{n_floats}/{n_strings} values but has {len(values)}",
+            f"tag {parts[1]!r} announces {n_ints}/{n_floats}/{n_strings} values but has "
+            f"{len(values)}",
             line,
         )
     try:
@@ -520,8 +530,8 @@ _SIGN_BIT = -(2**63)
 
 @cache
 def _powers_of_five() -> NDArray[np.uint64]:
-    """``5^q`` for q in -342..308 as 128-bit significands (high, low word), the top bit set: truncated
-    for q ≥ 0, rounded up for q < 0 (the table of Lemire's fast_float)."""
+    """``5^q`` for q in -342..308 as 128-bit significands (high, low word), the top bit set:
+    truncated for q ≥ 0, rounded up for q < 0 (the table of Lemire's fast_float)."""
     words = []
     for q in range(-342, 309):
         if q >= 0:
@@ -663,12 +673,13 @@ def _obj_kernel(
     hard: NDArray[np.int64],
     others: NDArray[np.int64],
 ) -> tuple[bool, int, int, int, int, int]:
-    """Scan OBJ bytes once into the arrays given; returns ``valid`` and the items found: coordinates,
-    faces, corners, hard numbers, other lines (those beyond an array's length are counted, not written).
-    ``points``: float64 bits, x y z per vertex (0 where hard); ``corners`` (0-based, resolved) and
-    ``sizes`` of the faces; ``hard``: (start, end, slot in points) of each number left to ``float``;
-    ``others``: (start, end) of each line of another statement, comment cut. Not ``valid`` (a byte
-    of class 4, or anything the line-by-line parser reports): that parser reads the file."""
+    """Scan OBJ bytes once into the arrays given; returns ``valid`` and the items found:
+    coordinates, faces, corners, hard numbers, other lines (those beyond an array's length are
+    counted, not written). ``points``: float64 bits, x y z per vertex (0 where hard); ``corners``
+    (0-based, resolved) and ``sizes`` of the faces; ``hard``: (start, end, slot in points) of each
+    number left to ``float``; ``others``: (start, end) of each line of another statement, comment
+    cut. Not ``valid`` (a byte of class 4, or anything the line-by-line parser reports): that parser
+    reads the file."""
     n = data.size
     n_points = n_faces = n_corners = n_hard = n_others = 0
     i, valid = 0, True
@@ -764,9 +775,9 @@ def _floats_kernel(
     out: NDArray[np.uint64],
     hard: NDArray[np.int64],
 ) -> tuple[bool, int, int]:
-    """The numbers of a text of numbers separated by spaces and line breaks, by :func:`_number`, into
-    ``out`` (float64 bits; 0 where hard): returns ``valid`` (no byte but a number's, a space or a
-    line break), the numbers and the hard ones found (those beyond ``out`` or ``hard`` counted,
+    """The numbers of a text of numbers separated by spaces and line breaks, by :func:`_number`,
+    into ``out`` (float64 bits; 0 where hard): returns ``valid`` (no byte but a number's, a space or
+    a line break), the numbers and the hard ones found (those beyond ``out`` or ``hard`` counted,
     not written); ``hard``: (start, end, slot in out) of each number left to ``float``."""
     n, count, n_hard, i = data.size, 0, 0, 0
     while i < n:
@@ -801,9 +812,10 @@ def _compiled(kernel: Callable[..., tuple]) -> Callable[..., tuple]:
 
 
 def _floats_compiled(text: bytes, count: int) -> NDArray[np.float64] | None:
-    """The ``count`` numbers of ``text`` (numbers, spaces, line breaks) converted as ``float`` converts
-    them, by :func:`_floats_kernel`; None if it holds anything else or another count. As
-    :func:`_numbers`, a token of other bytes than ``0-9 . e E + -`` is refused, not given to ``float``."""
+    """The ``count`` numbers of ``text`` (numbers, spaces, line breaks) converted as ``float``
+    converts them, by :func:`_floats_kernel`; None if it holds anything else or another count. As
+    :func:`_numbers`, a token of other bytes than ``0-9 . e E + -`` is refused, not given to
+    ``float``."""
     buffer, kernel, n_hard = np.frombuffer(text, dtype=np.uint8), _compiled(_floats_kernel), 1024
     out = np.empty(count, dtype=np.uint64)
     while True:
@@ -878,7 +890,8 @@ OFF_HEADERS = frozenset({"OFF", "COFF", "NOFF", "CNOFF", "STOFF", "STCOFF", "STN
 
 
 def _read_off(path: Path, data: bytes) -> _Parsed:
-    """``OFF``, ``nv nf ne``, nv lines ``x y z …``, nf lines ``n i_1 … i_n …`` (0-based); ``#`` comments.
+    """``OFF``, ``nv nf ne``, nv lines ``x y z …``, nf lines ``n i_1 … i_n …`` (0-based); ``#``
+    comments.
 
     Read by :func:`_off_fast`, or line by line (:func:`_read_off_lines`) where it declines.
     """
@@ -967,7 +980,8 @@ def _read_off_lines(path: Path, data: bytes) -> _Parsed:
         last = content[-1][0]
         raise FormatError(
             path,
-            f"truncated: the header announces {n_vertices} vertices and {n_faces} faces, the file ends first",
+            f"truncated: the header announces {n_vertices} vertices and {n_faces} faces, the file "
+            "ends first",
             last,
         )
 
@@ -1086,7 +1100,8 @@ class _PlyLayout(NamedTuple):
 
 
 def _ply_layout(data: bytes) -> _PlyLayout | None:
-    """The layout of a PLY file whose header :func:`_ply_header` accepted, None if it is not the common one."""
+    """The layout of a PLY file whose header :func:`_ply_header` accepted, None if it is not the
+    common one."""
     end = data.find(b"end_header")  # the header is ASCII before it
     lines = [line.strip() for line in data[:end].decode("ascii").splitlines()]
     if data[end : end + 11] != b"end_header\n" or len(lines) < 2 or lines[0] != "ply":
@@ -1248,7 +1263,8 @@ def _ply_meshio(
         AssertionError,
         EOFError,
     ) as exc:
-        reason = f"{type(exc).__name__}: {' '.join(str(exc).split())}"  # one line, whatever the library wrote
+        # one line, whatever the library wrote
+        reason = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
         raise FormatError(
             path, f"cannot read the PLY data, truncated or malformed ({reason})"
         ) from None
@@ -1265,8 +1281,10 @@ def _ply_meshio(
     if points.shape != (counts.get("vertex", 0), 3) or sizes.size != counts["face"]:
         raise FormatError(
             path,
-            f"truncated or malformed: the header announces {counts.get('vertex', 0)} vertices (x, y, z) and "
-            f"{counts['face']} faces, meshio read {points.shape[0]} vertices and {sizes.size} faces",
+            f"truncated or malformed: the header announces {counts.get('vertex', 0)} vertices (x, "
+            "y, z) and "
+            f"{counts['face']} faces, meshio read {points.shape[0]} vertices and {sizes.size} "
+            "faces",
         )
     # for an ASCII file with vertices then faces, one element per line after the header
     in_order = header.ascii and [name for name, _ in header.elements] == ["vertex", "face"]
@@ -1366,7 +1384,8 @@ def _write(
 
 
 def write_triangles(path: PathLike, points: ArrayLike, triangles: ArrayLike) -> None:
-    """Write a triangle mesh, ``points`` (n, 3) and ``triangles`` (m, 3), as OBJ, PLY or STL (by extension)."""
+    """Write a triangle mesh, ``points`` (n, 3) and ``triangles`` (m, 3), as OBJ, PLY or STL (by
+    extension)."""
     path = Path(path)
     suffix = _write_format(path)
     points = _checked_points("points", points)
@@ -1376,7 +1395,8 @@ def write_triangles(path: PathLike, points: ArrayLike, triangles: ArrayLike) -> 
 
 
 def write_quads(path: PathLike, vertices: ArrayLike, faces: ArrayLike) -> None:
-    """Write a quad mesh as OBJ or PLY, or as STL with each quad (a, b, c, d) split into (a, b, c), (a, c, d)."""
+    """Write a quad mesh as OBJ or PLY, or as STL with each quad (a, b, c, d) split into (a, b, c),
+    (a, c, d)."""
     path = Path(path)
     suffix = _write_format(path)
     vertices = _checked_points("vertices", vertices)

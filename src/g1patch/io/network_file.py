@@ -72,10 +72,11 @@ magnitude at most :data:`MAX_COORDINATE` = 1e30, in world coordinates (``|c| + s
 frame, whose scale must be positive and at most the bound). 1e30 mm is larger than the observable
 universe, and keeps every power the numerics form finite: the check and OpenCASCADE's G1
 measurement square the cross product of two unnormalised normals, an eighth power of the
-coordinates (1e240 here; at 1e40 the check overflows, measured). Any violation is one :class:`FormatError`
-naming the file, the member and the problem. A file of another kind (a mesh, a ``.bpt``, a text
-file renamed ``.npz``, anything not a zip archive) is refused with what was expected instead.
-:func:`save_network` runs the same checks first, so it never writes a file it would not read.
+coordinates (1e240 here; at 1e40 the check overflows, measured). Any violation is one
+:class:`FormatError` naming the file, the member and the problem. A file of another kind (a mesh, a
+``.bpt``, a text file renamed ``.npz``, anything not a zip archive) is refused with what was
+expected instead. :func:`save_network` runs the same checks first, so it never writes a file it
+would not read.
 """
 
 from __future__ import annotations
@@ -201,7 +202,8 @@ _MESH_SUFFIXES = (".obj", ".ply", ".stl", ".off")
 
 
 def save_network(path: str | os.PathLike[str], network: PatchNetwork) -> None:
-    """Write ``network`` to ``path`` (``.npz``), atomically; see the module docstring for the format.
+    """Write ``network`` to ``path`` (``.npz``), atomically; see the module docstring for the
+    format.
 
     The arrays pass the checks :func:`load_network` makes first (a network whose coordinates exceed
     :data:`MAX_COORDINATE`, say, raises :class:`FormatError` and writes nothing)."""
@@ -228,7 +230,8 @@ def save_network_in_background(path: str | os.PathLike[str], network: PatchNetwo
 def _members(
     path: str | os.PathLike[str], network: PatchNetwork
 ) -> tuple[Path, dict[str, NDArray[Any]]]:
-    """The target path and the file's members of ``network``, checked as :func:`load_network` checks them."""
+    """The target path and the file's members of ``network``, checked as :func:`load_network` checks
+    them."""
     target = Path(path)
     if target.suffix.lower() != ".npz":
         raise FormatError(path, "a network file must end in .npz")
@@ -256,7 +259,8 @@ def _write_members(target: Path, members: dict[str, NDArray[Any]]) -> None:
             _write_stored_zip(handle, members)
 
 
-# zip records (PKWARE APPNOTE 4.3): local header, central header, zip64 end record and locator, end record
+# zip records (PKWARE APPNOTE 4.3): local header, central header, zip64 end record and locator, end
+# record
 _LOCAL = struct.Struct("<4sHHHHHIIIHH")
 _LOCAL_ZIP64 = struct.Struct("<HHQQ")
 _CENTRAL = struct.Struct("<4sBBBBHHHHIIIHHHHHII")
@@ -282,7 +286,8 @@ def _crc(header: bytes, data: memoryview) -> int:
 
 
 def _crc_step(running: list[int], data: memoryview) -> int:
-    """The CRC-32 of everything so far, ``running[0]``, extended by ``data`` (steps run in order)."""
+    """The CRC-32 of everything so far, ``running[0]``, extended by ``data`` (steps run in
+    order)."""
     running[0] = zlib.crc32(data, running[0])
     return running[0]
 
@@ -444,7 +449,8 @@ def load_network(path: str | os.PathLike[str], *, expects: str | None = None) ->
             raise FormatError(source, f"not a g1patch network file but {other}; {wanted}{hint}")
         try:
             archive = zipfile.ZipFile(handle)
-        except Exception as exc:  # zipfile parses untrusted bytes: BadZipFile, NotImplementedError, struct.error, …
+        # zipfile parses untrusted bytes: BadZipFile, NotImplementedError, struct.error, …
+        except Exception as exc:
             raise FormatError(
                 source, f"not a g1patch network file (a damaged or truncated zip archive: {exc})"
             ) from None
@@ -475,7 +481,8 @@ def _size(count: int) -> str:
 
 
 class _Reader:
-    """Reads one archive: directory, ``.npy`` headers, caps, data, values (the module docstring's order)."""
+    """Reads one archive: directory, ``.npy`` headers, caps, data, values (the module docstring's
+    order)."""
 
     def __init__(self, source: Path, handle: BinaryIO, archive: zipfile.ZipFile) -> None:
         self.source, self.handle, self.archive = source, handle, archive
@@ -506,14 +513,16 @@ class _Reader:
                 )
             if info.file_size > MAX_BYTES:
                 raise self.fail(
-                    f"member {label!r} declares {_size(info.file_size)} uncompressed, above the cap of "
+                    f"member {label!r} declares {_size(info.file_size)} uncompressed, above the "
+                    "cap of "
                     f"{_size(MAX_BYTES)} per member"
                 )
             total += info.file_size
             members[name] = _Member(name, info)
         if total > MAX_BYTES:
             raise self.fail(
-                f"the members declare {_size(total)} uncompressed in all, above the cap of {_size(MAX_BYTES)}"
+                f"the members declare {_size(total)} uncompressed in all, above the cap of "
+                f"{_size(MAX_BYTES)}"
             )
         return members
 
@@ -561,11 +570,13 @@ class _Reader:
             Exception
         ) as exc:  # numpy parses the header with ast (SyntaxError, TokenError, ValueError, …)
             raise self.fail(
-                f"member {label!r}: not a readable .npy array ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})"
+                f"member {label!r}: not a readable .npy array "
+                f"({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})"
             ) from None
         if dtype.hasobject or dtype.fields is not None or dtype.subdtype is not None:
             raise self.fail(
-                f"member {label!r} holds {dtype} values (Python objects or records); network files hold plain numbers and strings"
+                f"member {label!r} holds {dtype} values (Python objects or records); network "
+                "files hold plain numbers and strings"
             )
         member.shape, member.dtype, member.fortran = (
             tuple(int(n) for n in shape),
@@ -576,7 +587,8 @@ class _Reader:
         declared = length + math.prod(member.shape) * dtype.itemsize
         if declared != member.info.file_size:
             raise self.fail(
-                f"member {label!r}: its .npy header describes {dtype} {member.shape} ({_size(declared)}), "
+                f"member {label!r}: its .npy header describes {dtype} {member.shape} "
+                f"({_size(declared)}), "
                 f"but the zip directory says {_size(member.info.file_size)}"
             )
 
@@ -587,7 +599,8 @@ class _Reader:
         local = self.handle.read(30)
         if len(local) < 30 or local[:4] != b"PK\x03\x04":
             raise self.fail(
-                f"corrupt network file: the local header of member {info.filename!r} is missing (truncated?)"
+                f"corrupt network file: the local header of member {info.filename!r} is missing "
+                "(truncated?)"
             )
         name_length, extra_length = struct.unpack("<HH", local[26:30])
         start = info.header_offset + 30 + name_length + extra_length
@@ -598,7 +611,8 @@ class _Reader:
             )
         if start + info.file_size > self.file_size:
             raise self.fail(
-                f"truncated: member {info.filename!r} needs bytes {start}..{start + info.file_size} "
+                f"truncated: member {info.filename!r} needs bytes "
+                f"{start}..{start + info.file_size} "
                 f"of the file, which has {self.file_size}"
             )
         return start
@@ -609,7 +623,8 @@ class _Reader:
         crc_thread: ThreadPoolExecutor,
         crcs: list[tuple[_Member, Future[int]]],
     ) -> NDArray[Any]:
-        """The array of ``member`` (shape and size already checked); a stored member's CRC is queued."""
+        """The array of ``member`` (shape and size already checked); a stored member's CRC is
+        queued."""
         shape, dtype = member.shape, member.dtype
         array = np.empty(shape[::-1], dtype).T if member.fortran else np.empty(shape, dtype)
         view = (
@@ -662,7 +677,8 @@ class _Reader:
         label = member.info.filename
         if member.info.file_size > cap + _NPY_HEADER_BYTES:
             raise self.fail(
-                f"member {label!r} declares {_size(member.info.file_size)}, above the cap of {_size(cap)} for it"
+                f"member {label!r} declares {_size(member.info.file_size)}, above the cap of "
+                f"{_size(cap)} for it"
             )
         self.read_npy_header(member)
         if member.shape != () or member.dtype.kind != "U":
@@ -697,7 +713,8 @@ class _Reader:
         if isinstance(version, bool) or version not in READABLE_VERSIONS:
             readable = ", ".join(map(str, READABLE_VERSIONS))
             raise self.fail(
-                f"network format version {version!r} is not supported (this g1patch reads {readable})"
+                f"network format version {version!r} is not supported (this g1patch reads "
+                f"{readable})"
             )
         version = int(version)
         provenance = header.get("provenance", {})
@@ -736,7 +753,8 @@ class _Reader:
         ]
         if unexpected:
             raise self.fail(
-                f"corrupt network file: unexpected member {unexpected[0]!r} in a version {version} {kind} network file"
+                f"corrupt network file: unexpected member {unexpected[0]!r} in a version "
+                f"{version} {kind} network file"
             )
         wanted = {
             name: m
@@ -757,7 +775,8 @@ class _Reader:
         count = corner.shape[0]
         if not 1 <= count <= MAX_PATCHES:
             raise self.fail(
-                f"member 'corner_ids.npy' claims {count} patches; network files hold 1 to {MAX_PATCHES}"
+                f"member 'corner_ids.npy' claims {count} patches; network files hold 1 to "
+                f"{MAX_PATCHES}"
             )
         dims = {"P": count}
         for name, dim in (("edge_collapsed", "E"), ("vertices", "V"), ("vertex_normals", "V")):
@@ -775,7 +794,8 @@ class _Reader:
                     "(" + ", ".join(map(str, template)) + ("," if len(template) == 1 else "") + ")"
                 )
                 raise self.fail(
-                    f"member {member.info.filename!r}: expected shape {text} = {expected} for {count} patches, got {member.shape}"
+                    f"member {member.info.filename!r}: expected shape {text} = {expected} for "
+                    f"{count} patches, got {member.shape}"
                 )
         for dim in ("E", "V"):
             if dims.get(dim, 0) > 4 * count:
@@ -787,7 +807,8 @@ class _Reader:
         budget = PER_PATCH_BYTES * count + _NPY_HEADER_BYTES * len(wanted)
         if total > budget:
             raise self.fail(
-                f"the arrays declare {_size(total)} in all, more than the {_size(budget)} a network of "
+                f"the arrays declare {_size(total)} in all, more than the {_size(budget)} a "
+                "network of "
                 f"{count} patches may hold ({PER_PATCH_BYTES} bytes a patch)"
             )
 
@@ -825,7 +846,8 @@ class _Reader:
             raise self.fail(f"corrupt network file: {exc}") from None
 
     def check_cap(self, member: _Member, patches: int, qualifier: str) -> None:
-        """``member``'s declared size against the most its role allows a network of ``patches`` patches."""
+        """``member``'s declared size against the most its role allows a network of ``patches``
+        patches."""
         shape = _SHAPES[member.name]
         rows = {"P": patches, "E": 4 * patches, "V": 4 * patches}
         elements = math.prod(rows[d] if isinstance(d, str) else d for d in shape)
@@ -834,8 +856,10 @@ class _Reader:
         )
         if member.info.file_size > cap:
             raise self.fail(
-                f"member {member.info.filename!r} declares {_size(member.info.file_size)} uncompressed, more than "
-                f"the {_size(cap)} it can take in a network of {qualifier}{patches} patches (from 'corner_ids.npy')"
+                f"member {member.info.filename!r} declares {_size(member.info.file_size)} "
+                "uncompressed, more than "
+                f"the {_size(cap)} it can take in a network of {qualifier}{patches} patches (from "
+                "'corner_ids.npy')"
             )
 
     def check_dtype(self, member: _Member) -> None:
@@ -865,7 +889,8 @@ class _Checker:
         return FormatError(self.source, f"{self.prefix}member '{name}.npy': {message}")
 
     def check(self, arrays: dict[str, Any]) -> dict[str, Any]:
-        """``arrays`` with index arrays as int64 and floats as float64, or FormatError naming the member."""
+        """``arrays`` with index arrays as int64 and floats as float64, or FormatError naming the
+        member."""
         kind = str(arrays["patch_kind"])
         patch_name = "points" if kind == GregoryPatchSet.kind else "control"
         patches = np.asarray(arrays[patch_name])
@@ -927,7 +952,8 @@ class _Checker:
             bad = np.argwhere(np.ascontiguousarray(array).view(np.uint8) > 1)[0]
             raise self.fail(
                 name,
-                f"byte {int(np.ascontiguousarray(array).view(np.uint8)[tuple(bad)])} at {_where(bad)} "
+                f"byte {int(np.ascontiguousarray(array).view(np.uint8)[tuple(bad)])} at "
+                f"{_where(bad)} "
                 f"is not a boolean (0 or 1)",
             )
         return array
@@ -964,7 +990,8 @@ class _Checker:
             bad = np.argwhere((array < low) | (array > high))[0]
             raise self.fail(
                 name,
-                f"value {int(array[tuple(bad)])} at {_where(bad)} is out of range {low}..{high} ({meaning})",
+                f"value {int(array[tuple(bad)])} at {_where(bad)} is out of range {low}..{high} "
+                f"({meaning})",
             )
         return array.astype(
             np.int64, copy=False
@@ -1023,8 +1050,9 @@ class _Checker:
                 )
 
     def frame(self, arrays: dict[str, Any], extent: dict[str, float], patch_name: str) -> None:
-        """The frame's own checks (:meth:`Frame.from_arrays`: both arrays, shapes, finite, scale > 0), then
-        the centre and scale within the bound and the world coordinates ``|c| + s·max|x|`` too."""
+        """The frame's own checks (:meth:`Frame.from_arrays`: both arrays, shapes, finite, scale >
+        0), then the centre and scale within the bound and the world coordinates ``|c| + s·max|x|``
+        too."""
         try:
             frame = Frame.from_arrays(arrays)
         except InputError as exc:

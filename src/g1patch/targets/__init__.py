@@ -57,8 +57,8 @@ class Targets:
       regular star, as long as the slots turn counter-clockwise about the normal;
     * ``interior`` (F, 4, 2, 3): per face corner k, the targets of the interior Bézier point next
       to that corner (``b11`` at corner 0), i.e. ``x + (t_next + t_prev)/3 + twist/9``, as seen by
-      edge k (``[..., 0, :]``) and by edge k − 1 (``[..., 1, :]``): a Gregory patch has one per edge,
-      a tensor-product patch takes their mean (:attr:`corner_interior`);
+      edge k (``[..., 0, :]``) and by edge k − 1 (``[..., 1, :]``): a Gregory patch has one per
+      edge, a tensor-product patch takes their mean (:attr:`corner_interior`);
     * ``seams`` (E,): edges the surface is meant to cross with a crease (only C0 there, on
       purpose): the two faces share the boundary curve and nothing more;
     * ``fallback`` (V,): vertices where the rule could not use its normal recipe and fell back;
@@ -105,7 +105,8 @@ class Targets:
         )
         if corner_normals.shape != (topology.n_faces, 4, 3):
             raise InputError(
-                f"targets.corner_normals: expected shape ({topology.n_faces}, 4, 3), got {corner_normals.shape}"
+                f"targets.corner_normals: expected shape ({topology.n_faces}, 4, 3), got "
+                f"{corner_normals.shape}"
             )
         object.__setattr__(self, "corner_normals", corner_normals)
 
@@ -116,7 +117,8 @@ class Targets:
 
     @property
     def has_sectors(self) -> bool:
-        """Whether any vertex has more than one sector (a seam or a creased boundary runs through it)."""
+        """Whether any vertex has more than one sector (a seam or a creased boundary runs through
+        it)."""
         return bool(self.seams.any())
 
     def with_changes(self, **changes: object) -> Targets:
@@ -151,7 +153,8 @@ def slot_sector_normals(targets: Targets) -> tuple[FloatArray, FloatArray]:
     boundary = topology.is_boundary_vertex
     last = topology.neighbor_offsets[1:] - 1  # the virtual slot of a boundary vertex
     right[last[boundary]] = corner[topology.ring_offsets[1:][boundary] - 1]
-    # left of slot j is ring face j − 1: cyclic inside, the slot's own face at a boundary's first slot
+    # left of slot j is ring face j − 1: cyclic inside, the slot's own face at a boundary's first
+    # slot
     shifted = np.where(position == 0, position + face_count[ring_vertex] - 1, position - 1)
     left[slot] = np.where(
         ((position == 0) & boundary[ring_vertex])[:, None],

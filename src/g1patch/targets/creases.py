@@ -77,7 +77,8 @@ def sharp_vertices(mesh: QuadMesh, threshold: float = INFINITE_SHARPNESS) -> Boo
 
 
 def sector_fan_normals(mesh: QuadMesh, found: Sectors) -> FloatArray:
-    """Area-weighted fan normal of each sector's face corners, ``Σ (x_next − x) × (x_prev − x)`` (not unit)."""
+    """Area-weighted fan normal of each sector's face corners, ``Σ (x_next − x) × (x_prev − x)``
+    (not unit)."""
     topology = mesh.topology
     x = mesh.vertices
     here = x[topology.faces]
@@ -91,8 +92,8 @@ def sector_fan_normals(mesh: QuadMesh, found: Sectors) -> FloatArray:
 
 
 def _circle_lengths(chord: FloatArray, direction: FloatArray) -> FloatArray:
-    """Hermite tangent length of the circular arc leaving along unit ``direction`` through the chord's end:
-    ``2|c| / (1 + ĉ·d)``."""
+    """Hermite tangent length of the circular arc leaving along unit ``direction`` through the
+    chord's end: ``2|c| / (1 + ĉ·d)``."""
     length = np.linalg.norm(chord, axis=-1)
     cosine = _dot(chord, direction) / np.where(length > 0, length, 1.0)
     return 2.0 * length / (1.0 + np.maximum(cosine, _MIRROR_MIN))
@@ -121,7 +122,8 @@ def crease_tangents(
     slot_cut &= creased[slot_vertex]
     fan = sector_fan_normals(mesh, found)
 
-    # two-seam vertices: the crease curve runs through, tangent to the circle through both neighbours
+    # two-seam vertices: the crease curve runs through, tangent to the circle through both
+    # neighbours
     seam_slot = slot_cut & ~_boundary_slots(topology)
     two_seams = creased & ~topology.is_boundary_vertex & (found.cuts == 2)
     two = np.flatnonzero(seam_slot & two_seams[slot_vertex]).reshape(-1, 2)  # slots in vertex order

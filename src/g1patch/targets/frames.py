@@ -18,7 +18,8 @@ face 2-ring has coordinates (x, y, z) of p − A, r² = x² + y². A circle thro
 plane, of curvature k in the direction x̂ = (x, y)/r, satisfies x̂-section ``r² + z² = 2z/k``, i.e.
 ``z = ½ k (r² + z²) = ½ (1 + z²/r²) k r²``; with ``k r² = (x, y) H (x, y)ᵀ`` the fit is linear:
 
-    z = g1 x + g2 y + ½ (1 + z²/r²)(h11 x² + 2 h12 xy + h22 y²) + (c1 x³ + 3c2 x²y + 3c3 xy² + c4 y³)/6
+    z = g1 x + g2 y + ½ (1 + z²/r²)(h11 x² + 2 h12 xy + h22 y²) + (c1 x³ + 3c2 x²y + 3c3 xy² + c4
+    y³)/6
 
 by weighted least squares, ``w = exp(−r²/(2 h̄²))``, h̄² the mean squared projected length of the
 ring edges; the cubic only with ≥ 12 points, else the face 1-ring without it. Then
@@ -26,8 +27,8 @@ ring edges; the cubic only with ≥ 12 points, else the face 1-ring without it. 
 ``STOP`` = 1e-14 (the further refits would move N by about that: at 1 M torus quads the slopes
 are ≤ 9e-10, 6e-15, 3e-16, so 2 fits). On a sphere of radius ρ (outward normal n, frame
 normal N with n = (a, b, c) in the frame) ``|q + ρn|² = ρ²`` gives exactly
-``z = −(a/c) x − (b/c) y − (r² + z²)/(2ρc)``: the model holds with C = 0, so one step is exact at any
-resolution (the cube's corners included). Elsewhere N is O(h³) and H O(h²).
+``z = −(a/c) x − (b/c) y − (r² + z²)/(2ρc)``: the model holds with C = 0, so one step is exact at
+any resolution (the cube's corners included). Elsewhere N is O(h³) and H O(h²).
 
 **Shape operator.** ``S = −P E H Eᵀ P`` (E = [e1 e2] of the last fit, P = I − N Nᵀ): S = dN, so the
 unit sphere with outward normals has S = I − N Nᵀ and principal curvatures are positive on convex
@@ -120,7 +121,8 @@ def _unit(v: FloatArray) -> FloatArray:
 
 
 def _frame(n: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Unit e1, e2 with (e1, e2, n) right-handed: e1 ⊥ n and the coordinate axis least aligned with n."""
+    """Unit e1, e2 with (e1, e2, n) right-handed: e1 ⊥ n and the coordinate axis least aligned with
+    n."""
     axis = np.zeros_like(n)
     axis[np.arange(n.shape[0]), np.argmin(np.abs(n), axis=1)] = 1.0
     e1 = _unit(cross(n, axis))
@@ -133,7 +135,8 @@ def _frame(n: FloatArray) -> tuple[FloatArray, FloatArray]:
 
 @dataclass(frozen=True)
 class _Ring:
-    """Ring edges ``d`` (one per neighbour, grouped by vertex) and consecutive pairs ``(first, second)``."""
+    """Ring edges ``d`` (one per neighbour, grouped by vertex) and consecutive pairs ``(first,
+    second)``."""
 
     offsets: IntArray  # neighbor_offsets
     owner: IntArray  # vertex of each neighbour entry
@@ -170,7 +173,8 @@ class _Ring:
         )
 
     def valid(self, n: FloatArray) -> BoolArray:
-        """The projected ring goes once around ``n`` (V, 3) counter-clockwise (see the module doc)."""
+        """The projected ring goes once around ``n`` (V, 3) counter-clockwise (see the module
+        doc)."""
         np_ = n[self.pair_owner]
         sine = np.einsum("pd,pd->p", np_, self.cross)
         height = np.einsum("nd,nd->n", self.d, n[self.owner])
@@ -181,13 +185,15 @@ class _Ring:
         return ~folded & once
 
     def steepness(self, n: FloatArray) -> FloatArray:
-        """Largest ``|N·d| / |d|`` (sine of the angle to the plane) over each vertex's ring edges."""
+        """Largest ``|N·d| / |d|`` (sine of the angle to the plane) over each vertex's ring
+        edges."""
         sine = np.abs(np.einsum("nd,nd->n", self.d, n[self.owner])) / np.linalg.norm(self.d, axis=1)
         return np.maximum.reduceat(sine, self.offsets[:-1])
 
     def repair(self, n: FloatArray, bad: IntArray) -> tuple[FloatArray, BoolArray]:
-        """Valid normals for vertices ``bad``: unit-direction fan, else max–min of unit corner normals.
-        A zero ring edge or corner (coincident points) gives a NaN candidate, which is not taken."""
+        """Valid normals for vertices ``bad``: unit-direction fan, else max–min of unit corner
+        normals. A zero ring edge or corner (coincident points) gives a NaN candidate, which is not
+        taken."""
         pick = np.isin(self.pair_owner, bad)
         owner = np.searchsorted(bad, self.pair_owner[pick])
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -208,9 +214,11 @@ class _Ring:
 
 
 def _gilbert(points: FloatArray, owner: IntArray, groups: int) -> FloatArray:
-    """Approximate nearest-to-origin point of the convex hull of each group's ``points`` (Gilbert's algorithm).
+    """Approximate nearest-to-origin point of the convex hull of each group's ``points`` (Gilbert's
+    algorithm).
 
-    ``x ← x + t (p − x)`` with p minimising ``x·p`` in the group and ``t = clip(x·(x − p)/|x − p|², 0, 1)``.
+    ``x ← x + t (p − x)`` with p minimising ``x·p`` in the group and ``t = clip(x·(x − p)/|x − p|²,
+    0, 1)``.
     """
     start = np.zeros((groups, 3))
     np.add.at(start, owner, points)
@@ -235,7 +243,8 @@ def _gilbert(points: FloatArray, owner: IntArray, groups: int) -> FloatArray:
 
 @dataclass(frozen=True)
 class _Hood:
-    """A neighbourhood per vertex as CSR: ``points[offsets[v]:offsets[v + 1]]`` (the vertex itself excluded)."""
+    """A neighbourhood per vertex as CSR: ``points[offsets[v]:offsets[v + 1]]`` (the vertex itself
+    excluded)."""
 
     offsets: NDArray[np.integer]
     points: NDArray[np.integer]
@@ -254,8 +263,8 @@ class _Hood:
 
 
 def _face_rings(mesh: QuadMesh) -> tuple[_Hood, _Hood]:
-    """Face 1-ring (vertices of the faces at v) and face 2-ring (vertices of the faces at those), from
-    the vertex–face incidence ``I``: the patterns of ``I Iᵀ`` and ``(I Iᵀ)²``."""
+    """Face 1-ring (vertices of the faces at v) and face 2-ring (vertices of the faces at those),
+    from the vertex–face incidence ``I``: the patterns of ``I Iᵀ`` and ``(I Iᵀ)²``."""
     nv, nf = mesh.n_vertices, mesh.n_faces
     incidence = sp.csr_matrix(
         (np.ones(4 * nf, dtype=bool), (mesh.faces.ravel(), np.repeat(np.arange(nf), 4))),
@@ -282,8 +291,8 @@ def _padded(vertices: IntArray, offsets: IntArray) -> tuple[IntArray, BoolArray]
 
 
 def _solve(gram: FloatArray, rhs: FloatArray, leading: int) -> tuple[FloatArray, FloatArray]:
-    """Least-squares coefficients (k, b) from the normal equations ``gram c = rhs`` ((k, k, b), (k, b)),
-    and how well the first ``leading`` coefficients are determined (b,).
+    """Least-squares coefficients (k, b) from the normal equations ``gram c = rhs`` ((k, k, b), (k,
+    b)), and how well the first ``leading`` coefficients are determined (b,).
 
     Cholesky ``gram = L Lᵀ`` across the batch, one column at a time; a column whose pivot is at most
     :data:`DROP_PIVOT` of its diagonal (sin² of its angle to the earlier columns) is dropped, its
@@ -349,12 +358,13 @@ def _circle_fit(
     cubic: bool,
     tilt: bool,
 ) -> _Fit:
-    """The circle-aware fit (module doc) of points ``q`` (b, 3, m) relative to their vertex, padding ``mask`` (b, m).
+    """The circle-aware fit (module doc) of points ``q`` (b, 3, m) relative to their vertex, padding
+    ``mask`` (b, m).
 
     ``edges`` (b, 3, k) are the ring edges for h̄. With ``tilt`` the normal ``n`` (b, 3) is refitted
     up to :data:`ITERATIONS` times, a vertex stopping once its slope ``|g|`` < :data:`STOP`, else
-    held (g1, g2 left out, one pass). Columns: [x, y,] a x², 2a xy, a y² [, x³/6, x²y/2, xy²/2, y³/6]
-    with a = ½(1 + z²/r²), coordinates in units of h̄.
+    held (g1, g2 left out, one pass). Columns: [x, y,] a x², 2a xy, a y² [, x³/6, x²y/2, xy²/2,
+    y³/6] with a = ½(1 + z²/r²), coordinates in units of h̄.
     """
     out = _Fit(n.copy(), np.empty((n.shape[0], 3, 3)), np.empty(n.shape[0]), np.empty(n.shape[0]))
     edge_length2 = np.einsum("bdk,bdk->bk", edges, edges)
@@ -418,7 +428,8 @@ def _circle_fit(
 
 
 #: faces around a vertex up to which :func:`_rows_kernel` sorts them by insertion and finds repeated
-#: points by scanning the row (a valence-4 row holds 9 points); beyond it, in time linear in the ring
+# : points by scanning the row (a valence-4 row holds 9 points); beyond it, in time linear in the
+# ring
 SMALL_RING = 16
 
 
@@ -512,14 +523,14 @@ def _fit_kernel(
     the vertex alone.
 
     Neighbourhoods: the face 1-ring is v's row of ``I Iᵀ`` (``rows``, :func:`_rows_kernel`) without
-    v; the face 2-ring is v's row of ``(I Iᵀ)²``, in scipy's order too (reversed first encounter over
-    the rows of v's row), without v. With ``tilt`` a vertex with a 2-ring of ≥ :data:`CUBIC_POINTS`
-    points fits it with the cubic, else its 1-ring without; without ``tilt`` the 1-ring, normal
-    held. :data:`BLOCK` vertices at a time are gathered, then fitted in lanes of one column count
-    (sorted by column count and size; a batch's largest is at most twice its smallest, plus
-    :data:`CUBIC_POINTS`); a lane with fewer points than the largest of its batch is padded with
-    points at the vertex itself, which get weight 0 and add exactly nothing. Writes row i of the ``out_`` arrays for ``vertices[i]``;
-    S as in :func:`_circle_fit`, before symmetrising.
+    v; the face 2-ring is v's row of ``(I Iᵀ)²``, in scipy's order too (reversed first encounter
+    over the rows of v's row), without v. With ``tilt`` a vertex with a 2-ring of ≥
+    :data:`CUBIC_POINTS` points fits it with the cubic, else its 1-ring without; without ``tilt``
+    the 1-ring, normal held. :data:`BLOCK` vertices at a time are gathered, then fitted in lanes of
+    one column count (sorted by column count and size; a batch's largest is at most twice its
+    smallest, plus :data:`CUBIC_POINTS`); a lane with fewer points than the largest of its batch is
+    padded with points at the vertex itself, which get weight 0 and add exactly nothing. Writes row
+    i of the ``out_`` arrays for ``vertices[i]``; S as in :func:`_circle_fit`, before symmetrising.
     """
     taken = np.full(x.shape[0], -1, dtype=np.int32)  # v once a point is in v's 2-ring
     hood = np.empty(32 * BLOCK, dtype=np.int64)
@@ -882,11 +893,12 @@ def _ring_kernel(
     out_valid: BoolArray,
     out_steepness: FloatArray,
 ) -> None:
-    """:meth:`_Ring.valid` and :meth:`_Ring.steepness` of ``normals[v]`` at ``vertices``, vertex by vertex
-    (row i for ``vertices[i]``): turning angles ``atan2(N·(d_i × d_{i+1}), d_i·d_{i+1} − (N·d_i)(N·d_{i+1}))``
-    summed over the ring's consecutive pairs, and the largest ``|N·d|/|d|``. An interior vertex of
-    valence ≤ 4 whose turns are all positive goes around exactly once (its n < 5 turns of less than
-    π each sum to 2π times a whole number), so there the angles are not computed."""
+    """:meth:`_Ring.valid` and :meth:`_Ring.steepness` of ``normals[v]`` at ``vertices``, vertex by
+    vertex (row i for ``vertices[i]``): turning angles ``atan2(N·(d_i × d_{i+1}), d_i·d_{i+1} −
+    (N·d_i)(N·d_{i+1}))`` summed over the ring's consecutive pairs, and the largest ``|N·d|/|d|``.
+    An interior vertex of valence ≤ 4 whose turns are all positive goes around exactly once (its n <
+    5 turns of less than π each sum to 2π times a whole number), so there the angles are not
+    computed."""
     for i in range(vertices.size):
         v = vertices[i]
         n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
@@ -949,8 +961,9 @@ def _fit_all(
     cubic: bool,
     tilt: bool,
 ) -> _Fit:
-    """:func:`_circle_fit` of ``vertices`` with neighbourhoods ``hood`` and start normals ``n`` (V, 3), row i for
-    ``vertices[i]``, block by block in NumPy (the reference of :func:`_fit_kernel`)."""
+    """:func:`_circle_fit` of ``vertices`` with neighbourhoods ``hood`` and start normals ``n`` (V,
+    3), row i for ``vertices[i]``, block by block in NumPy (the reference of
+    :func:`_fit_kernel`)."""
     out = _Fit.empty(vertices.size)
     x = mesh.vertices
     order = np.argsort(hood.sizes[vertices], kind="stable")
@@ -1003,8 +1016,8 @@ def _face_ring_rows(mesh: QuadMesh) -> tuple[IntArray, IntArray]:
 def _fit_compiled(
     mesh: QuadMesh, rows: tuple[IntArray, IntArray], vertices: IntArray, n: FloatArray, tilt: bool
 ) -> _Fit:
-    """:func:`_fit_kernel` of ``vertices`` (row i for ``vertices[i]``) with start normals ``n`` (V, 3), in
-    ranges of rows side by side (:func:`~g1patch.kernels.in_chunks`)."""
+    """:func:`_fit_kernel` of ``vertices`` (row i for ``vertices[i]``) with start normals ``n`` (V,
+    3), in ranges of rows side by side (:func:`~g1patch.kernels.in_chunks`)."""
     topo = mesh.topology
     out = _Fit.empty(vertices.size)
     kernel = jit_kernel(_fit_kernel)
@@ -1030,11 +1043,13 @@ def _fit_compiled(
 
 
 def vertex_frames(mesh: QuadMesh, *, compiled: bool = True) -> VertexFrames:
-    """Unit normals and shape operators at the vertices of ``mesh``: repaired fan normal, circle-aware
-    fit where trusted, else the fan normal with the fixed-normal circle fit of S (module doc).
+    """Unit normals and shape operators at the vertices of ``mesh``: repaired fan normal,
+    circle-aware fit where trusted, else the fan normal with the fixed-normal circle fit of S
+    (module doc).
 
     ``compiled`` runs the fits and ring checks in numba kernels (:func:`_fit_kernel`,
-    :func:`_ring_kernel`); ``False`` runs the NumPy reference (the same to rounding, tests/test_frames.py).
+    :func:`_ring_kernel`); ``False`` runs the NumPy reference (the same to rounding,
+    tests/test_frames.py).
     """
     nv = mesh.n_vertices
     everything = np.arange(nv)

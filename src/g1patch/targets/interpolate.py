@@ -95,7 +95,8 @@ _BLENDS = np.arange(1, 9) / 8.0
 _RIM_SMOOTH = np.radians(45.0)
 _RIM_CORNER = np.radians(90.0)
 #: a mesh line B' → A → B through a regular vertex runs on smoothly (its slots at A turn along it)
-#: when its turn at A is within this share of the mean of its turns at B and B', plus the slack (rad)
+# : when its turn at A is within this share of the mean of its turns at B and B', plus the slack
+# (rad)
 _LINE_SHARE = 0.25
 _LINE_SLACK = np.radians(0.1)
 #: an edge whose projection onto the tangent plane is shorter than this share of its length is
@@ -159,7 +160,8 @@ def tangent_stars(
     """The previous release's star: the regular star fitted to the projected edge tangents
     (:func:`~g1patch.targets.local.corner_tangents`, ``tangents`` lengths), and ``c_v``.
 
-    Raises :class:`ConstructionError` where a fitted star is degenerate or folded, as that release did.
+    Raises :class:`ConstructionError` where a fitted star is degenerate or folded, as that release
+    did.
     """
     check_choice("tangents", tangents, TANGENTS)
     topology = mesh.topology
@@ -176,14 +178,16 @@ def tangent_stars(
         v = int(np.flatnonzero(~valid)[0])
         raise ConstructionError(
             f"tangent star: the regular star fitted to the ring of vertex {v} "
-            f"({'boundary' if topology.is_boundary_vertex[v] else 'interior'}, valence {topology.valence[v]}) "
+            f"({'boundary' if topology.is_boundary_vertex[v] else 'interior'}, valence "
+            f"{topology.valence[v]}) "
             "is degenerate or folded; its ring edges do not turn once around the normal"
         )
     return star, cosine
 
 
 def legacy_targets(mesh: QuadMesh, tangents: TangentRule = "arc") -> Targets:
-    """The previous release's rule: fan normal, fitted regular star, bilinear twist (module docstring)."""
+    """The previous release's rule: fan normal, fitted regular star, bilinear twist (module
+    docstring)."""
     topology = mesh.topology
     normals = fan_normals(mesh)
     star, _ = tangent_stars(mesh, normals, tangents)
@@ -246,7 +250,8 @@ def _projected_kernel(
     chord: FloatArray,
     parallel: NDArray[np.bool_],
 ) -> None:
-    """:func:`_projected_tangents` vertex by vertex: ``s = d − (N·d) N``, ``s · 2|d|²/(|d| + |s|)/|s|``."""
+    """:func:`_projected_tangents` vertex by vertex: ``s = d − (N·d) N``, ``s · 2|d|²/(|d| +
+    |s|)/|s|``."""
     for v in range(offsets.size - 1):
         n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
         parallel[v] = False
@@ -372,7 +377,8 @@ def _lines_kernel(
     lo: int,
     hi: int,
 ) -> None:
-    """:func:`_along_smooth_lines` for vertices ``lo`` to ``hi``: the same formulas, in the same order."""
+    """:func:`_along_smooth_lines` for vertices ``lo`` to ``hi``: the same formulas, in the same
+    order."""
     turn = np.empty(3)
     for v in range(lo, hi):
         if boundary[v] or face_count[v] != 4:
@@ -553,7 +559,8 @@ def _valid_fans_kernel(
     min_gap_share: float,
     valid: NDArray[np.bool_],
 ) -> None:
-    """:func:`_valid_fans` vertex by vertex: the turns ``atan2((a × b)·N, a·b)`` of the gaps (:func:`_fan_gaps`)."""
+    """:func:`_valid_fans` vertex by vertex: the turns ``atan2((a × b)·N, a·b)`` of the gaps
+    (:func:`_fan_gaps`)."""
     for v in range(offsets.size - 1):
         n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
         first, size = offsets[v], offsets[v + 1] - offsets[v]
@@ -712,10 +719,10 @@ def _interior_targets(
     out: FloatArray | None = None,
 ) -> FloatArray:
     """``Ft = A + (t_AB + t_AD)/3 + w/9`` per face corner, ``w = A − B + C − D``; with a shape
-    operator S = dN (:class:`~g1patch.targets.frames.VertexFrames`) the normal part of w is replaced by
-    the second fundamental form, ``N·p_uv = −t_ABᵀ S t_AD``: ``w ← P_A w − (t_ABᵀ S t_AD) N_A``,
-    by the weight :func:`_local_twist_weights` of ``|P_A w| / (|t_AB| + |t_AD|)``.
-    ``compiled``: corner by corner in :func:`_interior_kernel` (ranges of vertices side by side,
+    operator S = dN (:class:`~g1patch.targets.frames.VertexFrames`) the normal part of w is replaced
+    by the second fundamental form, ``N·p_uv = −t_ABᵀ S t_AD``: ``w ← P_A w − (t_ABᵀ S t_AD) N_A``,
+    by the weight :func:`_local_twist_weights` of ``|P_A w| / (|t_AB| + |t_AD|)``. ``compiled``:
+    corner by corner in :func:`_interior_kernel` (ranges of vertices side by side,
     :func:`~g1patch.kernels.in_chunks`), into ``out`` (F, 4, 3) if given; else NumPy."""
     from . import halfedge_slots
 
@@ -778,9 +785,9 @@ def _interior_kernel(
     first: int,
     stop: int,
 ) -> None:
-    """:func:`_interior_targets` of the vertices ``first ≤ a < stop``, vertex by vertex, over its ring:
-    the corner of ring face i is between slots i (A → B) and i + 1 (A → D, cyclic inside), so no
-    slot table is needed."""
+    """:func:`_interior_targets` of the vertices ``first ≤ a < stop``, vertex by vertex, over its
+    ring: the corner of ring face i is between slots i (A → B) and i + 1 (A → D, cyclic inside), so
+    no slot table is needed."""
     w = np.empty(3)
     for a in range(first, stop):
         slots = slot_offsets[a + 1] - slot_offsets[a]
@@ -1145,7 +1152,8 @@ def shape_targets(
     mesh: QuadMesh, shape: ShapeRule = "interpolate", *, tangents: TangentRule = "arc"
 ) -> Targets:
     """The targets of ``mesh`` by the named rule: ``interpolate`` (this module), ``limit`` (the
-    Catmull–Clark limit of the mesh as a control cage, :mod:`g1patch.targets.limit`) or ``legacy``."""
+    Catmull–Clark limit of the mesh as a control cage, :mod:`g1patch.targets.limit`) or
+    ``legacy``."""
     check_choice("shape", shape, SHAPES)
     if shape == "legacy":
         return legacy_targets(mesh, tangents)

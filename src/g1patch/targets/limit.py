@@ -19,8 +19,8 @@
   ``b11 = (4A + 2B + 2D + C)/9`` at corner A of face (A, B, C, D) of the cage (the tensor product
   of the curve rule ``(2P_0 + P_1)/3``), exactly; elsewhere the four interior points of the
   bicubic with those boundary curves that fit the exact limit samples inside the face in the
-  same weighted sense, with a larger share ρ (:data:`_PARAMETRIC_INTERIOR`) (a 12 × 12 solve per face). The Gregory assembly then moves them as far as
-  G1 requires.
+  same weighted sense, with a larger share ρ (:data:`_PARAMETRIC_INTERIOR`) (a 12 × 12 solve per
+  face). The Gregory assembly then moves them as far as G1 requires.
 
 Every manifold quad mesh gets valid targets: a fitted fan that does not turn counter-clockwise
 falls back to the limit star, and where the two limit tangents of a vertex are parallel (a
@@ -114,18 +114,21 @@ def bspline_slots(mesh: QuadMesh) -> BoolArray:
 
 
 def regular_faces(topology: QuadTopology) -> BoolArray:
-    """Faces whose four corners are interior vertices of valence 4: their limit is the uniform bicubic B-spline."""
+    """Faces whose four corners are interior vertices of valence 4: their limit is the uniform
+    bicubic B-spline."""
     regular = ~topology.is_boundary_vertex & (topology.face_count == 4)
     return regular[topology.faces].all(axis=1)
 
 
 def _weigh(r: FloatArray, n: FloatArray) -> FloatArray:
-    """``W r`` with ``W = n nᵀ + ρ I``: the residual's normal part, plus :data:`_PARAMETRIC_EDGE` of all of it."""
+    """``W r`` with ``W = n nᵀ + ρ I``: the residual's normal part, plus :data:`_PARAMETRIC_EDGE` of
+    all of it."""
     return _dot(r, n)[..., None] * n + _PARAMETRIC_EDGE * r
 
 
 def _plane_bases(normals: FloatArray, a: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Orthonormal ``(e1, e2)`` of each tangent plane, e1 along ``a`` projected (any direction in the plane where that vanishes)."""
+    """Orthonormal ``(e1, e2)`` of each tangent plane, e1 along ``a`` projected (any direction in
+    the plane where that vanishes)."""
     e1 = a - _dot(a, normals)[:, None] * normals
     length = np.linalg.norm(e1, axis=1, keepdims=True)
     other = np.cross(
@@ -245,13 +248,13 @@ def _fit_tangents(
     slots: tuple[IntArray, IntArray],
     h: IntArray,
 ) -> FloatArray:
-    """The free slot tangents fitted in their tangent planes: per interior edge A → B with a free end
-    the least-squares fit of ``H(s) = B0 A + B1 (A + t_A/3) + B2 (B + t_B/3) + B3 B`` to the limit
-    curve samples, ``t = α e1 + β e2`` at a free end (a 4 × 4 solve per edge; ``(e1, e2)`` per
+    """The free slot tangents fitted in their tangent planes: per interior edge A → B with a free
+    end the least-squares fit of ``H(s) = B0 A + B1 (A + t_A/3) + B2 (B + t_B/3) + B3 B`` to the
+    limit curve samples, ``t = α e1 + β e2`` at a free end (a 4 × 4 solve per edge; ``(e1, e2)`` per
     slot, :func:`_plane_bases` of the normal of the slot's sector, ``planes[plane_of[s]]``, or
-    ``planes[s]`` without ``plane_of``), the other end
-    fixed; ``samples[row[f]]`` holds face f's grid of limit samples; ``slots``: :func:`~g1patch.targets.halfedge_slots`,
-    ``h``: :func:`_fitted_edges`."""
+    ``planes[s]`` without ``plane_of``), the other end fixed; ``samples[row[f]]`` holds face f's
+    grid of limit samples; ``slots``: :func:`~g1patch.targets.halfedge_slots`, ``h``:
+    :func:`_fitted_edges`."""
     topology = mesh.topology
     slot_out, slot_in = slots
     out = t.copy()
@@ -400,7 +403,8 @@ def _touched(mesh: QuadMesh) -> BoolArray:
 
 def _sector_slots(mesh: QuadMesh, seams: BoolArray) -> tuple[Sectors, BoolArray, BoolArray]:
     """The sectors of the creased vertices, which slots bound one (their tangent is the crease
-    curve's, exact), and which inner slots are exact B-spline ones (a crease sector of two faces)."""
+    curve's, exact), and which inner slots are exact B-spline ones (a crease sector of two
+    faces)."""
     topology = mesh.topology
     found = sectors(topology, seams)
     slot_vertex = slot_vertices(topology)
@@ -423,7 +427,8 @@ def _sector_slots(mesh: QuadMesh, seams: BoolArray) -> tuple[Sectors, BoolArray,
 
 
 def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
-    """The Catmull–Clark limit targets of ``mesh`` (module docstring); ``levels`` of refinement for the fits."""
+    """The Catmull–Clark limit targets of ``mesh`` (module docstring); ``levels`` of refinement for
+    the fits."""
     topology = mesh.topology
     slot_vertex = slot_vertices(topology)
     limit = limit_data(mesh)
@@ -514,8 +519,9 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
 
 
 def _bspline_interior(mesh: QuadMesh) -> FloatArray:
-    """The uniform B-spline's interior Bézier points of every face as both edges' targets, (F, 4, 2, 3):
-    ``b11 = (4A + 2B + 2D + C)/9`` at corner A of face (A, B, C, D); by :func:`_interior_kernel` on large meshes."""
+    """The uniform B-spline's interior Bézier points of every face as both edges' targets, (F, 4, 2,
+    3): ``b11 = (4A + 2B + 2D + C)/9`` at corner A of face (A, B, C, D); by :func:`_interior_kernel`
+    on large meshes."""
     topology = mesh.topology
     out = np.empty((topology.n_faces, 4, 2, 3))
     if _kernels_wanted(topology):
@@ -534,8 +540,9 @@ def _bspline_interior(mesh: QuadMesh) -> FloatArray:
 
 
 def _kernels_wanted(topology: QuadTopology) -> bool:
-    """Whether the passes over every slot and face run as numba kernels: as the limit stencils', from
-    :data:`~g1patch.subdivision.KERNEL_VERTICES` vertices on (their compile, once per install, costs more below)."""
+    """Whether the passes over every slot and face run as numba kernels: as the limit stencils',
+    from :data:`~g1patch.subdivision.KERNEL_VERTICES` vertices on (their compile, once per install,
+    costs more below)."""
     return topology.n_vertices >= subdivision.KERNEL_VERTICES
 
 

@@ -1,4 +1,5 @@
-"""Interpolating Catmull–Clark targets: the limit surface of a solved cage that passes through the mesh vertices.
+"""Interpolating Catmull–Clark targets: the limit surface of a solved cage that passes through the
+mesh vertices.
 
 Halstead, Kass and DeRose (SIGGRAPH 1993), and Rhino's interpolating SubD: the mesh's vertices V
 are not the control cage but the limit positions wanted. The limit position of every cage vertex
@@ -82,10 +83,10 @@ def limit_matrix(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> sp.csr_m
     (module docstring for its rows), assembled directly from the half-edges: every half-edge h
     from v adds ``4/(n(n + 5))`` at its target and ``1/(n(n + 5))`` at the corner opposite v in
     its face to row v of a smooth vertex; a sharp edge (a, b) adds 1/6 at (a, b) where a is a
-    crease vertex, and at (b, a) where b is. Rules as in :mod:`g1patch.subdivision`, features from the
-    mesh's tags (edge sharpness from ``sharpness`` where given): a vertex is a corner with more than
-    two sharp edges, where it is tagged infinitely sharp or where the boundary mode makes it one, a
-    crease with two, smooth otherwise. A semi-sharp edge or vertex (0 < s < 10) raises
+    crease vertex, and at (b, a) where b is. Rules as in :mod:`g1patch.subdivision`, features from
+    the mesh's tags (edge sharpness from ``sharpness`` where given): a vertex is a corner with more
+    than two sharp edges, where it is tagged infinitely sharp or where the boundary mode makes it
+    one, a crease with two, smooth otherwise. A semi-sharp edge or vertex (0 < s < 10) raises
     :class:`InputError`: its limit reads more than the 1-ring masks (refine past it first)."""
     topology = mesh.topology
     nv = topology.n_vertices
@@ -98,8 +99,10 @@ def limit_matrix(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> sp.csr_m
         semi = np.flatnonzero((values > 0) & (values < INFINITE_SHARPNESS))
         if semi.size:
             raise InputError(
-                f"limit_matrix: {name} {semi[0]} is semi-sharp ({values[semi[0]]:g}; {semi.size} such); the limit "
-                "stencil covers smooth and infinitely sharp (≥ 10) features only: refine the mesh past its semi-sharp "
+                f"limit_matrix: {name} {semi[0]} is semi-sharp ({values[semi[0]]:g}; {semi.size} "
+                "such); the limit "
+                "stencil covers smooth and infinitely sharp (≥ 10) features only: refine the mesh "
+                "past its semi-sharp "
                 "levels first (subdivision.refine)"
             )
     sharp = sharp_edges(mesh, sharpness)
@@ -136,9 +139,11 @@ class CageSolution:
     """The solved cage of :func:`interpolating_cage`.
 
     * ``cage`` (V, 3): the control points C, same topology and tags as the mesh;
-    * ``residual``: ``max_v |(L C − V)_v| / diag(V)``, measured with :func:`~g1patch.subdivision.limit_points`;
+    * ``residual``: ``max_v |(L C − V)_v| / diag(V)``, measured with
+      :func:`~g1patch.subdivision.limit_points`;
     * ``condition``: the 1-norm condition estimate of L (``inf`` where the LU found it singular);
-    * ``solver``: ``lu`` (sparse LU) or ``lsmr`` (least-norm correction, L singular or ill conditioned).
+    * ``solver``: ``lu`` (sparse LU) or ``lsmr`` (least-norm correction, L singular or ill
+      conditioned).
     """
 
     cage: FloatArray
@@ -148,7 +153,8 @@ class CageSolution:
 
 
 def _condition(matrix: sp.csr_matrix, lu: SuperLU) -> float:
-    """``κ₁ = ‖L‖₁ · est ‖L⁻¹‖₁`` by Hager–Higham's estimator (``onenormest``) on the LU's solves."""
+    """``κ₁ = ‖L‖₁ · est ‖L⁻¹‖₁`` by Hager–Higham's estimator (``onenormest``) on the LU's
+    solves."""
     size = matrix.shape[0]
     inverse = LinearOperator(
         (size, size),
@@ -160,8 +166,9 @@ def _condition(matrix: sp.csr_matrix, lu: SuperLU) -> float:
 
 
 def _solve(matrix: sp.csr_matrix, rhs: FloatArray) -> tuple[FloatArray, float, Solver]:
-    """The correction D with ``L D = rhs`` (3 columns) and κ₁: LU where ``κ₁ ≤`` :data:`MAX_CONDITION`,
-    else the least-norm LSMR solution per coordinate (κ₁ = ∞ where SuperLU finds L exactly singular)."""
+    """The correction D with ``L D = rhs`` (3 columns) and κ₁: LU where ``κ₁ ≤``
+    :data:`MAX_CONDITION`, else the least-norm LSMR solution per coordinate (κ₁ = ∞ where SuperLU
+    finds L exactly singular)."""
     try:
         lu = splu(matrix.tocsc())
     except RuntimeError:  # SuperLU: "Factor is exactly singular"
@@ -200,10 +207,14 @@ def interpolating_cage(mesh: QuadMesh) -> CageSolution:
     if not residual <= MAX_RESIDUAL:
         singular = ", numerically singular" if condition > _SINGULAR else ""
         raise ConstructionError(
-            f"limit-interpolate: no Catmull–Clark cage of this mesh's topology has its vertices as limit points: the limit "
-            f"stencil has 1-norm condition estimate {condition:.1e}{singular}, and the closest cage ({solver}) leaves a "
-            f"relative residual of {residual:.1e} > {MAX_RESIDUAL:g}. On a cage whose vertices all have valence 3 (a cube) "
-            "the checkerboard mode is in the stencil's null space and only vertices symmetric to it can be interpolated; "
+            "limit-interpolate: no Catmull–Clark cage of this mesh's topology has its vertices "
+            "as limit points: the limit "
+            f"stencil has 1-norm condition estimate {condition:.1e}{singular}, and the closest "
+            f"cage ({solver}) leaves a "
+            f"relative residual of {residual:.1e} > {MAX_RESIDUAL:g}. On a cage whose vertices "
+            "all have valence 3 (a cube) "
+            "the checkerboard mode is in the stencil's null space and only vertices symmetric to "
+            "it can be interpolated; "
             "use refine=1 (--refine 1) first, or shape 'interpolate'"
         )
     return CageSolution(cage.vertices, residual, condition, solver)
@@ -211,8 +222,9 @@ def interpolating_cage(mesh: QuadMesh) -> CageSolution:
 
 def limit_interpolate_targets(mesh: QuadMesh) -> Targets:
     """Targets through the mesh vertices on the Catmull–Clark limit of the interpolating cage
-    (:func:`interpolating_cage`): :func:`~g1patch.targets.limit.limit_targets` of the cage, positions
-    set to the vertices exactly. Logs the residual, condition estimate and solver at INFO."""
+    (:func:`interpolating_cage`): :func:`~g1patch.targets.limit.limit_targets` of the cage,
+    positions set to the vertices exactly. Logs the residual, condition estimate and solver at
+    INFO."""
     solution = interpolating_cage(mesh)
     _logger.info(
         "limit-interpolate: cage solved by %s, relative residual %.1e, condition estimate %.1e",

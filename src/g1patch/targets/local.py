@@ -56,7 +56,8 @@ def in_vertex_planes(
     out: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """Slot vectors moved into their vertex's tangent plane, ``t − (N·t) N`` (N the unit normal of
-    the slot's vertex, slots ``offsets[v]:offsets[v + 1]``), by a numba kernel; ``out`` may be ``tangents``."""
+    the slot's vertex, slots ``offsets[v]:offsets[v + 1]``), by a numba kernel; ``out`` may be
+    ``tangents``."""
     out = np.empty_like(tangents) if out is None else out
     jit_kernel(_plane_kernel)(tangents, normals, offsets, out)
     return out
@@ -80,9 +81,9 @@ def _plane_kernel(
 
 
 def slot_tables(topology: QuadTopology) -> tuple[NDArray[np.int32], NDArray[np.int32]]:
-    """:func:`g1patch.targets.halfedge_slots` by a numba kernel, as int32 (half the memory): the ring
-    slot of each half-edge A → B at A (``slot_out``), and of B → A at B (``slot_in``; the last slot
-    of B where A → B is a boundary half-edge)."""
+    """:func:`g1patch.targets.halfedge_slots` by a numba kernel, as int32 (half the memory): the
+    ring slot of each half-edge A → B at A (``slot_out``), and of B → A at B (``slot_in``; the last
+    slot of B where A → B is a boundary half-edge)."""
     slot_out = np.empty(topology.n_halfedges, dtype=np.int32)
     slot_in = np.empty(topology.n_halfedges, dtype=np.int32)
     jit_kernel(_slots_kernel)(

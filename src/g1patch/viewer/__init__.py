@@ -1,4 +1,5 @@
-"""An interactive viewer: one self-contained HTML file per network (``g1patch view``, ``Surface.view``).
+"""An interactive viewer: one self-contained HTML file per network (``g1patch view``,
+``Surface.view``).
 
 The page draws the surface with WebGL (three.js, vendored: see ``vendor/README.md``) and needs no
 network when opened: three.js and the data are inlined (an import map of ``data:`` URLs for the
@@ -66,7 +67,8 @@ __all__ = [
 #: three.js release inlined into every page (vendor/README.md says how to refresh it)
 VENDORED_THREE_VERSION = "0.170.0"
 MODES = ("shaded", "zebra", "deviation")
-#: bytes of the page per grid sample (float32 position and normal, base64) and per patch (4 side values)
+# : bytes of the page per grid sample (float32 position and normal, base64) and per patch (4 side
+# values)
 BYTES_PER_SAMPLE = 32
 BYTES_PER_PATCH = 22
 #: samples per block of patch evaluation
@@ -89,7 +91,8 @@ _DEFAULTS: dict[str, Any] = {
 
 
 class ViewTooLargeError(InputError):
-    """A page would hold more than :data:`~g1patch.tessellate.TRIANGLE_BUDGET` triangles and was not forced."""
+    """A page would hold more than :data:`~g1patch.tessellate.TRIANGLE_BUDGET` triangles and was not
+    forced."""
 
 
 @dataclass(frozen=True)
@@ -134,7 +137,8 @@ def _check_network(network: object) -> PatchNetwork:
 
 
 def page_size(n_patches: int, resolution: int) -> int:
-    """Bytes of the data in a page of ``n_patches`` at ``resolution``, about (three.js adds ~0.95 MB)."""
+    """Bytes of the data in a page of ``n_patches`` at ``resolution``, about (three.js adds ~0.95
+    MB)."""
     return BYTES_PER_SAMPLE * n_patches * resolution * resolution + BYTES_PER_PATCH * n_patches
 
 
@@ -153,7 +157,8 @@ def _resolution(n_patches: int, resolution: object, force: bool) -> int:
     triangles = triangle_count(n_patches, r)
     if triangles > TRIANGLE_BUDGET and not force:
         raise ViewTooLargeError(
-            f"{n_patches} patches at {r} samples a side would make a page of {_size_text(triangles)} triangles "
+            f"{n_patches} patches at {r} samples a side would make a page of "
+            f"{_size_text(triangles)} triangles "
             f"(~{_size_text(page_size(n_patches, r), 'B')}), above the viewer's budget of "
             f"{_size_text(TRIANGLE_BUDGET)} triangles; pass force=True (--force)"
             + (" or a lower resolution" if r > 2 else " (2 samples a side is the coarsest)")
@@ -197,7 +202,8 @@ def _sample(network: PatchNetwork, r: int) -> _Samples:
 
 
 def _side_values(network: PatchNetwork, report: ContinuityReport) -> NDArray[np.float32]:
-    """Per patch side (N, 4): its edge's G1 angle in degrees, -1 on a seam, -2 on an open or collapsed side."""
+    """Per patch side (N, 4): its edge's G1 angle in degrees, -1 on a seam, -2 on an open or
+    collapsed side."""
     from ..render import _band_angles
 
     angles, seams = _band_angles(network, report)
@@ -273,7 +279,8 @@ def _verdict(report: ContinuityReport) -> str:
     parts = [f"{report.folds} folded patches"] if report.folds else []
     if not report.is_g1():
         parts.append(
-            f"not G1: kinks up to {max(report.max_edge_angle_deg, report.max_corner_angle_deg):.3g}°"
+            "not G1: kinks up to "
+            f"{max(report.max_edge_angle_deg, report.max_corner_angle_deg):.3g}°"
         )
     if not report.seams_closed():
         parts.append(f"seams open by {report.seam_g0_max:.2g} of the diagonal")
