@@ -316,7 +316,7 @@ def test_check_refuses_other_objects_by_name() -> None:
     from g1patch.continuity import check
 
     with pytest.raises(
-        g1patch.InputError, match=r"network: expected a Surface, PatchNetwork.*got a dict"
+        g1patch.InputError, match=r"network: expected a PatchNetwork, PatchSet.*got a dict"
     ):
         check({})  # type: ignore[arg-type]
     with pytest.raises(g1patch.InputError, match=r"surface: expected a Surface.*got a list"):
@@ -393,9 +393,9 @@ def test_jupyter_displays(cube_obj: Path, cube: g1patch.Surface) -> None:
 def test_jupyter_skips_large_networks(
     cube: g1patch.Surface, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import g1patch.api
+    import g1patch.display
 
-    monkeypatch.setattr(g1patch.api, "PREVIEW_MAX_PATCHES", 5)
+    monkeypatch.setattr(g1patch.display, "PREVIEW_MAX_PATCHES", 5)
     assert cube._repr_png_() is None  # the text repr is shown instead
 
 

@@ -3,8 +3,8 @@
 ::
 
     import g1patch
-    surface = g1patch.smooth("mesh.obj")     # a path, (vertices, faces), a meshio.Mesh, a trimesh,
-    a QuadMesh print(surface.check())                   # G1 angles, gaps, folds, fairness
+    surface = g1patch.smooth("mesh.obj")     # a path, (vertices, faces), a meshio.Mesh, a trimesh…
+    print(surface.check())                   # G1 angles, gaps, folds, fairness
     surface.export("mesh.step")              # .npz .obj .ply .stl .step .iges .bpt, by suffix
     surface.render("zebra.png", mode="zebra")
 
@@ -16,6 +16,8 @@ deep modules), so ``import g1patch`` itself is fast; the deep modules stay impor
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
+
+from .display import register_painter
 
 if TYPE_CHECKING:  # pragma: no cover
     from .api import Surface, as_mesh, as_network, check, export, read, smooth, view
@@ -76,3 +78,21 @@ def __getattr__(name: str) -> Any:
 
 def __dir__() -> list[str]:
     return sorted({*globals(), *__all__})
+
+
+def _paint_mesh(mesh: QuadMesh) -> bytes:
+    from .api import mesh_png
+
+    return mesh_png(mesh)
+
+
+def _paint_network(network: PatchNetwork) -> bytes:
+    from .api import network_png
+
+    return network_png(network)
+
+
+# Jupyter pictures of the deep modules' objects are drawn by render, a high layer: the objects ask
+# g1patch.display, and the root (a shell, like the CLI) tells it who draws.
+register_painter("mesh", _paint_mesh)
+register_painter("network", _paint_network)

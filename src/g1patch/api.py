@@ -5,8 +5,8 @@ One import does the whole job, in the style of ``trimesh.load`` and ``meshio.rea
     import g1patch
     surface = g1patch.smooth("mesh.obj")            # or (vertices, faces), a meshio.Mesh, a trimesh
     print(surface.check())                          # the continuity report
-    surface.export("mesh.step")                     # by suffix: .npz .obj .ply .stl .step .iges
-    .bpt surface.render("zebra.png", mode="zebra")
+    surface.export("mesh.step")                     # by suffix: .npz .obj .ply .stl .step …
+    surface.render("zebra.png", mode="zebra")
 
 A :class:`Surface` is a thin wrapper around the :class:`~g1patch.network.PatchNetwork` it holds
 (``surface.network``), so everything in the deep modules keeps working on that. Heavy modules
@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import logging
 import os
-import reprlib
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
@@ -26,7 +25,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import FormatError, G1PatchError, InputError
+from .display import PREVIEW_SIZE, describe, picture
+from .errors import FormatError, InputError
 
 if TYPE_CHECKING:  # pragma: no cover
     from .continuity import ContinuityReport
@@ -62,130 +62,12 @@ TRIANGLE_SUFFIXES = (".obj", ".ply", ".stl")
 CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
 #: what :meth:`Surface.export` writes, by suffix
 EXPORT_SUFFIXES = (".npz", *TRIANGLE_SUFFIXES, *CAD_SUFFIXES, ".bpt")
-#: pixels of the pictures Jupyter shows (``_repr_png_``)
-PREVIEW_SIZE = (400, 400)
-#: networks (or meshes, in faces) larger than this are not drawn automatically in Jupyter: the
-#: text repr is shown instead, and :meth:`Surface.render` draws them on request
-PREVIEW_MAX_PATCHES = 20_000
 
 _SOURCES = (
     "a mesh file path (.obj, .ply, .off), a (vertices, faces) pair of arrays or lists, a "
     "meshio.Mesh, "
     "an object with vertices and faces (trimesh), a pyvista.PolyData or a QuadMesh"
 )
-
-
-# ------------------------------------------------------------------------------- descriptions
-
-
-def describe(value: object) -> str:
-    """A short phrase naming ``value`` for an error message: its type and a repr of at most ~60
-    characters (arrays by shape and dtype, never their contents)."""
-    kind = type(value)
-    name = (
-        kind.__qualname__
-        if kind.__module__ == "builtins"
-        else f"{kind.__module__.split('.')[0]}.{kind.__qualname__}"
-    )
-    if isinstance(value, np.ndarray):
-        return f"a numpy.ndarray of shape {value.shape} and dtype {value.dtype}"
-    short = reprlib.Repr()
-    short.maxstring, short.maxother, short.maxlist, short.maxtuple, short.maxdict = 40, 40, 4, 4, 3
-    try:
-        text = short.repr(value)
-    except Exception:  # a repr that fails says nothing useful
-        text = "…"
-    if len(text) > 60:
-        text = text[:59] + "…"
-    article = "an" if name[:1].lower() in "aeiou" else "a"
-    return f"{article} {name} ({text})"
-
-
-def _number(value: float) -> str:
-    return f"{float(value) + 0.0:.4g}"  # + 0.0: no "-0"
-
-
-def bbox_text(low: Any, high: Any) -> str:
-    """``"bbox (-1, -1, -1)…(1, 1, 1)"``, 4 significant digits."""
-    low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
-    if low.shape != (3,) or not (np.isfinite(low).all() and np.isfinite(high).all()):
-        return "bbox empty"
-    return f"bbox ({', '.join(map(_number, low))})…({', '.join(map(_number, high))})"
-
-
-def short_source(source: object) -> str:
-    """The file name of a source path, at most 40 characters."""
-    name = Path(str(source)).name or str(source)
-    return name if len(name) <= 40 else name[:39] + "…"
-
-
-def patch_kind(patches: object) -> str:
-    """``"gregory"`` for Gregory patches, the form (``"bezier"``, ``"hermite"``, ``"bspline"``) for
-    bicubics."""
-    return getattr(patches, "kind", None) or str(getattr(patches, "form", type(patches).__name__))
-
-
-#: samples per patch side of the box in reprs: corners, edge midpoints and the centre, where a
-#: patch of a smooth surface bulges most
-BOX_SAMPLES = 3
-_BLOCK = 1 << 16
-
-
-def surface_box(patches: Any, samples: int = BOX_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
-    """(lowest, highest) corner of the box around the surface sampled on a ``samples²`` grid per
-    patch (world coordinates): one batched product of the grid's weights with the stored points,
-    a block of patches at a time and without copies, so a million patches take well under a
-    second."""
-    from .basis import basis_values
-    from .gregory import GregoryPatchSet, gregory_weights
-
-    t = np.linspace(0.0, 1.0, samples)
-    if isinstance(patches, GregoryPatchSet):
-        weights = gregory_weights(t[:, None], t[None, :]).reshape(-1, 20)
-        points = patches.points
-    else:
-        values = basis_values(patches.form, t)  # (samples, 4)
-        weights = np.einsum("ia,jb->ijab", values, values).reshape(-1, 16)
-        points = patches.control.reshape(-1, 16, 3)
-    low, high = np.full(3, np.inf), np.full(3, -np.inf)
-    for start in range(0, len(points), _BLOCK):
-        sampled = np.matmul(weights, points[start : start + _BLOCK]).reshape(-1, 3)
-        low, high = np.minimum(low, sampled.min(axis=0)), np.maximum(high, sampled.max(axis=0))
-    frame = getattr(patches, "frame", None)
-    if frame is not None and len(
-        points
-    ):  # x ↦ c + s x with s > 0 keeps the order of every coordinate
-        low, high = frame.to_world(low), frame.to_world(high)
-    return low, high
-
-
-def network_box(network: PatchNetwork) -> tuple[np.ndarray, np.ndarray]:
-    """The box of a network's surface (:func:`surface_box`)."""
-    return surface_box(network.patches)
-
-
-def network_repr(
-    network: PatchNetwork, name: str = "PatchNetwork", notes: Sequence[str] = ()
-) -> str:
-    """``<PatchNetwork 6 gregory patches, interpolate, bbox (-1.732, -1.732, -1.732)…(1.732, 1.732,
-    1.732)>``."""
-    provenance = network.provenance
-    method = provenance.get("method")
-    kind = method if method and method != "file" else patch_kind(network.patches)
-    parts = [f"{network.n_patches} {kind} patches"]
-    if provenance.get("shape"):
-        parts.append(provenance["shape"])
-    elif provenance.get("source"):
-        parts.append(f"from {short_source(provenance['source'])}")
-    if network.n_seams:
-        parts.append(f"{network.n_seams} seams")
-    parts.extend(notes)
-    if network.n_patches:
-        parts.append(bbox_text(*network_box(network)))
-    return f"<{name} {', '.join(parts)}>"
-
-
-# ------------------------------------------------------------------------------- pictures
 
 
 def _png_via_file(draw: Any) -> bytes:
@@ -221,19 +103,6 @@ def mesh_png(mesh: QuadMesh, size: tuple[int, int] = PREVIEW_SIZE) -> bytes:
     normals = np.repeat(normal, 6, axis=0)
     flat = TriangleMesh(points, normals, np.arange(len(points), dtype=np.int64).reshape(-1, 3))
     return _png_via_file(lambda path: render_surfaces(path, [flat], [None], size=size))  # type: ignore[list-item]
-
-
-def preview_png(draw: Any, count: int) -> bytes | None:
-    """``draw()`` for Jupyter's ``_repr_png_``: None (the text repr is shown instead) above
-    :data:`PREVIEW_MAX_PATCHES` items, or when the picture cannot be made (no matplotlib, an
-    empty or degenerate surface): a display hook must not raise."""
-    if count > PREVIEW_MAX_PATCHES:
-        return None
-    try:
-        return draw()
-    except (G1PatchError, OSError, ValueError, ArithmeticError, RuntimeError):
-        logger.info("no picture: drawing failed", exc_info=True)
-        return None
 
 
 # ------------------------------------------------------------------------------- inputs
@@ -489,30 +358,19 @@ def as_network(surface: Any, name: str = "surface") -> PatchNetwork:
     """The :class:`~g1patch.network.PatchNetwork` of a Surface, a network (itself), a
     :class:`~g1patch.patches.PatchSet` or a :class:`~g1patch.gregory.GregoryPatchSet` (their
     shared edges found by matching boundary control points,
-    :func:`~g1patch.network.network_from_patch_points`), or a ``.npz`` / ``.bpt`` file name.
+    :func:`~g1patch.network.network_of`), or a ``.npz`` / ``.bpt`` file name.
     Anything else raises :class:`InputError` naming it."""
-    from dataclasses import replace
+    from .network import network_of
 
-    from .gregory import GregoryPatchSet
-    from .network import PatchNetwork, network_from_patch_points
-    from .patches import PatchSet
-
-    if isinstance(surface, PatchNetwork):
-        return surface
     if isinstance(surface, Surface):
         return surface.network
-    if isinstance(surface, PatchSet):
-        return network_from_patch_points(surface, source="PatchSet")
-    if isinstance(surface, GregoryPatchSet):
-        # the boundary curves are the Bézier net's boundary rows: match those, keep the Gregory
-        # patches
-        bezier = PatchSet(surface.to_bezier_control(), "bezier", surface.frame)
-        return replace(network_from_patch_points(bezier, source="GregoryPatchSet"), patches=surface)
+    if isinstance(surface, _surface_types()):
+        return network_of(surface, name)
     if isinstance(surface, (str, os.PathLike)) and Path(surface).suffix.lower() in NETWORK_SUFFIXES:
         return read(surface)  # type: ignore[return-value]
     raise InputError(
-        f"{name}: expected a Surface, PatchNetwork, PatchSet, GregoryPatchSet or a network file "
-        f"(.npz, .bpt), got {describe(surface)}"
+        f"{name}: expected a Surface, PatchNetwork, PatchSet, GregoryPatchSet or a network "
+        f"file (.npz, .bpt), got {describe(surface)}"
     )
 
 
@@ -580,15 +438,15 @@ class Surface:
     @property
     def bounding_box(self) -> tuple[np.ndarray, np.ndarray]:
         """(lowest, highest) corner of the box around the surface, sampled at 3 × 3 points a patch
-        (corners, edge midpoints, centre; :func:`surface_box`)."""
-        return network_box(self.network)
+        (corners, edge midpoints, centre; :meth:`~g1patch.patches.PatchSet.box`)."""
+        return self.network.patches.box()
 
     def __repr__(self) -> str:
         repaired = ("repaired",) if self.repairs else ()  # what: .repairs
-        return network_repr(self.network, "Surface", repaired)
+        return self.network.describe("Surface", repaired)
 
     def _repr_png_(self) -> bytes | None:
-        return preview_png(lambda: network_png(self.network), self.n_patches)
+        return picture("network", self.network, self.n_patches)
 
     # -- what one does with it -------------------------------------------------------------
 

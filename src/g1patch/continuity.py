@@ -55,7 +55,7 @@ from ._grid import BLOCK_POINTS
 from .basis import basis_values
 from .errors import InputError
 from .gregory import BEZIER_INDEX, INTERIOR_INDEX, GregoryPatchSet, gregory_weights
-from .network import Patches, PatchNetwork, edge_parameters
+from .network import Patches, PatchNetwork, edge_parameters, network_of
 from .patches import CORNER_PARAMETERS, PatchSet
 
 __all__ = [
@@ -380,7 +380,7 @@ def check(
     called after each block. Degenerate normals, folds and fairness share the
     ``fold_samples²`` grid of every patch. A :class:`~g1patch.patches.PatchSet` or
     :class:`~g1patch.gregory.GregoryPatchSet` is measured as the network of its matching boundary
-    curves (:func:`g1patch.api.as_network`). ``compiled``: the numba kernels (see below), all edges
+    curves (:func:`g1patch.network.network_of`). ``compiled``: the numba kernels (see below), all edges
     and all patches in one pass each (``progress`` after each); False: the NumPy reference; None
     (default): the kernels from :data:`KERNEL_PATCHES` patches on.
     """
@@ -390,12 +390,7 @@ def check(
         ("chunk", chunk, 1),
     ):
         _check_count(name, value, least)
-    if not isinstance(
-        network, PatchNetwork
-    ):  # a PatchSet or GregoryPatchSet: match its shared edges
-        from .api import as_network
-
-        network = as_network(network, "network")
+    network = network_of(network, "network")  # a PatchSet or GregoryPatchSet: its shared edges
     patches = network.patches
     local = _local(patches)
     form = _evaluation_form(local) if _kernels_wanted(compiled, len(local)) else None

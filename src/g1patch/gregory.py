@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .basis import basis_values
 from .curves import CubicCurves
+from .display import BOX_SAMPLES, bbox_text, sampled_box
 from .errors import InputError, as_float_array
 from .frame import Frame, check_frame
 from .patches import CORNER_PARAMETERS, unit
@@ -165,10 +166,16 @@ class GregoryPatchSet:
     def __repr__(self) -> str:
         """``<GregoryPatchSet 6 patches, bbox (-1, -1, -1)…(1, 1, 1)>`` (the box of the surface
         sampled at 3 × 3 points a patch, world coordinates), never the arrays."""
-        from .api import bbox_text, surface_box
-
-        box = f", {bbox_text(*surface_box(self))}" if len(self) else ""
+        box = f", {bbox_text(*self.box())}" if len(self) else ""
         return f"<GregoryPatchSet {len(self)} patches{box}>"
+
+    def box(self, samples: int = BOX_SAMPLES) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(lowest, highest) corner of the box around the surface sampled on a ``samples²`` grid
+        per patch, world coordinates (:func:`g1patch.display.sampled_box`)."""
+        t = np.linspace(0.0, 1.0, samples)
+        weights = gregory_weights(t[:, None], t[None, :]).reshape(-1, 20)
+        to_world = self.frame.to_world if self.frame is not None else None
+        return sampled_box(weights, self.points, to_world)
 
     def take(self, indices: ArrayLike) -> GregoryPatchSet:
         """The patches at ``indices`` (any integer array, repeats allowed), in that order."""

@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from .display import bbox_text, picture, short_source
 from .errors import (
     DegenerateFaceError,
     InputError,
@@ -1535,8 +1536,6 @@ class QuadMesh:
     def __repr__(self) -> str:
         """``<QuadMesh 8 vertices, 6 quads, 12 edges, closed, bbox (-1, -1, -1)…(1, 1, 1),
         cube.obj>``: counts, tags, repairs, the box and the file name, never the arrays."""
-        from .api import bbox_text, short_source
-
         parts = [self.topology._counts()]
         if self.tags:
             parts.append("tags " + " ".join(dict.fromkeys(tag.name for tag in self.tags)))
@@ -1549,10 +1548,8 @@ class QuadMesh:
 
     def _repr_png_(self) -> bytes | None:
         """A small flat-shaded picture of the quads for Jupyter (None above
-        :data:`g1patch.api.PREVIEW_MAX_PATCHES` faces)."""
-        from .api import mesh_png, preview_png
-
-        return preview_png(lambda: mesh_png(self), self.n_faces)
+        :data:`g1patch.display.PREVIEW_MAX_PATCHES` faces)."""
+        return picture("mesh", self, self.n_faces)
 
     def with_vertices(self, new_vertices: ArrayLike) -> QuadMesh:
         """The same topology, tags and repair record with new positions (validated the same way)."""

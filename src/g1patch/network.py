@@ -19,13 +19,16 @@ file) ``same_direction[p, k]`` is True and the check compares normals with a fli
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .display import bbox_text, describe, patch_kind, picture, short_source
 from .errors import G1PatchError, InputError, NonManifoldError, as_float_array, as_index_array
+from .gregory import GregoryPatchSet
 from .mesh import QuadTopology
 from .patches import PatchSet
 
@@ -50,6 +53,8 @@ class Patches(Protocol):
     def evaluate_grid(
         self, u: ArrayLike, v: ArrayLike | None = None, du: int = 0, dv: int = 0
     ) -> NDArray[np.float64]: ...
+
+    def box(self, samples: int = ...) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
 
 
 def edge_parameters(edge: NDArray[np.int64], t: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -196,16 +201,29 @@ class PatchNetwork:
         """``<PatchNetwork 6 gregory patches, interpolate, bbox (-1, -1, -1)…(1, 1, 1)>``: counts,
         method and shape (or source), seams, the surface's box (3 × 3 samples a patch); never the
         arrays."""
-        from .api import network_repr
+        return self.describe()
 
-        return network_repr(self)
+    def describe(self, name: str = "PatchNetwork", notes: Sequence[str] = ()) -> str:
+        """The one-line repr under ``name``, with ``notes`` before the box."""
+        provenance = self.provenance
+        method = provenance.get("method")
+        kind = method if method and method != "file" else patch_kind(self.patches)
+        parts = [f"{self.n_patches} {kind} patches"]
+        if provenance.get("shape"):
+            parts.append(provenance["shape"])
+        elif provenance.get("source"):
+            parts.append(f"from {short_source(provenance['source'])}")
+        if self.n_seams:
+            parts.append(f"{self.n_seams} seams")
+        parts.extend(notes)
+        if self.n_patches:
+            parts.append(bbox_text(*self.patches.box()))
+        return f"<{name} {', '.join(parts)}>"
 
     def _repr_png_(self) -> bytes | None:
         """A small shaded picture for Jupyter (None above
-        :data:`g1patch.api.PREVIEW_MAX_PATCHES`)."""
-        from .api import network_png, preview_png
-
-        return preview_png(lambda: network_png(self), self.n_patches)
+        :data:`g1patch.display.PREVIEW_MAX_PATCHES`)."""
+        return picture("network", self, self.n_patches)
 
     @property
     def n_patches(self) -> int:
@@ -382,3 +400,23 @@ def network_from_mesh(
         provenance=dict(provenance or {}),
     )
     return network if seam_edges is None else network.with_seams(seam_edges)
+
+
+def network_of(
+    patches: PatchNetwork | PatchSet | GregoryPatchSet, name: str = "surface"
+) -> PatchNetwork:
+    """A network itself, or the network of a :class:`~g1patch.patches.PatchSet` or
+    :class:`~g1patch.gregory.GregoryPatchSet` (shared edges found by matching boundary control
+    points, :func:`network_from_patch_points`; a Gregory set's boundary curves are its Bézier net's
+    boundary rows, and the Gregory patches are kept). Anything else raises :class:`InputError`."""
+    if isinstance(patches, PatchNetwork):
+        return patches
+    if isinstance(patches, PatchSet):
+        return network_from_patch_points(patches, source="PatchSet")
+    if isinstance(patches, GregoryPatchSet):
+        bezier = PatchSet(patches.to_bezier_control(), "bezier", patches.frame)
+        matched = network_from_patch_points(bezier, source="GregoryPatchSet")
+        return replace(matched, patches=patches)
+    raise InputError(
+        f"{name}: expected a PatchNetwork, PatchSet or GregoryPatchSet, got {describe(patches)}"
+    )

@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 from . import _grid
 from .basis import FORMS, Form, basis_matrix, basis_values, check_order, conversion_matrix
 from .curves import CubicCurves
+from .display import BOX_SAMPLES, bbox_text, sampled_box
 from .errors import InputError, as_float_array, check_choice
 from .frame import Frame, check_frame
 
@@ -89,10 +90,16 @@ class PatchSet:
     def __repr__(self) -> str:
         """``<PatchSet 6 bezier patches, bbox (-1, -1, -1)…(1, 1, 1)>`` (the box of the surface
         sampled at 3 × 3 points a patch, world coordinates), never the arrays."""
-        from .api import bbox_text, surface_box
-
-        box = f", {bbox_text(*surface_box(self))}" if len(self) else ""
+        box = f", {bbox_text(*self.box())}" if len(self) else ""
         return f"<PatchSet {len(self)} {self.form} patches{box}>"
+
+    def box(self, samples: int = BOX_SAMPLES) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(lowest, highest) corner of the box around the surface sampled on a ``samples²`` grid
+        per patch, world coordinates (:func:`g1patch.display.sampled_box`)."""
+        values = basis_values(self.form, np.linspace(0.0, 1.0, samples))  # (samples, 4)
+        weights = np.einsum("ia,jb->ijab", values, values).reshape(-1, 16)
+        to_world = self.frame.to_world if self.frame is not None else None
+        return sampled_box(weights, self.control.reshape(-1, 16, 3), to_world)
 
     def take(self, indices: ArrayLike) -> PatchSet:
         """The patches at ``indices`` (any integer array, repeats allowed), in that order."""
@@ -359,8 +366,8 @@ def hs_twists(hermite: ArrayLike) -> NDArray[np.float64]:
 def closure(hermite: ArrayLike) -> NDArray[np.float64]:
     """The closure vector of an S-/HS-patch with Hermite control ``(N, 4, 4, 3)``, shape (N, 3).
 
-        C = 4δ + [p_u(0,1) + p_u(1,1) − p_u(0,0) − p_u(1,0)] + [p_v(1,0) + p_v(1,1) − p_v(0,0) −
-        p_v(0,1)]
+        C = 4δ + [p_u(0,1) + p_u(1,1) − p_u(0,0) − p_u(1,0)]
+               + [p_v(1,0) + p_v(1,1) − p_v(0,0) − p_v(0,1)]
 
     With Coons twists the diagonal and anti-diagonal have t^4 coefficients +C and −C: both are
     cubic iff ``C = 0``. C depends on the boundary only.

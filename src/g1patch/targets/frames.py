@@ -18,8 +18,8 @@ face 2-ring has coordinates (x, y, z) of p − A, r² = x² + y². A circle thro
 plane, of curvature k in the direction x̂ = (x, y)/r, satisfies x̂-section ``r² + z² = 2z/k``, i.e.
 ``z = ½ k (r² + z²) = ½ (1 + z²/r²) k r²``; with ``k r² = (x, y) H (x, y)ᵀ`` the fit is linear:
 
-    z = g1 x + g2 y + ½ (1 + z²/r²)(h11 x² + 2 h12 xy + h22 y²) + (c1 x³ + 3c2 x²y + 3c3 xy² + c4
-    y³)/6
+    z = g1 x + g2 y + ½ (1 + z²/r²)(h11 x² + 2 h12 xy + h22 y²)
+        + (c1 x³ + 3c2 x²y + 3c3 xy² + c4 y³)/6
 
 by weighted least squares, ``w = exp(−r²/(2 h̄²))``, h̄² the mean squared projected length of the
 ring edges; the cubic only with ≥ 12 points, else the face 1-ring without it. Then
