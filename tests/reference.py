@@ -45,7 +45,9 @@ def hermite_basis_from_conditions() -> list[sp.Expr]:
     basis = []
     for i in range(4):
         target = [1 if k == i else 0 for k in range(4)]
-        solution = sp.solve([c - w for c, w in zip(conditions, target)], a, dict=True)[0]
+        solution = sp.solve([c - w for c, w in zip(conditions, target, strict=True)], a, dict=True)[
+            0
+        ]
         basis.append(sp.expand(cubic.subs(solution)))
     return basis
 
@@ -114,8 +116,8 @@ def conversion_matrix(source: str, target: str) -> sp.Matrix:
     xs = sp.symbols("x0:4")
     ys = sp.symbols("y0:4")
     difference = sp.expand(
-        sum(y * b for y, b in zip(ys, basis_polynomials(target)))
-        - sum(x * b for x, b in zip(xs, basis_polynomials(source)))
+        sum(y * b for y, b in zip(ys, basis_polynomials(target), strict=True))
+        - sum(x * b for x, b in zip(xs, basis_polynomials(source), strict=True))
     )
     equations = sp.Poly(difference, t).all_coeffs()
     (solution,) = sp.linsolve(equations, ys)
@@ -185,7 +187,7 @@ def _patch_polynomials(key) -> tuple[sp.Poly, ...]:
     M = sp.Matrix(PAPER_M_H) if form == "hermite" else basis_matrix(form)
     out = []
     for d in range(shape[-1]):
-        X = sp.Matrix(4, 4, lambda i, j: rational(control[i, j, d]))
+        X = sp.Matrix(4, 4, lambda i, j, d=d: rational(control[i, j, d]))
         A = M.T * X * M
         terms = {(3 - i, 3 - j): A[i, j] for i in range(4) for j in range(4) if A[i, j] != 0}
         out.append(sp.Poly.from_dict(terms, u, v) if terms else sp.Poly(0, u, v))

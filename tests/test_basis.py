@@ -124,8 +124,8 @@ def test_conversion_keeps_the_polynomial_exactly(source, target):
     xs = sp.symbols("x0:4")
     C = sp.Matrix(basis.exact_conversion_matrix(source, target))
     ys = C * sp.Matrix(xs)
-    before = sum(x * b for x, b in zip(xs, ref.basis_polynomials(source)))
-    after = sum(y * b for y, b in zip(ys, ref.basis_polynomials(target)))
+    before = sum(x * b for x, b in zip(xs, ref.basis_polynomials(source), strict=True))
+    after = sum(y * b for y, b in zip(ys, ref.basis_polynomials(target), strict=True))
     assert sp.expand(after - before) == 0
     assert C == ref.conversion_matrix(source, target)
     assert all(

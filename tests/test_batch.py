@@ -80,6 +80,7 @@ def assert_one_line_error(record: dict, name: str) -> None:
     assert name in record["error"] and "vertex" in record["error"] and "\n" not in record["error"]
 
 
+@pytest.mark.slow
 def test_embedded_cluster_converts_generated_meshes_and_reports_the_broken_one(
     meshes: Path, tmp_path: Path
 ) -> None:
@@ -128,6 +129,7 @@ def test_embedded_cluster_converts_generated_meshes_and_reports_the_broken_one(
     assert g1patch.check(out / "torus.npz").max_edge_angle_deg <= 1e-9
 
 
+@pytest.mark.slow
 def test_shared_meshes_with_a_broken_file_then_a_rerun_skips_them(
     scheduler: str, shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -213,6 +215,7 @@ def test_rerun_rebuilds_changed_inputs_and_changed_options(
     capsys.readouterr()
 
 
+@pytest.mark.slow
 def test_scheduler_started_separately(
     meshes: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -287,6 +290,7 @@ def _free_port() -> int:
         return int(probe.getsockname()[1])
 
 
+@pytest.mark.slow
 def test_unreachable_scheduler_is_a_usage_error(
     meshes: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

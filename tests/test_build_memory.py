@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 import g1patch.build as build_module
-import g1patch.construct.split4 as split4_module
+import g1patch.construct.one_per_face as one_per_face_module
+import g1patch.construct.split4.network as split4_module
 from g1patch import shapes
 from g1patch.targets import Targets
 
@@ -73,6 +74,6 @@ def test_the_targets_are_freed_before_the_network_is_made(
     if method == "split4":
         _asserting_freed(monkeypatch, split4_module, "_split4_network", seen, calls)
     else:
-        _asserting_freed(monkeypatch, build_module, "network_from_mesh", seen, calls)
+        _asserting_freed(monkeypatch, one_per_face_module, "network_from_mesh", seen, calls)
     network = build_module.build_network(shapes.noisy_sphere(2), method)  # type: ignore[arg-type]
     assert calls and network.n_patches > 0

@@ -35,6 +35,7 @@ from g1patch.io.cad import (
     read_iges_faces,
     read_step_faces,
 )
+from g1patch.io.cad import export as cad_export
 from g1patch.io.meshfile import read_mesh
 from g1patch.network import PatchNetwork, network_from_patch_points
 from g1patch.patches import PatchSet
@@ -194,8 +195,8 @@ def test_fit_reports_an_unreachable_tolerance() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"tolerance": -1.0}, "tolerance"),
-        ({"tolerance": float("nan")}, "tolerance"),
+        ({"fit_tolerance": -1.0}, "tolerance"),
+        ({"fit_tolerance": float("nan")}, "tolerance"),
         ({"max_spans": 0}, "max_spans"),
         ({"refine": "random"}, "refine"),
     ],
@@ -299,6 +300,7 @@ def occ_solid_figures(shape: object) -> tuple[bool, float, str]:
     return bool(BRepCheck_Analyzer(shape).IsValid()), float(props.Mass()), shape.ShapeType().name  # type: ignore[attr-defined]
 
 
+@pytest.mark.slow
 @requires_ocp
 @pytest.mark.parametrize("name", list(CLOSED))
 def test_step_round_trip_of_closed_meshes(
@@ -394,6 +396,7 @@ def test_step_export_of_fitted_non_polynomial_patches(tmp_path: Path) -> None:
         )
 
 
+@pytest.mark.slow
 @requires_ocp
 @pytest.mark.parametrize("name", ["cube", "torus_8_6", "catmark_torus"])
 def test_step_round_trip_of_gregory_networks(
@@ -426,6 +429,7 @@ def test_step_round_trip_of_gregory_networks(
         )
 
 
+@pytest.mark.slow
 @requires_ocp
 @pytest.mark.parametrize("name", ["catmark_cube", "spot"])
 def test_split4_step_export_is_the_surface_itself(
@@ -526,7 +530,7 @@ def test_a_failing_writer_leaves_no_file(monkeypatch: pytest.MonkeyPatch, tmp_pa
         path.write_text("ISO-10303-21;\nHEADER;\n")
         raise OSError("disk full")
 
-    monkeypatch.setattr(cad, "_write", half_written)
+    monkeypatch.setattr(cad_export, "_write", half_written)
     with pytest.raises(OSError, match="disk full"):
         export_step(tmp_path / "cube.step", build_corner_network(shapes.cube()))
     assert list(tmp_path.iterdir()) == []

@@ -206,6 +206,7 @@ OPEN = {
 REFINED = {"catmark_xord_interior": 2, "catmark_tent_creases1": 3, "catmark_dart_edgecorner": 4}
 
 
+@pytest.mark.slow
 @requires_ocp
 @pytest.mark.parametrize(
     "name",
@@ -316,10 +317,11 @@ def test_compact_step_shares_points_and_keeps_the_poles_to_15_digits(
     """Compacting is a rewrite: the same faces, fewer point entities, poles as written by OCC
     (12 digits) or closer to the exact ones (15 digits); and OCC reads the file back."""
     from g1patch.io import cad
+    from g1patch.io.cad import export as cad_export
 
     network = split4_of_gregory(gregory("cube", None))
     compact = cad.export_step(tmp_path / "compact.step", network, g1_samples=0)
-    monkeypatch.setattr(cad, "compact_step", lambda *args: None)
+    monkeypatch.setattr(cad_export, "compact_step", lambda *args: None)
     plain = cad.export_step(tmp_path / "plain.step", network, g1_samples=0)
     exact = bspline_nets(network)  # every cube quad is two-span: 6 × 6 poles
     errors = []
@@ -479,6 +481,7 @@ def test_max_deviation_chooses_the_cells(
     )
 
 
+@pytest.mark.slow
 @requires_ocp
 def test_cells_that_fold_are_not_taken(tmp_path: Path) -> None:
     """A coarse box cage with one long and one short edge per vertex: its re-assembly folds 2 and
@@ -557,7 +560,7 @@ def test_auto_fits_what_split4_cannot_reassemble_and_says_so(
 def test_step_reals_always_carry_their_decimal_point() -> None:
     """ISO 10303-21 reals need the point ('1.E-05', not '1E-05'); 15 significant digits: relative
     error ≤ 5e-15."""
-    from g1patch.io.cad import _step_reals
+    from g1patch.io.cad.step_text import _step_reals
 
     assert _step_reals(
         np.array([1.0, -2.0, 1e-5, 1.5e20, 0.1 + 0.2, -0.0, 123456789012345.0, -3e-300])

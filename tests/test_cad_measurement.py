@@ -30,38 +30,40 @@ def sewn_faces(network: PatchNetwork) -> tuple[list[object], bool]:
     """The sewn OCC faces of a network, as export_cad makes them, and whether they are split4
     quads."""
     from g1patch.io import cad
+    from g1patch.io.cad import opencascade
 
-    occ = cad._occ()
+    occ = opencascade._occ()
     quads = cad.split4_quad_faces(network)
     tolerance = cad.SEWING_RTOL * network.bounding_box_diagonal()
     if quads is not None:
-        faces = cad._make_quad_faces(occ, quads, 0.01 * tolerance, None)
+        faces = opencascade._make_quad_faces(occ, quads, 0.01 * tolerance, None)
     elif isinstance(network.patches, PatchSet):
         knots = cad.bezier_knots(1)
         fit = cad.BSplineFit(network.patches.convert("bezier").world_control(), knots, knots, 0.0)
-        faces = cad._make_faces(occ, fit, 0.01 * tolerance, None)
+        faces = opencascade._make_faces(occ, fit, 0.01 * tolerance, None)
     else:
-        faces = cad._make_faces(occ, cad.fit_bspline_surfaces(network), 0.01 * tolerance, None)
-    return cad._sew(occ, faces, tolerance)[1], quads is not None
+        fit = cad.fit_bspline_surfaces(network)
+        faces = opencascade._make_faces(occ, fit, 0.01 * tolerance, None)
+    return opencascade._sew(occ, faces, tolerance)[1], quads is not None
 
 
 def occ_angles(
     network: PatchNetwork, faces: list[object], quads: bool, monkeypatch: pytest.MonkeyPatch
 ) -> np.ndarray:
     """The G1 angles with every point evaluated by OCC (``BRepAdaptor_Surface::D1``), as before."""
-    from g1patch.io import cad
+    from g1patch.io.cad import measure, opencascade
 
     with monkeypatch.context() as patch:
-        patch.setattr(cad, "_occ_bspline", lambda occ, face: None)
-        return cad._occ_g1_angles(cad._occ(), faces, network, 17, None, quads)
+        patch.setattr(measure, "_occ_bspline", lambda occ, face: None)
+        return measure._occ_g1_angles(opencascade._occ(), faces, network, 17, None, quads)
 
 
 def creased_cube(data: Path) -> PatchNetwork:
     """The creased cube's Gregory network, whose patches are bicubics: written as they are."""
-    from g1patch.io import cad
+    from g1patch.io.cad.method import _as_bicubics
 
     network = build_network(read_mesh(data / "catmark_cube_creases2.obj"))
-    return replace(network, patches=cad._as_bicubics(network.patches))
+    return replace(network, patches=_as_bicubics(network.patches))
 
 
 NETWORKS = {
@@ -82,11 +84,11 @@ def test_vectorised_g1_angles_are_occs_own(
     """On every shared edge and sample, the angle from the vectorised normals is OCC's per-point
     one to rounding; at degenerate points (the creased cube's corners, where OCC's S_u × S_v cancels
     to 0) both say 0, not a direction made of rounding."""
-    from g1patch.io import cad
+    from g1patch.io.cad import measure, opencascade
 
     network = NETWORKS[name](shared_data)
     faces, quads = sewn_faces(network)
-    fast = cad._occ_g1_angles(cad._occ(), faces, network, 17, None, quads)
+    fast = measure._occ_g1_angles(opencascade._occ(), faces, network, 17, None, quads)
     reference = occ_angles(network, faces, quads, monkeypatch)
     assert fast.shape == reference.shape == (len(network.shared_edges()[0]), 17)
     np.testing.assert_allclose(fast, reference, rtol=0, atol=1e-9)
@@ -95,9 +97,9 @@ def test_vectorised_g1_angles_are_occs_own(
 def test_normals_agree_with_occ_point_by_point_and_other_rows_go_to_occ() -> None:
     """Rows on iso-lines (every edge) are vectorised and equal OCC's normals to rounding, reversed
     faces included; a row on no iso-line is evaluated by OCC itself, bit for bit."""
-    from g1patch.io import cad
+    from g1patch.io.cad import measure, opencascade
 
-    occ = cad._occ()
+    occ = opencascade._occ()
     faces, _ = sewn_faces(split4_of_gregory(build_network(shapes.cube())))
     reversed_faces = [face.Reversed() for face in faces[:2]]
     faces = [*faces, *[occ.TopoDS.Face(face) for face in reversed_faces]]
@@ -112,9 +114,9 @@ def test_normals_agree_with_occ_point_by_point_and_other_rows_go_to_occ() -> Non
     face_of = np.repeat(np.arange(len(faces)), len(rows))
     uv = np.tile(np.stack(rows), (len(faces), 1, 1))
     uv[0] = rng.random((9, 2))  # a diagonal row: OCC's
-    normals = cad._shape_normals(occ, faces, face_of, uv, None)
+    normals = measure._shape_normals(occ, faces, face_of, uv, None)
     for row in range(len(uv)):
-        expected = cad._face_normals(occ, faces[face_of[row]], uv[row])
+        expected = measure._face_normals(occ, faces[face_of[row]], uv[row])
         if row == 0:
             np.testing.assert_array_equal(normals[row], expected)
         else:
@@ -129,20 +131,20 @@ def test_normals_agree_with_occ_point_by_point_and_other_rows_go_to_occ() -> Non
 def test_a_face_that_disagrees_with_occ_is_measured_by_occ(monkeypatch: pytest.MonkeyPatch) -> None:
     """The cross-check per face is live: where vectorised and OCC's normal differ (here: any
     difference at all, or a misread pole), the face's every point is OCC's, bit for bit."""
-    from g1patch.io import cad
+    from g1patch.io.cad import measure, opencascade
 
     network = split4_of_gregory(build_network(shapes.cube()))
     faces, quads = sewn_faces(network)
     reference = occ_angles(network, faces, quads, monkeypatch)
-    read = cad._occ_bspline
+    read = measure._occ_bspline
 
     def misread(occ: object, face: object) -> object:
         surface = read(occ, face)
         return surface._replace(poles=surface.poles * 1.001)
 
-    monkeypatch.setattr(cad, "_occ_bspline", misread)
+    monkeypatch.setattr(measure, "_occ_bspline", misread)
     np.testing.assert_array_equal(
-        cad._occ_g1_angles(cad._occ(), faces, network, 17, None, quads), reference
+        measure._occ_g1_angles(opencascade._occ(), faces, network, 17, None, quads), reference
     )
 
 

@@ -9,9 +9,10 @@ mesh lines). Angles and gaps may differ by the rounding of the tangents: the ker
 and corner samples as OpenBLAS's dgemm micro-kernel does (a sequential fused multiply-add), which
 equals the reference except on the rows OpenBLAS gives its tail kernels; there a tangent differs by
 a few ULP of ``Σ |w_m| |P_m|``, and so does a normal, so an angle (atan2 of vectors of that
-accuracy) differs by at most :data:`ANGLE_ATOL` (measured ≤ 4.0e-13° = 32 ε rad on the shared
-meshes, spot's Gregory network), and a gap by :data:`GAP_ATOL` of the diagonal. The reference is no
-steadier: its own gaps move as much with its ``chunk`` (which rows fall in BLAS's tail kernels)."""
+accuracy) differs by at most :data:`ANGLE_ATOL`, plus the noise of the angle itself where it is
+the rounding of an exactly G1 edge (:data:`G1_NOISE_DEG`), and a gap by :data:`GAP_ATOL` of the
+diagonal. The reference is no steadier: its own gaps move as much with its ``chunk`` (which rows
+fall in BLAS's tail kernels)."""
 
 from __future__ import annotations
 
@@ -31,11 +32,17 @@ from g1patch.network import PatchNetwork
 from g1patch.patches import PatchSet
 
 EPS = float(np.finfo(float).eps)
-#: angles (degrees): 1024 ε radians, 2× the largest difference measured: a normal's direction is
-#: off by a few ULP of Σ |w_m| |P_m| / |p_u|, and the NumPy reference's matrix products go through
-#: BLAS, whose summation order depends on its build (32 ε with the OpenBLAS of earlier NumPy
-#: wheels, 454 ε on the shared meshes with NumPy 2.4's); the angles themselves are ~1e-11°
+#: angles (degrees): 1024 ε radians, 2× the largest difference measured on well-conditioned
+#: edges: a normal's direction is off by a few ULP of Σ |w_m| |P_m| / |p_u|, and the NumPy
+#: reference's matrix products go through BLAS, whose summation order depends on its build (32 ε
+#: with the OpenBLAS of earlier NumPy wheels, 454 ε on the shared Gregory networks with NumPy 2.4's)
 ANGLE_ATOL = 1024 * EPS * 180 / np.pi
+#: below this (degrees) an angle is rounding noise of an exactly G1 edge: its size is set by the
+#: conditioning (a split4 sub-patch's tangents are a quarter of its corner's, the teapot's
+#: networks reach 2e-10°), and the two evaluators' noises differ by up to the noise itself
+#: (measured 0.45× the reference's largest angle on the teapot's split4 network, 0.69× on one
+#: edge): both may differ by :data:`ANGLE_ATOL` plus the reference's largest angle up to this
+G1_NOISE_DEG = 1e-9
 #: gaps relative to the diagonal: 4 ε (measured ≤ 0.3 ε)
 GAP_ATOL = 4 * EPS
 #: thin-plate energy, relative: its sums run in another order over tangents of a few ULP
@@ -88,13 +95,14 @@ def assert_same_report(compiled: ContinuityReport, reference: ContinuityReport) 
         np.testing.assert_array_equal(
             getattr(compiled, name), getattr(reference, name), err_msg=name
         )
+    noise = min(reference.max_edge_angle_deg or 0.0, G1_NOISE_DEG)
     for name in ANGLES:
         value, expected = getattr(compiled, name), getattr(reference, name)
         assert (value is None) == (expected is None), name
         if value is not None:
-            assert abs(value - expected) <= ANGLE_ATOL, (name, value, expected)
+            assert abs(value - expected) <= ANGLE_ATOL + noise, (name, value, expected)
     np.testing.assert_allclose(
-        compiled.edge_angle_deg, reference.edge_angle_deg, rtol=0, atol=ANGLE_ATOL
+        compiled.edge_angle_deg, reference.edge_angle_deg, rtol=0, atol=ANGLE_ATOL + noise
     )
     np.testing.assert_allclose(compiled.edge_gap, reference.edge_gap, rtol=0, atol=GAP_ATOL)
     assert abs(compiled.max_g0_gap - reference.max_g0_gap) <= GAP_ATOL
@@ -124,6 +132,7 @@ def test_generated_meshes_report_as_the_reference(
     assert_same_report(check(network, compiled=True), check(network, compiled=False))
 
 
+@pytest.mark.slow
 def test_shared_meshes_report_as_the_reference(shared_data: Path) -> None:
     paths = sorted(shared_data.glob("*.obj")) + [shared_data / "teapot.bpt"]
     for path in paths:
@@ -145,7 +154,7 @@ def test_turn_maximum_of_many_tied_candidates_from_the_tensor_sums(
     evaluation's, within ``TENSOR_TURN_ATOL`` of the reference's; everything else as before."""
     network = build_gregory_network(MESHES[name]())
     reference = check(network, compiled=False)
-    monkeypatch.setattr(continuity, "EXACT_TURN_CANDIDATES", 0)
+    monkeypatch.setattr(continuity.grid, "EXACT_TURN_CANDIDATES", 0)
     compiled = check(network, compiled=True)
     assert abs(compiled.turn_max_deg - reference.turn_max_deg) <= continuity.TENSOR_TURN_ATOL
     assert_same_report(
@@ -247,10 +256,10 @@ def test_kernels_by_default_only_from_kernel_patches_on(monkeypatch: pytest.Monk
         raise AssertionError("the kernels were asked for")
 
     network = build_gregory_network(shapes.cube_sphere(1))
-    monkeypatch.setattr(continuity, "_evaluation_form", no_kernels)
+    monkeypatch.setattr(continuity.jit, "_evaluation_form", no_kernels)
     check(network), fairness(network), folded_patches(network.patches)  # the reference, untouched
     with pytest.raises(AssertionError, match="kernels were asked"):
         check(network, compiled=True)
-    monkeypatch.setattr(continuity, "KERNEL_PATCHES", len(network.patches))
+    monkeypatch.setattr(continuity.jit, "KERNEL_PATCHES", len(network.patches))
     with pytest.raises(AssertionError, match="kernels were asked"):
         folded_patches(network.patches)

@@ -23,6 +23,10 @@ REPORT_KEYS = {
 }
 
 
+# every test here runs the command line in a subprocess (~0.5 s each)
+pytestmark = pytest.mark.slow
+
+
 def g1patch(*args: str | Path, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "g1patch.cli", *map(str, args)],

@@ -169,7 +169,7 @@ def test_planar_vector_algebra_equals_the_interleaved_numpy_formulas() -> None:
     # The measures run on planar (3, ...) arrays; they must give the numbers of np.cross,
     # np.linalg.norm and np.einsum on interleaved (..., 3) arrays (today bit for bit; allowed:
     # a different summation order, 4 eps of |a||b| for 3-term sums).
-    from g1patch.continuity import _angle3, _cross3, _dot3, _norm3, _planar
+    from g1patch.continuity.vectors import _angle3, _cross3, _dot3, _norm3, _planar
 
     rng = np.random.default_rng(4)
     a = rng.normal(size=(50, 33, 3)) * 10.0 ** rng.integers(-8, 9, size=(50, 33, 3))
@@ -204,7 +204,7 @@ def test_corner_points_and_world_diagonal_as_the_evaluation() -> None:
     """The check reads a Gregory patch's corners from its points 0–3 and maps them to world for the
     reported diagonal: bit for bit the evaluation at the corners and the network's own diagonal."""
     from g1patch.build import build_gregory_network
-    from g1patch.continuity import _corner_points, _world_diagonal
+    from g1patch.continuity.sampling import _corner_points, _world_diagonal
     from g1patch.patches import CORNER_PARAMETERS
 
     network = build_gregory_network(shapes.noisy_sphere(2, 0.3))

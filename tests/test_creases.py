@@ -22,7 +22,6 @@ from g1patch.sharpen import sharp_angle_tags
 from g1patch.targets.creases import sectors
 from g1patch.targets.interpolate import interpolate_targets
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 CREASE_SHAPES = [
     "catmark_cube_creases2",
     "catmark_tent_creases1",
@@ -90,10 +89,9 @@ def test_the_crease_curve_is_tangent_continuous_through_crease_vertices() -> Non
 
 @pytest.mark.parametrize("name", CREASE_SHAPES)
 def test_shared_crease_shapes_interpolate_sharp_where_tagged_and_g1_elsewhere(name: str) -> None:
-    path = DATA / f"{name}.obj"
-    if not path.exists():
-        pytest.skip(f"shared data not present: {path}")
-    mesh = read_mesh(path)
+    from conftest import shared_data_path
+
+    mesh = read_mesh(shared_data_path(f"{name}.obj"))
     network = build_network(mesh)
     report = check(network)
     expected = int(((mesh.features.edge_sharpness >= 1.0) & ~mesh.topology.is_boundary_edge).sum())
@@ -104,10 +102,9 @@ def test_shared_crease_shapes_interpolate_sharp_where_tagged_and_g1_elsewhere(na
 
 
 def test_a_dart_end_is_exactly_g1() -> None:
-    path = DATA / "catmark_dart_edgecorner.obj"
-    if not path.exists():
-        pytest.skip(f"shared data not present: {path}")
-    mesh = read_mesh(path)
+    from conftest import shared_data_path
+
+    mesh = read_mesh(shared_data_path("catmark_dart_edgecorner.obj"))
     targets = interpolate_targets(mesh)
     found = sectors(mesh.topology, targets.seams)
     ends = np.flatnonzero(found.cuts == 1 & ~mesh.topology.is_boundary_vertex)
@@ -186,13 +183,12 @@ LIMIT_DISTANCE = 2e-3
 
 @pytest.mark.parametrize("name", CREASE_SHAPES)
 def test_shared_crease_shapes_follow_opensubdivs_limit(name: str) -> None:
+    from conftest import shared_data_path
+
     from g1patch import compare
 
-    path = DATA / f"{name}.obj"
-    reference_file = DATA / "reference" / f"{name}.limit.npz"
-    if not reference_file.exists():
-        pytest.skip(f"shared data not present: {reference_file}")
-    mesh = read_mesh(path)
+    mesh = read_mesh(shared_data_path(f"{name}.obj"))
+    reference_file = shared_data_path("reference", f"{name}.limit.npz")
     reference = compare.load_reference(reference_file)
     network = build_network(mesh, "gregory", "limit")
     report = check(network)
@@ -243,12 +239,12 @@ def _capped_cylinder(sides: int = 16, layers: int = 4) -> tuple[np.ndarray, list
     )
     faces = [
         [
-            l * sides + i,
-            l * sides + (i + 1) % sides,
-            (l + 1) * sides + (i + 1) % sides,
-            (l + 1) * sides + i,
+            layer * sides + i,
+            layer * sides + (i + 1) % sides,
+            (layer + 1) * sides + (i + 1) % sides,
+            (layer + 1) * sides + i,
         ]
-        for l in range(layers)
+        for layer in range(layers)
         for i in range(sides)
     ]
     faces += [list(range(sides))[::-1], [layers * sides + i for i in range(sides)]]

@@ -139,8 +139,8 @@ def test_reversal_matrix_is_exact_in_sympy(form):
     R = sp.Matrix(reversal_matrix(form).astype(int))
     np.testing.assert_array_equal(reversal_matrix(form), np.array(R.tolist(), dtype=float))
     basis = ref.basis_polynomials(form)
-    forward = sum(x * b.subs(ref.t, 1 - ref.t) for x, b in zip(xs, basis))
-    backward = sum(y * b for y, b in zip(R * sp.Matrix(xs), basis))
+    forward = sum(x * b.subs(ref.t, 1 - ref.t) for x, b in zip(xs, basis, strict=True))
+    backward = sum(y * b for y, b in zip(R * sp.Matrix(xs), basis, strict=True))
     assert sp.expand(forward - backward) == 0
 
 

@@ -20,6 +20,7 @@ MAX_PICTURE_BYTES = 150_000
 DOCS_MODULES = ("mkdocs", "material", "mkdocstrings", "mkdocstrings_handlers.python")
 
 
+@pytest.mark.slow
 def test_the_docs_build_without_warnings(tmp_path: Path) -> None:
     for module in DOCS_MODULES:
         try:

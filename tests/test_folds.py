@@ -15,7 +15,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from g1patch import shapes
 from g1patch.construct.corner import build_corner_network
-from g1patch.continuity import _GridMeasures, angle_between, check, fairness
+from g1patch.continuity import angle_between, check, fairness
+from g1patch.continuity.grid import _GridMeasures
 from g1patch.io.bpt import read_bpt, write_bpt
 from g1patch.network import PatchNetwork, network_from_patch_points
 from g1patch.patches import PatchSet
@@ -236,6 +237,7 @@ def g1patch_cli(*args: str | Path) -> subprocess.CompletedProcess[str]:
     )
 
 
+@pytest.mark.slow
 def test_check_exits_1_on_folds_and_says_so(tmp_path: Path) -> None:
     clean, folded = tmp_path / "clean.bpt", tmp_path / "folded.bpt"
     write_bpt(clean, flat_sheet())

@@ -254,7 +254,7 @@ def test_framed_patches_equal_the_same_patches_in_world_coordinates(form: str) -
         )
     )
     assert_normals_close(framed.normals(UV), p_u, p_v, tangent_error)
-    for (du, dv), got, want in zip(((1, 0), (0, 1)), framed.tangents(UV), (p_u, p_v)):
+    for (du, dv), got, want in zip(((1, 0), (0, 1)), framed.tangents(UV), (p_u, p_v), strict=True):
         assert_close_ulps(got, want, weight_sum(form, UV[:, 0], UV[:, 1], du, dv), size)
     assert_close_ulps(
         framed.twist(UV), world.twist(UV), weight_sum(form, UV[:, 0], UV[:, 1], 1, 1), size
@@ -347,7 +347,7 @@ def test_power_form_diagonals_and_closure_are_world_values() -> None:
         atol=1e3 * EPS * size,
     )
     np.testing.assert_allclose(power, world.power_coefficients(), rtol=0, atol=1e3 * EPS * size)
-    for got, want in zip(framed.diagonal_polynomials(), world.diagonal_polynomials()):
+    for got, want in zip(framed.diagonal_polynomials(), world.diagonal_polynomials(), strict=True):
         np.testing.assert_allclose(got, want, rtol=0, atol=1e4 * EPS * size)
     np.testing.assert_array_equal(framed.closure(), FAR.scale * framed.local().closure())
 

@@ -9,16 +9,13 @@ import scipy.sparse as sp
 
 from g1patch import shapes
 from g1patch.mesh import QuadMesh
+from g1patch.targets.frame_fit import CUBIC_POINTS, _face_rings, _fit_all, _Ring
+from g1patch.targets.frame_kernels import SMALL_RING
 from g1patch.targets.frames import (
-    CUBIC_POINTS,
     MAX_TILT,
-    SMALL_RING,
     VertexFrames,
     _face_ring_rows,
-    _face_rings,
-    _fit_all,
     _fit_compiled,
-    _Ring,
     vertex_frames,
 )
 from g1patch.targets.local import fan_normals

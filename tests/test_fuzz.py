@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 CI_CASES = 500
 
 
+@pytest.mark.slow
 @settings(
     max_examples=CI_CASES, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck)
 )

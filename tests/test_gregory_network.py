@@ -81,11 +81,9 @@ def test_shared_meshes_are_exactly_g1(shared_data: Path, name: str, shape: str) 
 def test_perturbed_shared_meshes_are_exactly_g1(
     name: str, amplitude: float, seed: int, shape: str
 ) -> None:
-    from conftest import SHARED_DATA
+    from conftest import shared_data_path
 
-    if not SHARED_DATA.is_dir():
-        pytest.skip(f"external test data not found: {SHARED_DATA}")
-    mesh = perturbed(read_mesh(SHARED_DATA / name), amplitude, seed)
+    mesh = perturbed(read_mesh(shared_data_path(name)), amplitude, seed)
     assert_exact_g1(check(build_gregory_network(mesh, shape=shape)))  # type: ignore[arg-type]
 
 
@@ -97,6 +95,7 @@ def test_perturbed_spot_is_exactly_g1(shared_data: Path) -> None:
 # ------------------------------------------------------------------------------ generated meshes
 
 
+@pytest.mark.slow
 @settings(deadline=None, max_examples=150)
 @given(noisy_generated_meshes())
 def test_generated_meshes_are_exactly_g1(drawn: tuple[QuadMesh, str]) -> None:

@@ -27,6 +27,9 @@ from g1patch.io.atomic import TEMPORARY_PREFIX
 from g1patch.io.network_file import save_network
 from g1patch.tessellate import MAX_TRIANGLES, TRIANGLE_BUDGET
 
+# nearly every test here runs the command line in a subprocess
+pytestmark = pytest.mark.slow
+
 
 def g1patch(*args: str | Path, **options: object) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
@@ -294,7 +297,7 @@ def test_shared_spot_split4_default_export_stays_within_the_budget(
 
 # --------------------------------------------------------------------------- render by pixels
 def test_render_samples_by_pixels(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    from g1patch import render as render_module
+    from g1patch.render import pictures as render_module
 
     chosen: list[tuple[int, int, object]] = []
     original = render_module._sample

@@ -514,8 +514,6 @@ def _wrong_files(tmp_path: Path, gregory_file: Path) -> dict[str, tuple[Path, st
 
     obj = tmp_path / "x.obj"
     write_quads(obj, mesh.vertices, mesh.faces)
-    bpt = tmp_path / "p.bpt"
-    write_bpt(bpt, PatchSet(np.random.default_rng(0).normal(size=(2, 4, 4, 3)), "bezier"))
     text = tmp_path / "notes.txt"
     text.write_text("hello\n")
     renamed = tmp_path / "text.npz"
@@ -531,7 +529,6 @@ def _wrong_files(tmp_path: Path, gregory_file: Path) -> dict[str, tuple[Path, st
     directory.mkdir()
     return {
         "obj": (obj, "a Wavefront OBJ mesh"),
-        "bpt": (bpt, "a Bézier patch file (.bpt)"),
         "txt": (text, "a .txt file"),
         "text renamed .npz": (renamed, "a text file"),
         "binary .npz": (binary, "not a zip archive"),
@@ -544,7 +541,6 @@ def _wrong_files(tmp_path: Path, gregory_file: Path) -> dict[str, tuple[Path, st
 
 WRONG = [
     "obj",
-    "bpt",
     "txt",
     "text renamed .npz",
     "binary .npz",
@@ -565,6 +561,16 @@ def test_export_names_what_it_expects(
         assert "a network file (.npz) written by g1patch build" in line
     if kind == "obj":
         assert "g1patch build" in line and "x.npz" in line  # how to make one
+
+
+def test_export_reads_a_bpt_as_check_does(
+    tmp_path: Path, out: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A Bézier patch file is a network to every command (one reader, the API's)."""
+    bpt = tmp_path / "p.bpt"
+    write_bpt(bpt, PatchSet(np.random.default_rng(0).normal(size=(2, 4, 4, 3)), "bezier"))
+    assert main(["export", str(bpt), "-o", str(out / "p.obj"), "--resolution", "2"]) == 0
+    assert "wrote 4 triangles" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("command", ["check", "render"])
@@ -781,8 +787,9 @@ def test_a_sewn_away_face_is_an_error_not_a_crash(
     """With the size check off, the collapsed patch reaches OCC: its dropped face is caught after
     sewing."""
     from g1patch.io import cad
+    from g1patch.io.cad import export as cad_export
 
-    monkeypatch.setattr(cad, "_check_fit", lambda *args: None)
+    monkeypatch.setattr(cad_export, "_check_fit", lambda *args: None)
     with pytest.raises(cad.OpenCascadeError, match="sewing dropped the face of patch 0"):
         cad.export_cad(tmp_path / "x.step", _collapsed_patch())
     assert list(tmp_path.iterdir()) == []
@@ -807,8 +814,9 @@ def test_exceptions_inside_occ_become_g1patch_errors(
     from OCP.Standard import Standard_Failure
 
     from g1patch.io import cad
+    from g1patch.io.cad import export as cad_export
 
-    real = cad._occ
+    real = cad_export._occ
 
     def failing() -> object:
         occ = real()
@@ -819,7 +827,7 @@ def test_exceptions_inside_occ_become_g1patch_errors(
         setattr(occ, name, boom)
         return occ
 
-    monkeypatch.setattr(cad, "_occ", failing)
+    monkeypatch.setattr(cad_export, "_occ", failing)
     with pytest.raises(
         cad.OpenCascadeError,
         match=rf"x\.step: OpenCASCADE failed while {stage} \(Standard_Failure: simulated failure\)",
@@ -882,7 +890,7 @@ def test_random_damage_is_always_a_format_error(compressed: bool, tmp_path: Path
 def test_the_bound_check_sees_every_chunk(at: int, value: float) -> None:
     """The coordinate check runs in chunks: a bad value in any of them, first or last element, is
     found."""
-    from g1patch.io.network_file import _Checker, _extremes
+    from g1patch.io.network_file.values import _Checker, _extremes
 
     array = np.zeros(3 * (1 << 17))
     array[at] = value

@@ -79,7 +79,7 @@ def test_targets_kernels(mesh: QuadMesh) -> None:
     """Projected tangents, their turn along smooth mesh lines, fan validity (on the raw fans, valid
     or not), interior targets with and without the shape operator, and the coarse-face turn."""
     from g1patch.kernels import jit_kernel
-    from g1patch.targets import interpolate
+    from g1patch.targets import fans, interior, interpolate
     from g1patch.targets.frames import vertex_frames
 
     frames = vertex_frames(mesh)
@@ -99,8 +99,8 @@ def test_targets_kernels(mesh: QuadMesh) -> None:
     twisted = raw * np.where(np.arange(len(raw)) % 3 == 0, -1.0, 1.0)[:, None]  # folded fans fail
     for t in (raw, twisted):
         assert_close(
-            interpolate._valid_fans(topology, n, t),
-            interpolate._valid_fans(topology, n, t, compiled=False),
+            fans._valid_fans(topology, n, t),
+            fans._valid_fans(topology, n, t, compiled=False),
         )
     for s in (frames.shape_operator, None):
         assert_close(
@@ -109,7 +109,7 @@ def test_targets_kernels(mesh: QuadMesh) -> None:
         )
     corner_normals = n[topology.faces]
     turn = np.empty(mesh.n_faces)
-    jit_kernel(interpolate._turn_kernel)(corner_normals, turn)
+    jit_kernel(interior._turn_kernel)(corner_normals, turn)
     cosine = np.einsum("fkd,fkd->fk", corner_normals, np.roll(corner_normals, -1, axis=1))
     assert_close(turn, np.arccos(np.clip(cosine, -1.0, 1.0)).max(axis=1))
 

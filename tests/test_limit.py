@@ -88,6 +88,7 @@ def test_any_valence_gives_valid_exactly_g1_targets(valence: int) -> None:
     assert report.max_edge_angle_deg <= 1e-9 and report.max_corner_angle_deg <= 1e-9
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "refinements"), sorted(DISTANCE_BOUNDS))
 def test_reference_meshes_are_exactly_g1_and_close(
     shared_data, name: str, refinements: int
@@ -125,6 +126,7 @@ def test_limit_samples_of_a_neighbourhood_equal_the_whole_mesh_refined() -> None
     np.testing.assert_allclose(local_normals, limit_normals(fine)[grid[faces]], rtol=0, atol=1e-13)
 
 
+@pytest.mark.slow
 def test_kernels_give_the_numpy_targets_bit_for_bit(shared_data, monkeypatch) -> None:
     """Above the kernels' size threshold (subdivision.KERNEL_VERTICES) the stencils, the plane
     projection of the stars, the chords and the B-spline interior points run as numba kernels in the

@@ -15,7 +15,7 @@ from g1patch.errors import ConstructionError
 from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh, Tag
 from g1patch.subdivision import limit_points, refine
-from g1patch.targets.interpolate import shape_targets
+from g1patch.targets import shape_targets
 from g1patch.targets.limit_interpolate import interpolating_cage, limit_matrix
 
 SHARED = (
@@ -131,6 +131,7 @@ def test_jittered_cube_has_no_interpolating_cage() -> None:
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["gregory", "split4"])
 @pytest.mark.parametrize("name", SHARED)
 def test_shared_meshes(shared_data: Path, name: str, method: str) -> None:

@@ -113,8 +113,8 @@ def assert_topology_invariants(topology: QuadTopology) -> None:
     assert t.euler_characteristic == t.n_vertices - t.n_edges + t.n_faces
     assert t.is_closed == (not t.is_boundary_edge.any())
     for loop in t.boundary_loops():  # consecutive loop vertices are joined by boundary half-edges
-        steps = set(zip(loop.tolist(), np.roll(loop, -1).tolist()))
-        boundary = set(zip(origin[~paired].tolist(), target[~paired].tolist()))
+        steps = set(zip(loop.tolist(), np.roll(loop, -1).tolist(), strict=True))
+        boundary = set(zip(origin[~paired].tolist(), target[~paired].tolist(), strict=True))
         assert steps <= boundary
     assert sum(len(loop) for loop in t.boundary_loops()) == np.count_nonzero(t.is_boundary_edge)
 
@@ -143,6 +143,7 @@ def test_invariants_on_generated_shapes(name: str) -> None:
     assert_rings_turn_with_faces(mesh)
 
 
+@pytest.mark.slow
 def test_invariants_on_shared_meshes(shared_data) -> None:
     for path in sorted(shared_data.glob("*.obj")):
         mesh = read_mesh(path)

@@ -14,10 +14,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from g1patch import mesh as meshmodule
 from g1patch import shapes
 from g1patch.errors import G1PatchError
 from g1patch.mesh import QuadMesh, _as_polygons
+from g1patch.mesh import connectivity as mesh_connectivity
+from g1patch.mesh import validate as mesh_validate
 
 SETTINGS = settings(
     max_examples=200, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck)
@@ -27,7 +28,7 @@ SETTINGS = settings(
 def connectivity(corners: np.ndarray, sizes: np.ndarray, n_vertices: int, compiled: bool) -> tuple:
     """``_connect``'s arrays (dtype, shape, bytes), or its error."""
     try:
-        result = meshmodule._connect(corners, sizes, n_vertices, compiled=compiled)
+        result = mesh_connectivity._connect(corners, sizes, n_vertices, compiled=compiled)
     except G1PatchError as error:
         return (type(error).__name__, str(error))
     return tuple(
@@ -128,7 +129,7 @@ def test_connect_kernel_is_the_reference_on_damaged_grids(
 
 def area_outcome(vertices: np.ndarray, faces: np.ndarray, compiled: bool) -> str:
     try:
-        meshmodule._check_face_areas(vertices, faces, compiled=compiled)
+        mesh_validate._check_face_areas(vertices, faces, compiled=compiled)
     except G1PatchError as error:
         return f"{type(error).__name__}: {error}"
     return "ok"
@@ -155,11 +156,12 @@ def test_from_arrays_of_a_large_mesh_is_the_reference(monkeypatch: pytest.Monkey
     equal."""
     mesh = shapes.large_torus(30_000)
     assert (
-        mesh.n_faces >= meshmodule.KERNEL_FACES and 4 * mesh.n_faces >= meshmodule.KERNEL_HALFEDGES
+        mesh.n_faces >= mesh_validate.KERNEL_FACES
+        and 4 * mesh.n_faces >= mesh_connectivity.KERNEL_HALFEDGES
     )
     fast = QuadMesh.from_arrays(mesh.vertices, mesh.faces)
-    monkeypatch.setattr(meshmodule, "KERNEL_HALFEDGES", 10**12)
-    monkeypatch.setattr(meshmodule, "KERNEL_FACES", 10**12)
+    monkeypatch.setattr(mesh_connectivity, "KERNEL_HALFEDGES", 10**12)
+    monkeypatch.setattr(mesh_validate, "KERNEL_FACES", 10**12)
     slow = QuadMesh.from_arrays(mesh.vertices, mesh.faces)
     assert fast.vertices.tobytes() == slow.vertices.tobytes()
     for name, value in vars(slow.topology).items():

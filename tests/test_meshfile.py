@@ -64,7 +64,7 @@ STATISTICS = {
 
 def histogram(values: np.ndarray) -> dict[int, int]:
     keys, counts = np.unique(values, return_counts=True)
-    return dict(zip(keys.tolist(), counts.tolist()))
+    return dict(zip(keys.tolist(), counts.tolist(), strict=True))
 
 
 @pytest.mark.parametrize("name", STATISTICS)

@@ -48,5 +48,5 @@ def _self_adjacent() -> PatchNetwork:
 )
 def test_shared_edges_lists_each_shared_edge_once_by_its_first_side(network: PatchNetwork) -> None:
     patch, edge = network.shared_edges()
-    assert list(zip(patch.tolist(), edge.tolist())) == _first_sides(network)
+    assert list(zip(patch.tolist(), edge.tolist(), strict=True)) == _first_sides(network)
     assert 2 * len(patch) == int((network.neighbor >= 0).sum())

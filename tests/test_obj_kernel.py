@@ -24,6 +24,7 @@ from g1patch.io import meshfile
 from g1patch.io.meshfile import read_mesh, write_quads
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(obj_files())
 def test_obj_kernel_is_the_reference(data: bytes) -> None:
@@ -194,6 +195,7 @@ def test_floats_kernel_is_numbers(tokens: list[str], separator: str) -> None:
     assert (compiled is not None) == plain, tokens
 
 
+@pytest.mark.slow
 def test_large_off_and_ascii_ply_are_the_references(tmp_path: Path) -> None:
     """Past KERNEL_BYTES, OFF and ASCII PLY coordinates go through the kernel: the reference's mesh
     bit for bit."""

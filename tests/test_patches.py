@@ -91,7 +91,7 @@ class Reference:
     def values(self, uv_per_patch, du=0, dv=0) -> np.ndarray:
         """Exact values (rounded once) at uv_per_patch[n] = list of (u, v)."""
         out = []
-        for polys, uvs in zip(self.polys, uv_per_patch):
+        for polys, uvs in zip(self.polys, uv_per_patch, strict=True):
             derived = ref.derivative(polys, du, dv)
             out.append([[float(x) for x in ref.evaluate(derived, a, b)] for a, b in uvs])
         return np.array(out, dtype=float).reshape(len(self.polys), len(uv_per_patch[0]), 3)
@@ -250,7 +250,7 @@ def test_tangents_twist_corners_are_the_derivatives(reference):
 def exact_unit_normals(reference, uv_per_patch):
     """n = p_u × p_v / |p_u × p_v| from the exact derivatives, normalised to 30 digits."""
     out = []
-    for polys, uvs in zip(reference.polys, uv_per_patch):
+    for polys, uvs in zip(reference.polys, uv_per_patch, strict=True):
         pu_polys, pv_polys = ref.derivative(polys, 1, 0), ref.derivative(polys, 0, 1)
         row = []
         for a, b in uvs:
@@ -403,7 +403,7 @@ def test_round_trips_keep_the_surface(control, uv, start, via):
     abs_chain = np.eye(4)
     scale_points = ref.abs_patch_sum(start, control, uv)
     current = np.abs(control)
-    for source, target in zip(path, path[1:]):
+    for source, target in itertools.pairwise(path):
         step = abs_conversion(source, target)
         abs_chain = step @ abs_chain
         current = np.einsum("ik,nkld,jl->nijd", step, current, step)

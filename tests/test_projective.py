@@ -49,7 +49,7 @@ def exact_det(matrix: list[list[Fraction]]) -> Fraction:
         det *= rows[col][col]
         for r in range(col + 1, n):
             factor = rows[r][col] / rows[col][col]
-            rows[r] = [a - factor * b for a, b in zip(rows[r], rows[col])]
+            rows[r] = [a - factor * b for a, b in zip(rows[r], rows[col], strict=True)]
     return det
 
 

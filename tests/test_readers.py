@@ -171,6 +171,7 @@ def obj_files(draw) -> bytes:
     return (newline.join(lines) + (newline if draw(st.booleans()) else "")).encode()
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(obj_files())
 def test_obj_fast_path_is_the_reference(data: bytes) -> None:
@@ -226,6 +227,7 @@ def off_files(draw) -> bytes:
     return (newline.join(lines) + (newline if draw(st.booleans()) else "")).encode()
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(off_files())
 def test_off_fast_path_is_the_reference(data: bytes) -> None:
@@ -465,6 +467,7 @@ def ascii_ply_files(draw) -> bytes:
     return (newline.join(lines) + newline).encode()
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(ascii_ply_files())
 def test_ascii_ply_fast_path_is_meshio(tmp_path_factory, data: bytes) -> None:

@@ -27,6 +27,8 @@ from g1patch.render import (
     stripe_jumps,
     stripe_phase,
 )
+from g1patch.render import draw as render_draw
+from g1patch.render import pictures as render_pictures
 from g1patch.tessellate import tessellate
 
 
@@ -369,7 +371,7 @@ def test_a_failed_render_leaves_the_old_file_and_no_partial_one(
     def broken(*args: object) -> None:
         raise RuntimeError("drawing failed")
 
-    monkeypatch.setattr(render_module, "_gouraud_artist", broken)
+    monkeypatch.setattr(render_draw, "_gouraud_artist", broken)
     with pytest.raises(RuntimeError):
         render(path, corner_cube, resolution=5)
     assert path.read_bytes() == b"old picture"
@@ -391,7 +393,7 @@ def test_deviation_map_keeps_the_edges_of_patches_seen_edge_on(
         filled_counts.append(0 if filled is None else int(np.count_nonzero(filled)))
         return original(network, resolution, band, filled)
 
-    monkeypatch.setattr(render_module, "_sample", spy)
+    monkeypatch.setattr(render_pictures, "_sample", spy)
     render_module.render(
         tmp_path / "sphere.png",
         build_split4_network(shapes.cube()),

@@ -154,11 +154,9 @@ def test_stripe_jumps_default_to_the_pictures_camera() -> None:
 # --------------------------------------------------------------------------- shared data
 @pytest.fixture(scope="module")
 def shared_data_path() -> Path:
-    from conftest import SHARED_DATA
+    import conftest
 
-    if not SHARED_DATA.is_dir():
-        pytest.skip(f"external test data not found: expected the directory {SHARED_DATA}")
-    return SHARED_DATA
+    return conftest.shared_data_path()
 
 
 @pytest.fixture(scope="module")

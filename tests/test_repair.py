@@ -120,7 +120,7 @@ def cyclic(faces: np.ndarray) -> set[tuple[int, ...]]:
     """Faces up to the choice of first corner (orientation kept)."""
     rows = np.asarray(faces)
     start = np.argmin(rows, axis=1)
-    return {tuple(np.roll(row, -k).tolist()) for row, k in zip(rows, start)}
+    return {tuple(np.roll(row, -k).tolist()) for row, k in zip(rows, start, strict=True)}
 
 
 def assert_builds_exactly(mesh: QuadMesh) -> None:
@@ -390,6 +390,7 @@ def test_cli_repairs_with_one_line_and_refuses_when_strict(
     assert not strict_out.exists()
 
 
+@pytest.mark.slow
 def test_cli_as_a_user_runs_it(tmp_path: Path) -> None:
     source = write_obj(tmp_path / "book.obj", *book(100))
     out = tmp_path / "book.npz"
@@ -433,7 +434,7 @@ def test_one_large_polygon_splits_in_linear_memory() -> None:
     peaks = {}
     for n in (10_000, 100_000):
         peaks[n], mesh = peak_memory(
-            lambda: QuadMesh.from_arrays(regular_polygon(n), [list(range(n))])
+            lambda n=n: QuadMesh.from_arrays(regular_polygon(n), [list(range(n))])
         )
         assert mesh.n_faces == n and mesh.topology.valence.max() == n
     assert peaks[100_000] <= 15 * peaks[10_000], peaks

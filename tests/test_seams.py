@@ -27,7 +27,7 @@ from g1patch.mesh import QuadMesh
 from g1patch.network import PatchNetwork, network_from_mesh, network_from_patch_points
 from g1patch.patches import PatchSet
 from g1patch.render import render
-from g1patch.targets.interpolate import shape_targets
+from g1patch.targets import shape_targets
 
 EXACT = 1e-9
 

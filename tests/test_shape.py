@@ -8,6 +8,7 @@ continuity report; fairness against OpenSubdiv's Catmull–Clark limit (../share
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from pathlib import Path
 
@@ -61,6 +62,7 @@ FAMILIES: dict[str, tuple[Callable[[int], QuadMesh], tuple[int, int], Callable[.
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family", sorted(FAMILIES))
 def test_refinement_orders(family: str) -> None:
     """Position order ≥ 3.5 and normal order ≥ 2.5 over the two finest levels (h halves per level);
@@ -138,6 +140,7 @@ def test_cages_built_to_fold_do_not(name: str) -> None:
     _exact_and_unfolded(build_network(CAGES[name](), "gregory"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", SHARED_MESHES)
 @pytest.mark.parametrize("method", ["gregory", "split4"])
 def test_shared_meshes_do_not_fold(shared_data: Path, name: str, method: str) -> None:
@@ -158,6 +161,7 @@ P99_RATIO = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", SHARED_MESHES)
 def test_fairness_against_the_catmull_clark_limit(shared_data: Path, name: str) -> None:
     reference = load_reference(reference_path(shared_data / name))
@@ -253,7 +257,7 @@ def test_fold_guard_never_repeats_a_retreat(monkeypatch: pytest.MonkeyPatch) -> 
     )
     build_network(perturbed(shapes.torus(3, 5), 0.05, 0))
     assert [weight for weight, _ in retreats] == [0.5, 1.0]
-    assert all(a != b for a, b in zip(retreats, retreats[1:]))
+    assert all(a != b for a, b in itertools.pairwise(retreats))
 
 
 def test_fold_guard_keeps_its_best_attempt(monkeypatch: pytest.MonkeyPatch) -> None:

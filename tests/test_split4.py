@@ -105,6 +105,7 @@ def test_shared_meshes_are_exactly_g1(shared_data: Path, name: str, shape: str) 
     assert_exact_g1(build_and_check(mesh, shape))
 
 
+@pytest.mark.slow
 @settings(deadline=None, max_examples=20)
 @given(
     st.sampled_from(SHARED_MESHES),
@@ -115,17 +116,16 @@ def test_shared_meshes_are_exactly_g1(shared_data: Path, name: str, shape: str) 
 def test_perturbed_shared_meshes_are_exactly_g1(
     name: str, amplitude: float, seed: int, shape: str
 ) -> None:
-    from conftest import SHARED_DATA
+    from conftest import shared_data_path
 
-    if not SHARED_DATA.is_dir():
-        pytest.skip(f"external test data not found: {SHARED_DATA}")
-    mesh = perturbed(read_mesh(SHARED_DATA / name), amplitude, seed)
+    mesh = perturbed(read_mesh(shared_data_path(name)), amplitude, seed)
     assert_exact_g1(build_and_check(mesh, shape))
 
 
 # ------------------------------------------------------------------------------ generated meshes
 
 
+@pytest.mark.slow
 @settings(deadline=None, max_examples=120)
 @given(noisy_generated_meshes())
 def test_generated_meshes_are_exactly_g1(drawn: tuple[QuadMesh, str]) -> None:
@@ -155,6 +155,7 @@ COLLAPSE_BASES: dict[str, Callable[[int], QuadMesh]] = {
 }
 
 
+@pytest.mark.slow
 @settings(deadline=None, max_examples=120)
 @given(
     st.sampled_from(sorted(COLLAPSE_BASES)),
@@ -271,7 +272,7 @@ def walked_shears(mesh: QuadMesh) -> np.ndarray:
             nodes[1],
         )  # ties: the smaller node 2e + side
         sign0 = -np.sign(gaps[0]) if at_start else -np.sign(gaps[1]) * (-1) ** len(line)
-        for k, (edge, near_v, far_v) in enumerate(line):
+        for k, (edge, _near_v, far_v) in enumerate(line):
             towards_far = sign0 * size * (-1) ** (k + 1)
             mu[edge] = towards_far if x_of[edge] == far_v else -towards_far
     return mu
@@ -425,7 +426,7 @@ def test_blocked_assembly_does_not_depend_on_the_block_size(
 ) -> None:
     """The sub-patch controls are assembled in blocks of faces: any block size (one face, a
     partial last block, all faces at once) gives bit-identical controls."""
-    from g1patch.construct import split4
+    from g1patch.construct.split4 import reference as split4
 
     mesh = perturbed(shapes.fan(5, 2), NOISE, 9)  # open, with boundary vertices
     reference = build_split4_network(mesh).patches.world_control()

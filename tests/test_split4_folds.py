@@ -19,7 +19,8 @@ from g1patch.build import build_split4_network
 from g1patch.construct.split4 import STAR_LENGTH_LIMIT, split4_star
 from g1patch.continuity import check
 from g1patch.mesh import QuadMesh
-from g1patch.targets.interpolate import shape_targets, slot_vertices
+from g1patch.targets import shape_targets
+from g1patch.targets.interpolate import slot_vertices
 
 FAN_VALENCES = [3, 4, 5, 6, 8, 12, 16, 32, 64, 128, 360]
 

@@ -18,11 +18,10 @@ import pytest
 
 from g1patch import kernels, shapes
 from g1patch.construct import split4
-from g1patch.construct.split4 import macro_nets, split4_patches, split4_star
+from g1patch.construct.split4 import macro_nets, split4_patches, split4_star, threshold
 from g1patch.frame import Frame
 from g1patch.mesh import QuadMesh, subdivide
-from g1patch.targets import Targets
-from g1patch.targets.interpolate import shape_targets
+from g1patch.targets import Targets, shape_targets
 
 EPS = np.finfo(np.float64).eps
 POINT_ULPS = 16
@@ -150,7 +149,7 @@ def test_the_default_is_numpy_below_the_threshold_and_kernels_above(
         split4_patches(targets, mesh.vertices, frame.centre, frame.scale)[0].control,
         reference[0].control,
     )
-    monkeypatch.setattr(split4, "KERNEL_FACES", mesh.topology.n_faces)
+    monkeypatch.setattr(threshold, "KERNEL_FACES", mesh.topology.n_faces)
     np.testing.assert_array_equal(
         split4_patches(targets, mesh.vertices, frame.centre, frame.scale)[0].control,
         compiled[0].control,

@@ -51,6 +51,7 @@ CASES = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "refine"), CASES)
 def test_split4_limit_is_as_fair_as_gregory(shared_data: Path, name: str, refine: int) -> None:
     mesh = read_mesh(shared_data / f"{name}.obj")

@@ -3,6 +3,8 @@ OpenSubdiv's limit."""
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -116,7 +118,7 @@ def test_limit_points_are_invariant_under_refinement_and_vertices_converge(share
         fine = refine(mesh, levels)
         np.testing.assert_allclose(limit_points(fine)[: mesh.n_vertices], limit, atol=1e-12)
         errors.append(np.linalg.norm(fine.vertices[: mesh.n_vertices] - limit, axis=1).max())
-    assert all(b < 0.5 * a for a, b in zip(errors, errors[1:]))
+    assert all(b < 0.5 * a for a, b in itertools.pairwise(errors))
 
 
 @pytest.mark.parametrize("name", REFERENCE_MESHES)
@@ -220,7 +222,8 @@ def _stencil_cages(shared_data) -> list[QuadMesh]:
 def test_stencil_kernels_equal_the_numpy_reference_bit_for_bit(shared_data) -> None:
     """The numba kernels of the smooth vertices' limit stencils add in the reference's order, so
     positions, stars, slot tangents and sector normals are the same floats, not merely close."""
-    from g1patch.subdivision import _level_of, _limit_frames, _limit_positions
+    from g1patch.subdivision.features import _level_of
+    from g1patch.subdivision.stencils import _limit_frames, _limit_positions
 
     for mesh in _stencil_cages(shared_data):
         level = _level_of(mesh)
@@ -248,6 +251,9 @@ def test_public_limits_with_kernels_equal_those_without(shared_data, monkeypatch
         monkeypatch.setattr(subdivision, "KERNEL_VERTICES", 0)
         after = subdivision.limit_data(mesh), subdivision.limit_corner_normals(mesh)
         for name, old, new in zip(
-            (*before[0]._fields, "corner normals"), (*before[0], before[1]), (*after[0], after[1])
+            (*before[0]._fields, "corner normals"),
+            (*before[0], before[1]),
+            (*after[0], after[1]),
+            strict=True,
         ):
             np.testing.assert_array_equal(new, old, err_msg=name)

@@ -226,7 +226,7 @@ def test_refined_tags_carry_the_decremented_sharpness() -> None:
     features = fine.features
     nv = mesh.n_vertices
     keys = fine.topology.edges[:, 0] * fine.n_vertices + fine.topology.edges[:, 1]
-    for (a, b), s, child in zip(line, [4.7, 2.5, 0.5, 10.0], [3.7, 1.5, 0.0, 10.0]):
+    for (a, b), _, child in zip(line, [4.7, 2.5, 0.5, 10.0], [3.7, 1.5, 0.0, 10.0], strict=True):
         e = np.searchsorted(
             mesh.topology.edges[:, 0] * nv + mesh.topology.edges[:, 1], min(a, b) * nv + max(a, b)
         )

@@ -422,6 +422,7 @@ def _keep(image: np.ndarray, name: str) -> None:
         Image.fromarray(image).save(Path(SCREENSHOTS) / f"{name}.png")
 
 
+@pytest.mark.slow
 def test_browser_draws_every_mode(
     browser: DevTools, cube_page: Path, creased: g1patch.Surface, tmp_path: Path
 ) -> None:

@@ -266,11 +266,11 @@ def _run(
             np.copyto(v_tile.reshape(3, 4, 4, m), r_v[:, lo:hi].reshape(3, 1, 4, m))
             coeff, tmp = coeff_buf[: 16 * m].reshape(16, m), tmp_buf[: 16 * m].reshape(16, m)
             nrm, length_m = cross[:, :m], length[:m]
-            for d, i, l in _CROSS:
-                # C_d[(j, k)] = U_i[j] V_l[k] - U_l[j] V_i[k] for every grid row, then one GEMM
+            for d, i, m_ in _CROSS:
+                # C_d[(j, k)] = U_i[j] V_m[k] - U_m[j] V_i[k] for every grid row, then one GEMM
                 # along v
-                np.multiply(u_rep[i], v_tile[l], out=coeff)
-                np.multiply(u_rep[l], v_tile[i], out=tmp)
+                np.multiply(u_rep[i], v_tile[m_], out=coeff)
+                np.multiply(u_rep[m_], v_tile[i], out=tmp)
                 np.subtract(coeff, tmp, out=coeff)
                 np.matmul(coeff.T, products, out=nrm[d])
             np.einsum("dmb,dmb->mb", nrm, nrm, out=length_m)

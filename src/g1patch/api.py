@@ -216,7 +216,10 @@ def _meshio_faces(mesh: Any) -> Any:
             if isinstance(data, np.ndarray) and data.ndim == 2:
                 blocks.append(data.astype(np.int64, copy=False))
             else:  # polygon blocks of mixed sizes come as a list of arrays
-                blocks.extend(np.atleast_2d(np.asarray(face, dtype=np.int64)) for face in data)
+                blocks.extend(
+                    np.atleast_2d(np.asarray(face, dtype=np.int64))
+                    for face in (data if data is not None else ())
+                )
         elif kind == "vertex" or kind.startswith("line"):
             skipped.append(kind)
         else:
@@ -365,13 +368,43 @@ def as_network(surface: Any, name: str = "surface") -> PatchNetwork:
     if isinstance(surface, Surface):
         return surface.network
     if isinstance(surface, _surface_types()):
-        return network_of(surface, name)
-    if isinstance(surface, (str, os.PathLike)) and Path(surface).suffix.lower() in NETWORK_SUFFIXES:
-        return read(surface)  # type: ignore[return-value]
+        return network_of(surface, name)  # type: ignore[arg-type]
+    if isinstance(surface, (str, os.PathLike)):
+        return _read_network(Path(surface))
     raise InputError(
         f"{name}: expected a Surface, PatchNetwork, PatchSet, GregoryPatchSet or a network "
         f"file (.npz, .bpt), got {describe(surface)}"
     )
+
+
+#: what the commands that take a surface read instead of a mesh
+NETWORK_EXPECTED = (
+    "check, export, render and view read a network file (.npz) written by g1patch build, "
+    "or Bézier patches (.bpt)"
+)
+
+
+def _read_network(path: Path) -> PatchNetwork:
+    """The network of a ``.npz`` or ``.bpt`` file; anything else, a missing file included, is one
+    :class:`FormatError` saying what was expected instead (and, for a mesh, how to make one)."""
+    suffix = path.suffix.lower()
+    if suffix == ".bpt":
+        return read(path)  # type: ignore[return-value]
+    if suffix == ".npz":
+        from .io.network_file import load_network
+
+        return load_network(path, expects=NETWORK_EXPECTED)
+    if not path.exists():
+        raise FormatError(path, "no such file")
+    from .io.network_file import describe_file
+
+    what = describe_file(path, b"")
+    hint = (
+        f" (make a network from it: g1patch build {path} -o {path.with_suffix('.npz')})"
+        if suffix in MESH_SUFFIXES
+        else ""
+    )
+    raise FormatError(path, f"not a network or patch file but {what}; {NETWORK_EXPECTED}{hint}")
 
 
 # ------------------------------------------------------------------------------- the surface
@@ -474,15 +507,17 @@ class Surface:
         mesh = tessellate(self.network, resolution, force=force)
         return mesh.points, mesh.triangles
 
-    def export(self, path: PathLike, **options: Any) -> Path | ExportResult:
+    def export(self, path: PathLike, **options: Any) -> Any:
         """Write the surface to ``path``, the format chosen by its suffix:
 
         * ``.npz``: the network file (``g1patch check/render/export`` read it; :func:`read` too);
+          ``background=True`` writes it on a thread of its own and returns a future whose
+          ``result()`` waits for it (:func:`g1patch.io.network_file.save_network_in_background`);
         * ``.obj``, ``.ply``, ``.stl``: triangles of :meth:`tessellate` (options ``resolution``,
-          ``force``);
+          ``force``: an explicit resolution above 20 M triangles needs it);
         * ``.step``/``.stp``, ``.iges``/``.igs``: a B-rep, one B-spline face per patch (split4:
           per quad), exact for polynomial patches; a Gregory network by ``method`` (``auto``:
-          its split4 re-assembly, exact G1 in CAD; ``fit``: fitted within ``tolerance``, model
+          its split4 re-assembly, exact G1 in CAD; ``fit``: fitted within ``fit_tolerance``, model
           units, default 1e-6 × the bbox diagonal); ``max_deviation`` (the re-assembly's bound,
           relative to the diagonal, default 1e-3); also ``progress``, ``g1_samples``
           (:func:`g1patch.io.cad.export_cad`, needs ``pip install 'g1patch[cad]'``);
@@ -504,7 +539,9 @@ class Surface:
             )
         if suffix in CAD_SUFFIXES:
             _check_options(
-                target, options, ("tolerance", "progress", "g1_samples", "method", "max_deviation")
+                target,
+                options,
+                ("fit_tolerance", "progress", "g1_samples", "method", "max_deviation"),
             )
             from .io.cad import export_cad
 
@@ -512,18 +549,23 @@ class Surface:
         if suffix in TRIANGLE_SUFFIXES:
             _check_options(target, options, ("resolution", "force"))
             from .io.meshfile import write_triangles
+            from .tessellate import check_file_size
 
-            points, triangles = self.tessellate(
-                options.get("resolution"), force=bool(options.get("force", False))
-            )
+            resolution, force = options.get("resolution"), bool(options.get("force", False))
+            if resolution is not None:
+                check_file_size(self.n_patches, resolution, suffix, force)
+            points, triangles = self.tessellate(resolution, force=force)
             write_triangles(target, points, triangles)
             return target
-        _check_options(target, options, ())
         if suffix == ".npz":
-            from .io.network_file import save_network
+            _check_options(target, options, ("background",))
+            from .io.network_file import save_network, save_network_in_background
 
+            if options.get("background"):
+                return save_network_in_background(target, self.network)
             save_network(target, self.network)
             return target
+        _check_options(target, options, ())
         from .io.bpt import write_bpt
         from .patches import PatchSet
 
@@ -615,6 +657,8 @@ def smooth(
     strict: bool | None = None,
     split: bool = True,
     tangents: str = "arc",
+    twist: str = "bilinear",
+    normals: str = "fan",
 ) -> Surface:
     """The smooth surface of a mesh: exactly G1 bicubic patches
     (:func:`g1patch.build.build_network`).
@@ -626,16 +670,26 @@ def smooth(
     ``split4`` (exact G1, polynomial: exact in STEP) or ``corner`` (the paper's, G1 at corners
     only). ``refine``: Catmull–Clark steps first. ``sharp_angle`` (degrees): keep edges whose faces
     turn by more than that sharp. ``strict``: refuse a mesh that needs repair instead of repairing
-    it. ``split``: split non-quad faces (else they raise). ``tangents``: the legacy shape's.
+    it. ``split``: split non-quad faces (else they raise). ``tangents``: the legacy shape's;
+    ``twist`` and ``normals``: the paper's construction's (``corner`` with ``legacy``).
     """
-    from .build import METHODS, build_network
+    from .build import build_network
+    from .construct import METHODS
     from .errors import check_choice
-    from .targets.interpolate import SHAPES
+    from .targets import SHAPES
 
-    check_choice("shape", shape, SHAPES)  # before a large file is read
+    check_choice("shape", shape, tuple(SHAPES))  # before a large file is read
     check_choice("method", method, METHODS)
     mesh = as_mesh(source, split=split, sharp_angle=sharp_angle, strict=strict)
-    network = build_network(mesh, method, shape, tangents=tangents, refine=refine)  # type: ignore[arg-type]
+    network = build_network(
+        mesh,
+        method,
+        shape,
+        tangents=tangents,  # type: ignore[arg-type]
+        twist=twist,  # type: ignore[arg-type]
+        normals=normals,  # type: ignore[arg-type]
+        refine=refine,
+    )
     return Surface(network, mesh)
 
 

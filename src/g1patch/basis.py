@@ -74,7 +74,8 @@ _DERIVATIVE = np.array(
 
 def _matmul(a: RationalMatrix, b: RationalMatrix) -> RationalMatrix:
     return tuple(
-        tuple(sum(a[i][k] * b[k][j] for k in range(4)) for j in range(4)) for i in range(4)
+        tuple(sum((a[i][k] * b[k][j] for k in range(4)), Fraction(0)) for j in range(4))
+        for i in range(4)
     )
 
 
@@ -89,7 +90,7 @@ def _inverse(a: RationalMatrix) -> RationalMatrix:
         for r in range(4):
             if r != col and rows[r][col] != 0:
                 factor = rows[r][col]
-                rows[r] = [x - factor * y for x, y in zip(rows[r], rows[col])]
+                rows[r] = [x - factor * y for x, y in zip(rows[r], rows[col], strict=True)]
     return tuple(tuple(row[4:]) for row in rows)
 
 

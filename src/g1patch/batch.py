@@ -81,11 +81,11 @@ class BuildOptions:
     strict: bool = False
 
     def __post_init__(self) -> None:
-        from .build import METHODS
-        from .targets.interpolate import SHAPES
+        from .construct import METHODS
+        from .targets import SHAPES
 
         check_choice("method", self.method, METHODS)
-        check_choice("shape", self.shape, SHAPES)
+        check_choice("shape", self.shape, tuple(SHAPES))
         if isinstance(self.refine, bool) or not isinstance(self.refine, int) or self.refine < 0:
             raise InputError(
                 f"refine: expected a number of Catmull–Clark steps ≥ 0, got {self.refine!r}"
@@ -362,8 +362,8 @@ def convert(job: Job) -> dict[str, Any]:
             ):  # STEP/IGES: faces, deviation, OpenCASCADE's G1 angles
                 record["cad"][name] = written.to_dict()
         record["status"] = BUILT
-        if mesh.repairs:
-            record["note"] = mesh.repair_note
+        if surface.repairs:
+            record["note"] = surface.mesh.repair_note  # type: ignore[union-attr]
     except Exception as error:  # a batch reports each file's failure, whatever it is, and goes on
         record.update(status=FAILED, error=one_line(error))
     times["total"] = time.perf_counter() - start
@@ -636,7 +636,9 @@ def summary_table(records: Sequence[dict[str, Any]]) -> str:
         )
     widths = [max(len(row[column]) for row in rows) for column in range(len(header) - 1)]
     lines = [
-        "  ".join(cell.ljust(width) for cell, width in zip(row, widths)) + "  " + row[-1]
+        "  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=False))
+        + "  "
+        + row[-1]
         for row in rows
     ]
     counts = {

@@ -19,31 +19,27 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from typing import Literal, TypeVar
+from typing import TypeVar
 
 import numpy as np
 
-from .construct.corner import assemble_corner
-from .construct.gregory import assemble_gregory
+from .construct import ASSEMBLIES, METHODS, NetworkParts
+from .construct.corner import TWISTS, TwistRule, build_corner_network
 from .continuity import folded_patches
 from .errors import InputError, check_choice
 from .frame import Frame
-from .gregory import GregoryPatchSet
-from .mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology, Tag
-from .network import Patches, PatchNetwork, network_from_mesh
-from .patches import PatchSet
-from .targets import Targets
-from .targets.interpolate import SHAPES, ShapeRule, retreat, shape_targets
-from .targets.local import TANGENTS, TangentRule
+from .mesh import INFINITE_SHARPNESS, QuadMesh, Tag
+from .network import Patches, PatchNetwork
+from .targets import SHAPES, Targets, shape_targets
+from .targets.interpolate import retreat
+from .targets.local import NORMALS, TANGENTS, NormalRule, TangentRule
 
-__all__ = ["METHODS", "Method", "build_gregory_network", "build_network", "build_split4_network"]
+__all__ = ["METHODS", "build_gregory_network", "build_network", "build_split4_network"]
 
 #: whatever an assembly returns (its patches, or its patches and more)
 A = TypeVar("A")
 logger = logging.getLogger(__name__)
 
-Method = Literal["gregory", "split4", "corner"]
-METHODS: tuple[Method, ...] = ("gregory", "split4", "corner")
 
 #: how far the fold guard moves the targets of folded faces' vertices, in turn
 GUARD_STEPS = (0.5, 1.0, 1.0)
@@ -131,7 +127,7 @@ def _faces_at_risk(targets: Targets, *, compiled: bool = True) -> np.ndarray:
         )
         return np.flatnonzero(risky)
     n = targets.corner_normals
-    risky = targets.fallback[faces].any(axis=1)
+    risky = np.asarray(targets.fallback[faces].any(axis=1))
     risky |= (np.einsum("fkd,fkd->fk", n, np.roll(n, -1, axis=1)) < np.cos(RISK_TURN)).any(axis=1)
     slot_out, _ = halfedge_slots(topology)
     x = targets.positions
@@ -190,7 +186,7 @@ def _guarded(
     targets: Targets,
     assemble: Callable[[Targets], A],
     patches_per_face: int,
-    patches_of: Callable[[A], Patches] = lambda a: a,
+    patches_of: Callable[[A], Patches] = lambda a: a,  # type: ignore[assignment,return-value]
 ) -> tuple[A, Targets]:
     """Assemble, and where faces fold retreat their vertices' targets (module docstring). Only the
     faces at risk (:func:`_faces_at_risk`) of ``patches_of(assemble(targets))`` are tested (an
@@ -244,29 +240,35 @@ def _guarded(
 
 def build_network(
     mesh: QuadMesh,
-    method: Method = "gregory",
-    shape: ShapeRule = "interpolate",
+    method: str = "gregory",
+    shape: str = "interpolate",
     *,
     tangents: TangentRule = "arc",
+    twist: TwistRule = "bilinear",
+    normals: NormalRule = "fan",
     refine: int = 0,
 ) -> PatchNetwork:
     """The patch network of ``mesh``: targets by ``shape``, assembled by ``method``.
 
-    ``method``: ``gregory`` (exact G1, rational interiors), ``split4`` (exact G1, 2×2 polynomial
-    bicubics per quad), ``corner`` (the paper: G1 at corners only). ``shape``: ``interpolate``
-    (the default rules of :mod:`g1patch.targets.interpolate`: through the mesh vertices),
-    ``limit`` (the Catmull–Clark limit of the mesh as a control cage, :mod:`g1patch.targets.limit`:
-    through the limit points, without the fold guard, which would pull it off the limit) or
-    ``legacy`` (the previous release's, for comparison, without the fold guard). ``tangents``
-    (``arc`` or ``chord``) applies to ``legacy`` only. ``refine``: Catmull–Clark steps applied to
-    the mesh first (:func:`g1patch.subdivision.refine`); the limit shapes refine at least
-    :func:`semi_sharp_levels` steps, so semi-sharp creases follow OpenSubdiv's limit. The network's
-    provenance records the choices (the steps actually taken) and how many vertices needed a
-    fallback.
+    ``method`` (:data:`g1patch.construct.ASSEMBLIES`): ``gregory`` (exact G1, rational
+    interiors), ``split4`` (exact G1, 2×2 polynomial bicubics per quad), ``corner`` (the paper: G1
+    at corners only). ``shape`` (:data:`g1patch.targets.SHAPES`): ``interpolate`` (through the
+    mesh vertices, with the fold guard), ``limit`` (the Catmull–Clark limit of the mesh as a
+    control cage: through the limit points, without the fold guard, which would pull it off the
+    limit), ``limit-interpolate`` or ``legacy`` (the previous release's, for comparison).
+    ``tangents`` (``arc`` or ``chord``) applies to ``legacy`` only; ``corner`` with ``legacy`` is
+    the paper's construction as the first release built it (:func:`build_corner_network`, world
+    coordinates), with its ``twist`` and ``normals`` rules. ``refine``: Catmull–Clark steps
+    applied to the mesh first (:func:`g1patch.subdivision.refine`); the limit shapes refine at
+    least :func:`semi_sharp_levels` steps, so semi-sharp creases follow OpenSubdiv's limit. The
+    network's provenance records the choices (the steps actually taken) and how many vertices
+    needed a fallback.
     """
     check_choice("method", method, METHODS)
-    check_choice("shape", shape, SHAPES)
+    check_choice("shape", shape, tuple(SHAPES))
     check_choice("tangents", tangents, TANGENTS)
+    check_choice("twist", twist, TWISTS)
+    check_choice("normals", normals, NORMALS)
     if isinstance(refine, bool) or not isinstance(refine, (int, np.integer)) or refine < 0:
         raise InputError(f"refine: expected a number of Catmull–Clark steps ≥ 0, got {refine!r}")
     refine = max(
@@ -277,113 +279,33 @@ def build_network(
         from .subdivision import refine as subdivide
 
         mesh = subdivide(mesh, refine)
+    if method == "corner" and shape == "legacy" and not refine:
+        return build_corner_network(mesh, tangents=tangents, twist=twist, normals=normals)
+    assembly = ASSEMBLIES[method]
     frame = Frame.of_points(mesh.vertices)
     local = mesh.with_vertices(frame.to_local(mesh.vertices))
-    if method == "split4" and mesh.features.sharp_edges.any():
+    if not assembly.keeps_creases and mesh.features.sharp_edges.any():
         local = _without_creases(local)
     targets = shape_targets(local, shape, tangents=tangents)
-    guard = shape == "interpolate"
     surface = (
         mesh if shape != "limit" else mesh.with_vertices(frame.to_world(targets.positions))
     )  # the points passed through
     provenance = _provenance(mesh, method, shape, tangents, targets, refine, repairs)
-    if method == "split4":
-        from .construct.split4 import (
-            Split4Parts,
-            split4_network_from_parts,
-            split4_patches,
-            split4_provenance,
+    if shape == "interpolate":  # the guard's best assembly is the network's: built once
+        assembled, targets = _guarded(
+            targets, assembly.assemble, assembly.patches_per_face, assembly.patches_of
         )
-
-        def assemble_split4(t: Targets) -> Split4Parts:
-            return split4_patches(t, t.positions, np.zeros(3), 1.0)
-
-        # the guard's best assembly is the network's: built once (interpolate's positions are the
-        # vertices)
-        if guard:
-            parts, targets = _guarded(targets, assemble_split4, 4, lambda p: p[0])
-        else:
-            parts = assemble_split4(targets)
-        sub_patches, extra, extra_normals, stars = parts
-        provenance, normals = split4_provenance(provenance, targets, stars), targets.normals
-        del (
-            parts,
-            stars,
-            targets,
-            local,
-        )  # the network needs none of the rest: freed before its arrays are made (DESIGN §6)
-        network = split4_network_from_parts(
-            surface, sub_patches, extra, extra_normals, normals, frame, provenance
-        )
-        # said once the network exists: a build that then fails says one thing, its error
-        if mesh.features.sharp_edges.any():
-            logger.warning(
-                "split4 does not keep sharp edges yet: the %d tagged sharp edges come out smooth "
-                "(use --method gregory)",
-                int(mesh.features.sharp_edges.sum()),
-            )
-        if mesh.features.holes.any():
-            logger.warning(
-                "split4 does not leave holes open yet: the %d hole faces get patches (use "
-                "--method gregory)",
-                int(mesh.features.holes.sum()),
-            )
-        return network
-    assemble: Callable[[Targets], Patches] = (
-        assemble_corner if method == "corner" else assemble_gregory
-    )
-    if guard:
-        patches, targets = _guarded(targets, assemble, 1)
         provenance["fallback_vertices"] = str(targets.n_fallback)
     else:
-        patches = assemble(targets)
-    normals, seams = targets.normals, targets.seams
-    del (
-        targets,
-        local,
-    )  # the network needs none of the rest: freed before its arrays are made (DESIGN §6)
-    framed: PatchSet | GregoryPatchSet = patches.with_frame(frame)  # type: ignore[attr-defined]
-    holes = mesh.features.holes
-    if holes.any():
-        return _without_holes(
-            mesh.topology, framed, surface.vertices, normals, seams, provenance, ~holes
-        )
-    return network_from_mesh(
-        mesh.topology, framed, surface.vertices, normals, provenance, seam_edges=seams
-    )
-
-
-def _without_holes(
-    topology: QuadTopology,
-    patches: Patches,
-    vertices: np.ndarray,
-    normals: np.ndarray,
-    seams: np.ndarray,
-    provenance: dict[str, str],
-    keep: np.ndarray,
-) -> PatchNetwork:
-    """The network of the faces ``keep`` only: hole faces take part in every rule around them
-    (OpenSubdiv's semantics), but get no patch, so their edges become open boundaries."""
-    if not keep.any():
-        raise InputError("every face of the mesh is tagged as a hole: there is no surface to build")
-    faces = topology.faces[keep]
-    used = np.zeros(topology.n_vertices, dtype=bool)
-    used[faces] = True
-    index = np.cumsum(used) - 1
-    sub = QuadTopology.from_faces(index[faces], int(used.sum()))
-    # an edge of the sub-mesh is a seam where its parent edge was
-    parent = topology.halfedge_edge[(4 * np.flatnonzero(keep)[:, None] + np.arange(4)).ravel()]
-    sub_seams = np.zeros(sub.n_edges, dtype=bool)
-    sub_seams[sub.halfedge_edge] = seams[parent]
-    provenance = {**provenance, "holes": str(int((~keep).sum()))}
-    return network_from_mesh(
-        sub,
-        patches.take(np.flatnonzero(keep)),
-        vertices[used],
-        normals[used],
-        provenance,
-        seam_edges=sub_seams,
-    )
+        assembled = assembly.assemble(targets)
+    kept, provenance = assembly.keep(assembled, targets, provenance)
+    # the network needs none of the rest: freed before its arrays are made (DESIGN §6)
+    del assembled, targets, local
+    network = assembly.network(kept, NetworkParts(mesh, surface, frame, provenance))
+    # said once the network exists: a build that then fails says one thing, its error
+    for warning in assembly.warnings(mesh):
+        logger.warning(warning)
+    return network
 
 
 def _without_creases(mesh: QuadMesh) -> QuadMesh:
@@ -418,14 +340,14 @@ def _without_creases(mesh: QuadMesh) -> QuadMesh:
 
 
 def build_gregory_network(
-    mesh: QuadMesh, *, shape: ShapeRule = "interpolate", tangents: TangentRule = "arc"
+    mesh: QuadMesh, *, shape: str = "interpolate", tangents: TangentRule = "arc"
 ) -> PatchNetwork:
     """``build_network(mesh, "gregory", shape)``: exact G1, one rational Gregory patch per quad."""
     return build_network(mesh, "gregory", shape, tangents=tangents)
 
 
 def build_split4_network(
-    mesh: QuadMesh, *, shape: ShapeRule = "interpolate", tangents: TangentRule = "arc"
+    mesh: QuadMesh, *, shape: str = "interpolate", tangents: TangentRule = "arc"
 ) -> PatchNetwork:
     """``build_network(mesh, "split4", shape)``: exact G1, 2×2 polynomial bicubics per quad."""
     return build_network(mesh, "split4", shape, tangents=tangents)

@@ -22,11 +22,8 @@ import signal
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from importlib import resources
 from pathlib import Path
-from typing import Any, Literal
-
-import numpy as np
+from typing import Any
 
 from . import __version__
 from .errors import FormatError, G1PatchError
@@ -36,9 +33,6 @@ EXIT_OK, EXIT_CHECK_FAILED, EXIT_ERROR = 0, 1, 2
 #: 128 + the signal's number, as a shell reports a process the signal ended
 EXIT_SIGNAL_BASE = 128
 EXIT_BROKEN_PIPE = EXIT_SIGNAL_BASE + 13
-METHODS = ("gregory", "split4", "corner")
-MESH_SUFFIXES = (".obj", ".ply", ".stl")
-CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
 
 _EXAMPLES = {
     "build": """examples:
@@ -78,10 +72,15 @@ _EXAMPLES = {
 
 
 def _parser() -> argparse.ArgumentParser:
+    from .construct import ASSEMBLIES
     from .construct.corner import TWISTS
     from .io.cad import CAD_METHODS, DEVIATION_RTOL
-    from .targets.interpolate import SHAPES
+    from .targets import SHAPES
     from .targets.local import NORMALS, TANGENTS
+
+    methods = tuple(ASSEMBLIES)
+    shapes = tuple(SHAPES)
+    method_help = "; ".join(f"{a.name}: {a.summary}" for a in ASSEMBLIES.values())
 
     parser = argparse.ArgumentParser(
         prog="g1patch",
@@ -111,18 +110,17 @@ def _parser() -> argparse.ArgumentParser:
     )
     build.add_argument(
         "--method",
-        choices=METHODS,
-        default="gregory",
-        help="gregory: exact G1, rational interiors (default); split4: exact G1 with polynomial "
-        "bicubics, exact in STEP; corner: the paper's, G1 at corners only",
+        choices=methods,
+        default=methods[0],
+        help=method_help,
     )
     build.add_argument(
         "--shape",
-        choices=SHAPES,
-        default="interpolate",
+        choices=shapes,
+        default=shapes[0],
         help="interpolate: through the vertices, fitted normals, flexible tangent fans, "
-        "curvature-carrying "
-        "twists (default); limit: the Catmull–Clark limit of the mesh as a control cage; "
+        "curvature-carrying twists (default); limit: the Catmull–Clark limit of the mesh as a "
+        "control cage; limit-interpolate: through the vertices as the limit of a solved cage; "
         "legacy: the first release's rules (fan normal, regular star, bilinear twist)",
     )
     build.add_argument(
@@ -220,7 +218,7 @@ def _parser() -> argparse.ArgumentParser:
         help="meshes: allow a --resolution making more than 20 M triangles",
     )
     export.add_argument(
-        "--tolerance",
+        "--fit-tolerance",
         type=float,
         metavar="REL",
         help="CAD: fit tolerance for rational patches, relative to the bbox diagonal (default: "
@@ -329,10 +327,10 @@ def _parser() -> argparse.ArgumentParser:
         "(default: npz)",
     )
     batch.add_argument(
-        "--method", choices=METHODS, default="gregory", help="as for build (default: gregory)"
+        "--method", choices=methods, default=methods[0], help="as for build (default: %(default)s)"
     )
     batch.add_argument(
-        "--shape", choices=SHAPES, default="interpolate", help="as for build (default: interpolate)"
+        "--shape", choices=shapes, default=shapes[0], help="as for build (default: %(default)s)"
     )
     batch.add_argument(
         "--refine", type=int, default=0, metavar="N", help="as for build (default: 0)"
@@ -416,100 +414,42 @@ def _progress(label: str, quiet: bool) -> Iterator[Callable[[int, int], None]]:
         bar.close()
 
 
-def _load_surface(path: Path) -> Any:
-    """The network ``check`` and ``render`` read: a network file (.npz, validated by
-    :func:`load_network`) or Bézier patches (.bpt, validated by :func:`read_bpt`). Anything else,
-    a missing file included, is one :class:`FormatError` saying what was expected instead."""
-    from .io.bpt import read_bpt
-    from .io.network_file import describe_file, load_network
-    from .network import network_from_patch_points
-
-    expects = (
-        "check and render read a network file (.npz) written by g1patch build, "
-        "or Bézier patches (.bpt)"
-    )
-    suffix = path.suffix.lower()
-    if suffix == ".bpt":
-        return network_from_patch_points(read_bpt(path), source=str(path))
-    if suffix == ".npz":
-        return load_network(path, expects=expects)
-    if not path.exists():
-        raise FormatError(path, "no such file")
-    what = describe_file(path, b"")
-    hint = (
-        f" (make a network from it: g1patch build {path} -o {path.with_suffix('.npz')})"
-        if suffix in MESH_SUFFIXES + (".off",)
-        else ""
-    )
-    raise FormatError(path, f"not a network or patch file but {what}; {expects}{hint}")
-
-
-def build_network(
-    mesh: Any,
-    method: str,
-    *,
-    shape: str = "interpolate",
-    tangents: str = "arc",
-    twist: str = "bilinear",
-    normals: str = "fan",
-    refine: int = 0,
-) -> Any:
-    """The network of ``mesh`` by ``method`` and ``shape`` (:func:`g1patch.build.build_network`).
-
-    ``--method corner --shape legacy`` is the paper's construction as the first release built it,
-    with its ``--twist`` and ``--normals`` options.
-    """
-    if method == "corner" and shape == "legacy" and not refine:
-        from .construct.corner import build_corner_network
-
-        return build_corner_network(mesh, tangents=tangents, twist=twist, normals=normals)  # type: ignore[arg-type]
-    from .build import build_network as build
-
-    return build(mesh, method, shape, tangents=tangents, refine=refine)  # type: ignore[arg-type]
-
-
 def _build(args: argparse.Namespace) -> int:
-    from .io.meshfile import read_mesh
-    from .io.network_file import save_network, save_network_in_background
-    from .mesh import strict_meshes
+    from .api import smooth
 
     if args.output.suffix.lower() != ".npz":
         raise FormatError(args.output, "a network file must end in .npz")
     with _progress("build", args.quiet) as progress:
-        progress(0, 3)
-        with strict_meshes(args.strict):
-            mesh = read_mesh(args.mesh, split=not args.no_split, sharp_angle=args.sharp_angle)
-        progress(1, 3)
-        network = build_network(
-            mesh,
+        progress(0, 2)
+        surface = smooth(
+            args.mesh,
+            args.shape,
             args.method,
-            shape=args.shape,
+            refine=args.refine,
+            sharp_angle=args.sharp_angle,
+            strict=args.strict,
+            split=not args.no_split,
             tangents=args.tangents,
             twist=args.twist,
             normals=args.normals,
-            refine=args.refine,
         )
-        progress(2, 3)
-        if args.check:  # the file is written while the check runs
-            saving = save_network_in_background(args.output, network)
-        else:
-            save_network(args.output, network)
-        progress(3, 3)
+        progress(1, 2)
+        # with --check the file is written while the check runs
+        saving = surface.export(args.output, background=args.check)
+        progress(2, 2)
     report = None
     if args.check:
-        from .continuity import check
-
         with _progress("check", args.quiet) as progress:
-            report = check(network, progress=progress)
+            report = surface.check(progress=progress)
         saving.result()
-    if mesh.repairs:
-        print(f"g1patch: {args.mesh}: {mesh.repair_note}", file=sys.stderr)
-    fallback = int(network.provenance.get("fallback_vertices", "0"))
+    if surface.repairs:
+        print(f"g1patch: {args.mesh}: {surface.mesh.repair_note}", file=sys.stderr)  # type: ignore[union-attr]
+    fallback = int(surface.provenance.get("fallback_vertices", "0"))
     note = (
         f"; {fallback} vertices needed a fallback (degenerate or folded fans)" if fallback else ""
     )
     print(
-        f"built {network.n_patches} {args.method} patches from {args.mesh} -> {args.output}{note}"
+        f"built {surface.n_patches} {args.method} patches from {args.mesh} -> {args.output}{note}"
     )
     if report is not None:
         print(report.summary())
@@ -517,9 +457,10 @@ def _build(args: argparse.Namespace) -> int:
 
 
 def _check(args: argparse.Namespace) -> int:
-    from .continuity import SEAM_G0_RTOL, check
+    from .api import as_network, check
+    from .continuity import SEAM_G0_RTOL
 
-    network = _load_surface(args.surface)
+    network = as_network(args.surface)
     with _progress("check", args.quiet) as progress:
         report = check(network, samples=args.samples, progress=progress)
     if args.json:
@@ -556,67 +497,53 @@ def _check(args: argparse.Namespace) -> int:
 
 
 def _export(args: argparse.Namespace) -> int:
+    from .api import CAD_SUFFIXES, EXPORT_SUFFIXES, as_network, export
+    from .errors import InputError
+    from .io.cad import ExportResult
+
     suffix = args.output.suffix.lower()
-    if suffix not in (*MESH_SUFFIXES, *CAD_SUFFIXES, ".bpt"):
+    if suffix not in EXPORT_SUFFIXES or suffix == ".npz":
+        written = ", ".join(s for s in EXPORT_SUFFIXES if s != ".npz")
         raise FormatError(
             args.output,
-            f"unsupported extension {suffix or '(none)'!r}; expected one of "
-            f"{', '.join((*MESH_SUFFIXES, *CAD_SUFFIXES, '.bpt'))}",
+            f"unsupported extension {suffix or '(none)'!r}; expected one of {written}",
         )
-    from .io.network_file import load_network
-
-    network = load_network(args.network)
+    if args.json and suffix not in CAD_SUFFIXES:
+        raise InputError(
+            f"--json: reports CAD exports ({', '.join(CAD_SUFFIXES)}); {args.output} is not one"
+        )
+    network = as_network(args.network)
     if suffix in CAD_SUFFIXES:
-        from .io.cad import export_cad
-
         with _progress("export", args.quiet or args.json) as progress:
-            tolerance = (
-                None if args.tolerance is None else args.tolerance * network.bounding_box_diagonal()
+            fit_tolerance = (
+                None
+                if args.fit_tolerance is None
+                else args.fit_tolerance * network.bounding_box_diagonal()
             )
-            result = export_cad(
-                args.output,
+            result = export(
                 network,
-                tolerance=tolerance,
+                args.output,
+                fit_tolerance=fit_tolerance,
                 method=args.cad_method,
                 max_deviation=args.max_deviation,
                 progress=lambda stage, done, total: progress(done, total),
             )
         corner_only = network.provenance.get("method") == "corner"
+        assert isinstance(result, ExportResult)
         if args.json:
             print(json.dumps({**result.to_dict(), "g1_by_design": not corner_only}))
             return EXIT_OK
         print(_cad_export_text(result, corner_only))
         return EXIT_OK
-    if args.json:
-        from .errors import InputError
-
-        raise InputError(
-            f"--json: reports CAD exports ({', '.join(CAD_SUFFIXES)}); {args.output} is not one"
-        )
     if suffix == ".bpt":
-        from .io.bpt import write_bpt
-        from .patches import PatchSet
-
-        if not isinstance(network.patches, PatchSet):
-            raise FormatError(
-                args.output,
-                ".bpt holds polynomial Bézier patches; this network's patches are rational "
-                "(export to .step instead)",
-            )
-        write_bpt(args.output, network.patches)
+        export(network, args.output)
         print(f"wrote {network.n_patches} Bézier patches -> {args.output}")
         return EXIT_OK
-    from .io.meshfile import write_triangles
-    from .tessellate import choose_resolution, tessellate
+    from .tessellate import choose_resolution, triangle_count
 
-    resolution = (
-        choose_resolution(network.n_patches) if args.resolution is None else args.resolution
-    )
-    if args.resolution is not None:
-        _check_export_size(network.n_patches, resolution, suffix, args.force)
-    mesh = tessellate(network, resolution, force=True)
-    write_triangles(args.output, mesh.points, mesh.triangles)
-    print(f"wrote {len(mesh.triangles)} triangles, {len(mesh.points)} points -> {args.output}")
+    resolution = args.resolution or choose_resolution(network.n_patches)
+    export(network, args.output, resolution=resolution, force=args.force or args.resolution is None)
+    print(f"wrote {triangle_count(network.n_patches, resolution)} triangles -> {args.output}")
     return EXIT_OK
 
 
@@ -665,53 +592,15 @@ def _cad_export_text(result: Any, corner_only: bool) -> str:
     return "\n".join(lines)
 
 
-def _estimated_file_size(suffix: str, n_points: int, n_triangles: int) -> int:
-    """Bytes of a triangle mesh file, about: OBJ ~60 bytes a point (shortest round-trip digits)
-    and 3 indices a triangle; binary PLY 24 bytes a point, 13 a triangle; binary STL 50 a
-    triangle."""
-    if suffix == ".obj":
-        return 60 * n_points + (3 * (len(str(max(n_points, 1))) + 1) + 2) * n_triangles
-    if suffix == ".ply":
-        return 24 * n_points + 13 * n_triangles
-    return 84 + 50 * n_triangles
-
-
-def _check_export_size(n_patches: int, resolution: int, suffix: str, force: bool) -> None:
-    """Refuse (exit 2) an explicit ``--resolution`` above the triangle cap without ``--force``, with
-    the sizes."""
-    from .errors import InputError
-    from .tessellate import MAX_TRIANGLES, _size_text, estimated_memory, triangle_count
-
-    if resolution < 2:
-        return  # tessellate names the bad resolution
-    triangles = triangle_count(n_patches, resolution)
-    if force or triangles <= MAX_TRIANGLES:
-        return
-    points = n_patches * (resolution - 1) ** 2
-    largest = 1 + int((MAX_TRIANGLES / (2 * max(n_patches, 1))) ** 0.5)
-    size = _size_text(_estimated_file_size(suffix, points, triangles), "B")
-    memory = _size_text(estimated_memory(n_patches, resolution), "B")
-    raise InputError(
-        f"--resolution {resolution} on {n_patches} patches would write {_size_text(triangles)} "
-        "triangles "
-        f"(~{size}, ~{memory} of memory); use --force or a lower resolution "
-        f"(at most {largest} stays within {_size_text(MAX_TRIANGLES)} triangles)"
-    )
-
-
 def _render(args: argparse.Namespace) -> int:
-    from .render import render
+    from .api import Surface, as_network
 
     if args.output.suffix.lower() != ".png":
         raise FormatError(args.output, "pictures are written as .png")
-    mode: Literal["shaded", "zebra", "deviation"] = (
-        "zebra" if args.zebra else "deviation" if args.deviation else "shaded"
-    )
-    network = _load_surface(args.network)
-    render(
+    mode = "zebra" if args.zebra else "deviation" if args.deviation else "shaded"
+    Surface(as_network(args.network)).render(
         args.output,
-        network,
-        mode=mode,
+        mode,
         size=tuple(args.size),
         **_camera_options(args),
         zoom=args.zoom,
@@ -748,10 +637,10 @@ def _batch(args: argparse.Namespace) -> int:
 
 
 def _view(args: argparse.Namespace) -> int:
-    from .api import Surface
+    from .api import Surface, as_network
     from .tessellate import _size_text, choose_resolution, triangle_count
 
-    network = _load_surface(args.network)
+    network = as_network(args.network)
     resolution = (
         choose_resolution(network.n_patches) if args.resolution is None else args.resolution
     )
@@ -761,113 +650,15 @@ def _view(args: argparse.Namespace) -> int:
     print(
         f"wrote a viewer of {network.n_patches} patches, "
         f"{triangle_count(network.n_patches, resolution)} triangles "
-        f"({_size_text(path.stat().st_size, 'B')}) -> {path}"
+        f"({_size_text(Path(path).stat().st_size, 'B')}) -> {path}"
     )
     return EXIT_OK
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from .build import build_gregory_network, build_network, build_split4_network
-    from .construct.corner import build_corner_network
-    from .continuity import check, format_reports
-    from .io.meshfile import read_mesh, write_triangles
-    from .patches import CORNER_PARAMETERS, PatchSet, polynomial_degree, unit
-    from .render import render_side_by_side
-    from .tessellate import tessellate
+    from .demo import run_demo
 
-    camera = _camera_options(args)
-    with resources.as_file(resources.files("g1patch") / "data" / "cube.obj") as cube_path:
-        mesh = read_mesh(cube_path)
-    corner = build_corner_network(mesh, tangents="arc", twist="coons")
-    gregory = build_gregory_network(mesh)
-    split4 = build_split4_network(mesh)
-    limit = build_network(mesh, "gregory", shape="limit")
-    print("The paper's example: the cube [-1, 1]^3, valence 3 at every corner, smoothed into a")
-    print("sphere-like surface.\n")
-    print("1. The paper's construction: bicubic Hermite patches whose corner tangents satisfy")
-    print("   n^T p_u = n^T p_v = 0 (eq. 13), with S-/HS-patch (Coons) twists.")
-    hermite = corner.patches
-    assert isinstance(hermite, PatchSet)  # the corner construction makes Hermite bicubics
-    normals = unit(np.cross(*hermite.tangents(CORNER_PARAMETERS)))[0]
-    print("   Patch 0 (face 0), unit corner normals p_u x p_v:")
-    for vertex, normal in zip(mesh.faces[0], normals, strict=True):
-        print(f"     vertex {vertex}: ({normal[0]:+.6f}, {normal[1]:+.6f}, {normal[2]:+.6f})")
-    diagonal, anti = hermite.diagonal_polynomials()
-    print(
-        f"   Degrees of its diagonal and anti-diagonal: {int(polynomial_degree(diagonal)[0])} and "
-        f"{int(polynomial_degree(anti)[0])} (S-/HS closure |C| = "
-        f"{np.linalg.norm(hermite.closure()[0]):.1e})."
-    )
-    print("2. g1patch's default: the interpolating Gregory network, G1 along every edge.")
-    print(
-        "3. g1patch's polynomial option: 2x2 bicubic pieces per quad, G1 everywhere, exact in CAD."
-    )
-    print(
-        "4. The cube as a subdivision cage: the Catmull–Clark limit (what a SubD modeller shows), "
-        "exactly G1.\n"
-    )
-    reports = [check(network) for network in (corner, gregory, split4, limit)]
-    corner_report, gregory_report, split4_report, limit_report = reports
-    print(
-        format_reports(
-            reports,
-            [
-                "1. paper (corner G1)",
-                "2. Gregory (exact G1)",
-                "3. split4 (exact G1)",
-                "4. limit (exact G1)",
-            ],
-        )
-    )
-    radius = np.linalg.norm(gregory.patches.evaluate_grid(np.linspace(0, 1, 17)), axis=-1)
-    limit_radius = np.linalg.norm(limit.patches.evaluate_grid(np.linspace(0, 1, 17)), axis=-1)
-    exact = max(report.max_edge_angle_deg for report in reports[1:])
-    print(
-        "\nThe paper's conditions hold at the corners (angle ~1e-14°) but its patches crease "
-        "along every"
-    )
-    print(
-        f"edge by {corner_report.max_edge_angle_deg:.1f}°; the other three are G1 everywhere (max "
-        f"{exact:.1e}°)."
-    )
-    print(
-        "The interpolating Gregory cube is a sphere: radius "
-        f"{radius.min():.4f}..{radius.max():.4f} (√3 = 1.7321);"
-    )
-    print(
-        "the limit surface lies inside the cage: radius "
-        f"{limit_radius.min():.4f}..{limit_radius.max():.4f}."
-    )
-
-    args.out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for name, network in (
-        ("cube_corner", corner),
-        ("cube_gregory", gregory),
-        ("cube_split4", split4),
-        ("cube_limit", limit),
-    ):
-        surface = tessellate(network, 33)
-        write_triangles(args.out / f"{name}.obj", surface.points, surface.triangles)
-        written.append(args.out / f"{name}.obj")
-    titles = [
-        "paper: corner G1 (creased)",
-        "Gregory (exact G1)",
-        "split4 (exact G1, polynomial)",
-        "Catmull–Clark limit (exact G1)",
-    ]
-    for mode in ("zebra", "deviation"):
-        path = args.out / f"cube_{mode}.png"
-        render_side_by_side(
-            path,
-            [corner, gregory, split4, limit],
-            titles,
-            mode=mode,
-            size=(2400, 640),
-            **camera,
-            reports=reports if mode == "deviation" else None,
-        )
-        written.append(path)
+    written = run_demo(args.out, _camera_options(args))
     print("\nwrote " + ", ".join(str(path) for path in written))
     return EXIT_OK
 

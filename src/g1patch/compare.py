@@ -289,7 +289,10 @@ def closest_points_on_triangles(
     """The closest point to each of ``points`` on triangle (a, b, c); all (..., 3), broadcast
     together."""
     p, a, b, c = np.broadcast_arrays(
-        *(as_float_array(name, value, (3,)) for name, value in zip("pabc", (points, a, b, c)))
+        *(
+            as_float_array(name, value, (3,))
+            for name, value in zip("pabc", (points, a, b, c), strict=True)
+        )
     )
     ab, ac, ap = b - a, c - a, p - a
     v, w = _barycentric_closest(
@@ -441,7 +444,7 @@ def reference_vertex_normals(points: ArrayLike, faces: ArrayLike) -> FloatArray:
     )
     length = np.linalg.norm(normals, axis=1, keepdims=True)
     np.divide(normals, length, out=normals, where=length > 0)
-    return normals
+    return normals.astype(np.float64, copy=False)
 
 
 def reference_normal_turns(points: ArrayLike, faces: ArrayLike) -> FloatArray:

@@ -72,6 +72,14 @@ def bbox_text(low: Any, high: Any) -> str:
     return f"bbox ({', '.join(map(_number, low))})…({', '.join(map(_number, high))})"
 
 
+def patch_set_repr(name: str, count: int, what: str, box: Callable[[], tuple[Any, Any]]) -> str:
+    """``<name 6 what, bbox (-1, -1, -1)…(1, 1, 1)>``: ``box()`` is the box of the surface sampled
+    at :data:`BOX_SAMPLES` ² points a patch (world coordinates), left out of an empty set; never the
+    arrays."""
+    text = f", {bbox_text(*box())}" if count else ""
+    return f"<{name} {count} {what}{text}>"
+
+
 def short_source(source: object) -> str:
     """The file name of a source path, at most 40 characters."""
     name = Path(str(source)).name or str(source)

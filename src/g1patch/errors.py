@@ -118,7 +118,7 @@ def as_float_array(
     need = len(trailing) if min_ndim is None else min_ndim
     shape_ok = array.ndim >= need and all(
         want is None or got == want
-        for got, want in zip(array.shape[array.ndim - len(trailing) :], trailing)
+        for got, want in zip(array.shape[array.ndim - len(trailing) :], trailing, strict=False)
     )
     if not shape_ok:
         expected = "(..., " + _shape_text(trailing)[1:] if trailing else f"at least {need} axes"
@@ -127,6 +127,16 @@ def as_float_array(
         bad = np.argwhere(~np.isfinite(array))[0]
         raise InputError(
             f"{name}: non-finite value {array[tuple(bad)]} at index {tuple(int(i) for i in bad)}"
+        )
+    return array
+
+
+def as_batch_array(name: str, value: ArrayLike, trailing: Sequence[int]) -> NDArray[np.float64]:
+    """:func:`as_float_array` with exactly one batch axis: shape ``(N, *trailing)``."""
+    array = as_float_array(name, value, trailing)
+    if array.ndim != len(trailing) + 1:
+        raise InputError(
+            f"{name}: expected shape (N, {_shape_text(trailing)[1:]}, got {array.shape}"
         )
     return array
 
@@ -146,7 +156,7 @@ def as_index_array(
     array = np.asarray(array, dtype=np.int64, order="C")
     shape_ok = array.ndim >= len(trailing) and all(
         want is None or got == want
-        for got, want in zip(array.shape[array.ndim - len(trailing) :], trailing)
+        for got, want in zip(array.shape[array.ndim - len(trailing) :], trailing, strict=False)
     )
     if not shape_ok:
         raise InputError(

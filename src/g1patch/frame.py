@@ -146,6 +146,12 @@ class Frame:
         return cls(np.asarray(arrays["frame_centre"]), scale.item())
 
 
+def in_world(frame: Frame | None, values: NDArray[np.float64], order: int) -> NDArray[np.float64]:
+    """Local values of an ``order``-th derivative (0: points) mapped to world in place
+    (:meth:`Frame.derivative_to_world`); ``values`` itself without a frame."""
+    return values if frame is None else frame.derivative_to_world(values, order, out=values)
+
+
 def check_frame(frame: object) -> Frame | None:
     """``frame`` if it is a :class:`Frame` or None, else :class:`InputError`."""
     if frame is not None and not isinstance(frame, Frame):

@@ -50,9 +50,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from .basis import basis_values
 from .curves import CubicCurves
-from .display import BOX_SAMPLES, bbox_text, sampled_box
-from .errors import InputError, as_float_array
-from .frame import Frame, check_frame
+from .display import BOX_SAMPLES, patch_set_repr, sampled_box
+from .errors import InputError, as_batch_array, as_float_array
+from .frame import Frame, check_frame, in_world
 from .patches import CORNER_PARAMETERS, unit
 
 __all__ = ["BEZIER_INDEX", "INTERIOR_INDEX", "GregoryPatchSet", "gregory_weights"]
@@ -154,9 +154,7 @@ class GregoryPatchSet:
     kind: ClassVar[str] = "gregory"
 
     def __post_init__(self) -> None:
-        points = as_float_array("points", self.points, (20, 3))
-        if points.ndim != 3:
-            raise InputError(f"points: expected shape (N, 20, 3), got {points.shape}")
+        points = as_batch_array("points", self.points, (20, 3))
         object.__setattr__(self, "points", points)
         check_frame(self.frame)
 
@@ -164,10 +162,8 @@ class GregoryPatchSet:
         return int(self.points.shape[0])
 
     def __repr__(self) -> str:
-        """``<GregoryPatchSet 6 patches, bbox (-1, -1, -1)…(1, 1, 1)>`` (the box of the surface
-        sampled at 3 × 3 points a patch, world coordinates), never the arrays."""
-        box = f", {bbox_text(*self.box())}" if len(self) else ""
-        return f"<GregoryPatchSet {len(self)} patches{box}>"
+        """``<GregoryPatchSet 6 patches, bbox (-1, -1, -1)…(1, 1, 1)>``."""
+        return patch_set_repr("GregoryPatchSet", len(self), "patches", self.box)
 
     def box(self, samples: int = BOX_SAMPLES) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(lowest, highest) corner of the box around the surface sampled on a ``samples²`` grid
@@ -197,13 +193,8 @@ class GregoryPatchSet:
         return self.points if self.frame is None else self.frame.to_world(self.points)
 
     def _to_world(self, values: NDArray[np.float64], du: int, dv: int) -> NDArray[np.float64]:
-        """Local values of ``∂^(du+dv) p`` mapped to world in place
-        (:meth:`Frame.derivative_to_world`)."""
-        return (
-            values
-            if self.frame is None
-            else self.frame.derivative_to_world(values, du + dv, out=values)
-        )
+        """Local values of ``∂^(du+dv) p`` mapped to world in place (:func:`frame.in_world`)."""
+        return in_world(self.frame, values, du + dv)
 
     # ------------------------------------------------------------- evaluation
     def evaluate(self, uv: ArrayLike, du: int = 0, dv: int = 0) -> NDArray[np.float64]:

@@ -19,7 +19,7 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from functools import cache
 from itertools import pairwise
-from typing import TypeVar
+from typing import Any, TypeVar
 
 __all__ = ["CHUNK_ITEMS", "RANGES_PER_WORKER", "in_chunks", "jit_kernel", "workers"]
 
@@ -36,7 +36,7 @@ _pool: ThreadPoolExecutor | None = None
 
 
 @cache
-def jit_kernel(kernel: Callable[..., object]) -> Callable[..., object]:
+def jit_kernel(kernel: Callable[..., object]) -> Callable[..., Any]:
     """``kernel`` compiled by numba on first use: ``njit(cache=True, nogil=True)`` (cached on disk;
     without the GIL so that :func:`in_chunks` can run ranges side by side), float64 IEEE arithmetic
     as NumPy's (no fastmath, NumPy's division semantics). numba is imported here, so that

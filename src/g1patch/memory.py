@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import ctypes
 import os
+from collections.abc import Callable
 
 __all__ = [
     "TUNED_ENVIRONMENT",
@@ -57,23 +58,25 @@ def without_huge_page_advice() -> None:
     request may compact memory first. On a host where that stalls (measured once on the
     development VM under load: first writes at ~80 MB/s instead of ~1.7 GB/s, 48 MB in 0.6 s
     against 0.03 s) a program may call this; the command line does not (module docstring)."""
+    import importlib
+
     try:
-        from numpy._core.multiarray import _set_madvise_hugepage  # NumPy ≥ 2
+        multiarray = importlib.import_module("numpy._core.multiarray")  # NumPy ≥ 2
     except ImportError:  # pragma: no cover - NumPy 1.26
-        from numpy.core.multiarray import _set_madvise_hugepage
-    _set_madvise_hugepage(False)
+        multiarray = importlib.import_module("numpy.core.multiarray")
+    multiarray._set_madvise_hugepage(False)
 
 
 def _glibc() -> bool:
     """Whether this process runs on glibc (``confstr(_CS_GNU_LIBC_VERSION)``: musl, macOS and
     Windows have none)."""
     try:
-        return os.confstr("CS_GNU_LIBC_VERSION").startswith("glibc ")
+        return (os.confstr("CS_GNU_LIBC_VERSION") or "").startswith("glibc ")
     except (AttributeError, ValueError, OSError):
         return False
 
 
-def _mallopt() -> ctypes._CFuncPtr | None:
+def _mallopt() -> Callable[..., int] | None:
     """glibc's ``mallopt``, or None on another C library."""
     if not _glibc():
         return None

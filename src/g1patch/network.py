@@ -243,12 +243,14 @@ class PatchNetwork:
         first = (self.neighbor > patch) | (
             (self.neighbor == patch) & (self.neighbor_edge > np.arange(4))
         )
-        return np.nonzero(first)
+        patches, edges = np.nonzero(first)
+        return patches.astype(np.int64), edges.astype(np.int64)
 
     def open_edges(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
         """``(patch, edge)`` of every edge with no neighbour that is not collapsed."""
         collapsed = self.edge_collapsed[self.edge_ids]
-        return np.nonzero((self.neighbor < 0) & ~collapsed)
+        patches, edges = np.nonzero((self.neighbor < 0) & ~collapsed)
+        return patches.astype(np.int64), edges.astype(np.int64)
 
     def bounding_box_diagonal(self) -> float:
         """Length of the diagonal of the box around the patch corners (the scale of G0 gaps)."""

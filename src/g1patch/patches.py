@@ -30,9 +30,9 @@ from numpy.typing import ArrayLike, NDArray
 from . import _grid
 from .basis import FORMS, Form, basis_matrix, basis_values, check_order, conversion_matrix
 from .curves import CubicCurves
-from .display import BOX_SAMPLES, bbox_text, sampled_box
-from .errors import InputError, as_float_array, check_choice
-from .frame import Frame, check_frame
+from .display import BOX_SAMPLES, patch_set_repr, sampled_box
+from .errors import InputError, as_batch_array, as_float_array, check_choice
+from .frame import Frame, check_frame, in_world
 
 __all__ = [
     "PatchSet",
@@ -78,9 +78,7 @@ class PatchSet:
 
     def __post_init__(self) -> None:
         check_choice("form", self.form, FORMS)
-        control = as_float_array("control", self.control, (4, 4, 3))
-        if control.ndim != 4:
-            raise InputError(f"control: expected shape (N, 4, 4, 3), got {control.shape}")
+        control = as_batch_array("control", self.control, (4, 4, 3))
         object.__setattr__(self, "control", control)
         check_frame(self.frame)
 
@@ -88,10 +86,8 @@ class PatchSet:
         return int(self.control.shape[0])
 
     def __repr__(self) -> str:
-        """``<PatchSet 6 bezier patches, bbox (-1, -1, -1)…(1, 1, 1)>`` (the box of the surface
-        sampled at 3 × 3 points a patch, world coordinates), never the arrays."""
-        box = f", {bbox_text(*self.box())}" if len(self) else ""
-        return f"<PatchSet {len(self)} {self.form} patches{box}>"
+        """``<PatchSet 6 bezier patches, bbox (-1, -1, -1)…(1, 1, 1)>``."""
+        return patch_set_repr("PatchSet", len(self), f"{self.form} patches", self.box)
 
     def box(self, samples: int = BOX_SAMPLES) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(lowest, highest) corner of the box around the surface sampled on a ``samples²`` grid
@@ -173,13 +169,8 @@ class PatchSet:
         return power
 
     def _to_world(self, values: NDArray[np.float64], du: int, dv: int) -> NDArray[np.float64]:
-        """Local values of ``∂^(du+dv) p`` mapped to world in place
-        (:meth:`Frame.derivative_to_world`)."""
-        return (
-            values
-            if self.frame is None
-            else self.frame.derivative_to_world(values, du + dv, out=values)
-        )
+        """Local values of ``∂^(du+dv) p`` mapped to world in place (:func:`frame.in_world`)."""
+        return in_world(self.frame, values, du + dv)
 
     # ------------------------------------------------------------- evaluation
     def evaluate_grid(
@@ -339,6 +330,16 @@ def unit(vectors: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.divide(vectors, length, out=np.zeros_like(vectors), where=length > 0)
 
 
+def _corner_defect(control: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``δ = p(0,1) + p(1,0) − p(0,0) − p(1,1)`` of Hermite control ``(..., 4, 4, 3)``."""
+    return (
+        control[..., 0, 1, :]
+        + control[..., 1, 0, :]
+        - control[..., 0, 0, :]
+        - control[..., 1, 1, :]
+    )
+
+
 def hs_twists(hermite: ArrayLike) -> NDArray[np.float64]:
     """Twists of the S-/HS-patch from the 12 boundary vectors of Hermite patches ``(N, 4, 4, 3)``.
 
@@ -350,12 +351,7 @@ def hs_twists(hermite: ArrayLike) -> NDArray[np.float64]:
     (the power coefficients of u^3 v^3, u^3 v^2, u^2 v^3 and u^2 v^2 vanish). Returns (N, 2, 2, 3).
     """
     control = as_float_array("hermite", hermite, (4, 4, 3))
-    delta = (
-        control[..., 0, 1, :]
-        + control[..., 1, 0, :]
-        - control[..., 0, 0, :]
-        - control[..., 1, 1, :]
-    )
+    delta = _corner_defect(control)
     p_u = control[..., 2:4, 0:2, :]  # p_u[a, b] = ∂p/∂u at corner (a, b)
     p_v = control[..., 0:2, 2:4, :]  # p_v[a, b] = ∂p/∂v at corner (a, b)
     u_term = (p_u[..., :, 1, :] - p_u[..., :, 0, :])[..., :, None, :]  # depends on a
@@ -373,12 +369,7 @@ def closure(hermite: ArrayLike) -> NDArray[np.float64]:
     cubic iff ``C = 0``. C depends on the boundary only.
     """
     control = as_float_array("hermite", hermite, (4, 4, 3))
-    delta = (
-        control[..., 0, 1, :]
-        + control[..., 1, 0, :]
-        - control[..., 0, 0, :]
-        - control[..., 1, 1, :]
-    )
+    delta = _corner_defect(control)
     p_u = control[..., 2:4, 0:2, :]
     p_v = control[..., 0:2, 2:4, :]
     u_sum = p_u[..., 0, 1, :] + p_u[..., 1, 1, :] - p_u[..., 0, 0, :] - p_u[..., 1, 0, :]

@@ -127,7 +127,7 @@ def _as_vectors(
     """Check ``len(values)`` vectors of shape ``(..., length)``; broadcast and stack them as
     rows."""
     arrays = []
-    for name, value in zip(names, values):
+    for name, value in zip(names, values, strict=True):
         array = as_float_array(name, value, (None,))
         if array.shape[-1] != length:
             hint = " (append w with homogeneous())" if array.shape[-1] == length - 1 else ""
@@ -136,7 +136,7 @@ def _as_vectors(
     try:
         batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
     except ValueError:
-        shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays))
+        shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(names, arrays, strict=True))
         raise InputError(f"batch shapes do not broadcast: {shapes}") from None
     return np.stack([np.broadcast_to(a, batch + (length,)) for a in arrays], axis=-2)
 
@@ -177,7 +177,7 @@ def _laplace_plan(
     Each level is ``(columns, sub-minor indices, signs)``, arrays of shape ``(C(n, k), k)``.
     """
     plan = []
-    previous = {(): 0}
+    previous: dict[tuple[int, ...], int] = {(): 0}
     for k in range(1, n):
         subsets = list(itertools.combinations(range(n), k))
         columns = np.array(subsets, dtype=np.intp)
@@ -203,7 +203,7 @@ def _cross_laplace(rows: NDArray[np.float64]) -> NDArray[np.float64]:
 @cache
 def _alternating(n: int) -> NDArray[np.float64]:
     """``(−1)^k`` for k = 0..n−1 (0-based form of ``(−1)^(k+1)``)."""
-    signs = (-1.0) ** np.arange(n)
+    signs = np.power(-1.0, np.arange(n), dtype=np.float64)
     signs.setflags(write=False)
     return signs
 

@@ -29,6 +29,7 @@ __all__ = [
     "TRIANGLE_BUDGET",
     "TooLargeError",
     "TriangleMesh",
+    "check_file_size",
     "check_size",
     "choose_resolution",
     "estimated_memory",
@@ -120,6 +121,19 @@ class TooLargeError(InputError):
     """A tessellation would exceed :data:`MAX_TRIANGLES` and was not forced."""
 
 
+def samples_per_side(resolution: object, n_patches: int) -> int:
+    """``resolution`` checked (an integer ≥ 2), or :func:`choose_resolution` where it is None."""
+    if resolution is None:
+        return choose_resolution(n_patches)
+    if (
+        isinstance(resolution, bool)
+        or not isinstance(resolution, (int, np.integer))
+        or resolution < 2
+    ):
+        raise InputError(f"resolution: expected an integer ≥ 2, got {resolution!r}")
+    return int(resolution)
+
+
 def check_size(
     n_patches: int, resolution: int, force: bool = False, max_triangles: int = MAX_TRIANGLES
 ) -> int:
@@ -137,6 +151,37 @@ def check_size(
     return triangles
 
 
+def _estimated_file_size(suffix: str, n_points: int, n_triangles: int) -> int:
+    """Bytes of a triangle mesh file, about: OBJ ~60 bytes a point (shortest round-trip digits)
+    and 3 indices a triangle; binary PLY 24 bytes a point, 13 a triangle; binary STL 50 a
+    triangle."""
+    if suffix == ".obj":
+        return 60 * n_points + (3 * (len(str(max(n_points, 1))) + 1) + 2) * n_triangles
+    if suffix == ".ply":
+        return 24 * n_points + 13 * n_triangles
+    return 84 + 50 * n_triangles
+
+
+def check_file_size(n_patches: int, resolution: int, suffix: str, force: bool = False) -> None:
+    """Refuse (:class:`TooLargeError`) a triangle file of ``n_patches`` at an explicit
+    ``resolution`` above :data:`MAX_TRIANGLES` triangles unless ``force``, saying how large the
+    file and the memory would be and which resolution stays within the cap."""
+    if resolution < 2:
+        return  # tessellate names the bad resolution
+    triangles = triangle_count(n_patches, resolution)
+    if force or triangles <= MAX_TRIANGLES:
+        return
+    points = n_patches * (resolution - 1) ** 2
+    largest = 1 + int((MAX_TRIANGLES / (2 * max(n_patches, 1))) ** 0.5)
+    size = _size_text(_estimated_file_size(suffix, points, triangles), "B")
+    memory = _size_text(estimated_memory(n_patches, resolution), "B")
+    raise TooLargeError(
+        f"--resolution {resolution} on {n_patches} patches would write {_size_text(triangles)} "
+        f"triangles (~{size}, ~{memory} of memory); use --force or a lower resolution "
+        f"(at most {largest} stays within {_size_text(MAX_TRIANGLES)} triangles)"
+    )
+
+
 def tessellate(
     network: PatchNetwork, resolution: int | None = None, *, force: bool = False
 ) -> TriangleMesh:
@@ -149,15 +194,7 @@ def tessellate(
     are removed. Patches are evaluated a block at a time, so the memory is the output's and a
     little more (:func:`estimated_memory`).
     """
-    if resolution is None:
-        resolution = choose_resolution(network.n_patches)
-    if (
-        isinstance(resolution, bool)
-        or not isinstance(resolution, (int, np.integer))
-        or resolution < 2
-    ):
-        raise InputError(f"resolution: expected an integer ≥ 2, got {resolution!r}")
-    r = int(resolution)
+    r = samples_per_side(resolution, network.n_patches)
     check_size(network.n_patches, r, force)
     grid = np.linspace(0.0, 1.0, r)
     index, total = _grid_indices(network, r)
@@ -169,7 +206,7 @@ def tessellate(
     a, b = (
         axis.reshape(-1) for axis in np.meshgrid(np.arange(r - 1), np.arange(r - 1), indexing="ij")
     )
-    triangles = np.empty((2, count, cells, 3), dtype=np.int64)
+    triangles: NDArray[np.int64] = np.empty((2, count, cells, 3), dtype=np.int64)
     step = max(1, _BLOCK_SAMPLES // (r * r))
     for start in range(0, count, step):
         block = slice(start, min(start + step, count))

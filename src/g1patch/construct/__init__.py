@@ -1,1 +1,86 @@
-"""Surface constructions: a QuadMesh in, a PatchNetwork out."""
+"""The assembly stage: any valid targets in, patches that are exactly G1 out (DESIGN §1).
+
+:data:`ASSEMBLIES` is the registry the build, the API and the command line take their choices
+from (``--method``): a new assembly is one module plus one line here. The contract an assembly
+meets is :class:`~g1patch.construct.stage.Assembly`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..network import Patches
+from ..targets import Targets
+from .corner import assemble_corner
+from .gregory import assemble_gregory
+from .one_per_face import keep_patches, patch_per_face_network
+from .split4 import split4_network_from_parts, split4_patches, split4_provenance
+from .stage import Assembly, NetworkParts
+
+__all__ = ["ASSEMBLIES", "METHODS", "Assembly", "NetworkParts"]
+
+
+def _assemble_split4(targets: Targets) -> Any:
+    """split4's parts of ``targets`` (their positions are the corners; already in the frame)."""
+    return split4_patches(targets, targets.positions, np.zeros(3), 1.0)
+
+
+def _split4_patches(parts: Any) -> Patches:
+    patches: Patches = parts[0]
+    return patches
+
+
+def _keep_split4(parts: Any, targets: Targets, provenance: dict[str, str]) -> Any:
+    """The sub-patches, midpoints, centres and their normals, the vertex normals; the stars only
+    count into the provenance."""
+    sub_patches, extra, extra_normals, stars = parts
+    provenance = split4_provenance(provenance, targets, stars)
+    return (sub_patches, extra, extra_normals, targets.normals), provenance
+
+
+def _split4_network(kept: Any, parts: NetworkParts) -> Any:
+    sub_patches, extra, extra_normals, normals = kept
+    return split4_network_from_parts(
+        parts.surface, sub_patches, extra, extra_normals, normals, parts.frame, parts.provenance
+    )
+
+
+#: ``--method`` name → assembly, the default first
+ASSEMBLIES: dict[str, Assembly] = {
+    assembly.name: assembly
+    for assembly in (
+        Assembly(
+            "gregory",
+            "exact G1, one rational Gregory patch per quad (default)",
+            assemble_gregory,
+            1,
+            lambda patches: patches,
+            keep_patches,
+            patch_per_face_network,
+        ),
+        Assembly(
+            "split4",
+            "exact G1, 2×2 polynomial bicubics per quad: exact in STEP",
+            _assemble_split4,
+            4,
+            _split4_patches,
+            _keep_split4,
+            _split4_network,
+            keeps_creases=False,
+            keeps_holes=False,
+        ),
+        Assembly(
+            "corner",
+            "the paper's construction: one Hermite patch per quad, G1 at corners only",
+            assemble_corner,
+            1,
+            lambda patches: patches,
+            keep_patches,
+            patch_per_face_network,
+        ),
+    )
+}
+#: the names, default first
+METHODS: tuple[str, ...] = tuple(ASSEMBLIES)

@@ -15,6 +15,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..errors import check_choice
 from ..mesh import QuadMesh
@@ -36,6 +37,25 @@ __all__ = ["TWISTS", "TwistRule", "assemble_corner", "build_corner_network"]
 
 TwistRule = Literal["zero", "bilinear", "coons"]
 TWISTS: tuple[TwistRule, ...] = ("zero", "bilinear", "coons")
+
+
+def _hermite_corners(
+    x: NDArray[np.float64], to_next: NDArray[np.float64], to_prev: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Hermite control (F, 4, 4, 3) with the corner points ``x`` (F, 4, 3) and tangents set by the
+    table of :func:`build_corner_network` from ``T(k → k+1)``, ``T(k → k−1)``; zero twists."""
+    control = np.zeros((len(x), 4, 4, 3))
+    control[:, 0, 0], control[:, 1, 0], control[:, 1, 1], control[:, 0, 1] = (
+        x[:, 0],
+        x[:, 1],
+        x[:, 2],
+        x[:, 3],
+    )
+    control[:, 2, 0], control[:, 0, 2] = to_next[:, 0], to_prev[:, 0]  # corner (0,0)
+    control[:, 3, 0], control[:, 1, 2] = -to_prev[:, 1], to_next[:, 1]  # corner (1,0)
+    control[:, 3, 1], control[:, 1, 3] = -to_next[:, 2], -to_prev[:, 2]  # corner (1,1)
+    control[:, 2, 1], control[:, 0, 3] = to_prev[:, 3], -to_next[:, 3]  # corner (0,1)
+    return control
 
 
 def build_corner_network(
@@ -67,17 +87,7 @@ def build_corner_network(
     to_next = corner_tangents(x, np.roll(x, -1, axis=1), n, tangents, next_edges)  # T(k → k+1)
     to_prev = corner_tangents(x, np.roll(x, 1, axis=1), n, tangents, prev_edges)  # T(k → k−1)
 
-    control = np.zeros((len(faces), 4, 4, 3))
-    control[:, 0, 0], control[:, 1, 0], control[:, 1, 1], control[:, 0, 1] = (
-        x[:, 0],
-        x[:, 1],
-        x[:, 2],
-        x[:, 3],
-    )
-    control[:, 2, 0], control[:, 0, 2] = to_next[:, 0], to_prev[:, 0]  # corner (0,0)
-    control[:, 3, 0], control[:, 1, 2] = -to_prev[:, 1], to_next[:, 1]  # corner (1,0)
-    control[:, 3, 1], control[:, 1, 3] = -to_next[:, 2], -to_prev[:, 2]  # corner (1,1)
-    control[:, 2, 1], control[:, 0, 3] = to_prev[:, 3], -to_next[:, 3]  # corner (0,1)
+    control = _hermite_corners(x, to_next, to_prev)
     if twist == "bilinear":
         control[:, 2:, 2:] = (x[:, 0] - x[:, 1] + x[:, 2] - x[:, 3])[:, None, None]
     elif twist == "coons":
@@ -110,17 +120,7 @@ def assemble_corner(targets: Targets) -> PatchSet:
     to_prev = t[slot_in[prev]].reshape(count, 4, 3)  # T(k → k−1)
     x = targets.positions[topology.faces]
     w = 9.0 * (targets.corner_interior - x) - 3.0 * (to_next + to_prev)
-    control = np.zeros((count, 4, 4, 3))
-    control[:, 0, 0], control[:, 1, 0], control[:, 1, 1], control[:, 0, 1] = (
-        x[:, 0],
-        x[:, 1],
-        x[:, 2],
-        x[:, 3],
-    )
-    control[:, 2, 0], control[:, 0, 2] = to_next[:, 0], to_prev[:, 0]  # corner (0,0)
-    control[:, 3, 0], control[:, 1, 2] = -to_prev[:, 1], to_next[:, 1]  # corner (1,0)
-    control[:, 3, 1], control[:, 1, 3] = -to_next[:, 2], -to_prev[:, 2]  # corner (1,1)
-    control[:, 2, 1], control[:, 0, 3] = to_prev[:, 3], -to_next[:, 3]  # corner (0,1)
+    control = _hermite_corners(x, to_next, to_prev)
     control[:, 2, 2], control[:, 3, 2], control[:, 3, 3], control[:, 2, 3] = (
         w[:, 0],
         -w[:, 1],

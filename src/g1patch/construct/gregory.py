@@ -47,6 +47,10 @@ closed-form solves batched over edges. No Python loop over vertices, edges or fa
 
 from __future__ import annotations
 
+import operator
+from collections.abc import Iterable
+from functools import reduce
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -69,6 +73,11 @@ SYMMETRIC_TOLERANCE = 1e-12
 #: the free values bounded where G1 and h_L1 are nearly dependent (edge cubic nearly quadratic,
 #: α nearly constant), which would otherwise inflate round-off (shape-quality.md §3.4)
 RIDGE = 1e-6
+
+
+def _total(terms: Iterable[FloatArray]) -> FloatArray:
+    """``t_0 + t_1 + …`` of arrays, left to right as ``sum`` does (typed: no ``0`` start)."""
+    return reduce(operator.add, terms)
 
 
 def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
@@ -343,12 +352,12 @@ def _kh_fit(
     )
     scalar = (2.0 * b0 / 3.0, 2.0 * b1_ / 3.0, -2.0 * a0 / 3.0, -2.0 * a1 / 3.0)  # ∂/∂G1 = c_i I
     # normal equations [[a I, c], [cᵀ, d]] p = [r_G; r_h]: a = Σ c_i², c = Σ c_i v_i, d = Σ |v_i|²
-    a = sum(c_i[:, 0] ** 2 for c_i in scalar)
-    c = sum(c_i * v_i for c_i, v_i in zip(scalar, along, strict=True))
-    d = sum(_dot(v_i, v_i) for v_i in along)
+    a = _total(c_i[:, 0] ** 2 for c_i in scalar)
+    c = _total(c_i * v_i for c_i, v_i in zip(scalar, along, strict=True))
+    d = _total(_dot(v_i, v_i) for v_i in along)
     residuals = [r_i - k_i for r_i, k_i in zip(wanted, constant, strict=True)]
-    r_g = sum(c_i * y for c_i, y in zip(scalar, residuals, strict=True))
-    r_h = sum(_dot(v_i, y) for v_i, y in zip(along, residuals, strict=True))
+    r_g = _total(c_i * y for c_i, y in zip(scalar, residuals, strict=True))
+    r_h = _total(_dot(v_i, y) for v_i, y in zip(along, residuals, strict=True))
     a = a * (1.0 + RIDGE)
     d = d * (1.0 + RIDGE)
     # Schur complement: h = (r_h − c·r_G/a) / (d − |c|²/a), G1 = (r_G − c h)/a

@@ -23,17 +23,17 @@ opposite tangents, :func:`_straight_creases`): both sides of a seam then compute
 curve, bit for bit, and the sub-patches are connected on the uncut mesh with those edges marked as
 seams.
 
-The result is compared with the Gregory surface itself (:func:`surface_deviation`). split4's
-stars cannot hold every Gregory fan (a V-shaped fan at a dart's end, unequal opposite tangents),
-and the difference lives within a quad's size of those vertices, so the network's surface can also
-be re-assembled on its mesh with every patch cut into n × n cells (:func:`grid_refinement`,
-:func:`refined_gregory_targets`: the targets read off the Gregory patches at the cell corners):
-the export takes the fewest cells that bring it within its bound.
+The result is compared with the Gregory surface itself
+(:func:`~g1patch.construct.deviation.surface_deviation`). split4's stars cannot hold every Gregory
+fan (a V-shaped fan at a dart's end, unequal opposite tangents), and the difference lives within a
+quad's size of those vertices, so the network's surface can also be re-assembled on its mesh
+with every patch cut into n × n cells (:func:`grid_refinement`, :func:`refined_gregory_targets`:
+the targets read off the Gregory patches at the cell corners): the export takes the fewest cells
+that bring it within its bound.
 """
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -46,7 +46,16 @@ from ..mesh import QuadMesh, QuadTopology
 from ..network import PatchNetwork
 from ..patches import CORNER_PARAMETERS
 from ..targets import Targets, halfedge_slots
-from .split4 import SplitStar, fan_walk
+from .deviation import surface_deviation
+from .split4 import (
+    BSPLINE_KNOTS,
+    SplitStar,
+    fan_walk,
+    split4_network_from_points,
+    split4_network_from_targets,
+    split4_patches,
+    split4_star,
+)
 
 __all__ = [
     "GridRefinement",
@@ -324,8 +333,6 @@ def seam_stars(
     :data:`SIN_FLOOR`; ``c_v = cos θ``, no length safeguard. A one-face sector keeps its tangents
     (as split4 does).
     """
-    from .split4 import split4_star
-
     topology = targets.topology
     base = split4_star(targets, equal_sectors=equal_sectors)
     star, cosine, factor = base.star.copy(), base.cosine.copy(), base.factor.copy()
@@ -358,12 +365,15 @@ def seam_stars(
     c, sn = np.cos(phi), np.sin(phi)
     residual = t - c[:, None] * anchor[owner]
     free = j != e[owner]
-    b = np.stack(
-        [
-            np.bincount(owner, np.where(free, sn * residual[:, d], 0.0), minlength=copies.size)
-            for d in range(3)
-        ],
-        axis=1,
+    b = np.asarray(
+        np.stack(
+            [
+                np.bincount(owner, np.where(free, sn * residual[:, d], 0.0), minlength=copies.size)
+                for d in range(3)
+            ],
+            axis=1,
+        ),
+        dtype=np.float64,
     )
     b /= np.maximum(
         np.bincount(owner, np.where(free, sn * sn, 0.0), minlength=copies.size), 1e-300
@@ -395,8 +405,6 @@ def _fit_operators(samples: int) -> tuple[FloatArray, FloatArray]:
     ½ written out: row 3 the midpoint of its neighbours), and (4, samples) to one cubic's Bézier
     row."""
     from scipy.interpolate import BSpline
-
-    from .split4 import BSPLINE_KNOTS
 
     t = np.linspace(0.0, 1.0, samples)
     inverse = np.linalg.pinv(BSpline.design_matrix(t, BSPLINE_KNOTS, 3).toarray())  # (6, samples)
@@ -455,8 +463,6 @@ def split4_of_gregory(
     Seams: assembled on the topology cut along them (each side a boundary, :func:`seam_stars`
     keeping the seam tangents, so both sides get the same boundary curve), connected on the
     uncut one with the seams marked. Provenance ``from = gregory``."""
-    from .split4 import _split4_network, split4_network_from_targets, split4_patches, split4_star
-
     if not (isinstance(refine, (int, np.integer)) and refine >= 1):
         raise InputError(f"refine: expected an integer ≥ 1, got {refine!r}")
     provenance = {**network.provenance, "method": "split4", "from": "gregory"}
@@ -464,7 +470,7 @@ def split4_of_gregory(
         provenance["refine"] = str(refine)
     topology = _topology_of(network, cut=False)
     seams = network.seam.reshape(-1)
-    cut = seams.any()
+    cut = bool(seams.any())
     if refine == 1:
         guide = guide_nets(network.patches) if guided else None  # type: ignore[arg-type]
         targets, frame = gregory_targets(network, cut=cut)
@@ -520,128 +526,13 @@ def split4_of_gregory(
     ]  # one sector's
     if network.vertex_normals is not None and len(network.vertex_normals) == network.n_corners:
         vertex_normals[: network.n_corners] = network.vertex_normals
-    result = _split4_network(
+    seam_edges = np.zeros(topology.n_edges, dtype=bool)
+    seam_edges[topology.halfedge_edge] = seams
+    return split4_network_from_points(
         topology,
         patches,
         np.concatenate([vertices, points]),
         np.concatenate([vertex_normals, point_normals]),
         provenance,
+        seam_edges,
     )
-    seam_edges = np.zeros(topology.n_edges, dtype=bool)
-    seam_edges[topology.halfedge_edge] = seams
-    return result.with_seams(
-        np.concatenate([np.repeat(seam_edges, 2), np.zeros(4 * topology.n_faces, dtype=bool)])
-    )
-
-
-#: Gauss–Newton steps of :func:`surface_deviation`'s foot points
-FOOT_STEPS = 3
-#: foot-point searches per sample, from its nearest grid samples (:func:`surface_deviation`): a
-#: search clamped to the edge of its patch overestimates where the foot point lies in the next
-#: patch (catmark_xord_boundary: 1.8e-3 of the diagonal from one start, 1.0e-3 from four)
-FOOT_STARTS = 4
-#: samples per direction and Gregory patch from which the foot-point search starts
-SEARCH_SAMPLES = 17
-
-
-def _grid_starts(
-    points: FloatArray, tree: object, t: FloatArray, count: int
-) -> tuple[IntArray, FloatArray]:
-    """Each point's ``count`` nearest samples of the :data:`SEARCH_SAMPLES`² grid ``t`` × ``t`` of
-    every patch (``tree`` over them): their patches (P, count) and parameters (P, count, 2)."""
-    nearest = tree.query(points, k=count)[1].reshape(len(points), count)  # type: ignore[attr-defined]
-    patch, rest = np.divmod(nearest, len(t) ** 2)
-    return patch, np.stack([t[rest // len(t)], t[rest % len(t)]], axis=-1)
-
-
-def _foot_distances(
-    points: FloatArray, local: FloatArray, patch: IntArray, at: FloatArray
-) -> FloatArray:
-    """Per point an upper bound of its distance to the Gregory surface of nets ``local`` (F, 20, 3):
-    from each of its starts (patches ``patch`` (P, S), parameters ``at`` (P, S, 2))
-    :data:`FOOT_STEPS` Gauss–Newton steps ``(JᵀJ) δ = Jᵀ (p − g)``, ``J = [g_u g_v]``, clamped to
-    that patch; the nearest point seen."""
-    from ..gregory import gregory_weights
-
-    starts = patch.shape[1]
-    patch, at = patch.reshape(-1), at.reshape(-1, 2)
-    points = np.repeat(points, starts, axis=0)
-    nets = local[patch]
-
-    def value(du: int = 0, dv: int = 0) -> FloatArray:
-        return np.einsum(
-            "nm,nmd->nd", gregory_weights(at[:, 0], at[:, 1], du, dv), nets, optimize=True
-        )
-
-    residual = points - value()  # at the current foot points, kept from step to step
-    best = np.linalg.norm(residual, axis=-1)
-    for _ in range(FOOT_STEPS):
-        g_u, g_v = value(1, 0), value(0, 1)
-        a, b, c = (np.einsum("nd,nd->n", x, y) for x, y in ((g_u, g_u), (g_u, g_v), (g_v, g_v)))
-        r_u, r_v = np.einsum("nd,nd->n", g_u, residual), np.einsum("nd,nd->n", g_v, residual)
-        det = a * c - b * b
-        regular = det > 1e-300
-        step = (
-            np.stack([c * r_u - b * r_v, a * r_v - b * r_u], axis=-1)
-            / np.where(regular, det, 1.0)[:, None]
-        )
-        at = np.clip(at + np.where(regular[:, None], step, 0.0), 0.0, 1.0)
-        residual = points - value()
-        best = np.minimum(best, np.linalg.norm(residual, axis=-1))  # a clamped step may lead away
-    return best.reshape(-1, starts).min(axis=1)
-
-
-def surface_deviation(
-    network: PatchNetwork, split4: PatchNetwork, samples: int = 5
-) -> tuple[float, float]:
-    """How far the split4 surface ``s`` lies from the Gregory surface ``g``, model units:
-    ``(parametric, geometric)``, maxima over a ``samples``² grid per quad (``samples`` odd;
-    sub-patch ``4r + k`` covers ``((a, b) + (uv + corner_k) / 2) / n`` of patch f, for quad
-    ``r = f n² + a n + b`` of a split4 network refined n × n, :func:`split4_of_gregory`).
-
-    ``parametric = max |g(u, v) − s(u, v)|``. ``geometric`` = max distance of the samples of ``s``
-    to their foot points on ``g`` (:func:`_foot_distances`): from the sample's own parameter (it
-    may drift along the surface by more than a grid step); then, while a sample is at least half
-    the largest distance, also from its :data:`FOOT_STARTS` nearest of :data:`SEARCH_SAMPLES`²
-    samples per Gregory patch (any patch). Each distance is an upper bound, so is their maximum,
-    and none is above its sample's parametric distance (the first start)."""
-    from scipy.spatial import cKDTree
-
-    from ..gregory import gregory_weights
-
-    if samples < 3 or samples % 2 == 0:
-        raise InputError(f"samples: expected an odd number ≥ 3, got {samples!r}")
-    gregory: GregoryPatchSet = network.patches  # type: ignore[assignment]
-    frame = gregory.frame or Frame(np.zeros(3), 1.0)
-    local = gregory.local().points  # (F, 20, 3)
-    half = np.linspace(0.0, 1.0, (samples + 1) // 2)
-    uv = np.stack(np.meshgrid(half, half, indexing="ij"), axis=-1).reshape(-1, 2)  # (K, 2)
-    corner = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
-    points = frame.to_local(
-        split4.patches.evaluate(uv).reshape(-1, 3)
-    )  # sub-patch by sub-patch: (4R K, 3)
-    n = math.isqrt(len(split4.patches) // (4 * len(local)))
-    cell = np.stack(np.meshgrid(np.arange(n), np.arange(n), indexing="ij"), axis=-1).reshape(
-        -1, 1, 1, 2
-    )
-    at = np.tile(
-        (cell + 0.5 * (uv[None, None] + corner[None, :, None])) / n, (len(local), 1, 1, 1)
-    ).reshape(-1, 2)
-    patch = np.repeat(np.arange(len(local)), 4 * n * n * len(uv))
-
-    def value(du: int = 0, dv: int = 0) -> FloatArray:
-        return np.einsum(
-            "nm,nmd->nd", gregory_weights(at[:, 0], at[:, 1], du, dv), nets, optimize=True
-        )
-
-    nets = local[patch]  # each sample's patch points, gathered once per patch assignment
-    parametric = float(np.linalg.norm(points - value(), axis=-1).max())
-    t = np.linspace(0.0, 1.0, SEARCH_SAMPLES)
-    tree = cKDTree(gregory.local().evaluate_grid(t, t).reshape(-1, 3))
-    best = _foot_distances(points, local, patch[:, None], at[:, None])
-    refined = np.zeros(len(points), dtype=bool)
-    while (chosen := ~refined & (best >= 0.5 * best.max())).any():  # the largest, from more starts
-        starts = _grid_starts(points[chosen], tree, t, FOOT_STARTS)
-        best[chosen] = np.minimum(best[chosen], _foot_distances(points[chosen], local, *starts))
-        refined |= chosen
-    return parametric * frame.scale, float(best.max()) * frame.scale

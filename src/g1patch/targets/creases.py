@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 
 from ..mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology, Sectors, sectors
 from .local import cross
+from .value import halfedge_slots
 
 __all__ = [
     "INTERPOLATE_SHARPNESS",
@@ -219,8 +220,6 @@ def _boundary_slots(topology: QuadTopology) -> BoolArray:
 
 def _reverse_slots(topology: QuadTopology) -> IntArray:
     """For every slot A → B the slot B → A."""
-    from . import halfedge_slots
-
     slot_out, slot_in = halfedge_slots(topology)
     out = np.empty(int(topology.neighbor_offsets[-1]), dtype=np.int64)
     out[slot_out] = slot_in

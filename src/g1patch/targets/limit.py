@@ -50,16 +50,19 @@ from ..subdivision import (
     limit_points,
     refine_grids,
 )
-from . import Targets, halfedge_slots, slot_sector_normals
 from .creases import seam_edges, spread_sectors
-from .interpolate import safeguarded_fans, slot_vertices
-from .local import cross, fan_normals, slot_tables
+from .fans import safeguarded_fans
+from .local import cross, dot, fan_normals, slot_tables, slot_vertices
+from .value import TangentRule, Targets, halfedge_slots, slot_sector_normals
 
 __all__ = ["FIT_LEVELS", "bspline_slots", "limit_targets", "regular_faces"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
+#: ``(slot_out, slot_in)`` of :func:`~g1patch.targets.value.halfedge_slots` (int64) or of
+#: :func:`~g1patch.targets.local.slot_tables` (int32)
+SlotTables = tuple[NDArray[np.integer], NDArray[np.integer]]
 
 #: refinement levels of the exact limit samples the free tangents and interior points are fitted to
 FIT_LEVELS = 3
@@ -87,10 +90,6 @@ _EDGE_GRID = (
     lambda s, m: (m - s, m + 0 * s),
     lambda s, m: (0 * s, m - s),
 )
-
-
-def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
-    return np.einsum("...d,...d->...", a, b)
 
 
 def _bernstein(t: FloatArray) -> FloatArray:
@@ -123,13 +122,13 @@ def regular_faces(topology: QuadTopology) -> BoolArray:
 def _weigh(r: FloatArray, n: FloatArray) -> FloatArray:
     """``W r`` with ``W = n nᵀ + ρ I``: the residual's normal part, plus :data:`_PARAMETRIC_EDGE` of
     all of it."""
-    return _dot(r, n)[..., None] * n + _PARAMETRIC_EDGE * r
+    return dot(r, n)[..., None] * n + _PARAMETRIC_EDGE * r
 
 
 def _plane_bases(normals: FloatArray, a: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Orthonormal ``(e1, e2)`` of each tangent plane, e1 along ``a`` projected (any direction in
     the plane where that vanishes)."""
-    e1 = a - _dot(a, normals)[:, None] * normals
+    e1 = a - dot(a, normals)[:, None] * normals
     length = np.linalg.norm(e1, axis=1, keepdims=True)
     other = np.cross(
         normals, np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
@@ -142,9 +141,7 @@ def _plane_bases(normals: FloatArray, a: FloatArray) -> tuple[FloatArray, FloatA
     return e1, np.cross(normals, e1)
 
 
-def _fitted_edges(
-    topology: QuadTopology, free: BoolArray, slots: tuple[IntArray, IntArray]
-) -> IntArray:
+def _fitted_edges(topology: QuadTopology, free: BoolArray, slots: SlotTables) -> IntArray:
     """Canonical half-edges of the interior edges with a free end (their tangents are fitted);
     ``slots``: :func:`~g1patch.targets.halfedge_slots`."""
     slot_out, slot_in = slots
@@ -213,7 +210,7 @@ def _limit_samples(mesh: QuadMesh, faces: IntArray, levels: int) -> tuple[FloatA
     for _ in range(_SAMPLE_MARGIN):
         touched = np.zeros(topology.n_vertices, dtype=bool)
         touched[topology.faces[keep]] = True
-        keep = touched[topology.faces].any(axis=1)
+        keep = np.any(touched[topology.faces], axis=1)
     for _ in range(_PINCH_FILLS):
         pinched = _pinched_vertices(topology, keep)
         if not pinched.any():
@@ -245,7 +242,7 @@ def _fit_tangents(
     sample_normals: FloatArray,
     row: IntArray,
     m: int,
-    slots: tuple[IntArray, IntArray],
+    slots: SlotTables,
     h: IntArray,
 ) -> FloatArray:
     """The free slot tangents fitted in their tangent planes: per interior edge A → B with a free
@@ -288,9 +285,7 @@ def _fit_tangents(
         ],
         axis=1,
     )
-    known = np.stack(
-        [_dot(t[sa], e1a), _dot(t[sa], e2a), _dot(t[sb], e1b), _dot(t[sb], e2b)], axis=1
-    )
+    known = np.stack([dot(t[sa], e1a), dot(t[sa], e2a), dot(t[sb], e1b), dot(t[sb], e2b)], axis=1)
     unknown = np.repeat(np.stack([free[sa], free[sb]], axis=1), 2, axis=1)  # (E, 4)
     fixed_part = np.einsum("ec,ecsd->esd", np.where(unknown, 0.0, known), columns)
     weighted = _weigh(columns, normal[:, None])
@@ -309,7 +304,7 @@ def _fit_tangents(
 
 
 def _boundary_nets(
-    mesh: QuadMesh, x: FloatArray, t: FloatArray, faces: IntArray, slots: tuple[IntArray, IntArray]
+    mesh: QuadMesh, x: FloatArray, t: FloatArray, faces: IntArray, slots: SlotTables
 ) -> FloatArray:
     """The 4 × 4 Bézier nets ``b[f, i, j]`` of ``faces`` with corners and edge points set, interior
     zero; ``slots``: :func:`~g1patch.targets.halfedge_slots`."""
@@ -353,7 +348,7 @@ def _limit_normals(mesh: QuadMesh, a: FloatArray, b: FloatArray) -> tuple[FloatA
     (:data:`_DEGENERATE`), flagged."""
     a_cross_b = cross(a, b)
     length = np.linalg.norm(a_cross_b, axis=1)
-    degenerate = ~(length > _DEGENERATE * (_dot(a, a) + _dot(b, b)))
+    degenerate = ~(length > _DEGENERATE * (dot(a, a) + dot(b, b)))
     normals = a_cross_b / np.where(degenerate, 1.0, length)[:, None]
     if degenerate.any():
         normals[degenerate] = fan_normals(mesh)[degenerate]
@@ -426,9 +421,12 @@ def _sector_slots(mesh: QuadMesh, seams: BoolArray) -> tuple[Sectors, BoolArray,
     return found, bound & found.creased[slot_vertex], inner_exact
 
 
-def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
+def limit_targets(
+    mesh: QuadMesh, levels: int = FIT_LEVELS, *, tangents: TangentRule = "arc"
+) -> Targets:
     """The Catmull–Clark limit targets of ``mesh`` (module docstring); ``levels`` of refinement for
-    the fits."""
+    the fits. ``tangents`` is ignored (the signature of a
+    :class:`~g1patch.targets.value.ShapeFunction`): the limit surface has its own tangents."""
     topology = mesh.topology
     slot_vertex = slot_vertices(topology)
     limit = limit_data(mesh)
@@ -460,7 +458,7 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
             slot_sector_normals(plane)[1],
             None,
         )  # each slot's sector plane (the right-hand face's)
-        projected = star - _dot(star, n)[:, None] * n
+        projected = star - dot(star, n)[:, None] * n
         star = np.where(
             bound[:, None], star, projected
         )  # crease tangents lie in both sectors' planes already
@@ -474,7 +472,7 @@ def limit_targets(mesh: QuadMesh, levels: int = FIT_LEVELS) -> Targets:
             jit_kernel(_plane_kernel)(limit.tangents, normals, topology.neighbor_offsets, star)
         else:
             slot_normals = normals[slot_vertex]
-            star = star - _dot(star, slot_normals)[:, None] * slot_normals
+            star = star - dot(star, slot_normals)[:, None] * slot_normals
         exact = bspline_slots(mesh) & ~touched[slot_vertex]
     free = ~exact & ~degenerate[slot_vertex]
     regular = regular_faces(topology) & ~touched[topology.faces].any(axis=1)

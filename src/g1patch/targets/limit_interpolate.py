@@ -47,8 +47,8 @@ from scipy.sparse.linalg import LinearOperator, SuperLU, lsmr, onenormest, splu
 from ..errors import ConstructionError, InputError, MeshError
 from ..mesh import QuadMesh, QuadTopology
 from ..subdivision import INFINITE_SHARPNESS, corner_vertices, limit_points, sharp_edges
-from . import Targets
 from .limit import limit_targets
+from .value import TangentRule, Targets
 
 __all__ = [
     "LSMR_ITERATIONS",
@@ -220,11 +220,11 @@ def interpolating_cage(mesh: QuadMesh) -> CageSolution:
     return CageSolution(cage.vertices, residual, condition, solver)
 
 
-def limit_interpolate_targets(mesh: QuadMesh) -> Targets:
+def limit_interpolate_targets(mesh: QuadMesh, *, tangents: TangentRule = "arc") -> Targets:
     """Targets through the mesh vertices on the Catmull–Clark limit of the interpolating cage
     (:func:`interpolating_cage`): :func:`~g1patch.targets.limit.limit_targets` of the cage,
     positions set to the vertices exactly. Logs the residual, condition estimate and solver at
-    INFO."""
+    INFO. ``tangents`` is ignored, as by :func:`~g1patch.targets.limit.limit_targets`."""
     solution = interpolating_cage(mesh)
     _logger.info(
         "limit-interpolate: cage solved by %s, relative residual %.1e, condition estimate %.1e",

@@ -3,7 +3,9 @@
 * ``fan_normals``: the area-weighted fan normal ``N_A = normalize(Σ (x_next − A) × (x_prev − A))``;
 * ``least_squares_normals``: the paper's normal, the best plane through the vertex and its ring;
 * ``corner_tangents``: a mesh edge projected onto the tangent plane, ``s = d − (n·d) n``, with the
-  chord length or the circle-aware arc length ``2|d|²/(|d| + |s|)``.
+  chord length or the circle-aware arc length ``2|d|²/(|d| + |s|)``;
+* ``cross``, ``dot``, ``unit_rows`` on rows of 3-vectors, and the ring slots' vertices and
+  half-edge tables (``slot_vertices``, ``slot_tables``).
 
 The numba kernels beside the NumPy code they replace are compiled by
 :func:`g1patch.kernels.jit_kernel`.
@@ -19,6 +21,7 @@ from numpy.typing import NDArray
 from ..errors import ConstructionError, check_choice
 from ..kernels import jit_kernel
 from ..mesh import QuadMesh, QuadTopology
+from .value import TANGENTS, TangentRule
 
 __all__ = [
     "NORMALS",
@@ -27,16 +30,17 @@ __all__ = [
     "TangentRule",
     "corner_tangents",
     "cross",
+    "dot",
     "fan_normals",
     "in_vertex_planes",
     "least_squares_normals",
     "slot_tables",
+    "slot_vertices",
+    "unit_rows",
 ]
 
 NormalRule = Literal["fan", "paper"]
-TangentRule = Literal["chord", "arc"]
 NORMALS: tuple[NormalRule, ...] = ("fan", "paper")
-TANGENTS: tuple[TangentRule, ...] = ("chord", "arc")
 
 
 def cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -47,6 +51,17 @@ def cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]
     out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
     out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
     return out
+
+
+def dot(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``a · b`` along the last axis."""
+    return np.einsum("...d,...d->...", a, b)
+
+
+def unit_rows(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``v`` scaled to unit length along the last axis; zero rows stay zero."""
+    length = np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / np.where(length > 0, length, 1.0)
 
 
 def in_vertex_planes(
@@ -78,6 +93,11 @@ def _plane_kernel(
             out[s, 0] = t0 - height * n0
             out[s, 1] = t1 - height * n1
             out[s, 2] = t2 - height * n2
+
+
+def slot_vertices(topology: QuadTopology) -> NDArray[np.int64]:
+    """The vertex of every ring slot, (S,)."""
+    return np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
 
 
 def slot_tables(topology: QuadTopology) -> tuple[NDArray[np.int32], NDArray[np.int32]]:

@@ -53,7 +53,7 @@ from ..continuity import DEGENERATE_RTOL, ContinuityReport
 from ..errors import InputError
 from ..io.atomic import atomic_path
 from ..network import PatchNetwork
-from ..tessellate import TRIANGLE_BUDGET, _size_text, choose_resolution, triangle_count
+from ..tessellate import TRIANGLE_BUDGET, _size_text, samples_per_side, triangle_count
 
 __all__ = [
     "MODES",
@@ -145,15 +145,7 @@ def page_size(n_patches: int, resolution: int) -> int:
 def _resolution(n_patches: int, resolution: object, force: bool) -> int:
     """The samples per patch side: ``resolution`` or :func:`choose_resolution`; above the budget
     without ``force`` a :class:`ViewTooLargeError` with the sizes."""
-    if resolution is None:
-        resolution = choose_resolution(n_patches)
-    if (
-        isinstance(resolution, bool)
-        or not isinstance(resolution, (int, np.integer))
-        or resolution < 2
-    ):
-        raise InputError(f"resolution: expected an integer ≥ 2, got {resolution!r}")
-    r = int(resolution)
+    r = samples_per_side(resolution, n_patches)
     triangles = triangle_count(n_patches, r)
     if triangles > TRIANGLE_BUDGET and not force:
         raise ViewTooLargeError(

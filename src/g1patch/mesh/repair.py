@@ -44,8 +44,10 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from .errors import DegenerateFaceError, MeshError, OrientationError, ValenceError
-from .mesh import FACE_TAGS, Tag, _edge_keys, _few, _following_corner
+from ..errors import DegenerateFaceError, MeshError, OrientationError, ValenceError
+from .faces import _edge_keys, _following_corner
+from .tags import FACE_TAGS, Tag
+from .validate import _few
 
 __all__ = ["Repaired", "repair_polygons"]
 

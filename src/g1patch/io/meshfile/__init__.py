@@ -1,0 +1,118 @@
+"""Quad mesh files: read OBJ / PLY / OFF into a :class:`QuadMesh`; write triangles or quads as OBJ /
+PLY / STL.
+
+* OBJ is read by a small parser of its own (``v``, ``f``, OpenSubdiv ``t`` tag lines; other OBJ
+  statements are skipped, unknown ones are errors) so that every error names its line and mixed
+  polygon lists keep their order.
+* PLY: binary files of the common layout (x, y, z and other scalars per vertex, one list of
+  vertex indices per face, every face with as many corners) are read as NumPy records, any other
+  by meshio (``meshio.ply``), after checking the header here: meshio silently returns fewer faces
+  from a truncated binary file.
+* OFF is read by a parser of its own: meshio's OFF reader only accepts triangles.
+
+OBJ and OFF text is parsed in bulk by NumPy over the whole file, and from :data:`KERNEL_BYTES` on
+by numba kernels (OBJ in one scan; the coordinates of OFF and ASCII PLY); only where a fast path
+declines (anything unusual, any error) is the file read again line by line, by the reference
+parser whose results and line-numbered messages the fast paths reproduce exactly.
+
+Every problem with a file raises :class:`FormatError` (file, line where known, what was expected);
+problems with the mesh it describes raise the :class:`MeshError` family, prefixed with the file
+name. Writes go through :func:`atomic_path`: an error never leaves a partial file. OBJ and STL are
+written here, a block of rows at a time (several times faster than meshio and in bounded
+memory), binary PLY by meshio.
+
+The package's modules: :mod:`~g1patch.io.meshfile.obj`, :mod:`~g1patch.io.meshfile.ply` and
+:mod:`~g1patch.io.meshfile.off` read one format each, on the shared fast paths of
+:mod:`~g1patch.io.meshfile.text` (NumPy) and :mod:`~g1patch.io.meshfile.compiled` (numba) and the
+checks of :mod:`~g1patch.io.meshfile.parsed`; :mod:`~g1patch.io.meshfile.write` writes.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import FormatError
+from ...mesh import QuadMesh, Tag
+from .compiled import KERNEL_BYTES as KERNEL_BYTES
+from .compiled import _floats_compiled as _floats_compiled
+from .obj import OBJ_SKIPPED as OBJ_SKIPPED
+from .obj import _obj_compiled as _obj_compiled
+from .obj import _obj_fast as _obj_fast
+from .obj import _read_obj
+from .obj import _read_obj_lines as _read_obj_lines
+from .off import OFF_HEADERS as OFF_HEADERS
+from .off import _off_fast as _off_fast
+from .off import _read_off
+from .off import _read_off_lines as _read_off_lines
+from .parsed import _Parsed
+from .ply import _ply_header as _ply_header
+from .ply import _ply_meshio as _ply_meshio
+from .ply import _ply_records as _ply_records
+from .ply import _ply_text as _ply_text
+from .ply import _read_ply
+from .text import _numbers as _numbers
+from .write import WRITE_FORMATS, PathLike, write_quads, write_triangles
+
+__all__ = ["read_mesh", "write_triangles", "write_quads", "READ_FORMATS", "WRITE_FORMATS"]
+
+READ_FORMATS = (".obj", ".ply", ".off")
+
+
+def read_mesh(
+    path: PathLike,
+    *,
+    split: bool = True,
+    sharp_angle: float | None = None,
+    strict: bool | None = None,
+) -> QuadMesh:
+    """Read an OBJ, PLY or OFF file into a validated :class:`QuadMesh` (tags from OBJ ``t`` lines).
+
+    With ``split`` a mesh with non-quad faces is refined once into quads (see
+    :meth:`QuadMesh.from_arrays`); without, such a mesh raises :class:`MeshError`.
+    ``sharp_angle`` (degrees): tag the edges whose faces' normals differ by more than that as
+    infinitely sharp, and vertices with three such edges as corners, before splitting
+    (:func:`g1patch.sharpen.sharp_angle_tags`); the file's own tags are kept. ``strict``: refuse
+    a mesh that needs repair instead of repairing it (:meth:`QuadMesh.from_arrays`).
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    readers = {".obj": _read_obj, ".ply": _read_ply, ".off": _read_off}
+    if suffix not in readers:
+        raise FormatError(
+            path,
+            f"unsupported extension {path.suffix!r}; expected one of {', '.join(READ_FORMATS)}",
+        )
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise FormatError(path, f"cannot read the file ({exc.strerror or exc})") from None
+    if not data or data.isspace():
+        raise FormatError(path, "the file is empty")
+    parsed = readers[suffix](path, data)
+    tags = parsed.tags
+    if sharp_angle is not None:
+        tags = tags + _sharp_angle_tags(path, parsed, sharp_angle)
+    return QuadMesh.from_arrays(
+        parsed.vertices, parsed.faces, split=split, source=str(path), tags=tags, strict=strict
+    )
+
+
+def _sharp_angle_tags(path: Path, parsed: _Parsed, degrees: float) -> tuple[Tag, ...]:
+    """The ``--sharp-angle`` tags of a parsed file, on its own polygons (index errors are left to
+    the mesh checks)."""
+    from ...mesh import _as_polygons
+    from ...sharpen import sharp_angle_tags
+
+    corners, sizes = _as_polygons(parsed.faces)
+    vertices = np.asarray(parsed.vertices, dtype=np.float64)
+    if (
+        sizes.size == 0
+        or corners.size == 0
+        or corners.min() < 0
+        or corners.max() >= len(vertices)
+        or not np.isfinite(vertices).all()
+    ):
+        return ()
+    return sharp_angle_tags(vertices, corners, sizes, degrees)

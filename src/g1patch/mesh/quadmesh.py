@@ -1,0 +1,225 @@
+"""Quad meshes: positions on a :class:`~g1patch.mesh.QuadTopology` with the tags of their file
+(:class:`QuadMesh`), built from any polygons by :meth:`QuadMesh.from_arrays` (checked, non-quads
+split, repaired unless strict: :func:`strict_meshes`), and :func:`subdivide`.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..display import bbox_text, picture, short_source
+from ..errors import (
+    DegenerateFaceError,
+    InputError,
+    MeshError,
+    NonManifoldError,
+    OrientationError,
+    ValenceError,
+    as_float_array,
+)
+from .features import Features, _read_only, features_from_tags
+from .polygons import _quads_from_polygons, refine_polygons
+from .repair import repair_polygons
+from .tags import Tag, _refine_tags
+from .topology import QuadTopology
+from .validate import _check_face_areas, _check_finite, _checked_polygons
+
+__all__ = ["REPAIRABLE", "QuadMesh", "strict_meshes", "subdivide"]
+
+logger = logging.getLogger(__name__)
+
+IntArray = NDArray[np.int64]
+FloatArray = NDArray[np.float64]
+
+#: what :meth:`QuadMesh.from_arrays` repairs unless strict (:mod:`g1patch.mesh.repair`)
+REPAIRABLE = (DegenerateFaceError, NonManifoldError, OrientationError, ValenceError)
+
+_STRICT: ContextVar[bool] = ContextVar("g1patch_strict_meshes", default=False)
+
+
+@contextmanager
+def strict_meshes(strict: bool = True) -> Iterator[None]:
+    """Within the block, :meth:`QuadMesh.from_arrays` calls that do not pass ``strict`` use this
+    one: for callers that cannot pass it on, such as :func:`~g1patch.io.meshfile.read_mesh`."""
+    token = _STRICT.set(strict)
+    try:
+        yield
+    finally:
+        _STRICT.reset(token)
+
+
+@contextmanager
+def _named_errors(source: str | None) -> Iterator[None]:
+    """Prefix mesh and input errors with the source file name, keeping their class."""
+    try:
+        yield
+    except (MeshError, InputError) as error:
+        if source is None:
+            raise
+        raise type(error)(f"{source}: {error}") from None
+
+
+@dataclass(frozen=True, eq=False)
+class QuadMesh:
+    """Positions ``vertices`` (nv, 3) on a :class:`~g1patch.mesh.QuadTopology`, with the OpenSubdiv
+    tags of its file.
+
+    Validated on construction: finite coordinates, and no face of zero area
+    (:data:`DEGENERATE_AREA_TOLERANCE`). ``repairs`` names what :meth:`from_arrays` repaired
+    (short phrases, :attr:`repair_note` joins them), empty if nothing.
+    """
+
+    vertices: FloatArray
+    topology: QuadTopology
+    tags: tuple[Tag, ...] = ()
+    source: str | None = None
+    repairs: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        with _named_errors(self.source):
+            vertices = as_float_array("vertices", self.vertices, (3,), finite=False)
+            if vertices.shape != (self.topology.n_vertices, 3):
+                raise InputError(
+                    f"vertices: expected shape ({self.topology.n_vertices}, 3) for this topology, "
+                    f"got {vertices.shape}"
+                )
+            _check_finite(vertices)
+            _check_face_areas(vertices, self.topology.faces)
+        object.__setattr__(self, "vertices", _read_only(vertices.copy()))
+        object.__setattr__(self, "tags", tuple(Tag(*tag) for tag in self.tags))
+        object.__setattr__(self, "repairs", tuple(self.repairs))
+
+    @classmethod
+    def from_arrays(
+        cls,
+        vertices: ArrayLike,
+        faces: ArrayLike | Sequence[Sequence[int]],
+        *,
+        split: bool = True,
+        source: str | None = None,
+        tags: Sequence[Tag] = (),
+        strict: bool | None = None,
+    ) -> QuadMesh:
+        """Validate and build a quad mesh from positions and faces ((nf, 4) array or lists of
+        indices).
+
+        Unused vertices are dropped (one ``logging`` info line). If any face has 3 or ≥ 5 corners
+        the whole mesh is refined once (:func:`refine_polygons`, new points on a smooth surface
+        through the vertices) with ``split``, else a :class:`MeshError` is raised. A mesh the
+        checks refuse (:data:`REPAIRABLE`: repeated vertices, non-manifold edges or vertices,
+        inconsistent orientation, interior valence 2) is repaired
+        (:func:`g1patch.mesh.repair.repair_polygons`, one info line, the repairs kept in
+        :attr:`repairs`), unless ``strict`` (default: the one of :func:`strict_meshes`, else False),
+        which raises the check's error. Non-finite coordinates, out-of-range indices, faces of < 3
+        corners, zero area and non-orientable components raise either way. Errors name ``source`` (a
+        file name) when given.
+        """
+        strict = _STRICT.get() if strict is None else strict
+        tags = tuple(Tag(*tag) for tag in tags)
+        repairs: tuple[str, ...] = ()
+        with _named_errors(source):
+            points, corners, sizes = _checked_polygons(vertices, faces, tags)
+            try:
+                quad_points, quads, quad_tags = _quads_from_polygons(
+                    points, corners, sizes, split, source, tags
+                )
+                topology = QuadTopology.from_faces(quads, quad_points.shape[0])
+            except REPAIRABLE as refusal:
+                if strict:
+                    raise
+                repaired = repair_polygons(points, corners, sizes, tags)
+                if not repaired.repairs:
+                    raise refusal
+                repairs = repaired.repairs
+                logger.info("%s: repaired: %s", source or "mesh", ", ".join(repairs))
+                quad_points, quads, quad_tags = _quads_from_polygons(
+                    repaired.points, repaired.corners, repaired.sizes, split, source, repaired.tags
+                )
+                topology = QuadTopology.from_faces(quads, quad_points.shape[0])
+        return cls(quad_points, topology, quad_tags, source, repairs)
+
+    def __repr__(self) -> str:
+        """``<QuadMesh 8 vertices, 6 quads, 12 edges, closed, bbox (-1, -1, -1)…(1, 1, 1),
+        cube.obj>``: counts, tags, repairs, the box and the file name, never the arrays."""
+        parts = [self.topology._counts()]
+        if self.tags:
+            parts.append("tags " + " ".join(dict.fromkeys(tag.name for tag in self.tags)))
+        if self.repairs:
+            parts.append("repaired")
+        parts.append(bbox_text(*self.bounding_box))
+        if self.source:
+            parts.append(short_source(self.source))
+        return f"<QuadMesh {', '.join(parts)}>"
+
+    def _repr_png_(self) -> bytes | None:
+        """A small flat-shaded picture of the quads for Jupyter (None above
+        :data:`g1patch.display.PREVIEW_MAX_PATCHES` faces)."""
+        return picture("mesh", self, self.n_faces)
+
+    def with_vertices(self, new_vertices: ArrayLike) -> QuadMesh:
+        """The same topology, tags and repair record with new positions (validated the same way)."""
+        return QuadMesh(
+            np.asarray(new_vertices), self.topology, self.tags, self.source, self.repairs
+        )
+
+    @property
+    def repair_note(self) -> str:
+        """The repairs as one line, ``"repaired: 1 valence-2 vertex (137) dissolved, …"``; empty if
+        none."""
+        return "repaired: " + ", ".join(self.repairs) if self.repairs else ""
+
+    @cached_property
+    def features(self) -> Features:
+        """Sharpness per edge and vertex, holes and boundary rule from the tags
+        (:func:`features_from_tags`)."""
+        with _named_errors(self.source):
+            return features_from_tags(self.topology, self.tags)
+
+    @property
+    def faces(self) -> IntArray:
+        return self.topology.faces
+
+    @property
+    def n_vertices(self) -> int:
+        return self.topology.n_vertices
+
+    @property
+    def n_faces(self) -> int:
+        return self.topology.n_faces
+
+    @property
+    def n_edges(self) -> int:
+        return self.topology.n_edges
+
+    @property
+    def bounding_box(self) -> tuple[FloatArray, FloatArray]:
+        """(lowest, highest) corner of the axis-aligned box around the vertices."""
+        return self.vertices.min(axis=0), self.vertices.max(axis=0)
+
+    @property
+    def bounding_box_diagonal(self) -> float:
+        low, high = self.bounding_box
+        return float(np.linalg.norm(high - low))
+
+
+def subdivide(mesh: QuadMesh) -> QuadMesh:
+    """One Catmull–Clark topology step with linear positions: 4 F quads on V + E + F vertices.
+
+    Old vertices keep their indices, edge midpoints follow (in edge order), then face centroids
+    (:func:`refine_polygons`). Crease and hole tags are carried over.
+    """
+    corners = mesh.faces.ravel()
+    sizes = np.full(mesh.n_faces, 4, dtype=np.int64)
+    vertices, quads, _ = refine_polygons(mesh.vertices, corners, sizes)
+    tags = _refine_tags(mesh.tags, corners, sizes, mesh.n_vertices)
+    return QuadMesh(
+        vertices, QuadTopology.from_faces(quads, vertices.shape[0]), tags, mesh.source, mesh.repairs
+    )

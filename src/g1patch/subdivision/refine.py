@@ -1,0 +1,242 @@
+"""Catmull–Clark refinement with OpenSubdiv's creasing (the rules are told in
+:mod:`g1patch.subdivision`): one step of positions, topology and child sharpness, the tags of the
+refined mesh, and the refined grids of the original faces.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import InputError
+from ..mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology, Tag, refine_polygons
+from .features import (
+    RULE_CREASE,
+    RULE_SMOOTH,
+    _effective,
+    _end_sums,
+    _Level,
+    _level_of,
+    _rules,
+    _segment_sum,
+)
+
+__all__ = ["catmull_clark_points", "refine", "refine_grids"]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
+
+#: tags that :func:`refine` rebuilds from the child sharpness
+_FEATURE_TAGS = frozenset({"crease", "corner", "hole"})
+
+
+def _decrement(s: FloatArray) -> FloatArray:
+    """OpenSubdiv's uniform sharpness subdivision: ∞ stays ∞, else ``s − 1``, 0 once ≤ 0."""
+    return np.where(s >= INFINITE_SHARPNESS, INFINITE_SHARPNESS, np.maximum(s - 1.0, 0.0))
+
+
+def _child_edge_halves(level: _Level) -> tuple[FloatArray, FloatArray]:
+    """Sharpness of each edge's two children, the one at ``edges[:, 0]`` and the one at ``edges[:,
+    1]``."""
+    s = level.edge
+    if not level.chaikin:
+        child = _decrement(s)
+        return child, child
+    topology = level.topology
+    nv = topology.n_vertices
+    a, b = topology.edges[:, 0], topology.edges[:, 1]
+    semi = (s > 0) & (s < INFINITE_SHARPNESS)
+    count = np.bincount(a[semi], minlength=nv) + np.bincount(b[semi], minlength=nv)
+    total = np.bincount(a[semi], weights=s[semi], minlength=nv) + np.bincount(
+        b[semi], weights=s[semi], minlength=nv
+    )
+
+    def at(end: IntArray) -> FloatArray:
+        others = count[end] - 1
+        mean = np.divide(total[end] - s, others, out=np.zeros_like(s), where=others > 0)
+        blended = np.where(others > 0, 0.75 * s + 0.25 * mean, s)
+        return np.where(semi, np.maximum(blended - 1.0, 0.0), _decrement(s))
+
+    return at(a), at(b)
+
+
+def _step(level: _Level) -> _Level:
+    """One Catmull–Clark step with OpenSubdiv's creasing (:mod:`g1patch.subdivision`), numbered like
+    :func:`~g1patch.mesh.refine_polygons`: the V vertex points, one per edge (``edges`` order), one
+    per face."""
+    topology, x = level.topology, level.x
+    nv, ne = topology.n_vertices, topology.n_edges
+    edges = topology.edges
+    a, b = edges[:, 0], edges[:, 1]
+    s = level.edge
+    half_a, half_b = _child_edge_halves(level)
+    child_vertex = _decrement(level.vertex)
+
+    face_points = x[topology.faces].mean(axis=1)
+    left = topology.edge_halfedges[:, 0] >> 2
+    right = np.maximum(topology.edge_halfedges[:, 1], 0) >> 2
+    middle = 0.5 * (x[a] + x[b])
+    smooth_edge = 0.25 * (x[a] + x[b] + face_points[left] + face_points[right])
+    weight = np.where(s <= 0, 0.0, np.where((half_a > 0) & (half_b > 0), 1.0, np.minimum(s, 1.0)))[
+        :, None
+    ]
+    edge_points = np.where(
+        weight == 0,
+        smooth_edge,
+        np.where(weight == 1, middle, weight * middle + (1 - weight) * smooth_edge),
+    )
+
+    h = np.arange(topology.n_halfedges)
+    origin = topology.origin(h)
+    n = topology.face_count[:, None].astype(np.float64)
+    neighbour_sum = _segment_sum(origin, x[topology.target(h)], nv)
+    face_sum = _segment_sum(origin, face_points[h >> 2], nv)
+    smooth = ((n - 2.0) * x + (neighbour_sum + face_sum) / n) / n
+
+    sharp = s > 0
+    parent_rule = _rules(level.vertex, np.bincount(edges[sharp].ravel(), minlength=nv))
+    child_count = np.bincount(a[half_a > 0], minlength=nv) + np.bincount(
+        b[half_b > 0], minlength=nv
+    )
+    child_rule = _rules(child_vertex, child_count)
+    vertex_points = smooth.copy()
+    creased = np.flatnonzero(parent_rule != RULE_SMOOTH)
+    if creased.size:
+        parent_crease = (6.0 * x + _end_sums(x, edges, sharp, sharp, nv)) / 8.0
+        child_crease = (6.0 * x + _end_sums(x, edges, half_a > 0, half_b > 0, nv)) / 8.0
+        parent_mask = np.where((parent_rule == RULE_CREASE)[:, None], parent_crease, x)
+        child_mask = np.select(
+            [child_rule[:, None] == RULE_SMOOTH, child_rule[:, None] == RULE_CREASE],
+            [smooth, child_crease],
+            x,
+        )
+        # the fractional weight of the transition: the mean of the sharpness values that decay to 0
+        # here
+        if level.chaikin:
+            decay_a, decay_b = sharp & (half_a <= 0), sharp & (half_b <= 0)
+        else:
+            decay_a = decay_b = sharp & (s <= 1.0)
+        vertex_decays = (level.vertex > 0) & (child_vertex <= 0)
+        total = (
+            np.bincount(a[decay_a], weights=s[decay_a], minlength=nv)
+            + np.bincount(b[decay_b], weights=s[decay_b], minlength=nv)
+            + np.where(vertex_decays, level.vertex, 0.0)
+        )
+        count = (
+            np.bincount(a[decay_a], minlength=nv)
+            + np.bincount(b[decay_b], minlength=nv)
+            + vertex_decays
+        )
+        w = np.minimum(np.divide(total, count, out=np.zeros(nv), where=count > 0), 1.0)[:, None]
+        blended = np.where(
+            child_rule[:, None] == parent_rule[:, None],
+            parent_mask,
+            w * parent_mask + (1 - w) * child_mask,
+        )
+        vertex_points[creased] = blended[creased]
+    points = np.concatenate([vertex_points, edge_points, face_points])
+
+    _, quads, _ = refine_polygons(
+        x, topology.faces.ravel(), np.full(topology.n_faces, 4, dtype=np.int64)
+    )
+    child = QuadTopology.from_faces(quads, len(points))
+    child_edge = np.zeros(child.n_edges)
+    keys = child.edges[:, 0] * len(points) + child.edges[:, 1]
+    m = nv + np.arange(ne)
+    for end, values in ((a, half_a), (b, half_b)):
+        positive = values > 0
+        half_keys = np.minimum(end, m) * len(points) + np.maximum(end, m)
+        child_edge[np.searchsorted(keys, half_keys[positive])] = values[positive]
+    child_vertices = np.concatenate([child_vertex, np.zeros(ne + topology.n_faces)])
+    child_edge, child_vertices = _effective(child, child_edge, child_vertices, level.mode)
+    return _Level(
+        points,
+        child,
+        child_edge,
+        child_vertices,
+        np.repeat(level.holes, 4),
+        level.mode,
+        level.chaikin,
+    )
+
+
+def _level_tags(tags: tuple[Tag, ...], level: _Level) -> tuple[Tag, ...]:
+    """The mesh's other tags, then ``crease``, ``corner`` and ``hole`` tags of the level's features
+    (boundary edges and the boundary rule's corners left implicit, zeros dropped)."""
+    topology = level.topology
+    out = [tag for tag in tags if tag.name not in _FEATURE_TAGS]
+    creases = np.flatnonzero((level.edge > 0) & ~topology.is_boundary_edge)
+    if creases.size:
+        out.append(
+            Tag(
+                "crease",
+                tuple(topology.edges[creases].ravel().tolist()),
+                tuple(level.edge[creases].tolist()),
+            )
+        )
+    implicit = (
+        topology.is_boundary_vertex & (topology.face_count == 1) & (level.mode == "edge-and-corner")
+    )
+    corners = np.flatnonzero((level.vertex > 0) & ~implicit)
+    if corners.size:
+        out.append(Tag("corner", tuple(corners.tolist()), tuple(level.vertex[corners].tolist())))
+    if level.holes.any():
+        out.append(Tag("hole", tuple(np.flatnonzero(level.holes).tolist())))
+    return tuple(out)
+
+
+def catmull_clark_points(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> FloatArray:
+    """One Catmull–Clark step's positions (:mod:`g1patch.subdivision`), numbered like
+    :func:`~g1patch.mesh.refine_polygons`: the V vertex points, then one point per edge
+    (``topology.edges`` order), then one per face."""
+    return _step(_level_of(mesh, sharpness)).x
+
+
+def refine(mesh: QuadMesh, levels: int = 1, sharpness: ArrayLike | None = None) -> QuadMesh:
+    """``levels`` Catmull–Clark steps (:mod:`g1patch.subdivision`) on the topology of
+    :func:`~g1patch.mesh.subdivide` (old vertices, then one per edge, then one per face). Features
+    from the mesh's tags, edge sharpness overridden by ``sharpness`` where given; the result's tags
+    carry the child features (the other tags are kept). ``levels = 0`` returns the mesh itself."""
+    return refine_grids(mesh, levels, sharpness)[0]
+
+
+def _edge_points(edge_keys: IntArray, nv: int, p: IntArray, q: IntArray) -> IntArray:
+    """The vertex a refinement step puts on each edge p–q (``nv`` + the edge's index in
+    ``edges`` order, found by its key ``min · nv + max`` among ``edge_keys``)."""
+    return nv + np.searchsorted(edge_keys, np.minimum(p, q) * nv + np.maximum(p, q))
+
+
+def refine_grids(
+    mesh: QuadMesh, levels: int, sharpness: ArrayLike | None = None
+) -> tuple[QuadMesh, IntArray]:
+    """:func:`refine`, and per original face the refined vertices as a grid ``(F, m + 1, m + 1)``,
+    ``m = 2^levels``: ``grid[f, i, j]`` sits at parameter ``(i/m, j/m)`` of face f (u from corner 0
+    to 1, v from corner 0 to 3). Cell (i, j) of a level is the face holding the half-edge
+    ``grid[i, j] → grid[i + 1, j]`` (refinement keeps orientation), its face point the cell's
+    centre."""
+    if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or levels < 0:
+        raise InputError(f"levels: expected a non-negative integer, got {levels!r}")
+    level = _level_of(mesh, sharpness)
+    grid = mesh.faces[:, [[0, 3], [1, 2]]]
+    for _ in range(int(levels)):
+        topology = level.topology
+        nv = topology.n_vertices
+        edge_keys = topology.edges[:, 0] * nv + topology.edges[:, 1]
+        h = np.arange(topology.n_halfedges)
+        directed = topology.origin(h) * nv + topology.target(h)
+        order = np.argsort(directed)
+        cell = (
+            order[np.searchsorted(directed[order], grid[:, :-1, :-1] * nv + grid[:, 1:, :-1])] >> 2
+        )
+        size = 2 * grid.shape[1] - 1
+        fine = np.empty((grid.shape[0], size, size), dtype=np.int64)
+        fine[:, ::2, ::2] = grid
+        fine[:, 1::2, ::2] = _edge_points(edge_keys, nv, grid[:, :-1], grid[:, 1:])
+        fine[:, ::2, 1::2] = _edge_points(edge_keys, nv, grid[:, :, :-1], grid[:, :, 1:])
+        fine[:, 1::2, 1::2] = nv + topology.n_edges + cell
+        level = _step(level)
+        grid = fine
+    if not levels:
+        return mesh, grid
+    return QuadMesh(level.x, level.topology, _level_tags(mesh.tags, level), mesh.source), grid
