@@ -164,7 +164,11 @@ def test_no_import_cycles() -> None:
     ("module", "source", "expected"),
     [
         ("g1patch.mesh.topology", "def f():\n    from ..render import render\n", "higher layer"),
-        ("g1patch.mesh.topology", "def f():\n    from ..api import smooth\n", "package root or api"),
+        (
+            "g1patch.mesh.topology",
+            "def f():\n    from ..api import smooth\n",
+            "package root or api",
+        ),
         ("g1patch.network", "import g1patch.render\n", "higher layer"),
         ("g1patch.continuity.report", "from .. import read\n", "package root"),
         ("g1patch.viewer", "from ..api import Surface\n", "package root or api"),
