@@ -15,23 +15,22 @@ Every file holds the same members (a valid network file of format version 3), so
 without checks, for comparison. Each save writes a fresh file (the previous one deleted first).
 The round trip is checked to be exact. Target (issue 12): save and load each ≤ 1 s at 1 M quads.
 
-Run:  .venv/bin/python benchmarks/bench_files.py [--quads N] [--repeats R] [--formats a,b,...] [--dir DIR]
+Run:  .venv/bin/python benchmarks/bench_files.py [--quads N] [--repeats R] [--formats a,b,...]
+      [--dir DIR] [--quick]
 """
 
 from __future__ import annotations
 
-import argparse
 import json
-import os
-import platform
 import shutil
 import tempfile
-import time
 import zipfile
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
+import harness
 import numpy as np
 
 from g1patch import shapes
@@ -40,35 +39,32 @@ from g1patch.io.network_file import FORMAT_VERSION, load_network, save_network
 from g1patch.memory import tune_for_large_arrays
 from g1patch.network import PatchNetwork
 
+record = harness.recorder("bench_files")
+#: the network's arrays a network file holds beside its patches
+ARRAYS = (
+    "corner_ids",
+    "edge_ids",
+    "edge_reversed",
+    "neighbor",
+    "neighbor_edge",
+    "same_direction",
+    "edge_collapsed",
+    "seam",
+    "vertices",
+    "vertex_normals",
+)
+
 
 def members(network: PatchNetwork) -> dict[str, np.ndarray]:
     """The members save_network writes, for the other writers."""
     patches = network.patches
+    header = {"format": "g1patch-network", "version": FORMAT_VERSION}
     arrays: dict[str, Any] = {
-        "header": np.array(
-            json.dumps(
-                {
-                    "format": "g1patch-network",
-                    "version": FORMAT_VERSION,
-                    "provenance": network.provenance,
-                }
-            )
-        ),
+        "header": np.array(json.dumps({**header, "provenance": network.provenance})),
         "patch_kind": np.array(getattr(patches, "kind", "bicubic")),
         **patches.to_arrays(),  # type: ignore[attr-defined]
     }
-    for name in (
-        "corner_ids",
-        "edge_ids",
-        "edge_reversed",
-        "neighbor",
-        "neighbor_edge",
-        "same_direction",
-        "edge_collapsed",
-        "seam",
-        "vertices",
-        "vertex_normals",
-    ):
+    for name in ARRAYS:
         if getattr(network, name) is not None:
             arrays[name] = getattr(network, name)
     return arrays
@@ -102,128 +98,114 @@ FORMATS: dict[str, Callable[[Path, PatchNetwork], None]] = {
 }
 
 
-def best(run: Callable[[], Any], repeats: int) -> tuple[float, Any]:
-    times, result = [], None
-    for _ in range(repeats):
-        result = None  # free the previous result before the next run allocates its own
-        start = time.perf_counter()
-        result = run()
-        times.append(time.perf_counter() - start)
-    return min(times), result
-
-
 def numpy_load(path: Path) -> dict[str, np.ndarray]:
     with np.load(path, allow_pickle=False) as data:
         return {name: data[name] for name in data.files}
 
 
 def same(a: PatchNetwork, b: PatchNetwork) -> bool:
-    arrays = (
-        "corner_ids",
-        "edge_ids",
-        "edge_reversed",
-        "neighbor",
-        "neighbor_edge",
-        "same_direction",
-        "edge_collapsed",
-        "seam",
-        "vertices",
-        "vertex_normals",
-    )
     return (
         np.array_equal(a.patches.points, b.patches.points)  # type: ignore[attr-defined]
         and a.patches.frame == b.patches.frame  # type: ignore[attr-defined]
-        and all(np.array_equal(getattr(a, n), getattr(b, n)) for n in arrays)
+        and all(np.array_equal(getattr(a, n), getattr(b, n)) for n in ARRAYS)
         and a.provenance == b.provenance
     )
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument(
-        "--quads", type=int, default=1_000_000, help="quads of the torus (default: 1,000,000)"
+def measure(name: str, path: Path, network: PatchNetwork, repeats: int) -> dict[str, float]:
+    """Save, load and np.load of one container: best seconds, and the file's bytes."""
+    writer = FORMATS[name]
+
+    def save() -> None:
+        path.unlink(missing_ok=True)
+        writer(path, network)
+
+    save_seconds = harness.best(save, repeats)
+    size = path.stat().st_size
+    times, loaded = harness.runs(lambda: load_network(path), repeats)
+    if not same(loaded, network):
+        raise SystemExit(f"{name}: the round trip is not exact")
+    del loaded
+    numpy_seconds = harness.best(lambda: numpy_load(path), repeats)
+    path.unlink()
+    return {"size": size, "save": save_seconds, "load": min(times), "np.load": numpy_seconds}
+
+
+def print_table(rows: dict[str, dict[str, float]], build_seconds: float) -> None:
+    """The table of containers, and its records."""
+    header = (
+        f"{'format':22s} {'size MB':>9s} {'save s':>8s} {'load s':>8s} {'np.load s':>10s} "
+        f"{'build s':>8s} {'save+load / build':>18s}"
     )
-    parser.add_argument(
-        "--repeats",
-        type=int,
-        default=3,
-        help="runs per measurement, the best is reported (default: 3)",
+    print(header)
+    print("-" * len(header))
+    for name, row in rows.items():
+        share = (row["save"] + row["load"]) / build_seconds
+        print(
+            f"{name:22s} {row['size'] / 1e6:9.1f} {row['save']:8.2f} {row['load']:8.2f} "
+            f"{row['np.load']:10.2f} {build_seconds:8.1f} {share:17.1%}"
+        )
+        record(f"{name} file", row["size"] / 1e6, "MB")
+        record(f"{name} save", row["save"], "s", "best")
+        record(f"{name} load", row["load"], "s", "best; load_network, validated")
+        record(f"{name} np.load", row["np.load"], "s", "best; no checks")
+        record(f"{name} save + load / build", share, "×")
+    print(
+        "load: load_network (validated); np.load: every member read, no checks. Target: save "
+        "and load ≤ 1 s at 1 M quads."
     )
-    parser.add_argument(
-        "--formats", default=",".join(FORMATS), help=f"comma-separated, of: {', '.join(FORMATS)}"
-    )
-    parser.add_argument(
-        "--dir",
-        type=Path,
-        default=None,
-        help="where to write the files (default: a temporary folder)",
-    )
-    args = parser.parse_args()
+
+
+#: the command line's options (harness.Option)
+OPTIONS: dict[str, harness.Option] = {
+    "quads": (1_000_000, "quads of the torus"),
+    "repeats": (3, "runs per measurement, the best"),
+    "formats": (",".join(FORMATS), "comma-separated containers"),
+    "dir": (None, "where to write the files (default: a temporary folder)", Path),
+}
+#: the defaults --quick sets: small sizes, a smoke run
+QUICK = {"quads": 20_000, "repeats": 1}
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    args = harness.parse_args(__doc__, argv, OPTIONS, QUICK)
     tune_for_large_arrays()  # as the command line does (g1patch.memory)
     chosen = [name.strip() for name in args.formats.split(",") if name.strip()]
     unknown = [name for name in chosen if name not in FORMATS]
     if unknown:
-        parser.error(f"unknown formats {unknown}; choose from {list(FORMATS)}")
+        raise SystemExit(f"unknown formats {unknown}; choose from {list(FORMATS)}")
 
-    print(
-        f"python {platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} cores, {platform.machine()}"
-    )
-    start = time.perf_counter()
-    mesh = shapes.large_torus(args.quads)
-    mesh_seconds = time.perf_counter() - start
-    start = time.perf_counter()
-    network = build_network(mesh)
-    build_seconds = time.perf_counter() - start
+    print(harness.machine_line())
+    mesh_seconds, mesh = harness.timed(lambda: shapes.large_torus(args.quads))
+    build_seconds, network = harness.timed(partial(build_network, mesh))
     del mesh
     raw = sum(np.asarray(a).nbytes for a in members(network).values())
     print(
-        f"mesh: {args.quads} quads in {mesh_seconds:.1f} s; build_network (gregory): {network.n_patches} patches in "
-        f"{build_seconds:.1f} s; {raw / 1e6:.1f} MB of arrays"
+        f"mesh: {args.quads} quads in {mesh_seconds:.1f} s; build_network (gregory): "
+        f"{network.n_patches} patches in {build_seconds:.1f} s; {raw / 1e6:.1f} MB of arrays"
     )
+    record("patches", network.n_patches, "", f"build_network(shapes.large_torus({args.quads}))")
+    record("arrays", raw / 1e6, "MB")
+    record("build", build_seconds, "s", "one build, the baseline of the ratios")
 
     folder = Path(tempfile.mkdtemp(prefix="bench_files.", dir=args.dir))
-    rows = []
+    rows = {}
     try:
         for name in chosen:
             path = folder / f"{name.replace(' ', '_')}.npz"
-            writer = FORMATS[name]
-
-            def save() -> None:
-                path.unlink(missing_ok=True)
-                writer(path, network)
-
-            save_seconds, _ = best(save, args.repeats)
-            size = path.stat().st_size
-            load_seconds, loaded = best(lambda: load_network(path), args.repeats)
-            if not same(loaded, network):
-                raise SystemExit(f"{name}: the round trip is not exact")
-            loaded = None
-            numpy_seconds, _ = best(lambda: numpy_load(path), args.repeats)
-            rows.append((name, size, save_seconds, load_seconds, numpy_seconds))
+            rows[name] = row = measure(name, path, network, args.repeats)
             print(
-                f"  {name}: {size / 1e6:.1f} MB, save {save_seconds:.2f} s, load {load_seconds:.2f} s",
+                f"  {name}: {row['size'] / 1e6:.1f} MB, save {row['save']:.2f} s, load "
+                f"{row['load']:.2f} s",
                 flush=True,
             )
-            path.unlink()
     finally:
         shutil.rmtree(folder, ignore_errors=True)
-
-    print()
     print(
-        f"{network.n_patches} Gregory patches (best of {args.repeats}; build {build_seconds:.1f} s in this run)"
+        f"\n{network.n_patches} Gregory patches (best of {args.repeats}; build "
+        f"{build_seconds:.1f} s in this run)"
     )
-    header = f"{'format':22s} {'size MB':>9s} {'save s':>8s} {'load s':>8s} {'np.load s':>10s} {'build s':>8s} {'save+load / build':>18s}"
-    print(header)
-    print("-" * len(header))
-    for name, size, save_seconds, load_seconds, numpy_seconds in rows:
-        share = (save_seconds + load_seconds) / build_seconds
-        print(
-            f"{name:22s} {size / 1e6:9.1f} {save_seconds:8.2f} {load_seconds:8.2f} {numpy_seconds:10.2f} "
-            f"{build_seconds:8.1f} {share:17.1%}"
-        )
-    print(
-        "load: load_network (validated); np.load: every member read, no checks. Target: save and load ≤ 1 s at 1 M quads."
-    )
+    print_table(rows, build_seconds)
 
 
 if __name__ == "__main__":

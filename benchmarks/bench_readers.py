@@ -23,41 +23,33 @@ kernels against the NumPy pairing and face check (kernel thresholds raised); and
 (what a fresh install's first large read costs), then again in that process (warm).
 
 Run:  .venv/bin/python benchmarks/bench_readers.py [--quads N] [--repeats R] [--dir DIR]
+      [--no-cold] [--quick]
 """
 
 from __future__ import annotations
 
-import argparse
-import os
-import platform
-import subprocess
 import sys
 import tempfile
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from functools import partial
 from pathlib import Path
 from typing import Any
 
+import harness
 import meshio
 import numpy as np
 
-from g1patch import mesh as meshmodule
 from g1patch import shapes
 from g1patch.io import meshfile
 from g1patch.io.meshfile import read_mesh, write_quads
 from g1patch.memory import tune_for_large_arrays
 from g1patch.mesh import QuadMesh
+from g1patch.mesh import connectivity as mesh_connectivity
+from g1patch.mesh import validate as mesh_validate
 
-
-def best(function: Callable[[], Any], repeats: int) -> float:
-    """The shortest of ``repeats`` wall-clock times of ``function()``."""
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return min(times)
+record = harness.recorder("bench_readers")
+COLUMNS = ("before", "read", "parse", "valid.", "raw read", "fromfile", "meshio", "numbers")
 
 
 def write_files(mesh: QuadMesh, directory: Path) -> dict[str, Path]:
@@ -116,12 +108,12 @@ def before(name: str, path: Path) -> Callable[[], meshfile._Parsed]:
 @contextmanager
 def numpy_references() -> Iterator[None]:
     """``from_arrays`` by its NumPy code: the kernels' thresholds out of reach."""
-    saved = meshmodule.KERNEL_HALFEDGES, meshmodule.KERNEL_FACES
-    meshmodule.KERNEL_HALFEDGES = meshmodule.KERNEL_FACES = sys.maxsize
+    saved = mesh_connectivity.KERNEL_HALFEDGES, mesh_validate.KERNEL_FACES
+    mesh_connectivity.KERNEL_HALFEDGES = mesh_validate.KERNEL_FACES = sys.maxsize
     try:
         yield
     finally:
-        meshmodule.KERNEL_HALFEDGES, meshmodule.KERNEL_FACES = saved
+        mesh_connectivity.KERNEL_HALFEDGES, mesh_validate.KERNEL_FACES = saved
 
 
 COLD = """
@@ -138,43 +130,154 @@ print(*times)
 """
 
 
-def cold_read(path: Path, directory: Path | None) -> tuple[float, float]:
+def cold_read(path: Path) -> tuple[float, float]:
     """(first, second) ``read_mesh`` seconds of ``path`` in a fresh process with an empty numba
     cache: the first read compiles every kernel the read uses."""
-    with tempfile.TemporaryDirectory(dir=directory) as cache:
-        environment = dict(os.environ, NUMBA_CACHE_DIR=cache)
-        output = subprocess.run(
-            [sys.executable, "-c", COLD, str(path)],
-            env=environment,
-            check=True,
-            capture_output=True,
-            text=True,
-        ).stdout
-    first, second = map(float, output.split())
+    line = harness.run_python(["-c", COLD, str(path)], empty_cache=True)
+    if line is None:
+        raise SystemExit(f"the cold read of {path} failed")
+    first, second = map(float, line.split())
     return first, second
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quads", type=int, default=1_000_000)
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument(
-        "--dir",
-        type=Path,
-        default=None,
-        help="where to write the files (default: a temporary directory)",
+def from_arrays(parsed: meshfile._Parsed, path: Path) -> Callable[[], QuadMesh]:
+    """``QuadMesh.from_arrays`` on a reader's arrays, as ``read_mesh`` calls it."""
+    return partial(QuadMesh.from_arrays, parsed.vertices, parsed.faces, source=str(path))
+
+
+def measure(
+    name: str, path: Path, mesh: QuadMesh, numbers: Callable[[], None], repeats: int
+) -> dict[str, Any]:
+    """One format's row: seconds per column of :data:`COLUMNS` (None where it does not apply)."""
+    read = harness.best(lambda: read_mesh(path), repeats)
+    parse = parse_only(name, path)
+    parsed = parse()
+    again = from_arrays(parsed, path)()
+    assert again.vertices.tobytes() == mesh.vertices.tobytes()
+    assert np.array_equal(again.faces, mesh.faces)
+    parse_seconds = harness.best(parse, repeats)
+    validate = harness.best(from_arrays(parsed, path), repeats)
+    with numpy_references():
+        numpy_valid = harness.best(from_arrays(parsed, path), repeats)
+    library = None
+    if name != "OFF":  # meshio's OFF reader takes only triangles
+        library = harness.best(lambda: meshio.read(path), 1 if name == "PLY ascii" else repeats)
+    row = {
+        "before": harness.best(before(name, path), 1) + numpy_valid,
+        "read": read,
+        "parse": parse_seconds,
+        "valid.": validate,
+        "raw read": harness.best(path.read_bytes, repeats),
+        "fromfile": harness.best(lambda: np.fromfile(path, dtype=np.uint8), repeats),
+        "meshio": library,
+        # next to parse: the load changes
+        "numbers": harness.best(numbers, repeats) if name != "PLY binary" else None,
+        "numpy valid.": numpy_valid,
+    }
+    if name == "OBJ":
+        data = path.read_bytes()
+        row["kernel parse"] = harness.best(lambda: meshfile._obj_compiled(data), repeats)
+        row["numpy parse"] = harness.best(lambda: meshfile._obj_fast(data), repeats)
+    return row
+
+
+def ratio(numerator: float | None, denominator: float | None) -> float | None:
+    """``numerator / denominator``, None when either is missing."""
+    return None if numerator is None or denominator is None else numerator / denominator
+
+
+def print_table(rows: dict[str, dict[str, Any]]) -> None:
+    """The table of formats, and its records."""
+    ratios = {
+        "before/read": ("before", "read"),
+        "read/meshio": ("read", "meshio"),
+        "parse/numbers": ("parse", "numbers"),
+        "parse/fromfile": ("parse", "fromfile"),
+    }
+    print(
+        f"\n{'format':11s} {'MB':>6s} "
+        + " ".join(f"{c:>8s}" for c in COLUMNS)
+        + " "
+        + " ".join(f"{c:>9s}" for c in ratios)
     )
-    args = parser.parse_args()
+    for name, row in rows.items():
+        cells = [f"{row[c]:8.2f}" if row[c] is not None else f"{'-':>8s}" for c in COLUMNS]
+        quotients = [ratio(row[a], row[b]) for a, b in ratios.values()]
+        shown = [f"{q:8.1f}×" if q is not None else f"{'-':>9s}" for q in quotients]
+        print(f"{name:11s} {row['MB']:6.1f} " + " ".join(cells) + " " + " ".join(shown))
+        record(f"{name} file", row["MB"], "MB")
+        for column in COLUMNS:
+            if row[column] is not None:
+                record(f"{name} {column.rstrip('.')}", row[column], "s", "best")
+        for label, value in zip(ratios, quotients, strict=True):
+            if value is not None:
+                record(f"{name} {label}", value, "×")
+    print(
+        "seconds. before: the replaced reader (line-by-line OBJ/OFF parser, meshio for PLY) + "
+        "NumPy validation, once; read: read_mesh; parse: the reader alone; valid.: "
+        "QuadMesh.from_arrays on its arrays; numbers: np.fromstring of the coordinates and "
+        "indices alone."
+    )
+    print(
+        f"load average {harness.loads()}. Targets: OBJ read ≤ 1 s, binary PLY read ≤ 0.5 s "
+        "(1 M quads)."
+    )
+
+
+def print_compiled(obj: dict[str, Any], repeats: int) -> None:
+    """The compiled paths against their NumPy references, and their records."""
+    kernel, numpy_parse = obj["kernel parse"], obj["numpy parse"]
+    valid, numpy_valid = obj["valid."], obj["numpy valid."]
+    print(f"\ncompiled paths against their NumPy references (best of {repeats}):")
+    print(
+        f"  OBJ parse: kernel {kernel:.2f} s, NumPy fast path {numpy_parse:.2f} s "
+        f"({numpy_parse / kernel:.1f}×)"
+    )
+    print(
+        f"  from_arrays: kernels {valid:.2f} s, NumPy {numpy_valid:.2f} s "
+        f"({numpy_valid / valid:.1f}×)"
+    )
+    record("OBJ kernel parse", kernel, "s", "best")
+    record("OBJ NumPy fast path parse", numpy_parse, "s", "best")
+    record("from_arrays NumPy / kernels", numpy_valid / valid, "×", "OBJ's arrays")
+
+
+def print_cold(paths: dict[str, Path]) -> None:
+    """``read_mesh`` in a fresh process with an empty numba cache, OBJ and binary PLY."""
+    texts = []
+    for name in ("OBJ", "PLY binary"):
+        first, warm = cold_read(paths[name])
+        texts.append(
+            f"{name} first read_mesh {first:.2f} s, then {warm:.2f} s (compile ≈ "
+            f"{first - warm:.1f} s)"
+        )
+        record(f"{name} cold first read", first, "s", "fresh process, empty numba cache")
+        record(f"{name} cold second read", warm, "s", "the same process")
+    print("  cold compile (fresh process, empty numba cache): " + "; ".join(texts))
+
+
+#: the command line's options (harness.Option)
+OPTIONS: dict[str, harness.Option] = {
+    "quads": (1_000_000, "quads of the torus"),
+    "repeats": (3, "runs per measurement, the best"),
+    "dir": (None, "where to write the files (default: a temporary folder)", Path),
+    "no_cold": (False, "skip the cold-compile reads"),
+}
+#: the defaults --quick sets: small sizes, a smoke run
+QUICK = {"quads": 20_000, "repeats": 1, "no_cold": True}
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    args = harness.parse_args(__doc__, argv, OPTIONS, QUICK)
     tune_for_large_arrays()  # as the command line does
 
     mesh = shapes.large_torus(args.quads)
+    print(f"{harness.machine_line()}, meshio {meshio.__version__}")
     print(
-        f"python {platform.python_version()}, numpy {np.__version__}, meshio {meshio.__version__}, "
-        f"{os.cpu_count()} cores; load average at start {os.getloadavg()[0]:.2f}"
+        f"mesh: shapes.large_torus({args.quads}): {mesh.n_vertices} vertices, {mesh.n_faces} "
+        f"quads; best of {args.repeats}"
     )
-    print(
-        f"mesh: shapes.large_torus({args.quads}): {mesh.n_vertices} vertices, {mesh.n_faces} quads; best of {args.repeats}"
-    )
+    record("quads", mesh.n_faces, "quads", f"shapes.large_torus({args.quads})")
     coordinates, indices = numbers_text(mesh)
 
     def numbers() -> None:
@@ -183,108 +286,16 @@ def main() -> None:
 
     with tempfile.TemporaryDirectory(dir=args.dir) as directory:
         paths = write_files(mesh, Path(directory))
-        rows = []
+        rows = {}
         for name, path in paths.items():
-            read = best(lambda: read_mesh(path), args.repeats)
-            parse = parse_only(name, path)
-            parsed = parse()
-            again = QuadMesh.from_arrays(parsed.vertices, parsed.faces, source=str(path))
-            assert again.vertices.tobytes() == mesh.vertices.tobytes() and np.array_equal(
-                again.faces, mesh.faces
-            )
-            parse_seconds = best(parse, args.repeats)
-            validate = best(
-                lambda: QuadMesh.from_arrays(parsed.vertices, parsed.faces, source=str(path)),
-                args.repeats,
-            )
-            with numpy_references():
-                numpy_valid = best(
-                    lambda: QuadMesh.from_arrays(parsed.vertices, parsed.faces, source=str(path)),
-                    args.repeats,
-                )
-            old = best(before(name, path), 1) + numpy_valid
-            raw = best(path.read_bytes, args.repeats)
-            fromfile = best(lambda: np.fromfile(path, dtype=np.uint8), args.repeats)
-            library = (
-                None
-                if name == "OFF"
-                else best(lambda: meshio.read(path), 1 if name == "PLY ascii" else args.repeats)
-            )
-            bound = (
-                best(numbers, args.repeats) if name != "PLY binary" else None
-            )  # next to parse: the load changes
-            rows.append(
-                (
-                    name,
-                    path.stat().st_size,
-                    old,
-                    read,
-                    parse_seconds,
-                    validate,
-                    raw,
-                    fromfile,
-                    library,
-                    bound,
-                )
-            )
-            print(f"  {name}: read_mesh {read:.2f} s", flush=True)
-            if name == "OBJ":
-                data = path.read_bytes()
-                kernel_parse = best(lambda: meshfile._obj_compiled(data), args.repeats)
-                numpy_parse = best(lambda: meshfile._obj_fast(data), args.repeats)
-                kernel_valid, numpy_obj_valid = validate, numpy_valid
-        cold = [cold_read(paths[name], args.dir) for name in ("OBJ", "PLY binary")]
-
-    def cell(seconds: float | None) -> str:
-        return f"{seconds:8.2f}" if seconds is not None else f"{'-':>8s}"
-
-    def ratio(numerator: float | None, denominator: float | None) -> str:
-        return (
-            f"{numerator / denominator:7.1f}×"
-            if numerator is not None and denominator is not None
-            else f"{'-':>8s}"
-        )
-
-    print()
-    header = (
-        f"{'format':11s} {'MB':>6s} {'before':>8s} {'read':>8s} {'parse':>8s} {'valid.':>8s} {'raw read':>8s} "
-        f"{'fromfile':>8s} {'meshio':>8s} {'numbers':>8s} {'before/':>8s} {'read/':>8s} {'parse/':>8s} {'parse/':>8s}"
-    )
-    print(header)
-    print(
-        f"{'':11s} {'':6s} {'':8s} {'':8s} {'':8s} {'':8s} {'':8s} {'':8s} {'':8s} {'':8s} {'read':>8s} {'meshio':>8s} {'numbers':>8s} {'fromfile':>8s}"
-    )
-    print("-" * len(header))
-    for name, size, old, read, parse_seconds, validate, raw, fromfile, library, bound in rows:
-        print(
-            f"{name:11s} {size / 1e6:6.1f} {cell(old)} {cell(read)} {cell(parse_seconds)} {cell(validate)} {cell(raw)} "
-            f"{cell(fromfile)} {cell(library)} {cell(bound)} {ratio(old, read)} {ratio(read, library)} "
-            f"{ratio(parse_seconds, bound)} {ratio(parse_seconds, fromfile)}"
-        )
-    print(
-        "seconds. before: the replaced reader (line-by-line OBJ/OFF parser, meshio for PLY) + NumPy validation, once; "
-        "read: read_mesh; parse: the reader alone; valid.: QuadMesh.from_arrays on its arrays; numbers: np.fromstring "
-        "of the coordinates and indices alone."
-    )
-    print(
-        f"load average {os.getloadavg()[0]:.2f}. Targets: OBJ read ≤ 1 s, binary PLY read ≤ 0.5 s (1 M quads)."
-    )
-
-    print()
-    print(f"compiled paths against their NumPy references (best of {args.repeats}):")
-    print(
-        f"  OBJ parse: kernel {kernel_parse:.2f} s, NumPy fast path {numpy_parse:.2f} s ({numpy_parse / kernel_parse:.1f}×)"
-    )
-    print(
-        f"  from_arrays: kernels {kernel_valid:.2f} s, NumPy {numpy_obj_valid:.2f} s ({numpy_obj_valid / kernel_valid:.1f}×)"
-    )
-    (obj_first, obj_warm), (ply_first, ply_warm) = cold
-    print(
-        f"  cold compile (fresh process, empty numba cache): first read_mesh OBJ {obj_first:.2f} s, then {obj_warm:.2f} s "
-        f"(compile ≈ {obj_first - obj_warm:.1f} s); binary PLY {ply_first:.2f} s, then {ply_warm:.2f} s "
-        f"(≈ {ply_first - ply_warm:.1f} s)"
-    )
-    print(f"load average at end {os.getloadavg()[0]:.2f}")
+            rows[name] = measure(name, path, mesh, numbers, args.repeats)
+            rows[name]["MB"] = path.stat().st_size / 1e6
+            print(f"  {name}: read_mesh {rows[name]['read']:.2f} s", flush=True)
+        print_table(rows)
+        print_compiled(rows["OBJ"], args.repeats)
+        if not args.no_cold:
+            print_cold(paths)
+    print(f"load average at end {harness.loads()}")
 
 
 if __name__ == "__main__":

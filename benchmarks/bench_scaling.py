@@ -23,46 +23,25 @@ save one after the other. Issue bar at 4M: ≤ 30 s and ≤ 8 GB.
 The workers run as the command line does (``g1patch.memory.tune_for_large_arrays``: freed memory
 kept for the next array, NumPy's huge-page advice as NumPy sets it).
 
-Run:  .venv/bin/python benchmarks/bench_scaling.py [--sizes 10000 100000 1000000 4000000] [--end-to-end N]
+Run:  .venv/bin/python benchmarks/bench_scaling.py [--sizes 10000 100000 1000000 4000000]
+      [--end-to-end N] [--quick]
 """
 
 from __future__ import annotations
 
-import argparse
 import json
-import os
-import platform
-import resource
-import subprocess
-import sys
 import tempfile
 import time
-import tracemalloc
-from collections.abc import Callable
+from collections.abc import Sequence
 from pathlib import Path
-from typing import TypeVar
+from typing import Any
 
+import harness
 import numpy as np
 
 from g1patch.memory import TUNED_ENVIRONMENT
 
-T = TypeVar("T")
-
-
-def _timed(run: Callable[[], T]) -> tuple[T, float]:
-    start = time.perf_counter()
-    result = run()
-    return result, time.perf_counter() - start
-
-
-def _peak(run: Callable[[], object]) -> int:
-    """Bytes allocated at the peak of ``run()`` over what was held when it started (tracemalloc)."""
-    tracemalloc.start()
-    try:
-        run()
-        return tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+record = harness.recorder("bench_scaling")
 
 
 def _warm_up() -> None:
@@ -86,11 +65,12 @@ def size_row(quads: int) -> dict[str, float]:
     _warm_up()
     mesh = shapes.large_torus(quads)
     build_network(mesh)
-    network, build_s = _timed(lambda: build_network(mesh))
-    build_peak = _peak(lambda: build_network(mesh))
-    _, check_s = _timed(lambda: check(network))
-    check_peak = _peak(lambda: check(network))
+    build_s, network = harness.timed(lambda: build_network(mesh))
+    build_peak = harness.peak(lambda: build_network(mesh))
+    check_s, _ = harness.timed(lambda: check(network))
+    check_peak = harness.peak(lambda: check(network))
     return {
+        "size": quads,
         "quads": mesh.n_faces,
         "build_s": build_s,
         "build_peak": build_peak,
@@ -115,18 +95,18 @@ def end_to_end(quads: int) -> dict[str, float]:
         mesh = shapes.large_torus(quads)
         meshio.write(ply, meshio.Mesh(mesh.vertices, [("quad", mesh.topology.faces)]), binary=True)
         del mesh
-        baseline = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+        baseline = harness.process_peak()
         start = time.perf_counter()
-        mesh, read_s = _timed(lambda: read_mesh(ply))
-        network, build_s = _timed(lambda: build_network(mesh))
+        read_s, mesh = harness.timed(lambda: read_mesh(ply))
+        build_s, network = harness.timed(lambda: build_network(mesh))
         saving = save_network_in_background(out, network)
-        _, check_s = _timed(lambda: check(network))
-        _, wait_s = _timed(saving.result)
+        check_s, _ = harness.timed(lambda: check(network))
+        wait_s, _ = harness.timed(saving.result)
         total = time.perf_counter() - start
-        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+        peak = harness.process_peak()
         out.unlink()
-        _, alone_check_s = _timed(lambda: check(network))
-        _, alone_save_s = _timed(lambda: save_network(out, network))
+        alone_check_s, _ = harness.timed(lambda: check(network))
+        alone_save_s, _ = harness.timed(lambda: save_network(out, network))
     return {
         "quads": network.n_patches,
         "read_s": read_s,
@@ -141,21 +121,16 @@ def end_to_end(quads: int) -> dict[str, float]:
     }
 
 
-def _in_subprocess(function: str, quads: int) -> dict[str, float]:
+def _in_subprocess(function: str, quads: int) -> dict[str, Any]:
     """``function(quads)`` of this file in a fresh interpreter, its result as JSON."""
     code = (
-        f"import json, sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); import bench_scaling as b; "
-        f"print(json.dumps(b.{function}({quads})))"
+        f"import json, sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); "
+        f"import bench_scaling as b; print(json.dumps(b.{function}({quads})))"
     )
-    result = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        env={**os.environ, **TUNED_ENVIRONMENT},
-    )
-    if result.returncode:
-        raise SystemExit(f"{function}({quads}) failed:\n{result.stderr[-2000:]}")
-    return json.loads(result.stdout.strip().splitlines()[-1])
+    line = harness.run_python(["-c", code], env=TUNED_ENVIRONMENT)
+    if line is None:
+        raise SystemExit(f"{function}({quads}) failed")
+    return json.loads(line)
 
 
 def exponent(quads: list[float], values: list[float]) -> float:
@@ -163,31 +138,27 @@ def exponent(quads: list[float], values: list[float]) -> float:
     return float(np.polyfit(np.log(quads), np.log(values), 1)[0])
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument(
-        "--sizes", type=int, nargs="+", default=[10_000, 100_000, 1_000_000, 4_000_000]
-    )
-    parser.add_argument(
-        "--end-to-end",
-        type=int,
-        default=None,
-        help="quads of the end-to-end run (default: the largest size; 0: skip)",
-    )
-    args = parser.parse_args()
-    print(f"{platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}")
-
-    rows = [_in_subprocess("size_row", quads) for quads in args.sizes]
-    print(f"\nload average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+def print_sizes(rows: list[dict[str, Any]]) -> None:
+    """The table of sizes and the fitted exponents, and their records."""
+    print(f"\nload average {harness.loads()}")
     print(
-        f"{'quads':>9} {'build s':>8} {'build MB':>9} {'B/quad':>7} {'check s':>8} {'check MB':>9} {'B/quad':>7} {'check/build':>11}"
+        f"{'quads':>9} {'build s':>8} {'build MB':>9} {'B/quad':>7} {'check s':>8} "
+        f"{'check MB':>9} {'B/quad':>7} {'check/build':>11}"
     )
     for row in rows:
+        quads = row["quads"]
         print(
-            f"{row['quads']:9,.0f} {row['build_s']:8.2f} {row['build_peak'] / 1e6:9.0f} {row['build_peak'] / row['quads']:7.0f}"
-            f" {row['check_s']:8.2f} {row['check_peak'] / 1e6:9.0f} {row['check_peak'] / row['quads']:7.0f}"
+            f"{quads:9,.0f} {row['build_s']:8.2f} {row['build_peak'] / 1e6:9.0f} "
+            f"{row['build_peak'] / quads:7.0f} {row['check_s']:8.2f} "
+            f"{row['check_peak'] / 1e6:9.0f} {row['check_peak'] / quads:7.0f}"
             f" {row['check_s'] / row['build_s']:11.2f}"
         )
+        size = f"{row['size']} quads"
+        record(f"build, {size}", row["build_s"], "s", f"large_torus: {quads:,} quads")
+        record(f"build peak per quad, {size}", row["build_peak"] / quads, "B/quad")
+        record(f"check, {size}", row["check_s"], "s")
+        record(f"check peak per quad, {size}", row["check_peak"] / quads, "B/quad")
+        record(f"check / build, {size}", row["check_s"] / row["build_s"], "×", "bar ≤ 1")
     if len(rows) > 1:
         quads = [row["quads"] for row in rows]
         fitted = {
@@ -198,22 +169,55 @@ def main() -> None:
             "exponents (t ∝ N^b, bar ≤ 1.1): "
             + ", ".join(f"{name} {value:.3f}" for name, value in fitted.items())
         )
+        sizes = " ".join(str(row["size"]) for row in rows)
+        record("smallest size", rows[0]["size"], "quads")
+        record("largest size", rows[-1]["size"], "quads")
+        for name, value in fitted.items():
+            record(f"exponent of {name}", value, "", f"sizes {sizes}; bar ≤ 1.1")
 
+
+def print_end_to_end(row: dict[str, Any]) -> None:
+    """The end-to-end run, and its records."""
+    print(
+        f"\nend to end, {row['quads']:,.0f} quads (binary PLY → build → check → save), load "
+        f"average {harness.loads()}:"
+    )
+    print(
+        f"  read {row['read_s']:.2f} s, build {row['build_s']:.2f} s, check {row['check_s']:.2f} "
+        f"s while the file is written, then {row['wait_s']:.2f} s until it is; total "
+        f"{row['total_s']:.2f} s (bar 30 s); process peak {row['peak'] / 1e9:.2f} GB (bar 8 GB; "
+        f"{row['baseline'] / 1e9:.2f} GB before reading)"
+    )
+    print(
+        f"  one after the other instead: check {row['alone_check_s']:.2f} s, save "
+        f"{row['alone_save_s']:.2f} s"
+    )
+    record("end to end quads", row["quads"], "quads")
+    for stage in ("read", "build", "check", "wait", "total"):
+        record(
+            f"end to end {stage}", row[f"{stage}_s"], "s", "bar 30 s" if stage == "total" else ""
+        )
+    record("end to end peak", row["peak"] / 1e9, "GB", "ru_maxrss; bar 8 GB")
+    record("end to end check alone", row["alone_check_s"], "s")
+    record("end to end save alone", row["alone_save_s"], "s")
+
+
+#: the command line's options (harness.Option)
+OPTIONS: dict[str, harness.Option] = {
+    "sizes": ([10_000, 100_000, 1_000_000, 4_000_000], "quads of the tori"),
+    "end_to_end": (None, "quads of the end-to-end run (None: the largest size; 0: skip)", int),
+}
+#: the defaults --quick sets: small sizes, a smoke run
+QUICK = {"sizes": [10_000, 40_000], "end_to_end": 10_000}
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    args = harness.parse_args(__doc__, argv, OPTIONS, QUICK)
+    print(harness.machine_line())
+    print_sizes([_in_subprocess("size_row", quads) for quads in args.sizes])
     size = args.sizes[-1] if args.end_to_end is None else args.end_to_end
     if size:
-        row = _in_subprocess("end_to_end", size)
-        print(
-            f"\nend to end, {row['quads']:,.0f} quads (binary PLY → build → check → save), load average "
-            f"{' '.join(f'{x:.2f}' for x in os.getloadavg())}:"
-        )
-        print(
-            f"  read {row['read_s']:.2f} s, build {row['build_s']:.2f} s, check {row['check_s']:.2f} s while the file is written,"
-            f" then {row['wait_s']:.2f} s until it is; total {row['total_s']:.2f} s (bar 30 s); process peak"
-            f" {row['peak'] / 1e9:.2f} GB (bar 8 GB; {row['baseline'] / 1e9:.2f} GB before reading)"
-        )
-        print(
-            f"  one after the other instead: check {row['alone_check_s']:.2f} s, save {row['alone_save_s']:.2f} s"
-        )
+        print_end_to_end(_in_subprocess("end_to_end", size))
 
 
 if __name__ == "__main__":

@@ -9,27 +9,29 @@ checked against ``--memory-cap``.
 Summary table: cases, commands run, exit codes, tracebacks, crashes, leftover files, NaN in
 reports, slow commands, other broken promises, time; then the first findings, one line each.
 
-Run:  .venv/bin/python benchmarks/fuzz.py [--cases N] [--workers W] [--memory-cap MB]
+Run:  .venv/bin/python benchmarks/fuzz.py [--cases N] [--workers W] [--memory-cap MB] [--quick]
 """
 
 from __future__ import annotations
 
-import argparse
 import collections
 import multiprocessing
 import os
-import resource
 import sys
 import tempfile
 import time
+from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+import harness
+
+sys.path.insert(0, str(harness.ROOT / "tests"))
 
 import fuzzing  # noqa: E402
 
+record = harness.recorder("fuzz")
 TASKS_PER_WORKER = 200  #: cases a worker runs before its pool is replaced
 
 
@@ -42,7 +44,7 @@ def one_case(seed: int) -> tuple[int, list[int | None], list[str], float]:
         case = fuzzing.make_case(seed, Path(directory))
         outcomes = fuzzing.run_case(case, render=seed % 5 == 0, cad=seed % 20 == 0)
         found = fuzzing.problems(case, outcomes)
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    peak = harness.process_peak() / 2**20
     return seed, [outcome.code for outcome in outcomes], found, peak
 
 
@@ -55,14 +57,18 @@ def _warm_up() -> None:
     build_network(shapes.cube_sphere(1))
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cases", type=int, default=10_000)
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 2)
-    parser.add_argument(
-        "--memory-cap", type=float, default=4096.0, help="MB of resident memory per worker"
-    )
-    args = parser.parse_args()
+#: the command line's options (harness.Option)
+OPTIONS: dict[str, harness.Option] = {
+    "cases": (10_000, "hostile inputs"),
+    "workers": (os.cpu_count() or 2, "worker processes"),
+    "memory_cap": (4096.0, "MB of resident memory per worker"),
+}
+#: the defaults --quick sets: small sizes, a smoke run
+QUICK = {"cases": 20}
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    args = harness.parse_args(__doc__, argv, OPTIONS, QUICK)
 
     _warm_up()
     start = time.perf_counter()
@@ -72,8 +78,8 @@ def main() -> None:
     peak = 0.0
     pending = list(range(args.cases))
     while pending:
-        # a fresh pool per chunk of TASKS_PER_WORKER cases a worker, so no worker's memory grows over
-        # the run (max_tasks_per_child hangs the pool once a worker retires, on Python 3.11)
+        # a fresh pool per chunk of TASKS_PER_WORKER cases a worker, so no worker's memory grows
+        # over the run (max_tasks_per_child hangs the pool once a worker retires, on Python 3.11)
         chunk = pending[: args.workers * TASKS_PER_WORKER]
         with ProcessPoolExecutor(
             args.workers, mp_context=multiprocessing.get_context("spawn")
@@ -89,7 +95,8 @@ def main() -> None:
                     peak = max(peak, case_peak)
                     if case_peak > args.memory_cap:
                         findings.append(
-                            f"seed {seed}: worker resident peak {case_peak:.0f} MB above {args.memory_cap:.0f} MB"
+                            f"seed {seed}: worker resident peak {case_peak:.0f} MB above "
+                            f"{args.memory_cap:.0f} MB"
                         )
             except BrokenProcessPool:
                 running = [s for f, s in futures.items() if s not in done and not f.done()]
@@ -99,13 +106,13 @@ def main() -> None:
                     if s not in done and f.done() and f.exception() is not None
                 ]
                 crashes += broken[:1] or running[:1]
-                findings.append(
-                    f"seed {(broken[:1] or running[:1])[0]}: a worker crashed (native crash or killed)"
-                )
+                first = (broken[:1] or running[:1])[0]
+                findings.append(f"seed {first}: a worker crashed (native crash or killed)")
                 done.update(crashes)
         pending = [seed for seed in pending if seed not in done]
         print(
-            f"fuzz: {args.cases - len(pending)} of {args.cases} cases, {time.perf_counter() - start:.0f} s",
+            f"fuzz: {args.cases - len(pending)} of {args.cases} cases, "
+            f"{time.perf_counter() - start:.0f} s",
             file=sys.stderr,
         )
 
@@ -121,8 +128,7 @@ def main() -> None:
     }
     commands = sum(codes.values())
     elapsed = time.perf_counter() - start
-    load = os.getloadavg()[0]
-    print(f"fuzz: {args.cases} cases, {args.workers} workers, load average {load:.2f}")
+    print(f"fuzz: {args.cases} cases, {args.workers} workers, load average {harness.loads()}")
     print("| measure | value |")
     print("|---|---|")
     rows = [
@@ -137,6 +143,14 @@ def main() -> None:
     ]
     for name, value in rows:
         print(f"| {name} | {value} |")
+    record("cases", args.cases)
+    record("commands run", commands)
+    for code in (0, 1, 2):
+        record(f"exit {code}", codes.get(code, 0), "commands")
+    for name, value in rows[3:-2]:  # other exit codes, the categories, other broken promises
+        record(name, value)
+    record("largest worker resident peak", peak, "MiB")
+    record("time", elapsed / 60, "min")
     for line in findings[:50]:
         print(line)
     sys.exit(1 if findings else 0)
