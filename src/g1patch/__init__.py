@@ -22,7 +22,14 @@ from .display import register_painter
 if TYPE_CHECKING:  # pragma: no cover
     from .api import Surface, as_mesh, as_network, check, export, read, smooth, view
     from .continuity import ContinuityReport
-    from .errors import FormatError, G1PatchError, InputError, MeshError, MissingDependencyError
+    from .errors import (
+        BudgetError,
+        FormatError,
+        G1PatchError,
+        InputError,
+        MeshError,
+        MissingDependencyError,
+    )
     from .gregory import GregoryPatchSet
     from .mesh import QuadMesh, QuadTopology
     from .network import PatchNetwork
@@ -49,6 +56,7 @@ _LAZY = {
     "MeshError": "errors",
     "FormatError": "errors",
     "MissingDependencyError": "errors",
+    "BudgetError": "errors",
 }
 
 __all__ = ["__version__", *_LAZY]

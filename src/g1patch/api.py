@@ -659,6 +659,8 @@ def smooth(
     tangents: str = "arc",
     twist: str = "bilinear",
     normals: str = "fan",
+    max_memory: int | None = None,
+    max_patches: int | None = None,
 ) -> Surface:
     """The smooth surface of a mesh: exactly G1 bicubic patches
     (:func:`g1patch.build.build_network`).
@@ -672,24 +674,29 @@ def smooth(
     turn by more than that sharp. ``strict``: refuse a mesh that needs repair instead of repairing
     it. ``split``: split non-quad faces (else they raise). ``tangents``: the legacy shape's;
     ``twist`` and ``normals``: the paper's construction's (``corner`` with ``legacy``).
+    ``max_memory`` (bytes; default half the RAM) and ``max_patches``: a build estimated above
+    either is refused before it starts (:class:`~g1patch.errors.BudgetError`).
     """
     from .build import build_network
     from .construct import METHODS
-    from .errors import check_choice
+    from .errors import BudgetError, ConstructionError, check_choice, named_errors
     from .targets import SHAPES
 
     check_choice("shape", shape, tuple(SHAPES))  # before a large file is read
     check_choice("method", method, METHODS)
     mesh = as_mesh(source, split=split, sharp_angle=sharp_angle, strict=strict)
-    network = build_network(
-        mesh,
-        method,
-        shape,
-        tangents=tangents,  # type: ignore[arg-type]
-        twist=twist,  # type: ignore[arg-type]
-        normals=normals,  # type: ignore[arg-type]
-        refine=refine,
-    )
+    with named_errors(mesh.source, (ConstructionError, BudgetError)):  # the file it cannot build
+        network = build_network(
+            mesh,
+            method,
+            shape,
+            tangents=tangents,  # type: ignore[arg-type]
+            twist=twist,  # type: ignore[arg-type]
+            normals=normals,  # type: ignore[arg-type]
+            refine=refine,
+            max_memory=max_memory,
+            max_patches=max_patches,
+        )
     return Surface(network, mesh)
 
 

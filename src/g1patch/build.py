@@ -18,7 +18,9 @@ again. Those vertices are counted in the provenance's ``fallback_vertices``.
 from __future__ import annotations
 
 import logging
+import os
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TypeVar
 
 import numpy as np
@@ -26,15 +28,25 @@ import numpy as np
 from .construct import ASSEMBLIES, METHODS, NetworkParts
 from .construct.corner import TWISTS, TwistRule, build_corner_network
 from .continuity import folded_patches
-from .errors import InputError, check_choice
+from .errors import BudgetError, InputError, check_choice
 from .frame import Frame
 from .mesh import INFINITE_SHARPNESS, QuadMesh, Tag
 from .network import Patches, PatchNetwork
+from .subdivision import catmull_clark_cage
 from .targets import SHAPES, Targets, shape_targets
 from .targets.interpolate import retreat
 from .targets.local import NORMALS, TANGENTS, NormalRule, TangentRule
 
-__all__ = ["METHODS", "build_gregory_network", "build_network", "build_split4_network"]
+__all__ = [
+    "METHODS",
+    "BuildEstimate",
+    "build_gregory_network",
+    "build_network",
+    "build_split4_network",
+    "check_budget",
+    "estimate_build",
+    "memory_budget",
+]
 
 #: whatever an assembly returns (its patches, or its patches and more)
 A = TypeVar("A")
@@ -59,15 +71,91 @@ def semi_sharp_levels(mesh: QuadMesh) -> int:
     features = mesh.features
     values = np.concatenate([features.edge_sharpness, features.vertex_sharpness])
     semi = values[(values > 0) & (values < INFINITE_SHARPNESS)]
-    if not semi.size:
-        return 0
-    levels = int(np.ceil(semi.max()))
-    logger.info(
-        "semi-sharp features (sharpness up to %g): refining %d Catmull–Clark steps first",
-        semi.max(),
-        levels,
+    return int(np.ceil(semi.max())) if semi.size else 0
+
+
+#: the refinement's peak per refined face, bytes: the last step's arrays (~650 B, tracemalloc) and
+#: the level before it (a quarter as many faces)
+REFINE_BYTES_PER_FACE = 820
+#: what a refined mesh holds per face while its network is built, bytes (~350 B measured)
+MESH_BYTES_PER_FACE = 360
+
+
+@dataclass(frozen=True)
+class BuildEstimate:
+    """What a build will make, known before it starts: Catmull–Clark ``steps``, ``faces`` after
+    them, ``patches`` and the peak ``bytes`` it allocates (from the assembly's measured peak per
+    face, :attr:`~g1patch.construct.stage.Assembly.peak_bytes_per_face`)."""
+
+    steps: int
+    faces: int
+    patches: int
+    bytes: int
+
+
+def refine_steps(mesh: QuadMesh, shape: str, refine: int) -> int:
+    """The Catmull–Clark steps a build takes: ``refine``, and for the limit shapes at least
+    :func:`semi_sharp_levels`."""
+    limit = shape in ("limit", "limit-interpolate")
+    return max(int(refine), semi_sharp_levels(mesh) if limit else 0)
+
+
+def estimate_build(mesh: QuadMesh, method: str, shape: str, refine: int = 0) -> BuildEstimate:
+    """The size of :func:`build_network`'s result and its peak memory, from counts alone."""
+    assembly = ASSEMBLIES[method]
+    steps = refine_steps(mesh, shape, refine)
+    faces = mesh.n_faces * 4**steps
+    refined = faces * REFINE_BYTES_PER_FACE if steps else 0
+    held = faces * MESH_BYTES_PER_FACE if steps else 0
+    peak = max(refined, held + faces * assembly.peak_bytes_per_face)
+    return BuildEstimate(steps, faces, faces * assembly.patches_per_face, peak)
+
+
+def memory_budget() -> int:
+    """The default ``max_memory`` of a build: half of this machine's RAM (bytes)."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2
+    except (ValueError, OSError, AttributeError):  # no sysconf: a budget that refuses nothing
+        return 2**62
+
+
+def size_text(count: float) -> str:
+    """``1.5 GB``, ``820 MB``, ``12 kB``: bytes in decimal units, 2–3 significant digits."""
+    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if count >= scale:
+            return f"{count / scale:.3g} {unit}"
+    return f"{int(count)} B"
+
+
+def check_budget(
+    estimate: BuildEstimate,
+    method: str,
+    max_memory: int | None = None,
+    max_patches: int | None = None,
+) -> None:
+    """Refuse (:class:`BudgetError`) a build whose estimate is above ``max_memory`` bytes (default
+    :func:`memory_budget`) or makes more than ``max_patches`` patches (where its result must fit
+    a format, e.g. the network file's)."""
+    budget = memory_budget() if max_memory is None else max_memory
+    steps = f" after {estimate.steps} Catmull–Clark steps" if estimate.steps else ""
+    if max_patches is not None and estimate.patches > max_patches:
+        raise BudgetError(
+            f"the build would make {estimate.patches:,} {method} patches{steps}, more than a "
+            f"network file holds ({max_patches:,}): use fewer --refine steps{_other(method)}"
+        )
+    if estimate.bytes <= budget:
+        return
+    raise BudgetError(
+        f"the build would make {estimate.patches:,} {method} patches{steps} and need about "
+        f"{size_text(estimate.bytes)}, above the memory budget of {size_text(budget)} "
+        f"(--max-memory; default half of this machine's RAM): use fewer --refine steps"
+        f"{_other(method)} or a larger --max-memory"
     )
-    return levels
+
+
+def _other(method: str) -> str:
+    """``", --method gregory"`` (the leanest assembly) unless that is ``method``."""
+    return "" if method == "gregory" else ", --method gregory"
 
 
 def _provenance(
@@ -247,6 +335,8 @@ def build_network(
     twist: TwistRule = "bilinear",
     normals: NormalRule = "fan",
     refine: int = 0,
+    max_memory: int | None = None,
+    max_patches: int | None = None,
 ) -> PatchNetwork:
     """The patch network of ``mesh``: targets by ``shape``, assembled by ``method``.
 
@@ -262,7 +352,9 @@ def build_network(
     applied to the mesh first (:func:`g1patch.subdivision.refine`); the limit shapes refine at
     least :func:`semi_sharp_levels` steps, so semi-sharp creases follow OpenSubdiv's limit. The
     network's provenance records the choices (the steps actually taken) and how many vertices
-    needed a fallback.
+    needed a fallback. A build whose :func:`estimate_build` is above ``max_memory`` bytes (default
+    :func:`memory_budget`, half the RAM), or makes more than ``max_patches``, is refused before
+    it starts (:class:`BudgetError`).
     """
     check_choice("method", method, METHODS)
     check_choice("shape", shape, tuple(SHAPES))
@@ -271,9 +363,17 @@ def build_network(
     check_choice("normals", normals, NORMALS)
     if isinstance(refine, bool) or not isinstance(refine, (int, np.integer)) or refine < 0:
         raise InputError(f"refine: expected a number of Catmull–Clark steps ≥ 0, got {refine!r}")
-    refine = max(
-        int(refine), semi_sharp_levels(mesh) if shape in ("limit", "limit-interpolate") else 0
-    )
+    if shape == "limit":  # the cage's limit: a polygon cage's first step by the Catmull–Clark rules
+        mesh = catmull_clark_cage(mesh)
+    estimate = estimate_build(mesh, method, shape, refine)
+    check_budget(estimate, method, max_memory, max_patches)
+    if estimate.steps > refine:
+        logger.info(
+            "semi-sharp features: refining %d Catmull–Clark steps first (%s patches)",
+            estimate.steps,
+            f"{estimate.patches:,}",
+        )
+    refine = estimate.steps
     repairs = mesh.repairs
     if refine:
         from .subdivision import refine as subdivide

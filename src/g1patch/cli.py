@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import signal
 import sys
@@ -129,6 +130,12 @@ def _parser() -> argparse.ArgumentParser:
         default=0,
         metavar="N",
         help="Catmull–Clark steps before building (default: 0)",
+    )
+    build.add_argument(
+        "--max-memory",
+        type=_memory_size,
+        metavar="SIZE",
+        help="refuse a build estimated to need more (e.g. 8G, 500M; default: half the RAM)",
     )
     build.add_argument(
         "--tangents",
@@ -414,8 +421,27 @@ def _progress(label: str, quiet: bool) -> Iterator[Callable[[int, int], None]]:
         bar.close()
 
 
+_SIZE_UNITS = {"": 1, "K": 10**3, "M": 10**6, "G": 10**9, "T": 10**12}
+
+
+def _memory_size(text: str) -> int:
+    """``8G``, ``8GB``, ``500M``, ``1.5T`` or a number of bytes, as bytes (decimal units)."""
+    value = text.strip().upper().removesuffix("B")
+    unit = value[-1:] if value[-1:] in _SIZE_UNITS else ""
+    try:
+        number = float(value[: len(value) - len(unit)])
+    except ValueError:
+        number = math.nan
+    if not (math.isfinite(number) and number > 0):
+        raise argparse.ArgumentTypeError(
+            f"expected a size such as 8G, 500M or a number of bytes, got {text!r}"
+        )
+    return int(number * _SIZE_UNITS[unit])
+
+
 def _build(args: argparse.Namespace) -> int:
     from .api import smooth
+    from .io.network_file import MAX_PATCHES
 
     if args.output.suffix.lower() != ".npz":
         raise FormatError(args.output, "a network file must end in .npz")
@@ -432,6 +458,8 @@ def _build(args: argparse.Namespace) -> int:
             tangents=args.tangents,
             twist=args.twist,
             normals=args.normals,
+            max_memory=args.max_memory,
+            max_patches=MAX_PATCHES,
         )
         progress(1, 2)
         # with --check the file is written while the check runs
@@ -445,9 +473,8 @@ def _build(args: argparse.Namespace) -> int:
     if surface.repairs:
         print(f"g1patch: {args.mesh}: {surface.mesh.repair_note}", file=sys.stderr)  # type: ignore[union-attr]
     fallback = int(surface.provenance.get("fallback_vertices", "0"))
-    note = (
-        f"; {fallback} vertices needed a fallback (degenerate or folded fans)" if fallback else ""
-    )
+    vertices = "1 vertex" if fallback == 1 else f"{fallback} vertices"
+    note = f"; {vertices} needed a fallback (degenerate or folded fans)" if fallback else ""
     print(
         f"built {surface.n_patches} {args.method} patches from {args.mesh} -> {args.output}{note}"
     )

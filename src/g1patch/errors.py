@@ -6,7 +6,8 @@ expected. The CLI maps any :class:`G1PatchError` to exit code 2 and one line on 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -21,11 +22,13 @@ __all__ = [
     "OrientationError",
     "FormatError",
     "ConstructionError",
+    "BudgetError",
     "MissingDependencyError",
     "all_finite",
     "as_float_array",
     "as_index_array",
     "check_choice",
+    "named_errors",
 ]
 
 
@@ -71,6 +74,11 @@ class ConstructionError(G1PatchError):
     """A surface construction cannot be carried out on this input."""
 
 
+class BudgetError(InputError):
+    """A run would need more memory (or make more items) than its budget allows; the message
+    gives the estimate, the budget and what to change."""
+
+
 class MissingDependencyError(G1PatchError, ImportError):
     """An optional dependency is missing; the message names the extra to install."""
 
@@ -79,6 +87,20 @@ class MissingDependencyError(G1PatchError, ImportError):
             f"{feature} needs the package '{package}': install it with "
             f"pip install 'g1patch[{extra}]'"
         )
+
+
+@contextmanager
+def named_errors(
+    source: str | None, kinds: tuple[type[G1PatchError], ...] = (MeshError, InputError)
+) -> Iterator[None]:
+    """Prefix errors of ``kinds`` raised in the block with the source file name, keeping their
+    class (and never twice)."""
+    try:
+        yield
+    except kinds as error:
+        if source is None or str(error).startswith(f"{source}: "):
+            raise
+        raise type(error)(f"{source}: {error}") from None
 
 
 def _shape_text(shape: Sequence[int | None]) -> str:

@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MeshError
+from .cage import PolygonTopology
 from .tags import INFINITE_SHARPNESS, Tag
 from .topology import QuadTopology
 
@@ -103,7 +104,7 @@ def _tag_values(tag: Tag, count: int) -> FloatArray:
     return values
 
 
-def features_from_tags(topology: QuadTopology, tags: Sequence[Tag]) -> Features:
+def features_from_tags(topology: QuadTopology | PolygonTopology, tags: Sequence[Tag]) -> Features:
     """The :class:`Features` of OpenSubdiv tags on ``topology``: ``crease`` (vertex pairs, one
     sharpness each or one for all), ``corner`` (vertices), ``hole`` (faces), ``interpolateboundary``
     (0/1/2) and ``creasemethod`` (``normal``/``chaikin``); repeated items keep their largest

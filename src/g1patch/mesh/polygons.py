@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MeshError
+from .cage import PolygonCage
 from .connectivity import _connect
 from .faces import _edge_keys, _following_corner
 from .tags import INFINITE_SHARPNESS, Tag, _refine_tags, _renumber_tags
@@ -272,9 +273,10 @@ def _quads_from_polygons(
     split: bool,
     source: str | None,
     tags: tuple[Tag, ...],
-) -> tuple[FloatArray, IntArray, tuple[Tag, ...]]:
+) -> tuple[FloatArray, IntArray, tuple[Tag, ...], PolygonCage | None]:
     """Drop unused vertices and split non-quads of checked polygons (see
-    :meth:`QuadMesh.from_arrays <g1patch.mesh.QuadMesh.from_arrays>`).
+    :meth:`QuadMesh.from_arrays <g1patch.mesh.QuadMesh.from_arrays>`); the polygons split, as a
+    :class:`PolygonCage`, or None where all were quads.
 
     When anything is dropped or split, the polygon topology is validated first, so that errors
     name the input's faces and vertices.
@@ -282,7 +284,7 @@ def _quads_from_polygons(
     used = np.bincount(corners, minlength=points.shape[0]) > 0
     non_quads = np.flatnonzero(sizes != 4)
     if used.all() and non_quads.size == 0:
-        return points, corners.reshape(-1, 4), tags
+        return points, corners.reshape(-1, 4), tags, None
     if non_quads.size and not split:
         raise MeshError(
             f"{non_quads.size} faces are not quads (face {non_quads[0]} has {sizes[non_quads[0]]} "
@@ -301,7 +303,8 @@ def _quads_from_polygons(
         points, corners = points[used], new_index[corners]
         tags = _renumber_tags(tags, new_index)
     if non_quads.size == 0:
-        return points, corners.reshape(-1, 4), tags
+        return points, corners.reshape(-1, 4), tags, None
+    cage = PolygonCage(points, corners, sizes, tags)
     sharp = _crease_edges(tags, corners, sizes, points.shape[0])
     tags = _refine_tags(tags, corners, sizes, points.shape[0])
     points, quads, _ = refine_polygons(points, corners, sizes, smooth=True, sharp=sharp)
@@ -312,4 +315,4 @@ def _quads_from_polygons(
         non_quads.size,
         sizes.size,
     )
-    return points, quads, tags
+    return points, quads, tags, cage

@@ -19,12 +19,13 @@ from ..display import bbox_text, picture, short_source
 from ..errors import (
     DegenerateFaceError,
     InputError,
-    MeshError,
     NonManifoldError,
     OrientationError,
     ValenceError,
     as_float_array,
+    named_errors,
 )
+from .cage import PolygonCage
 from .features import Features, _read_only, features_from_tags
 from .polygons import _quads_from_polygons, refine_polygons
 from .repair import repair_polygons
@@ -56,17 +57,6 @@ def strict_meshes(strict: bool = True) -> Iterator[None]:
         _STRICT.reset(token)
 
 
-@contextmanager
-def _named_errors(source: str | None) -> Iterator[None]:
-    """Prefix mesh and input errors with the source file name, keeping their class."""
-    try:
-        yield
-    except (MeshError, InputError) as error:
-        if source is None:
-            raise
-        raise type(error)(f"{source}: {error}") from None
-
-
 @dataclass(frozen=True, eq=False)
 class QuadMesh:
     """Positions ``vertices`` (nv, 3) on a :class:`~g1patch.mesh.QuadTopology`, with the OpenSubdiv
@@ -74,7 +64,10 @@ class QuadMesh:
 
     Validated on construction: finite coordinates, and no face of zero area
     (:data:`DEGENERATE_AREA_TOLERANCE`). ``repairs`` names what :meth:`from_arrays` repaired
-    (short phrases, :attr:`repair_note` joins them), empty if nothing.
+    (short phrases, :attr:`repair_note` joins them), empty if nothing. ``cage``: the polygons
+    :meth:`from_arrays` split into these quads (:class:`~g1patch.mesh.cage.PolygonCage`), where
+    some face was not a quad; the limit shapes take their first Catmull–Clark step from it
+    (:func:`g1patch.subdivision.catmull_clark_cage`). New positions (:meth:`with_vertices`) drop it.
     """
 
     vertices: FloatArray
@@ -82,9 +75,10 @@ class QuadMesh:
     tags: tuple[Tag, ...] = ()
     source: str | None = None
     repairs: tuple[str, ...] = ()
+    cage: PolygonCage | None = None
 
     def __post_init__(self) -> None:
-        with _named_errors(self.source):
+        with named_errors(self.source):
             vertices = as_float_array("vertices", self.vertices, (3,), finite=False)
             if vertices.shape != (self.topology.n_vertices, 3):
                 raise InputError(
@@ -125,10 +119,10 @@ class QuadMesh:
         strict = _STRICT.get() if strict is None else strict
         tags = tuple(Tag(*tag) for tag in tags)
         repairs: tuple[str, ...] = ()
-        with _named_errors(source):
+        with named_errors(source):
             points, corners, sizes = _checked_polygons(vertices, faces, tags)
             try:
-                quad_points, quads, quad_tags = _quads_from_polygons(
+                quad_points, quads, quad_tags, cage = _quads_from_polygons(
                     points, corners, sizes, split, source, tags
                 )
                 topology = QuadTopology.from_faces(quads, quad_points.shape[0])
@@ -140,11 +134,11 @@ class QuadMesh:
                     raise refusal
                 repairs = repaired.repairs
                 logger.info("%s: repaired: %s", source or "mesh", ", ".join(repairs))
-                quad_points, quads, quad_tags = _quads_from_polygons(
+                quad_points, quads, quad_tags, cage = _quads_from_polygons(
                     repaired.points, repaired.corners, repaired.sizes, split, source, repaired.tags
                 )
                 topology = QuadTopology.from_faces(quads, quad_points.shape[0])
-        return cls(quad_points, topology, quad_tags, source, repairs)
+        return cls(quad_points, topology, quad_tags, source, repairs, cage)
 
     def __repr__(self) -> str:
         """``<QuadMesh 8 vertices, 6 quads, 12 edges, closed, bbox (-1, -1, -1)…(1, 1, 1),
@@ -180,7 +174,7 @@ class QuadMesh:
     def features(self) -> Features:
         """Sharpness per edge and vertex, holes and boundary rule from the tags
         (:func:`features_from_tags`)."""
-        with _named_errors(self.source):
+        with named_errors(self.source):
             return features_from_tags(self.topology, self.tags)
 
     @property

@@ -133,6 +133,19 @@ class QuadTopology:
         """The vertex half-edge ``h`` points to: ``origin(next(h))``."""
         return self.faces.ravel()[_next(h)]
 
+    @staticmethod
+    def face_of(h: ArrayLike) -> IntArray:
+        """The face of half-edge ``h``: ``h // 4``."""
+        return np.asarray(h, dtype=np.int64) >> 2
+
+    def face_points(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Per face the centroid of its corners, ``(1/4) Σ x_i``."""
+        return x[self.faces].mean(axis=1)
+
+    def polygons(self) -> tuple[IntArray, IntArray]:
+        """The faces as flat ``(corners, sizes)``."""
+        return self.faces.ravel(), np.full(self.n_faces, 4, dtype=np.int64)
+
     def next_ccw(self, h: ArrayLike) -> IntArray:
         """The next outgoing half-edge counter-clockwise about ``origin(h)``: ``twin(prev(h))`` (-1
         past a boundary)."""

@@ -93,7 +93,7 @@ from .features import (
     sharp_edges,
     vertex_rules,
 )
-from .refine import catmull_clark_points, refine, refine_grids
+from .refine import catmull_clark_cage, catmull_clark_points, refine, refine_grids
 from .semisharp import _decayed_neighbourhood
 from .stencils import _Frames, _limit_frames, _limit_positions, _unit
 
@@ -107,6 +107,7 @@ __all__ = [
     "RULE_SMOOTH",
     "boundary_mode",
     "LimitData",
+    "catmull_clark_cage",
     "catmull_clark_points",
     "corner_vertices",
     "limit_corner_normals",

@@ -13,6 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InputError, as_float_array
 from ..mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology
+from ..mesh.cage import PolygonTopology
 
 __all__ = [
     "BOUNDARY_MODES",
@@ -116,7 +117,10 @@ class _Level(NamedTuple):
 
 
 def _effective(
-    topology: QuadTopology, edge: FloatArray, vertex: FloatArray, mode: BoundaryMode
+    topology: QuadTopology | PolygonTopology,
+    edge: FloatArray,
+    vertex: FloatArray,
+    mode: BoundaryMode,
 ) -> tuple[FloatArray, FloatArray]:
     edge = np.where(
         topology.is_boundary_edge, INFINITE_SHARPNESS, np.minimum(edge, INFINITE_SHARPNESS)

@@ -5,14 +5,19 @@ refined mesh, and the refined grids of the original faces.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InputError
 from ..mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology, Tag, refine_polygons
+from ..mesh.cage import PolygonCage, PolygonTopology
+from ..mesh.features import features_from_tags
 from .features import (
     RULE_CREASE,
     RULE_SMOOTH,
+    BoundaryMode,
     _effective,
     _end_sums,
     _Level,
@@ -21,7 +26,7 @@ from .features import (
     _segment_sum,
 )
 
-__all__ = ["catmull_clark_points", "refine", "refine_grids"]
+__all__ = ["catmull_clark_cage", "catmull_clark_points", "refine", "refine_grids"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -31,12 +36,24 @@ BoolArray = NDArray[np.bool_]
 _FEATURE_TAGS = frozenset({"crease", "corner", "hole"})
 
 
+class _CageLevel(NamedTuple):
+    """A polygon cage as a :class:`_Level` (the fields :func:`_step` reads)."""
+
+    x: FloatArray
+    topology: PolygonTopology
+    edge: FloatArray
+    vertex: FloatArray
+    holes: BoolArray
+    mode: BoundaryMode
+    chaikin: bool
+
+
 def _decrement(s: FloatArray) -> FloatArray:
     """OpenSubdiv's uniform sharpness subdivision: ∞ stays ∞, else ``s − 1``, 0 once ≤ 0."""
     return np.where(s >= INFINITE_SHARPNESS, INFINITE_SHARPNESS, np.maximum(s - 1.0, 0.0))
 
 
-def _child_edge_halves(level: _Level) -> tuple[FloatArray, FloatArray]:
+def _child_edge_halves(level: _Level | _CageLevel) -> tuple[FloatArray, FloatArray]:
     """Sharpness of each edge's two children, the one at ``edges[:, 0]`` and the one at ``edges[:,
     1]``."""
     s = level.edge
@@ -61,7 +78,7 @@ def _child_edge_halves(level: _Level) -> tuple[FloatArray, FloatArray]:
     return at(a), at(b)
 
 
-def _step(level: _Level) -> _Level:
+def _step(level: _Level | _CageLevel) -> _Level:
     """One Catmull–Clark step with OpenSubdiv's creasing (:mod:`g1patch.subdivision`), numbered like
     :func:`~g1patch.mesh.refine_polygons`: the V vertex points, one per edge (``edges`` order), one
     per face."""
@@ -73,9 +90,9 @@ def _step(level: _Level) -> _Level:
     half_a, half_b = _child_edge_halves(level)
     child_vertex = _decrement(level.vertex)
 
-    face_points = x[topology.faces].mean(axis=1)
-    left = topology.edge_halfedges[:, 0] >> 2
-    right = np.maximum(topology.edge_halfedges[:, 1], 0) >> 2
+    face_points = topology.face_points(x)
+    left = topology.face_of(topology.edge_halfedges[:, 0])
+    right = topology.face_of(np.maximum(topology.edge_halfedges[:, 1], 0))
     middle = 0.5 * (x[a] + x[b])
     smooth_edge = 0.25 * (x[a] + x[b] + face_points[left] + face_points[right])
     weight = np.where(s <= 0, 0.0, np.where((half_a > 0) & (half_b > 0), 1.0, np.minimum(s, 1.0)))[
@@ -91,7 +108,7 @@ def _step(level: _Level) -> _Level:
     origin = topology.origin(h)
     n = topology.face_count[:, None].astype(np.float64)
     neighbour_sum = _segment_sum(origin, x[topology.target(h)], nv)
-    face_sum = _segment_sum(origin, face_points[h >> 2], nv)
+    face_sum = _segment_sum(origin, face_points[topology.face_of(h)], nv)
     smooth = ((n - 2.0) * x + (neighbour_sum + face_sum) / n) / n
 
     sharp = s > 0
@@ -137,9 +154,8 @@ def _step(level: _Level) -> _Level:
         vertex_points[creased] = blended[creased]
     points = np.concatenate([vertex_points, edge_points, face_points])
 
-    _, quads, _ = refine_polygons(
-        x, topology.faces.ravel(), np.full(topology.n_faces, 4, dtype=np.int64)
-    )
+    corners, sizes = topology.polygons()
+    _, quads, _ = refine_polygons(x, corners, sizes)
     child = QuadTopology.from_faces(quads, len(points))
     child_edge = np.zeros(child.n_edges)
     keys = child.edges[:, 0] * len(points) + child.edges[:, 1]
@@ -155,7 +171,7 @@ def _step(level: _Level) -> _Level:
         child,
         child_edge,
         child_vertices,
-        np.repeat(level.holes, 4),
+        np.repeat(level.holes, sizes),
         level.mode,
         level.chaikin,
     )
@@ -191,6 +207,29 @@ def catmull_clark_points(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> 
     :func:`~g1patch.mesh.refine_polygons`: the V vertex points, then one point per edge
     (``topology.edges`` order), then one per face."""
     return _step(_level_of(mesh, sharpness)).x
+
+
+def catmull_clark_cage(mesh: QuadMesh) -> QuadMesh:
+    """The mesh whose Catmull–Clark limit is that of the polygon cage ``mesh`` was split from:
+    one Catmull–Clark step of the cage (:mod:`g1patch.subdivision`: face points the centroids of
+    their n corners, the old vertices moved by the smooth, crease and corner rules, creases and
+    corners one level less sharp), on ``mesh``'s own topology. ``mesh`` itself where it was read
+    as quads (no :attr:`~g1patch.mesh.QuadMesh.cage`)."""
+    cage: PolygonCage | None = mesh.cage
+    if cage is None:
+        return mesh
+    topology = PolygonTopology.from_polygons(cage.corners, cage.sizes, cage.points.shape[0])
+    features = features_from_tags(topology, cage.tags)
+    mode: BoundaryMode = (
+        "edge-and-corner" if features.boundary == "edge-and-corner" else "edge-only"
+    )
+    edge, vertex = _effective(topology, features.edge_sharpness, features.vertex_sharpness, mode)
+    chaikin = features.crease_method == "chaikin"
+    level = _CageLevel(cage.points, topology, edge, vertex, features.holes, mode, chaikin)
+    child = _step(level)
+    return QuadMesh(
+        child.x, mesh.topology, _level_tags(cage.tags, child), mesh.source, mesh.repairs
+    )
 
 
 def refine(mesh: QuadMesh, levels: int = 1, sharpness: ArrayLike | None = None) -> QuadMesh:

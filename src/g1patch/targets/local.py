@@ -139,8 +139,33 @@ def _slots_kernel(
             slot_in[h] = neighbor_offsets[origin[(h & ~3) | ((h + 1) & 3)] + 1] - 1
 
 
-def _unit_or_fail(vectors: NDArray[np.float64], what: str) -> NDArray[np.float64]:
+def _face_normal_sums(mesh: QuadMesh, vertices: NDArray[np.int64]) -> NDArray[np.float64]:
+    """Per vertex in ``vertices`` the sum of its faces' area vectors ``(x_2 − x_0) × (x_3 − x_1)``
+    (a quad's normal times twice its area, defined where a corner is straight)."""
+    x, faces = mesh.vertices, mesh.faces
+    area = cross(x[faces[:, 2]] - x[faces[:, 0]], x[faces[:, 3]] - x[faces[:, 1]])
+    wanted = np.isin(faces.reshape(-1), vertices)
+    corners = faces.reshape(-1)[wanted]
+    face = np.flatnonzero(wanted) >> 2
+    total = np.stack(
+        [np.bincount(corners, area[face, d], minlength=len(x)) for d in range(3)], axis=1
+    )
+    return np.asarray(total[vertices], dtype=np.float64)
+
+
+def _unit_or_fail(
+    vectors: NDArray[np.float64], what: str, mesh: QuadMesh | None = None
+) -> NDArray[np.float64]:
+    """``vectors`` normalised; where one is zero (a boundary vertex whose one face has a straight
+    corner there, corner normals that cancel) the sum of its faces' normals
+    (:func:`_face_normal_sums`) stands in, given ``mesh``; where that is zero too, a
+    :class:`ConstructionError` naming the vertex."""
     length = np.linalg.norm(vectors, axis=-1, keepdims=True)
+    if mesh is not None and not (length > 0).all():
+        vanished = np.flatnonzero(~(length[:, 0] > 0))
+        vectors = vectors.copy()
+        vectors[vanished] = _face_normal_sums(mesh, vanished)
+        length = np.linalg.norm(vectors, axis=-1, keepdims=True)
     if not (length > 0).all():
         bad = int(np.argmin(length[:, 0]))
         raise ConstructionError(
@@ -162,7 +187,7 @@ def fan_normals(mesh: QuadMesh, *, compiled: bool = True) -> NDArray[np.float64]
     if compiled:
         total = np.zeros_like(x)
         jit_kernel(_fan_kernel)(x, faces, total)
-        return _unit_or_fail(total, "fan normal")
+        return _unit_or_fail(total, "fan normal", mesh)
     here = x[faces]
     to_next = np.roll(here, -1, axis=1) - here
     to_prev = np.roll(here, 1, axis=1) - here
@@ -171,7 +196,7 @@ def fan_normals(mesh: QuadMesh, *, compiled: bool = True) -> NDArray[np.float64]
     total = np.stack(
         [np.bincount(corners, corner_normals[:, d], minlength=len(x)) for d in range(3)], axis=1
     )
-    return _unit_or_fail(total, "fan normal")
+    return _unit_or_fail(total, "fan normal", mesh)
 
 
 def _fan_kernel(
