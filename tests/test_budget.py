@@ -35,11 +35,11 @@ def test_the_estimate_counts_what_the_build_makes(method: str, shape: str, refin
 
 @pytest.mark.parametrize("method", ["gregory", "split4", "corner"])
 def test_the_memory_estimate_bounds_the_peak(method: str) -> None:
-    """tracemalloc's peak of a 20k-quad build (after a warm-up build compiled the kernels) is below
-    the estimate, and the estimate less than twice it: a budget that neither lets a build through
-    that exhausts memory nor refuses one that fits."""
+    """tracemalloc's peak of a 20k-quad build (after the same build compiled the kernels) is below
+    the estimate, and the estimate less than 1.5 times it: a budget that neither lets a build
+    through that exhausts memory nor refuses one that fits."""
     mesh = shapes.large_torus(20_000)
-    build_network(shapes.large_torus(1000), method, "interpolate", refine=1)
+    build_network(mesh, method, "interpolate", refine=1)  # kernels compiled or loaded: not traced
     tracemalloc.start()
     try:
         build_network(mesh, method, "interpolate", refine=1)
@@ -47,7 +47,7 @@ def test_the_memory_estimate_bounds_the_peak(method: str) -> None:
     finally:
         tracemalloc.stop()
     estimate = estimate_build(mesh, method, "interpolate", refine=1).bytes
-    assert peak <= estimate < 2 * peak, (peak, estimate)
+    assert peak <= estimate < 1.5 * peak, (peak, estimate)
 
 
 def test_a_build_above_the_budget_is_refused_before_it_starts() -> None:

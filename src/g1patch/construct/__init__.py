@@ -59,7 +59,7 @@ ASSEMBLIES: dict[str, Assembly] = {
             lambda patches: patches,
             keep_patches,
             patch_per_face_network,
-            1030,
+            1150,
         ),
         Assembly(
             "split4",
@@ -69,7 +69,7 @@ ASSEMBLIES: dict[str, Assembly] = {
             _split4_patches,
             _keep_split4,
             _split4_network,
-            2700,
+            3000,
             keeps_creases=False,
             keeps_holes=False,
         ),
@@ -81,7 +81,7 @@ ASSEMBLIES: dict[str, Assembly] = {
             lambda patches: patches,
             keep_patches,
             patch_per_face_network,
-            1520,
+            1700,
         ),
     )
 }

@@ -1,0 +1,7 @@
+"""``python -m g1patch.cli``: the command line."""
+
+import sys
+
+from . import main
+
+sys.exit(main())
