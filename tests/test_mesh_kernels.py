@@ -33,7 +33,7 @@ def connectivity(corners: np.ndarray, sizes: np.ndarray, n_vertices: int, compil
         return (type(error).__name__, str(error))
     return tuple(
         (name, array.dtype.str, array.shape, array.tobytes())
-        for name, array in result._asdict().items()
+        for name, array in vars(result).items()
     )
 
 

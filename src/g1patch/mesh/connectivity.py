@@ -10,6 +10,7 @@ and names it. :class:`~g1patch.mesh.QuadTopology` holds the result for quads.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, NamedTuple, cast
 
 import numpy as np
@@ -84,9 +85,11 @@ def _pair_halfedges(
     return _EdgePairing(edges, halfedge_edge, edge_halfedges)
 
 
-class _Connectivity(NamedTuple):
-    """The arrays of :class:`~g1patch.mesh.QuadTopology` that :func:`_connect` computes, under the
-    same names."""
+@dataclass(frozen=True, eq=False)
+class _Connectivity:
+    """The half-edge arrays :func:`_connect` computes: the base of
+    :class:`~g1patch.mesh.QuadTopology`, which adds the faces, the vertex count and the boundary
+    edges."""
 
     twin: IntArray
     edges: IntArray
@@ -151,7 +154,8 @@ def _connect(
     np.minimum.at(start, corners, halfedges)
     start[corners[boundary_out]] = boundary_out
     ring_offsets = np.concatenate([[0], np.cumsum(face_count)])
-    ring = _walk_rings(start, face_count, ring_offsets, twin, preceding, corners, face_ends)
+    fans = _Fans(face_count, ring_offsets, twin, preceding, corners, face_ends)
+    ring = _walk_rings(start, fans)
     visited = np.zeros(corners.size, dtype=bool)
     visited[ring] = True
     if not visited.all():  # a closed fan came round before visiting all faces of its vertex
@@ -174,19 +178,8 @@ def _connect(
     neighbors[neighbor_offsets[boundary + 1] - 1] = corners[
         preceding[ring[ring_offsets[boundary + 1] - 1]]
     ]
-    return _Connectivity(
-        twin,
-        pairing.edges,
-        pairing.halfedge_edge,
-        pairing.edge_halfedges,
-        valence,
-        face_count,
-        is_boundary_vertex,
-        ring_offsets,
-        ring,
-        neighbor_offsets,
-        neighbors,
-    )
+    counts = (valence, face_count, is_boundary_vertex)
+    return _Connectivity(twin, *pairing, *counts, ring_offsets, ring, neighbor_offsets, neighbors)
 
 
 #: half-edges sharing their smaller vertex that :func:`_connect_kernel` sorts (by insertion); a
@@ -318,20 +311,9 @@ def _connect_kernel(corners: IntArray, sizes: IntArray, n_vertices: int) -> tupl
             neighbors[neighbor_offsets[v + 1] - 1] = corners[
                 (last & ~3) | ((last + 3) & 3) if quads else preceding[last]
             ]
-    return (
-        valid,
-        twin,
-        edges[:n_edges],
-        halfedge_edge,
-        edge_halfedges[:n_edges],
-        valence,
-        face_count,
-        is_boundary_vertex,
-        ring_offsets,
-        ring,
-        neighbor_offsets,
-        neighbors,
-    )
+    pairing = (edges[:n_edges], halfedge_edge, edge_halfedges[:n_edges])
+    rings = (ring_offsets, ring, neighbor_offsets, neighbors)
+    return (valid, twin, *pairing, valence, face_count, is_boundary_vertex, *rings)
 
 
 #: ring positions written one rotation step at a time (for all vertices at once); the rest of the
@@ -340,15 +322,19 @@ def _connect_kernel(corners: IntArray, sizes: IntArray, n_vertices: int) -> tupl
 _WALK_STEPS = 32
 
 
-def _walk_rings(
-    start: IntArray,
-    face_count: IntArray,
-    ring_offsets: IntArray,
-    twin: IntArray,
-    preceding: IntArray,
-    corners: IntArray,
-    face_ends: IntArray,
-) -> IntArray:
+class _Fans(NamedTuple):
+    """What the ring walk reads: per vertex its face count and ring offset; per half-edge its
+    twin, its predecessor in its face and its origin; the faces' ends (for the errors)."""
+
+    face_count: IntArray
+    ring_offsets: IntArray
+    twin: IntArray
+    preceding: IntArray
+    corners: IntArray
+    face_ends: IntArray
+
+
+def _walk_rings(start: IntArray, fans: _Fans) -> IntArray:
     """Write ``h_{i+1} = twin(prev(h_i))`` from ``start`` for every vertex at once, one rotation
     step at a time.
 
@@ -356,6 +342,7 @@ def _walk_rings(
     a prefix of that order. Running into the boundary early means a second fan. After
     :data:`_WALK_STEPS` steps the remaining positions are ranked (:func:`_rank_ring_tails`).
     """
+    face_count, ring_offsets, twin, preceding, corners, face_ends = fans
     order = np.argsort(-face_count, kind="stable")
     walking = np.searchsorted(-face_count[order], -np.arange(int(face_count.max())), side="left")
     ring = np.empty(int(ring_offsets[-1]), dtype=np.int64)
@@ -369,31 +356,11 @@ def _walk_rings(
         current[:count] = twin[preceding[h]]
     if walking.size > _WALK_STEPS:
         tail = order[: walking[_WALK_STEPS]]
-        _rank_ring_tails(
-            ring,
-            tail,
-            current[: tail.size],
-            face_count,
-            ring_offsets,
-            twin,
-            preceding,
-            corners,
-            face_ends,
-        )
+        _rank_ring_tails(ring, tail, current[: tail.size], fans)
     return ring
 
 
-def _rank_ring_tails(
-    ring: IntArray,
-    tail: IntArray,
-    first: IntArray,
-    face_count: IntArray,
-    ring_offsets: IntArray,
-    twin: IntArray,
-    preceding: IntArray,
-    corners: IntArray,
-    face_ends: IntArray,
-) -> None:
+def _rank_ring_tails(ring: IntArray, tail: IntArray, first: IntArray, fans: _Fans) -> None:
     """Ring positions ``_WALK_STEPS`` onwards of the vertices ``tail``, whose walk has reached
     ``first``.
 
@@ -403,6 +370,7 @@ def _rank_ring_tails(
     ``_WALK_STEPS + d(first) - d(h)``. A chain from ``first`` shorter than the rest of the ring
     means a second fan.
     """
+    face_count, ring_offsets, twin, preceding, corners, face_ends = fans
     in_tail = np.zeros(face_count.size, dtype=bool)
     in_tail[tail] = True
     written = np.zeros(corners.size, dtype=bool)

@@ -23,7 +23,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import InputError, MeshError, as_index_array
-from .connectivity import _connect
+from .connectivity import _connect, _Connectivity
 from .validate import _few
 
 __all__ = ["QuadTopology"]
@@ -42,7 +42,7 @@ def _prev(h: ArrayLike) -> IntArray:
 
 
 @dataclass(frozen=True, eq=False)
-class QuadTopology:
+class QuadTopology(_Connectivity):
     """Half-edge connectivity of a manifold, consistently oriented quad mesh; build it with
     :meth:`from_faces`.
 
@@ -59,18 +59,7 @@ class QuadTopology:
 
     faces: IntArray
     n_vertices: int
-    twin: IntArray
-    edges: IntArray
-    halfedge_edge: IntArray
-    edge_halfedges: IntArray
     is_boundary_edge: NDArray[np.bool_]
-    valence: IntArray
-    face_count: IntArray
-    is_boundary_vertex: NDArray[np.bool_]
-    ring_offsets: IntArray
-    ring_halfedges: IntArray
-    neighbor_offsets: IntArray
-    neighbors: IntArray
 
     @classmethod
     def from_faces(cls, faces: ArrayLike, n_vertices: int | None = None) -> QuadTopology:
@@ -96,7 +85,7 @@ class QuadTopology:
             )
         is_boundary_edge = connectivity.edge_halfedges[:, 1] < 0
         return cls(
-            faces=quads, n_vertices=nv, is_boundary_edge=is_boundary_edge, **connectivity._asdict()
+            faces=quads, n_vertices=nv, is_boundary_edge=is_boundary_edge, **vars(connectivity)
         )
 
     def __post_init__(self) -> None:
