@@ -187,6 +187,10 @@ class GregoryPatchSet:
         """The same points read in ``frame`` (None: as world coordinates)."""
         return GregoryPatchSet(self.points, check_frame(frame))
 
+    def local_to(self, frame: Frame) -> GregoryPatchSet:
+        """The same surface in ``frame``'s local coordinates, ``(W − c)/s``, without a frame."""
+        return GregoryPatchSet(frame.to_local(self.world_points()))
+
     def world_points(self) -> NDArray[np.float64]:
         """Points in world coordinates, ``c + s P`` (``points`` itself without a frame), (N, 20,
         3)."""

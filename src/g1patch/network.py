@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .display import bbox_text, describe, patch_kind, picture, short_source
 from .errors import G1PatchError, InputError, NonManifoldError, as_float_array, as_index_array
+from .frame import Frame
 from .gregory import GregoryPatchSet
 from .mesh import QuadTopology
 from .patches import PatchSet
@@ -35,6 +36,8 @@ from .patches import PatchSet
 __all__ = [
     "Patches",
     "PatchNetwork",
+    "DISPLAY_RANGE",
+    "display_frame",
     "edge_parameters",
     "network_from_mesh",
     "network_from_patch_points",
@@ -55,6 +58,10 @@ class Patches(Protocol):
     ) -> NDArray[np.float64]: ...
 
     def box(self, samples: int = ...) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+
+    def corners(self) -> NDArray[np.float64]: ...
+
+    def local_to(self, frame: Frame) -> Patches: ...
 
 
 def edge_parameters(edge: NDArray[np.int64], t: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -252,6 +259,11 @@ class PatchNetwork:
         patches, edges = np.nonzero((self.neighbor < 0) & ~collapsed)
         return patches.astype(np.int64), edges.astype(np.int64)
 
+    def local_to(self, frame: Frame) -> PatchNetwork:
+        """The same network in ``frame``'s local coordinates (patches and vertices)."""
+        vertices = None if self.vertices is None else frame.to_local(self.vertices)
+        return replace(self, patches=self.patches.local_to(frame), vertices=vertices)
+
     def bounding_box_diagonal(self) -> float:
         """Length of the diagonal of the box around the patch corners (the scale of G0 gaps)."""
         corners = self.patches.evaluate(
@@ -422,3 +434,21 @@ def network_of(
     raise InputError(
         f"{name}: expected a PatchNetwork, PatchSet or GregoryPatchSet, got {describe(patches)}"
     )
+
+
+#: a picture's or page's surfaces are drawn in their own unit box when their size or distance from
+#: the origin leaves ``[1 / DISPLAY_RANGE, DISPLAY_RANGE]`` (float32 and the drawing's absolute
+#: tolerances hold well inside it); inside it they are drawn as they are
+DISPLAY_RANGE = 1e6
+
+
+def display_frame(networks: Sequence[PatchNetwork]) -> Frame | None:
+    """The frame (centre and diagonal of all ``networks``' corners) to draw them in, or None when
+    their size is within :data:`DISPLAY_RANGE`: a surface 1e-25 or 1e25 in size gives the same
+    picture as at size 1."""
+    corners = np.concatenate([network.patches.corners().reshape(-1, 3) for network in networks])
+    frame = Frame.of_points(corners)
+    reach = float(np.abs(frame.centre).max(initial=0.0)) / frame.scale
+    if 1.0 / DISPLAY_RANGE <= frame.scale <= DISPLAY_RANGE and reach <= DISPLAY_RANGE:
+        return None
+    return frame

@@ -111,6 +111,15 @@ class PatchSet:
         """The same control read in ``frame`` (None: as world coordinates)."""
         return PatchSet(self.control, self.form, check_frame(frame))
 
+    def local_to(self, frame: Frame) -> PatchSet:
+        """The same surface in ``frame``'s local coordinates, without a frame: positions
+        ``(W − c)/s``, Hermite's derivative and twist entries ``W/s``."""
+        world = self.world_control()
+        local = frame.vectors_to_local(world)
+        positions = (slice(None), slice(0, 2), slice(0, 2)) if self.form == "hermite" else ...
+        local[positions] = frame.to_local(world[positions])
+        return PatchSet(local, self.form)
+
     def world_control(self) -> NDArray[np.float64]:
         """Control in world coordinates (``control`` itself without a frame), (N, 4, 4, 3).
 

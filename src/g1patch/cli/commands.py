@@ -124,6 +124,11 @@ def _check(args: argparse.Namespace) -> int:
         failures.append(
             f"{report.folds} folded patches (first: patch {patch} at (u, v) = ({u:.4g}, {v:.4g}))"
         )
+    if report.degenerate_patches:
+        failures.append(
+            f"{report.degenerate_patches} degenerate patches (zero area or more than one collapsed "
+            f"edge; first: patch {report.degenerate_patch_ids[0]})"
+        )
     if not report.seams_closed():
         failures.append(
             f"seam G0 gap {report.seam_g0_max:.3e} (of bbox diag) above {SEAM_G0_RTOL:g}"

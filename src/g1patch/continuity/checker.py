@@ -7,9 +7,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..gregory import GregoryPatchSet
-from ..network import PatchNetwork, network_of
+from ..network import Patches, PatchNetwork, network_of
 from ..patches import PatchSet
 from .corner_kernels import (
     _corner_extent_compiled,
@@ -148,6 +149,9 @@ def check(
         deviation = np.linalg.norm(corners - vertices[network.corner_ids], axis=-1)
         max_vertex_deviation = float(deviation.max() / diagonal) if deviation.size else 0.0
 
+    degenerate = _degenerate_patches(
+        network, local, grid.degenerate, fold_samples, degenerate_level
+    )
     open_patch, _ = network.open_edges()
     smooth_angle = edge_angle[~seam]
     seam_range: tuple[float, float] | tuple[None, None] = (None, None)
@@ -166,6 +170,8 @@ def check(
         max_corner_angle_deg=corner_angle,
         max_g0_gap=float(edge_gap.max(initial=0.0)),
         degenerate_normals=grid.degenerate,
+        degenerate_patches=int(degenerate.size),
+        degenerate_patch_ids=tuple(int(i) for i in degenerate[:10]),
         folds=int(folded.sum()),
         inconsistent_orientation_edges=int(same.sum()),
         bounding_box_diagonal=float(
@@ -192,3 +198,30 @@ def check(
         edge_gap=edge_gap,
         edge_seam=seam,
     )
+
+
+def _degenerate_patches(
+    network: PatchNetwork,
+    local: Patches,
+    degenerate_samples: int,
+    samples: int,
+    level: float,
+) -> NDArray[np.int64]:
+    """The patches with more than one collapsed edge, or whose ``|p_u × p_v| ≤ level`` at every
+    sample of the ``samples²`` grid. The grid is evaluated again only where the check counted at
+    least one patch's worth of degenerate samples (never on a sound network)."""
+    suspect = network.edge_collapsed[network.edge_ids].sum(axis=1) > 1
+    if degenerate_samples >= samples * samples:
+        grid = np.linspace(0.0, 1.0, samples)
+        for block in range(0, len(local), _FLAT_BLOCK):  # local: the coordinates of ``level``
+            part = local.take(np.arange(block, min(block + _FLAT_BLOCK, len(local))))
+            normals = np.cross(
+                part.evaluate_grid(grid, grid, 1, 0), part.evaluate_grid(grid, grid, 0, 1)
+            )
+            area = np.linalg.norm(normals, axis=-1).reshape(len(part), -1)
+            suspect[block : block + _FLAT_BLOCK] |= (area <= level).all(axis=1)
+    return np.flatnonzero(suspect)
+
+
+#: patches a block when looking for flat patches (:func:`_degenerate_patches`)
+_FLAT_BLOCK = 4096

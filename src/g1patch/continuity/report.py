@@ -55,6 +55,11 @@ class ContinuityReport:
     edge_angle_deg: NDArray[np.float64] = field(repr=False)
     edge_gap: NDArray[np.float64] = field(repr=False)
     edge_seam: NDArray[np.bool_] = field(repr=False)
+    #: patches with no surface to speak of: zero area everywhere on the fold grid, or more than
+    #: one collapsed edge (one is an intended triangular patch, as the teapot's poles); their count
+    #: and the first of them (at most 10)
+    degenerate_patches: int = 0
+    degenerate_patch_ids: tuple[int, ...] = ()
 
     @property
     def worst_edge(self) -> dict[str, Any] | None:
@@ -80,8 +85,14 @@ class ContinuityReport:
         return self.seam_g0_max <= max_gap
 
     def passes(self, max_angle_deg: float = 1e-9, max_seam_gap: float = SEAM_G0_RTOL) -> bool:
-        """The check verdict: :meth:`is_g1`, no patch folds and :meth:`seams_closed`."""
-        return self.is_g1(max_angle_deg) and self.folds == 0 and self.seams_closed(max_seam_gap)
+        """The check verdict: :meth:`is_g1`, no patch folds, no degenerate patch and
+        :meth:`seams_closed`."""
+        return (
+            self.is_g1(max_angle_deg)
+            and self.folds == 0
+            and self.degenerate_patches == 0
+            and self.seams_closed(max_seam_gap)
+        )
 
     @property
     def seams(self) -> dict[str, Any]:
@@ -122,6 +133,8 @@ class ContinuityReport:
             "max_corner_angle_deg": self.max_corner_angle_deg,
             "max_g0_gap": self.max_g0_gap,
             "degenerate_normals": self.degenerate_normals,
+            "degenerate_patches": self.degenerate_patches,
+            "degenerate_patch_ids": list(self.degenerate_patch_ids),
             "folds": self.folds,
             "inconsistent_orientation_edges": self.inconsistent_orientation_edges,
             "bounding_box_diagonal": self.bounding_box_diagonal,
@@ -133,6 +146,13 @@ class ContinuityReport:
             **self.fairness,
         }
 
+    def _degenerate_rows(self) -> list[tuple[str, str]]:
+        if not self.degenerate_patches:
+            return []
+        first = ", ".join(str(i) for i in self.degenerate_patch_ids)
+        more = ", …" if self.degenerate_patches > len(self.degenerate_patch_ids) else ""
+        return [("degenerate patches", f"{self.degenerate_patches} ({first}{more})")]
+
     def rows(self) -> list[tuple[str, str]]:
         """(label, value) pairs of the figures, as :meth:`summary` prints them."""
         rows = [
@@ -143,6 +163,7 @@ class ContinuityReport:
             ("max G1 angle at corners", f"{self.max_corner_angle_deg:.3e}°"),
             ("max G0 gap (of bbox diag)", f"{self.max_g0_gap:.3e}"),
             ("degenerate normals", f"{self.degenerate_normals}"),
+            *self._degenerate_rows(),
             ("folds", f"{self.folds}"),
             (
                 "normal turn median / p99 / max",
@@ -204,6 +225,8 @@ class ContinuityReport:
             else f"not G1 (max angle {angle:.3g}°)"
         )
         folds = f"{self.folds} folded patches" if self.folds else "no folds"
+        if self.degenerate_patches:
+            folds += f", {self.degenerate_patches} degenerate patches"
         seams = (
             f", {self.seam_edges} seams"
             + ("" if self.seams_closed() else f" open by {self.seam_g0_max:.2g}")

@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..continuity import ContinuityReport
 from ..errors import InputError, as_float_array, check_choice
-from ..network import PatchNetwork
+from ..network import PatchNetwork, display_frame
 from ..tessellate import TriangleMesh
 from .camera import AUTO, UP_AXES, _camera, _check_view
 from .checks import (
@@ -141,6 +141,10 @@ def render_side_by_side(
     _check_titles(titles, len(networks), "network")
     for index, title in enumerate(titles):
         _check_title(f"titles[{index}]" if len(titles) > 1 else "title", title)
+    frame = display_frame(networks)  # a surface 1e-25 or 1e25 in size: drawn in its unit box
+    if frame is not None:
+        networks = [network.local_to(frame) for network in networks]
+        target_point = None if target_point is None else frame.to_local(target_point)
     if reports is None:
         reports = [None] * len(networks)
     if (

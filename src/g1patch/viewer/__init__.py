@@ -52,7 +52,7 @@ from numpy.typing import NDArray
 from ..continuity import DEGENERATE_RTOL, ContinuityReport
 from ..errors import InputError
 from ..io.atomic import atomic_path
-from ..network import PatchNetwork
+from ..network import PatchNetwork, display_frame
 from ..tessellate import TRIANGLE_BUDGET, _size_text, samples_per_side, triangle_count
 
 __all__ = [
@@ -310,6 +310,9 @@ def _page(
     from ..render import DEFAULT_STRIPES
 
     network = _check_network(network)
+    frame = display_frame([network])  # a surface 1e-25 or 1e25 in size: shown in its unit box
+    if frame is not None:
+        network = network.local_to(frame)
     r = _resolution(network.n_patches, resolution, force)
     up, view = _check_camera(up, view)
     if report is None:
