@@ -175,7 +175,7 @@ def test_shared_meshes_with_a_broken_file_then_a_rerun_skips_them(
         assert (
             again[name]["status"] == "skipped"
             and "skipped" in rows[name]
-            and "outputs newer than input" in rows[name]
+            and "up to date: same input and options" in rows[name]
         )
         assert (
             again[name]["max_g1_angle_deg"] == records[name]["max_g1_angle_deg"]
@@ -197,8 +197,10 @@ def test_rerun_rebuilds_changed_inputs_and_changed_options(
     assert main(command) == 0
     assert {r["status"] for r in summary(out).values()} == {"skipped"}
 
-    later = time.time() + 5  # the input edited after its outputs were made
-    os.utime(meshes / "cube.obj", (later, later))
+    later = time.time() + 5  # touched: the same bytes, a later time
+    os.utime(meshes / "torus.obj", (later, later))
+    with (meshes / "cube.obj").open("a") as edited:  # edited: other bytes
+        edited.write("# edited\n")
     assert main(command) == 0
     assert {name: r["status"] for name, r in summary(out).items()} == {
         "cube.obj": "built",
@@ -446,7 +448,7 @@ def test_interrupt_writes_the_summary_so_far(
 ) -> None:
     """Ctrl-C during a batch: the records done are kept, the others marked cancelled, and it is
     raised again."""
-    import g1patch.batch as batch
+    import g1patch.batch.run as batch
 
     def run(
         jobs: list[Job], scheduler: object, workers: object, progress: object, done: dict
@@ -471,7 +473,7 @@ def test_cad_exports_record_what_opencascade_measured(meshes: Path, tmp_path: Pa
     pytest.importorskip(
         "OCP", reason="STEP export needs cadquery-ocp-novtk: pip install 'g1patch[cad]'"
     )
-    from g1patch.batch import _json_ready
+    from g1patch.batch.jobs import json_ready
 
     record = convert(Job(str(meshes / "cube.obj"), (str(tmp_path / "cube.step"),), BuildOptions()))
     assert record["status"] == "built", record["error"]
@@ -481,8 +483,8 @@ def test_cad_exports_record_what_opencascade_measured(meshes: Path, tmp_path: Pa
         and step["max_g1_angle_deg"] <= 1e-9
         and step["path"] == str(tmp_path / "cube.step")
     )
-    json.dumps(_json_ready(record), allow_nan=False)  # summary.json holds it as it is
-    assert _json_ready({"a": float("nan"), "b": (1, float("inf"))}) == {"a": None, "b": [1, None]}
+    json.dumps(json_ready(record), allow_nan=False)  # summary.json holds it as it is
+    assert json_ready({"a": float("nan"), "b": (1, float("inf"))}) == {"a": None, "b": [1, None]}
 
 
 def test_embedded_workers_are_set_up_like_the_command_line(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -492,7 +494,7 @@ def test_embedded_workers_are_set_up_like_the_command_line(monkeypatch: pytest.M
     )
     import signal
 
-    from g1patch import batch
+    from g1patch.batch import run as batch
 
     calls: list[object] = []
     monkeypatch.setattr(batch, "tune_for_large_arrays", lambda: calls.append("tuned"))
