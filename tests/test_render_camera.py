@@ -112,11 +112,13 @@ def test_the_camera_follows_the_data_about_the_up_axis() -> None:
 def test_an_explicit_up_is_kept_and_weights_count() -> None:
     points, weights = box_samples((4.0, 3.0, 0.5))
     assert auto_camera(points, weights, up="x")[0] == "x"
-    # a heavy tall post at the far end outweighs the slab: no longer a z-up slab
+    # a tall post at the far end: the thing stands on its slab (the base rule: z whatever the
+    # weights), and a heavy post makes it taller, so it is seen from lower down
     wall, wall_w = box_samples((0.2, 0.2, 6.0))
     both = np.concatenate([points, wall + [4.0, 1.5, 0.0]])
-    assert auto_camera(both, np.concatenate([weights, 100.0 * wall_w]))[0] == "y"
-    assert auto_camera(both, np.concatenate([weights, 0.0 * wall_w]))[0] == "z"
+    heavy = auto_camera(both, np.concatenate([weights, 100.0 * wall_w]))
+    light = auto_camera(both, np.concatenate([weights, 0.0 * wall_w]))
+    assert heavy[0] == light[0] == "z" and heavy[1][0] < light[1][0]
 
 
 def test_bad_inputs_name_themselves(tmp_path: Path) -> None:
@@ -254,6 +256,42 @@ def test_the_default_picture_of_spot_is_upright_from_the_front_three_quarter(
     assert abs(aspect_z - box[1] / box[0]) > 0.1 * box[1] / box[0], (
         "the test tells a z-up picture apart"
     )
+
+
+#: rotations taking a y-up model to z-up and a z-up one to y-up (about x, by ±90°)
+Y_TO_Z = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+
+
+def _rotated(network: PatchNetwork, rotation: np.ndarray) -> PatchNetwork:
+    from dataclasses import replace
+
+    from g1patch.gregory import GregoryPatchSet
+
+    assert isinstance(network.patches, GregoryPatchSet)
+    vertices = None if network.vertices is None else network.vertices @ rotation.T
+    points = network.patches.world_points() @ rotation.T
+    return replace(network, patches=GregoryPatchSet(points), vertices=vertices)
+
+
+def test_spot_stood_on_z_is_z_up_and_drawn_as_upright(
+    tmp_path: Path, spot: tuple[PatchNetwork, np.ndarray]
+) -> None:
+    """The same cow in a z-up file stands on its hooves (the largest flat face of its hull faces
+    −z), so its picture is the y-up file's, pixel for pixel: once it lay on its side."""
+    network, _ = spot
+    standing = _rotated(network, Y_TO_Z)
+    assert auto_camera(standing)[0] == "z"
+    pictures = []
+    for name, surface in (("y", network), ("z", standing)):
+        render(tmp_path / f"{name}.png", surface, size=(240, 240))
+        pictures.append(matplotlib.image.imread(tmp_path / f"{name}.png"))
+    assert np.abs(pictures[0] - pictures[1]).max() <= 1 / 255
+
+
+def test_a_shape_with_two_equal_flat_sides_keeps_the_slab_rule() -> None:
+    """A flat torus touches its top and bottom planes alike: no base to tell, so the slab rule
+    (z-up for a slab in the xy plane) decides, as before."""
+    assert auto_camera(build_gregory_network(shapes.torus(8, 4)))[0] == "z"
 
 
 def test_the_teapot_is_z_up(shared_data_path: Path) -> None:

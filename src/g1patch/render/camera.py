@@ -80,6 +80,15 @@ AUTO_ELEVATION = (25.0, 45.0)
 #: front three-quarter: the camera is turned this many degrees from the front towards the model's
 #: left
 AUTO_TURN_DEG = 35.0
+#: a surface stands on the largest flat face of its convex hull (:func:`resting_axis`) when that
+#: face holds at least this fraction of the hull's area (Spot's hooves: 0.09, the teapot's
+#: bottom 0.11; a sphere's largest facet is far below)
+AUTO_BASE_FRACTION = 0.04
+#: ... and the face opposite it is smaller than this fraction of it (else it is a slab with two
+#: equal sides, the cube, a flat torus: no base to tell)
+AUTO_BASE_OPPOSITE = 0.8
+#: samples the hull is taken of, at most (evenly spaced)
+_AUTO_HULL_POINTS = 20_000
 #: patches sampled by :func:`auto_camera` on a network (evenly spaced through it), 4 × 4 points each
 _AUTO_PATCHES = 65_536
 _AUTO_GRID = 4
@@ -140,6 +149,40 @@ def _area_samples(
     return patches.evaluate_grid(t, t).reshape(-1, 3), area.reshape(-1)
 
 
+def resting_axis(points: NDArray[np.float64]) -> str | None:
+    """``"y"`` or ``"z"``, the axis a surface stands upright on, or None. Its convex hull's flat
+    faces (simplices of one plane together) that face down along ``−y`` or ``−z`` (within
+    :data:`AUTO_AXIS_TOLERANCE_DEG`): the larger of the two largest is the base when it holds at
+    least :data:`AUTO_BASE_FRACTION` of the hull's area and the face opposite it (up along that
+    axis) is smaller than :data:`AUTO_BASE_OPPOSITE` of it. x is never chosen, as by the slab
+    rule."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    sample = points[:: max(1, len(points) // _AUTO_HULL_POINTS)]
+    try:
+        hull = ConvexHull(sample)
+    except (QhullError, ValueError):  # flat or too few points: no solid to stand
+        return None
+    corners = hull.points[hull.simplices]
+    area = 0.5 * np.linalg.norm(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=-1
+    )
+    size = float(np.ptp(sample, axis=0).max()) or 1.0
+    # one plane: the same unit normal and offset, to 1e-6 (qhull's merged facets share them)
+    plane = np.round(hull.equations / [1.0, 1.0, 1.0, size] * 1e6).astype(np.int64)
+    keys, which = np.unique(plane, axis=0, return_inverse=True)
+    face_area = np.bincount(which.ravel(), weights=area, minlength=len(keys))
+    normals = keys[:, :3] / 1e6
+    aligned = math.cos(math.radians(AUTO_AXIS_TOLERANCE_DEG))
+    best, chosen = 0.0, None
+    for axis in (1, 2):
+        down = face_area[-normals[:, axis] >= aligned].max(initial=0.0)
+        up = face_area[normals[:, axis] >= aligned].max(initial=0.0)
+        if down > best and up < AUTO_BASE_OPPOSITE * down:
+            best, chosen = down, "xyz"[axis]
+    return chosen if best >= AUTO_BASE_FRACTION * area.sum() else None
+
+
 def auto_camera(
     surface: PatchNetwork | TriangleMesh | ArrayLike,
     weights: ArrayLike | None = None,
@@ -155,8 +198,10 @@ def auto_camera(
     axis to keep (``"x"``, ``"y"``, ``"z"``), or ``"auto"`` to choose it. The view is in the
     convention of :func:`render`'s ``view`` about that axis.
 
-    The rule, on the weighted mean and covariance of the samples, whose principal axes have
-    spreads (standard deviations) σ₀ ≤ σ₁ ≤ σ₂:
+    The rule: **up** is the axis the surface stands on (:func:`resting_axis`: its convex hull's
+    larger flat face facing down along −y or −z — Spot's hooves in a y-up or a z-up file alike),
+    where it stands on one; otherwise, on the weighted mean and covariance of the samples, whose
+    principal axes have spreads (standard deviations) σ₀ ≤ σ₁ ≤ σ₂:
 
     * **up** is **z** when the surface is a slab lying in the xy plane: its thinnest principal
       axis is within :data:`AUTO_AXIS_TOLERANCE_DEG` of z, σ₀ ≤ :data:`AUTO_SLAB_RATIO` σ₁, and it
@@ -178,9 +223,9 @@ def auto_camera(
       a flat torus) has no front: the azimuth of :data:`DEFAULT_VIEW`.
 
     A heuristic on the shape alone, right on the shared Spot and teapot and on the generated
-    shapes; it misreads e.g. a z-up animal (thin along x, so taken as y-up: it lies on its side), a
-    square y-up relief (thin along z: taken as a z-up slab) and a car whose rear stands higher
-    than its bonnet (seen from behind). Pass ``up`` / ``view`` for those.
+    shapes; without a base to stand on it misreads e.g. a square y-up relief (thin along z: taken
+    as a z-up slab), and a car whose rear stands higher than its bonnet is seen from behind. Pass
+    ``up`` / ``view`` for those.
     """
     up = check_choice("up", up, (AUTO, *UP_AXES))
     if isinstance(surface, (PatchNetwork, TriangleMesh)):
@@ -211,6 +256,8 @@ def auto_camera(
         return ("y" if up == AUTO else up), DEFAULT_VIEW
     spread2, axes = np.linalg.eigh(covariance)  # ascending
     cos_tol = math.cos(math.radians(AUTO_AXIS_TOLERANCE_DEG))
+    if up == AUTO:
+        up = resting_axis(points) or AUTO
     if up == AUTO:
         slab = spread2[0] <= AUTO_SLAB_RATIO**2 * spread2[1] and abs(axes[2, 0]) >= cos_tol
         standing = spread2[1] <= AUTO_LONG_RATIO**2 * spread2[2] and abs(axes[1, 2]) >= cos_tol
