@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -150,8 +150,8 @@ class PatchSet:
                 "arrays: bicubic patches need the arrays 'control' and 'form', got "
                 f"{sorted(arrays)}"
             )
-        form = str(np.asarray(arrays["form"]))
-        return cls(np.asarray(arrays["control"]), form, Frame.from_arrays(arrays))  # type: ignore[arg-type]
+        form = cast(Form, str(np.asarray(arrays["form"])))  # checked by __post_init__
+        return cls(np.asarray(arrays["control"]), form, Frame.from_arrays(arrays))
 
     # ------------------------------------------------------------------ forms
     def convert(self, form: Form) -> PatchSet:

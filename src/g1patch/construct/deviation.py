@@ -6,6 +6,7 @@ parametric distance, and the geometric one by foot points on the Gregory patches
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -14,6 +15,9 @@ from ..errors import InputError
 from ..frame import Frame
 from ..gregory import GregoryPatchSet, gregory_weights
 from ..network import PatchNetwork
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 __all__ = ["FOOT_STARTS", "FOOT_STEPS", "SEARCH_SAMPLES", "surface_deviation"]
 
@@ -31,11 +35,11 @@ SEARCH_SAMPLES = 17
 
 
 def _grid_starts(
-    points: FloatArray, tree: object, t: FloatArray, count: int
+    points: FloatArray, tree: cKDTree, t: FloatArray, count: int
 ) -> tuple[IntArray, FloatArray]:
     """Each point's ``count`` nearest samples of the :data:`SEARCH_SAMPLES`² grid ``t`` × ``t`` of
     every patch (``tree`` over them): their patches (P, count) and parameters (P, count, 2)."""
-    nearest = tree.query(points, k=count)[1].reshape(len(points), count)  # type: ignore[attr-defined]
+    nearest = tree.query(points, k=count)[1].reshape(len(points), count)
     patch, rest = np.divmod(nearest, len(t) ** 2)
     return patch, np.stack([t[rest // len(t)], t[rest % len(t)]], axis=-1)
 
