@@ -31,7 +31,7 @@ from .errors import FormatError, InputError
 if TYPE_CHECKING:  # pragma: no cover
     from .continuity import ContinuityReport
     from .gregory import GregoryPatchSet
-    from .io.cad import ExportResult
+    from .io.cad import ExportResult, RhinoResult
     from .mesh import QuadMesh, Tag
     from .network import PatchNetwork
     from .patches import PatchSet
@@ -61,7 +61,9 @@ NETWORK_SUFFIXES = (".npz", ".bpt")
 TRIANGLE_SUFFIXES = (".obj", ".ply", ".stl")
 CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs")
 #: what :meth:`Surface.export` writes, by suffix
-EXPORT_SUFFIXES = (".npz", *TRIANGLE_SUFFIXES, *CAD_SUFFIXES, ".bpt")
+#: Rhino's NURBS file (the extra ``rhino``)
+RHINO_SUFFIX = ".3dm"
+EXPORT_SUFFIXES = (".npz", *TRIANGLE_SUFFIXES, *CAD_SUFFIXES, RHINO_SUFFIX, ".bpt")
 
 _SOURCES = (
     "a mesh file path (.obj, .ply, .off), a (vertices, faces) pair of arrays or lists, a "
@@ -521,6 +523,9 @@ class Surface:
           units, default 1e-6 × the bbox diagonal); ``max_deviation`` (the re-assembly's bound,
           relative to the diagonal, default 1e-3); also ``progress``, ``g1_samples``
           (:func:`g1patch.io.cad.export_cad`, needs ``pip install 'g1patch[cad]'``);
+        * ``.3dm``: Rhino's file, the same B-spline faces as STEP's (options ``method``,
+          ``max_deviation``, ``fit_tolerance``; :func:`g1patch.io.cad.export_3dm`, needs ``pip
+          install 'g1patch[rhino]'``); returns a :class:`~g1patch.io.cad.RhinoResult`;
         * ``.bpt``: Newell's Bézier patches (polynomial networks only: corner, split4, files).
 
         Returns the path written, or for STEP/IGES the
@@ -546,6 +551,11 @@ class Surface:
             from .io.cad import export_cad
 
             return export_cad(target, self.network, **options)
+        if suffix == RHINO_SUFFIX:
+            _check_options(target, options, ("fit_tolerance", "method", "max_deviation"))
+            from .io.cad import export_3dm
+
+            return export_3dm(target, self.network, **options)
         if suffix in TRIANGLE_SUFFIXES:
             _check_options(target, options, ("resolution", "force"))
             from .io.meshfile import write_triangles
@@ -710,7 +720,7 @@ def check(surface: Any, **options: Any) -> ContinuityReport:
     return measure(as_network(surface), **options)
 
 
-def export(surface: Any, path: PathLike, **options: Any) -> Path | ExportResult:
+def export(surface: Any, path: PathLike, **options: Any) -> Path | ExportResult | RhinoResult:
     """:meth:`Surface.export` of a Surface, PatchNetwork, PatchSet, GregoryPatchSet or network
     file."""
     wrapped = surface if isinstance(surface, Surface) else Surface(as_network(surface))

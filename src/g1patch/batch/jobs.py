@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..api import CAD_SUFFIXES, EXPORT_SUFFIXES, TRIANGLE_SUFFIXES
+from ..api import CAD_SUFFIXES, EXPORT_SUFFIXES, RHINO_SUFFIX, TRIANGLE_SUFFIXES
 from ..errors import InputError, MissingDependencyError, check_choice
 
 #: the formats ``--formats`` takes: the suffixes :meth:`Surface.export` writes, without the dot
@@ -90,7 +90,7 @@ def parse_formats(text: str | Sequence[str]) -> tuple[str, ...]:
 
 def check_formats(formats: Sequence[str], options: BuildOptions) -> None:
     """Refuse, before any work, what every file would fail on: .bpt of rational patches, CAD without
-    OCP."""
+    OCP, .3dm without rhino3dm."""
     if "bpt" in formats and options.method == "gregory":
         raise InputError(
             "--formats bpt: .bpt holds polynomial Bézier patches and gregory patches are rational; "
@@ -101,6 +101,8 @@ def check_formats(formats: Sequence[str], options: BuildOptions) -> None:
         and importlib.util.find_spec("OCP") is None
     ):
         raise MissingDependencyError("cadquery-ocp-novtk", "cad", "STEP/IGES export")
+    if RHINO_SUFFIX[1:] in formats and importlib.util.find_spec("rhino3dm") is None:
+        raise MissingDependencyError("rhino3dm", "rhino", ".3dm export")
 
 
 def export_options(name: str) -> dict[str, Any]:
@@ -109,7 +111,7 @@ def export_options(name: str) -> dict[str, Any]:
     count), so that an output's record names them."""
     if f".{name}" in TRIANGLE_SUFFIXES:
         return {"resolution": None}
-    if f".{name}" in CAD_SUFFIXES:
+    if f".{name}" in (*CAD_SUFFIXES, RHINO_SUFFIX):
         from ..io.cad.method import DEVIATION_RTOL
 
         return {"method": "auto", "max_deviation": DEVIATION_RTOL, "fit_tolerance": None}

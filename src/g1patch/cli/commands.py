@@ -147,9 +147,9 @@ def _check(args: argparse.Namespace) -> int:
 
 
 def _export(args: argparse.Namespace) -> int:
-    from ..api import CAD_SUFFIXES, EXPORT_SUFFIXES, as_network, export
+    from ..api import CAD_SUFFIXES, EXPORT_SUFFIXES, RHINO_SUFFIX, as_network, export
     from ..errors import InputError
-    from ..io.cad import ExportResult
+    from ..io.cad import ExportResult, RhinoResult
 
     suffix = args.output.suffix.lower()
     if suffix not in EXPORT_SUFFIXES or suffix == ".npz":
@@ -184,6 +184,22 @@ def _export(args: argparse.Namespace) -> int:
             print(json.dumps({**result.to_dict(), "g1_by_design": not corner_only}))
             return EXIT_OK
         print(_cad_export_text(result, corner_only))
+        return EXIT_OK
+    if suffix == RHINO_SUFFIX:
+        fit_tolerance = (
+            None
+            if args.fit_tolerance is None
+            else args.fit_tolerance * network.bounding_box_diagonal()
+        )
+        rhino = export(
+            network,
+            args.output,
+            fit_tolerance=fit_tolerance,
+            method=args.cad_method,
+            max_deviation=args.max_deviation,
+        )
+        assert isinstance(rhino, RhinoResult)
+        print(rhino.summary())
         return EXIT_OK
     if suffix == ".bpt":
         export(network, args.output)

@@ -67,7 +67,16 @@ from .bspline import (
     fit_bspline_surfaces,
     split4_quad_faces,
 )
-from .export import SEWING_RTOL, ExportOptions, ExportResult, export_cad, export_iges, export_step
+from .export import (
+    SEWING_RTOL,
+    CadSurfaces,
+    ExportOptions,
+    ExportResult,
+    cad_surfaces,
+    export_cad,
+    export_iges,
+    export_step,
+)
 from .guards import MAX_COORDINATE, MIN_FACE_EXTENT
 from .measure import G1_SAMPLES
 from .method import CAD_METHODS, DEVIATION_RTOL, REFINE_QUADS, REFINE_STEPS, CadMethod
@@ -80,9 +89,14 @@ from .read import (
     read_iges_faces,
     read_step_faces,
 )
+from .rhino import RhinoResult, export_3dm
 from .step_text import STEP_DIGITS, compact_step
 
 __all__ = [
+    "CadSurfaces",
+    "RhinoResult",
+    "cad_surfaces",
+    "export_3dm",
     "CAD_FORMATS",
     "CAD_METHODS",
     "DEVIATION_RTOL",

@@ -5,11 +5,13 @@ the stages (method, faces, sewing, solid, check, G1 angles, write) and reports t
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, TypedDict, Unpack
+from typing import Any, NamedTuple, TypedDict, Unpack
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ...errors import InputError
 from ...network import PatchNetwork, network_from_patch_points
@@ -17,6 +19,7 @@ from ...patches import PatchSet
 from ..atomic import atomic_path
 from .bspline import (
     BSplineFit,
+    QuadFaces,
     _fit_tolerance,
     _quad_groups,
     bezier_knots,
@@ -152,6 +155,83 @@ def _as_network(network: PatchNetwork | PatchSet) -> PatchNetwork:
     )
 
 
+class CadSurfaces(NamedTuple):
+    """The B-spline surfaces a network is written as (:func:`cad_surfaces`): ``fit`` one face per
+    patch, or ``quads`` one per split4 quad (then ``fit`` is their finest group), in world
+    coordinates; the network they come from, the ``method`` taken and its note, the distance to
+    the network (model units), the re-assembly's cells per side and the fit tolerance."""
+
+    network: PatchNetwork
+    method: str
+    method_note: str
+    fit: BSplineFit
+    quads: QuadFaces | None
+    diagonal: float
+    deviation: float
+    exact: bool
+    refine: int
+    fit_tolerance: float
+
+    def nets(self) -> list[NDArray[np.float64]]:
+        """The world control net of every face, in face order."""
+        return _face_nets(self.fit if self.quads is None else self.quads)
+
+    def knots(self) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
+        """The (u, v) knot vectors of every face, in face order."""
+        if self.quads is None:
+            return [(self.fit.knots_u, self.fit.knots_v)] * len(self.fit.control)
+        one, two = self.quads.bezier, self.quads.two_span
+        return [
+            (one.knots_u, one.knots_v) if single else (two.knots_u, two.knots_v)
+            for single in self.quads.single.tolist()
+        ]
+
+
+def cad_surfaces(
+    target: Path,
+    network: PatchNetwork,
+    *,
+    method: CadMethod = "auto",
+    max_deviation: float = DEVIATION_RTOL,
+    fit_tolerance: float | None = None,
+    lap: Callable[[str], None] = lambda stage: None,
+) -> CadSurfaces:
+    """The surfaces of :func:`export_cad` (its docstring says how ``method`` chooses), the same for
+    every CAD format; ``lap(stage)`` after the ``split4``, ``deviation`` and ``fit`` stages."""
+    if not (isinstance(max_deviation, (int, float, np.floating)) and 0.0 < max_deviation < np.inf):
+        raise InputError(
+            f"max_deviation: expected a positive number (relative to the bounding-box diagonal), "
+            f"got {max_deviation!r}"
+        )
+    chosen = _cad_method(target, network, method)
+    if chosen != "fit" and not isinstance(network.patches, PatchSet) and _bicubic(network.patches):
+        network, chosen = replace(network, patches=_as_bicubics(network.patches)), "exact"
+    diagonal = network.bounding_box_diagonal()
+    _check_diagonal(target, diagonal)
+    deviation, method_note, refine = 0.0, "", 0
+    if chosen == "split4":
+        converted = _split4_within(network, max_deviation, diagonal, method == "auto", lap)
+        if isinstance(converted, str):
+            chosen, method_note = "fit", converted
+        else:
+            network, deviation, refine, method_note = converted
+    exact = isinstance(network.patches, PatchSet)
+    fit_tolerance = _fit_tolerance(fit_tolerance, diagonal)
+    quads = split4_quad_faces(network) if exact else None
+    if quads is not None:  # one face per quad; `fit` is the finest group, for `spans`
+        fit = _quad_groups(quads)[-1]
+    elif isinstance(network.patches, PatchSet):  # exact
+        knots = bezier_knots(1)
+        fit = BSplineFit(network.patches.convert("bezier").world_control(), knots, knots, 0.0)
+    else:
+        fit = fit_bspline_surfaces(network, fit_tolerance)
+        deviation = fit.deviation
+    lap("fit")
+    return CadSurfaces(
+        network, chosen, method_note, fit, quads, diagonal, deviation, exact, refine, fit_tolerance
+    )
+
+
 def export_cad(
     path: PathLike,
     network: PatchNetwork | PatchSet,
@@ -186,14 +266,6 @@ def export_cad(
     network = _as_network(network)
     if not (isinstance(g1_samples, (int, np.integer)) and (g1_samples == 0 or g1_samples >= 2)):
         raise InputError(f"g1_samples: expected 0 or an integer ≥ 2, got {g1_samples!r}")
-    if not (isinstance(max_deviation, (int, float, np.floating)) and 0.0 < max_deviation < np.inf):
-        raise InputError(
-            f"max_deviation: expected a positive number (relative to the bounding-box diagonal), "
-            f"got {max_deviation!r}"
-        )
-    chosen = _cad_method(target, network, method)
-    if chosen != "fit" and not isinstance(network.patches, PatchSet) and _bicubic(network.patches):
-        network, chosen = replace(network, patches=_as_bicubics(network.patches)), "exact"
     seconds: dict[str, float] = {}
     clock = time.perf_counter()
     doing = ["fitting the surfaces"]  # what OCC was doing, for a failure's message
@@ -209,27 +281,17 @@ def export_cad(
         if progress is not None:
             progress(stage, 1, 1)
 
-    diagonal = network.bounding_box_diagonal()
-    _check_diagonal(target, diagonal)
-    deviation, method_note, refine = 0.0, "", 0
-    if chosen == "split4":
-        converted = _split4_within(network, max_deviation, diagonal, method == "auto", lap)
-        if isinstance(converted, str):
-            chosen, method_note = "fit", converted
-        else:
-            network, deviation, refine, method_note = converted
-    exact = isinstance(network.patches, PatchSet)
-    fit_tolerance = _fit_tolerance(fit_tolerance, diagonal)
-    quads = split4_quad_faces(network) if exact else None
-    if quads is not None:  # one face per quad; `fit` is the finest group, for `spans`
-        fit = _quad_groups(quads)[-1]
-    elif isinstance(network.patches, PatchSet):  # exact
-        knots = bezier_knots(1)
-        fit = BSplineFit(network.patches.convert("bezier").world_control(), knots, knots, 0.0)
-    else:
-        fit = fit_bspline_surfaces(network, fit_tolerance)
-        deviation = fit.deviation
-    lap("fit")
+    made = cad_surfaces(
+        target,
+        network,
+        method=method,
+        max_deviation=max_deviation,
+        fit_tolerance=fit_tolerance,
+        lap=lap,
+    )
+    network, chosen, fit, quads = made.network, made.method, made.fit, made.quads
+    diagonal, deviation, exact = made.diagonal, made.deviation, made.exact
+    method_note, refine, fit_tolerance = made.method_note, made.refine, made.fit_tolerance
     sewing_tolerance = SEWING_RTOL * diagonal if diagonal > 0 else SEWING_RTOL
     for group in [fit] if quads is None else _quad_groups(quads):
         _check_fit(target, group, sewing_tolerance)
