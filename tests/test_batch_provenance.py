@@ -15,8 +15,17 @@ import test_batch
 from test_batch import summary
 
 import g1patch
-from g1patch.batch import FAILED, RECORDS_FOLDER, BuildOptions, Job, convert, record_path
+from g1patch.batch import (
+    FAILED,
+    RECORDS_FOLDER,
+    BuildOptions,
+    Job,
+    convert,
+    folder_lock,
+    record_path,
+)
 from g1patch.batch import run as batch_run
+from g1patch.batch.provenance import LOCK_NAME
 from g1patch.cli import main
 from g1patch.io.atomic import TEMPORARY_PREFIX
 
@@ -184,8 +193,48 @@ def test_an_unchanged_rerun_skips_everything_and_starts_no_cluster(
         for key in ("patches", "max_g1_angle_deg", "folds", "seams", "sha256", "outputs"):
             assert again[name][key] == first[name][key], (name, key)
     assert sorted(path.name for path in (out / RECORDS_FOLDER).iterdir()) == sorted(
-        f"{Path(name).stem}.{suffix}.json" for name in NAMES for suffix in ("npz", "obj")
+        [LOCK_NAME]
+        + [f"{Path(name).stem}.{suffix}.json" for name in NAMES for suffix in ("npz", "obj")]
     )
+
+
+def test_a_second_batch_into_the_same_folder_is_refused(
+    inputs: Path,
+    tmp_path: Path,
+    scheduler: str,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Two batches writing one folder would interleave outputs and records (one's record naming
+    the other's file): while one holds the folder, another exits 2 before reading or writing."""
+    out = tmp_path / "out"
+    command = ["batch", str(inputs), "--out", str(out), "--scheduler", scheduler, "-q"]
+    with folder_lock(out):
+        assert main([*command, "--method", "split4"]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.endswith(
+        f"out: another batch (PID {os.getpid()}) is writing into this folder; wait for it to end "
+        "or choose another --out folder"
+    )
+    assert sorted(path.name for path in out.rglob("*")) == [RECORDS_FOLDER, LOCK_NAME]
+    assert main(command) == 0  # released, whatever the holder did
+    assert_records_match(out)
+
+
+def test_a_record_of_an_output_with_a_long_name_is_kept(
+    inputs: Path, tmp_path: Path, scheduler: str
+) -> None:
+    """An output name of 251 to 255 bytes has no room for ``.json``: its record's name is
+    shortened by a hash, and the output is built and skipped like any other."""
+    source = inputs / f"{'x' * 250}.obj"
+    (inputs / "cube.obj").rename(source)
+    out = tmp_path / "out"
+    output = out / f"{source.stem}.npz"
+    assert len(os.fsencode(output.name)) == 254
+    for status in ("built", "skipped"):
+        records = batch_run.run_batch([source], out, formats="npz", scheduler=scheduler)
+        assert [record["status"] for record in records] == [status]
+        assert_records_match(out)
+    assert len(os.fsencode(record_path(output).name)) == 200 + 1 + 16 + 5
 
 
 def test_a_worker_of_another_version_refuses_the_job(inputs: Path, tmp_path: Path) -> None:

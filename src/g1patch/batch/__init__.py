@@ -19,8 +19,10 @@ input's bytes. Re-running skips a file only when every output's record says it w
 from the input as it is now (its figures then come from the record; its status is ``skipped``);
 any output whose record is missing, unreadable or different is rebuilt, with the file's other
 outputs. ``summary.json`` is a report of the run, never read back. When nothing is left to
-convert, no cluster is started. Modules: :mod:`.jobs` (options, recipe, records), :mod:`.plan`,
-:mod:`.provenance`, :mod:`.task` (one file), :mod:`.run` (the cluster), :mod:`.table`.
+convert, no cluster is started. One batch at a time writes into a folder (a lock in
+``.g1patch``): a second one is refused, since its outputs and records would interleave.
+Modules: :mod:`.jobs` (options, recipe, records), :mod:`.plan`, :mod:`.provenance`, :mod:`.task`
+(one file), :mod:`.run` (the cluster), :mod:`.table`.
 
 dask.distributed is the ``batch`` extra (``pip install 'g1patch[batch]'``), imported only when a
 batch runs: ``import g1patch.batch`` needs no Dask.
@@ -39,8 +41,8 @@ from .jobs import (
     parse_formats,
     recipe,
 )
-from .plan import collect_inputs, plan
-from .provenance import RECORDS_FOLDER, record_path
+from .plan import collect_inputs, jobs_for, plan
+from .provenance import RECORDS_FOLDER, folder_lock, record_path
 from .run import SUMMARY_NAME, run_batch
 from .table import summary_table
 from .task import convert
@@ -57,6 +59,8 @@ __all__ = [
     "Job",
     "collect_inputs",
     "convert",
+    "folder_lock",
+    "jobs_for",
     "parse_formats",
     "plan",
     "recipe",

@@ -78,8 +78,21 @@ def _outputs(
     return result
 
 
-def plan(
+def jobs_for(
     sources: Sequence[Path], out: Path, formats: Sequence[str], options: BuildOptions
+) -> list[Job]:
+    """One job per source, writing ``OUT/<stem>.<format>`` of each format; two sources writing one
+    file, or an output that is an input, raise :class:`InputError`. Reads nothing in ``out``."""
+    from .. import __version__
+
+    return [
+        Job(str(source), tuple(map(str, targets)), options, __version__)
+        for source, targets in _outputs(sources, out, formats).items()
+    ]
+
+
+def plan(
+    every: Sequence[Job], formats: Sequence[str], options: BuildOptions
 ) -> tuple[list[Job], dict[str, dict[str, Any]]]:
     """(jobs to run, records of the files skipped, by input path). A file is skipped when every
     output has a record (:mod:`~g1patch.batch.provenance`) saying it was made with these options,
@@ -87,12 +100,7 @@ def plan(
     ``summary.json`` is not read: it is a report, not the truth."""
     from .. import __version__
 
-    wanted = recipe(options, formats, __version__)
-    every = [
-        Job(str(source), tuple(map(str, targets)), options, __version__)
-        for source, targets in _outputs(sources, out, formats).items()
-    ]
-    done = provenance.up_to_date(every, wanted)
+    done = provenance.up_to_date(every, recipe(options, formats, __version__))
     jobs, skipped = [], {}
     for job in every:
         if job.source in done:

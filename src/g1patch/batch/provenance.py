@@ -10,24 +10,31 @@ The order makes the pair as good as one atomic write: the old record is removed 
 output is replaced, the new one written (atomically) after it, so an interruption anywhere
 leaves an output without a record, never one with another output's. One format serves every
 output (a mesh or CAD file has nowhere to keep it), and a record is read without opening the
-output.
+output. A batch holds :func:`folder_lock` from reading the records to writing the summary: a
+second batch into the same folder, whose outputs and records would interleave with the first's,
+is refused.
 """
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from ..errors import G1PatchError
 from ..io.atomic import atomic_path
 from .jobs import Job, json_text
 
 __all__ = [
+    "LOCK_NAME",
     "RECORDS_FOLDER",
+    "folder_lock",
     "forget",
     "read_record",
     "record_path",
@@ -39,6 +46,10 @@ __all__ = [
 
 #: the hidden folder inside the output folder holding one record per output
 RECORDS_FOLDER = ".g1patch"
+#: the lock file inside :data:`RECORDS_FOLDER` (never a record's name: those end in ``.json``)
+LOCK_NAME = "batch.lock"
+#: the longest file name most file systems take (bytes); a longer record name is shortened
+_NAME_MAX = 255
 #: the version of the record's layout; a record of another is not trusted
 SCHEMA = 1
 #: bytes read at a time when hashing an input
@@ -76,9 +87,48 @@ def sha256_of_each(paths: Iterable[str]) -> dict[str, str | None]:
 
 
 def record_path(output: str | os.PathLike[str]) -> Path:
-    """Where the record of ``output`` is kept: ``<its folder>/.g1patch/<its name>.json``."""
+    """Where the record of ``output`` is kept: ``<its folder>/.g1patch/<its name>.json``; a name
+    too long for that keeps its first 200 bytes and a hash of the whole."""
     path = Path(output)
-    return path.parent / RECORDS_FOLDER / f"{path.name}.json"
+    name = path.name
+    if len(os.fsencode(f"{name}.json")) > _NAME_MAX:
+        digest = hashlib.sha256(os.fsencode(name)).hexdigest()[:16]
+        while len(os.fsencode(name)) > 200:
+            name = name[:-1]
+        name = f"{name}~{digest}"
+    return path.parent / RECORDS_FOLDER / f"{name}.json"
+
+
+@contextmanager
+def folder_lock(folder: str | os.PathLike[str]) -> Iterator[None]:
+    """Hold ``folder/.g1patch/batch.lock`` (``flock``, released when the process ends however it
+    ends); :class:`G1PatchError` naming the holder's PID when another batch holds it. Where the
+    system or file system has no such locks, nothing is held."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        yield
+        return
+    records = Path(folder) / RECORDS_FOLDER
+    records.mkdir(parents=True, exist_ok=True)
+    handle = os.open(records / LOCK_NAME, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o666)
+    try:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as error:
+            if error.errno in (errno.EAGAIN, errno.EWOULDBLOCK, errno.EACCES):
+                holder = os.pread(handle, 32, 0).decode("ascii", "replace").strip() or "?"
+                raise G1PatchError(
+                    f"{folder}: another batch (PID {holder}) is writing into this folder; wait "
+                    "for it to end or choose another --out folder"
+                ) from None
+            # a file system without locks (ENOLCK, EOPNOTSUPP): nothing held
+        else:
+            os.ftruncate(handle, 0)
+            os.pwrite(handle, f"{os.getpid()}\n".encode("ascii"), 0)
+        yield
+    finally:
+        os.close(handle)
 
 
 def _file_state(path: str | os.PathLike[str]) -> dict[str, int]:

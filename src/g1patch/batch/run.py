@@ -27,8 +27,8 @@ from .jobs import (
     parse_formats,
     recipe,
 )
-from .plan import collect_inputs, plan
-from .provenance import RECORDS_FOLDER
+from .plan import collect_inputs, jobs_for, plan
+from .provenance import folder_lock
 from .task import convert, one_line
 
 #: the file in the output folder that holds one record per input
@@ -177,8 +177,10 @@ def run_batch(
     embedded LocalCluster of ``workers`` processes (default: the cores, at most one per file).
     ``progress``: a bar on stderr. Usage mistakes (a missing input, an unknown format, clashing
     outputs, an unreachable scheduler) raise :class:`InputError` before any file is converted;
-    a file's own failure is its record's ``error``. ``out/summary.json`` is written at the end,
-    and on an interrupt too (the files not done marked ``cancelled``) before it is raised again.
+    a file's own failure is its record's ``error``; another batch writing into ``out`` raises
+    :class:`G1PatchError` before any is read (:func:`~.provenance.folder_lock`).
+    ``out/summary.json`` is written at the end, and on an interrupt too (the files not done marked
+    ``cancelled``) before it is raised again.
     The local cluster's workers are spawned processes: a script calling this needs Python's
     ``if __name__ == "__main__":`` guard (the ``g1patch`` command has it).
     """
@@ -194,22 +196,26 @@ def run_batch(
     check_formats(formats, options)
     sources = collect_inputs(inputs)
     folder = Path(out).resolve()
-    jobs, done = plan(sources, folder, formats, options)
-    (folder / RECORDS_FOLDER).mkdir(parents=True, exist_ok=True)
-    pending = {job.source: job for job in jobs}
-    start = time.perf_counter()
+    every = jobs_for(sources, folder, formats, options)
+    with folder_lock(folder):
+        jobs, done = plan(every, formats, options)
+        pending = {job.source: job for job in jobs}
+        start = time.perf_counter()
 
-    def records() -> list[dict[str, Any]]:
-        return [done.get(str(source)) or blank_record(pending[str(source)]) for source in sources]
+        def records() -> list[dict[str, Any]]:
+            return [
+                done.get(str(source)) or blank_record(pending[str(source)]) for source in sources
+            ]
 
-    try:
-        if jobs:
-            _run(jobs, scheduler, workers, progress, done)
-    except KeyboardInterrupt:
-        _write_summary(folder, records(), formats, options, time.perf_counter() - start, scheduler)
-        raise
-    result = records()
-    _write_summary(folder, result, formats, options, time.perf_counter() - start, scheduler)
+        try:
+            if jobs:
+                _run(jobs, scheduler, workers, progress, done)
+        except KeyboardInterrupt:
+            wall = time.perf_counter() - start
+            _write_summary(folder, records(), formats, options, wall, scheduler)
+            raise
+        result = records()
+        _write_summary(folder, result, formats, options, time.perf_counter() - start, scheduler)
     return result
 
 
