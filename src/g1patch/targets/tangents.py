@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..kernels import in_chunks, jit_kernel
+from ..kernels import in_chunks, jit_kernel, use_kernels
 from ..mesh import QuadMesh
 from .local import cross, dot, slot_vertices, unit_rows
 
@@ -41,6 +41,7 @@ def _projected_tangents(
     """Circle-aware projected edge tangents per slot, the chord lengths, and per vertex whether a
     slot is (near) parallel to the normal (its tangent is set to 0). ``compiled``: slot by slot in
     :func:`_projected_kernel`, else NumPy."""
+    compiled = use_kernels(compiled)  # NumPy where kernels cannot be cached
     topology = mesh.topology
     x = mesh.vertices
     if compiled:
@@ -130,6 +131,7 @@ def _along_smooth_lines(
     ``a = B' − A``, ``b = B − A``, in A's plane, with their own lengths. ``compiled``: vertex by
     vertex in :func:`_lines_kernel` (ranges side by side), else NumPy; into ``out`` (``raw``
     itself may be given: a slot is read only before it is written), by default a copy of ``raw``."""
+    compiled = use_kernels(compiled)  # NumPy where kernels cannot be cached
     topology = mesh.topology
     out = raw.copy() if out is None else out
     if compiled:
@@ -316,7 +318,8 @@ def _smooth_boundary_tangents(mesh: QuadMesh, normals: FloatArray, raw: FloatArr
         own = unit_rows(raw[slot])
         blended = unit_rows((1.0 - weight) * own + weight * sign * direction)
         chord = np.linalg.norm(d, axis=1)
-        arc = 2.0 * chord**2 / (chord + np.abs(dot(d, blended)))
+        across = chord + np.abs(dot(d, blended))  # 0 only for a zero chord: no arc
+        arc = np.divide(2.0 * chord**2, across, out=np.zeros_like(chord), where=across > 0)
         keep = usable & (np.linalg.norm(raw[slot], axis=1) > 0)
         out[slot[keep]] = (arc[:, None] * blended)[keep]
     return out
