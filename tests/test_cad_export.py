@@ -468,7 +468,7 @@ def test_max_deviation_chooses_the_cells(
         == 2
     )
     assert (
-        "max_deviation: expected a positive number" in capsys.readouterr().err
+        "--max-deviation: expected a finite number > 0" in capsys.readouterr().err
         and not (tmp_path / "c.step").exists()
     )
     cube = export_step(

@@ -151,8 +151,18 @@ CORPUS = {
     "tag_out_of_range.obj": (MeshError, r"tag 'corner' names vertex 9, outside 0\.\.3", None),
     "truncated.obj": (FormatError, r"a face needs at least 3 corners, got 2", 12),
     "truncated.off": (FormatError, r"truncated: the header announces 8 vertices and 6 faces", 8),
-    "truncated.ply": (FormatError, r"cannot read the PLY data, truncated or malformed", None),
-    "truncated_ascii.ply": (FormatError, r"cannot read the PLY data, truncated or malformed", None),
+    "truncated.ply": (
+        FormatError,
+        r"truncated: the header announces 6 'face' elements of at least 13 bytes each, 270 bytes "
+        r"\(after 192 for the elements before them\), but only 202 bytes follow the header",
+        7,
+    ),
+    "truncated_ascii.ply": (
+        FormatError,
+        r"truncated: the header announces 4 'vertex' elements of at least 6 bytes each, 24 bytes, "
+        r"but only 18 bytes follow the header",
+        3,
+    ),
     "two_closed_fans.obj": (
         NonManifoldError,
         r"the 6 faces around vertex 7 \(1, 3, 5, 6, 8, 10\) form more than one fan",

@@ -217,8 +217,15 @@ def test_large_off_and_ascii_ply_are_the_references(tmp_path: Path) -> None:
     meshio.ply.write(
         str(ply), meshio.Mesh(mesh.vertices, [("quad", mesh.faces.astype(np.int32))]), binary=False
     )
-    records = meshfile._ply_text(ply.read_bytes())
+    data = ply.read_bytes()
+    header = meshfile._ply_header(ply, data)
+    layout = meshfile._ply_layout(header)
+    assert layout is not None
+    records = meshfile._ply_text(data, header, layout)
     assert records is not None and records[0].tobytes() == mesh.vertices.tobytes()
+    lines = meshfile._read_ply_lines(ply, data, header, layout)
+    assert lines.vertices.tobytes() == mesh.vertices.tobytes()
+    assert np.array_equal(lines.faces, records[1].reshape(-1, 4))
     assert (
         read_mesh(ply).vertices.tobytes()
         == read_mesh(off).vertices.tobytes()

@@ -60,7 +60,7 @@ from numpy.typing import NDArray
 
 from .basis import Form, basis_values
 from .errors import InputError
-from .kernels import in_chunks, jit_kernel
+from .kernels import in_chunks, jit_kernel, use_kernels
 
 __all__ = ["BLOCK_POINTS", "KERNEL_POINTS", "contract", "normals", "positions_and_normals"]
 
@@ -112,7 +112,7 @@ def _layout(n: int, gu: int, gv: int) -> tuple[int, int]:
 def _use_kernels(points: int, compiled: bool | None) -> bool:
     """Whether to run the compiled kernels: ``compiled`` when given, else from :data:`KERNEL_POINTS`
     on."""
-    return points >= KERNEL_POINTS if compiled is None else compiled
+    return use_kernels(points >= KERNEL_POINTS) if compiled is None else compiled
 
 
 def contract(

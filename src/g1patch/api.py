@@ -122,18 +122,27 @@ def read(
     split: bool = True,
     sharp_angle: float | None = None,
     strict: bool | None = None,
+    max_input_size: int | None = None,
 ) -> QuadMesh | PatchNetwork:
     """Open a file by its suffix: a mesh (``.obj`` with OpenSubdiv tags, ``.ply``, ``.off``) as a
     :class:`~g1patch.mesh.QuadMesh` (options as for :func:`g1patch.io.meshfile.read_mesh`), a
     network file (``.npz``, written by ``g1patch build`` or :meth:`Surface.export`) or Newell's
     Bézier patches (``.bpt``, their shared edges matched) as a
-    :class:`~g1patch.network.PatchNetwork`. A bad file raises :class:`FormatError` naming it."""
+    :class:`~g1patch.network.PatchNetwork`. A bad file raises :class:`FormatError` naming it.
+    ``max_input_size`` (bytes): refuse a larger mesh or ``.bpt`` file before reading it (default:
+    2 GB for a mesh, 1 GiB for a ``.bpt``); only regular files are read."""
     target = _check_path("path", path)
     suffix = target.suffix.lower()
     if suffix in MESH_SUFFIXES:
         from .io.meshfile import read_mesh
 
-        return read_mesh(target, split=split, sharp_angle=sharp_angle, strict=strict)
+        return read_mesh(
+            target,
+            split=split,
+            sharp_angle=sharp_angle,
+            strict=strict,
+            max_input_size=max_input_size,
+        )
     if suffix == ".npz":
         from .io.network_file import load_network
 
@@ -142,7 +151,8 @@ def read(
         from .io.bpt import read_bpt
         from .network import network_from_patch_points
 
-        return network_from_patch_points(read_bpt(target), source=str(target))
+        patches = read_bpt(target) if max_input_size is None else read_bpt(target, max_input_size)
+        return network_from_patch_points(patches, source=str(target))
     raise FormatError(
         target,
         f"unsupported extension {target.suffix or '(none)'!r}; g1patch.read opens meshes "
@@ -265,7 +275,12 @@ def _vtk_faces(flat: Any) -> Any:
 
 
 def as_mesh(
-    source: Any, *, split: bool = True, sharp_angle: float | None = None, strict: bool | None = None
+    source: Any,
+    *,
+    split: bool = True,
+    sharp_angle: float | None = None,
+    strict: bool | None = None,
+    max_input_size: int | None = None,
 ) -> QuadMesh:
     """A validated :class:`~g1patch.mesh.QuadMesh` of anything :func:`smooth` accepts.
 
@@ -275,8 +290,9 @@ def as_mesh(
     any object with ``vertices`` and ``faces`` (``trimesh.Trimesh``); an object with ``points``
     and a VTK cell array ``faces`` (``pyvista.PolyData``); or a QuadMesh (returned as it is, with
     ``sharp_angle`` tags added). Non-quad faces are split (one smooth Catmull–Clark step) unless
-    ``split`` is False; ``sharp_angle`` and ``strict`` as for :func:`g1patch.io.meshfile.read_mesh`.
-    Anything else raises :class:`InputError` naming what was passed.
+    ``split`` is False; ``sharp_angle``, ``strict`` and ``max_input_size`` (a file's) as for
+    :func:`g1patch.io.meshfile.read_mesh`. Anything else raises :class:`InputError` naming what was
+    passed.
     """
     from .mesh import QuadMesh
 
@@ -299,7 +315,13 @@ def as_mesh(
             )
         from .io.meshfile import read_mesh
 
-        return read_mesh(path, split=split, sharp_angle=sharp_angle, strict=strict)
+        return read_mesh(
+            path,
+            split=split,
+            sharp_angle=sharp_angle,
+            strict=strict,
+            max_input_size=max_input_size,
+        )
     if isinstance(source, (tuple, list)) and len(source) == 2:
         vertices, faces = source
         return _from_arrays(
@@ -489,8 +511,17 @@ class Surface:
         """The :class:`~g1patch.continuity.ContinuityReport` (G0 gaps, G1 angles, folds,
         fairness): :func:`g1patch.continuity.check` with ``options`` (``samples``,
         ``fold_samples``, ``progress``…). The default report is computed once and kept."""
+        import inspect
+
         from .continuity import check as measure
 
+        known = set(inspect.signature(measure).parameters) - {"network"}
+        unknown = sorted(set(options) - known)
+        if unknown:
+            raise InputError(
+                f"check: unknown option {unknown[0]!r}; expected one of {', '.join(sorted(known))} "
+                "(a verdict's max_angle goes to the report's is_g1 or passes)"
+            )
         if options:
             return measure(self.network, **options)
         if self._report is None:
@@ -671,6 +702,7 @@ def smooth(
     normals: str = "fan",
     max_memory: int | None = None,
     max_patches: int | None = None,
+    max_input_size: int | None = None,
 ) -> Surface:
     """The smooth surface of a mesh: exactly G1 bicubic patches
     (:func:`g1patch.build.build_network`).
@@ -686,6 +718,7 @@ def smooth(
     ``twist`` and ``normals``: the paper's construction's (``corner`` with ``legacy``).
     ``max_memory`` (bytes; default half the RAM) and ``max_patches``: a build estimated above
     either is refused before it starts (:class:`~g1patch.errors.BudgetError`).
+    ``max_input_size`` (bytes; default 2 GB): a larger mesh file is refused before it is read.
     """
     from .build import build_network
     from .construct import METHODS
@@ -694,7 +727,9 @@ def smooth(
 
     check_choice("shape", shape, tuple(SHAPES))  # before a large file is read
     check_choice("method", method, METHODS)
-    mesh = as_mesh(source, split=split, sharp_angle=sharp_angle, strict=strict)
+    mesh = as_mesh(
+        source, split=split, sharp_angle=sharp_angle, strict=strict, max_input_size=max_input_size
+    )
     with named_errors(mesh.source, (ConstructionError, BudgetError)):  # the file it cannot build
         network = build_network(
             mesh,

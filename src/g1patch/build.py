@@ -30,6 +30,7 @@ from .construct.corner import TWISTS, TwistRule, build_corner_network
 from .continuity import folded_patches
 from .errors import BudgetError, InputError, check_choice
 from .frame import Frame
+from .kernels import use_kernels
 from .mesh import INFINITE_SHARPNESS, QuadMesh, Tag
 from .network import Patches, PatchNetwork
 from .subdivision import catmull_clark_cage
@@ -190,6 +191,7 @@ def _faces_at_risk(targets: Targets, *, compiled: bool = True) -> np.ndarray:
     edge tangent off its chord by more than :data:`RISK_TANGENT` in angle or outside
     :data:`RISK_LENGTH` × its length. On a fine smooth mesh no face is, and the guard costs nothing.
     ``compiled``: in :func:`_risk_kernel`, else NumPy."""
+    compiled = use_kernels(compiled)  # NumPy where kernels cannot be cached
     from .targets import halfedge_slots
 
     topology = targets.topology

@@ -14,6 +14,7 @@ whole range, in any order.
 
 from __future__ import annotations
 
+import logging
 import os
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
@@ -21,7 +22,16 @@ from functools import cache
 from itertools import pairwise
 from typing import Any, TypeVar
 
-__all__ = ["CHUNK_ITEMS", "RANGES_PER_WORKER", "in_chunks", "jit_kernel", "workers"]
+__all__ = [
+    "CHUNK_ITEMS",
+    "RANGES_PER_WORKER",
+    "in_chunks",
+    "jit_kernel",
+    "kernels_cached",
+    "njit_cached",
+    "use_kernels",
+    "workers",
+]
 
 T = TypeVar("T")
 
@@ -41,9 +51,60 @@ def jit_kernel(kernel: Callable[..., object]) -> Callable[..., Any]:
     without the GIL so that :func:`in_chunks` can run ranges side by side), float64 IEEE arithmetic
     as NumPy's (no fastmath, NumPy's division semantics). numba is imported here, so that
     ``import g1patch`` stays fast."""
+    return njit_cached(kernel, nogil=True, error_model="numpy")
+
+
+def njit_cached(function: Callable[..., object], **options: Any) -> Callable[..., Any]:
+    """``numba.njit(cache=True, **options)(function)``; where numba finds no writable cache
+    directory for it, the same compiled in memory only (``cache=False``, after the one warning of
+    :func:`kernels_cached`): what a kernel without a NumPy twin runs on a read-only install."""
     import numba
 
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(kernel)
+    try:
+        return numba.njit(cache=True, **options)(function)
+    except RuntimeError as error:  # numba: "cannot cache function ...: no locator available"
+        if "cannot cache" not in str(error):
+            raise
+        _warn_uncached()
+        return numba.njit(cache=False, **options)(function)
+
+
+def _probe() -> None:
+    """A function beside the kernels, whose cache directory :func:`kernels_cached` asks numba
+    for."""
+
+
+@cache
+def kernels_cached() -> bool:
+    """Whether numba can cache the compiled kernels on disk: one of its cache directories (a
+    ``__pycache__`` beside the module, ``NUMBA_CACHE_DIR``, the user's cache) is writable. Where
+    none is (a system install, a read-only container), a kernel would be compiled anew by every
+    command, tens of seconds each: the callers choosing between a kernel and its NumPy twin
+    (:func:`use_kernels`) take NumPy, and a warning says so, once per process."""
+    from numba.core.caching import FunctionCache
+
+    try:
+        FunctionCache(_probe)
+    except RuntimeError:
+        _warn_uncached()
+        return False
+    return True
+
+
+def use_kernels(wanted: bool) -> bool:
+    """``wanted`` (a caller would run a compiled kernel, with a NumPy twin), unless the kernels
+    cannot be cached on disk (:func:`kernels_cached`): then the NumPy reference."""
+    return bool(wanted) and kernels_cached()
+
+
+@cache
+def _warn_uncached() -> None:
+    """The one warning of a process whose kernels cannot be cached on disk."""
+    logging.getLogger("g1patch.kernels").warning(
+        "g1patch: warning: numba has no writable cache directory (the package's __pycache__, "
+        "NUMBA_CACHE_DIR or ~/.cache): using the NumPy code instead of compiled kernels; set "
+        "NUMBA_CACHE_DIR to a writable folder for speed"
+    )
 
 
 def workers() -> int:

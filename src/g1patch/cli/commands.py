@@ -77,6 +77,7 @@ def _build(args: argparse.Namespace) -> int:
             normals=args.normals,
             max_memory=args.max_memory,
             max_patches=MAX_PATCHES,
+            max_input_size=args.max_input_size,
         )
         progress(1, 2)
         # with --check the file is written while the check runs
@@ -279,6 +280,13 @@ def _render(args: argparse.Namespace) -> int:
 def _batch(args: argparse.Namespace) -> int:
     from ..batch import FAILED, BuildOptions, run_batch, summary_table
 
+    if args.max_input_size is not None:  # each input within the cap, before any is converted
+        from ..batch.plan import collect_inputs
+        from ..io.meshfile import check_input
+
+        for source in collect_inputs(args.inputs):
+            check_input(source, args.max_input_size)
+
     options = BuildOptions(
         method=args.method,
         shape=args.shape,
@@ -329,7 +337,25 @@ def _demo(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-#: the function of each command
+def _at_the_door(
+    handler: Callable[[argparse.Namespace], int],
+) -> Callable[[argparse.Namespace], int]:
+    """``handler`` after :func:`.options.check_options` (every option in range, or exit 2)."""
+    from .options import check_options
+
+    def run(args: argparse.Namespace) -> int:
+        for note in check_options(args):
+            say(note)
+        if hasattr(args, "view"):  # --view ELEV AZIM: finite, the elevation within (-90, 90)
+            from ..render.camera import _check_view
+
+            _check_view(camera_options(args)["view"])
+        return handler(args)
+
+    return run
+
+
+#: the function of each command, its options checked first
 HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
     "build": _build,
     "check": _check,
@@ -339,6 +365,7 @@ HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
     "demo": _demo,
     "batch": _batch,
 }
+HANDLERS = {name: _at_the_door(handler) for name, handler in HANDLERS.items()}
 
 
 def say(line: str) -> None:

@@ -111,6 +111,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="SIZE",
         help="refuse a build estimated to need more (e.g. 8G, 500M; default: half the RAM)",
     )
+    input_size_argument(build)
     build.add_argument(
         "--tangents",
         choices=TANGENTS,
@@ -322,6 +323,7 @@ def build_parser() -> argparse.ArgumentParser:
     batch.add_argument(
         "--strict", action="store_true", help="as for build: refuse meshes that need repair"
     )
+    input_size_argument(batch)
     where = batch.add_mutually_exclusive_group()
     where.add_argument(
         "--workers",
@@ -337,6 +339,19 @@ def build_parser() -> argparse.ArgumentParser:
         "(e.g. tcp://127.0.0.1:8786) instead of a local one",
     )
     return parser
+
+
+def input_size_argument(parser: argparse.ArgumentParser) -> None:
+    """``--max-input-size`` of the commands that read meshes."""
+    from ..io.meshfile import MAX_INPUT_BYTES
+
+    parser.add_argument(
+        "--max-input-size",
+        type=memory_size,
+        metavar="SIZE",
+        help="refuse a mesh file larger than SIZE before reading it (e.g. 500M, 4G; default: "
+        f"{MAX_INPUT_BYTES // 10**9}G); only regular files are read",
+    )
 
 
 def camera_arguments(parser: argparse.ArgumentParser) -> None:

@@ -56,7 +56,7 @@ from numpy.typing import NDArray
 
 from ..errors import ConstructionError
 from ..gregory import GregoryPatchSet
-from ..kernels import in_chunks, jit_kernel
+from ..kernels import in_chunks, jit_kernel, use_kernels
 from ..mesh import QuadTopology
 from ..targets import Targets, halfedge_slots, slot_sector_normals
 from ..targets.local import in_vertex_planes, slot_tables
@@ -128,6 +128,7 @@ def tangent_plane_tangents(targets: Targets, *, compiled: bool = True) -> FloatA
     planes agree (to 1e-9) it is the plane's projection again. Without seams every slot of a
     vertex takes the vertex normal (``compiled``: vertex by vertex in a numba kernel).
     """
+    compiled = use_kernels(compiled)  # NumPy where kernels cannot be cached
     topology = targets.topology
     if not targets.has_sectors:
         if compiled:
@@ -168,6 +169,7 @@ def assemble_gregory(targets: Targets, *, compiled: bool = True) -> GregoryPatch
     the NumPy reference (the same to rounding, tests/test_kernels_match.py). Raises
     :class:`ConstructionError` when the targets' fan is invalid at some vertex.
     """
+    compiled = use_kernels(compiled)  # NumPy where kernels cannot be cached
     topology = targets.topology
     points = np.empty((topology.n_faces, 20, 3))
     if not compiled:

@@ -17,6 +17,8 @@ as G1 failures or folds; a G0 gap above :data:`SEAM_G0_RTOL` on a seam still fai
 On a ``G × G`` grid of every patch (``G = fold_samples``, both borders included):
 
 * degenerate normals: ``|p_u × p_v| ≤ degenerate_rtol · diag²`` (collapsed edges);
+* degenerate patches: every grid sample's normal degenerate (no area), or more than one collapsed
+  edge (one is an intended triangular patch, as the teapot's poles); they fail the check;
 * folds (intrinsic, DESIGN §4): a patch is folded where two neighbouring samples (along u or v)
   have normals more than 90° apart (``n_a · n_b < 0``), or where a sample of a corner's grid cell
   has its normal against the normal at that corner; both patches of a shared edge are folded
@@ -36,8 +38,10 @@ counts, folds, their locations, the turn figures, and within a few ULP on angles
 (tests/test_check_kernels.py states and tests the bounds).
 
 Everything is measured in the patches' local coordinates (``patches.local()`` when the patch set
-has a frame): angles do not depend on the frame, gaps and deviations are relative to the diagonal,
-so the figures are the same wherever the model sits and whatever its size.
+has a frame; a frame-free set whose corners' box is far from size 1 or from the origin, as a
+``.bpt`` 1e-25 or 1e25 in size, in the frame of that box: :func:`.sampling._unit_frame`): angles
+do not depend on the frame, gaps and deviations are relative to the diagonal, so the figures are
+the same wherever the model sits and whatever its size.
 
 **Modules.** :mod:`.checker` runs the check (:func:`check`) and :mod:`.report` holds its result
 (:class:`ContinuityReport`); :mod:`.edges` measures shared edges and corners, :mod:`.grid` the
@@ -61,8 +65,10 @@ from .grid import fairness
 from .jit import KERNEL_PATCHES as KERNEL_PATCHES
 from .report import SEAM_G0_RTOL, ContinuityReport, format_reports
 from .sampling import _blocks as _blocks
+from .sampling import _box as _box
 from .sampling import _diagonal as _diagonal
 from .sampling import _local as _local
+from .sampling import _unit_frame as _unit_frame
 from .vectors import _cross3 as _cross3
 from .vectors import _norm3 as _norm3
 from .vectors import _planar as _planar

@@ -5,12 +5,12 @@ by the NumPy reference or the kernels, as one :class:`~.report.ContinuityReport`
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
-from numpy.typing import NDArray
 
 from ..gregory import GregoryPatchSet
-from ..network import Patches, PatchNetwork, network_of
+from ..network import PatchNetwork, network_of
 from ..patches import PatchSet
 from .corner_kernels import (
     _corner_extent_compiled,
@@ -25,10 +25,12 @@ from .jit import _kernel_form
 from .report import ContinuityReport
 from .sampling import (
     _blocks,
+    _box,
     _check_count,
+    _check_sample_memory,
     _corner_points,
-    _diagonal,
     _local,
+    _unit_frame,
     _world_diagonal,
     _world_extent_diagonal,
 )
@@ -55,7 +57,8 @@ def check(
     :class:`~g1patch.gregory.GregoryPatchSet` is measured as the network of its matching boundary
     curves (:func:`g1patch.network.network_of`). ``compiled``: the numba kernels (:mod:`.jit`),
     all edges and all patches in one pass each (``progress`` after each); False: the NumPy
-    reference; None (default): the kernels from :data:`~.jit.KERNEL_PATCHES` patches on.
+    reference; None (default): the kernels from :data:`~.jit.KERNEL_PATCHES` patches on. Frame-free
+    patches far from size 1 are measured in the frame of their corners' box (:func:`_unit_frame`).
     """
     for name, value, least in (
         ("samples", samples, 2),
@@ -73,7 +76,8 @@ def check(
         vertices = network.vertices if frame is None else frame.to_local(network.vertices)
     if form is None:
         corners = _corner_points(local)
-        diagonal = _diagonal(corners) or 1.0
+        low, high = _box(corners)
+        diagonal = float(np.linalg.norm(high - low)) or 1.0
     else:  # the same figures from one pass over the corners in place (4 M corners: 0.5 s -> 0.03 s)
         corner_points = (
             form[0]
@@ -84,9 +88,17 @@ def check(
             corner_points, vertices, np.ascontiguousarray(network.corner_ids, dtype=np.int64)
         )
         diagonal = (float(np.linalg.norm(high - low)) if len(local) else 0.0) or 1.0
+    if local is patches and isinstance(patches, (PatchSet, GregoryPatchSet)) and len(local):
+        measuring = _unit_frame(low, high)  # frame-free, far from size 1 or the origin:
+        if measuring is not None:  # measured in its unit box
+            framed = replace(network, patches=patches.local_to(measuring).with_frame(measuring))
+            return check(
+                framed, samples, fold_samples, degenerate_rtol, chunk, progress, compiled=compiled
+            )
     degenerate_level = degenerate_rtol * diagonal**2
 
     left_patch, left_edge = network.shared_edges()
+    _check_sample_memory(samples, fold_samples, len(left_patch), chunk)
     right_patch = network.neighbor[left_patch, left_edge]
     right_edge = network.neighbor_edge[left_patch, left_edge]
     same = network.same_direction[left_patch, left_edge]
@@ -149,9 +161,12 @@ def check(
         deviation = np.linalg.norm(corners - vertices[network.corner_ids], axis=-1)
         max_vertex_deviation = float(deviation.max() / diagonal) if deviation.size else 0.0
 
-    degenerate = _degenerate_patches(
-        network, local, grid.degenerate, fold_samples, degenerate_level
-    )
+    collapsed = network.edge_collapsed[network.edge_ids]  # (N, 4): a triangle's pole, …
+    collapsed_patch_edges = int(np.count_nonzero(collapsed))
+    degenerate = grid.zero_area  # … and patches with no area or more than one such edge
+    if collapsed_patch_edges > 1:
+        degenerate = degenerate | (np.count_nonzero(collapsed, axis=1) > 1)
+    degenerate_ids = np.flatnonzero(degenerate)
     open_patch, _ = network.open_edges()
     smooth_angle = edge_angle[~seam]
     seam_range: tuple[float, float] | tuple[None, None] = (None, None)
@@ -163,15 +178,15 @@ def check(
         shared_edges=int(len(left_patch)),
         open_edges=int(len(open_patch)),
         collapsed_edges=int(network.edge_collapsed.sum()),
-        collapsed_patch_edges=int(network.edge_collapsed[network.edge_ids].sum()),
+        collapsed_patch_edges=collapsed_patch_edges,
         samples_per_edge=samples,
         max_edge_angle_deg=float(smooth_angle.max(initial=0.0)),
         mean_edge_angle_deg=float(smooth_angle.mean()) if len(smooth_angle) else 0.0,
         max_corner_angle_deg=corner_angle,
         max_g0_gap=float(edge_gap.max(initial=0.0)),
         degenerate_normals=grid.degenerate,
-        degenerate_patches=int(degenerate.size),
-        degenerate_patch_ids=tuple(int(i) for i in degenerate[:10]),
+        degenerate_patches=int(degenerate_ids.size),
+        degenerate_patch_ids=tuple(int(i) for i in degenerate_ids[:10]),
         folds=int(folded.sum()),
         inconsistent_orientation_edges=int(same.sum()),
         bounding_box_diagonal=float(
@@ -198,30 +213,3 @@ def check(
         edge_gap=edge_gap,
         edge_seam=seam,
     )
-
-
-def _degenerate_patches(
-    network: PatchNetwork,
-    local: Patches,
-    degenerate_samples: int,
-    samples: int,
-    level: float,
-) -> NDArray[np.int64]:
-    """The patches with more than one collapsed edge, or whose ``|p_u × p_v| ≤ level`` at every
-    sample of the ``samples²`` grid. The grid is evaluated again only where the check counted at
-    least one patch's worth of degenerate samples (never on a sound network)."""
-    suspect = network.edge_collapsed[network.edge_ids].sum(axis=1) > 1
-    if degenerate_samples >= samples * samples:
-        grid = np.linspace(0.0, 1.0, samples)
-        for block in range(0, len(local), _FLAT_BLOCK):  # local: the coordinates of ``level``
-            part = local.take(np.arange(block, min(block + _FLAT_BLOCK, len(local))))
-            normals = np.cross(
-                part.evaluate_grid(grid, grid, 1, 0), part.evaluate_grid(grid, grid, 0, 1)
-            )
-            area = np.linalg.norm(normals, axis=-1).reshape(len(part), -1)
-            suspect[block : block + _FLAT_BLOCK] |= (area <= level).all(axis=1)
-    return np.flatnonzero(suspect)
-
-
-#: patches a block when looking for flat patches (:func:`_degenerate_patches`)
-_FLAT_BLOCK = 4096

@@ -99,8 +99,8 @@ def _patch_block(resolution: int) -> int:
 
 
 class _GridMeasures:
-    """Degenerate normals, folds and fairness on a ``resolution²`` grid per patch, accumulated block
-    by block.
+    """Degenerate normals (and the patches with no other: ``zero_area``), folds and fairness on a
+    ``resolution²`` grid per patch, accumulated block by block.
 
     Folds are flagged per patch, located at the first offending sample (row-major, u first). The
     turns go into a histogram (see ``_EDGES``), their maximum is exact (``atan2`` of the worst
@@ -115,6 +115,8 @@ class _GridMeasures:
         self.fairness_wanted = fairness
         self.degenerate_level = degenerate_level
         self.degenerate = 0
+        #: patches whose every grid sample is degenerate (no area anywhere)
+        self.zero_area = np.zeros(count, dtype=bool)
         self.folded = np.zeros(count, dtype=bool)
         self.locations: list[tuple[int, float, float]] = []
         self.histogram = np.zeros(_BINS, dtype=np.int64)
@@ -136,6 +138,7 @@ class _GridMeasures:
         length = _norm3(normal)  # (B, G, G)
         usable = length > self.degenerate_level
         self.degenerate += int(usable.size - np.count_nonzero(usable))
+        self.zero_area[block] = ~usable.any(axis=(1, 2))
         unit = normal * (1.0 / np.maximum(length, np.finfo(float).tiny))
 
         offending = np.zeros(length.shape, dtype=bool)
@@ -210,6 +213,7 @@ class _GridMeasures:
         chunks = _chunks(count)
         location = np.empty(count, dtype=np.int64)
         degenerate = np.zeros(chunks, dtype=np.int64)
+        zero_area = np.empty(count, dtype=bool)
         histogram = np.zeros((chunks if self.fairness_wanted else 1, _BINS), dtype=np.int64)
         best = np.empty((count if self.fairness_wanted else 0, 4))
         _compiled(_grid_kernel)(
@@ -223,12 +227,13 @@ class _GridMeasures:
             chunks,
             location,
             degenerate,
+            zero_area,
             histogram,
             best,
             self.energy,
         )
         self.degenerate += int(degenerate.sum())
-        self.folded = location >= 0
+        self.zero_area, self.folded = zero_area, location >= 0
         for patch in np.flatnonzero(self.folded)[: MAX_FOLD_LOCATIONS - len(self.locations)]:
             i, j = divmod(int(location[patch]), resolution)
             self.locations.append((int(patch), float(self.grid[i]), float(self.grid[j])))

@@ -155,6 +155,7 @@ def _grid_kernel(
     chunks: int,
     location: NDArray[np.int64],
     degenerate: NDArray[np.int64],
+    zero_area: NDArray[np.bool_],
     histogram: NDArray[np.int64],
     best: NDArray[np.float64],
     energy: NDArray[np.float64],
@@ -163,7 +164,8 @@ def _grid_kernel(
     every scratch array, so the arithmetic vectorises across patches), row by row of their grids:
     tangents (fused multiply-adds: one u contraction of the net per row, 4 products and 4 blends
     per point; rows a − 1 and a kept), normals (the whole grid), the corner-cell and 90° tests
-    (``location``: the first offending sample ``G i + j``, −1 if none), degenerate normals and, if
+    (``location``: the first offending sample ``G i + j``, −1 if none), degenerate normals
+    (``zero_area``: a patch's every sample degenerate, ``|p_u × p_v| ≤ level``) and, if
     ``fairness``, the histogram of the turns (a row per chunk; a run of one bin along a patch's row
     is counted in a register and added once), the thin-plate energy, and per axis (u, v) the first
     largest squared chord with the angle of its pair (``best (N, 4)``: chord², angle, chord², angle;
@@ -448,6 +450,15 @@ def _grid_kernel(
                         ) + normal[1, i, s] * normal[1, cu, o]
                         if usable[i, s] and dot < 0.0:
                             offending[i, s] = True
+            for lane in range(count):  # no usable sample: only where a patch's worth is lost
+                zero_area[first + lane] = False
+            if lost >= g * g:
+                for lane in range(count):
+                    seen = False
+                    for i in range(g):
+                        for b in range(g):
+                            seen = seen | usable[i, b * lanes + lane]
+                    zero_area[first + lane] = not seen
             folded[:] = False  # per lane: any offending sample? then the first, row by row
             for i in range(g):
                 for s in range(gl):

@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 
 from ..basis import basis_values
 from ..gregory import GregoryPatchSet, gregory_weights
+from ..kernels import njit_cached, use_kernels
 from ..network import Patches
 from ..patches import PatchSet
 
@@ -45,7 +46,7 @@ KERNEL_PATCHES = 20_000
 def _kernels_wanted(compiled: bool | None, count: int) -> bool:
     """Whether to use the kernels: ``compiled`` when given, else from :data:`KERNEL_PATCHES` patches
     on."""
-    return count >= KERNEL_PATCHES if compiled is None else compiled
+    return use_kernels(count >= KERNEL_PATCHES) if compiled is None else compiled
 
 
 def _kernel_form(patches: Patches, compiled: bool | None) -> tuple[NDArray[np.float64], str] | None:
@@ -81,10 +82,8 @@ def _compiled(kernel: Callable[..., Any]) -> Callable[..., Any]:
     fastmath) and ``parallel=True`` (its ``prange`` loop runs on every core), which
     :func:`g1patch.kernels.jit_kernel` does not offer, after its module's names are bound
     (:func:`_bind`). numba is imported here, so that ``import g1patch`` stays fast."""
-    import numba
-
     _bind(vars(sys.modules[kernel.__module__]))
-    return numba.njit(cache=True, error_model="numpy", parallel=True)(kernel)
+    return njit_cached(kernel, error_model="numpy", parallel=True)
 
 
 def _bind(namespace: dict[str, Any]) -> None:
@@ -120,9 +119,7 @@ def _fused() -> Any:
 @cache
 def _helper(function: Callable[..., Any]) -> Callable[..., Any]:
     """A function the kernels call, compiled (without a parallel loop) and cached on disk."""
-    import numba
-
-    return numba.njit(cache=True, error_model="numpy")(function)
+    return njit_cached(function, error_model="numpy")
 
 
 @cache

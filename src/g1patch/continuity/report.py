@@ -9,6 +9,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import InputError
+
 SEAM_G0_RTOL = 1e-12
 """The largest G0 gap (relative to the bounding-box diagonal) a seam may have and pass: its two
 sides share one boundary curve, equal up to rounding."""
@@ -77,7 +79,16 @@ class ContinuityReport:
 
     def is_g1(self, max_angle_deg: float = 1e-9) -> bool:
         """True when every smooth edge and every corner sector's angle is within ``max_angle_deg``
-        (folds and seams aside)."""
+        (folds and seams aside); ``max_angle_deg`` must be finite, from 0 to 180
+        (:class:`~g1patch.errors.InputError`: NaN would pass every check)."""
+        if not (
+            isinstance(max_angle_deg, (int, float, np.integer, np.floating))
+            and not isinstance(max_angle_deg, bool)
+            and 0.0 <= max_angle_deg <= 180.0
+        ):
+            raise InputError(
+                f"max_angle: expected a finite number of degrees in [0, 180], got {max_angle_deg!r}"
+            )
         return max(self.max_edge_angle_deg, self.max_corner_angle_deg) <= max_angle_deg
 
     def seams_closed(self, max_gap: float = SEAM_G0_RTOL) -> bool:

@@ -123,9 +123,9 @@ def _connect(
     """
     _check_index_range(corners, sizes, n_vertices)
     _check_repeated_vertices(corners, sizes, n_vertices)
-    if corners.size >= KERNEL_HALFEDGES if compiled is None else compiled:
-        from ..kernels import jit_kernel  # numba, imported on first use
+    from ..kernels import jit_kernel, use_kernels  # numba, imported on first use
 
+    if use_kernels(corners.size >= KERNEL_HALFEDGES) if compiled is None else compiled:
         outcome = cast(tuple[Any, ...], jit_kernel(_connect_kernel)(corners, sizes, n_vertices))
         valid, *arrays = outcome
         if valid:

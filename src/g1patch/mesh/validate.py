@@ -121,9 +121,9 @@ def _check_face_areas(
     the mesh when every face clears the tolerance by the margin :data:`_AREA_MARGIN` (far beyond
     any rounding of the two computations); otherwise the NumPy code below, the reference, decides.
     """
-    if faces.shape[0] >= KERNEL_FACES if compiled is None else compiled:
-        from ..kernels import jit_kernel  # numba, imported on first use
+    from ..kernels import jit_kernel, use_kernels  # numba, imported on first use
 
+    if use_kernels(faces.shape[0] >= KERNEL_FACES) if compiled is None else compiled:
         if jit_kernel(_face_area_kernel)(
             vertices, faces, DEGENERATE_AREA_TOLERANCE * (1.0 + _AREA_MARGIN)
         ):

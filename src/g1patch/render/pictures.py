@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..continuity import ContinuityReport
+from ..continuity import ContinuityReport, _box, _unit_frame
 from ..errors import InputError, as_float_array, check_choice
 from ..network import PatchNetwork, display_frame
 from ..tessellate import TriangleMesh
@@ -241,6 +242,10 @@ def render_surfaces(
             raise InputError(f"meshes[{index}]: expected a TriangleMesh, got {type(mesh).__name__}")
         _check_title(f"titles[{index}]", title)
     _matplotlib()
+    points = [np.asarray(mesh.points, dtype=np.float64).reshape(-1, 3) for mesh in meshes]
+    frame = _unit_frame(*_box(np.concatenate(points)))
+    if frame is not None:  # meshes 1e-25 or 1e25 in size: drawn in their unit box
+        meshes = [replace(mesh, points=frame.to_local(mesh.points)) for mesh in meshes]
     camera = _camera(view, up, meshes)
     panels = []
     for mesh, title in zip(meshes, titles, strict=True):

@@ -78,6 +78,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..kernels import use_kernels
 from ..mesh import QuadMesh
 from .features import (
     BOUNDARY_MODES,
@@ -133,8 +134,9 @@ KERNEL_VERTICES = 20_000
 
 def _compiled(level: _Level) -> bool:
     """Whether the limit stencils of ``level`` run as numba kernels: from :data:`KERNEL_VERTICES`
-    vertices on (read at each call, so that it can be changed)."""
-    return level.topology.n_vertices >= KERNEL_VERTICES
+    vertices on (read at each call, so that it can be changed), where they can be cached
+    (:func:`~g1patch.kernels.use_kernels`)."""
+    return use_kernels(level.topology.n_vertices >= KERNEL_VERTICES)
 
 
 def _points(mesh: QuadMesh, sharpness: ArrayLike | None) -> FloatArray:

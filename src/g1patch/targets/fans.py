@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ConstructionError, check_choice
-from ..kernels import jit_kernel
+from ..kernels import jit_kernel, use_kernels
 from ..mesh import QuadMesh, QuadTopology
 from .local import corner_tangents, cross, dot, slot_vertices
 from .value import TANGENTS, TangentRule
@@ -138,6 +138,7 @@ def _valid_fans(
 ) -> NDArray[np.bool_]:
     """Per vertex: every consecutive turn in (ε, 180° − ε), once around inside, less than once at a
     boundary (``compiled``: vertex by vertex in :func:`_valid_fans_kernel`)."""
+    compiled = use_kernels(compiled)  # NumPy where kernels cannot be cached
     if compiled:
         valid = np.empty(topology.n_vertices, dtype=bool)
         jit_kernel(_valid_fans_kernel)(

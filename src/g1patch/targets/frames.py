@@ -80,7 +80,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..kernels import in_chunks, jit_kernel
+from ..kernels import in_chunks, jit_kernel, use_kernels
 from ..mesh import QuadMesh
 from .frame_fit import CUBIC_POINTS, _face_rings, _Fit, _fit_all, _Ring
 from .frame_kernels import LANES, _fit_kernel, _ring_kernel, _rows_kernel, _symmetric_kernel
@@ -200,6 +200,7 @@ def vertex_frames(mesh: QuadMesh, *, compiled: bool = True) -> VertexFrames:
     :func:`_ring_kernel`); ``False`` runs the NumPy reference (the same to rounding,
     tests/test_frames.py).
     """
+    compiled = use_kernels(compiled)  # NumPy where kernels cannot be cached
     nv = mesh.n_vertices
     everything = np.arange(nv)
     ring = None if compiled else _Ring.of(mesh)

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..kernels import in_chunks, jit_kernel
+from ..kernels import in_chunks, jit_kernel, use_kernels
 from ..mesh import QuadMesh, QuadTopology
 from .local import dot, slot_tables, unit_rows
 from .value import halfedge_slots
@@ -66,6 +66,7 @@ def _interior_targets(
     by the weight :func:`_local_twist_weights` of ``|P_A w| / (|t_AB| + |t_AD|)``. ``compiled``:
     corner by corner in :func:`_interior_kernel` (ranges of vertices side by side,
     :func:`~g1patch.kernels.in_chunks`), into ``out`` (F, 4, 3) if given; else NumPy."""
+    compiled = use_kernels(compiled)  # NumPy where kernels cannot be cached
     faces = topology.faces
     count = topology.n_faces
     if compiled:

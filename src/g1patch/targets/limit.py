@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from .. import subdivision
 from ..errors import MeshError
 from ..gregory import INTERIOR_INDEX
-from ..kernels import jit_kernel
+from ..kernels import jit_kernel, use_kernels
 from ..mesh import QuadMesh, QuadTopology, Sectors, Tag, sectors
 from ..subdivision import (
     boundary_mode,
@@ -541,7 +541,7 @@ def _kernels_wanted(topology: QuadTopology) -> bool:
     """Whether the passes over every slot and face run as numba kernels: as the limit stencils',
     from :data:`~g1patch.subdivision.KERNEL_VERTICES` vertices on (their compile, once per install,
     costs more below)."""
-    return topology.n_vertices >= subdivision.KERNEL_VERTICES
+    return use_kernels(topology.n_vertices >= subdivision.KERNEL_VERTICES)
 
 
 def _interior_kernel(x: FloatArray, faces: IntArray, out: FloatArray) -> None:

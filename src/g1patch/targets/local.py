@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ConstructionError, check_choice
-from ..kernels import jit_kernel
+from ..kernels import jit_kernel, use_kernels
 from ..mesh import QuadMesh, QuadTopology
 from .value import TANGENTS, TangentRule
 
@@ -182,6 +182,7 @@ def fan_normals(mesh: QuadMesh, *, compiled: bool = True) -> NDArray[np.float64]
     ``compiled``: one numba pass over the face corners (:func:`_fan_kernel`, the same sums in the
     same order), else NumPy.
     """
+    compiled = use_kernels(compiled)  # NumPy where kernels cannot be cached
     faces = mesh.faces
     x = mesh.vertices
     if compiled:

@@ -252,6 +252,8 @@ def _summary(report: ContinuityReport) -> list[list[str]]:
         ["max G0 gap (of diagonal)", f"{report.max_g0_gap:.2g}"],
         ["folds", f"{report.folds}"],
     ]
+    if report.degenerate_patches:
+        rows.append(["degenerate patches", f"{report.degenerate_patches}"])
     if report.seam_edges:
         rows.append(
             [
@@ -269,6 +271,8 @@ def _verdict(report: ContinuityReport) -> str:
     if report.passes():
         return "exactly G1" + (" apart from the seams" if report.seam_edges else "") + ", no folds"
     parts = [f"{report.folds} folded patches"] if report.folds else []
+    if report.degenerate_patches:
+        parts.append(f"{report.degenerate_patches} degenerate patches")
     if not report.is_g1():
         parts.append(
             "not G1: kinks up to "

@@ -7,6 +7,8 @@ the assembly and the network's connectivity at once (tests, ``benchmarks/bench_s
 
 from __future__ import annotations
 
+from ...kernels import use_kernels as cached_kernels
+
 __all__ = ["KERNEL_FACES", "use_kernels"]
 
 #: faces from which split4 runs its numba kernels (below, loading them costs more than they save)
@@ -14,5 +16,6 @@ KERNEL_FACES = 20_000
 
 
 def use_kernels(n_faces: int, compiled: bool | None) -> bool:
-    """``compiled`` where given, else whether ``n_faces`` reaches :data:`KERNEL_FACES`."""
-    return (n_faces >= KERNEL_FACES) if compiled is None else compiled
+    """``compiled`` where given, else whether ``n_faces`` reaches :data:`KERNEL_FACES` (and the
+    kernels can be cached: :func:`g1patch.kernels.use_kernels`)."""
+    return cached_kernels(n_faces >= KERNEL_FACES) if compiled is None else compiled

@@ -4,16 +4,22 @@ PLY / STL.
 * OBJ is read by a small parser of its own (``v``, ``f``, OpenSubdiv ``t`` tag lines; other OBJ
   statements are skipped, unknown ones are errors) so that every error names its line and mixed
   polygon lists keep their order.
-* PLY: binary files of the common layout (x, y, z and other scalars per vertex, one list of
-  vertex indices per face, every face with as many corners) are read as NumPy records, any other
-  by meshio (``meshio.ply``), after checking the header here: meshio silently returns fewer faces
-  from a truncated binary file.
+* PLY: files of the common layout (x, y, z and other scalars per vertex, scalars and one list of
+  vertex indices per face) are read here, binary as NumPy records, ASCII as OBJ and OFF text is;
+  any other by meshio (``meshio.ply``), after checking the header here: meshio silently returns
+  fewer faces from a truncated binary file.
 * OFF is read by a parser of its own: meshio's OFF reader only accepts triangles.
 
 OBJ and OFF text is parsed in bulk by NumPy over the whole file, and from :data:`KERNEL_BYTES` on
 by numba kernels (OBJ in one scan; the coordinates of OFF and ASCII PLY); only where a fast path
 declines (anything unusual, any error) is the file read again line by line, by the reference
 parser whose results and line-numbered messages the fast paths reproduce exactly.
+
+Nothing a file says is trusted (:mod:`~g1patch.io.meshfile.source`): only a regular file is read
+(links resolved: never ``/dev/zero`` or a FIFO), of at most :data:`MAX_INPUT_BYTES` (2 GB) or the
+caller's ``max_input_size``; every count in a header is checked against the bytes that follow it
+before anything is allocated by it, and lines or bytes beyond a header's counts are an error
+naming the line. A UTF-8 byte-order mark before the text is skipped.
 
 Every problem with a file raises :class:`FormatError` (file, line where known, what was expected);
 problems with the mesh it describes raise the :class:`MeshError` family, prefixed with the file
@@ -24,7 +30,9 @@ memory), binary PLY by meshio.
 The package's modules: :mod:`~g1patch.io.meshfile.obj`, :mod:`~g1patch.io.meshfile.ply` and
 :mod:`~g1patch.io.meshfile.off` read one format each, on the shared fast paths of
 :mod:`~g1patch.io.meshfile.text` (NumPy) and :mod:`~g1patch.io.meshfile.compiled` (numba) and the
-checks of :mod:`~g1patch.io.meshfile.parsed`; :mod:`~g1patch.io.meshfile.write` writes.
+checks of :mod:`~g1patch.io.meshfile.parsed` (PLY in :mod:`~g1patch.io.meshfile.ply_header`,
+:mod:`~g1patch.io.meshfile.ply_binary` and :mod:`~g1patch.io.meshfile.ply_ascii` too);
+:mod:`~g1patch.io.meshfile.source` reads the bytes; :mod:`~g1patch.io.meshfile.write` writes.
 """
 
 from __future__ import annotations
@@ -47,15 +55,28 @@ from .off import _off_fast as _off_fast
 from .off import _read_off
 from .off import _read_off_lines as _read_off_lines
 from .parsed import _Parsed
-from .ply import _ply_header as _ply_header
 from .ply import _ply_meshio as _ply_meshio
-from .ply import _ply_records as _ply_records
-from .ply import _ply_text as _ply_text
 from .ply import _read_ply
+from .ply_ascii import _ply_text as _ply_text
+from .ply_ascii import _read_ply_lines as _read_ply_lines
+from .ply_binary import _ply_records as _ply_records
+from .ply_header import _ply_header as _ply_header
+from .ply_header import _ply_layout as _ply_layout
+from .source import BOM, read_input
+from .source import MAX_INPUT_BYTES as MAX_INPUT_BYTES
+from .source import check_input as check_input
 from .text import _numbers as _numbers
 from .write import WRITE_FORMATS, PathLike, write_quads, write_triangles
 
-__all__ = ["read_mesh", "write_triangles", "write_quads", "READ_FORMATS", "WRITE_FORMATS"]
+__all__ = [
+    "read_mesh",
+    "write_triangles",
+    "write_quads",
+    "check_input",
+    "READ_FORMATS",
+    "WRITE_FORMATS",
+    "MAX_INPUT_BYTES",
+]
 
 READ_FORMATS = (".obj", ".ply", ".off")
 
@@ -66,6 +87,7 @@ def read_mesh(
     split: bool = True,
     sharp_angle: float | None = None,
     strict: bool | None = None,
+    max_input_size: int | None = None,
 ) -> QuadMesh:
     """Read an OBJ, PLY or OFF file into a validated :class:`QuadMesh` (tags from OBJ ``t`` lines).
 
@@ -75,6 +97,8 @@ def read_mesh(
     infinitely sharp, and vertices with three such edges as corners, before splitting
     (:func:`g1patch.sharpen.sharp_angle_tags`); the file's own tags are kept. ``strict``: refuse
     a mesh that needs repair instead of repairing it (:meth:`QuadMesh.from_arrays`).
+    ``max_input_size`` (bytes; default :data:`MAX_INPUT_BYTES`, 2 GB): a larger file is refused
+    before it is read, as is anything but a regular file (:func:`check_input`).
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -84,10 +108,7 @@ def read_mesh(
             path,
             f"unsupported extension {path.suffix!r}; expected one of {', '.join(READ_FORMATS)}",
         )
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise FormatError(path, f"cannot read the file ({exc.strerror or exc})") from None
+    data = read_input(path, max_input_size).removeprefix(BOM)
     if not data or data.isspace():
         raise FormatError(path, "the file is empty")
     parsed = readers[suffix](path, data)

@@ -13,7 +13,16 @@ from numpy.typing import NDArray
 from ...errors import FormatError
 from ...mesh import Tag
 from .compiled import _BYTE_CLASSES, KERNEL_BYTES, _compiled, _obj_kernel, _powers_of_five
-from .parsed import _decode, _faces_in_range, _finite_vertices, _Parsed, _polygon_list
+from .parsed import (
+    _INT64_END,
+    _convert,
+    _decode,
+    _faces_in_range,
+    _finite_vertices,
+    _Parsed,
+    _polygon_list,
+)
+from .source import MAX_COUNT_DIGITS
 from .text import _gather_floats, _numbers, _scan
 
 #: OBJ statements that carry nothing a quad mesh needs (normals, texture, grouping, materials,
@@ -164,31 +173,14 @@ def _read_obj_lines(path: Path, data: bytes) -> _Parsed:
     return _Parsed(points, _polygon_list(corners, face_sizes), tuple(tags))
 
 
-def _convert(
-    path: Path, tokens: list, dtype: type, expected: str, lines: Sequence[int] | NDArray[np.int64]
-) -> NDArray:
-    """``np.array(tokens, dtype)``; on a bad token, a :class:`FormatError` naming its line
-    (``lines`` per row)."""
-    try:
-        return np.array(tokens, dtype=dtype)
-    except (ValueError, OverflowError):
-        for row, line in zip(tokens, lines, strict=True):
-            try:
-                np.array(row, dtype=dtype)
-            except (ValueError, OverflowError):
-                text = row if isinstance(row, str) else " ".join(row)
-                raise FormatError(path, f"expected {expected}, got {text!r}", int(line)) from None
-        raise
-
-
 def _parse_tag(path: Path, parts: Sequence[str], line: int) -> Tag:
     """OpenSubdiv ``t name nints/nfloats/nstrings ints… floats… strings…`` (integers 0-based)."""
     usage = "expected 't name nints/nfloats/nstrings ints... floats... strings...'"
     if len(parts) < 3:
         raise FormatError(path, usage, line)
     counts = parts[2].split("/")
-    if len(counts) != 3 or not all(c.isdigit() for c in counts):
-        raise FormatError(path, f"{usage}; got counts {parts[2]!r}", line)
+    if len(counts) != 3 or not all(c.isdigit() and len(c) <= MAX_COUNT_DIGITS for c in counts):
+        raise FormatError(path, f"{usage}; got counts {parts[2][:60]!r}", line)
     n_ints, n_floats, n_strings = map(int, counts)
     values = parts[3:]
     if len(values) != n_ints + n_floats + n_strings:
@@ -201,9 +193,13 @@ def _parse_tag(path: Path, parts: Sequence[str], line: int) -> Tag:
     try:
         ints = tuple(int(x) for x in values[:n_ints])
         floats = tuple(float(x) for x in values[n_ints : n_ints + n_floats])
+        if any(not -_INT64_END <= i < _INT64_END for i in ints):
+            raise ValueError  # no index, no count
     except ValueError:
         raise FormatError(
-            path, f"tag {parts[1]!r}: expected {n_ints} integers then {n_floats} numbers", line
+            path,
+            f"tag {parts[1]!r}: expected {n_ints} integers (within ±2^63) then {n_floats} numbers",
+            line,
         ) from None
     return Tag(parts[1], ints, floats, tuple(values[n_ints + n_floats :]))
 

@@ -10,7 +10,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import FormatError
-from .parsed import _decode, _faces_in_range, _finite_vertices, _Parsed, _polygon_list
+from .parsed import (
+    _INT64_END,
+    _content,
+    _faces_in_range,
+    _finite_vertices,
+    _Parsed,
+    _polygon_list,
+    _rows_announced,
+)
 from .text import _gather_floats, _numbers, _scan
 
 OFF_HEADERS = frozenset({"OFF", "COFF", "NOFF", "CNOFF", "STOFF", "STCOFF", "STNOFF", "STCNOFF"})
@@ -45,8 +53,8 @@ def _off_fast(data: bytes) -> _Parsed | None:
         n_vertices, n_faces = int(counts[0]), int(counts[1])
     except (IndexError, ValueError):
         return None
-    if n_vertices < 0 or n_faces <= 0 or body.size < n_vertices + n_faces:
-        return None
+    if n_vertices < 0 or n_faces <= 0 or body.size != n_vertices + n_faces:
+        return None  # too few or too many lines: the reference names the line
     vertex_rows, face_rows = body[:n_vertices], body[n_vertices : n_vertices + n_faces]
     vertex_tokens, face_tokens = lines.tokens[vertex_rows], lines.tokens[face_rows]
     if (vertex_tokens < 3).any():
@@ -83,11 +91,7 @@ def _off_fast(data: bytes) -> _Parsed | None:
 
 def _read_off_lines(path: Path, data: bytes) -> _Parsed:
     """The line-by-line OFF reader, the reference: every error names its line."""
-    content = [
-        (number, parts)
-        for number, line in enumerate(_decode(path, data), start=1)
-        if (parts := line.split("#", 1)[0].split())
-    ]
+    content = _content(path, data)
     if not content or content[0][1][0] not in OFF_HEADERS:
         raise FormatError(
             path, "expected the header 'OFF' on the first line", content[0][0] if content else 1
@@ -102,16 +106,12 @@ def _read_off_lines(path: Path, data: bytes) -> _Parsed:
             raise ValueError
     except (IndexError, ValueError):
         raise FormatError(
-            path, "expected the counts 'n_vertices n_faces n_edges'", counts_line
-        ) from None
-    if len(body) < n_vertices + n_faces:
-        last = content[-1][0]
-        raise FormatError(
             path,
-            f"truncated: the header announces {n_vertices} vertices and {n_faces} faces, the file "
-            "ends first",
-            last,
-        )
+            "expected the counts 'n_vertices n_faces n_edges' (integers ≥ 0), got "
+            f"{' '.join(counts)[:60]!r}",
+            counts_line,
+        ) from None
+    _rows_announced(path, body, n_vertices, n_faces, counts_line)
 
     vertex_rows, face_rows = body[:n_vertices], body[n_vertices : n_vertices + n_faces]
     points = np.empty((n_vertices, 3))
@@ -130,8 +130,8 @@ def _read_off_lines(path: Path, data: bytes) -> _Parsed:
         try:
             size = int(parts[0])
             indices = [int(x) for x in parts[1 : 1 + size]]
-            if size < 3 or len(indices) != size:
-                raise ValueError
+            if size < 3 or len(indices) != size or max(map(abs, indices)) >= _INT64_END:
+                raise ValueError  # an index beyond int64 is no vertex either
         except ValueError:
             expected = "expected a face 'n i_1 ... i_n' with n >= 3"
             raise FormatError(path, f"{expected}, got {' '.join(parts)!r}", number) from None

@@ -70,9 +70,10 @@ at the same places, every neighbour pointing back and naming the same edge id; e
 (control points, Gregory points, vertices, their normals, the frame centre) finite and of
 magnitude at most :data:`MAX_COORDINATE` = 1e30, in world coordinates (``|c| + s·max|x|`` with a
 frame, whose scale must be positive and at most the bound). 1e30 mm is larger than the observable
-universe, and keeps every power the numerics form finite: the check and OpenCASCADE's G1
-measurement square the cross product of two unnormalised normals, an eighth power of the
-coordinates (1e240 here; at 1e40 the check overflows, measured). Any violation is one
+universe, above any surface built from a mesh 1e29 in size (its frame stores it), and keeps every
+power the numerics form finite: OpenCASCADE's G1 measurement squares the cross product of two
+unnormalised normals, an eighth power of the coordinates (1e240 here; the check measures in the
+patches' unit box, frame-free ones too, so their size does not matter to it). Any violation is one
 :class:`FormatError` naming the file, the member and the problem. A file of another kind (a mesh, a
 ``.bpt``, a text file renamed ``.npz``, anything not a zip archive) is refused with what was
 expected instead. :func:`save_network` runs the same checks first, so it never writes a file it
