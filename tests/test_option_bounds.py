@@ -136,7 +136,7 @@ def test_library_refuses_the_same_values() -> None:
 
 def test_samples_bound_follows_the_memory_budget(monkeypatch: pytest.MonkeyPatch) -> None:
     network = build_corner_network(shapes.cube())  # 12 shared edges
-    monkeypatch.setattr(sampling, "_memory_budget", lambda: 12 * 100 * sampling.SAMPLE_BYTES)
+    monkeypatch.setattr(sampling, "memory_budget", lambda: 12 * 100 * sampling.SAMPLE_BYTES)
     check(network, samples=100, fold_samples=8)
     with pytest.raises(InputError, match="expected 2 to 100 samples per edge"):
         check(network, samples=101, fold_samples=8)
@@ -145,4 +145,4 @@ def test_samples_bound_follows_the_memory_budget(monkeypatch: pytest.MonkeyPatch
 def test_memory_budget_is_the_builds() -> None:
     from g1patch.build import memory_budget
 
-    assert sampling._memory_budget() == memory_budget()
+    assert sampling.memory_budget is memory_budget  # one budget, in g1patch.memory

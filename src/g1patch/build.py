@@ -18,7 +18,6 @@ again. Those vertices are counted in the provenance's ``fallback_vertices``.
 from __future__ import annotations
 
 import logging
-import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TypeVar
@@ -31,6 +30,7 @@ from .continuity import folded_patches
 from .errors import BudgetError, InputError, check_choice
 from .frame import Frame
 from .kernels import use_kernels
+from .memory import memory_budget
 from .mesh import INFINITE_SHARPNESS, QuadMesh, Tag
 from .network import Patches, PatchNetwork
 from .subdivision import catmull_clark_cage
@@ -110,14 +110,6 @@ def estimate_build(mesh: QuadMesh, method: str, shape: str, refine: int = 0) -> 
     held = faces * MESH_BYTES_PER_FACE if steps else 0
     peak = max(refined, held + faces * assembly.peak_bytes_per_face)
     return BuildEstimate(steps, faces, faces * assembly.patches_per_face, peak)
-
-
-def memory_budget() -> int:
-    """The default ``max_memory`` of a build: half of this machine's RAM (bytes)."""
-    try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2
-    except (ValueError, OSError, AttributeError):  # no sysconf: a budget that refuses nothing
-        return 2**62
 
 
 def size_text(count: float) -> str:

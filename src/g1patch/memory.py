@@ -32,6 +32,7 @@ from collections.abc import Callable
 
 __all__ = [
     "TUNED_ENVIRONMENT",
+    "memory_budget",
     "keep_freed_memory",
     "tune_for_large_arrays",
     "without_huge_page_advice",
@@ -107,3 +108,11 @@ def tune_for_large_arrays() -> None:
 
 #: the same settings as environment variables, for a child process (glibc reads them at start-up)
 TUNED_ENVIRONMENT = {"MALLOC_MMAP_MAX_": "0", "MALLOC_TRIM_THRESHOLD_": _NEVER_TRIM_ENVIRONMENT}
+
+
+def memory_budget() -> int:
+    """The default memory budget of a build or a check: half of this machine's RAM (bytes)."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2
+    except (ValueError, OSError, AttributeError):  # no sysconf: a budget that refuses nothing
+        return 2**62

@@ -38,6 +38,7 @@ __all__ = [
     "PatchNetwork",
     "DISPLAY_RANGE",
     "display_frame",
+    "unit_frame",
     "edge_parameters",
     "network_from_mesh",
     "network_from_patch_points",
@@ -442,13 +443,25 @@ def network_of(
 DISPLAY_RANGE = 1e6
 
 
+def unit_frame(low: NDArray[np.float64], high: NDArray[np.float64]) -> Frame | None:
+    """The frame ``c = (low + high) / 2``, ``s = |high − low|`` of the box ``low``, ``high`` when
+    the box leaves the range ``1/R ≤ s ≤ R``, ``|c|∞ ≤ R s`` (``R =`` :data:`DISPLAY_RANGE`), else
+    None (also for a box that is a point or not finite). Frame-free patches are measured, and
+    triangle meshes drawn, in it: there ``|p_u × p_v| ~ s²`` neither overflows nor underflows, so
+    a surface 1e-150 in size is measured as at size 1, not as patches of zero area."""
+    scale = float(np.linalg.norm(high - low))
+    centre = 0.5 * (low + high)
+    if not (np.isfinite(scale) and scale > 0.0) or (
+        1.0 / DISPLAY_RANGE <= scale <= DISPLAY_RANGE
+        and float(np.abs(centre).max()) <= DISPLAY_RANGE * scale
+    ):
+        return None
+    return Frame(centre, scale)
+
+
 def display_frame(networks: Sequence[PatchNetwork]) -> Frame | None:
-    """The frame (centre and diagonal of all ``networks``' corners) to draw them in, or None when
+    """The frame (:func:`unit_frame` of all ``networks``' corners) to draw them in, or None when
     their size is within :data:`DISPLAY_RANGE`: a surface 1e-25 or 1e25 in size gives the same
     picture as at size 1."""
     corners = np.concatenate([network.patches.corners().reshape(-1, 3) for network in networks])
-    frame = Frame.of_points(corners)
-    reach = float(np.abs(frame.centre).max(initial=0.0)) / frame.scale
-    if 1.0 / DISPLAY_RANGE <= frame.scale <= DISPLAY_RANGE and reach <= DISPLAY_RANGE:
-        return None
-    return frame
+    return unit_frame(corners.min(axis=0), corners.max(axis=0))

@@ -39,9 +39,9 @@ counts, folds, their locations, the turn figures, and within a few ULP on angles
 
 Everything is measured in the patches' local coordinates (``patches.local()`` when the patch set
 has a frame; a frame-free set whose corners' box is far from size 1 or from the origin, as a
-``.bpt`` 1e-25 or 1e25 in size, in the frame of that box: :func:`.sampling._unit_frame`): angles
-do not depend on the frame, gaps and deviations are relative to the diagonal, so the figures are
-the same wherever the model sits and whatever its size.
+``.bpt`` 1e-25 or 1e25 in size, in the frame of that box, :func:`g1patch.network.unit_frame`):
+angles do not depend on the frame, gaps and deviations are relative to the diagonal, so the
+figures are the same wherever the model sits and whatever its size.
 
 **Modules.** :mod:`.checker` runs the check (:func:`check`) and :mod:`.report` holds its result
 (:class:`ContinuityReport`); :mod:`.edges` measures shared edges and corners, :mod:`.grid` the
@@ -68,7 +68,6 @@ from .sampling import _blocks as _blocks
 from .sampling import _box as _box
 from .sampling import _diagonal as _diagonal
 from .sampling import _local as _local
-from .sampling import _unit_frame as _unit_frame
 from .vectors import _cross3 as _cross3
 from .vectors import _norm3 as _norm3
 from .vectors import _planar as _planar

@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..gregory import GregoryPatchSet
-from ..network import PatchNetwork, network_of
+from ..network import PatchNetwork, network_of, unit_frame
 from ..patches import PatchSet
 from .corner_kernels import (
     _corner_extent_compiled,
@@ -30,7 +30,6 @@ from .sampling import (
     _check_sample_memory,
     _corner_points,
     _local,
-    _unit_frame,
     _world_diagonal,
     _world_extent_diagonal,
 )
@@ -58,7 +57,8 @@ def check(
     curves (:func:`g1patch.network.network_of`). ``compiled``: the numba kernels (:mod:`.jit`),
     all edges and all patches in one pass each (``progress`` after each); False: the NumPy
     reference; None (default): the kernels from :data:`~.jit.KERNEL_PATCHES` patches on. Frame-free
-    patches far from size 1 are measured in the frame of their corners' box (:func:`_unit_frame`).
+    patches far from size 1 are measured in the frame of their corners' box
+    (:func:`~g1patch.network.unit_frame`).
     """
     for name, value, least in (
         ("samples", samples, 2),
@@ -89,7 +89,7 @@ def check(
         )
         diagonal = (float(np.linalg.norm(high - low)) if len(local) else 0.0) or 1.0
     if local is patches and isinstance(patches, (PatchSet, GregoryPatchSet)) and len(local):
-        measuring = _unit_frame(low, high)  # frame-free, far from size 1 or the origin:
+        measuring = unit_frame(low, high)  # frame-free, far from size 1 or the origin:
         if measuring is not None:  # measured in its unit box
             framed = replace(network, patches=patches.local_to(measuring).with_frame(measuring))
             return check(

@@ -4,15 +4,13 @@ work, and the points and normals along patch edges."""
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InputError
-from ..frame import Frame
 from ..gregory import GregoryPatchSet
-from ..network import DISPLAY_RANGE, Patches, PatchNetwork, edge_parameters
+from ..memory import memory_budget
+from ..network import Patches, PatchNetwork, edge_parameters
 from ..patches import CORNER_PARAMETERS
 from .vectors import _cross3, _planar
 
@@ -27,19 +25,10 @@ def _check_count(name: str, value: object, least: int) -> None:
 SAMPLE_BYTES = 512
 
 
-def _memory_budget() -> int:
-    """Half of this machine's RAM in bytes, as :func:`g1patch.build.memory_budget` (a layer
-    above)."""
-    try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2
-    except (ValueError, OSError, AttributeError):  # no sysconf: a budget that refuses nothing
-        return 2**62
-
-
 def _check_sample_memory(samples: int, fold_samples: int, edges: int, chunk: int) -> None:
     """Refuse (:class:`InputError`) ``samples`` per edge whose block of ``min(edges, chunk)``
     edges, or a ``fold_samples²`` grid of one patch, would need more than the memory budget."""
-    budget = _memory_budget()
+    budget = memory_budget()
     lanes = max(1, min(edges, chunk))
     most = max(2, budget // (lanes * SAMPLE_BYTES))
     if samples > most:
@@ -78,23 +67,6 @@ def _diagonal(points: NDArray[np.float64]) -> float:
     """Length of the diagonal of the bounding box of ``points`` (..., 3), ``|max − min|``."""
     low, high = _box(points)
     return float(np.linalg.norm(high - low))
-
-
-def _unit_frame(low: NDArray[np.float64], high: NDArray[np.float64]) -> Frame | None:
-    """The frame ``c = (low + high) / 2``, ``s = |high − low|`` of the box ``low``, ``high`` when
-    the box leaves the range pictures keep too (:func:`g1patch.network.display_frame`:
-    ``1/R ≤ s ≤ R`` and ``|c|∞ ≤ R s``, ``R =`` :data:`~g1patch.network.DISPLAY_RANGE`), else None
-    (also for a box that is a point or not finite). Frame-free patches are measured, and triangle
-    meshes drawn, in it: there ``|p_u × p_v| ~ s²`` neither overflows nor underflows, so a surface
-    1e-150 in size is measured as at size 1, not as patches of zero area."""
-    scale = float(np.linalg.norm(high - low))
-    centre = 0.5 * (low + high)
-    if not (np.isfinite(scale) and scale > 0.0) or (
-        1.0 / DISPLAY_RANGE <= scale <= DISPLAY_RANGE
-        and float(np.abs(centre).max()) <= DISPLAY_RANGE * scale
-    ):
-        return None
-    return Frame(centre, scale)
 
 
 def _corner_points(patches: Patches) -> NDArray[np.float64]:

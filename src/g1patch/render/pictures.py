@@ -10,9 +10,9 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..continuity import ContinuityReport, _box, _unit_frame
+from ..continuity import ContinuityReport, _box
 from ..errors import InputError, as_float_array, check_choice
-from ..network import PatchNetwork, display_frame
+from ..network import PatchNetwork, display_frame, unit_frame
 from ..tessellate import TriangleMesh
 from .camera import AUTO, UP_AXES, _camera, _check_view
 from .checks import (
@@ -243,7 +243,7 @@ def render_surfaces(
         _check_title(f"titles[{index}]", title)
     _matplotlib()
     points = [np.asarray(mesh.points, dtype=np.float64).reshape(-1, 3) for mesh in meshes]
-    frame = _unit_frame(*_box(np.concatenate(points)))
+    frame = unit_frame(*_box(np.concatenate(points)))
     if frame is not None:  # meshes 1e-25 or 1e25 in size: drawn in their unit box
         meshes = [replace(mesh, points=frame.to_local(mesh.points)) for mesh in meshes]
     camera = _camera(view, up, meshes)
