@@ -17,6 +17,7 @@ import pytest
 
 from g1patch import shapes
 from g1patch.batch import FAILED, BuildOptions, Job, convert
+from g1patch.batch.jobs import recipe
 from g1patch.cli import main
 from g1patch.io.atomic import TEMPORARY_PREFIX
 from g1patch.io.meshfile import write_quads
@@ -501,3 +502,14 @@ def test_embedded_workers_are_set_up_like_the_command_line(monkeypatch: pytest.M
     monkeypatch.setattr(signal, "signal", lambda *arguments: calls.append(arguments))
     batch._embedded_worker_setup().setup(worker=None)
     assert calls == [(signal.SIGINT, signal.SIG_IGN), "tuned"]
+
+
+def test_the_workers_read_with_the_input_size_cap(meshes: Path, tmp_path: Path) -> None:
+    """--max-input-size reaches the task: a file above it fails alone (a batch's way), one line
+    naming it and the cap, nothing written; the cap is no part of an output's recipe."""
+    capped = BuildOptions(max_input_size=10)
+    record = convert(Job(str(meshes / "cube.obj"), (str(tmp_path / "cube.npz"),), capped))
+    assert record["status"] == FAILED and record["outputs"] == []
+    assert "cube.obj" in record["error"] and "input size cap of 10 bytes" in record["error"]
+    assert "\n" not in record["error"] and not (tmp_path / "cube.npz").exists()
+    assert recipe(capped, ["npz"], "x") == recipe(BuildOptions(), ["npz"], "x")

@@ -33,6 +33,9 @@ class BuildOptions:
     refine: int = 0
     sharp_angle: float | None = None
     strict: bool = False
+    #: the input size cap (bytes; None: the readers' default): how a file is read, not what is
+    #: made of it, so no part of an output's recipe
+    max_input_size: int | None = None
 
     def __post_init__(self) -> None:
         from ..construct import METHODS
@@ -123,7 +126,7 @@ def recipe(options: BuildOptions, formats: Sequence[str], version: str) -> dict[
     and each one's export options, and the g1patch version (JSON-ready). Two outputs made with
     equal recipes from the same input bytes are the same file."""
     return {
-        **asdict(options),
+        **{key: value for key, value in asdict(options).items() if key != "max_input_size"},
         "formats": list(formats),
         "export": {name: export_options(name) for name in formats},
         "g1patch": version,

@@ -47,7 +47,10 @@ def _read(job: Job) -> tuple[Any, str]:
     before = _identity(job.source)
     digest = provenance.sha256_of(job.source)
     mesh = g1patch.read(
-        job.source, sharp_angle=options.sharp_angle, strict=True if options.strict else None
+        job.source,
+        sharp_angle=options.sharp_angle,
+        strict=True if options.strict else None,
+        max_input_size=options.max_input_size,
     )
     if _identity(job.source) != before:
         raise G1PatchError(f"{job.source}: changed while it was read; run the batch again")

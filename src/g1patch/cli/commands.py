@@ -280,19 +280,19 @@ def _render(args: argparse.Namespace) -> int:
 def _batch(args: argparse.Namespace) -> int:
     from ..batch import FAILED, BuildOptions, run_batch, summary_table
 
-    if args.max_input_size is not None:  # each input within the cap, before any is converted
+    if args.max_input_size is not None:  # every input within the cap before any work (exit 2)
         from ..batch.plan import collect_inputs
         from ..io.meshfile import check_input
 
         for source in collect_inputs(args.inputs):
             check_input(source, args.max_input_size)
-
     options = BuildOptions(
         method=args.method,
         shape=args.shape,
         refine=args.refine,
         sharp_angle=args.sharp_angle,
         strict=args.strict,
+        max_input_size=args.max_input_size,
     )
     records = run_batch(
         args.inputs,
