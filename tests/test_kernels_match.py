@@ -134,3 +134,30 @@ def test_faces_at_risk(mesh: QuadMesh) -> None:
     )
     for t in (targets, shaken):
         assert_close(_faces_at_risk(t), _faces_at_risk(t, compiled=False))
+
+
+def test_numpy_twins_of_the_uncached_path(mesh: QuadMesh, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where kernels cannot be cached, the slot tables, the in-plane tangents and the coarse-face
+    turn come from NumPy twins: the same values."""
+    from g1patch.targets import interior, local
+    from g1patch.targets.frames import vertex_frames
+
+    topology, n = mesh.topology, vertex_frames(mesh).normals
+    raw = np.random.default_rng(10).normal(size=(int(topology.neighbor_offsets[-1]), 3))
+    corner_normals = n[topology.faces]
+    compiled = (
+        local.slot_tables(topology),
+        local.in_vertex_planes(raw, n, topology.neighbor_offsets),
+        interior.edge_turns(corner_normals),
+    )
+    for module in (local, interior):
+        monkeypatch.setattr(module, "use_kernels", lambda wanted: False)
+    twins = (
+        local.slot_tables(topology),
+        local.in_vertex_planes(raw, n, topology.neighbor_offsets),
+        interior.edge_turns(corner_normals),
+    )
+    for fast, reference in zip(compiled[0], twins[0], strict=True):
+        assert_close(fast, reference)
+    assert_close(compiled[1], twins[1])
+    assert_close(compiled[2], twins[2])

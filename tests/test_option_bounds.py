@@ -79,11 +79,11 @@ def cube_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
         ),
         (
             ["build", "{missing}", "-o", "{out}.npz", "--sharp-angle", "nan"],
-            "--sharp-angle: the sharp angle: expected degrees between 0 and 180, got nan",
+            "--sharp-angle: expected degrees between 0 and 180, got nan",
         ),
         (
             ["batch", "{missing}", "--out", "{out}", "--sharp-angle", "180"],
-            "--sharp-angle: the sharp angle: expected degrees between 0 and 180, got 180.0",
+            "--sharp-angle: expected degrees between 0 and 180, got 180.0",
         ),
         (
             ["batch", "{missing}", "--out", "{out}", "--workers", "0"],

@@ -104,3 +104,34 @@ def test_build_and_demo_fall_back_to_numpy_with_one_warning(install: Path, tmp_p
 def test_a_writable_cache_needs_no_warning(tmp_path: Path) -> None:
     """In this process numba caches: the kernels run, and nothing is said."""
     assert kernels.kernels_cached() and kernels.use_kernels(True) and not kernels.use_kernels(False)
+
+
+def test_no_kernel_is_compiled_where_none_can_be_cached(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """With no cache (``kernels_cached`` False) every stage takes its NumPy twin: reading a large
+    OBJ, every shape × method, the check. numba's ``njit`` fails if anything compiles (an
+    in-memory compile costs seconds per kernel per command)."""
+    import numba
+
+    from g1patch.construct import METHODS
+    from g1patch.targets import SHAPES
+
+    monkeypatch.setattr(kernels, "kernels_cached", lambda: False)
+    monkeypatch.setattr(kernels, "jit_kernel", kernels.jit_kernel.__wrapped__)
+
+    def refuse(*args: object, **options: object) -> None:
+        raise AssertionError("a kernel was compiled")
+
+    monkeypatch.setattr(numba, "njit", refuse)
+    cube = shapes.cube_sphere(5)
+    path = tmp_path / "sphere.obj"
+    write_quads(path, cube.vertices, cube.faces)
+    padding = b"#" * (2 << 20) + b"\n"  # past the readers' kernel threshold
+    path.write_bytes(padding + path.read_bytes())
+    assert g1patch.read(path).faces.shape == cube.faces.shape
+    small = shapes.cube_sphere(1)
+    for shape in SHAPES:
+        for method in METHODS:
+            report = g1patch.smooth(small, shape=shape, method=method).check()
+            assert report.is_g1(1e-6) or method in ("corner", "legacy"), (shape, method)

@@ -41,9 +41,7 @@ def check_options(args: argparse.Namespace) -> list[str]:
         _count("--refine", args.refine, 0, "a number of Catmull–Clark steps")
         angle = args.sharp_angle
         if angle is not None and not (math.isfinite(angle) and 0.0 < angle < 180.0):
-            raise InputError(
-                f"--sharp-angle: the sharp angle: expected degrees between 0 and 180, got {angle}"
-            )
+            raise InputError(f"--sharp-angle: expected degrees between 0 and 180, got {angle}")
     if command == "check":
         _count("--samples", args.samples, 2, "a number of samples per edge")
         _number("--max-angle", args.max_angle, 0.0, 180.0, low_open=False)

@@ -340,8 +340,7 @@ def _round_coarse_faces(
     topology = mesh.topology
     faces = topology.faces
     n = corner_normals
-    turn = np.empty(len(n))
-    jit_kernel(_turn_kernel)(n, turn)
+    turn = edge_turns(n)
     weight = np.clip((turn - _ROUND_START) / (_ROUND_FULL - _ROUND_START), 0.0, 1.0)
     weight = weight * weight * (3.0 - 2.0 * weight)
     chosen = np.flatnonzero(weight > 0)
@@ -375,6 +374,19 @@ def _round_coarse_faces(
         scale[pending] = 0.0
         out[block] += scale[:, None, None] * change
     return out
+
+
+def edge_turns(corner_normals: FloatArray) -> FloatArray:
+    """Per face the largest angle between the corner normals at the ends of an edge,
+    ``max_k arccos(clip(n_k·n_{k+1}, −1, 1))``: :func:`_turn_kernel`, or
+    its NumPy twin where kernels cannot be cached."""
+    if use_kernels(True):
+        turn = np.empty(len(corner_normals))
+        jit_kernel(_turn_kernel)(corner_normals, turn)
+        return turn
+    a, b = corner_normals, np.roll(corner_normals, -1, axis=1)
+    cosine = a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+    return np.asarray(np.arccos(np.clip(cosine, -1.0, 1.0)).max(axis=1, initial=0.0))
 
 
 def _turn_kernel(corner_normals: FloatArray, turn: FloatArray) -> None:

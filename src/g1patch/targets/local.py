@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from ..errors import ConstructionError, check_choice
 from ..kernels import jit_kernel, use_kernels
 from ..mesh import QuadMesh, QuadTopology
-from .value import TANGENTS, TangentRule
+from .value import TANGENTS, TangentRule, halfedge_slots
 
 __all__ = [
     "NORMALS",
@@ -74,7 +74,12 @@ def in_vertex_planes(
     the slot's vertex, slots ``offsets[v]:offsets[v + 1]``), by a numba kernel; ``out`` may be
     ``tangents``."""
     out = np.empty_like(tangents) if out is None else out
-    jit_kernel(_plane_kernel)(tangents, normals, offsets, out)
+    if use_kernels(True):
+        jit_kernel(_plane_kernel)(tangents, normals, offsets, out)
+        return out
+    n = normals[np.repeat(np.arange(offsets.size - 1), np.diff(offsets))]
+    height = tangents[:, 0] * n[:, 0] + tangents[:, 1] * n[:, 1] + tangents[:, 2] * n[:, 2]
+    out[:] = tangents - height[:, None] * n
     return out
 
 
@@ -104,6 +109,9 @@ def slot_tables(topology: QuadTopology) -> tuple[NDArray[np.int32], NDArray[np.i
     """:func:`g1patch.targets.halfedge_slots` by a numba kernel, as int32 (half the memory): the
     ring slot of each half-edge A → B at A (``slot_out``), and of B → A at B (``slot_in``; the last
     slot of B where A → B is a boundary half-edge)."""
+    if not use_kernels(True):
+        slot_out64, slot_in64 = halfedge_slots(topology)
+        return slot_out64.astype(np.int32), slot_in64.astype(np.int32)
     slot_out = np.empty(topology.n_halfedges, dtype=np.int32)
     slot_in = np.empty(topology.n_halfedges, dtype=np.int32)
     jit_kernel(_slots_kernel)(

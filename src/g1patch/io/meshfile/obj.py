@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import FormatError
+from ...kernels import use_kernels
 from ...mesh import Tag
 from .compiled import _BYTE_CLASSES, KERNEL_BYTES, _compiled, _obj_kernel, _powers_of_five
 from .parsed import (
@@ -43,7 +44,7 @@ def _read_obj(path: Path, data: bytes) -> _Parsed:
     :func:`_obj_compiled` (from :data:`KERNEL_BYTES` on) or :func:`_obj_fast`, or line by line
     (:func:`_read_obj_lines`) where it declines.
     """
-    parsed = _obj_compiled(data) if len(data) >= KERNEL_BYTES else _obj_fast(data)
+    parsed = _obj_compiled(data) if use_kernels(len(data) >= KERNEL_BYTES) else _obj_fast(data)
     return parsed if parsed is not None else _read_obj_lines(path, data)
 
 

@@ -18,6 +18,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from ...kernels import use_kernels
 from .compiled import KERNEL_BYTES, _floats_compiled
 
 #: bytes ``str.splitlines`` or ``str.split`` treat as line breaks or spaces; the fast path declines
@@ -148,7 +149,7 @@ def _numbers(
     as ``int`` or ``float`` converts it, by one ``np.fromstring`` (floats from :data:`KERNEL_BYTES`
     on, without a keyword: :func:`_floats_compiled`); None where ``text`` holds anything else, or a
     token that ``np.fromstring`` might read otherwise."""
-    if dtype is np.float64 and not keyword and len(text) >= KERNEL_BYTES:
+    if dtype is np.float64 and not keyword and use_kernels(len(text) >= KERNEL_BYTES):
         return _floats_compiled(text, count)
     allowed, after_sign = _NUMBER_BYTES[dtype]
     if text.translate(None, allowed).replace(keyword, b"") != b"":
