@@ -90,6 +90,34 @@ def test_build_with_check_writes_the_same_file_and_prints_the_check(
     )  # after the file's name
 
 
+def test_build_says_how_many_patches_fold_where_and_what_to_try(
+    tmp_path: Path, cube_obj: Path
+) -> None:
+    """The build line counts the folded patches (the check's grid test: the same count as
+    ``check``); with folds, one warning line names the first one's place and the options that
+    avoid them (the noisy coarse torus folds when interpolated, its limit does not)."""
+    import numpy as np
+
+    from g1patch import shapes
+    from g1patch.io.meshfile import write_quads
+
+    clean = g1patch("build", cube_obj, "-o", tmp_path / "cube.npz", "-q")
+    assert clean.stdout.rstrip().endswith("no folds") and "warning" not in clean.stderr
+    torus = shapes.torus(8, 4)
+    noisy = torus.vertices + np.random.default_rng(2).normal(0.0, 0.12, torus.vertices.shape)
+    write_quads(tmp_path / "noisy.obj", noisy, torus.faces)
+    network = tmp_path / "noisy.npz"
+    result = g1patch("build", tmp_path / "noisy.obj", "-o", network, "-q")
+    assert result.returncode == 0, result.stderr
+    folds = json.loads(g1patch("check", network, "--json").stdout)["folds"]
+    assert folds > 0 and f", {folds} folded patches" in result.stdout
+    (warning,) = [line for line in result.stderr.splitlines() if "fold" in line]
+    assert warning.startswith(f"g1patch: warning: {network}: {folds} patches fold (the first is ")
+    assert "--shape limit" in warning and "--refine 1" in warning
+    limit = g1patch("build", tmp_path / "noisy.obj", "-o", network, "-q", "--shape", "limit")
+    assert limit.stdout.rstrip().endswith("no folds") and "fold" not in limit.stderr
+
+
 def test_build_check_export(tmp_path: Path, cube_obj: Path) -> None:
     network = tmp_path / "cube.npz"
     result = g1patch(

@@ -507,6 +507,16 @@ class Surface:
 
     # -- what one does with it -------------------------------------------------------------
 
+    def folded_patches(self) -> np.ndarray:
+        """The indices of the patches that fold in themselves, by the check's grid test
+        (:func:`g1patch.continuity.folded_patches` on its ``FOLD_SAMPLES`` grid), at a fraction of
+        the full :meth:`check`'s cost; the check's ``folds`` also counts patches that fold across
+        an edge (a G1 angle above 90°, which an exactly G1 network never has)."""
+        from .continuity import folded_patches
+        from .continuity.grid import FOLD_SAMPLES
+
+        return np.flatnonzero(folded_patches(self.network.patches, FOLD_SAMPLES))
+
     def check(self, **options: Any) -> ContinuityReport:
         """The :class:`~g1patch.continuity.ContinuityReport` (G0 gaps, G1 angles, folds,
         fairness): :func:`g1patch.continuity.check` with ``options`` (``samples``,

@@ -80,14 +80,18 @@ def _build(args: argparse.Namespace) -> int:
             max_input_size=args.max_input_size,
         )
         progress(1, 2)
-        # with --check the file is written while the check runs
-        saving = surface.export(args.output, background=args.check)
-        progress(2, 2)
-    report = None
-    if args.check:
-        with _progress("check", args.quiet) as progress:
-            report = surface.check(progress=progress)
+        # the file is written while the folds (or the whole check) are measured
+        saving = surface.export(args.output, background=True)
+        report = None
+        if args.check:
+            with _progress("check", args.quiet) as checking:
+                report = surface.check(progress=checking)
+            folds = report.folds
+        else:
+            folded = surface.folded_patches()
+            folds = len(folded)
         saving.result()
+        progress(2, 2)
     if surface.repairs:
         note = surface.mesh.repair_note if surface.mesh is not None else ""
         print(f"g1patch: {args.mesh}: {note}", file=sys.stderr)
@@ -95,11 +99,42 @@ def _build(args: argparse.Namespace) -> int:
     vertices = "1 vertex" if fallback == 1 else f"{fallback} vertices"
     note = f"; {vertices} needed a fallback (degenerate or folded fans)" if fallback else ""
     print(
-        f"built {surface.n_patches} {args.method} patches from {args.mesh} -> {args.output}{note}"
+        f"built {surface.n_patches} {args.method} patches from {args.mesh} -> {args.output}, "
+        f"{_count(folds, 'folded patch', 'folded patches') if folds else 'no folds'}{note}"
     )
+    if folds:
+        first = report.fold_locations[0][0] if report is not None else int(folded[0])
+        hint = _fold_hint(surface, folds, first, args)
+        print(f"g1patch: warning: {args.output}: {hint}", file=sys.stderr)
     if report is not None:
         print(report.summary())
     return EXIT_OK
+
+
+def _count(count: int, one: str, many: str) -> str:
+    """``'1 folded patch'``, ``'3 folded patches'``."""
+    return f"{count:,} {one if count == 1 else many}"
+
+
+def _fold_hint(surface: Any, folds: int, patch: int, args: argparse.Namespace) -> str:
+    """How many patches fold, where the first is (its centre, in model units) and what to try:
+    the Catmull–Clark limit of the cage (approximating: it folds only where the limit does), or a
+    finer cage (``--refine 1``: the vertices interpolated are then nearer the limit's)."""
+    import numpy as np
+
+    centre = surface.network.patches.take(np.array([patch])).evaluate(np.array([[0.5, 0.5]]))
+    where = ", ".join(f"{value:.4g}" for value in np.ravel(centre)[:3])
+    tries = []
+    if surface.shape != "limit":
+        tries.append("--shape limit (the Catmull–Clark limit of the cage)")
+    if not args.refine:
+        tries.append("--refine 1 (a finer cage)")
+    advice = f"; try {' or '.join(tries)}" if tries else ""
+    which = "it is" if folds == 1 else "the first is"
+    return (
+        f"{_count(folds, 'patch folds', 'patches fold')} ({which} patch {patch}, near ({where}))"
+        f"{advice}; `g1patch render {args.output} --zebra` shows them"
+    )
 
 
 def _check(args: argparse.Namespace) -> int:
