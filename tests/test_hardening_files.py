@@ -209,6 +209,18 @@ CORRUPTIONS: dict[str, tuple[Callable[[Path, Path], Path], str]] = {
         "member 'frame_centre.npy'",
     ),
     "frame scale 0": (lambda g, t: rewrite(g, t, frame_scale=np.array(0.0)), "frame scale"),
+    "NaN uv": (
+        lambda g, t: rewrite(g, t, uv=np.full((24, 4, 2), np.nan)),
+        "member 'uv.npy': value nan at index (0, 0, 0) is not a number",
+    ),
+    "uv of 3 columns": (
+        lambda g, t: rewrite(g, t, uv=np.zeros((24, 4, 3))),
+        "member 'uv.npy': expected shape (P, 4, 2) = (24, 4, 2)",
+    ),
+    "uv as integers": (
+        lambda g, t: rewrite(g, t, uv=np.zeros((24, 4, 2), np.int64)),
+        "member 'uv.npy': expected floating-point",
+    ),
     "missing neighbor": (
         lambda g, t: rewrite(g, t, drop=("neighbor",)),
         "network file lacks neighbor",
@@ -694,7 +706,7 @@ def test_round_trips_are_exact(name: str, tmp_path: Path) -> None:
     assert (tmp_path / "again.npz").read_bytes() == (tmp_path / "n.npz").read_bytes()
 
 
-@pytest.mark.parametrize("version", [1, 2, 3])
+@pytest.mark.parametrize("version", [1, 2, 3, 4])
 @pytest.mark.parametrize("compressed", [True, False])
 def test_files_of_every_version_still_load(
     version: int, compressed: bool, gregory_file: Path, tmp_path: Path

@@ -473,6 +473,33 @@ def test_browser_draws_every_mode(
     assert _requests(browser) <= {"file", "data", "about"}, _requests(browser)
 
 
+@pytest.mark.slow
+def test_browser_draws_the_uv_checker_of_a_textured_cage(
+    browser: DevTools, cube_page: Path, tmp_path: Path
+) -> None:
+    """A cage with ``vt`` (one chart per face, 8 × 8 checker squares a unit, a face a quarter
+    unit: two squares a side): the ``uv`` mode draws the checker (light and dark alternate along
+    a scanline, where shading varies slowly), no errors; a page without UVs offers no such mode."""
+    square = [(0.0, 0.0), (0.25, 0.0), (0.25, 0.25), (0.0, 0.25)]
+    lines = [f"v {x} {y} {z}" for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+    lines += [f"vt {u} {v}" for u, v in square]
+    faces = [(0, 4, 6, 2), (1, 3, 7, 5), (0, 1, 5, 4), (2, 6, 7, 3), (0, 2, 3, 1), (4, 5, 7, 6)]
+    lines += ["f " + " ".join(f"{v + 1}/{k + 1}" for k, v in enumerate(face)) for face in faces]
+    source = tmp_path / "textured.obj"
+    source.write_text("\n".join(lines) + "\n")
+    page = write_view(tmp_path / "textured.html", g1patch.smooth(source).network)
+    shaded, covered = shoot(browser, page, "shaded")
+    checker, _ = shoot(browser, page, "uv")
+    _keep(checker, "textured-uv")
+    middle = range(int(0.35 * covered.shape[0]), int(0.65 * covered.shape[0]), 10)
+    assert np.median([_alternations(checker[y], covered[y]) for y in middle]) >= 4
+    assert np.median([_alternations(shaded[y], covered[y]) for y in middle]) <= 3
+    assert browser.evaluate("document.getElementById('uv-mode') !== null")
+    shoot(browser, cube_page, "shaded")
+    assert browser.evaluate("document.getElementById('uv-mode') === null")
+    assert _errors(browser) == []
+
+
 def test_cli_view_help(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as done:
         main(["view", "--help"])

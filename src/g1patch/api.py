@@ -301,7 +301,12 @@ def as_mesh(
             return source
         tags = _sharp_tags(source.vertices, source.faces, sharp_angle)
         return QuadMesh(
-            source.vertices, source.topology, source.tags + tags, source.source, source.repairs
+            source.vertices,
+            source.topology,
+            source.tags + tags,
+            source.source,
+            source.repairs,
+            uv=source.uv,
         )
     if isinstance(source, (str, os.PathLike)):
         path = Path(source)
@@ -472,6 +477,12 @@ class Surface:
         return self.network.n_patches
 
     @property
+    def uv(self) -> np.ndarray | None:
+        """Texture coordinates (P, 4, 2) at each patch's corners, from the mesh's ``vt``
+        (:attr:`PatchNetwork.uv`); None without."""
+        return self.network.uv
+
+    @property
     def provenance(self) -> dict[str, str]:
         """How it was made: method, shape, refine, repairs, source…
         (:attr:`PatchNetwork.provenance`)."""
@@ -557,7 +568,8 @@ class Surface:
           ``background=True`` writes it on a thread of its own and returns a future whose
           ``result()`` waits for it (:func:`g1patch.io.network_file.save_network_in_background`);
         * ``.obj``, ``.ply``, ``.stl``: triangles of :meth:`tessellate` (options ``resolution``,
-          ``force``: an explicit resolution above 20 M triangles needs it);
+          ``force``: an explicit resolution above 20 M triangles needs it), with the surface's
+          texture coordinates where it has them (OBJ ``vt``, PLY ``s``, ``t``);
         * ``.step``/``.stp``, ``.iges``/``.igs``: a B-rep, one B-spline face per patch (split4:
           per quad), exact for polynomial patches; a Gregory network by ``method`` (``auto``:
           its split4 re-assembly, exact G1 in CAD; ``fit``: fitted within ``fit_tolerance``, model
@@ -604,9 +616,15 @@ class Surface:
 
             resolution, force = options.get("resolution"), bool(options.get("force", False))
             if resolution is not None:
-                check_file_size(self.n_patches, resolution, suffix, force)
-            points, triangles = self.tessellate(resolution, force=force)
-            write_triangles(target, points, triangles)
+                check_file_size(
+                    self.n_patches, resolution, suffix, force, textured=self.uv is not None
+                )
+            from .tessellate import tessellate
+
+            mesh = tessellate(self.network, resolution, force=force)
+            write_triangles(
+                target, mesh.points, mesh.triangles, uv=mesh.uv, uv_triangles=mesh.uv_triangles
+            )
             return target
         if suffix == ".npz":
             _check_options(target, options, ("background",))

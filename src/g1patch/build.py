@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TypeVar
 
 import numpy as np
@@ -32,7 +32,7 @@ from .frame import Frame
 from .kernels import use_kernels
 from .memory import memory_budget
 from .mesh import INFINITE_SHARPNESS, QuadMesh, Tag
-from .network import Patches, PatchNetwork
+from .network import Patches, PatchNetwork, patch_uvs
 from .subdivision import catmull_clark_cage
 from .targets import SHAPES, Targets, shape_targets
 from .targets.interpolate import retreat
@@ -374,7 +374,8 @@ def build_network(
 
         mesh = subdivide(mesh, refine)
     if method == "corner" and shape == "legacy" and not refine:
-        return build_corner_network(mesh, tangents=tangents, twist=twist, normals=normals)
+        corner = build_corner_network(mesh, tangents=tangents, twist=twist, normals=normals)
+        return _with_uv(corner, mesh, 1)
     assembly = ASSEMBLIES[method]
     frame = Frame.of_points(mesh.vertices)
     local = mesh.with_vertices(frame.to_local(mesh.vertices))
@@ -399,7 +400,18 @@ def build_network(
     # said once the network exists: a build that then fails says one thing, its error
     for warning in assembly.warnings(mesh):
         logger.warning(warning)
-    return network
+    return _with_uv(network, mesh, assembly.patches_per_face)
+
+
+def _with_uv(network: PatchNetwork, mesh: QuadMesh, patches_per_face: int) -> PatchNetwork:
+    """``network`` with its patches' UVs (:func:`~g1patch.network.patch_uvs`) from the mesh's
+    face-varying ones, the hole faces' left out where they have no patches; as it is without."""
+    if mesh.uv is None:
+        return network
+    faces = np.arange(mesh.n_faces)
+    if network.n_patches != mesh.n_faces * patches_per_face:  # hole faces without patches
+        faces = np.flatnonzero(~mesh.features.holes)
+    return replace(network, uv=patch_uvs(mesh.uv[faces], patches_per_face))
 
 
 def _without_creases(mesh: QuadMesh) -> QuadMesh:

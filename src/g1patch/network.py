@@ -42,7 +42,11 @@ __all__ = [
     "edge_parameters",
     "network_from_mesh",
     "network_from_patch_points",
+    "patch_uvs",
 ]
+
+#: the parameter corners (u, v) of a patch, corner k: (0,0), (1,0), (1,1), (0,1)
+PARAMETER_CORNERS = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
 
 
 class Patches(Protocol):
@@ -97,6 +101,9 @@ class PatchNetwork:
     provenance: dict[str, str] = field(default_factory=dict)
     #: (P, 4) patch edges that are sharp on purpose (None: none are); see the module docstring
     seam: NDArray[np.bool_] = None  # type: ignore[assignment]
+    #: (P, 4, 2) texture coordinates at each patch's corners (u, v) = (0,0), (1,0), (1,1), (0,1),
+    #: bilinear between (the mesh's ``vt``); None without
+    uv: NDArray[np.float64] | None = None
 
     def __post_init__(self) -> None:
         count = len(self.patches)
@@ -117,6 +124,11 @@ class PatchNetwork:
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, as_float_array(name, getattr(self, name), (3,)))
         object.__setattr__(self, "seam", self._checked_seam())
+        if self.uv is not None:
+            uv = as_float_array("uv", self.uv, (4, 2))
+            if uv.shape != (count, 4, 2):
+                raise InputError(f"uv: expected shape ({count}, 4, 2), got {uv.shape}")
+            object.__setattr__(self, "uv", uv)
 
     def _checked_seam(self) -> NDArray[np.bool_]:
         """``seam`` as a (P, 4) bool array: True only on shared edges, equal on both sides."""
@@ -379,6 +391,23 @@ def check_consistent(network: PatchNetwork) -> None:
             f"network: patch {patch[bad]} edge {edge[bad]} points to patch {other[bad]} edge "
             f"{other_edge[bad]}, which does not point back"
         )
+
+
+def patch_uvs(face_uv: ArrayLike, patches_per_face: int) -> NDArray[np.float64]:
+    """Each patch's corner UVs (P, 4, 2) from the faces' ``face_uv`` (F, 4, 2), bilinear
+    ``uv(s, t) = (1−s)(1−t) u_0 + s(1−t) u_1 + s t u_2 + (1−s) t u_3``: one patch per face, its
+    corner k at face corner k; four (split4), sub-patch ``4f + k`` covering ``(s, t) = ((u, v) +
+    c_k)/2`` with ``c_k`` the face's parameter corner k. Corners on face corners are copied
+    exactly (the weights there are 0 and 1)."""
+    face_uv = np.asarray(face_uv, dtype=np.float64)
+    if patches_per_face == 1:
+        return np.ascontiguousarray(face_uv)
+    if patches_per_face != 4:
+        raise InputError(f"patches_per_face: expected 1 or 4, got {patches_per_face}")
+    st = 0.5 * (PARAMETER_CORNERS[None, :, :] + PARAMETER_CORNERS[:, None, :])  # [k, corner]
+    s, t = st[..., 0], st[..., 1]
+    weights = np.stack([(1 - s) * (1 - t), s * (1 - t), s * t, (1 - s) * t], axis=-1)
+    return np.einsum("kjc,fcd->fkjd", weights, face_uv).reshape(-1, 4, 2)
 
 
 def network_from_mesh(

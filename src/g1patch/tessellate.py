@@ -10,6 +10,13 @@ Points on a shared corner or edge get one index for all patches that touch them 
 numbered in the edge's canonical direction), so the triangle mesh has no cracks by construction: on
 a closed network every triangle edge has exactly two triangles. Samples on a collapsed edge all
 become the corner point, and the triangles that lose an area there are dropped.
+
+**Texture coordinates.** A network with :attr:`~g1patch.network.PatchNetwork.uv` gets them per
+sample, bilinear in each patch's corner UVs, as face-varying data: one UV vertex per distinct
+(point, UV) pair (:attr:`TriangleMesh.uv`, ``uv_points``, ``uv_triangles``), so a point on a seam
+in UV space has one UV per side and the geometry stays welded. Edge samples are interpolated in
+the edge's canonical direction, ``(1 − s) A + s B``, so two patches that agree on an edge's end
+UVs give bit-identical UVs along it and share its UV vertices.
 """
 
 from __future__ import annotations
@@ -54,11 +61,16 @@ _BLOCK_SAMPLES = 1 << 18
 
 @dataclass(frozen=True)
 class TriangleMesh:
-    """Points (P, 3), unit normals (P, 3) and counter-clockwise triangles (T, 3)."""
+    """Points (P, 3), unit normals (P, 3) and counter-clockwise triangles (T, 3); with texture
+    coordinates, ``uv`` (K, 2), the point of each (``uv_points`` (K,)) and the triangles' UV
+    vertices ``uv_triangles`` (T, 3): ``points[uv_points[uv_triangles]] == points[triangles]``."""
 
     points: NDArray[np.float64]
     normals: NDArray[np.float64]
     triangles: NDArray[np.int64]
+    uv: NDArray[np.float64] | None = None
+    uv_points: NDArray[np.int64] | None = None
+    uv_triangles: NDArray[np.int64] | None = None
 
 
 def _grid_indices(network: PatchNetwork, resolution: int) -> tuple[NDArray[np.int64], int]:
@@ -85,6 +97,45 @@ def _grid_indices(network: PatchNetwork, resolution: int) -> tuple[NDArray[np.in
     index[:, 0, 0], index[:, -1, 0] = network.corner_ids[:, 0], network.corner_ids[:, 1]
     index[:, -1, -1], index[:, 0, -1] = network.corner_ids[:, 2], network.corner_ids[:, 3]
     return index, face_base + count * inner * inner
+
+
+def _uv_grid(
+    uv: NDArray[np.float64], reversed_: NDArray[np.bool_], grid: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """UVs (N, r, r, 2) of every grid sample: inside, bilinear ``(1−s)(1−t) c_0 + s(1−t) c_1 +
+    s t c_2 + (1−s) t c_3``; on edge k, ``(1 − s) A + s B`` along its canonical direction (A, B
+    the UVs of its canonical start and end), so neighbours agree bit for bit."""
+    s, t = grid[:, None, None], grid[None, :, None]
+    c = uv[:, :, None, None, :]
+    out = (
+        (1 - s) * (1 - t) * c[:, 0]
+        + s * (1 - t) * c[:, 1]
+        + s * t * c[:, 2]
+        + (1 - s) * t * c[:, 3]
+    )
+    r = grid.size
+    m = np.arange(r)
+    rows = ((m, 0 * m), (0 * m + r - 1, m), (r - 1 - m, 0 * m + r - 1), (0 * m, r - 1 - m))
+    for k, (i, j) in enumerate(rows):  # the 4 edges, counter-clockwise samples m = 0..r−1
+        back = reversed_[:, k, None, None]
+        first = np.where(back, uv[:, (k + 1) % 4, None], uv[:, k, None])
+        last = np.where(back, uv[:, k, None], uv[:, (k + 1) % 4, None])
+        along = np.where(back, grid[::-1][None, :, None], grid[None, :, None])
+        out[:, i, j] = (1 - along) * first + along * last
+    return out
+
+
+def _uv_vertices(
+    uv: NDArray[np.float64], point: NDArray[np.int64], corners: NDArray[np.int64]
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+    """The distinct (point, UV) pairs of the samples ``corners`` (T, 3) use: their UVs, points and
+    the triangles over them."""
+    used = np.unique(corners)
+    keys = np.column_stack([point[used], (uv[used] + 0.0).view(np.int64)])  # -0.0 as 0.0
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    lookup = np.empty(point.size, dtype=np.int64)
+    lookup[used] = inverse.reshape(-1)
+    return uv[used[first]], point[used[first]], lookup[corners]
 
 
 def triangle_count(n_patches: int, resolution: int) -> int:
@@ -151,21 +202,28 @@ def check_size(
     return triangles
 
 
-def _estimated_file_size(suffix: str, n_points: int, n_triangles: int) -> int:
+def _estimated_file_size(
+    suffix: str, n_points: int, n_triangles: int, textured: bool = False
+) -> int:
     """Bytes of a triangle mesh file, about: OBJ ~60 bytes a point (shortest round-trip digits)
-    and 3 indices a triangle; binary PLY 24 bytes a point, 13 a triangle; binary STL 50 a
+    and 3 indices a triangle, with texture coordinates ~40 bytes a ``vt`` and twice the indices;
+    binary PLY 24 bytes a point (32 with ``s``, ``t``), 13 a triangle; binary STL 50 a
     triangle."""
     if suffix == ".obj":
-        return 60 * n_points + (3 * (len(str(max(n_points, 1))) + 1) + 2) * n_triangles
+        index = 3 * (len(str(max(n_points, 1))) + 1) * (2 if textured else 1) + 2
+        return (100 if textured else 60) * n_points + index * n_triangles
     if suffix == ".ply":
-        return 24 * n_points + 13 * n_triangles
+        return (32 if textured else 24) * n_points + 13 * n_triangles
     return 84 + 50 * n_triangles
 
 
-def check_file_size(n_patches: int, resolution: int, suffix: str, force: bool = False) -> None:
+def check_file_size(
+    n_patches: int, resolution: int, suffix: str, force: bool = False, textured: bool = False
+) -> None:
     """Refuse (:class:`TooLargeError`) a triangle file of ``n_patches`` at an explicit
     ``resolution`` above :data:`MAX_TRIANGLES` triangles unless ``force``, saying how large the
-    file and the memory would be and which resolution stays within the cap."""
+    file (``textured``: with texture coordinates) and the memory would be and which resolution
+    stays within the cap."""
     if resolution < 2:
         return  # tessellate names the bad resolution
     triangles = triangle_count(n_patches, resolution)
@@ -173,7 +231,7 @@ def check_file_size(n_patches: int, resolution: int, suffix: str, force: bool = 
         return
     points = n_patches * (resolution - 1) ** 2
     largest = 1 + int((MAX_TRIANGLES / (2 * max(n_patches, 1))) ** 0.5)
-    size = _size_text(_estimated_file_size(suffix, points, triangles), "B")
+    size = _size_text(_estimated_file_size(suffix, points, triangles, textured), "B")
     memory = _size_text(estimated_memory(n_patches, resolution), "B")
     raise TooLargeError(
         f"--resolution {resolution} on {n_patches} patches would write {_size_text(triangles)} "
@@ -222,6 +280,7 @@ def tessellate(
         first, second = triangles[0, block], triangles[1, block]
         first[..., 0], first[..., 1], first[..., 2] = p00, p10, p11
         second[..., 0], second[..., 1], second[..., 2] = p00, p11, p01
+    sample_point = index.reshape(-1) if network.uv is not None else None
     del index
     triangles = triangles.reshape(-1, 3)
     keep = (
@@ -229,6 +288,17 @@ def tessellate(
         & (triangles[:, 1] != triangles[:, 2])
         & (triangles[:, 0] != triangles[:, 2])
     )
+    uv_parts = None
+    if network.uv is not None and sample_point is not None:
+        samples = np.arange(count * r * r).reshape(count, r, r)
+        p00, p10 = samples[:, a, b], samples[:, a + 1, b]
+        p11, p01 = samples[:, a + 1, b + 1], samples[:, a, b + 1]
+        corners = np.stack(
+            [np.stack([p00, p10, p11], axis=-1), np.stack([p00, p11, p01], axis=-1)]
+        ).reshape(-1, 3)[keep]
+        uv_grid = _uv_grid(network.uv, network.edge_reversed, grid).reshape(-1, 2)
+        uv_parts = _uv_vertices(uv_grid, sample_point, corners)
+        del samples, corners, uv_grid, sample_point
     if not keep.all():
         triangles = triangles[keep]
     del keep
@@ -238,9 +308,13 @@ def tessellate(
     if not used.all():
         renumber = np.cumsum(used) - 1
         np.take(renumber, triangles, out=triangles)
-        del renumber
         points, point_normals = points[used], point_normals[used]
+        if uv_parts is not None:
+            uv_parts = (uv_parts[0], renumber[uv_parts[1]], uv_parts[2])
+        del renumber
     length = np.linalg.norm(point_normals, axis=-1, keepdims=True)
     np.divide(point_normals, length, out=point_normals, where=length > 0)
     point_normals[~(length > 0)[:, 0]] = 0.0
-    return TriangleMesh(points, point_normals, triangles)
+    if uv_parts is None:
+        return TriangleMesh(points, point_normals, triangles)
+    return TriangleMesh(points, point_normals, triangles, *uv_parts)

@@ -21,7 +21,7 @@ from .tags import INFINITE_SHARPNESS, Tag, _refine_tags, _renumber_tags
 from .validate import _few
 from .vertex_sectors import sectors
 
-__all__ = ["SPLIT_SHARPNESS", "refine_polygons"]
+__all__ = ["SPLIT_SHARPNESS", "refine_corner_uvs", "refine_polygons"]
 
 logger = logging.getLogger(__name__)
 
@@ -237,6 +237,22 @@ def refine_polygons(
     return np.concatenate([vertices, edge_points, face_points]), quads, corner_face
 
 
+def refine_corner_uvs(uv: FloatArray, sizes: IntArray) -> FloatArray:
+    """Face-varying texture coordinates through :func:`refine_polygons`' split: ``uv`` (C, 2),
+    one per polygon corner, becomes (C, 4, 2), the corners of quad ``offsets[f] + i``:
+    ``(u_i, (u_i + u_{i+1})/2, (1/n) Σ u_k, (u_{i-1} + u_i)/2)``, bilinear on a quad (edge
+    midpoints and centre at parameters ½), the same per face, so seams in UV space stay."""
+    following = _following_corner(sizes)
+    preceding = np.empty_like(following)
+    preceding[following] = np.arange(following.size)
+    offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    centre = np.add.reduceat(uv, offsets, axis=0) / sizes[:, None]
+    corner_face = np.repeat(np.arange(sizes.size), sizes)
+    return np.stack(
+        [uv, 0.5 * (uv + uv[following]), centre[corner_face], 0.5 * (uv[preceding] + uv)], axis=1
+    )
+
+
 #: creases at least this sharp shape the smooth split (the interpolating rule's threshold)
 SPLIT_SHARPNESS = 1.0
 
@@ -273,18 +289,21 @@ def _quads_from_polygons(
     split: bool,
     source: str | None,
     tags: tuple[Tag, ...],
-) -> tuple[FloatArray, IntArray, tuple[Tag, ...], PolygonCage | None]:
+    uv: FloatArray | None = None,
+) -> tuple[FloatArray, IntArray, tuple[Tag, ...], PolygonCage | None, FloatArray | None]:
     """Drop unused vertices and split non-quads of checked polygons (see
     :meth:`QuadMesh.from_arrays <g1patch.mesh.QuadMesh.from_arrays>`); the polygons split, as a
-    :class:`PolygonCage`, or None where all were quads.
+    :class:`PolygonCage`, or None where all were quads; the quads' corner UVs (F, 4, 2) of the
+    polygons' ``uv`` (C, 2) (:func:`refine_corner_uvs`), None without.
 
     When anything is dropped or split, the polygon topology is validated first, so that errors
     name the input's faces and vertices.
     """
     used = np.bincount(corners, minlength=points.shape[0]) > 0
     non_quads = np.flatnonzero(sizes != 4)
+    quad_uv = None if uv is None else uv.reshape(-1, 4, 2) if non_quads.size == 0 else None
     if used.all() and non_quads.size == 0:
-        return points, corners.reshape(-1, 4), tags, None
+        return points, corners.reshape(-1, 4), tags, None, quad_uv
     if non_quads.size and not split:
         raise MeshError(
             f"{non_quads.size} faces are not quads (face {non_quads[0]} has {sizes[non_quads[0]]} "
@@ -303,7 +322,7 @@ def _quads_from_polygons(
         points, corners = points[used], new_index[corners]
         tags = _renumber_tags(tags, new_index)
     if non_quads.size == 0:
-        return points, corners.reshape(-1, 4), tags, None
+        return points, corners.reshape(-1, 4), tags, None, quad_uv
     cage = PolygonCage(points, corners, sizes, tags)
     sharp = _crease_edges(tags, corners, sizes, points.shape[0])
     tags = _refine_tags(tags, corners, sizes, points.shape[0])
@@ -315,4 +334,4 @@ def _quads_from_polygons(
         non_quads.size,
         sizes.size,
     )
-    return points, quads, tags, cage
+    return points, quads, tags, cage, None if uv is None else refine_corner_uvs(uv, sizes)

@@ -27,13 +27,13 @@ from ..errors import (
 )
 from .cage import PolygonCage
 from .features import Features, _read_only, features_from_tags
-from .polygons import _quads_from_polygons, refine_polygons
+from .polygons import _quads_from_polygons, refine_corner_uvs, refine_polygons
 from .repair import repair_polygons
 from .tags import Tag, _refine_tags
 from .topology import QuadTopology
 from .validate import _check_face_areas, _check_finite, _checked_polygons
 
-__all__ = ["REPAIRABLE", "QuadMesh", "strict_meshes", "subdivide"]
+__all__ = ["REPAIRABLE", "UV_DROPPED", "QuadMesh", "strict_meshes", "subdivide"]
 
 logger = logging.getLogger(__name__)
 
@@ -42,6 +42,9 @@ FloatArray = NDArray[np.float64]
 
 #: what :meth:`QuadMesh.from_arrays` repairs unless strict (:mod:`g1patch.mesh.repair`)
 REPAIRABLE = (DegenerateFaceError, NonManifoldError, OrientationError, ValenceError)
+
+#: the repair note when texture coordinates cannot follow a repair (faces merged)
+UV_DROPPED = "texture coordinates (vt) dropped: faces were merged, their UVs cannot follow"
 
 _STRICT: ContextVar[bool] = ContextVar("g1patch_strict_meshes", default=False)
 
@@ -68,6 +71,8 @@ class QuadMesh:
     :meth:`from_arrays` split into these quads (:class:`~g1patch.mesh.cage.PolygonCage`), where
     some face was not a quad; the limit shapes take their first Catmull–Clark step from it
     (:func:`g1patch.subdivision.catmull_clark_cage`). New positions (:meth:`with_vertices`) drop it.
+    ``uv``: texture coordinates per face corner (F, 4, 2), face-varying (a vertex may have other
+    UVs in other faces: a seam in UV space), the file's ``vt``; None without.
     """
 
     vertices: FloatArray
@@ -76,6 +81,7 @@ class QuadMesh:
     source: str | None = None
     repairs: tuple[str, ...] = ()
     cage: PolygonCage | None = None
+    uv: FloatArray | None = None
 
     def __post_init__(self) -> None:
         with named_errors(self.source):
@@ -87,6 +93,9 @@ class QuadMesh:
                 )
             _check_finite(vertices)
             _check_face_areas(vertices, self.topology.faces)
+            if self.uv is not None:
+                uv = _checked_uv(self.uv, (self.topology.n_faces, 4, 2))
+                object.__setattr__(self, "uv", _read_only(uv.copy()))
         object.__setattr__(self, "vertices", _read_only(vertices.copy()))
         object.__setattr__(self, "tags", tuple(Tag(*tag) for tag in self.tags))
         object.__setattr__(self, "repairs", tuple(self.repairs))
@@ -101,6 +110,7 @@ class QuadMesh:
         source: str | None = None,
         tags: Sequence[Tag] = (),
         strict: bool | None = None,
+        uv: ArrayLike | None = None,
     ) -> QuadMesh:
         """Validate and build a quad mesh from positions and faces ((nf, 4) array or lists of
         indices).
@@ -121,9 +131,10 @@ class QuadMesh:
         repairs: tuple[str, ...] = ()
         with named_errors(source):
             points, corners, sizes = _checked_polygons(vertices, faces, tags)
+            corner_uv = None if uv is None else _checked_uv(uv, (corners.size, 2))
             try:
-                quad_points, quads, quad_tags, cage = _quads_from_polygons(
-                    points, corners, sizes, split, source, tags
+                quad_points, quads, quad_tags, cage, quad_uv = _quads_from_polygons(
+                    points, corners, sizes, split, source, tags, corner_uv
                 )
                 topology = QuadTopology.from_faces(quads, quad_points.shape[0])
             except REPAIRABLE as refusal:
@@ -133,12 +144,24 @@ class QuadMesh:
                 if not repaired.repairs:
                     raise refusal
                 repairs = repaired.repairs
+                if corner_uv is not None and repaired.corner_source is not None:
+                    if repaired.merged:
+                        corner_uv = None
+                        repairs += (UV_DROPPED,)
+                    else:
+                        corner_uv = corner_uv[repaired.corner_source]
                 logger.info("%s: repaired: %s", source or "mesh", ", ".join(repairs))
-                quad_points, quads, quad_tags, cage = _quads_from_polygons(
-                    repaired.points, repaired.corners, repaired.sizes, split, source, repaired.tags
+                quad_points, quads, quad_tags, cage, quad_uv = _quads_from_polygons(
+                    repaired.points,
+                    repaired.corners,
+                    repaired.sizes,
+                    split,
+                    source,
+                    repaired.tags,
+                    corner_uv,
                 )
                 topology = QuadTopology.from_faces(quads, quad_points.shape[0])
-        return cls(quad_points, topology, quad_tags, source, repairs, cage)
+        return cls(quad_points, topology, quad_tags, source, repairs, cage, quad_uv)
 
     def __repr__(self) -> str:
         """``<QuadMesh 8 vertices, 6 quads, 12 edges, closed, bbox (-1, -1, -1)…(1, 1, 1),
@@ -159,9 +182,15 @@ class QuadMesh:
         return picture("mesh", self, self.n_faces)
 
     def with_vertices(self, new_vertices: ArrayLike) -> QuadMesh:
-        """The same topology, tags and repair record with new positions (validated the same way)."""
+        """The same topology, tags, repair record and UVs with new positions (validated the same
+        way)."""
         return QuadMesh(
-            np.asarray(new_vertices), self.topology, self.tags, self.source, self.repairs
+            np.asarray(new_vertices),
+            self.topology,
+            self.tags,
+            self.source,
+            self.repairs,
+            uv=self.uv,
         )
 
     @property
@@ -208,12 +237,27 @@ def subdivide(mesh: QuadMesh) -> QuadMesh:
     """One Catmull–Clark topology step with linear positions: 4 F quads on V + E + F vertices.
 
     Old vertices keep their indices, edge midpoints follow (in edge order), then face centroids
-    (:func:`refine_polygons`). Crease and hole tags are carried over.
+    (:func:`refine_polygons`). Crease and hole tags are carried over, UVs bilinearly
+    (:func:`refine_corner_uvs`).
     """
     corners = mesh.faces.ravel()
     sizes = np.full(mesh.n_faces, 4, dtype=np.int64)
     vertices, quads, _ = refine_polygons(mesh.vertices, corners, sizes)
     tags = _refine_tags(mesh.tags, corners, sizes, mesh.n_vertices)
+    uv = None if mesh.uv is None else refine_corner_uvs(mesh.uv.reshape(-1, 2), sizes)
     return QuadMesh(
-        vertices, QuadTopology.from_faces(quads, vertices.shape[0]), tags, mesh.source, mesh.repairs
+        vertices,
+        QuadTopology.from_faces(quads, vertices.shape[0]),
+        tags,
+        mesh.source,
+        mesh.repairs,
+        uv=uv,
     )
+
+
+def _checked_uv(uv: ArrayLike, shape: tuple[int, ...]) -> FloatArray:
+    """Texture coordinates of the expected ``shape``, finite, as float64 (:class:`InputError`)."""
+    array = as_float_array("uv", uv, shape[1:])
+    if array.shape != shape:
+        raise InputError(f"uv: expected shape {shape} (one per face corner), got {array.shape}")
+    return array

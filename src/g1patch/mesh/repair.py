@@ -67,6 +67,10 @@ class Repaired(NamedTuple):
     sizes: IntArray
     tags: tuple[Tag, ...]
     repairs: tuple[str, ...]
+    #: per repaired corner, the input corner it comes from (what face-varying data follows)
+    corner_source: IntArray | None = None
+    #: whether faces were merged (rule 4): face-varying data cannot follow a merge
+    merged: bool = False
 
 
 class _Polygons(NamedTuple):
@@ -78,6 +82,7 @@ class _Polygons(NamedTuple):
     source: IntArray
     holes: BoolArray
     origin: IntArray
+    corner_source: IntArray  # per corner, the input corner it comes from
 
 
 def _plural(count: int, noun: str, plural: str | None = None) -> str:
@@ -106,7 +111,14 @@ def _regroup(
     counts = np.bincount(face[order], minlength=source.size)
     alive = counts >= 3
     order = order[alive[face[order]]]
-    return _Polygons(p.corners[order], counts[alive], source[alive], holes[:, alive], p.origin)
+    return _Polygons(
+        p.corners[order],
+        counts[alive],
+        source[alive],
+        holes[:, alive],
+        p.origin,
+        p.corner_source[order],
+    )
 
 
 def _cut_repeats(p: _Polygons) -> tuple[_Polygons, IntArray]:
@@ -267,7 +279,7 @@ def _sheets(p: _Polygons, notes: _Notes) -> tuple[_Polygons, bool]:
     notes.add("vertices", p.origin[copied[~crowded_ends[copied]]])
     notes.add("flipped", p.source[flip])
 
-    split = _Polygons(corners, p.sizes, p.source, p.holes, origin)
+    split = _Polygons(corners, p.sizes, p.source, p.holes, origin, p.corner_source)
     if flip.any():
         reversed_position = np.where(
             flip[face], (p.sizes[face] - position) % p.sizes[face], position
@@ -494,6 +506,7 @@ def repair_polygons(
         np.arange(sizes.size, dtype=np.int64),
         holes,
         np.arange(n_input, dtype=np.int64),
+        np.arange(corners.size, dtype=np.int64),
     )
     notes = _Notes()
 
@@ -521,4 +534,12 @@ def repair_polygons(
     index = np.cumsum(keep) - 1
     p = p._replace(corners=index[p.corners], origin=p.origin[keep])
     carried = _carry_tags(tags, p, corners, sizes, n_input, notes)
-    return Repaired(points[p.origin], p.corners, p.sizes, carried, _phrases(notes))
+    return Repaired(
+        points[p.origin],
+        p.corners,
+        p.sizes,
+        carried,
+        _phrases(notes),
+        p.corner_source,
+        bool(notes.get("dissolved").size),
+    )

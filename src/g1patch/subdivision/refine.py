@@ -14,6 +14,7 @@ from ..errors import InputError
 from ..mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology, Tag, refine_polygons
 from ..mesh.cage import PolygonCage, PolygonTopology
 from ..mesh.features import features_from_tags
+from ..mesh.polygons import refine_corner_uvs
 from .features import (
     RULE_CREASE,
     RULE_SMOOTH,
@@ -228,7 +229,12 @@ def catmull_clark_cage(mesh: QuadMesh) -> QuadMesh:
     level = _CageLevel(cage.points, topology, edge, vertex, features.holes, mode, chaikin)
     child = _step(level)
     return QuadMesh(
-        child.x, mesh.topology, _level_tags(cage.tags, child), mesh.source, mesh.repairs
+        child.x,
+        mesh.topology,
+        _level_tags(cage.tags, child),
+        mesh.source,
+        mesh.repairs,
+        uv=mesh.uv,
     )
 
 
@@ -236,7 +242,9 @@ def refine(mesh: QuadMesh, levels: int = 1, sharpness: ArrayLike | None = None) 
     """``levels`` Catmull–Clark steps (:mod:`g1patch.subdivision`) on the topology of
     :func:`~g1patch.mesh.subdivide` (old vertices, then one per edge, then one per face). Features
     from the mesh's tags, edge sharpness overridden by ``sharpness`` where given; the result's tags
-    carry the child features (the other tags are kept). ``levels = 0`` returns the mesh itself."""
+    carry the child features (the other tags are kept), its UVs are the parent faces' bilinear
+    UVs at the children's corners (:func:`~g1patch.mesh.polygons.refine_corner_uvs` each step).
+    ``levels = 0`` returns the mesh itself."""
     return refine_grids(mesh, levels, sharpness)[0]
 
 
@@ -278,4 +286,9 @@ def refine_grids(
         grid = fine
     if not levels:
         return mesh, grid
-    return QuadMesh(level.x, level.topology, _level_tags(mesh.tags, level), mesh.source), grid
+    uv = mesh.uv
+    if uv is not None:
+        for _ in range(int(levels)):
+            uv = refine_corner_uvs(uv.reshape(-1, 2), np.full(uv.shape[0], 4, dtype=np.int64))
+    refined = QuadMesh(level.x, level.topology, _level_tags(mesh.tags, level), mesh.source, uv=uv)
+    return refined, grid

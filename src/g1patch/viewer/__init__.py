@@ -15,7 +15,11 @@ mode, the URL hash (``#shaded``, ``#zebra``, ``#deviation``) chooses the first o
 * ``deviation``: every patch edge drawn as a band about 3 pixels wide in the colour of its G1
   angle (:func:`g1patch.continuity.check`'s per-edge measure, the colour scale of
   :func:`g1patch.render.render`: plasma, logarithmic when the angles span decades), with a legend;
-  a patch smaller than 8 pixels on the screen is filled with its worst edge's colour instead.
+  a patch smaller than 8 pixels on the screen is filled with its worst edge's colour instead;
+* ``uv`` (key 4; only for a network with texture coordinates, :attr:`PatchNetwork.uv`, the mesh's
+  ``vt``): a procedural checker of the UVs, 8 × 8 squares a unit, no image needed. The page holds
+  each patch's corner UVs (float32) and gives the geometry a ``texcoord`` attribute, bilinear
+  over the patch's grid.
 
 Intended seams (``network.seam``) are drawn apart as green lines in every mode; the continuity
 summary (G1 angles, G0 gap, folds, seams) sits in a corner.
@@ -351,6 +355,7 @@ def _page(
         "exact": bool(report.passes()),
         "scale": _colour_scale(sides),
         "stripes": DEFAULT_STRIPES,
+        "uv": network.uv is not None,
     }
     imports = {
         "three": _module_url(_vendor("three.module.min.js")),
@@ -364,6 +369,9 @@ def _page(
         b"@@NORMALS@@": _base64(samples.normals),
         b"@@SIDES@@": _base64(sides),
         b"@@SEAMS@@": _base64(seams.astype(np.float32)),
+        b"@@TEXCOORDS@@": _base64(
+            np.zeros(0, np.float32) if network.uv is None else network.uv.astype(np.float32)
+        ),
         b"@@VERSION@@": VENDORED_THREE_VERSION.encode(),
         b"@@LICENSE@@": _html_text(_vendor("LICENSE-three.txt")).encode(),
     }

@@ -3,7 +3,9 @@ PLY / STL.
 
 * OBJ is read by a small parser of its own (``v``, ``f``, OpenSubdiv ``t`` tag lines; other OBJ
   statements are skipped, unknown ones are errors) so that every error names its line and mixed
-  polygon lists keep their order.
+  polygon lists keep their order. Texture coordinates (``vt``, with faces ``v/vt`` or
+  ``v/vt/vn``) are read by a pass of their own that runs only on files that have them
+  (:func:`~g1patch.io.meshfile.obj._obj_uvs`), as one UV per face corner.
 * PLY: files of the common layout (x, y, z and other scalars per vertex, scalars and one list of
   vertex indices per face) are read here, binary as NumPy records, ASCII as OBJ and OFF text is;
   any other by meshio (``meshio.ply``), after checking the header here: meshio silently returns
@@ -116,7 +118,13 @@ def read_mesh(
     if sharp_angle is not None:
         tags = tags + _sharp_angle_tags(path, parsed, sharp_angle)
     return QuadMesh.from_arrays(
-        parsed.vertices, parsed.faces, split=split, source=str(path), tags=tags, strict=strict
+        parsed.vertices,
+        parsed.faces,
+        split=split,
+        source=str(path),
+        tags=tags,
+        strict=strict,
+        uv=parsed.uv,
     )
 
 

@@ -1,5 +1,6 @@
 """OBJ: ``v``, ``f`` and OpenSubdiv ``t`` tag lines, other statements skipped or refused; read
-by the compiled kernel, the vectorised fast path or, where they decline, line by line."""
+by the compiled kernel, the vectorised fast path or, where they decline, line by line; ``vt`` by
+a pass of its own, only in files that have them (:func:`_obj_uvs`)."""
 
 from __future__ import annotations
 
@@ -45,7 +46,117 @@ def _read_obj(path: Path, data: bytes) -> _Parsed:
     (:func:`_read_obj_lines`) where it declines.
     """
     parsed = _obj_compiled(data) if use_kernels(len(data) >= KERNEL_BYTES) else _obj_fast(data)
-    return parsed if parsed is not None else _read_obj_lines(path, data)
+    parsed = parsed if parsed is not None else _read_obj_lines(path, data)
+    if not _mentions_uvs(data):  # the one cost to files without texture coordinates
+        return parsed
+    return parsed._replace(uv=_obj_uvs(path, data, parsed))
+
+
+def _mentions_uvs(data: bytes) -> bool:
+    """Whether some ``t`` of ``data`` ends a ``vt`` at the start of a token: a ``memchr`` for the
+    byte ``t``, which numbers never hold (a search for ``vt`` stops at every ``v``: 7× slower)."""
+    at = data.find(b"t")
+    while at >= 0:
+        if at and data[at - 1] == ord("v") and (at == 1 or data[at - 2] in b" \t\r\n"):
+            return True
+        at = data.find(b"t", at + 1)
+    return False
+
+
+#: a face corner ``v/vt…`` as its ``vt`` index (``v//vn`` as an empty token)
+_VT_OF_CORNER = re.compile(rb"[^ \n/]*/([^ \n/]*)[^ \n]*")
+
+
+def _obj_uvs(path: Path, data: bytes, parsed: _Parsed) -> NDArray[np.float64] | None:
+    """Texture coordinates per face corner (C, 2), in the readers' face order: ``vt u [v [w]]``
+    (v = 0 when absent), named by the faces' ``v/vt`` or ``v/vt/vn`` corners (1-based; negative
+    ones count back from the last ``vt`` defined so far). None where the file has no ``vt`` or
+    some corner names none (``v``, ``v//vn``): UVs are all or nothing. Vectorised; where it
+    declines, :func:`_obj_uvs_lines` reads them (and names the line of a bad one)."""
+    sizes = _face_sizes(parsed.faces)
+    lines = _scan(data)
+    if lines is None:
+        return _obj_uvs_lines(path, data, sizes)
+    first, second, third = lines.byte(0), lines.byte(1), lines.byte(2)
+    is_uv = (first == ord("v")) & (second == ord("t")) & (third == ord(" "))
+    if not is_uv.any():
+        return None
+    uv_rows = np.flatnonzero(is_uv)
+    face_rows = np.flatnonzero((first == ord("f")) & (second == ord(" ")))
+    uv_tokens = lines.tokens[uv_rows]
+    if (
+        (uv_tokens < 3).any()
+        or (uv_tokens > 4).any()
+        or not np.array_equal(lines.tokens[face_rows] - 1, sizes)
+    ):
+        return _obj_uvs_lines(path, data, sizes)
+    text, count = _VT_OF_CORNER.subn(rb"\1", lines.chunk(face_rows))
+    if count != sizes.sum():
+        return None  # a corner without '/': no UVs
+    uv_text = lines.chunk(uv_rows)
+    values: NDArray[np.float64] | None = None
+    if (uv_tokens == 3).all() and (
+        numbers := _numbers(uv_text, b"vt", 2 * uv_rows.size, np.float64)
+    ) is not None:
+        values = numbers.reshape(-1, 2)
+    else:  # 'vt u v w', or tokens np.fromstring does not read as float does
+        values = _gather_floats(uv_text, uv_tokens, (1, 2))
+    written = _numbers(text, b"f", int(sizes.sum()), np.int64)
+    if values is None or written is None or (written == 0).any():
+        return _obj_uvs_lines(path, data, sizes)
+    before = np.repeat(np.cumsum(is_uv)[face_rows], sizes)
+    corners = np.where(written > 0, written - 1, before + written)
+    if corners.min() < 0 or corners.max() >= len(values) or not np.isfinite(values).all():
+        return _obj_uvs_lines(path, data, sizes)
+    return values[corners]
+
+
+def _face_sizes(faces: NDArray[np.int64] | list[NDArray[np.int64]]) -> NDArray[np.int64]:
+    if isinstance(faces, np.ndarray):
+        return np.full(faces.shape[0], faces.shape[1], dtype=np.int64)
+    return np.array([len(face) for face in faces], dtype=np.int64)
+
+
+def _obj_uvs_lines(path: Path, data: bytes, sizes: NDArray[np.int64]) -> NDArray[np.float64] | None:
+    """:func:`_obj_uvs` line by line, the reference: a bad ``vt`` or ``vt`` index names its line."""
+    values: list[tuple[float, float]] = []
+    corners: list[int] = []
+    for number, line in enumerate(_decode(path, data), start=1):
+        parts = line.split("#", 1)[0].split()
+        if not parts:
+            continue
+        if parts[0] == "vt":
+            try:
+                u, v = float(parts[1]), float(parts[2]) if len(parts) > 2 else 0.0
+                if len(parts) > 4 or not (np.isfinite(u) and np.isfinite(v)):
+                    raise ValueError
+            except (ValueError, IndexError):
+                expected = "expected 'vt u [v [w]]' with finite numbers"
+                raise FormatError(path, f"{expected}, got {line.strip()!r}", number) from None
+            values.append((u, v))
+        elif parts[0] == "f":
+            for token in parts[1:]:
+                vt = token.split("/")[1] if "/" in token else ""
+                if not vt:
+                    return None  # a corner without a texture coordinate: no UVs
+                try:
+                    index = int(vt)
+                except ValueError:
+                    raise FormatError(
+                        path, f"expected an integer texture index in {token!r}", number
+                    ) from None
+                at = index - 1 if index > 0 else len(values) + index
+                if index == 0 or not 0 <= at < len(values):
+                    raise FormatError(
+                        path,
+                        f"face corner {token!r} names texture coordinate {index}, but "
+                        f"{len(values)} are defined (1-based)",
+                        number,
+                    )
+                corners.append(at)
+    if not values or len(corners) != int(sizes.sum()):
+        return None
+    return np.array(values, dtype=np.float64).reshape(-1, 2)[corners]
 
 
 def _obj_fast(data: bytes) -> _Parsed | None:

@@ -22,6 +22,8 @@ class _Parsed(NamedTuple):
     vertices: NDArray[np.float64]
     faces: NDArray[np.int64] | list[NDArray[np.int64]]
     tags: tuple[Tag, ...] = ()
+    #: texture coordinates per face corner (C, 2), in the faces' order (OBJ ``vt``); None without
+    uv: NDArray[np.float64] | None = None
 
 
 def _decode(path: Path, data: bytes) -> list[str]:

@@ -51,19 +51,33 @@ def _checked_cells(name: str, cells: ArrayLike, corners: int, n_points: int) -> 
 _OBJ_ROWS = 1 << 15
 
 
-def _write_obj(path: Path, points: NDArray[np.float64], cells: NDArray[np.int64]) -> None:
+def _write_obj(
+    path: Path,
+    points: NDArray[np.float64],
+    cells: NDArray[np.int64],
+    uv: NDArray[np.float64] | None = None,
+    uv_cells: NDArray[np.int64] | None = None,
+) -> None:
     """OBJ text as meshio writes it (``v x y z`` with the shortest round-trip digits, ``f`` with
     1-based indices), formatted a block of rows at a time by one C-level ``%`` per block: several
-    times faster than meshio's line-by-line loop, and in bounded memory."""
+    times faster than meshio's line-by-line loop, and in bounded memory. With ``uv`` and
+    ``uv_cells``: ``vt u v`` lines too, and faces ``f a/x b/y c/z``."""
     vertex_row = "v %r %r %r\n"
-    face_row = "f" + " %d" * cells.shape[1] + "\n"
+    with_uv = uv is not None and uv_cells is not None
+    face_row = "f" + (" %d/%d" if with_uv else " %d") * cells.shape[1] + "\n"
     with open(path, "w", encoding="ascii", newline="\n") as handle:
         handle.write("# written by g1patch\n")
         for start in range(0, len(points), _OBJ_ROWS):
             block = points[start : start + _OBJ_ROWS]
             handle.write((vertex_row * len(block)) % tuple(block.ravel().tolist()))
+        if uv is not None and uv_cells is not None:
+            for start in range(0, len(uv), _OBJ_ROWS):
+                block = uv[start : start + _OBJ_ROWS]
+                handle.write(("vt %r %r\n" * len(block)) % tuple(block.ravel().tolist()))
         for start in range(0, len(cells), _OBJ_ROWS):
             rows = cells[start : start + _OBJ_ROWS] + 1
+            if uv_cells is not None and with_uv:
+                rows = np.stack([rows, uv_cells[start : start + _OBJ_ROWS] + 1], axis=-1)
             handle.write((face_row * len(rows)) % tuple(rows.ravel().tolist()))
 
 
@@ -98,23 +112,62 @@ def _write(
         with atomic_path(path) as temporary:
             writer(temporary, points, cells)
         return
-    index_type = (
-        np.int32 if cells.size == 0 or cells.max() < 2**31 else np.int64
-    )  # PLY wants 32-bit indices
-    mesh = meshio.Mesh(points, [(cell_type, cells.astype(index_type))])
+    mesh = meshio.Mesh(points, [(cell_type, cells.astype(_index_type(cells)))])
     with atomic_path(path) as temporary:
         meshio.ply.write(str(temporary), mesh, binary=True)
 
 
-def write_triangles(path: PathLike, points: ArrayLike, triangles: ArrayLike) -> None:
+def _index_type(cells: NDArray[np.int64]) -> type:
+    """int32 where the indices fit (PLY wants 32-bit indices), else int64."""
+    return np.int32 if cells.size == 0 or cells.max() < 2**31 else np.int64
+
+
+def write_triangles(
+    path: PathLike,
+    points: ArrayLike,
+    triangles: ArrayLike,
+    *,
+    uv: ArrayLike | None = None,
+    uv_triangles: ArrayLike | None = None,
+) -> None:
     """Write a triangle mesh, ``points`` (n, 3) and ``triangles`` (m, 3), as OBJ, PLY or STL (by
-    extension)."""
+    extension).
+
+    Texture coordinates, face-varying: ``uv`` (k, 2) and ``uv_triangles`` (m, 3), the UV vertex
+    of every triangle corner. OBJ writes them as ``vt`` with faces ``f a/x b/y c/z`` (the points
+    stay welded); PLY as vertex properties ``s``, ``t``, one vertex per distinct (point, UV) pair
+    of the corners (split where UVs differ: at seams in UV space); STL has no place for them.
+    """
     path = Path(path)
     suffix = _write_format(path)
     points = _checked_points("points", points)
-    _write(
-        path, suffix, points, "triangle", _checked_cells("triangles", triangles, 3, points.shape[0])
+    cells = _checked_cells("triangles", triangles, 3, points.shape[0])
+    if uv is None or uv_triangles is None or suffix == ".stl":
+        _write(path, suffix, points, "triangle", cells)
+        return
+    uv = as_float_array("uv", uv, (2,))
+    uv_cells = _checked_cells("uv_triangles", uv_triangles, 3, uv.shape[0])
+    if uv_cells.shape != cells.shape:
+        raise InputError(
+            f"uv_triangles: expected shape {cells.shape} (one per triangle corner), got "
+            f"{uv_cells.shape}"
+        )
+    if suffix == ".obj":
+        with atomic_path(path) as temporary:
+            _write_obj(temporary, points, cells, uv, uv_cells)
+        return
+    # PLY: one vertex per distinct (point, UV vertex) pair
+    pairs = cells.reshape(-1) * np.int64(uv.shape[0]) + uv_cells.reshape(-1)
+    keys, first, inverse = np.unique(pairs, return_index=True, return_inverse=True)
+    del keys
+    point_of, uv_of = cells.reshape(-1)[first], uv_cells.reshape(-1)[first]
+    mesh = meshio.Mesh(
+        points[point_of],
+        [("triangle", inverse.reshape(-1, 3).astype(_index_type(inverse)))],
+        point_data={"s": uv[uv_of, 0], "t": uv[uv_of, 1]},
     )
+    with atomic_path(path) as temporary:
+        meshio.ply.write(str(temporary), mesh, binary=True)
 
 
 def write_quads(path: PathLike, vertices: ArrayLike, faces: ArrayLike) -> None:

@@ -13,8 +13,11 @@ it): ``header`` (a 0-d string, the JSON ``{"format": "g1patch-network", "version
 Version 2 stores the patches in their local coordinates and, when they have one, their frame as
 the arrays ``frame_centre`` (3,) and ``frame_scale`` () (see :mod:`g1patch.frame`): the file holds
 exactly the numbers the construction made. Version 3 adds ``seam`` (P, 4) bool, the patch edges
-that are sharp on purpose (:attr:`PatchNetwork.seam`). Version 1 files (no frame) and version 2
-files (no seams) are read as before: seam-free.
+that are sharp on purpose (:attr:`PatchNetwork.seam`). Version 4 adds the optional
+``uv`` (P, 4, 2) float, each patch's texture coordinates at its corners (:attr:`PatchNetwork.uv`,
+from the mesh's ``vt``; finite, checked like the coordinates). Version 1 files (no frame), version
+2 files (no seams) and version 3 files (no texture coordinates) are read as before: seam-free,
+without UVs.
 
 Container: stored, not compressed
 ---------------------------------
@@ -42,7 +45,7 @@ CRC-32, and read back with ``readinto`` at its offset in 64 MB steps, each step'
 second thread while the next is read and the arrays are validated.
 Arrays keep the dtypes :class:`PatchNetwork` holds (int64 indices, so loading allocates nothing
 but the arrays themselves). The container is unchanged — a zip of ``.npy`` members, what
-``np.load`` reads — so the version stays 3, and compressed files (every earlier release's) are
+``np.load`` reads — so the version stayed 3 then, and compressed files (every earlier release's) are
 still read.
 
 Loading validates, before and after reading

@@ -43,6 +43,7 @@ from .schema import (
     PER_PATCH_BYTES,
     READABLE_VERSIONS,
     SEAM_VERSION,
+    UV_VERSION,
 )
 from .values import _Checker
 from .write import _crc_step
@@ -387,13 +388,22 @@ class _Reader:
             ignored |= {"frame_centre", "frame_scale"}
         if version < SEAM_VERSION:  # seam-free: an array of that name is not part of it
             ignored.add("seam")
+        if version < UV_VERSION:  # no texture coordinates: an array of that name is not part of it
+            ignored.add("uv")
         required = (
             "patch_kind",
             *_KIND_ARRAYS[kind],
             *_ARRAYS,
             *(("seam",) if version >= SEAM_VERSION else ()),
         )
-        optional = {"header", "vertices", "vertex_normals", "frame_centre", "frame_scale"} - ignored
+        optional = {
+            "header",
+            "vertices",
+            "vertex_normals",
+            "frame_centre",
+            "frame_scale",
+            "uv",
+        } - ignored
         missing = [name for name in required if name not in members]
         if missing:
             raise self.fail(f"network file lacks {', '.join(missing)}")
@@ -491,6 +501,7 @@ class _Reader:
                 vertices=arrays.get("vertices"),
                 vertex_normals=arrays.get("vertex_normals"),
                 seam=arrays.get("seam"),  # type: ignore[arg-type]  # None: no seams
+                uv=arrays.get("uv"),
                 provenance={str(k): str(v) for k, v in provenance.items()},
             )
         except (InputError, KeyError) as exc:

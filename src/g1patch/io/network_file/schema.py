@@ -6,9 +6,9 @@ from __future__ import annotations
 from ...gregory import GregoryPatchSet
 
 #: the version :func:`save_network` writes
-FORMAT_VERSION = 3
-#: the versions :func:`load_network` reads (1: no frame, 2: no seams)
-READABLE_VERSIONS = (1, 2, 3)
+FORMAT_VERSION = 4
+#: the versions :func:`load_network` reads (1: no frame, 2: no seams, 3: no texture coordinates)
+READABLE_VERSIONS = (1, 2, 3, 4)
 _ARRAYS = (
     "corner_ids",
     "edge_ids",
@@ -22,6 +22,8 @@ _ARRAYS = (
 FRAME_VERSION = 2
 #: the first version with seams
 SEAM_VERSION = 3
+#: the first version with texture coordinates (``uv``, optional)
+UV_VERSION = 4
 
 #: largest magnitude of a coordinate in world units (see the module docstring)
 MAX_COORDINATE = 1e30
@@ -44,7 +46,15 @@ _NPY_HEADER_BYTES = 10_000 + 16
 
 _INDEX_ARRAYS = ("corner_ids", "edge_ids", "neighbor", "neighbor_edge")
 _BOOL_ARRAYS = ("edge_reversed", "same_direction", "edge_collapsed", "seam")
-_FLOAT_ARRAYS = ("points", "control", "vertices", "vertex_normals", "frame_centre", "frame_scale")
+_FLOAT_ARRAYS = (
+    "points",
+    "control",
+    "vertices",
+    "vertex_normals",
+    "frame_centre",
+    "frame_scale",
+    "uv",
+)
 _STRING_ARRAYS = ("header", "patch_kind", "form")
 #: shape of every array member, by its dimensions: P patches, E edges, V vertices
 _SHAPES: dict[str, tuple[str | int, ...]] = {
@@ -60,6 +70,7 @@ _SHAPES: dict[str, tuple[str | int, ...]] = {
     "control": ("P", 4, 4, 3),
     "vertices": ("V", 3),
     "vertex_normals": ("V", 3),
+    "uv": ("P", 4, 2),
     "frame_centre": (3,),
     "frame_scale": (),
     "header": (),

@@ -48,6 +48,8 @@ class _Checker:
         ):
             if name in arrays and np.shape(arrays[name]) != (count, 4):
                 raise self.fail(name, f"expected shape ({count}, 4), got {np.shape(arrays[name])}")
+        if "uv" in arrays and np.shape(arrays["uv"]) != (count, 4, 2):
+            raise self.fail("uv", f"expected shape ({count}, 4, 2), got {np.shape(arrays['uv'])}")
         for name in _BOOL_ARRAYS:
             if name in arrays:
                 out[name] = self.booleans(name, arrays[name])

@@ -73,7 +73,7 @@ def _members(
         raise FormatError(path, f"cannot store patches of type {type(patches).__name__}")
     arrays: dict[str, NDArray[Any]] = {"patch_kind": np.array(kind), **patches.to_arrays()}
     arrays.update({name: getattr(network, name) for name in (*_ARRAYS, "seam")})
-    for name in ("vertices", "vertex_normals"):
+    for name in ("vertices", "vertex_normals", "uv"):
         if getattr(network, name) is not None:
             arrays[name] = getattr(network, name)
     arrays = _Checker(target, "cannot store this network: ").check(arrays)
