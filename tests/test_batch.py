@@ -370,7 +370,7 @@ def test_usage_errors_exit_2_before_any_work(
         ),
         "sharp angle": (
             [cube, "--sharp-angle", "200"],
-            "sharp angle: expected degrees between 0 and 180",
+            "--sharp-angle: expected degrees between 0 and 180",
         ),
         "refine": (
             [cube, "--refine", "-1"],
