@@ -102,7 +102,7 @@ def test_build_says_how_many_patches_fold_where_and_what_to_try(
     from g1patch.io.meshfile import write_quads
 
     clean = g1patch("build", cube_obj, "-o", tmp_path / "cube.npz", "-q")
-    assert clean.stdout.rstrip().endswith("no folds") and "warning" not in clean.stderr
+    assert clean.stdout.rstrip().endswith("no folds") and "fold" not in clean.stderr
     torus = shapes.torus(8, 4)
     noisy = torus.vertices + np.random.default_rng(2).normal(0.0, 0.12, torus.vertices.shape)
     write_quads(tmp_path / "noisy.obj", noisy, torus.faces)

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from environment import own_lines
 
 from g1patch import shapes
 from g1patch.cli import main
@@ -46,7 +47,7 @@ def temporaries(directory: Path) -> list[str]:
 
 
 def one_line(stderr: str) -> str:
-    lines = stderr.splitlines()
+    lines = own_lines(stderr)
     assert len(lines) == 1 and "Traceback" not in stderr, stderr
     return lines[0]
 

@@ -101,9 +101,22 @@ def test_build_and_demo_fall_back_to_numpy_with_one_warning(install: Path, tmp_p
     assert not list((install / "site").rglob("*.nbi")) and not list((install / "cache").iterdir())
 
 
-def test_a_writable_cache_needs_no_warning(tmp_path: Path) -> None:
-    """In this process numba caches: the kernels run, and nothing is said."""
-    assert kernels.kernels_cached() and kernels.use_kernels(True) and not kernels.use_kernels(False)
+def test_a_writable_cache_needs_no_warning(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    """With a writable cache directory (``NUMBA_CACHE_DIR``, numba's ``config.CACHE_DIR``) the
+    kernels run, and nothing is said (whether this process's own cache is writable or not)."""
+    import numba
+
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+    kernels.kernels_cached.cache_clear()
+    try:
+        assert kernels.kernels_cached()
+        assert kernels.use_kernels(True) and not kernels.use_kernels(False)
+        assert "no writable cache" not in caplog.text
+    finally:
+        monkeypatch.undo()
+        kernels.kernels_cached.cache_clear()
 
 
 def test_no_kernel_is_compiled_where_none_can_be_cached(

@@ -29,7 +29,7 @@ from .construct.corner import TWISTS, TwistRule, build_corner_network
 from .continuity import folded_patches
 from .errors import BudgetError, InputError, check_choice
 from .frame import Frame
-from .kernels import use_kernels
+from .kernels import kernels_cached, use_kernels
 from .memory import memory_budget
 from .mesh import INFINITE_SHARPNESS, QuadMesh, Tag
 from .network import Patches, PatchNetwork, patch_uvs
@@ -101,14 +101,23 @@ def refine_steps(mesh: QuadMesh, shape: str, refine: int) -> int:
     return max(int(refine), semi_sharp_levels(mesh) if limit else 0)
 
 
+#: faces from which the estimate asks whether the kernels run (below, the per-face figures of
+#: either path leave a build far under any budget)
+_BUDGET_FACES = 10_000
+
+
 def estimate_build(mesh: QuadMesh, method: str, shape: str, refine: int = 0) -> BuildEstimate:
-    """The size of :func:`build_network`'s result and its peak memory, from counts alone."""
+    """The size of :func:`build_network`'s result and its peak memory, from counts alone (the
+    assembly's peak per face on the path that will run: the kernels', or NumPy's where numba has
+    no writable cache)."""
     assembly = ASSEMBLIES[method]
     steps = refine_steps(mesh, shape, refine)
     faces = mesh.n_faces * 4**steps
     refined = faces * REFINE_BYTES_PER_FACE if steps else 0
     held = faces * MESH_BYTES_PER_FACE if steps else 0
-    peak = max(refined, held + faces * assembly.peak_bytes_per_face)
+    uncached = faces >= _BUDGET_FACES and not kernels_cached()  # small builds: numba not loaded
+    per_face = assembly.numpy_peak_bytes_per_face if uncached else assembly.peak_bytes_per_face
+    peak = max(refined, held + faces * per_face)
     return BuildEstimate(steps, faces, faces * assembly.patches_per_face, peak)
 
 

@@ -60,6 +60,7 @@ ASSEMBLIES: dict[str, Assembly] = {
             keep_patches,
             patch_per_face_network,
             1150,
+            4000,
         ),
         Assembly(
             "split4",
@@ -70,6 +71,7 @@ ASSEMBLIES: dict[str, Assembly] = {
             _keep_split4,
             _split4_network,
             3000,
+            4900,
             keeps_creases=False,
             keeps_holes=False,
         ),
@@ -82,6 +84,7 @@ ASSEMBLIES: dict[str, Assembly] = {
             keep_patches,
             patch_per_face_network,
             1700,
+            1850,
         ),
     )
 }

@@ -54,6 +54,9 @@ class Assembly:
     #: the build's peak allocation per face, bytes: ~10 % above tracemalloc's (200k quads, either
     #: shape), an upper bound for the memory budget of :func:`g1patch.build.estimate_build`
     peak_bytes_per_face: int
+    #: the same where the NumPy code runs instead of the kernels (no writable numba cache:
+    #: :func:`g1patch.kernels.use_kernels`), measured the same way
+    numpy_peak_bytes_per_face: int
     #: False: infinitely sharp creases are built smooth (the build says so)
     keeps_creases: bool = True
     #: False: hole faces get patches (the build says so)
