@@ -41,8 +41,7 @@ from g1patch.continuity import check
 from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh
 from g1patch.network import PatchNetwork
-from g1patch.subdivision import catmull_clark_points, limit_points, refine
-from g1patch.targets.limit_interpolate import limit_matrix
+from g1patch.subdivision import catmull_clark_points, limit_matrix, limit_points, refine
 
 record = harness.recorder("bench_interpolants")
 #: extra Catmull–Clark steps of the faired cage the fairness energy is measured on

@@ -14,9 +14,9 @@ from g1patch.compare import Reference, compare_fairness, load_reference, referen
 from g1patch.errors import ConstructionError
 from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh, Tag
-from g1patch.subdivision import limit_points, refine
+from g1patch.subdivision import limit_matrix, limit_points, refine
 from g1patch.targets import shape_targets
-from g1patch.targets.limit_interpolate import interpolating_cage, limit_matrix
+from g1patch.targets.limit_interpolate import interpolating_cage
 
 SHARED = (
     "catmark_cube",

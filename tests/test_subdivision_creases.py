@@ -17,6 +17,7 @@ from g1patch.subdivision import (
     RULE_CREASE,
     RULE_SMOOTH,
     limit_corner_normals,
+    limit_matrix,
     limit_normals,
     limit_points,
     limit_stars,
@@ -25,7 +26,6 @@ from g1patch.subdivision import (
     refine_grids,
     vertex_rules,
 )
-from g1patch.targets.limit_interpolate import limit_matrix
 
 CREASED = [
     "catmark_cube_creases2",

@@ -69,6 +69,10 @@ the affected vertices (those with a semi-sharp vertex sharpness or incident edge
 sharpness has decayed (⌈max s⌉ levels) and take the masks there, the vertices keeping their
 indices. Tangents are then in the original face's parameter scale: the refined tangents times
 ``2^levels`` (a refined edge spans half the parameter of its parent).
+
+Every rule is linear in the positions: :mod:`~g1patch.subdivision.matrix` gives the sparse matrices
+of a step (:func:`step_matrix`), of ``levels`` steps (:func:`refine_matrix`), of the limit points
+(:func:`limit_matrix`) and of the limit points of the refined grids (:func:`limit_grid_matrix`).
 """
 
 from __future__ import annotations
@@ -94,6 +98,7 @@ from .features import (
     sharp_edges,
     vertex_rules,
 )
+from .matrix import limit_grid_matrix, limit_matrix, refine_matrix, step_matrix
 from .refine import catmull_clark_cage, catmull_clark_points, refine, refine_grids
 from .semisharp import _decayed_neighbourhood
 from .stencils import _Frames, _limit_frames, _limit_positions, _unit
@@ -113,13 +118,17 @@ __all__ = [
     "corner_vertices",
     "limit_corner_normals",
     "limit_data",
+    "limit_grid_matrix",
+    "limit_matrix",
     "limit_normals",
     "limit_points",
     "limit_stars",
     "limit_tangents",
     "refine",
     "refine_grids",
+    "refine_matrix",
     "sharp_edges",
+    "step_matrix",
     "vertex_rules",
 ]
 

@@ -5,6 +5,8 @@ refined mesh, and the refined grids of the original faces.
 
 from __future__ import annotations
 
+from collections import deque
+from collections.abc import Iterator
 from typing import NamedTuple
 
 import numpy as np
@@ -79,6 +81,57 @@ def _child_edge_halves(level: _Level | _CageLevel) -> tuple[FloatArray, FloatArr
     return at(a), at(b)
 
 
+class _Weights(NamedTuple):
+    """The coefficients of one step (:func:`_weights`): they depend on the features only, not on
+    the positions."""
+
+    half_a: FloatArray  # sharpness of each edge's child at ``edges[:, 0]``
+    half_b: FloatArray  # ... and at ``edges[:, 1]``
+    child_vertex: FloatArray  # the vertices' child sharpness
+    edge: FloatArray  # per edge the weight s of the midpoint: ``s·midpoint + (1 − s)·smooth``
+    parent_rule: IntArray
+    child_rule: IntArray
+    vertex: (
+        FloatArray  # per vertex w: ``w·parent mask + (1 − w)·child mask`` where the rules differ
+    )
+
+
+def _weights(level: _Level | _CageLevel) -> _Weights:
+    """The features' part of one step (:mod:`g1patch.subdivision`): child sharpness, each edge
+    point's midpoint weight, each vertex's parent and child rule and the fractional weight of the
+    transition, the mean of the sharpness values that decay to 0 here."""
+    nv = level.topology.n_vertices
+    edges = level.topology.edges
+    a, b = edges[:, 0], edges[:, 1]
+    s = level.edge
+    half_a, half_b = _child_edge_halves(level)
+    child_vertex = _decrement(level.vertex)
+    edge = np.where(s <= 0, 0.0, np.where((half_a > 0) & (half_b > 0), 1.0, np.minimum(s, 1.0)))
+    sharp = s > 0
+    parent_rule = _rules(level.vertex, np.bincount(edges[sharp].ravel(), minlength=nv))
+    child_count = np.bincount(a[half_a > 0], minlength=nv) + np.bincount(
+        b[half_b > 0], minlength=nv
+    )
+    child_rule = _rules(child_vertex, child_count)
+    if level.chaikin:
+        decay_a, decay_b = sharp & (half_a <= 0), sharp & (half_b <= 0)
+    else:
+        decay_a = decay_b = sharp & (s <= 1.0)
+    vertex_decays = (level.vertex > 0) & (child_vertex <= 0)
+    total = (
+        np.bincount(a[decay_a], weights=s[decay_a], minlength=nv)
+        + np.bincount(b[decay_b], weights=s[decay_b], minlength=nv)
+        + np.where(vertex_decays, level.vertex, 0.0)
+    )
+    count = (
+        np.bincount(a[decay_a], minlength=nv)
+        + np.bincount(b[decay_b], minlength=nv)
+        + vertex_decays
+    )
+    vertex = np.minimum(np.divide(total, count, out=np.zeros(nv), where=count > 0), 1.0)
+    return _Weights(half_a, half_b, child_vertex, edge, parent_rule, child_rule, vertex)
+
+
 def _step(level: _Level | _CageLevel) -> _Level:
     """One Catmull–Clark step with OpenSubdiv's creasing (:mod:`g1patch.subdivision`), numbered like
     :func:`~g1patch.mesh.refine_polygons`: the V vertex points, one per edge (``edges`` order), one
@@ -87,18 +140,15 @@ def _step(level: _Level | _CageLevel) -> _Level:
     nv, ne = topology.n_vertices, topology.n_edges
     edges = topology.edges
     a, b = edges[:, 0], edges[:, 1]
-    s = level.edge
-    half_a, half_b = _child_edge_halves(level)
-    child_vertex = _decrement(level.vertex)
+    weights = _weights(level)
+    half_a, half_b = weights.half_a, weights.half_b
 
     face_points = topology.face_points(x)
     left = topology.face_of(topology.edge_halfedges[:, 0])
     right = topology.face_of(np.maximum(topology.edge_halfedges[:, 1], 0))
     middle = 0.5 * (x[a] + x[b])
     smooth_edge = 0.25 * (x[a] + x[b] + face_points[left] + face_points[right])
-    weight = np.where(s <= 0, 0.0, np.where((half_a > 0) & (half_b > 0), 1.0, np.minimum(s, 1.0)))[
-        :, None
-    ]
+    weight = weights.edge[:, None]
     edge_points = np.where(
         weight == 0,
         smooth_edge,
@@ -112,12 +162,8 @@ def _step(level: _Level | _CageLevel) -> _Level:
     face_sum = _segment_sum(origin, face_points[topology.face_of(h)], nv)
     smooth = ((n - 2.0) * x + (neighbour_sum + face_sum) / n) / n
 
-    sharp = s > 0
-    parent_rule = _rules(level.vertex, np.bincount(edges[sharp].ravel(), minlength=nv))
-    child_count = np.bincount(a[half_a > 0], minlength=nv) + np.bincount(
-        b[half_b > 0], minlength=nv
-    )
-    child_rule = _rules(child_vertex, child_count)
+    sharp = level.edge > 0
+    parent_rule, child_rule = weights.parent_rule, weights.child_rule
     vertex_points = smooth.copy()
     creased = np.flatnonzero(parent_rule != RULE_SMOOTH)
     if creased.size:
@@ -129,24 +175,7 @@ def _step(level: _Level | _CageLevel) -> _Level:
             [smooth, child_crease],
             x,
         )
-        # the fractional weight of the transition: the mean of the sharpness values that decay to 0
-        # here
-        if level.chaikin:
-            decay_a, decay_b = sharp & (half_a <= 0), sharp & (half_b <= 0)
-        else:
-            decay_a = decay_b = sharp & (s <= 1.0)
-        vertex_decays = (level.vertex > 0) & (child_vertex <= 0)
-        total = (
-            np.bincount(a[decay_a], weights=s[decay_a], minlength=nv)
-            + np.bincount(b[decay_b], weights=s[decay_b], minlength=nv)
-            + np.where(vertex_decays, level.vertex, 0.0)
-        )
-        count = (
-            np.bincount(a[decay_a], minlength=nv)
-            + np.bincount(b[decay_b], minlength=nv)
-            + vertex_decays
-        )
-        w = np.minimum(np.divide(total, count, out=np.zeros(nv), where=count > 0), 1.0)[:, None]
+        w = weights.vertex[:, None]
         blended = np.where(
             child_rule[:, None] == parent_rule[:, None],
             parent_mask,
@@ -165,7 +194,7 @@ def _step(level: _Level | _CageLevel) -> _Level:
         positive = values > 0
         half_keys = np.minimum(end, m) * len(points) + np.maximum(end, m)
         child_edge[np.searchsorted(keys, half_keys[positive])] = values[positive]
-    child_vertices = np.concatenate([child_vertex, np.zeros(ne + topology.n_faces)])
+    child_vertices = np.concatenate([weights.child_vertex, np.zeros(ne + topology.n_faces)])
     child_edge, child_vertices = _effective(child, child_edge, child_vertices, level.mode)
     return _Level(
         points,
@@ -254,18 +283,16 @@ def _edge_points(edge_keys: IntArray, nv: int, p: IntArray, q: IntArray) -> IntA
     return nv + np.searchsorted(edge_keys, np.minimum(p, q) * nv + np.maximum(p, q))
 
 
-def refine_grids(
+def _refinement(
     mesh: QuadMesh, levels: int, sharpness: ArrayLike | None = None
-) -> tuple[QuadMesh, IntArray]:
-    """:func:`refine`, and per original face the refined vertices as a grid ``(F, m + 1, m + 1)``,
-    ``m = 2^levels``: ``grid[f, i, j]`` sits at parameter ``(i/m, j/m)`` of face f (u from corner 0
-    to 1, v from corner 0 to 3). Cell (i, j) of a level is the face holding the half-edge
-    ``grid[i, j] → grid[i + 1, j]`` (refinement keeps orientation), its face point the cell's
-    centre."""
+) -> Iterator[tuple[_Level, IntArray]]:
+    """The levels 0, 1, …, ``levels`` of :func:`refine_grids`, each with the grid of the original
+    faces at that level (``levels`` checked at the first ``next``)."""
     if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or levels < 0:
         raise InputError(f"levels: expected a non-negative integer, got {levels!r}")
     level = _level_of(mesh, sharpness)
     grid = mesh.faces[:, [[0, 3], [1, 2]]]
+    yield level, grid
     for _ in range(int(levels)):
         topology = level.topology
         nv = topology.n_vertices
@@ -284,11 +311,28 @@ def refine_grids(
         fine[:, 1::2, 1::2] = nv + topology.n_edges + cell
         level = _step(level)
         grid = fine
+        yield level, grid
+
+
+def _refined_mesh(mesh: QuadMesh, level: _Level, levels: int) -> QuadMesh:
+    """The mesh of ``level``, ``levels`` steps below ``mesh``: its tags rebuilt, the UVs refined
+    (``mesh`` itself for 0 levels)."""
     if not levels:
-        return mesh, grid
+        return mesh
     uv = mesh.uv
     if uv is not None:
         for _ in range(int(levels)):
             uv = refine_corner_uvs(uv.reshape(-1, 2), np.full(uv.shape[0], 4, dtype=np.int64))
-    refined = QuadMesh(level.x, level.topology, _level_tags(mesh.tags, level), mesh.source, uv=uv)
-    return refined, grid
+    return QuadMesh(level.x, level.topology, _level_tags(mesh.tags, level), mesh.source, uv=uv)
+
+
+def refine_grids(
+    mesh: QuadMesh, levels: int, sharpness: ArrayLike | None = None
+) -> tuple[QuadMesh, IntArray]:
+    """:func:`refine`, and per original face the refined vertices as a grid ``(F, m + 1, m + 1)``,
+    ``m = 2^levels``: ``grid[f, i, j]`` sits at parameter ``(i/m, j/m)`` of face f (u from corner 0
+    to 1, v from corner 0 to 3). Cell (i, j) of a level is the face holding the half-edge
+    ``grid[i, j] → grid[i + 1, j]`` (refinement keeps orientation), its face point the cell's
+    centre."""
+    level, grid = deque(_refinement(mesh, levels, sharpness), maxlen=1)[0]  # the last level
+    return _refined_mesh(mesh, level, levels), grid

@@ -4,7 +4,8 @@ mesh vertices.
 Halstead, Kass and DeRose (SIGGRAPH 1993), and Rhino's interpolating SubD: the mesh's vertices V
 are not the control cage but the limit positions wanted. The limit position of every cage vertex
 is a fixed linear combination of the cage (the masks of :func:`~g1patch.subdivision.limit_points`),
-so with the V × V sparse *limit stencil* L (:func:`limit_matrix`)
+so with the V × V sparse *limit stencil* L
+(:func:`~g1patch.subdivision.matrix.limit_matrix`, re-exported here)
 
     ``limit_points(cage C) = L C``,
 
@@ -41,12 +42,13 @@ from typing import Literal
 
 import numpy as np
 import scipy.sparse as sp
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 from scipy.sparse.linalg import LinearOperator, SuperLU, lsmr, onenormest, splu
 
-from ..errors import ConstructionError, InputError, MeshError
-from ..mesh import QuadMesh, QuadTopology
-from ..subdivision import INFINITE_SHARPNESS, corner_vertices, limit_points, sharp_edges
+from ..errors import ConstructionError, MeshError
+from ..mesh import QuadMesh
+from ..subdivision import limit_points
+from ..subdivision.matrix import limit_matrix
 from .limit import limit_targets
 from .value import TangentRule, Targets
 
@@ -76,62 +78,6 @@ _SINGULAR = 1e15
 
 Solver = Literal["lu", "lsmr"]
 _logger = logging.getLogger(__name__)
-
-
-def limit_matrix(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> sp.csr_matrix:
-    """The sparse V × V limit stencil L with ``L @ mesh.vertices == limit_points(mesh, sharpness)``
-    (module docstring for its rows), assembled directly from the half-edges: every half-edge h
-    from v adds ``4/(n(n + 5))`` at its target and ``1/(n(n + 5))`` at the corner opposite v in
-    its face to row v of a smooth vertex; a sharp edge (a, b) adds 1/6 at (a, b) where a is a
-    crease vertex, and at (b, a) where b is. Rules as in :mod:`g1patch.subdivision`, features from
-    the mesh's tags (edge sharpness from ``sharpness`` where given): a vertex is a corner with more
-    than two sharp edges, where it is tagged infinitely sharp or where the boundary mode makes it
-    one, a crease with two, smooth otherwise. A semi-sharp edge or vertex (0 < s < 10) raises
-    :class:`InputError`: its limit reads more than the 1-ring masks (refine past it first)."""
-    topology = mesh.topology
-    nv = topology.n_vertices
-    edge = (
-        mesh.features.edge_sharpness
-        if sharpness is None
-        else np.asarray(sharpness, dtype=np.float64)
-    )
-    for name, values in (("edge", edge), ("vertex", mesh.features.vertex_sharpness)):
-        semi = np.flatnonzero((values > 0) & (values < INFINITE_SHARPNESS))
-        if semi.size:
-            raise InputError(
-                f"limit_matrix: {name} {semi[0]} is semi-sharp ({values[semi[0]]:g}; {semi.size} "
-                "such); the limit "
-                "stencil covers smooth and infinitely sharp (≥ 10) features only: refine the mesh "
-                "past its semi-sharp "
-                "levels first (subdivision.refine)"
-            )
-    sharp = sharp_edges(mesh, sharpness)
-    ends = topology.edges[sharp]
-    count = np.bincount(ends.ravel(), minlength=nv)
-    corner = (count > 2) | corner_vertices(mesh)
-    crease = (count == 2) & ~corner
-    smooth = ~(corner | crease)
-
-    n = topology.face_count.astype(np.float64)
-    h = np.flatnonzero(smooth[topology.origin(np.arange(topology.n_halfedges))])
-    origin = topology.origin(h)
-    ring_weight = 1.0 / (n[origin] * (n[origin] + 5.0))
-    crease_rows, crease_columns = np.concatenate([ends, ends[:, ::-1]]).T
-    at_crease = crease[crease_rows]
-    rows = np.concatenate([np.arange(nv), origin, origin, crease_rows[at_crease]])
-    columns = np.concatenate(
-        [
-            np.arange(nv),
-            topology.target(h),
-            topology.origin(QuadTopology.next(QuadTopology.next(h))),
-            crease_columns[at_crease],
-        ]
-    )
-    diagonal = np.select([smooth, crease], [n / (n + 5.0), 2.0 / 3.0], 1.0)
-    weights = np.concatenate(
-        [diagonal, 4.0 * ring_weight, ring_weight, np.full(int(at_crease.sum()), 1.0 / 6.0)]
-    )
-    return sp.csr_matrix((weights, (rows, columns)), shape=(nv, nv))
 
 
 @dataclass(frozen=True)
