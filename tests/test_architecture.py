@@ -24,6 +24,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("viewer",),
     ("render",),
     ("io",),
+    ("fitting",),
     ("build", "compare"),
     ("construct",),
     ("targets",),

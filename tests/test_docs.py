@@ -48,7 +48,7 @@ def test_the_docs_build_without_warnings(tmp_path: Path) -> None:
         "the API reference documents auto_camera"
     )
     assert ":func:" not in render_page, "Sphinx roles are shown as code (docs/griffe_roles.py)"
-    for page in ("build", "check", "export", "render", "view", "demo", "batch"):
+    for page in ("build", "check", "export", "render", "view", "demo", "batch", "fit"):
         assert (site / "guide" / page / "index.html").is_file(), f"no guide page for {page}"
 
 

@@ -39,6 +39,7 @@ if TYPE_CHECKING:  # pragma: no cover
 _LAZY = {
     "read": "api",
     "smooth": "api",
+    "fit": "api",
     "Surface": "api",
     "check": "api",
     "export": "api",

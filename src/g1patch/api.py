@@ -21,7 +21,7 @@ import os
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -30,6 +30,7 @@ from .errors import FormatError, InputError
 
 if TYPE_CHECKING:  # pragma: no cover
     from .continuity import ContinuityReport
+    from .fitting import FitReport
     from .gregory import GregoryPatchSet
     from .io.cad import ExportResult, RhinoResult
     from .mesh import QuadMesh, Tag
@@ -40,11 +41,13 @@ __all__ = [
     "MESH_SUFFIXES",
     "NETWORK_SUFFIXES",
     "EXPORT_SUFFIXES",
+    "FitResult",
     "Surface",
     "as_mesh",
     "as_network",
     "check",
     "export",
+    "fit",
     "read",
     "smooth",
     "view",
@@ -771,6 +774,49 @@ def smooth(
             max_patches=max_patches,
         )
     return Surface(network, mesh)
+
+
+class FitResult(NamedTuple):
+    """What :func:`fit` returns: the fitted ``surface`` and its ``report``
+    (:class:`g1patch.fitting.FitReport`: two-way distances to the scan, faces, rounds, time)."""
+
+    surface: Surface
+    report: FitReport
+
+
+def fit(
+    source: Any,
+    *,
+    tolerance: float = 1e-3,
+    faces: int | None = None,
+    layout: Any = None,
+    method: str = "split4",
+    max_input_size: int | None = None,
+) -> FitResult:
+    """An exact-G1 surface fitted to a dense triangle mesh (a scan; :mod:`g1patch.fitting`).
+
+    ``source``: a mesh file (OBJ, PLY, OFF) or anything :func:`as_mesh` takes, its triangles (or
+    polygons) the scan. A quad layout (Instant Meshes, or ``layout``: your own quad mesh near
+    the scan, anything :func:`as_mesh` takes) gives the cage's topology; its positions are solved
+    so that the Catmull–Clark limit passes nearest the scan's points; the limit is assembled
+    exactly G1 by ``method`` (``split4``: polynomial, so STEP holds the fitted surface itself).
+    ``tolerance``: two-way distance, of the bounding-box diagonal, the layout's face count
+    doubling until it holds (at most four layouts) unless ``faces`` or ``layout`` fix it; the
+    report says whether it was met."""
+    from .construct import METHODS
+    from .errors import ConstructionError, check_choice, named_errors
+    from .fitting import fit_network, scan_of
+
+    check_choice("method", method, METHODS)
+    mesh = as_mesh(source, max_input_size=max_input_size)
+    quads = None if layout is None else as_mesh(layout, max_input_size=max_input_size)
+    if quads is not None and quads.cage is not None:
+        raise InputError(f"{quads.source or 'layout'}: a layout must be all quads")
+    with named_errors(mesh.source, (ConstructionError,)):
+        network, report = fit_network(
+            scan_of(mesh), tolerance=tolerance, faces=faces, layout=quads, method=method
+        )
+    return FitResult(Surface(network), report)
 
 
 def check(surface: Any, **options: Any) -> ContinuityReport:

@@ -137,6 +137,38 @@ def _fold_hint(surface: Any, folds: int, patch: int, args: argparse.Namespace) -
     )
 
 
+def _fit(args: argparse.Namespace) -> int:
+    from ..api import EXPORT_SUFFIXES, fit
+
+    suffix = args.output.suffix.lower()
+    if suffix not in EXPORT_SUFFIXES:
+        raise FormatError(
+            args.output,
+            f"unsupported extension {suffix or '(none)'!r}; expected one of "
+            f"{', '.join(EXPORT_SUFFIXES)}",
+        )
+    with _progress("fit", args.quiet) as progress:
+        progress(0, 2)
+        result = fit(
+            args.scan,
+            tolerance=args.tolerance,
+            faces=args.faces,
+            layout=args.layout,
+            method=args.method,
+            max_input_size=args.max_input_size,
+        )
+        progress(1, 2)
+        result.surface.export(args.output)
+        progress(2, 2)
+    report = result.report
+    if args.json:
+        print(json.dumps({**report.to_dict(), "output": str(args.output)}))
+    else:
+        print(f"fitted {args.scan} -> {args.output}")
+        print(report.summary())
+    return EXIT_OK if report.met else EXIT_CHECK_FAILED
+
+
 def _check(args: argparse.Namespace) -> int:
     from ..api import as_network, check
     from ..continuity import SEAM_G0_RTOL
@@ -393,6 +425,7 @@ def _at_the_door(
 #: the function of each command, its options checked first
 HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
     "build": _build,
+    "fit": _fit,
     "check": _check,
     "export": _export,
     "render": _render,

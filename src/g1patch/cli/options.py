@@ -12,6 +12,10 @@ from typing import Any
 from ..errors import InputError
 from ..kernels import workers as cores
 
+#: the most quads ``fit --faces`` asks of the remesher (its fit takes ~2 kB a quad and more per
+#: scan point: a few GB at this bound)
+MAX_FIT_FACES = 1_000_000
+
 
 def _count(option: str, value: Any, least: int, what: str = "an integer") -> None:
     if value is not None and value < least:
@@ -42,6 +46,13 @@ def check_options(args: argparse.Namespace) -> list[str]:
         angle = args.sharp_angle
         if angle is not None and not (math.isfinite(angle) and 0.0 < angle < 180.0):
             raise InputError(f"--sharp-angle: expected degrees between 0 and 180, got {angle}")
+    if command == "fit":
+        _number("--tolerance", args.tolerance, 0.0, 0.5, low_open=True)
+        _count("--faces", args.faces, 16, "a number of quads")
+        if args.faces is not None and args.faces > MAX_FIT_FACES:
+            raise InputError(
+                f"--faces: expected a number of quads ≤ {MAX_FIT_FACES:,}, got {args.faces:,}"
+            )
     if command == "check":
         _count("--samples", args.samples, 2, "a number of samples per edge")
         _number("--max-angle", args.max_angle, 0.0, 180.0, low_open=False)

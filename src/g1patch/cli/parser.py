@@ -36,6 +36,11 @@ _EXAMPLES = {
   g1patch view surface.npz -o surface.html              # open it in a browser: no network needed
   g1patch view surface.npz -o coarse.html --resolution 5
   g1patch view teapot.bpt -o teapot.html""",
+    "fit": """examples:
+  g1patch fit scan.stl -o part.step                 # within 1e-3 of the diagonal, exact G1
+  g1patch fit scan.ply -o part.npz --tolerance 2e-4 --json
+  g1patch fit scan.obj -o part.step --faces 4000     # a layout of about 4,000 quads
+  g1patch fit scan.obj -o part.npz --layout quads.obj   # your own quad layout near the scan""",
     "demo": """example:
   g1patch demo --out out""",
     "batch": """examples:
@@ -156,6 +161,46 @@ def build_parser() -> argparse.ArgumentParser:
         "written, "
         "and print the report",
     )
+
+    fit = command(
+        "fit",
+        "fit an exact-G1 surface to a dense triangle mesh (a scan: OBJ, PLY, OFF) within a "
+        "tolerance",
+    )
+    fit.add_argument("scan", type=Path, help="the triangle (or polygon) mesh to fit")
+    fit.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        required=True,
+        help="file to write: .npz (network), .step/.iges/.3dm (CAD), .obj/.ply/.stl (triangles)",
+    )
+    fit.add_argument(
+        "--tolerance",
+        type=float,
+        default=1e-3,
+        metavar="REL",
+        help="two-way distance to the scan, a fraction of its bounding-box diagonal; the layout "
+        "is made finer until it holds (default: 1e-3; exit 1 when not met)",
+    )
+    fit.add_argument(
+        "--faces", type=int, metavar="N", help="quads of the layout (default: from the tolerance)"
+    )
+    fit.add_argument(
+        "--layout",
+        type=Path,
+        metavar="QUADS",
+        help="your own quad mesh near the scan (its topology is the cage's) instead of Instant "
+        "Meshes'",
+    )
+    fit.add_argument(
+        "--method",
+        choices=methods,
+        default="split4",
+        help="the exact-G1 assembly (default: split4, polynomial: the CAD file is the surface)",
+    )
+    input_size_argument(fit)
+    fit.add_argument("--json", action="store_true", help="print the report as one JSON object")
 
     check = command(
         "check", "measure G0/G1 continuity of a network (.npz) or a Bézier patch file (.bpt)"

@@ -1,0 +1,228 @@
+"""The fit stage: a dense triangle mesh (a scan, a tessellation) → a quad layout → a cage whose
+Catmull–Clark limit passes nearest the scan (:mod:`g1patch.fitting.solve`) → the limit targets and
+an exact-G1 assembly (split4 by default: polynomial, so the CAD file is the fitted surface).
+
+:func:`fit_network` runs it and measures the result against the scan both ways
+(:class:`FitReport`): scan points to the surface and surface samples to the scan's triangles.
+Without a given layout or face count it starts from :data:`START_FACES` (or the scan's size) and
+doubles the faces while the tolerance is not met, up to :data:`MAX_ROUNDS` layouts.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..build import build_network
+from ..compare import mesh_distance
+from ..errors import InputError
+from ..mesh import QuadMesh
+from ..network import PatchNetwork
+from ..tessellate import tessellate
+from .layout import quad_layout
+from .solve import FitCage, fit_cage, vertex_normals
+
+__all__ = [
+    "DEFAULT_TOLERANCE",
+    "MAX_ROUNDS",
+    "START_FACES",
+    "FitReport",
+    "Scan",
+    "fit_network",
+    "quad_layout",
+    "scan_of",
+]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: the default tolerance: two-way distance, a fraction of the scan's bounding-box diagonal
+DEFAULT_TOLERANCE = 1e-3
+#: quads of the first layout when neither a layout nor a face count is given
+START_FACES = 1024
+#: layouts tried at most (the faces doubling each time) to meet the tolerance
+MAX_ROUNDS = 4
+#: samples per patch side of the surface when it is measured against the scan (split4: a
+#: sub-patch is a quarter face, so 9 a face side)
+MEASURE_SAMPLES = 5
+
+
+@dataclass(frozen=True)
+class Scan:
+    """A dense triangle mesh to fit: ``points`` (N, 3), ``triangles`` (T, 3), its name."""
+
+    points: FloatArray
+    triangles: IntArray
+    source: str | None = None
+
+    @property
+    def diagonal(self) -> float:
+        return float(np.linalg.norm(self.points.max(axis=0) - self.points.min(axis=0)))
+
+
+def scan_of(mesh: QuadMesh) -> Scan:
+    """The triangles of a read mesh: its polygons fanned into triangles where it was split from
+    polygons (:attr:`QuadMesh.cage`), else its quads cut along the diagonal 0–2."""
+    if mesh.cage is not None:
+        corners, sizes = mesh.cage.corners, mesh.cage.sizes
+        points = mesh.cage.points
+        first = np.repeat(np.cumsum(sizes) - sizes, sizes - 2)
+        step = np.arange(int((sizes - 2).sum())) - np.repeat(
+            np.cumsum(sizes - 2) - (sizes - 2), sizes - 2
+        )
+        triangles = np.stack(
+            [corners[first], corners[first + step + 1], corners[first + step + 2]], axis=1
+        )
+    else:
+        points, quads = mesh.vertices, mesh.faces
+        triangles = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    return Scan(np.asarray(points, dtype=np.float64), triangles.astype(np.int64), mesh.source)
+
+
+@dataclass(frozen=True)
+class FitReport:
+    """How near the fitted surface is to the scan, in model units and of the diagonal.
+
+    ``to_surface``: scan points → surface; ``to_scan``: surface samples → scan triangles; each
+    ``(max, p99, rms)``. ``faces``: cage quads; ``rounds``: layouts tried; ``rms``: the model's
+    RMS per solve of the last round; ``seconds``: wall time."""
+
+    diagonal: float
+    tolerance: float
+    to_surface: tuple[float, float, float]
+    to_scan: tuple[float, float, float]
+    faces: int
+    patches: int
+    rounds: int
+    rms: tuple[float, ...]
+    seconds: float
+
+    @property
+    def worst(self) -> float:
+        """The two-way maximum distance, of the diagonal."""
+        return max(self.to_surface[0], self.to_scan[0]) / self.diagonal
+
+    @property
+    def met(self) -> bool:
+        return self.worst <= self.tolerance
+
+    def summary(self) -> str:
+        """The report as a table (distances also of the diagonal)."""
+
+        def row(name: str, figures: tuple[float, float, float]) -> str:
+            relative = " / ".join(f"{value / self.diagonal:.2e}" for value in figures)
+            absolute = " / ".join(f"{value:.3g}" for value in figures)
+            return f"{name:<32}{relative}  ({absolute})"
+
+        verdict = "within" if self.met else "NOT within"
+        return "\n".join(
+            [
+                f"{'cage quads / patches':<32}{self.faces} / {self.patches} "
+                f"({self.rounds} layouts)",
+                f"{'distance, of diagonal':<32}max / p99 / rms  (model units)",
+                row("scan → surface", self.to_surface),
+                row("surface → scan", self.to_scan),
+                f"{'tolerance':<32}{self.tolerance:g} of the diagonal: {verdict} "
+                f"({self.worst:.2e})",
+                f"{'time':<32}{self.seconds:.1f} s",
+            ]
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The figures, JSON-ready."""
+        names = ("max", "p99", "rms")
+        return {
+            "diagonal": self.diagonal,
+            "tolerance": self.tolerance,
+            "within_tolerance": self.met,
+            "worst_of_diagonal": self.worst,
+            "scan_to_surface": dict(zip(names, self.to_surface, strict=True)),
+            "surface_to_scan": dict(zip(names, self.to_scan, strict=True)),
+            "faces": self.faces,
+            "patches": self.patches,
+            "rounds": self.rounds,
+            "seconds": self.seconds,
+        }
+
+
+def _figures(distances: FloatArray) -> tuple[float, float, float]:
+    return (
+        float(distances.max()),
+        float(np.percentile(distances, 99)),
+        float(np.sqrt(np.mean(distances**2))),
+    )
+
+
+def measure(network: PatchNetwork, scan: Scan) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Two-way distances between the surface (sampled :data:`MEASURE_SAMPLES` per patch side,
+    triangulated) and the scan: ``(to_surface, to_scan)`` figures (max, p99, rms)."""
+    mesh = tessellate(network, MEASURE_SAMPLES)
+    to_surface = mesh_distance(scan.points, mesh.points, mesh.triangles)
+    to_scan = mesh_distance(mesh.points, scan.points, scan.triangles)
+    return _figures(to_surface), _figures(to_scan)
+
+
+def _check_tolerance(tolerance: float) -> float:
+    if not (isinstance(tolerance, (int, float)) and 0 < tolerance < 1):
+        raise InputError(
+            f"tolerance: expected a fraction of the diagonal between 0 and 1, got {tolerance!r}"
+        )
+    return float(tolerance)
+
+
+def fit_network(
+    scan: Scan,
+    *,
+    tolerance: float = DEFAULT_TOLERANCE,
+    faces: int | None = None,
+    layout: QuadMesh | None = None,
+    method: str = "split4",
+) -> tuple[PatchNetwork, FitReport]:
+    """The fitted exact-G1 network of ``scan`` and its :class:`FitReport` (module docstring).
+
+    ``layout``: the user's quad mesh near the scan (its topology is the cage's; no remeshing);
+    ``faces``: the layout's quad count (about), else from :data:`START_FACES` doubling up to
+    :data:`MAX_ROUNDS` times while the two-way distance exceeds ``tolerance`` (of the diagonal).
+    """
+    tolerance = _check_tolerance(tolerance)
+    started = time.perf_counter()
+    diagonal = scan.diagonal
+    if not diagonal > 0:
+        raise InputError(f"{scan.source or 'scan'}: the scan has no extent")
+    count = faces if faces is not None else min(START_FACES, max(64, len(scan.triangles) // 8))
+    adaptive = layout is None and faces is None
+    normals = vertex_normals(scan.points, scan.triangles)
+    rounds = 0
+    while True:
+        rounds += 1
+        cage_layout = layout if layout is not None else _layout(scan, count)
+        fitted: FitCage = fit_cage(scan.points, normals, cage_layout)
+        network = build_network(fitted.cage, method, "limit")
+        to_surface, to_scan = measure(network, scan)
+        worst = max(to_surface[0], to_scan[0]) / diagonal
+        if not adaptive or worst <= tolerance or rounds >= MAX_ROUNDS:
+            break
+        count *= 2
+    network.provenance.update({"fit_tolerance": f"{tolerance:g}", "fit_distance": f"{worst:.3e}"})
+    report = FitReport(
+        diagonal,
+        tolerance,
+        to_surface,  # type: ignore[arg-type]
+        to_scan,  # type: ignore[arg-type]
+        fitted.cage.n_faces,
+        network.n_patches,
+        rounds,
+        fitted.rms,
+        time.perf_counter() - started,
+    )
+    return network, report
+
+
+def _layout(scan: Scan, faces: int) -> QuadMesh:
+    """The remesher's quads as a validated (and where needed repaired) quad mesh."""
+    vertices, quads = quad_layout(scan.points, scan.triangles, int(faces))
+    return QuadMesh.from_arrays(vertices, quads, source=f"layout of {scan.source or 'the scan'}")

@@ -1,0 +1,184 @@
+"""The cage whose Catmull–Clark limit surface passes nearest a scan (Eck & Hoppe 1996, Hoppe et
+al. 1994: fit a subdivision surface's control mesh by linear least squares, feet re-projected).
+
+The limit surface of a cage C over a quad layout is linear in C: at the vertices of the layout
+refined ``levels`` times its points are ``G C`` exactly
+(:func:`g1patch.subdivision.limit_grid_matrix`, a ``(2^levels + 1)²`` grid per face); between
+them the surface is taken as the triangles of that grid (a second-order approximation: the grid
+step is a quarter of a cage edge at the default two levels, where the limit bends little). Each
+scan point p gets its foot on those triangles (barycentric weights b over a triangle's three grid
+points), so that its model is ``B G C`` (B: one row of three weights per point), and the cage
+minimises
+
+    ``‖B G C − P‖² + λ ‖K C‖² + μ ‖C − C_prev‖²``,   ``λ = fairness · N / V``,
+    ``μ = damping · N / V``
+
+(N scan points, V cage vertices; K the umbrella Laplacian ``C_v − mean of its neighbours``: a
+small fairness term keeps noise from being chased; the proximal term keeps vertices few points
+reach near the previous cage while the feet settle), solved by a sparse LU of the normal
+equations. The feet move with the surface, so project → solve is repeated ``iterations`` times.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+from scipy.sparse.linalg import splu
+from scipy.spatial import cKDTree
+
+from ..compare import _barycentric_closest
+from ..errors import ConstructionError
+from ..mesh import QuadMesh
+from ..subdivision import limit_grid_matrix
+
+__all__ = [
+    "FIT_ITERATIONS",
+    "FIT_LEVELS",
+    "FitCage",
+    "fit_cage",
+    "grid_triangles",
+    "vertex_normals",
+]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: refinement levels of the limit grid the scan points are projected on
+FIT_LEVELS = 2
+#: project → solve alternations
+FIT_ITERATIONS = 6
+#: the fairness weight per scan point per cage vertex (dimensionless: both terms are lengths²)
+FAIRNESS = 1e-3
+#: the weight, per scan point per cage vertex, of staying near the previous solve's cage (a
+#: proximal step: a vertex few points reach cannot run away while the feet settle)
+DAMPING = 1e-2
+#: surface points a scan point's foot may start from (the nearest that faces its way)
+_NEIGHBOURS = 8
+
+
+class FitCage(NamedTuple):
+    """The fitted cage (the layout's topology, new positions) and the model's RMS distance of
+    the scan points after each solve, in model units."""
+
+    cage: QuadMesh
+    rms: tuple[float, ...]
+
+
+def grid_triangles(grid: IntArray) -> IntArray:
+    """The two triangles of every cell of per-face grids ``(F, m + 1, m + 1)``, (2 F m², 3),
+    oriented as the faces (u then v)."""
+    a, b = grid[:, :-1, :-1], grid[:, 1:, :-1]
+    c, d = grid[:, 1:, 1:], grid[:, :-1, 1:]
+    first = np.stack([a, b, c], axis=-1).reshape(-1, 3)
+    second = np.stack([a, c, d], axis=-1).reshape(-1, 3)
+    return np.concatenate([first, second])
+
+
+def vertex_normals(points: FloatArray, triangles: IntArray) -> FloatArray:
+    """Area-weighted unit vertex normals of a triangle mesh (zero where a vertex has none)."""
+    a, b, c = (points[triangles[:, k]] for k in range(3))
+    area = np.cross(b - a, c - a)
+    total = np.zeros_like(points)
+    for k in range(3):
+        np.add.at(total, triangles[:, k], area)
+    length = np.linalg.norm(total, axis=1, keepdims=True)
+    return total / np.where(length > 0, length, 1.0)
+
+
+def _feet(
+    points: FloatArray,
+    point_normals: FloatArray,
+    surface: FloatArray,
+    triangles: IntArray,
+) -> tuple[IntArray, FloatArray]:
+    """Per point the triangle of ``surface[triangles]`` nearest it among those around a nearby
+    surface point, and the barycentric weights (N, 3) of the closest point on it. The surface
+    point is the nearest of the :data:`_NEIGHBOURS` nearest whose normal faces the same way as
+    the point's (dot > 0; the nearest where none does): across a thin part (a tail, an ear) the
+    nearest surface point may lie on the far side, and a foot there pulls that side over."""
+    corners = triangles.reshape(-1)
+    order = np.argsort(corners, kind="stable")
+    starts = np.searchsorted(corners[order], np.arange(len(surface) + 1))
+    near = cKDTree(surface).query(points, k=_NEIGHBOURS, workers=-1)[1]
+    facing = np.einsum("nkd,nd->nk", vertex_normals(surface, triangles)[near], point_normals) > 0
+    pick = np.where(facing.any(axis=1), np.argmax(facing, axis=1), 0)
+    nearest = near[np.arange(len(points)), pick]
+    counts = starts[nearest + 1] - starts[nearest]
+    width = int(counts.max())
+    slot = np.arange(width)
+    valid = slot[None, :] < counts[:, None]
+    candidate = np.where(
+        valid, order[np.minimum(starts[nearest][:, None] + slot, len(order) - 1)] // 3, 0
+    )
+    a = surface[triangles[candidate, 0]]
+    ab = surface[triangles[candidate, 1]] - a
+    ac = surface[triangles[candidate, 2]] - a
+    ap = points[:, None, :] - a
+    v, w = _barycentric_closest(
+        (ab * ap).sum(-1),
+        (ac * ap).sum(-1),
+        (ab * ab).sum(-1),
+        (ab * ac).sum(-1),
+        (ac * ac).sum(-1),
+    )
+    gap = np.linalg.norm(v[..., None] * ab + w[..., None] * ac - ap, axis=-1)
+    best = np.argmin(np.where(valid, gap, np.inf), axis=1)
+    rows = np.arange(len(points))
+    v, w = v[rows, best], w[rows, best]
+    return candidate[rows, best], np.stack([1.0 - v - w, v, w], axis=1)
+
+
+def _umbrella(mesh: QuadMesh) -> sp.csr_matrix:
+    """``K C = C_v − mean of v's edge neighbours`` (V × V)."""
+    edges = mesh.topology.edges
+    count = mesh.n_vertices
+    degree = np.bincount(edges.ravel(), minlength=count).astype(np.float64)
+    rows = np.concatenate([edges[:, 0], edges[:, 1]])
+    columns = np.concatenate([edges[:, 1], edges[:, 0]])
+    weights = -1.0 / np.maximum(degree[rows], 1.0)
+    neighbours = sp.csr_matrix((weights, (rows, columns)), shape=(count, count))
+    return sp.identity(count, format="csr") + neighbours
+
+
+def fit_cage(
+    points: FloatArray,
+    normals: FloatArray,
+    layout: QuadMesh,
+    *,
+    levels: int = FIT_LEVELS,
+    iterations: int = FIT_ITERATIONS,
+    fairness: float = FAIRNESS,
+    damping: float = DAMPING,
+) -> FitCage:
+    """The cage of ``layout``'s topology whose limit surface passes nearest ``points`` (N, 3,
+    with unit ``normals``) (module docstring), starting from the layout's own positions."""
+    limit, grid = limit_grid_matrix(layout, levels)
+    triangles = grid_triangles(grid)
+    fair = _umbrella(layout)
+    per_vertex = len(points) / max(layout.n_vertices, 1)
+    damping = damping * per_vertex
+    regular = fairness * per_vertex * (fair.T @ fair) + damping * sp.identity(layout.n_vertices)
+    cage = layout.vertices.copy()
+    rms = []
+    for _ in range(iterations):
+        triangle, barycentric = _feet(points, normals, limit @ cage, triangles)
+        rows = np.repeat(np.arange(len(points)), 3)
+        feet = sp.csr_matrix(
+            (barycentric.reshape(-1), (rows, triangles[triangle].reshape(-1))),
+            shape=(len(points), limit.shape[0]),
+        )
+        model = (feet @ limit).tocsr()
+        try:
+            factor = splu((model.T @ model + regular).tocsc())
+        except RuntimeError as error:  # SuperLU: "Factor is exactly singular"
+            raise ConstructionError(
+                f"fit: the least-squares system is singular ({error})"
+            ) from None
+        cage = factor.solve(np.asarray(model.T @ points) + damping * cage)
+        if not np.isfinite(cage).all():
+            raise ConstructionError("fit: the least-squares solve gave non-finite positions")
+        rms.append(float(np.sqrt(np.mean(np.sum((model @ cage - points) ** 2, axis=1)))))
+    return FitCage(layout.with_vertices(cage), tuple(rms))
