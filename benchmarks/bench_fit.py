@@ -1,0 +1,107 @@
+"""``g1patch fit``: time, memory and distance against the scan's size and the layout's (issue 33).
+
+Table 1, scans of growing size: triangulated tori (``shapes.torus_quads``, R 2, r 0.7, each quad
+cut in two; ``--triangles`` of them, about) fitted at the default tolerance (1e-3 of the
+diagonal): wall time of ``g1patch.fit`` (the Instant Meshes child process included), tracemalloc
+peak of this process (the child's memory is its own), cage quads, layouts tried, and the two-way
+maximum distance, of the diagonal. The baseline measured in the same run is the tool before the
+fit existed: ``smooth`` of the same triangles as a cage (every triangle split into three quads,
+interpolated); the ratio is the fit's time over it.
+
+Table 2, distance against the layout's size on one scan (``--faces`` sweep) and on the shared
+Spot triangles (a coarse tessellation: its facets are up to 3e-3 of the diagonal from any smooth
+surface through its vertices, so the surface → scan figure stays above that).
+
+Run:  .venv/bin/python benchmarks/bench_fit.py [--triangles N ...] [--faces N ...] [--quick]
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+
+import harness
+import numpy as np
+
+import g1patch
+from g1patch import shapes
+from g1patch.io.meshfile import write_triangles
+
+record = harness.recorder("bench_fit")
+
+
+def torus_scan(folder: Path, triangles: int) -> Path:
+    """A triangulated torus of about ``triangles`` triangles (minor rings = major / 2)."""
+    minor = max(4, int(round((triangles / 4) ** 0.5)))
+    mesh = shapes.torus_quads(2 * minor, minor, 2.0, 0.7)
+    cells = np.concatenate([mesh.faces[:, [0, 1, 2]], mesh.faces[:, [0, 2, 3]]])
+    path = folder / f"torus_{len(cells)}.obj"
+    write_triangles(path, mesh.vertices, cells)
+    return path
+
+
+def row(label: str, path: Path, **options: object) -> g1patch.api.FitResult:
+    """One fit, timed and traced (two runs: the traced one's peak, the untraced one's time)."""
+    seconds, result = harness.timed(lambda: g1patch.fit(path, **options))  # type: ignore[arg-type]
+    peak = harness.peak(lambda: g1patch.fit(path, **options))  # type: ignore[arg-type]
+    report = result.report
+    print(
+        f"  {label:<28} {seconds:6.1f} s {peak / 1e6:7.0f} MB  {report.faces:7,} quads "
+        f"({report.rounds} layouts)  scan→surface {report.to_surface[0] / report.diagonal:.1e}"
+        f"  surface→scan {report.to_scan[0] / report.diagonal:.1e}"
+    )
+    record(f"{label}: time", seconds, "s", "remesher child process included")
+    record(f"{label}: peak", peak / 1e6, "MB", "tracemalloc, this process")
+    record(f"{label}: quads", report.faces, "")
+    record(f"{label}: two-way max", report.worst, "of diagonal", f"{report.rounds} layouts")
+    return result
+
+
+def table_sizes(folder: Path, sizes: Sequence[int]) -> None:
+    print("fit against the scan's size (torus scans, default tolerance 1e-3):")
+    for triangles in sizes:
+        path = torus_scan(folder, triangles)
+        label = f"torus {triangles:,} triangles"
+        result = row(label, path)
+        if triangles <= 40_000:  # the baseline: the triangles as a cage, interpolated
+            g1patch.smooth(path)  # kernels loaded
+            baseline, surface = harness.timed(lambda path=path: g1patch.smooth(path))
+            ratio = result.report.seconds / baseline
+            print(
+                f"  {'  as a cage (baseline)':<28} {baseline:6.1f} s {surface.n_patches:,} "
+                f"patches; the fit takes {ratio:.1f}× its time, {result.report.patches:,} patches"
+            )
+            record(f"{label}: fit / build as a cage", ratio, "×", "time")
+            record(f"{label}: build as a cage", baseline, "s", f"{surface.n_patches} patches")
+
+
+def table_faces(folder: Path, faces: Sequence[int], spot: bool) -> None:
+    print("distance against the layout's size:")
+    path = torus_scan(folder, 40_000)
+    for count in faces:
+        row(f"torus 40k, {count:,} quads asked", path, faces=count)
+    shared = harness.SHARED / "spot_triangulated.obj"
+    if spot and shared.exists():
+        for count in faces:
+            row(f"Spot triangles, {count:,} quads", shared, faces=count)
+
+
+#: the command line's options (harness.Option)
+OPTIONS: dict[str, harness.Option] = {
+    "triangles": ([10_000, 100_000, 1_000_000], "scan sizes, triangles"),
+    "faces": ([500, 2_000, 8_000], "layout sizes of table 2, quads"),
+}
+#: the defaults --quick sets: small sizes, a smoke run
+QUICK = {"triangles": [10_000], "faces": [500]}
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    args = harness.parse_args(__doc__, argv, OPTIONS, QUICK)
+    with tempfile.TemporaryDirectory(prefix="bench-fit.") as folder:
+        table_sizes(Path(folder), args.triangles)
+        table_faces(Path(folder), args.faces, spot=not args.quick)
+
+
+if __name__ == "__main__":
+    main()
