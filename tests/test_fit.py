@@ -143,3 +143,15 @@ def test_shared_spot_triangles(shared_data: Path) -> None:
     assert report.to_surface[1] <= 2e-3 * report.diagonal
     checked = result.surface.check()
     assert checked.is_g1(1e-9) and checked.folds == 0
+
+
+def test_the_viewer_shows_the_distance_to_the_scan(
+    fitted: g1patch.api.FitResult, tmp_path: Path
+) -> None:
+    """``fit … -o page.html`` / ``FitResult.view``: the page carries every sample's distance to
+    the scan (of the diagonal) and offers the distance mode; a page without a scan does not."""
+    page = fitted.view(resolution=3)
+    meta = json.loads(page.split('id="g1-meta">', 1)[1].split("</script>", 1)[0])
+    assert 0 < meta["distance"]["high"] <= 1e-3 and 'id="distance-mode"' in page
+    plain = fitted.surface.view(resolution=3)
+    assert '"distance":null' in plain

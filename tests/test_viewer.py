@@ -500,6 +500,24 @@ def test_browser_draws_the_uv_checker_of_a_textured_cage(
     assert _errors(browser) == []
 
 
+@pytest.mark.slow
+def test_browser_draws_the_distance_to_a_scan(browser: DevTools, tmp_path: Path) -> None:
+    """A surface viewed with the scan it was fitted to (here: a coarse triangulation of its own
+    samples, so the distance varies over each triangle): the distance mode colours it, darkest
+    at the scan's vertices, with its legend; no errors."""
+    surface = g1patch.smooth(g1patch.shapes.cube_sphere(1))
+    points, triangles = surface.tessellate(3)
+    page = Path(surface.view(tmp_path / "distance.html", scan=(points, triangles)))
+    shaded, covered = shoot(browser, page, "shaded")
+    coloured, _ = shoot(browser, page, "distance")
+    _keep(coloured, "distance")
+    difference = np.abs(coloured.astype(int) - shaded.astype(int))[covered].max(axis=-1)
+    assert (difference > 30).mean() > 0.5  # a different picture from the shading
+    legend = "getComputedStyle(document.getElementById('distance-legend')).display"
+    assert browser.evaluate(legend) == "block"
+    assert _errors(browser) == []
+
+
 def test_cli_view_help(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as done:
         main(["view", "--help"])

@@ -30,7 +30,7 @@ from .errors import FormatError, InputError
 
 if TYPE_CHECKING:  # pragma: no cover
     from .continuity import ContinuityReport
-    from .fitting import FitReport
+    from .fitting import FitReport, Scan
     from .gregory import GregoryPatchSet
     from .io.cad import ExportResult, RhinoResult
     from .mesh import QuadMesh, Tag
@@ -685,13 +685,16 @@ class Surface:
         title: str | None = None,
         up: str = "auto",
         view: tuple[float, float] | str = "auto",
+        scan: tuple[Any, Any] | None = None,
     ) -> Path | str:
         """An interactive viewer: one self-contained HTML page (orbit, zoom, pan; shaded, zebra and
         G1-deviation modes; seams as lines; the continuity summary), written to ``path``
         (``.html``, returned) or returned as a string when ``path`` is None. ``resolution``:
         samples per patch side (None: about 2 M triangles at most); a page of more needs ``force``.
         ``up``, ``view``: the first camera, as for :meth:`render` (``"auto"``: from the data).
-        :func:`g1patch.viewer.view_html` makes the page; opening it needs no network."""
+        ``scan``: ``(points, triangles)`` of a scan the surface was fitted to: a mode colouring
+        the surface by its distance to it. :func:`g1patch.viewer.view_html` makes the page;
+        opening it needs no network."""
         from .viewer import view_html, write_view
 
         options: dict[str, Any] = {
@@ -700,6 +703,7 @@ class Surface:
             "title": title,
             "up": up,
             "view": view,
+            "scan": scan,
         }
         if path is None:
             return view_html(self.network, report=self.check(), **options)
@@ -777,11 +781,17 @@ def smooth(
 
 
 class FitResult(NamedTuple):
-    """What :func:`fit` returns: the fitted ``surface`` and its ``report``
-    (:class:`g1patch.fitting.FitReport`: two-way distances to the scan, faces, rounds, time)."""
+    """What :func:`fit` returns: the fitted ``surface``, its ``report``
+    (:class:`g1patch.fitting.FitReport`: two-way distances to the scan, faces, rounds, time) and
+    the ``scan`` it was fitted to (:class:`g1patch.fitting.Scan`)."""
 
     surface: Surface
     report: FitReport
+    scan: Scan
+
+    def view(self, path: PathLike | None = None, **options: Any) -> Path | str:
+        """:meth:`Surface.view` with the distance-to-the-scan mode."""
+        return self.surface.view(path, scan=(self.scan.points, self.scan.triangles), **options)
 
 
 def fit(
@@ -813,10 +823,11 @@ def fit(
     if quads is not None and quads.cage is not None:
         raise InputError(f"{quads.source or 'layout'}: a layout must be all quads")
     with named_errors(mesh.source, (ConstructionError,)):
+        scan = scan_of(mesh)
         network, report = fit_network(
-            scan_of(mesh), tolerance=tolerance, faces=faces, layout=quads, method=method
+            scan, tolerance=tolerance, faces=faces, layout=quads, method=method
         )
-    return FitResult(Surface(network), report)
+    return FitResult(Surface(network), report, scan)
 
 
 def check(surface: Any, **options: Any) -> ContinuityReport:

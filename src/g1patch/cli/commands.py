@@ -141,11 +141,11 @@ def _fit(args: argparse.Namespace) -> int:
     from ..api import EXPORT_SUFFIXES, fit
 
     suffix = args.output.suffix.lower()
-    if suffix not in EXPORT_SUFFIXES:
+    if suffix not in (*EXPORT_SUFFIXES, ".html"):
         raise FormatError(
             args.output,
             f"unsupported extension {suffix or '(none)'!r}; expected one of "
-            f"{', '.join(EXPORT_SUFFIXES)}",
+            f"{', '.join((*EXPORT_SUFFIXES, '.html'))}",
         )
     with _progress("fit", args.quiet) as progress:
         progress(0, 2)
@@ -158,7 +158,10 @@ def _fit(args: argparse.Namespace) -> int:
             max_input_size=args.max_input_size,
         )
         progress(1, 2)
-        result.surface.export(args.output)
+        if suffix == ".html":  # the viewer, with the distance to the scan
+            result.view(args.output)
+        else:
+            result.surface.export(args.output)
         progress(2, 2)
     report = result.report
     if args.json:

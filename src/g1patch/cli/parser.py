@@ -40,7 +40,8 @@ _EXAMPLES = {
   g1patch fit scan.stl -o part.step                 # within 1e-3 of the diagonal, exact G1
   g1patch fit scan.ply -o part.npz --tolerance 2e-4 --json
   g1patch fit scan.obj -o part.step --faces 4000     # a layout of about 4,000 quads
-  g1patch fit scan.obj -o part.npz --layout quads.obj   # your own quad layout near the scan""",
+  g1patch fit scan.obj -o part.npz --layout quads.obj   # your own quad layout near the scan
+  g1patch fit scan.ply -o fit.html                  # the viewer: the distance to the scan""",
     "demo": """example:
   g1patch demo --out out""",
     "batch": """examples:
@@ -173,7 +174,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--output",
         type=Path,
         required=True,
-        help="file to write: .npz (network), .step/.iges/.3dm (CAD), .obj/.ply/.stl (triangles)",
+        help="file to write: .npz (network), .step/.iges/.3dm (CAD), .obj/.ply/.stl (triangles), "
+        ".html (the viewer, with the distance to the scan)",
     )
     fit.add_argument(
         "--tolerance",

@@ -91,6 +91,7 @@ _DEFAULTS: dict[str, Any] = {
     "title": None,
     "up": "auto",
     "view": "auto",
+    "scan": None,
 }
 
 
@@ -313,6 +314,7 @@ def _page(
     title: str | None,
     up: str,
     view: tuple[float, float] | str,
+    scan: tuple[NDArray[np.float64], NDArray[np.int64]] | None,
 ) -> list[bytes]:
     """The page of :func:`view_html` in pieces of UTF-8 (the data are never one large string)."""
     from ..render import DEFAULT_STRIPES
@@ -328,6 +330,7 @@ def _page(
 
         report = check(network)
     samples = _sample(network, r)
+    distance, distance_meta = _scan_distances(samples, scan, frame)
     up, eye = _eye(samples, up, view)
     sides = _side_values(network, report)
     seams = _seam_segments(samples, report)
@@ -356,6 +359,7 @@ def _page(
         "scale": _colour_scale(sides),
         "stripes": DEFAULT_STRIPES,
         "uv": network.uv is not None,
+        "distance": distance_meta,
     }
     imports = {
         "three": _module_url(_vendor("three.module.min.js")),
@@ -372,12 +376,39 @@ def _page(
         b"@@TEXCOORDS@@": _base64(
             np.zeros(0, np.float32) if network.uv is None else network.uv.astype(np.float32)
         ),
+        b"@@DISTANCE@@": _base64(distance),
         b"@@VERSION@@": VENDORED_THREE_VERSION.encode(),
         b"@@LICENSE@@": _html_text(_vendor("LICENSE-three.txt")).encode(),
     }
     template = (resources.files(__name__) / "page.html").read_bytes()
     pieces = re.split(rb"(@@[A-Z]+@@)", template)  # the text, then a field's name and text again
     return [fields[piece] if index % 2 else piece for index, piece in enumerate(pieces)]
+
+
+def _scan_distances(
+    samples: _Samples,
+    scan: tuple[NDArray[np.float64], NDArray[np.int64]] | None,
+    frame: Any,
+) -> tuple[NDArray[np.float32], dict[str, float] | None]:
+    """The distance of every sample to the scan's triangles (``scan``: points (V, 3), triangles
+    (T, 3); exact point–triangle distances, :func:`g1patch.compare.mesh_distance`), of the
+    scan's bounding-box diagonal, float32 in the samples' order, and the distance mode's meta
+    (``high``: the largest); empty and None without a scan."""
+    if scan is None:
+        return np.zeros(0, np.float32), None
+    from ..compare import mesh_distance
+    from ..errors import InputError, as_float_array, as_index_array
+
+    points = as_float_array("scan points", scan[0], (3,))
+    triangles = as_index_array("scan triangles", scan[1], (3,))
+    if frame is not None:  # the samples are in the display frame: so is the scan
+        points = frame.to_local(points)
+    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    if not diagonal > 0:
+        raise InputError("scan: the scan has no extent")
+    where = samples.positions.reshape(-1, 3).astype(np.float64) + samples.centre
+    distance = mesh_distance(where, points, triangles) / diagonal
+    return distance.astype(np.float32), {"high": float(distance.max())}
 
 
 def _html_text(text: str) -> str:
@@ -393,6 +424,7 @@ def view_html(
     title: str | None = None,
     up: str = "auto",
     view: tuple[float, float] | str = "auto",
+    scan: tuple[NDArray[np.float64], NDArray[np.int64]] | None = None,
 ) -> str:
     """The viewer page of ``network`` as one HTML string (see the module docstring).
 
@@ -401,10 +433,19 @@ def view_html(
     :class:`ViewTooLargeError` unless ``force``. ``report``: the continuity report to show
     (computed when None). ``title``: the page's title (default: the network's source or method).
     ``up``, ``view``: the first camera, as for :func:`g1patch.render.render` (``"auto"``: by
-    :func:`g1patch.render.auto_camera`); R in the page returns to it.
+    :func:`g1patch.render.auto_camera`); R in the page returns to it. ``scan``: a triangle
+    mesh ``(points, triangles)`` the surface was fitted to; the page then offers a distance
+    mode (every sample coloured by its distance to the scan, of the scan's diagonal).
     """
     pieces = _page(
-        network, resolution=resolution, force=force, report=report, title=title, up=up, view=view
+        network,
+        resolution=resolution,
+        force=force,
+        report=report,
+        title=title,
+        up=up,
+        view=view,
+        scan=scan,
     )
     return b"".join(pieces).decode("utf-8")
 
