@@ -57,6 +57,9 @@ FAIRNESS = 1e-3
 DAMPING = 1e-2
 #: surface points a scan point's foot may start from (the nearest that faces its way)
 _NEIGHBOURS = 8
+#: scan points whose feet and normal equations are made at a time (bounds the memory: ~2 kB a
+#: point in flight)
+BLOCK_POINTS = 65_536
 
 
 class FitCage(NamedTuple):
@@ -88,47 +91,51 @@ def vertex_normals(points: FloatArray, triangles: IntArray) -> FloatArray:
     return total / np.where(length > 0, length, 1.0)
 
 
-def _feet(
-    points: FloatArray,
-    point_normals: FloatArray,
-    surface: FloatArray,
-    triangles: IntArray,
-) -> tuple[IntArray, FloatArray]:
-    """Per point the triangle of ``surface[triangles]`` nearest it among those around a nearby
-    surface point, and the barycentric weights (N, 3) of the closest point on it. The surface
-    point is the nearest of the :data:`_NEIGHBOURS` nearest whose normal faces the same way as
-    the point's (dot > 0; the nearest where none does): across a thin part (a tail, an ear) the
-    nearest surface point may lie on the far side, and a foot there pulls that side over."""
-    corners = triangles.reshape(-1)
-    order = np.argsort(corners, kind="stable")
-    starts = np.searchsorted(corners[order], np.arange(len(surface) + 1))
-    near = cKDTree(surface).query(points, k=_NEIGHBOURS, workers=-1)[1]
-    facing = np.einsum("nkd,nd->nk", vertex_normals(surface, triangles)[near], point_normals) > 0
-    pick = np.where(facing.any(axis=1), np.argmax(facing, axis=1), 0)
-    nearest = near[np.arange(len(points)), pick]
-    counts = starts[nearest + 1] - starts[nearest]
-    width = int(counts.max())
-    slot = np.arange(width)
-    valid = slot[None, :] < counts[:, None]
-    candidate = np.where(
-        valid, order[np.minimum(starts[nearest][:, None] + slot, len(order) - 1)] // 3, 0
-    )
-    a = surface[triangles[candidate, 0]]
-    ab = surface[triangles[candidate, 1]] - a
-    ac = surface[triangles[candidate, 2]] - a
-    ap = points[:, None, :] - a
-    v, w = _barycentric_closest(
-        (ab * ap).sum(-1),
-        (ac * ap).sum(-1),
-        (ab * ab).sum(-1),
-        (ab * ac).sum(-1),
-        (ac * ac).sum(-1),
-    )
-    gap = np.linalg.norm(v[..., None] * ab + w[..., None] * ac - ap, axis=-1)
-    best = np.argmin(np.where(valid, gap, np.inf), axis=1)
-    rows = np.arange(len(points))
-    v, w = v[rows, best], w[rows, best]
-    return candidate[rows, best], np.stack([1.0 - v - w, v, w], axis=1)
+class _Triangles:
+    """A triangle mesh prepared for foot queries: a k-d tree of its points, their normals and
+    every point's fan of triangles (CSR: ``order[starts[v]:starts[v + 1]] // 3``)."""
+
+    def __init__(self, points: FloatArray, triangles: IntArray) -> None:
+        corners = triangles.reshape(-1)
+        self.points, self.triangles = points, triangles
+        self.order = np.argsort(corners, kind="stable")
+        self.starts = np.searchsorted(corners[self.order], np.arange(len(points) + 1))
+        self.normals = vertex_normals(points, triangles)
+        self.tree = cKDTree(points)
+
+    def feet(self, points: FloatArray, normals: FloatArray) -> tuple[IntArray, FloatArray]:
+        """Per point the triangle nearest it among those around a nearby mesh point, and the
+        barycentric weights (N, 3) of the closest point on it. The mesh point is the nearest of
+        the :data:`_NEIGHBOURS` nearest whose normal faces the same way as the point's (dot > 0;
+        the nearest where none does): across a thin part (a tail, an ear) the nearest mesh point
+        may lie on the far side, and a foot there pulls that side over."""
+        near = self.tree.query(points, k=_NEIGHBOURS, workers=-1)[1]
+        facing = np.einsum("nkd,nd->nk", self.normals[near], normals) > 0
+        pick = np.where(facing.any(axis=1), np.argmax(facing, axis=1), 0)
+        nearest = near[np.arange(len(points)), pick]
+        counts = self.starts[nearest + 1] - self.starts[nearest]
+        slot = np.arange(int(counts.max()))
+        valid = slot[None, :] < counts[:, None]
+        last = len(self.order) - 1
+        candidate = np.where(
+            valid, self.order[np.minimum(self.starts[nearest][:, None] + slot, last)] // 3, 0
+        )
+        corners = self.points[self.triangles[candidate]]  # (N, width, 3, 3)
+        a = corners[:, :, 0]
+        ab, ac = corners[:, :, 1] - a, corners[:, :, 2] - a
+        ap = points[:, None, :] - a
+        v, w = _barycentric_closest(
+            (ab * ap).sum(-1),
+            (ac * ap).sum(-1),
+            (ab * ab).sum(-1),
+            (ab * ac).sum(-1),
+            (ac * ac).sum(-1),
+        )
+        gap = np.linalg.norm(v[..., None] * ab + w[..., None] * ac - ap, axis=-1)
+        best = np.argmin(np.where(valid, gap, np.inf), axis=1)
+        rows = np.arange(len(points))
+        v, w = v[rows, best], w[rows, best]
+        return candidate[rows, best], np.stack([1.0 - v - w, v, w], axis=1)
 
 
 def _umbrella(mesh: QuadMesh) -> sp.csr_matrix:
@@ -162,23 +169,38 @@ def fit_cage(
     damping = damping * per_vertex
     regular = fairness * per_vertex * (fair.T @ fair) + damping * sp.identity(layout.n_vertices)
     cage = layout.vertices.copy()
+    blocks = [slice(start, start + BLOCK_POINTS) for start in range(0, len(points), BLOCK_POINTS)]
     rms = []
     for _ in range(iterations):
-        triangle, barycentric = _feet(points, normals, limit @ cage, triangles)
-        rows = np.repeat(np.arange(len(points)), 3)
-        feet = sp.csr_matrix(
-            (barycentric.reshape(-1), (rows, triangles[triangle].reshape(-1))),
-            shape=(len(points), limit.shape[0]),
-        )
-        model = (feet @ limit).tocsr()
+        surface = _Triangles(limit @ cage, triangles)
+        lhs, rhs, kept = regular, damping * cage, []
+        for rows in blocks:  # the normal equations a block of points at a time
+            triangle, barycentric = surface.feet(points[rows], normals[rows])
+            count = len(triangle)
+            feet = sp.csr_matrix(
+                (
+                    barycentric.reshape(-1),
+                    (np.repeat(np.arange(count), 3), triangles[triangle].reshape(-1)),
+                ),
+                shape=(count, limit.shape[0]),
+            )
+            model = (feet @ limit).tocsr()
+            lhs = lhs + model.T @ model
+            rhs = rhs + np.asarray(model.T @ points[rows])
+            kept.append((triangles[triangle], barycentric))
         try:
-            factor = splu((model.T @ model + regular).tocsc())
+            factor = splu(sp.csc_matrix(lhs))
         except RuntimeError as error:  # SuperLU: "Factor is exactly singular"
             raise ConstructionError(
                 f"fit: the least-squares system is singular ({error})"
             ) from None
-        cage = factor.solve(np.asarray(model.T @ points) + damping * cage)
+        cage = factor.solve(rhs)
         if not np.isfinite(cage).all():
             raise ConstructionError("fit: the least-squares solve gave non-finite positions")
-        rms.append(float(np.sqrt(np.mean(np.sum((model @ cage - points) ** 2, axis=1)))))
+        moved = limit @ cage  # the model's feet on the new surface: their squared distances
+        squared = sum(
+            float(np.sum((np.einsum("nk,nkd->nd", weights, moved[corners]) - points[rows]) ** 2))
+            for (corners, weights), rows in zip(kept, blocks, strict=True)
+        )
+        rms.append(float(np.sqrt(squared / len(points))))
     return FitCage(layout.with_vertices(cage), tuple(rms))
