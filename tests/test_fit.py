@@ -96,6 +96,14 @@ def test_the_command_line_writes_reports_and_exits_1_when_not_within(
     report = json.loads(result.stdout)
     assert report["within_tolerance"] and report["output"] == str(out)
     assert g1patch.read(out).n_patches == report["patches"]
+    checked = subprocess.run(
+        [sys.executable, "-m", "g1patch.cli", "check", str(out), "--json"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    figures = json.loads(checked.stdout)  # check reports the distance the file was fitted to
+    assert figures["fit_distance"] == pytest.approx(report["worst_of_diagonal"], rel=1e-3)
     tight = subprocess.run(
         [*run, "--faces", "64", "--tolerance", "1e-6"], capture_output=True, text=True, timeout=600
     )

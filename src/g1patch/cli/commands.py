@@ -179,11 +179,14 @@ def _check(args: argparse.Namespace) -> int:
     network = as_network(args.surface)
     with _progress("check", args.quiet) as progress:
         report = check(network, samples=args.samples, progress=progress)
+    fitted = _fit_rows(network.provenance)
     if args.json:
-        print(json.dumps(report.to_dict()))
+        print(json.dumps({**report.to_dict(), **{key: value for key, _, value in fitted}}))
     else:
         print(f"{args.surface} ({network.provenance.get('method', 'file')})")
         print(report.summary())
+        for _, label, value in fitted:
+            print(f"{label:<32}{value:.3e}")
     if args.max_angle is None:
         return EXIT_OK
     failures = []
@@ -215,6 +218,19 @@ def _check(args: argparse.Namespace) -> int:
             )
             print(f"passed: G1 angles within {args.max_angle}°, no folds{seams}")
     return EXIT_CHECK_FAILED if failures else EXIT_OK
+
+
+def _fit_rows(provenance: dict[str, str]) -> list[tuple[str, str, float]]:
+    """The figures a fitted network carries (``g1patch fit``): (JSON key, label, value)."""
+    rows = []
+    if "fit_distance" in provenance:
+        rows.append(
+            ("fit_distance", "distance to the scan (of diag)", float(provenance["fit_distance"]))
+        )
+        rows.append(
+            ("fit_tolerance", "fit tolerance (of diag)", float(provenance["fit_tolerance"]))
+        )
+    return rows
 
 
 def _export(args: argparse.Namespace) -> int:
