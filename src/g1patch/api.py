@@ -815,15 +815,20 @@ def fit(
     report says whether it was met."""
     from .construct import METHODS
     from .errors import ConstructionError, check_choice, named_errors
-    from .fitting import fit_network, scan_of
+    from .fitting import fit_network, scan_from_polygons, scan_of
 
     check_choice("method", method, METHODS)
-    mesh = as_mesh(source, max_input_size=max_input_size)
+    if isinstance(source, (str, os.PathLike)):  # a file: its triangles as they are, not split
+        from .io.meshfile import read_polygons
+
+        path = _check_path("source", source)
+        scan = scan_from_polygons(*read_polygons(path, max_input_size=max_input_size), str(path))
+    else:
+        scan = scan_of(as_mesh(source))
     quads = None if layout is None else as_mesh(layout, max_input_size=max_input_size)
     if quads is not None and quads.cage is not None:
         raise InputError(f"{quads.source or 'layout'}: a layout must be all quads")
-    with named_errors(mesh.source, (ConstructionError,)):
-        scan = scan_of(mesh)
+    with named_errors(scan.source, (ConstructionError,)):
         network, report = fit_network(
             scan, tolerance=tolerance, faces=faces, layout=quads, method=method
         )

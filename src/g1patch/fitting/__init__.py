@@ -34,6 +34,7 @@ __all__ = [
     "Scan",
     "fit_network",
     "quad_layout",
+    "scan_from_polygons",
     "scan_of",
 ]
 
@@ -64,23 +65,28 @@ class Scan:
         return float(np.linalg.norm(self.points.max(axis=0) - self.points.min(axis=0)))
 
 
+def scan_from_polygons(
+    points: FloatArray, corners: IntArray, sizes: IntArray, source: str | None = None
+) -> Scan:
+    """Polygons (flat ``corners``, ``sizes``) fanned into triangles from their first corner."""
+    first = np.repeat(np.cumsum(sizes) - sizes, sizes - 2)
+    fan = sizes - 2
+    step = np.arange(int(fan.sum())) - np.repeat(np.cumsum(fan) - fan, fan)
+    triangles = np.stack(
+        [corners[first], corners[first + step + 1], corners[first + step + 2]], axis=1
+    )
+    return Scan(np.asarray(points, dtype=np.float64), triangles.astype(np.int64), source)
+
+
 def scan_of(mesh: QuadMesh) -> Scan:
-    """The triangles of a read mesh: its polygons fanned into triangles where it was split from
-    polygons (:attr:`QuadMesh.cage`), else its quads cut along the diagonal 0–2."""
+    """The triangles of a mesh: the polygons it was split from (:attr:`QuadMesh.cage`) fanned
+    into triangles, else its quads cut along the diagonal 0–2."""
     if mesh.cage is not None:
-        corners, sizes = mesh.cage.corners, mesh.cage.sizes
-        points = mesh.cage.points
-        first = np.repeat(np.cumsum(sizes) - sizes, sizes - 2)
-        step = np.arange(int((sizes - 2).sum())) - np.repeat(
-            np.cumsum(sizes - 2) - (sizes - 2), sizes - 2
-        )
-        triangles = np.stack(
-            [corners[first], corners[first + step + 1], corners[first + step + 2]], axis=1
-        )
-    else:
-        points, quads = mesh.vertices, mesh.faces
-        triangles = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
-    return Scan(np.asarray(points, dtype=np.float64), triangles.astype(np.int64), mesh.source)
+        cage = mesh.cage
+        return scan_from_polygons(cage.points, cage.corners, cage.sizes, mesh.source)
+    quads = mesh.faces
+    triangles = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    return Scan(np.asarray(mesh.vertices, dtype=np.float64), triangles, mesh.source)
 
 
 @dataclass(frozen=True)

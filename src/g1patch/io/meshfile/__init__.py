@@ -42,6 +42,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ...errors import FormatError
 from ...mesh import QuadMesh, Tag
@@ -72,6 +73,7 @@ from .write import WRITE_FORMATS, PathLike, write_quads, write_triangles
 
 __all__ = [
     "read_mesh",
+    "read_polygons",
     "write_triangles",
     "write_quads",
     "check_input",
@@ -103,17 +105,7 @@ def read_mesh(
     before it is read, as is anything but a regular file (:func:`check_input`).
     """
     path = Path(path)
-    suffix = path.suffix.lower()
-    readers = {".obj": _read_obj, ".ply": _read_ply, ".off": _read_off}
-    if suffix not in readers:
-        raise FormatError(
-            path,
-            f"unsupported extension {path.suffix!r}; expected one of {', '.join(READ_FORMATS)}",
-        )
-    data = read_input(path, max_input_size).removeprefix(BOM)
-    if not data or data.isspace():
-        raise FormatError(path, "the file is empty")
-    parsed = readers[suffix](path, data)
+    parsed = _parse(path, max_input_size)
     tags = parsed.tags
     if sharp_angle is not None:
         tags = tags + _sharp_angle_tags(path, parsed, sharp_angle)
@@ -126,6 +118,37 @@ def read_mesh(
         strict=strict,
         uv=parsed.uv,
     )
+
+
+def _parse(path: Path, max_input_size: int | None) -> _Parsed:
+    """The file's vertices, faces and tags as its reader parses them (by its extension)."""
+    suffix = path.suffix.lower()
+    readers = {".obj": _read_obj, ".ply": _read_ply, ".off": _read_off}
+    if suffix not in readers:
+        raise FormatError(
+            path,
+            f"unsupported extension {path.suffix!r}; expected one of {', '.join(READ_FORMATS)}",
+        )
+    data = read_input(path, max_input_size).removeprefix(BOM)
+    if not data or data.isspace():
+        raise FormatError(path, "the file is empty")
+    return readers[suffix](path, data)
+
+
+def read_polygons(
+    path: PathLike, *, max_input_size: int | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+    """A mesh file's polygons as they are, without splitting or repairing them: ``(points (V, 3),
+    corners, sizes)`` (flat corner indices, corners per face), checked as :func:`read_mesh`
+    checks what no repair mends (finite positions, indices in range, ≥ 3 corners): what a scan
+    to fit is read as (:func:`g1patch.fit`), at a fraction of a quad mesh's memory."""
+    from ...errors import named_errors
+    from ...mesh.validate import _checked_polygons
+
+    path = Path(path)
+    parsed = _parse(path, max_input_size)
+    with named_errors(str(path)):
+        return _checked_polygons(parsed.vertices, parsed.faces, ())
 
 
 def _sharp_angle_tags(path: Path, parsed: _Parsed, degrees: float) -> tuple[Tag, ...]:
