@@ -65,7 +65,8 @@ def _projected_tangents(
     in_plane = np.linalg.norm(s, axis=1)
     chord = np.linalg.norm(d, axis=1)
     parallel = ~(in_plane > _PARALLEL * chord)
-    length = 2.0 * chord**2 / (chord + in_plane)
+    across = chord + in_plane  # 0 only for a zero chord, a parallel slot: no length
+    length = np.divide(2.0 * chord**2, across, out=np.zeros_like(chord), where=across > 0)
     scale = np.where(parallel, 0.0, length / np.where(parallel, 1.0, in_plane))
     return (
         s * scale[:, None],
