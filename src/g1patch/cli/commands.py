@@ -250,13 +250,13 @@ def _export(args: argparse.Namespace) -> int:
             f"--json: reports CAD exports ({', '.join(CAD_SUFFIXES)}); {args.output} is not one"
         )
     network = as_network(args.network)
+    fit_tolerance = (  # CAD files: --fit-tolerance is of the diagonal, the exporter's in units
+        None
+        if args.fit_tolerance is None
+        else args.fit_tolerance * network.bounding_box_diagonal()
+    )
     if suffix in CAD_SUFFIXES:
         with _progress("export", args.quiet or args.json) as progress:
-            fit_tolerance = (
-                None
-                if args.fit_tolerance is None
-                else args.fit_tolerance * network.bounding_box_diagonal()
-            )
             result = export(
                 network,
                 args.output,
@@ -273,11 +273,6 @@ def _export(args: argparse.Namespace) -> int:
         print(_cad_export_text(result, corner_only))
         return EXIT_OK
     if suffix == RHINO_SUFFIX:
-        fit_tolerance = (
-            None
-            if args.fit_tolerance is None
-            else args.fit_tolerance * network.bounding_box_diagonal()
-        )
         rhino = export(
             network,
             args.output,
