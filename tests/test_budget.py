@@ -50,6 +50,28 @@ def test_the_memory_estimate_bounds_the_peak(method: str) -> None:
     assert peak <= estimate < 1.5 * peak, (peak, estimate)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("method", ["gregory", "split4"])
+def test_without_a_kernel_cache_the_estimate_bounds_the_numpy_peak(
+    method: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Where numba cannot cache (a read-only install) the NumPy path runs, which holds more (the
+    gregory build 2.6× the kernels' peak): the estimate takes that path's figures, still within
+    1.5× of the peak."""
+    from g1patch import kernels
+
+    monkeypatch.setattr(kernels, "kernels_cached", lambda: False)
+    mesh = shapes.large_torus(20_000)
+    tracemalloc.start()
+    try:
+        build_network(mesh, method, "interpolate", refine=1)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    estimate = estimate_build(mesh, method, "interpolate", refine=1).bytes
+    assert peak <= estimate < 1.5 * peak, (peak, estimate)
+
+
 def test_a_build_above_the_budget_is_refused_before_it_starts() -> None:
     with pytest.raises(BudgetError, match=r"8,388,608 gregory patches after 9 Catmull–Clark steps"):
         build_network(shapes.torus(8, 4, 1.0, 0.25), refine=9, max_memory=10**9)

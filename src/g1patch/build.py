@@ -29,7 +29,7 @@ from .construct.corner import TWISTS, TwistRule, build_corner_network
 from .continuity import folded_patches
 from .errors import BudgetError, InputError, check_choice
 from .frame import Frame
-from .kernels import kernels_cached, use_kernels
+from .kernels import use_kernels
 from .memory import memory_budget
 from .mesh import INFINITE_SHARPNESS, QuadMesh, Tag
 from .network import Patches, PatchNetwork, patch_uvs
@@ -115,7 +115,7 @@ def estimate_build(mesh: QuadMesh, method: str, shape: str, refine: int = 0) -> 
     faces = mesh.n_faces * 4**steps
     refined = faces * REFINE_BYTES_PER_FACE if steps else 0
     held = faces * MESH_BYTES_PER_FACE if steps else 0
-    uncached = faces >= _BUDGET_FACES and not kernels_cached()  # small builds: numba not loaded
+    uncached = faces >= _BUDGET_FACES and not use_kernels(True)  # small builds: numba not loaded
     per_face = assembly.numpy_peak_bytes_per_face if uncached else assembly.peak_bytes_per_face
     peak = max(refined, held + faces * per_face)
     return BuildEstimate(steps, faces, faces * assembly.patches_per_face, peak)
