@@ -108,13 +108,17 @@ def test_the_command_line_writes_reports_and_exits_1_when_not_within(
         [*run, "--faces", "64", "--tolerance", "1e-6"], capture_output=True, text=True, timeout=600
     )
     assert tight.returncode == 1 and "NOT within" in tight.stdout and out.exists()
-    for bad, named in (
-        (["--tolerance", "0"], "--tolerance: expected"),
-        (["--faces", "3"], "--faces: expected"),
+    out.unlink()
+    missing = [sys.executable, "-m", "g1patch.cli", "fit", str(tmp_path / "none.obj")]
+    for command, named in (
+        ([*run, "--tolerance", "0"], "--tolerance: expected"),
+        ([*run, "--faces", "3"], "--faces: expected"),
+        ([*missing, "-o", str(out)], "none.obj: cannot read the file"),
+        ([*run[:-2], str(tmp_path / "fit.txt"), "-q"], "unsupported extension '.txt'"),
     ):
-        refused = subprocess.run([*run, *bad], capture_output=True, text=True, timeout=600)
-        assert refused.returncode == 2 and named in refused.stderr
-        assert "Traceback" not in refused.stderr
+        refused = subprocess.run(command, capture_output=True, text=True, timeout=600)
+        assert refused.returncode == 2 and named in refused.stderr, refused.stderr
+        assert "Traceback" not in refused.stderr and not out.exists()
 
 
 def test_a_missing_or_failing_remesher_is_one_clear_error(
