@@ -251,9 +251,7 @@ def _export(args: argparse.Namespace) -> int:
         )
     network = as_network(args.network)
     fit_tolerance = (  # CAD files: --fit-tolerance is of the diagonal, the exporter's in units
-        None
-        if args.fit_tolerance is None
-        else args.fit_tolerance * network.bounding_box_diagonal()
+        None if args.fit_tolerance is None else args.fit_tolerance * network.bounding_box_diagonal()
     )
     if suffix in CAD_SUFFIXES:
         with _progress("export", args.quiet or args.json) as progress:
