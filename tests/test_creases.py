@@ -7,6 +7,7 @@ the tagged edges of ``--sharp-angle`` are exactly those whose faces turn by more
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -44,19 +45,24 @@ def _unit_normals(patches, uv: np.ndarray) -> np.ndarray:
     return n / np.linalg.norm(n, axis=-1, keepdims=True)
 
 
-def test_a_box_with_every_edge_sharp_has_flat_faces_at_right_angles() -> None:
+#: patch edges per mesh edge, by method
+HALVES = {"gregory": 1, "split4": 2}
+
+
+@pytest.mark.parametrize("method", ["gregory", "split4"])
+def test_a_box_with_every_edge_sharp_has_flat_faces_at_right_angles(method: str) -> None:
     box = _tagged(cube(), np.arange(12))
-    network = build_network(box)
+    network = build_network(box, method)
     report = check(network)
     assert report.passes(G1)
     seams = report.to_dict()["seams"]
-    assert seams["count"] == 12 and seams["g0_max"] <= G0
+    assert seams["count"] == 12 * HALVES[method] and seams["g0_max"] <= G0
     assert abs(seams["angle_min_deg"] - 90.0) <= G1 and abs(seams["angle_max_deg"] - 90.0) <= G1
     normals = _unit_normals(network.patches, np.random.default_rng(0).random((50, 2)))
     assert np.abs(normals - normals[:, :1]).max() <= 1e-12  # flat: one normal per face
     axes = np.abs(normals[:, 0]).round(12)
     assert sorted(map(tuple, axes)) == sorted(
-        [(1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)] * 2
+        [(1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)] * 2 * HALVES[method] ** 2
     )
 
 
@@ -87,16 +93,19 @@ def test_the_crease_curve_is_tangent_continuous_through_crease_vertices() -> Non
     assert report.passes(G1) and report.folds == 0
 
 
+@pytest.mark.parametrize("method", ["gregory", "split4"])
 @pytest.mark.parametrize("name", CREASE_SHAPES)
-def test_shared_crease_shapes_interpolate_sharp_where_tagged_and_g1_elsewhere(name: str) -> None:
+def test_shared_crease_shapes_interpolate_sharp_where_tagged_and_g1_elsewhere(
+    name: str, method: str
+) -> None:
     from conftest import shared_data_path
 
     mesh = read_mesh(shared_data_path(f"{name}.obj"))
-    network = build_network(mesh)
+    network = build_network(mesh, method)
     report = check(network)
     expected = int(((mesh.features.edge_sharpness >= 1.0) & ~mesh.topology.is_boundary_edge).sum())
     seams = report.to_dict()["seams"]
-    assert seams["count"] == expected > 0
+    assert seams["count"] == expected * HALVES[method] > 0
     assert seams["g0_max"] <= G0
     assert report.passes(G1) and report.folds == 0
 
@@ -110,7 +119,8 @@ def test_a_dart_end_is_exactly_g1() -> None:
     ends = np.flatnonzero(found.cuts == 1 & ~mesh.topology.is_boundary_vertex)
     assert ends.size == 1  # the crease 8–17–20 ends inside, at 20
     assert np.allclose(targets.corner_normals[mesh.faces == ends[0]], targets.normals[ends[0]])
-    assert check(build_network(mesh)).to_dict()["max_corner_angle_deg"] <= G1
+    for method in ("gregory", "split4"):
+        assert check(build_network(mesh, method)).to_dict()["max_corner_angle_deg"] <= G1
 
 
 @pytest.mark.parametrize("part", [filleted_box, slotted_block])
@@ -168,10 +178,11 @@ def test_hole_faces_get_no_patch_and_their_rim_is_open() -> None:
     mesh = cube_sphere(2)
     holes = (0, 5, 9)
     tagged = QuadMesh(mesh.vertices, mesh.topology, (Tag("hole", holes),))
-    for shape in ("interpolate", "limit"):
-        network = build_network(tagged, "gregory", shape)
-        assert network.n_patches == mesh.n_faces - len(holes)
-        assert network.open_edges()[0].size == 4 * len(holes)
+    for method, shape in itertools.product(("gregory", "split4"), ("interpolate", "limit")):
+        network = build_network(tagged, method, shape)
+        per_face = HALVES[method] ** 2
+        assert network.n_patches == per_face * (mesh.n_faces - len(holes))
+        assert network.open_edges()[0].size == 4 * len(holes) * HALVES[method]
         report = check(network)
         assert report.passes(G1) and report.folds == 0
         assert network.provenance["holes"] == "3"
@@ -208,16 +219,17 @@ def test_shared_crease_shapes_follow_opensubdivs_limit(name: str) -> None:
     assert distance.max() <= LIMIT_DISTANCE * np.linalg.norm(high - low)
 
 
+@pytest.mark.parametrize("method", ["gregory", "split4"])
 @pytest.mark.parametrize("shape", ["interpolate", "limit"])
 def test_the_sharp_cube_is_flat_and_a_valid_step_solid_with_12_sharp_edges(
-    shape: str, tmp_path: Path
+    shape: str, method: str, tmp_path: Path
 ) -> None:
     pytest.importorskip("OCP")
     from g1patch.io.cad import export_cad
 
-    network = build_network(_tagged(cube(), np.arange(12)), "gregory", shape)
+    network = build_network(_tagged(cube(), np.arange(12)), method, shape)
     seams = check(network).to_dict()["seams"]
-    assert seams["count"] == 12
+    assert seams["count"] == 12 * HALVES[method]
     assert abs(seams["angle_min_deg"] - 90.0) <= G1 and abs(seams["angle_max_deg"] - 90.0) <= G1
     result = export_cad(tmp_path / "cube.step", network)
     assert result.solid and result.valid and result.free_edges == 0

@@ -31,7 +31,7 @@ from .errors import BudgetError, InputError, check_choice
 from .frame import Frame
 from .kernels import use_kernels
 from .memory import memory_budget
-from .mesh import INFINITE_SHARPNESS, QuadMesh, Tag
+from .mesh import INFINITE_SHARPNESS, QuadMesh
 from .network import Patches, PatchNetwork, patch_uvs
 from .subdivision import catmull_clark_cage
 from .targets import SHAPES, Targets, shape_targets
@@ -388,8 +388,6 @@ def build_network(
     assembly = ASSEMBLIES[method]
     frame = Frame.of_points(mesh.vertices)
     local = mesh.with_vertices(frame.to_local(mesh.vertices))
-    if not assembly.keeps_creases and mesh.features.sharp_edges.any():
-        local = _without_creases(local)
     targets = shape_targets(local, shape, tangents=tangents)
     surface = (
         mesh if shape != "limit" else mesh.with_vertices(frame.to_world(targets.positions))
@@ -406,9 +404,6 @@ def build_network(
     # the network needs none of the rest: freed before its arrays are made (DESIGN §6)
     del assembled, targets, local
     network = assembly.network(kept, NetworkParts(mesh, surface, frame, provenance))
-    # said once the network exists: a build that then fails says one thing, its error
-    for warning in assembly.warnings(mesh):
-        logger.warning(warning)
     return _with_uv(network, mesh, assembly.patches_per_face)
 
 
@@ -421,37 +416,6 @@ def _with_uv(network: PatchNetwork, mesh: QuadMesh, patches_per_face: int) -> Pa
     if network.n_patches != mesh.n_faces * patches_per_face:  # hole faces without patches
         faces = np.flatnonzero(~mesh.features.holes)
     return replace(network, uv=patch_uvs(mesh.uv[faces], patches_per_face))
-
-
-def _without_creases(mesh: QuadMesh) -> QuadMesh:
-    """The mesh without its infinitely sharp creases and corners (the rest of its tags kept), for
-    constructions that cannot keep them: their targets must then be consistently smooth."""
-    features = mesh.features
-    topology = mesh.topology
-    tags = [tag for tag in mesh.tags if tag.name not in ("crease", "corner")]
-    kept = np.flatnonzero(
-        (features.edge_sharpness > 0) & (features.edge_sharpness < INFINITE_SHARPNESS)
-    )
-    if kept.size:
-        tags.append(
-            Tag(
-                "crease",
-                tuple(topology.edges[kept].ravel().tolist()),
-                tuple(features.edge_sharpness[kept].tolist()),
-            )
-        )
-    corners = np.flatnonzero(
-        (features.vertex_sharpness > 0) & (features.vertex_sharpness < INFINITE_SHARPNESS)
-    )
-    if corners.size:
-        tags.append(
-            Tag(
-                "corner",
-                tuple(corners.tolist()),
-                tuple(features.vertex_sharpness[corners].tolist()),
-            )
-        )
-    return QuadMesh(mesh.vertices, topology, tuple(tags), mesh.source, mesh.repairs)
 
 
 def build_gregory_network(

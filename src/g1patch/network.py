@@ -164,6 +164,29 @@ class PatchNetwork:
         )
         return replace(self, seam=seam)
 
+    def take_patches(self, keep: ArrayLike) -> PatchNetwork:
+        """The network of the patches where ``keep`` (P,) is True: an edge shared with a patch
+        left out becomes open (no neighbour, no seam); corner and edge ids, points and UVs of the
+        kept patches stay as they are."""
+        kept = _as_bool("keep", keep, (self.n_patches,))
+        index = np.cumsum(kept) - 1
+        neighbor = self.neighbor[kept]
+        lost = neighbor >= 0
+        lost[lost] = ~kept[neighbor[lost]]
+        neighbor = np.where((neighbor >= 0) & ~lost, index[np.maximum(neighbor, 0)], -1)
+        return replace(
+            self,
+            patches=self.patches.take(np.flatnonzero(kept)),
+            corner_ids=self.corner_ids[kept],
+            edge_ids=self.edge_ids[kept],
+            edge_reversed=self.edge_reversed[kept],
+            neighbor=neighbor,
+            neighbor_edge=np.where(neighbor >= 0, self.neighbor_edge[kept], -1),
+            same_direction=self.same_direction[kept],
+            seam=self.seam[kept] & (neighbor >= 0),
+            uv=None if self.uv is None else self.uv[kept],
+        )
+
     @property
     def n_seams(self) -> int:
         """Number of shared edges that are seams (each counted once)."""

@@ -16,12 +16,10 @@ exactly. Per Gregory patch f (one per quad, patch edge k = half-edge ``4 f + k``
 * ``seams``: the network's seams per mesh edge.
 
 split4's interiors are then guided by a least-squares fit of each Gregory patch
-(:func:`guide_nets`). split4 keeps no seams itself, so a network with seams is re-assembled on its
-mesh *cut open* along them (one vertex per corner sector, each seam two boundary edges), with stars
-that keep every seam tangent exactly (:func:`seam_stars`; a nearly straight crease first gets
-opposite tangents, :func:`_straight_creases`): both sides of a seam then compute the same boundary
-curve, bit for bit, and the sub-patches are connected on the uncut mesh with those edges marked as
-seams.
+(:func:`guide_nets`). A network with seams is re-assembled on its mesh *cut open* along them, as
+split4 keeps seams (:mod:`~g1patch.construct.split4.seams`): one vertex per corner sector, each
+seam two boundary edges, stars that keep every seam tangent exactly, so both sides of a seam compute
+the same boundary curve, and the sub-patches connected on the uncut mesh with the seams marked.
 
 The result is compared with the Gregory surface itself
 (:func:`~g1patch.construct.deviation.surface_deviation`). split4's stars cannot hold every Gregory
@@ -49,27 +47,21 @@ from ..targets import Targets, halfedge_slots
 from .deviation import surface_deviation
 from .split4 import (
     BSPLINE_KNOTS,
-    SplitStar,
-    fan_walk,
     split4_network_from_points,
     split4_network_from_targets,
     split4_patches,
     split4_star,
 )
+from .split4.seams import _straight_creases, seam_stars
 
 __all__ = [
     "GridRefinement",
     "grid_refinement",
     "gregory_targets",
     "refined_gregory_targets",
-    "seam_stars",
     "split4_of_gregory",
     "surface_deviation",
 ]
-
-#: a sector between two seams takes its star's second axis from both seam tangents when the
-#: sine of its turn is at least this (else, a straight crease or a dart's end, by least squares)
-SIN_FLOOR = 0.2
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -281,119 +273,6 @@ def refined_gregory_targets(
     return targets, frame, guide
 
 
-#: a vertex whose two seams' tangents are at least this far apart (degrees) is a straight crease
-STRAIGHT_CREASE_DEG = 150.0
-
-
-def _straight_creases(
-    targets: Targets, topology: QuadTopology, seam_halfedges: NDArray[np.bool_]
-) -> Targets:
-    """Where exactly two seams pass through a vertex nearly straight (:data:`STRAIGHT_CREASE_DEG`),
-    their tangents made opposite, ``±(t_1 − t_2)/2``, in every copy: a sector's regular star
-    through both then exists (its turn is π), and both sides still share them."""
-    slot_out, slot_in = halfedge_slots(targets.topology)
-    h = np.flatnonzero(seam_halfedges)
-    slots = np.concatenate([slot_out[h], slot_in[h]])  # every seam slot of every copy
-    key = np.concatenate(
-        [topology.faces.reshape(-1)[h], topology.target(h)]
-    ) * topology.n_edges + np.tile(topology.halfedge_edge[h], 2)  # (original vertex, seam edge)
-    pairs, first, which = np.unique(key, return_index=True, return_inverse=True)
-    vertex = pairs // topology.n_edges
-    count = np.bincount(vertex, minlength=topology.n_vertices)
-    one = np.flatnonzero(
-        (count[vertex] == 2) & (np.r_[True, vertex[1:] != vertex[:-1]])
-    )  # first pair of a 2-seam vertex
-    t1, t2 = targets.tangents[slots[first[one]]], targets.tangents[slots[first[one + 1]]]
-    cosine = np.einsum("nd,nd->n", t1, t2) / (
-        np.linalg.norm(t1, axis=1) * np.linalg.norm(t2, axis=1)
-    )
-    straight = cosine <= np.cos(np.radians(STRAIGHT_CREASE_DEG))
-    if not straight.any():
-        return targets
-    value = np.full((len(pairs), 3), np.nan)
-    value[one[straight]] = 0.5 * (t1 - t2)[straight]
-    value[one[straight] + 1] = -0.5 * (t1 - t2)[straight]
-    moved = ~np.isnan(value[which, 0])
-    tangents = targets.tangents.copy()
-    tangents[slots[moved]] = value[which[moved]]
-    return targets.with_changes(tangents=tangents)
-
-
-def seam_stars(
-    targets: Targets, seam_halfedges: NDArray[np.bool_], *, equal_sectors: bool = False
-) -> SplitStar:
-    """split4's stars on a topology cut along seams (``seam_halfedges``: the cut's boundary
-    half-edges that were seams), where both sides of a seam must keep its tangents exactly.
-
-    Elsewhere :func:`~g1patch.construct.split4.split4_star` (``equal_sectors`` passed on). At a
-    vertex copy with k ≥ 2 faces and a seam slot e (0 or k): the regular star ``t_j = t_e cos φ_j +
-    b sin φ_j``, ``φ_j = |j − e| θ``, ``θ = Φ / k`` (Φ the fan's turn from slot 0 to slot k about
-    the sector normal), b by least squares over the other slots, or from the other end's seam
-    tangent, ``b = (t_k − t_0 cos Φ) / sin Φ``, where both ends are seams and ``|sin Φ| ≥``
-    :data:`SIN_FLOOR`; ``c_v = cos θ``, no length safeguard. A one-face sector keeps its tangents
-    (as split4 does).
-    """
-    topology = targets.topology
-    base = split4_star(targets, equal_sectors=equal_sectors)
-    star, cosine, factor = base.star.copy(), base.cosine.copy(), base.factor.copy()
-    offsets = topology.neighbor_offsets
-    origin = topology.faces.reshape(-1)
-    seam_at = np.zeros(int(offsets[-1]), dtype=bool)
-    slot_out, slot_in = halfedge_slots(topology)
-    seam_at[slot_out[seam_halfedges]] = True
-    seam_at[slot_in[seam_halfedges]] = True
-    copies = np.unique(
-        np.concatenate([origin[seam_halfedges], topology.target(np.flatnonzero(seam_halfedges))])
-    )
-    k = topology.face_count[copies]
-    first, last = offsets[copies], offsets[copies + 1] - 1
-    single = copies[k == 1]
-    star[offsets[single][:, None] + np.arange(2)] = targets.tangents[
-        offsets[single][:, None] + np.arange(2)
-    ]
-    factor[single] = 1.0
-    many = k >= 2
-    copies, k, first, last = copies[many], k[many], first[many], last[many]
-    if not copies.size:
-        return SplitStar(star, cosine, base.refitted, base.shrunk & (factor < 1.0), factor)
-    owner, j, slot, t, total = fan_walk(targets, copies)
-    theta = total / k
-    anchor_last = ~seam_at[first] & seam_at[last]  # the seam is slot k only
-    e = np.where(anchor_last, k, 0)
-    anchor = targets.tangents[np.where(anchor_last, last, first)]
-    phi = np.abs(j - e[owner]) * theta[owner]
-    c, sn = np.cos(phi), np.sin(phi)
-    residual = t - c[:, None] * anchor[owner]
-    free = j != e[owner]
-    b = np.asarray(
-        np.stack(
-            [
-                np.bincount(owner, np.where(free, sn * residual[:, d], 0.0), minlength=copies.size)
-                for d in range(3)
-            ],
-            axis=1,
-        ),
-        dtype=np.float64,
-    )
-    b /= np.maximum(
-        np.bincount(owner, np.where(free, sn * sn, 0.0), minlength=copies.size), 1e-300
-    )[:, None]
-    both = seam_at[first] & seam_at[last]
-    sin_total = np.sin(total)
-    exact = both & (np.abs(sin_total) >= SIN_FLOOR)
-    b[exact] = (
-        targets.tangents[last[exact]] - np.cos(total[exact])[:, None] * anchor[exact]
-    ) / sin_total[exact, None]
-    fitted = c[:, None] * anchor[owner] + sn[:, None] * b[owner]
-    fitted[seam_at[slot]] = t[
-        seam_at[slot]
-    ]  # the seams' own tangents, bit for bit: both sides share them
-    star[slot] = fitted
-    cosine[slot] = np.cos(theta)[owner]
-    factor[copies] = 1.0
-    return SplitStar(star, cosine, base.refitted, base.shrunk & (factor < 1.0), factor)
-
-
 # : samples per direction and patch of the guide fit (:func:`guide_nets`): 2× the 6 unknowns, both
 # ends
 GUIDE_SAMPLES = 13
@@ -460,9 +339,10 @@ def split4_of_gregory(
     n × n (:func:`refined_gregory_targets`, always guided): split4's stars differ from the Gregory
     fans they replace only near the vertices, so the distance to the Gregory surface shrinks about
     as 1/n; quad ``r = f n² + a n + b`` of the result covers cell (a, b) of patch f.
-    Seams: assembled on the topology cut along them (each side a boundary, :func:`seam_stars`
-    keeping the seam tangents, so both sides get the same boundary curve), connected on the
-    uncut one with the seams marked. Provenance ``from = gregory``."""
+    Seams: assembled on the topology cut along them (each side a boundary,
+    :func:`~g1patch.construct.split4.seams.seam_stars` keeping the seam tangents, so both sides get
+    the same boundary curve), connected on the uncut one with the seams marked. Provenance
+    ``from = gregory``."""
     if not (isinstance(refine, (int, np.integer)) and refine >= 1):
         raise InputError(f"refine: expected an integer ≥ 1, got {refine!r}")
     provenance = {**network.provenance, "method": "split4", "from": "gregory"}

@@ -18,8 +18,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from ..frame import Frame
 from ..mesh import QuadMesh
 from ..network import Patches, PatchNetwork
@@ -57,24 +55,3 @@ class Assembly:
     #: the same where the NumPy code runs instead of the kernels (no writable numba cache:
     #: :func:`g1patch.kernels.use_kernels`), measured the same way
     numpy_peak_bytes_per_face: int
-    #: False: infinitely sharp creases are built smooth (the build says so)
-    keeps_creases: bool = True
-    #: False: hole faces get patches (the build says so)
-    keeps_holes: bool = True
-
-    def warnings(self, mesh: QuadMesh) -> list[str]:
-        """What this assembly cannot keep of ``mesh``'s features, one sentence each."""
-        said = []
-        sharp = int(np.count_nonzero(mesh.features.sharp_edges))
-        holes = int(np.count_nonzero(mesh.features.holes))
-        if sharp and not self.keeps_creases:
-            said.append(
-                f"{self.name} does not keep sharp edges yet: the {sharp} tagged sharp edges come "
-                "out smooth (use --method gregory)"
-            )
-        if holes and not self.keeps_holes:
-            said.append(
-                f"{self.name} does not leave holes open yet: the {holes} hole faces get patches "
-                "(use --method gregory)"
-            )
-        return said
