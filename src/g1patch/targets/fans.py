@@ -5,9 +5,12 @@ turning once around the normal.
   slots (θ_j = 2πj/n inside, πj/k over the k + 1 slots of a boundary vertex), and the previous
   release's star of the projected edges (:func:`tangent_stars`);
 * :func:`safeguarded_fans`: in A's tangent plane consecutive slots must turn counter-clockwise by
-  more than ``ε = min(2°, ¼ · 360°/n)`` and less than ``180° − ε``, and go once around (interior)
-  or less than once (boundary); where they do not, the smallest blend towards the fitted star
-  that passes, else evenly spread directions (:func:`spread_fan`). The rule is told in full in
+  more than ``ε = min(2°, ¼ · 360°/n, ½ · ω_A)`` and less than ``180° − ε``, and go once around
+  (interior) or less than once (boundary); where they do not, the smallest blend towards the
+  fitted star that passes, else evenly spread directions (:func:`spread_fan`). ``ω_A``
+  (:func:`mesh_gaps`) is the mesh's own narrowest face corner at A, ``min(θ, 180° − θ)``: a
+  thin wedge the mesh has (the kites round a 360-valent pole turn 2° and 178° at their spoke
+  vertices) is no reason to replace a fan. The rule is told in full in
   :mod:`g1patch.targets.interpolate`.
 """
 
@@ -24,6 +27,7 @@ from .value import TANGENTS, TangentRule
 
 __all__ = [
     "fit_regular_star",
+    "mesh_gaps",
     "safeguarded_fans",
     "spread_fan",
     "tangent_stars",
@@ -133,12 +137,49 @@ def _fan_gaps(
     return gaps, gap_vertex, first
 
 
+def mesh_gaps(mesh: QuadMesh) -> FloatArray:
+    """Per vertex A the narrowest corner its faces have there, ``ω_A = min_j min(θ_j, π − θ_j)``
+    (radians), ``θ_j = atan2(|d_j × d_{j+1}|, d_j · d_{j+1})`` between the chords ``d_j = B_j − A``
+    of the face's two edges at A: the wedge the mesh itself allows a fan (:func:`gap_floors`)."""
+    topology = mesh.topology
+    offsets = topology.neighbor_offsets
+    counts = topology.face_count
+    gap_vertex = np.repeat(np.arange(topology.n_vertices), counts)
+    starts = np.cumsum(counts) - counts
+    local = np.arange(len(gap_vertex)) - starts[gap_vertex]
+    size = np.diff(offsets)[gap_vertex]
+    x = mesh.vertices
+    a = x[topology.neighbors[offsets[gap_vertex] + local]] - x[gap_vertex]
+    b = x[topology.neighbors[offsets[gap_vertex] + (local + 1) % size]] - x[gap_vertex]
+    theta = np.arctan2(np.linalg.norm(cross(a, b), axis=1), dot(a, b))
+    return np.minimum.reduceat(np.minimum(theta, np.pi - theta), starts)
+
+
+def gap_floors(topology: QuadTopology, own: FloatArray | None = None) -> FloatArray:
+    """Per vertex the safeguard's ε: ``min(2°, ¼ · 360°/n, ½ · ω)`` with ``ω`` the mesh's own
+    narrowest corner there (:func:`mesh_gaps`; None: no such bound). A boundary corner with one
+    face keeps ``min(2°, ¼ · 360°/n)``: its nearly straight corner is narrowed on purpose
+    (:func:`_narrowed_straight_corners`)."""
+    eps = np.minimum(_MIN_GAP, _MIN_GAP_SHARE * 2.0 * np.pi / np.maximum(topology.valence, 3))
+    if own is None:
+        return eps
+    corner = topology.is_boundary_vertex & (topology.face_count == 1)
+    return np.where(corner, eps, np.minimum(eps, 0.5 * own))
+
+
 def _valid_fans(
-    topology: QuadTopology, normals: FloatArray, t: FloatArray, *, compiled: bool = True
+    topology: QuadTopology,
+    normals: FloatArray,
+    t: FloatArray,
+    eps: FloatArray | None = None,
+    *,
+    compiled: bool = True,
 ) -> NDArray[np.bool_]:
     """Per vertex: every consecutive turn in (ε, 180° − ε), once around inside, less than once at a
-    boundary (``compiled``: vertex by vertex in :func:`_valid_fans_kernel`)."""
+    boundary (``eps`` per vertex, default :func:`gap_floors` without the mesh's own bound;
+    ``compiled``: vertex by vertex in :func:`_valid_fans_kernel`)."""
     compiled = use_kernels(compiled)  # NumPy where kernels cannot be cached
+    eps = gap_floors(topology) if eps is None else eps
     if compiled:
         valid = np.empty(topology.n_vertices, dtype=bool)
         jit_kernel(_valid_fans_kernel)(
@@ -146,18 +187,16 @@ def _valid_fans(
             t,
             topology.neighbor_offsets,
             topology.face_count,
-            topology.valence,
             topology.is_boundary_vertex,
+            eps,
             _MIN_GAP,
-            _MIN_GAP_SHARE,
             valid,
         )
         return valid
     gaps, gap_vertex, first = _fan_gaps(topology, normals, t)
-    n = np.maximum(topology.valence, 3)
-    eps = np.minimum(_MIN_GAP, _MIN_GAP_SHARE * 2.0 * np.pi / n)[gap_vertex]
+    floor = eps[gap_vertex]
     length = np.linalg.norm(t, axis=1)
-    ok_gap = (gaps > eps) & (gaps < np.pi - eps) & (length[first] > 0)
+    ok_gap = (gaps > floor) & (gaps < np.pi - floor) & (length[first] > 0)
     valid = np.bincount(gap_vertex, weights=~ok_gap, minlength=topology.n_vertices) == 0
     total = np.bincount(gap_vertex, weights=gaps, minlength=topology.n_vertices)
     once = np.where(
@@ -176,18 +215,17 @@ def _valid_fans_kernel(
     t: FloatArray,
     offsets: IntArray,
     face_count: IntArray,
-    valence: IntArray,
     boundary: NDArray[np.bool_],
+    floors: FloatArray,
     min_gap: float,
-    min_gap_share: float,
     valid: NDArray[np.bool_],
 ) -> None:
     """:func:`_valid_fans` vertex by vertex: the turns ``atan2((a × b)·N, a·b)`` of the gaps
-    (:func:`_fan_gaps`)."""
+    (:func:`_fan_gaps`), each above ``floors[v]`` and below ``π − floors[v]``."""
     for v in range(offsets.size - 1):
         n0, n1, n2 = normals[v, 0], normals[v, 1], normals[v, 2]
         first, size = offsets[v], offsets[v + 1] - offsets[v]
-        eps = min(min_gap, min_gap_share * 2.0 * np.pi / max(valence[v], 3))
+        eps = floors[v]
         ok = True
         total = 0.0
         for j in range(face_count[v]):
@@ -274,19 +312,26 @@ def _narrowed_straight_corners(
 
 
 def safeguarded_fans(
-    topology: QuadTopology, normals: FloatArray, raw: FloatArray, chord: FloatArray
+    topology: QuadTopology,
+    normals: FloatArray,
+    raw: FloatArray,
+    chord: FloatArray,
+    own: FloatArray | None = None,
 ) -> tuple[FloatArray, NDArray[np.bool_]]:
     """The raw slot tangents where their fan is valid, else the smallest blend towards the
     regular star that is, else evenly spread directions (:mod:`g1patch.targets.interpolate`).
-    Returns the tangents and the vertices that needed the safeguard."""
-    valid = _valid_fans(topology, normals, raw)
+    ``own``: the mesh's narrowest corner per vertex (:func:`mesh_gaps`), which lowers the minimum
+    turn ε to half of it (:func:`gap_floors`). Returns the tangents and the vertices that needed
+    the safeguard."""
+    eps = gap_floors(topology, own)
+    valid = _valid_fans(topology, normals, raw, eps)
     needs = ~valid
     if not needs.any():
         return raw, needs
     t = _narrowed_straight_corners(
         topology, normals, raw, np.flatnonzero(needs & (topology.face_count == 1))
     )
-    pending = needs & ~_valid_fans(topology, normals, t)
+    pending = needs & ~_valid_fans(topology, normals, t, eps)
     if not pending.any():
         return t, needs
     raw = t
@@ -297,7 +342,7 @@ def safeguarded_fans(
         rows = pending[slot_vertex]
         trial = t.copy()
         trial[rows] = (1.0 - mu) * raw[rows] + mu * star[rows]
-        passed = pending & _valid_fans(topology, normals, trial)
+        passed = pending & _valid_fans(topology, normals, trial, eps)
         accept = passed[slot_vertex]
         t[accept] = trial[accept]
         pending &= ~passed

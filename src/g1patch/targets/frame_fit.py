@@ -31,6 +31,9 @@ CUBIC_POINTS = 12  #: fewest 2-ring points for the cubic term
 HUB_POINTS = 64
 BLOCK = 2048  #: vertices per padded block (NumPy), per gathered block (kernel)
 GILBERT_STEPS = 64
+#: the fit's frame follows the ring's principal axis where the projected ring edges are this
+#: anisotropic, ``|λ1 − λ2|/(λ1 + λ2)`` of their second moments (:func:`_principal_frame`)
+PRINCIPAL_ANISOTROPY = 0.5
 
 
 def _unit(v: FloatArray) -> FloatArray:
@@ -44,6 +47,36 @@ def _frame(n: FloatArray) -> tuple[FloatArray, FloatArray]:
     axis[np.arange(n.shape[0]), np.argmin(np.abs(n), axis=1)] = 1.0
     e1 = _unit(cross(n, axis))
     return e1, cross(n, e1)
+
+
+def _principal_frame(
+    n: FloatArray, edges: FloatArray, edge_mask: BoolArray
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`_frame` turned about n onto the principal axis of the ring edges ``edges`` (b, 3, k)
+    where they are anisotropic: with ``m11, m12, m22`` the second moments of their coordinates in
+    :func:`_frame`'s (f1, f2), ``e1 = cos ψ f1 + sin ψ f2``, ``ψ = ½ atan2(2 m12, m11 − m22)``,
+    where ``√((m11 − m22)² + 4 m12²) ≥`` :data:`PRINCIPAL_ANISOTROPY` ``(m11 + m22)``.
+
+    The fit itself does not depend on the frame, but the determination of its single columns
+    does: round a pole, whose rings are thin wedges all alike, the axis-bound frame accepted the
+    fit in some wedges and refused it in the others, and the fan normal that replaced it tilted
+    the surface 34° there. The principal frame is the same for every wedge.
+    """
+    f1, f2 = _frame(n)
+    # summed edge by edge, in the kernel's order (its frames are the same to the last bit)
+    u = f1[:, 0, None] * edges[:, 0] + f1[:, 1, None] * edges[:, 1] + f1[:, 2, None] * edges[:, 2]
+    v = f2[:, 0, None] * edges[:, 0] + f2[:, 1, None] * edges[:, 1] + f2[:, 2, None] * edges[:, 2]
+    m11, m12, m22 = (np.zeros(n.shape[0]) for _ in range(3))
+    for j in range(edges.shape[2]):
+        m11 += np.where(edge_mask[:, j], u[:, j] * u[:, j], 0.0)
+        m12 += np.where(edge_mask[:, j], u[:, j] * v[:, j], 0.0)
+        m22 += np.where(edge_mask[:, j], v[:, j] * v[:, j], 0.0)
+    spread = np.hypot(m11 - m22, 2.0 * m12)
+    turn = spread >= PRINCIPAL_ANISOTROPY * (m11 + m22)
+    psi = np.where(turn, 0.5 * np.arctan2(2.0 * m12, m11 - m22), 0.0)[:, None]
+    e1 = np.cos(psi) * f1 + np.sin(psi) * f2
+    e2 = np.cos(psi) * f2 - np.sin(psi) * f1
+    return e1, e2
 
 
 # ----------------------------------------------------------------------------------------------
@@ -292,7 +325,9 @@ def _circle_fit(
     active = np.arange(n.shape[0])
     for _ in range(ITERATIONS if tilt else 1):
         n = out.normals[active]
-        e1, e2 = _frame(n)
+        # the frame decides only the determination of a tilted fit (a held fit's S does not
+        # depend on it): the held fits keep the axis-bound frame
+        e1, e2 = _principal_frame(n, edges, edge_mask) if tilt else _frame(n)
         height = np.matmul(n[:, None, :], edges)[:, 0]
         hbar = np.sqrt(np.sum(np.where(edge_mask, edge_length2 - height**2, 0.0), axis=1) / count)[
             :, None

@@ -9,7 +9,15 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .frame_fit import BLOCK, CUBIC_POINTS, DROP_PIVOT, HUB_POINTS, ITERATIONS, STOP
+from .frame_fit import (
+    BLOCK,
+    CUBIC_POINTS,
+    DROP_PIVOT,
+    HUB_POINTS,
+    ITERATIONS,
+    PRINCIPAL_ANISOTROPY,
+    STOP,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -263,11 +271,29 @@ def _fit_kernel(
                     e2[1, lane] = n[2, lane] * e1[0, lane] - n[0, lane] * e1[2, lane]
                     e2[2, lane] = n[0, lane] * e1[1, lane] - n[1, lane] * e1[0, lane]
                     spread = 0.0
+                    m11, m12, m22 = 0.0, 0.0, 0.0
                     for j in range(neighbor_offsets[v], neighbor_offsets[v + 1]):
                         p = neighbors[j]
                         dx, dy, dz = x[p, 0] - x[v, 0], x[p, 1] - x[v, 1], x[p, 2] - x[v, 2]
                         height = n[0, lane] * dx + n[1, lane] * dy + n[2, lane] * dz
                         spread += (dx * dx + dy * dy + dz * dz) - height * height
+                        du = e1[0, lane] * dx + e1[1, lane] * dy + e1[2, lane] * dz
+                        dv = e2[0, lane] * dx + e2[1, lane] * dy + e2[2, lane] * dz
+                        m11 += du * du
+                        m12 += du * dv
+                        m22 += dv * dv
+                    # _principal_frame (tilted fits only): onto the ring's principal axis where
+                    # anisotropic
+                    anisotropic = np.hypot(m11 - m22, 2.0 * m12) >= PRINCIPAL_ANISOTROPY * (
+                        m11 + m22
+                    )
+                    if tilt and anisotropic:
+                        psi = 0.5 * np.arctan2(2.0 * m12, m11 - m22)
+                        cos_psi, sin_psi = np.cos(psi), np.sin(psi)
+                        for d in range(3):
+                            f1, f2 = e1[d, lane], e2[d, lane]
+                            e1[d, lane] = cos_psi * f1 + sin_psi * f2
+                            e2[d, lane] = cos_psi * f2 - sin_psi * f1
                     hbar[lane] = np.sqrt(spread / (neighbor_offsets[v + 1] - neighbor_offsets[v]))
                     for d in range(3):
                         scaled[d, lane] = e1[d, lane] / hbar[lane]

@@ -21,9 +21,12 @@ Two rules, both returning :class:`~g1patch.targets.Targets` on the mesh's own po
       vertex with two or more faces the two rim slots point along ±the rim's central difference,
       so the boundary curve does not kink there (a corner with one face keeps its edges);
     * fan safeguard: in A's tangent plane consecutive slots must turn counter-clockwise by more
-      than ``ε = min(2°, ¼ · 360°/n)`` and less than ``180° − ε``, and go once around (interior)
-      or less than once (boundary). Where they do not, ``t = (1 − μ) t_raw + μ t_star`` with the
-      smallest ``μ ∈ {1/8, …, 1}`` that passes, t_star the regular star fitted to the raw fan; if
+      than ``ε = min(2°, ¼ · 360°/n, ½ · ω_A)`` and less than ``180° − ε``, and go once around
+      (interior) or less than once (boundary); ``ω_A`` is the narrowest corner the mesh's own
+      faces have at A, ``min(θ, 180° − θ)`` (:func:`~g1patch.targets.fans.mesh_gaps`): the thin
+      kites round a 360-valent pole turn 2° and 178° at their spoke vertices, and are kept.
+      Where they do not, ``t = (1 − μ) t_raw + μ t_star`` with the smallest
+      ``μ ∈ {1/8, …, 1}`` that passes, t_star the regular star fitted to the raw fan; if
       even the star fails, evenly spread directions with the raw lengths. A corner with one face
       turning by ``180° − ε`` or more (nearly straight: every corner of a split polygon of 180 or
       more sides) is its own regular star, so no blend helps: its two tangents turn towards each
@@ -52,7 +55,7 @@ from numpy.typing import NDArray
 
 from ..mesh import QuadMesh
 from .creases import INTERPOLATE_SHARPNESS, crease_tangents, seam_edges, sharp_vertices
-from .fans import fit_regular_star, safeguarded_fans, spread_fan, tangent_stars
+from .fans import fit_regular_star, mesh_gaps, safeguarded_fans, spread_fan, tangent_stars
 from .frames import vertex_frames
 from .interior import _interior_targets, _round_coarse_faces
 from .local import dot, fan_normals, in_vertex_planes, slot_vertices, unit_rows
@@ -100,7 +103,7 @@ def interpolate_targets(mesh: QuadMesh, *, tangents: TangentRule = "arc") -> Tar
     raw, chord, parallel = _projected_tangents(mesh, normals)
     raw = _along_smooth_lines(mesh, normals, raw, out=raw)
     raw = _smooth_boundary_tangents(mesh, normals, raw)
-    slots, guarded = safeguarded_fans(topology, normals, raw, chord)
+    slots, guarded = safeguarded_fans(topology, normals, raw, chord, mesh_gaps(mesh))
     slots = in_vertex_planes(slots, normals, topology.neighbor_offsets, out=slots)
     fallback = guarded | frames.repaired | parallel
     seams = seam_edges(mesh, INTERPOLATE_SHARPNESS)
