@@ -34,7 +34,7 @@ def cube_obj(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def cube(cube_obj: Path) -> g1patch.Surface:
-    return g1patch.smooth(cube_obj)
+    return g1patch.smooth(cube_obj, method="gregory")
 
 
 def _exact(report: g1patch.ContinuityReport) -> bool:
@@ -46,7 +46,7 @@ def _exact(report: g1patch.ContinuityReport) -> bool:
 
 def _script(path: Path, out: Path, cad: bool) -> None:
     """What a new user writes: one import, smooth, check, export, render."""
-    n = g1patch.smooth(path)
+    n = g1patch.smooth(path, method="gregory")
     print(n.check())
     if cad:
         result = n.export(out / "m.step")
@@ -90,7 +90,7 @@ def test_script_on_the_shared_torus(
     torus = shared_data_path("catmark_torus.obj")
     _script(torus, tmp_path, HAS_OCP)
     assert "folds" in capsys.readouterr().out
-    surface = g1patch.smooth(torus)
+    surface = g1patch.smooth(torus, method="gregory")
     assert surface.n_patches == 32 and _exact(surface.check())
 
 
@@ -123,7 +123,7 @@ def test_arrays_of_quads(as_lists: bool) -> None:
     source = (
         (CUBE_VERTICES.tolist(), CUBE_QUADS.tolist()) if as_lists else (CUBE_VERTICES, CUBE_QUADS)
     )
-    surface = g1patch.smooth(source)
+    surface = g1patch.smooth(source, method="gregory")
     assert surface.n_patches == 6 and _exact(surface.check())
 
 
@@ -132,12 +132,12 @@ def test_ragged_polygons_are_split() -> None:
         [1, 5, 7],
         [1, 7, 3],
     ]  # one side as two triangles
-    surface = g1patch.smooth((CUBE_VERTICES, faces))
+    surface = g1patch.smooth((CUBE_VERTICES, faces), method="gregory")
     assert surface.n_patches == 4 * 5 + 3 * 2 and _exact(surface.check())
 
 
 def test_planar_points_get_z_zero() -> None:
-    surface = g1patch.smooth(([[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 1, 2, 3]]))
+    surface = g1patch.smooth(([[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 1, 2, 3]]), method="gregory")
     low, high = surface.bounding_box
     assert surface.n_patches == 1 and low[2] == high[2] == 0.0
 
@@ -158,9 +158,9 @@ def test_meshio_mesh_with_quads_triangles_polygons_and_lines() -> None:
             ("line", np.array([[0, 1]])),
         ],
     )
-    surface = g1patch.smooth(mesh)
+    surface = g1patch.smooth(mesh, method="gregory")
     assert surface.n_patches == 2 * 3 + 3 * 4 and _exact(surface.check())
-    quads = g1patch.smooth(meshio.Mesh(CUBE_VERTICES, [("quad", CUBE_QUADS)]))
+    quads = g1patch.smooth(meshio.Mesh(CUBE_VERTICES, [("quad", CUBE_QUADS)]), method="gregory")
     assert quads.n_patches == 6
 
 
@@ -168,9 +168,9 @@ def test_meshio_volume_cells_are_refused_by_name() -> None:
     meshio = pytest.importorskip("meshio")
     mesh = meshio.Mesh(CUBE_VERTICES[:4], [("tetra", np.array([[0, 1, 2, 3]]))])
     with pytest.raises(g1patch.InputError, match="cell block 0 holds 'tetra' cells"):
-        g1patch.smooth(mesh)
+        g1patch.smooth(mesh, method="gregory")
     with pytest.raises(g1patch.InputError, match="no triangle, quad or polygon cells"):
-        g1patch.smooth(meshio.Mesh(CUBE_VERTICES, [("line", np.array([[0, 1]]))]))
+        g1patch.smooth(meshio.Mesh(CUBE_VERTICES, [("line", np.array([[0, 1]]))]), method="gregory")
 
 
 class TrimeshLike:
@@ -188,16 +188,18 @@ class PolyDataLike:
 
 
 def test_trimesh_like_object() -> None:
-    assert g1patch.smooth(TrimeshLike(CUBE_VERTICES, CUBE_QUADS)).n_patches == 6
+    assert g1patch.smooth(TrimeshLike(CUBE_VERTICES, CUBE_QUADS), method="gregory").n_patches == 6
     triangles = np.array(
         [face[[0, 1, 2]] for face in CUBE_QUADS] + [face[[0, 2, 3]] for face in CUBE_QUADS]
     )
-    assert g1patch.smooth(TrimeshLike(CUBE_VERTICES, triangles)).n_patches == 3 * 12
+    assert (
+        g1patch.smooth(TrimeshLike(CUBE_VERTICES, triangles), method="gregory").n_patches == 3 * 12
+    )
 
 
 def test_pyvista_like_object() -> None:
     cells = np.hstack([np.full((6, 1), 4), CUBE_QUADS]).ravel()
-    assert g1patch.smooth(PolyDataLike(CUBE_VERTICES, cells)).n_patches == 6
+    assert g1patch.smooth(PolyDataLike(CUBE_VERTICES, cells), method="gregory").n_patches == 6
 
 
 def test_quad_mesh_and_options(cube_obj: Path) -> None:
@@ -206,13 +208,22 @@ def test_quad_mesh_and_options(cube_obj: Path) -> None:
     limit = g1patch.smooth(mesh, "limit", "split4", refine=1)
     assert limit.n_patches == 4 * 24 and limit.shape == "limit" and limit.method == "split4"
     assert limit.provenance["refine"] == "1"
-    sharp = g1patch.smooth(mesh, sharp_angle=30)  # every cube edge turns by 90°: all seams
+    sharp = g1patch.smooth(
+        mesh, method="gregory", sharp_angle=30
+    )  # every cube edge turns by 90°: all seams
     assert sharp.network.n_seams == 12 and sharp.check().seam_edges == 12
-    assert g1patch.smooth((CUBE_VERTICES, CUBE_QUADS), sharp_angle=30).network.n_seams == 12
+    assert (
+        g1patch.smooth(
+            (CUBE_VERTICES, CUBE_QUADS), method="gregory", sharp_angle=30
+        ).network.n_seams
+        == 12
+    )
     with pytest.raises(g1patch.InputError, match="method: unknown value 'bezier'"):
         g1patch.smooth(mesh, method="bezier")
     with pytest.raises(g1patch.MeshError, match="not quads"):
-        g1patch.smooth((CUBE_VERTICES, [[0, 1, 3]] + CUBE_QUADS[1:].tolist()), split=False)
+        g1patch.smooth(
+            (CUBE_VERTICES, [[0, 1, 3]] + CUBE_QUADS[1:].tolist()), method="gregory", split=False
+        )
 
 
 @pytest.mark.parametrize(
@@ -230,20 +241,20 @@ def test_bad_inputs_name_what_was_passed(bad: object, named: str) -> None:
         g1patch.InputError,
         match=r"smooth: cannot make a mesh of " + named + r"; expected a mesh file path",
     ):
-        g1patch.smooth(bad)
+        g1patch.smooth(bad, method="gregory")
 
 
 def test_a_network_file_or_network_is_not_a_mesh(cube: g1patch.Surface) -> None:
     with pytest.raises(g1patch.InputError, match=r"surface\.npz: is a network file.*g1patch\.read"):
-        g1patch.smooth("surface.npz")
+        g1patch.smooth("surface.npz", method="gregory")
     with pytest.raises(g1patch.InputError, match=r"already a surface.*g1patch\.Surface"):
-        g1patch.smooth(cube.network)
+        g1patch.smooth(cube.network, method="gregory")
 
 
 def test_repairs_are_kept_and_shown() -> None:
     flipped = CUBE_QUADS.copy()
     flipped[0] = flipped[0][::-1]
-    surface = g1patch.smooth((CUBE_VERTICES, flipped))
+    surface = g1patch.smooth((CUBE_VERTICES, flipped), method="gregory")
     assert (
         surface.repairs == ("1 face (0) reoriented",)
         and "repaired" in repr(surface)
@@ -251,19 +262,19 @@ def test_repairs_are_kept_and_shown() -> None:
     )
     assert _exact(surface.check())
     with pytest.raises(g1patch.MeshError, match="oriented consistently"):
-        g1patch.smooth((CUBE_VERTICES, flipped), strict=True)
+        g1patch.smooth((CUBE_VERTICES, flipped), method="gregory", strict=True)
 
 
 def test_choices_are_checked_before_reading() -> None:
     with pytest.raises(g1patch.InputError, match="shape: unknown value 'round'"):
-        g1patch.smooth("no such file.obj", shape="round")
+        g1patch.smooth("no such file.obj", method="gregory", shape="round")
 
 
 def test_bad_arrays_raise_the_mesh_checks() -> None:
     with pytest.raises(g1patch.InputError, match="vertices"):
-        g1patch.smooth((np.zeros((4, 4)), [[0, 1, 2, 3]]))
+        g1patch.smooth((np.zeros((4, 4)), [[0, 1, 2, 3]]), method="gregory")
     with pytest.raises(g1patch.MeshError, match=r"face 0 has vertex index 9 outside 0\.\.7"):
-        g1patch.smooth((CUBE_VERTICES, [[0, 1, 3, 9]]))
+        g1patch.smooth((CUBE_VERTICES, [[0, 1, 3, 9]]), method="gregory")
 
 
 # ----------------------------------------------------------------------------- patch sets

@@ -209,12 +209,12 @@ def test_rerun_rebuilds_changed_inputs_and_changed_options(
         "torus.obj": "skipped",
     }
     assert (
-        main([*command, "--method", "split4"]) == 0
+        main([*command, "--method", "gregory"]) == 0
     )  # other options: the old outputs are not reused
     records = summary(out)
     assert {r["status"] for r in records.values()} == {"built"} and {
         r["method"] for r in records.values()
-    } == {"split4"}
+    } == {"gregory"}
     capsys.readouterr()
 
 
@@ -354,7 +354,7 @@ def test_usage_errors_exit_2_before_any_work(
         "empty folder": ([str(tmp_path / "empty")], "empty: a folder with no mesh files"),
         "format": ([cube, "--formats", "npz,xyz"], "unknown format 'xyz'"),
         "no format": ([cube, "--formats", " , "], "--formats: give at least one of npz, obj"),
-        "bpt of gregory": ([cube, "--formats", "bpt"], "--method split4"),
+        "bpt of gregory": ([cube, "--formats", "bpt", "--method", "gregory"], "--method split4"),
         "workers": (
             [cube, "--workers", "0"],
             "--workers: expected a number of worker processes ≥ 1, got 0",
@@ -432,7 +432,7 @@ def test_convert_returns_a_record_and_never_raises(meshes: Path, tmp_path: Path)
     an unwritable output's OS error."""
     options = BuildOptions(shape="limit")
     good = convert(Job(str(meshes / "cube.obj"), (str(tmp_path / "cube.npz"),), options))
-    assert good["status"] == "built" and good["shape"] == "limit" and good["patches"] == 6
+    assert good["status"] == "built" and good["shape"] == "limit" and good["patches"] == 4 * 6
     assert (tmp_path / "cube.npz").is_file()
     assert_one_line_error(
         convert(Job(str(meshes / "broken.obj"), (str(tmp_path / "b.npz"),), options)), "broken.obj"
@@ -441,7 +441,7 @@ def test_convert_returns_a_record_and_never_raises(meshes: Path, tmp_path: Path)
         Job(str(meshes / "cube.obj"), (str(tmp_path / "no" / "such" / "cube.npz"),), options)
     )
     assert unwritable["status"] == FAILED and "No such file or directory" in unwritable["error"]
-    assert unwritable["patches"] == 6 and unwritable["times"]["check"] > 0  # how far it got
+    assert unwritable["patches"] == 4 * 6 and unwritable["times"]["check"] > 0  # how far it got
 
 
 def test_interrupt_writes_the_summary_so_far(

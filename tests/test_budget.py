@@ -74,7 +74,7 @@ def test_without_a_kernel_cache_the_estimate_bounds_the_numpy_peak(
 
 def test_a_build_above_the_budget_is_refused_before_it_starts() -> None:
     with pytest.raises(BudgetError, match=r"8,388,608 gregory patches after 9 Catmull–Clark steps"):
-        build_network(shapes.torus(8, 4, 1.0, 0.25), refine=9, max_memory=10**9)
+        build_network(shapes.torus(8, 4, 1.0, 0.25), "gregory", refine=9, max_memory=10**9)
 
 
 def test_the_command_line_names_the_file_and_writes_nothing(

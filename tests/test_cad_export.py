@@ -40,7 +40,7 @@ from g1patch.patches import CORNER_PARAMETERS
 
 def gregory(name: str, data: Path | None) -> PatchNetwork:
     mesh = shapes.cube() if data is None else read_mesh(data / f"{name}.obj")
-    return build_network(mesh)
+    return build_network(mesh, "gregory")
 
 
 # ------------------------------------------------------------------------------- the re-assembly
@@ -135,7 +135,7 @@ def test_cut_patches_reproduce_a_bicubic_network(n: int) -> None:
     """The limit of a regular torus is a C2 bicubic B-spline (its Gregory patches are bicubics): the
     targets of its cells are the bicubic's pieces exactly (fans that are parallelograms, grid lines
     that close, guides in the 2×2 B-spline's space), so the re-assembly is the same surface."""
-    network = build_network(shapes.torus(8, 4), shape="limit")
+    network = build_network(shapes.torus(8, 4), "gregory", shape="limit")
     diagonal = network.bounding_box_diagonal()
     cells = grid_refinement(QuadTopology.from_faces(network.corner_ids), n)
     targets, _, guide = refined_gregory_targets(network, cells)
@@ -490,7 +490,7 @@ def test_cells_that_fold_are_not_taken(tmp_path: Path) -> None:
     from g1patch.continuity import folded_patches
     from g1patch.io.cad import export_step
 
-    network = build_network(shapes.box_cage())
+    network = build_network(shapes.box_cage(), "gregory")
     result = export_step(tmp_path / "box.step", network, g1_samples=0)
     assert result.refine == 2 and result.relative_deviation > 1e-3 and result.valid and result.solid
     assert (
@@ -502,7 +502,11 @@ def test_cells_that_fold_are_not_taken(tmp_path: Path) -> None:
 
 
 @requires_ocp
-@pytest.mark.parametrize("build", [build_corner_network, build_network], ids=["corner", "gregory"])
+@pytest.mark.parametrize(
+    "build",
+    [build_corner_network, lambda mesh: build_network(mesh, "gregory")],
+    ids=["corner", "gregory"],
+)
 def test_a_single_patch_exports_with_no_shared_edge_to_measure(
     build: object, tmp_path: Path
 ) -> None:
@@ -574,7 +578,7 @@ def test_step_reals_always_carry_their_decimal_point() -> None:
 def test_export_result_repr_is_one_short_line(tmp_path: Path) -> None:
     from g1patch.io.cad import export_cad
 
-    result = export_cad(tmp_path / "cube.step", build_network(shapes.cube()))
+    result = export_cad(tmp_path / "cube.step", build_network(shapes.cube(), "gregory"))
     text = repr(result)
     assert re.fullmatch(
         r"<ExportResult cube\.step: step, 6 faces, solid, valid, split4, OCC G1 ≤ \S+°, "

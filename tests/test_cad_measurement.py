@@ -62,17 +62,19 @@ def creased_cube(data: Path) -> PatchNetwork:
     """The creased cube's Gregory network, whose patches are bicubics: written as they are."""
     from g1patch.io.cad.method import _as_bicubics
 
-    network = build_network(read_mesh(data / "catmark_cube_creases2.obj"))
+    network = build_network(read_mesh(data / "catmark_cube_creases2.obj"), "gregory")
     return replace(network, patches=_as_bicubics(network.patches))
 
 
 NETWORKS = {
-    "cube split4 (two-span quads)": lambda data: split4_of_gregory(build_network(shapes.cube())),
-    "cube fitted (graded knots)": lambda data: build_network(shapes.cube()),
+    "cube split4 (two-span quads)": lambda data: split4_of_gregory(
+        build_network(shapes.cube(), "gregory")
+    ),
+    "cube fitted (graded knots)": lambda data: build_network(shapes.cube(), "gregory"),
     "corner cube (Bézier faces)": lambda data: build_corner_network(shapes.cube()),
     "creased cube (degenerate corners)": creased_cube,
     "torus with seams (split4)": lambda data: split4_of_gregory(
-        build_network(read_mesh(data / "catmark_torus_creases0.obj"))
+        build_network(read_mesh(data / "catmark_torus_creases0.obj"), "gregory")
     ),
 }
 
@@ -100,7 +102,7 @@ def test_normals_agree_with_occ_point_by_point_and_other_rows_go_to_occ() -> Non
     from g1patch.io.cad import measure, opencascade
 
     occ = opencascade._occ()
-    faces, _ = sewn_faces(split4_of_gregory(build_network(shapes.cube())))
+    faces, _ = sewn_faces(split4_of_gregory(build_network(shapes.cube(), "gregory")))
     reversed_faces = [face.Reversed() for face in faces[:2]]
     faces = [*faces, *[occ.TopoDS.Face(face) for face in reversed_faces]]
     rng = np.random.default_rng(3)
@@ -133,7 +135,7 @@ def test_a_face_that_disagrees_with_occ_is_measured_by_occ(monkeypatch: pytest.M
     difference at all, or a misread pole), the face's every point is OCC's, bit for bit."""
     from g1patch.io.cad import measure, opencascade
 
-    network = split4_of_gregory(build_network(shapes.cube()))
+    network = split4_of_gregory(build_network(shapes.cube(), "gregory"))
     faces, quads = sewn_faces(network)
     reference = occ_angles(network, faces, quads, monkeypatch)
     read = measure._occ_bspline

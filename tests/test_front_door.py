@@ -62,3 +62,21 @@ def test_export_reads_bezier_patches_as_check_and_render_do(
     assert main(["export", str(teapot), "-o", str(tmp_path / "teapot.bpt"), "-q"]) == 0
     again = g1patch.read(tmp_path / "teapot.bpt")
     assert isinstance(again, g1patch.PatchNetwork) and again.n_patches == 32
+
+
+def test_every_door_has_the_same_default_method_split4() -> None:
+    """The default is the polynomial assembly, so the CAD file of a default build is the surface
+    itself; the API, the batch, the build and the command line agree on it."""
+    import inspect
+
+    from g1patch.batch.jobs import BuildOptions
+    from g1patch.build import build_network
+    from g1patch.cli.parser import build_parser
+    from g1patch.construct import DEFAULT_METHOD
+
+    assert DEFAULT_METHOD == "split4"
+    for function in (g1patch.smooth, build_network):
+        assert inspect.signature(function).parameters["method"].default == DEFAULT_METHOD
+    assert BuildOptions().method == DEFAULT_METHOD
+    arguments = build_parser().parse_args(["build", "cube.obj", "-o", "cube.npz"])
+    assert arguments.method == DEFAULT_METHOD

@@ -53,7 +53,7 @@ COMMAND_PARAMS = [
 def gregory_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A small Gregory network (a 6 × 4 torus: 24 patches, framed), written by save_network."""
     path = tmp_path_factory.mktemp("good") / "torus.npz"
-    save_network(path, build_network(shapes.torus(6, 4)))
+    save_network(path, build_network(shapes.torus(6, 4), "gregory"))
     return path
 
 
@@ -430,7 +430,8 @@ def test_a_member_claiming_4_gb_in_the_zip_directory(gregory_file: Path, tmp_pat
 
 
 def test_a_member_above_the_absolute_cap(gregory_file: Path, tmp_path: Path) -> None:
-    """A zip64 directory may declare anything: above 8 GiB a member is refused whatever the network.
+    """A zip64 directory may declare anything: above 32 GiB a member is refused whatever the
+    network.
 
     save_network writes zip64 records: the uncompressed size of a member is the first field of the
     zip64 extra field of its central header."""
@@ -447,7 +448,7 @@ def test_a_member_above_the_absolute_cap(gregory_file: Path, tmp_path: Path) -> 
     with pytest.raises(
         FormatError,
         match=r"member 'points\.npy' declares 1099\.5 GB \(1099511627776 bytes\) uncompressed, "
-        r"above the cap of 8\.6 GB \(8589934592 bytes\) per member",
+        r"above the cap of 34\.4 GB \(34359738368 bytes\) per member",
     ):
         load_network(bad)
 
@@ -650,17 +651,17 @@ def test_bpt_counts_and_truncation(text: str, message: str, tmp_path: Path) -> N
 # ------------------------------------------------------------------- round trips and old versions
 def _networks() -> dict[str, Callable[[], PatchNetwork]]:
     return {
-        "gregory": lambda: build_network(shapes.torus(6, 4)),
+        "gregory": lambda: build_network(shapes.torus(6, 4), "gregory"),
         "gregory limit": lambda: build_network(shapes.cube(), "gregory", "limit"),
         "split4": lambda: build_network(shapes.torus(5, 3), "split4"),
         "corner": lambda: build_corner_network(shapes.cube()),
         "seamed": lambda: (lambda n: n.with_seams(np.ones(n.n_edges, dtype=bool)))(
-            build_network(shapes.cube())
+            build_network(shapes.cube(), "gregory")
         ),
         "patch file": lambda: network_from_patch_points(
             PatchSet(np.random.default_rng(3).normal(size=(3, 4, 4, 3)))
         ),
-        "grid": lambda: build_network(shapes.grid(3, 2)),
+        "grid": lambda: build_network(shapes.grid(3, 2), "gregory"),
     }
 
 
@@ -740,7 +741,7 @@ def test_narrow_index_types_written_by_users_still_load(gregory_file: Path, tmp_
 
 
 def test_save_refuses_what_load_would_refuse(tmp_path: Path) -> None:
-    network = build_network(shapes.torus(6, 4))
+    network = build_network(shapes.torus(6, 4), "gregory")
     huge = dataclasses.replace(network, patches=GregoryPatchSet(network.patches.points * 1e200))  # type: ignore[attr-defined]
     with pytest.raises(
         FormatError,
@@ -868,7 +869,7 @@ def test_random_damage_is_always_a_format_error(compressed: bool, tmp_path: Path
     import warnings
 
     good = tmp_path / "good.npz"
-    save_network(good, build_network(shapes.torus(4, 3)))
+    save_network(good, build_network(shapes.torus(4, 3), "gregory"))
     if compressed:
         rewrite(good, good, compressed=True)
     data = good.read_bytes()

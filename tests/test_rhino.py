@@ -49,7 +49,7 @@ def test_split4_faces_round_trip_and_evaluate_as_ours(tmp_path: Path) -> None:
 def test_a_gregory_surface_is_written_as_its_step_faces(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    surface = Surface(build_network(shapes.torus(8, 4)))
+    surface = Surface(build_network(shapes.torus(8, 4), "gregory"))
     surface.export(tmp_path / "t.npz")
     assert main(["export", str(tmp_path / "t.npz"), "-o", str(tmp_path / "t.3dm")]) == 0
     assert "wrote 32 NURBS faces (split4)" in capsys.readouterr().out

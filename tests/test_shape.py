@@ -86,7 +86,7 @@ def test_smooth_mesh_lines_run_straight_through_their_vertices() -> None:
     unit = fans / np.linalg.norm(fans, axis=2, keepdims=True)
     assert np.abs(np.cross(unit[:, :2], unit[:, 2:])).max() <= 1e-12
     assert (np.einsum("vkd,vkd->vk", unit[:, :2], unit[:, 2:]) < 0.0).all()
-    network = build_network(mesh)
+    network = build_network(mesh, "gregory")
     assert (
         surface_deviation(network, split4_of_gregory(network))[1]
         <= 1e-4 * network.bounding_box_diagonal()
@@ -255,7 +255,7 @@ def test_fold_guard_never_repeats_a_retreat(monkeypatch: pytest.MonkeyPatch) -> 
     monkeypatch.setattr(
         build_module, "folded_patches", lambda patches, samples: np.ones(len(patches), dtype=bool)
     )
-    build_network(perturbed(shapes.torus(3, 5), 0.05, 0))
+    build_network(perturbed(shapes.torus(3, 5), 0.05, 0), "gregory")
     assert [weight for weight, _ in retreats] == [0.5, 1.0]
     assert all(a != b for a, b in itertools.pairwise(retreats))
 
@@ -274,7 +274,7 @@ def test_fold_guard_keeps_its_best_attempt(monkeypatch: pytest.MonkeyPatch) -> N
         "retreat",
         lambda targets, vertices, weight: targets.with_changes(tangents=3.0 * targets.tangents),
     )
-    network = build_network(mesh)
+    network = build_network(mesh, "gregory")
     frame = Frame.of_points(mesh.vertices)
     local = QuadMesh(frame.to_local(mesh.vertices), mesh.topology, mesh.tags)
     assert network.provenance["fallback_vertices"] == "0"
@@ -295,7 +295,7 @@ def test_a_large_polygon_builds_unfolded_without_the_guard() -> None:
         np.stack([np.cos(theta), np.sin(theta), 0.1 * np.sin(3.0 * theta)], axis=1),
         [list(range(n))],
     )
-    network = build_network(mesh)
+    network = build_network(mesh, "gregory")
     assert network.provenance["fallback_vertices"] == str(n)  # the narrowed corners
     report = check(network)
     assert report.folds == 0, report.fold_locations

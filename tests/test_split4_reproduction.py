@@ -298,7 +298,7 @@ def test_limit_split4_cube_file_is_a_tenth_of_the_gregory_one(tmp_path: Path) ->
 
     mesh = read_mesh(CUBE)
     split4 = export_step(tmp_path / "split4.step", build_network(mesh, "split4", "limit"))
-    gregory = export_step(tmp_path / "gregory.step", build_network(mesh), method="fit")
+    gregory = export_step(tmp_path / "gregory.step", build_network(mesh, "gregory"), method="fit")
     assert split4.spans == 2 and gregory.spans > 10
     assert 10 * split4.path.stat().st_size <= gregory.path.stat().st_size
 

@@ -38,7 +38,7 @@ WINDOW = (1000, 720)
 
 @pytest.fixture(scope="module")
 def cube() -> g1patch.Surface:
-    return g1patch.smooth(DATA / "cube.obj")
+    return g1patch.smooth(DATA / "cube.obj", method="gregory")
 
 
 @pytest.fixture(scope="module")
@@ -124,7 +124,7 @@ def test_page_size_is_bounded(cube_page: Path) -> None:
 
 def test_seams_are_embedded_as_lines() -> None:
     mesh = g1patch.read(DATA / "cube.obj")
-    surface = g1patch.smooth(mesh, sharp_angle=30.0)
+    surface = g1patch.smooth(mesh, method="gregory", sharp_angle=30.0)
     page = view_html(surface.network)
     meta = _meta(page)
     seams = _embedded(page, "seams", np.float32).reshape(-1, 2, 3)
@@ -487,7 +487,7 @@ def test_browser_draws_the_uv_checker_of_a_textured_cage(
     lines += ["f " + " ".join(f"{v + 1}/{k + 1}" for k, v in enumerate(face)) for face in faces]
     source = tmp_path / "textured.obj"
     source.write_text("\n".join(lines) + "\n")
-    page = write_view(tmp_path / "textured.html", g1patch.smooth(source).network)
+    page = write_view(tmp_path / "textured.html", g1patch.smooth(source, method="gregory").network)
     shaded, covered = shoot(browser, page, "shaded")
     checker, _ = shoot(browser, page, "uv")
     _keep(checker, "textured-uv")
@@ -505,7 +505,7 @@ def test_browser_draws_the_distance_to_a_scan(browser: DevTools, tmp_path: Path)
     """A surface viewed with the scan it was fitted to (here: a coarse triangulation of its own
     samples, so the distance varies over each triangle): the distance mode colours it, darkest
     at the scan's vertices, with its legend; no errors."""
-    surface = g1patch.smooth(g1patch.shapes.cube_sphere(1))
+    surface = g1patch.smooth(g1patch.shapes.cube_sphere(1), method="gregory")
     points, triangles = surface.tessellate(3)
     page = Path(surface.view(tmp_path / "distance.html", scan=(points, triangles)))
     shaded, covered = shoot(browser, page, "shaded")

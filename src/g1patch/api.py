@@ -726,7 +726,7 @@ def _check_options(target: Path, options: dict[str, Any], allowed: Sequence[str]
 def smooth(
     source: Any,
     shape: str = "interpolate",
-    method: str = "gregory",
+    method: str = "split4",
     *,
     refine: int = 0,
     sharp_angle: float | None = None,
@@ -745,11 +745,12 @@ def smooth(
     ``source``: a mesh file path, a ``(vertices, faces)`` pair, a ``meshio.Mesh``, a trimesh, a
     pyvista PolyData or a QuadMesh (:func:`as_mesh`). ``shape``: ``interpolate`` (through the
     vertices, the default), ``limit`` (the Catmull–Clark limit of the mesh as a cage),
-    ``limit-interpolate`` or ``legacy``. ``method``: ``gregory`` (exact G1, the default),
-    ``split4`` (exact G1, polynomial: exact in STEP) or ``corner`` (the paper's, G1 at corners
-    only). ``refine``: Catmull–Clark steps first. ``sharp_angle`` (degrees): keep edges whose faces
-    turn by more than that sharp. ``strict``: refuse a mesh that needs repair instead of repairing
-    it. ``split``: split non-quad faces (else they raise). ``tangents``: the legacy shape's;
+    ``limit-interpolate`` or ``legacy``. ``method``: ``split4`` (exact G1, polynomial: exact in
+    STEP, the default), ``gregory`` (exact G1, rational: the fairest, fitted in STEP) or
+    ``corner`` (the paper's, G1 at corners only). ``refine``: Catmull–Clark steps first.
+    ``sharp_angle`` (degrees): keep edges whose faces turn by more than that sharp. ``strict``:
+    refuse a mesh that needs repair instead of repairing it. ``split``: split non-quad faces (else
+    they raise). ``tangents``: the legacy shape's;
     ``twist`` and ``normals``: the paper's construction's (``corner`` with ``legacy``).
     ``max_memory`` (bytes; default half the RAM) and ``max_patches``: a build estimated above
     either is refused before it starts (:class:`~g1patch.errors.BudgetError`).

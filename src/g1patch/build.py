@@ -24,7 +24,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from .construct import ASSEMBLIES, METHODS, NetworkParts
+from .construct import ASSEMBLIES, DEFAULT_METHOD, METHODS, NetworkParts
 from .construct.corner import TWISTS, TwistRule, build_corner_network
 from .continuity import folded_patches
 from .errors import BudgetError, InputError, check_choice
@@ -331,7 +331,7 @@ def _guarded(
 
 def build_network(
     mesh: QuadMesh,
-    method: str = "gregory",
+    method: str = DEFAULT_METHOD,
     shape: str = "interpolate",
     *,
     tangents: TangentRule = "arc",
@@ -343,22 +343,21 @@ def build_network(
 ) -> PatchNetwork:
     """The patch network of ``mesh``: targets by ``shape``, assembled by ``method``.
 
-    ``method`` (:data:`g1patch.construct.ASSEMBLIES`): ``gregory`` (exact G1, rational
-    interiors), ``split4`` (exact G1, 2×2 polynomial bicubics per quad), ``corner`` (the paper: G1
-    at corners only). ``shape`` (:data:`g1patch.targets.SHAPES`): ``interpolate`` (through the
-    mesh vertices, with the fold guard), ``limit`` (the Catmull–Clark limit of the mesh as a
-    control cage: through the limit points, without the fold guard, which would pull it off the
-    limit), ``limit-interpolate`` or ``legacy`` (the previous release's, for comparison).
-    ``tangents`` (``arc`` or ``chord``) applies to ``legacy`` only; ``corner`` with ``legacy`` is
-    the paper's construction as the first release built it (:func:`build_corner_network`, world
-    coordinates), with its ``twist`` and ``normals`` rules. ``refine``: Catmull–Clark steps
-    applied to the mesh first (:func:`g1patch.subdivision.refine`); the limit shapes refine at
-    least :func:`semi_sharp_levels` steps, so semi-sharp creases follow OpenSubdiv's limit. The
-    network's provenance records the choices (the steps actually taken) and how many vertices
-    needed a fallback. A build whose :func:`estimate_build` is above ``max_memory`` bytes (default
-    :func:`memory_budget`, half the RAM), or makes more than ``max_patches``, is refused before
-    it starts (:class:`BudgetError`).
-    """
+    ``method`` (:data:`g1patch.construct.ASSEMBLIES`): ``split4`` (exact G1, 2×2 polynomial bicubics
+    per quad: the default, exact in CAD), ``gregory`` (exact G1, rational interiors, the fairest),
+    ``corner`` (the paper: G1 at corners only). ``shape`` (:data:`g1patch.targets.SHAPES`):
+    ``interpolate`` (through the mesh vertices, with the fold guard), ``limit`` (the Catmull–Clark
+    limit of the mesh as a control cage: through the limit points, without the fold guard, which
+    would pull it off the limit), ``limit-interpolate`` or ``legacy`` (the previous release's, for
+    comparison). ``tangents`` (``arc`` or ``chord``) applies to ``legacy`` only; ``corner`` with
+    ``legacy`` is the paper's construction as the first release built it
+    (:func:`build_corner_network`, world coordinates), with its ``twist`` and ``normals`` rules.
+    ``refine``: Catmull–Clark steps applied to the mesh first (:func:`g1patch.subdivision.refine`);
+    the limit shapes refine at least :func:`semi_sharp_levels` steps, so semi-sharp creases follow
+    OpenSubdiv's limit. The network's provenance records the choices (the steps actually taken) and
+    how many vertices needed a fallback. A build whose :func:`estimate_build` is above
+    ``max_memory`` bytes (default :func:`memory_budget`, half the RAM), or makes more than
+    ``max_patches``, is refused before it starts (:class:`BudgetError`)."""
     check_choice("method", method, METHODS)
     check_choice("shape", shape, tuple(SHAPES))
     check_choice("tangents", tangents, TANGENTS)

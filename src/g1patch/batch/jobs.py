@@ -28,7 +28,7 @@ class BuildOptions:
     """The options of ``g1patch build`` a batch applies to every file (see
     :func:`g1patch.smooth`)."""
 
-    method: str = "gregory"
+    method: str = "split4"
     shape: str = "interpolate"
     refine: int = 0
     sharp_angle: float | None = None

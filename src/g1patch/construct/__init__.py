@@ -22,7 +22,7 @@ from .split4 import split4_network_from_parts, split4_patches, split4_provenance
 from .split4.seams import split4_seam_patches
 from .stage import Assembly, NetworkParts
 
-__all__ = ["ASSEMBLIES", "METHODS", "Assembly", "NetworkParts"]
+__all__ = ["ASSEMBLIES", "DEFAULT_METHOD", "METHODS", "Assembly", "NetworkParts"]
 
 
 def _assemble_split4(targets: Targets) -> Any:
@@ -75,19 +75,8 @@ ASSEMBLIES: dict[str, Assembly] = {
     assembly.name: assembly
     for assembly in (
         Assembly(
-            "gregory",
-            "exact G1, one rational Gregory patch per quad (default)",
-            assemble_gregory,
-            1,
-            lambda patches: patches,
-            keep_patches,
-            patch_per_face_network,
-            1150,
-            4000,
-        ),
-        Assembly(
             "split4",
-            "exact G1, 2×2 polynomial bicubics per quad: exact in STEP",
+            "exact G1, 2×2 polynomial bicubics per quad: exact in STEP (default)",
             _assemble_split4,
             4,
             _split4_patches,
@@ -95,6 +84,17 @@ ASSEMBLIES: dict[str, Assembly] = {
             _split4_network,
             3000,
             4900,
+        ),
+        Assembly(
+            "gregory",
+            "exact G1, one rational Gregory patch per quad: the fairest shape",
+            assemble_gregory,
+            1,
+            lambda patches: patches,
+            keep_patches,
+            patch_per_face_network,
+            1150,
+            4000,
         ),
         Assembly(
             "corner",
@@ -111,3 +111,5 @@ ASSEMBLIES: dict[str, Assembly] = {
 }
 #: the names, default first
 METHODS: tuple[str, ...] = tuple(ASSEMBLIES)
+#: the method a build takes unless told: polynomial, so the CAD file is the surface itself
+DEFAULT_METHOD = METHODS[0]

@@ -55,7 +55,8 @@ a network: every member must be a known ``.npy`` array of this version (stored o
 encrypted, named once); its declared size (``ZipInfo.file_size``) is capped, and must equal its
 ``.npy`` header plus shape × itemsize. The caps, checked in this order:
 
-* absolute: :data:`MAX_BYTES` (8 GiB) per member and in all, :data:`MAX_PATCHES` (2²³ patches);
+* absolute: :data:`MAX_BYTES` (32 GiB) per member and in all, :data:`MAX_PATCHES` (2²⁵ patches: a
+  4 M-quad split4 network is 16 M);
   the JSON header at most :data:`MAX_HEADER_BYTES` (1 MiB), the other strings 1 KiB;
 * per patch: with ``P`` patches (at most ``corner_ids``' size / 4 bytes before its ``.npy``
   header is read, exactly its first axis after), every array has the shape its role gives

@@ -28,9 +28,9 @@ UV_VERSION = 4
 #: largest magnitude of a coordinate in world units (see the module docstring)
 MAX_COORDINATE = 1e30
 #: most patches a network file may hold
-MAX_PATCHES = 2**23
+MAX_PATCHES = 2**25
 #: most bytes of arrays, per member and in all
-MAX_BYTES = 2**33
+MAX_BYTES = 2**35
 #: bytes of arrays a file may hold per patch, headers aside (a Gregory network needs ≈ 600)
 PER_PATCH_BYTES = 1024
 #: largest JSON header
