@@ -85,7 +85,7 @@ def test_build_with_check_writes_the_same_file_and_prints_the_check(
     assert result.returncode == 0, result.stderr
     assert checked.read_bytes() == alone.read_bytes()
     built, *report = result.stdout.splitlines()
-    assert built.startswith("built 6 gregory patches")
+    assert built.startswith("built 24 split4 patches")
     assert (
         report == g1patch("check", checked, "-q").stdout.splitlines()[1:]
     )  # after the file's name
