@@ -167,7 +167,7 @@ def main(argv: Sequence[str] | None = None) -> None:
 
     line = None if args.no_compile else harness.run_python(["-c", _COMPILE_SCRIPT], None, True)
     cold = None if line is None else float(line)
-    warm, _ = harness.timed(lambda: build_network(shapes.large_torus(1000)))
+    warm, _ = harness.timed(lambda: build_network(shapes.large_torus(1000), "gregory"))
     print(
         f"numba kernels: compile from an empty cache "
         f"{'not measured' if cold is None else f'{cold:.1f} s'} (first build of a 1000-quad "

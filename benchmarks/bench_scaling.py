@@ -53,7 +53,7 @@ def _warm_up() -> None:
 
     tune_for_large_arrays()  # as the command line does
     small = shapes.large_torus(30_000)  # above continuity.KERNEL_PATCHES: the check's kernels too
-    check(build_network(small))
+    check(build_network(small, "gregory"))
 
 
 def size_row(quads: int) -> dict[str, float]:
@@ -64,9 +64,9 @@ def size_row(quads: int) -> dict[str, float]:
 
     _warm_up()
     mesh = shapes.large_torus(quads)
-    build_network(mesh)
-    build_s, network = harness.timed(lambda: build_network(mesh))
-    build_peak = harness.peak(lambda: build_network(mesh))
+    build_network(mesh, "gregory")
+    build_s, network = harness.timed(lambda: build_network(mesh, "gregory"))
+    build_peak = harness.peak(lambda: build_network(mesh, "gregory"))
     check_s, _ = harness.timed(lambda: check(network))
     check_peak = harness.peak(lambda: check(network))
     return {
@@ -98,7 +98,7 @@ def end_to_end(quads: int) -> dict[str, float]:
         baseline = harness.process_peak()
         start = time.perf_counter()
         read_s, mesh = harness.timed(lambda: read_mesh(ply))
-        build_s, network = harness.timed(lambda: build_network(mesh))
+        build_s, network = harness.timed(lambda: build_network(mesh, "gregory"))
         saving = save_network_in_background(out, network)
         check_s, _ = harness.timed(lambda: check(network))
         wait_s, _ = harness.timed(saving.result)

@@ -198,6 +198,10 @@ def test_check_reads_patch_files(shared_data: Path) -> None:
     )
 
 
+#: the demo's four cubes
+METHODS_SHOWN = ("corner", "gregory", "split4", "limit")
+
+
 def test_demo_writes_its_files(tmp_path: Path) -> None:
     result = g1patch("demo", "--out", tmp_path / "out")
     assert result.returncode == 0, result.stderr
@@ -208,6 +212,9 @@ def test_demo_writes_its_files(tmp_path: Path) -> None:
     )
     for name in ("cube_corner.obj", "cube_gregory.obj", "cube_split4.obj", "cube_limit.obj"):
         assert (tmp_path / "out" / name).stat().st_size > 0
+    # four constructions, four surfaces (the Gregory cube was once built by the default method)
+    surfaces = {(tmp_path / "out" / f"cube_{name}.obj").read_bytes() for name in METHODS_SHOWN}
+    assert len(surfaces) == len(METHODS_SHOWN)
     for name in ("cube_zebra.png", "cube_deviation.png"):
         assert (tmp_path / "out" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 

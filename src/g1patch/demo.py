@@ -25,7 +25,7 @@ def run_demo(out: Path, camera: dict[str, Any]) -> list[Path]:
     with resources.as_file(resources.files("g1patch") / "data" / "cube.obj") as cube_path:
         mesh = read_mesh(cube_path)
     corner = build_network(mesh, "corner", "legacy", twist="coons")
-    gregory = build_network(mesh)
+    gregory = build_network(mesh, "gregory")
     split4 = build_network(mesh, "split4")
     limit = build_network(mesh, "gregory", "limit")
     print("The paper's example: the cube [-1, 1]^3, valence 3 at every corner, smoothed into a")
