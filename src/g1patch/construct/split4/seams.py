@@ -95,13 +95,11 @@ def cut_along_seams(targets: Targets) -> SeamCut:
     return SeamCut(cut_targets, seam_halfedges, split.vertex, edge_of, seams)
 
 
-def split4_seam_patches(
-    targets: Targets, guide: FloatArray | None = None, *, equal_sectors: bool = False
-) -> tuple[Split4Parts, BoolArray]:
+def split4_seam_patches(targets: Targets) -> tuple[Split4Parts, BoolArray]:
     """split4's parts (:func:`~g1patch.construct.split4.split4_patches`, in the targets' own
     coordinates) of targets with seams, assembled cut open along them (module docstring), with the
     midpoints and centres in the uncut topology's order (E + F) and the stars' flags per uncut
-    vertex; and the seams kept (per edge). ``equal_sectors`` as in :func:`seam_stars`."""
+    vertex; and the seams kept (per edge)."""
     cut = cut_along_seams(targets)
     lonely = int(np.count_nonzero(targets.seams & ~cut.seams))
     if lonely:
@@ -124,8 +122,8 @@ def split4_seam_patches(
         cut_targets.positions,
         np.zeros(3),
         1.0,
-        guide,
-        seam_stars(cut_targets, cut.seam_halfedges, equal_sectors=equal_sectors),
+        None,
+        seam_stars(cut_targets, cut.seam_halfedges),
     )
     n_cut_edges = cut_targets.topology.n_edges
     extra = np.concatenate([extra[cut.edge_of], extra[n_cut_edges:]])
