@@ -117,7 +117,8 @@ def _faces_in_range(
 def _polygon_list(
     corners: NDArray[np.int64], sizes: NDArray[np.int64]
 ) -> NDArray[np.int64] | list[NDArray[np.int64]]:
-    """An (nf, n) table when all faces have n corners, else one index array per face."""
-    if (sizes == sizes[0]).all():
+    """An (nf, n) table when all faces have n ≥ 1 corners, else one index array per face (faces
+    without corners are then empty arrays, which the mesh checks refuse by name)."""
+    if sizes[0] > 0 and (sizes == sizes[0]).all():
         return corners.reshape(-1, int(sizes[0]))
     return np.split(corners, np.cumsum(sizes)[:-1])
