@@ -25,7 +25,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("render",),
     ("io",),
     ("fitting",),
-    ("build", "compare"),
+    ("build", "compare", "fidelity"),
     ("construct",),
     ("targets",),
     ("subdivision", "sharpen", "shapes"),

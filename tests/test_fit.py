@@ -142,6 +142,73 @@ def test_a_missing_or_failing_remesher_is_one_clear_error(
         layout_module.quad_layout(points, triangles, 64)
 
 
+BOX = np.array([2.0, 1.2, 0.6])
+
+
+def box_scan(path: Path, cells_per_unit: int = 40) -> Path:
+    """A box (2 × 1.2 × 0.6, centred) tessellated as a CAD part is: a grid of right triangles on
+    every side, its 12 edges and 8 corners sharp."""
+    points, triangles = [], []
+    half = BOX / 2
+    for axis in range(3):
+        u, v = (axis + 1) % 3, (axis + 2) % 3
+        nu, nv = (max(2, round(BOX[a] * cells_per_unit)) for a in (u, v))
+        for side in (-1.0, 1.0):
+            i, j = np.meshgrid(np.arange(nu + 1), np.arange(nv + 1), indexing="ij")
+            grid = np.zeros((nu + 1, nv + 1, 3))
+            grid[..., axis] = side * half[axis]
+            grid[..., u] = -half[u] + BOX[u] * i / nu
+            grid[..., v] = -half[v] + BOX[v] * j / nv
+            base = sum(len(p) for p in points)
+            index = base + i * (nv + 1) + j
+            a, b, c, d = index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]
+            quads = np.stack([a, b, c, d], -1).reshape(-1, 4)
+            if side < 0:
+                quads = quads[:, ::-1]
+            triangles += [quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]]
+            points.append(grid.reshape(-1, 3))
+    every = np.concatenate(points)
+    _, first, inverse = np.unique(
+        np.round(every * 1e9).astype(np.int64), axis=0, return_index=True, return_inverse=True
+    )
+    write_triangles(path, every[first], inverse.ravel()[np.concatenate(triangles)])
+    return path
+
+
+def test_a_cad_part_keeps_its_sharp_edges(tmp_path: Path) -> None:
+    """A box tessellated with 13,824 triangles: its 90° edges are scan features (default sharp
+    angle), the layout edges along them creases, every one of them on a box edge; the fit is
+    within the tolerance in one layout of ~1,000 quads (measured: 1.1e-3 of the diagonal both
+    ways; without the creases four layouts up to 8,000 quads reach 1.9e-3), exactly G1 apart
+    from its seams, without folds."""
+    scan = box_scan(tmp_path / "box.obj")
+    result = g1patch.fit(scan, tolerance=2e-3, faces=1000)
+    report, network = result.report, result.surface.network
+    assert report.met and report.creases > 0 and network.n_seams > 0
+    layout_edges = np.flatnonzero(network.seam.ravel())
+    assert layout_edges.size
+    checked = result.surface.check()
+    assert checked.is_g1(1e-9) and checked.folds == 0 and checked.seam_edges > 0
+    corners = network.patches.corners()  # (P, 4, 3): every seam's ends lie on box edges
+    patch, edge = np.divmod(layout_edges, 4)
+    ends = np.concatenate([corners[patch, edge], corners[patch, (edge + 1) % 4]])
+    on_box_edge = (np.abs(np.abs(ends) - BOX / 2) <= 1e-3).sum(axis=1) >= 2
+    assert on_box_edge.all()
+    smooth = g1patch.fit(scan, tolerance=2e-3, faces=1000, sharp_angle=None)
+    assert smooth.report.creases == 0 and smooth.surface.network.n_seams == 0
+    assert smooth.report.worst > 2 * report.worst  # rounded edges: far off the part
+
+
+@pytest.mark.slow
+def test_an_organic_scan_gets_no_creases(shared_data: Path) -> None:
+    """The default sharp angle finds no feature on Spot's or the teapot's triangles (the
+    steepest turns of their facets are single scan edges, never a line a layout edge runs
+    along)."""
+    for name in ("spot_triangulated", "teapot_triangulated"):
+        result = g1patch.fit(shared_data / f"{name}.obj", faces=2000)
+        assert result.report.creases == 0 and result.surface.network.n_seams == 0
+
+
 @pytest.mark.slow
 def test_shared_spot_triangles(shared_data: Path) -> None:
     """Crane's Spot as 5,856 triangles: a coarse tessellation, not a scan. Its facets are up to

@@ -80,3 +80,34 @@ def test_every_door_has_the_same_default_method_split4() -> None:
     assert BuildOptions().method == DEFAULT_METHOD
     arguments = build_parser().parse_args(["build", "cube.obj", "-o", "cube.npz"])
     assert arguments.method == DEFAULT_METHOD
+
+
+def test_every_door_has_the_same_default_tolerance() -> None:
+    """The limit shapes' distance bound (issue 30): the API, the build and the command line agree
+    on 1e-3 of the diagonal."""
+    import inspect
+
+    from g1patch.build import DEFAULT_TOLERANCE, build_network
+    from g1patch.cli.parser import build_parser
+
+    assert DEFAULT_TOLERANCE == 1e-3
+    for function in (g1patch.smooth, build_network):
+        assert inspect.signature(function).parameters["tolerance"].default == DEFAULT_TOLERANCE
+    arguments = build_parser().parse_args(["build", "cube.obj", "-o", "cube.npz"])
+    assert arguments.tolerance == DEFAULT_TOLERANCE
+
+
+def test_every_fit_door_has_the_same_sharp_angle() -> None:
+    """The fit keeps a CAD part's edges by default (issue 33): the API, the fit and the command
+    line agree on the angle, and 'off' turns it off."""
+    import inspect
+
+    from g1patch.cli.parser import build_parser
+    from g1patch.fitting import FIT_SHARP_ANGLE, fit_network
+
+    for function in (g1patch.fit, fit_network):
+        assert inspect.signature(function).parameters["sharp_angle"].default == FIT_SHARP_ANGLE
+    arguments = build_parser().parse_args(["fit", "scan.stl", "-o", "part.step"])
+    assert arguments.sharp_angle == FIT_SHARP_ANGLE
+    off = build_parser().parse_args(["fit", "scan.stl", "-o", "a.step", "--sharp-angle", "off"])
+    assert off.sharp_angle is None

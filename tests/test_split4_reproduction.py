@@ -105,7 +105,7 @@ def test_reference_is_the_gregory_limit_network() -> None:
     plain split4 of the same cage under the interpolating rule."""
     mesh = shapes.torus(8, 4)
     s = np.linspace(0.0, 1.0, 4)
-    gregory = build_network(mesh, "gregory", "limit").patches.evaluate_grid(s, s)
+    gregory = build_network(mesh, "gregory", "limit", tolerance=None).patches.evaluate_grid(s, s)
     from g1patch.patches import PatchSet
 
     control = mesh.vertices[control_rings(mesh.topology)]
@@ -117,7 +117,7 @@ def test_reference_is_the_gregory_limit_network() -> None:
 @pytest.mark.parametrize("name", sorted(REGULAR))
 def test_regular_closed_cages_give_the_bspline(name: str) -> None:
     mesh = REGULAR[name]()
-    network = build_network(mesh, "split4", "limit")
+    network = build_network(mesh, "split4", "limit", tolerance=None)
     assert reproduction_error(mesh, network) <= REPRODUCTION_RTOL
     assert (
         network.provenance["star_safeguard_vertices"] == "0"
@@ -131,7 +131,7 @@ def test_regular_closed_cages_give_the_bspline(name: str) -> None:
 
 def test_catmark_torus_gives_the_bspline(shared_data: Path) -> None:
     mesh = read_mesh(shared_data / "catmark_torus.obj")
-    network = build_network(mesh, "split4", "limit")
+    network = build_network(mesh, "split4", "limit", tolerance=None)
     assert reproduction_error(mesh, network) <= REPRODUCTION_RTOL
     assert_exact_g1(check(network))
 
@@ -140,7 +140,7 @@ def test_kept_midpoints_report_the_surface_normal() -> None:
     """Where the targets' seam tangents are kept, the network's normal at M is ``t_L × t_X``: the
     patches' own normal at every corner (mesh vertices, midpoints, centres)."""
     for mesh, shape in ((shapes.torus(8, 4), "limit"), (shapes.flat_fan(16), "interpolate")):
-        network = build_network(mesh, "split4", shape)  # type: ignore[arg-type]
+        network = build_network(mesh, "split4", shape, tolerance=None)  # type: ignore[arg-type]
         uv = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
         normal = np.cross(network.patches.evaluate(uv, 1, 0), network.patches.evaluate(uv, 0, 1))
         normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
@@ -161,7 +161,7 @@ def test_faces_on_closed_lines_of_an_irregular_cage_give_the_bspline() -> None:
     mesh = collapsed(shapes.torus(12, 8), [0])
     assert mesh is not None
     topology = mesh.topology
-    network = build_network(mesh, "split4", "limit")
+    network = build_network(mesh, "split4", "limit", tolerance=None)
     assert_exact_g1(check(network))
     regular = topology.face_count == 4
     around = regular[topology.faces].all(axis=1)  # faces with four regular corners ...
@@ -262,7 +262,7 @@ def test_limit_split4_step_is_one_face_per_quad(name: str, tmp_path: Path) -> No
         "collapsed_torus": lambda: collapsed(shapes.torus(12, 8), [0]),
     }[name]()
     assert mesh is not None
-    network = build_network(mesh, "split4", "limit")
+    network = build_network(mesh, "split4", "limit", tolerance=None)
     quads = split4_quad_faces(network)
     assert quads is not None
     result = export_step(tmp_path / f"{name}.step", network)
@@ -297,7 +297,9 @@ def test_limit_split4_cube_file_is_a_tenth_of_the_gregory_one(tmp_path: Path) ->
     from g1patch.io.cad import export_step
 
     mesh = read_mesh(CUBE)
-    split4 = export_step(tmp_path / "split4.step", build_network(mesh, "split4", "limit"))
+    split4 = export_step(
+        tmp_path / "split4.step", build_network(mesh, "split4", "limit", tolerance=None)
+    )
     gregory = export_step(tmp_path / "gregory.step", build_network(mesh, "gregory"), method="fit")
     assert split4.spans == 2 and gregory.spans > 10
     assert 10 * split4.path.stat().st_size <= gregory.path.stat().st_size

@@ -738,6 +738,7 @@ def smooth(
     max_memory: int | None = None,
     max_patches: int | None = None,
     max_input_size: int | None = None,
+    tolerance: float | None = 1e-3,
 ) -> Surface:
     """The smooth surface of a mesh: exactly G1 bicubic patches
     (:func:`g1patch.build.build_network`).
@@ -755,6 +756,9 @@ def smooth(
     ``max_memory`` (bytes; default half the RAM) and ``max_patches``: a build estimated above
     either is refused before it starts (:class:`~g1patch.errors.BudgetError`).
     ``max_input_size`` (bytes; default 2 GB): a larger mesh file is refused before it is read.
+    ``tolerance`` (limit shapes): the largest distance from the exact Catmull–Clark limit, of the
+    bounding-box diagonal; the cage is refined until it holds (the surface's provenance says the
+    distance reached; None: not measured).
     """
     from .build import build_network
     from .construct import METHODS
@@ -777,6 +781,7 @@ def smooth(
             refine=refine,
             max_memory=max_memory,
             max_patches=max_patches,
+            tolerance=tolerance,
         )
     return Surface(network, mesh)
 
@@ -803,6 +808,7 @@ def fit(
     layout: Any = None,
     method: str = "split4",
     max_input_size: int | None = None,
+    sharp_angle: float | None = 60.0,
 ) -> FitResult:
     """An exact-G1 surface fitted to a dense triangle mesh (a scan; :mod:`g1patch.fitting`).
 
@@ -813,7 +819,8 @@ def fit(
     exactly G1 by ``method`` (``split4``: polynomial, so STEP holds the fitted surface itself).
     ``tolerance``: two-way distance, of the bounding-box diagonal, the layout's face count
     doubling until it holds (at most four layouts) unless ``faces`` or ``layout`` fix it; the
-    report says whether it was met."""
+    report says whether it was met. ``sharp_angle`` (degrees; None: off): scan edges whose
+    triangles turn by more than that are features, kept as creases (STEP edges)."""
     from .construct import METHODS
     from .errors import ConstructionError, check_choice, named_errors
     from .fitting import fit_network, scan_from_polygons, scan_of
@@ -831,7 +838,12 @@ def fit(
         raise InputError(f"{quads.source or 'layout'}: a layout must be all quads")
     with named_errors(scan.source, (ConstructionError,)):
         network, report = fit_network(
-            scan, tolerance=tolerance, faces=faces, layout=quads, method=method
+            scan,
+            tolerance=tolerance,
+            faces=faces,
+            layout=quads,
+            method=method,
+            sharp_angle=sharp_angle,
         )
     return FitResult(Surface(network), report, scan)
 

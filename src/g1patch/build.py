@@ -28,14 +28,17 @@ from .construct import ASSEMBLIES, DEFAULT_METHOD, METHODS, NetworkParts
 from .construct.corner import TWISTS, TwistRule, build_corner_network
 from .continuity import folded_patches
 from .errors import BudgetError, InputError, check_choice
+from .fidelity import limit_distance
 from .frame import Frame
 from .kernels import use_kernels
 from .memory import memory_budget
 from .mesh import INFINITE_SHARPNESS, QuadMesh
 from .network import Patches, PatchNetwork, patch_uvs
 from .subdivision import catmull_clark_cage
+from .subdivision import refine as subdivide
 from .targets import SHAPES, Targets, shape_targets
 from .targets.interpolate import retreat
+from .targets.limit_interpolate import interpolating_cage
 from .targets.local import NORMALS, TANGENTS, NormalRule, TangentRule
 
 __all__ = [
@@ -47,11 +50,23 @@ __all__ = [
     "check_budget",
     "estimate_build",
     "memory_budget",
+    "DEFAULT_TOLERANCE",
+    "LIMIT_SHAPES",
 ]
 
 #: whatever an assembly returns (its patches, or its patches and more)
 A = TypeVar("A")
 logger = logging.getLogger(__name__)
+
+
+#: the shapes that are a Catmull–Clark limit, whose distance to it a build measures
+LIMIT_SHAPES = ("limit", "limit-interpolate")
+#: the largest distance from the exact Catmull–Clark limit a limit shape may have by default, of
+#: the bounding-box diagonal (``--tolerance``)
+DEFAULT_TOLERANCE = 1e-3
+#: Catmull–Clark steps the tolerance may add at most (each one quarters the faces' size and roughly
+#: halves the distance, which is largest at extraordinary vertices)
+MAX_TOLERANCE_STEPS = 3
 
 
 #: how far the fold guard moves the targets of folded faces' vertices, in turn
@@ -97,7 +112,7 @@ class BuildEstimate:
 def refine_steps(mesh: QuadMesh, shape: str, refine: int) -> int:
     """The Catmull–Clark steps a build takes: ``refine``, and for the limit shapes at least
     :func:`semi_sharp_levels`."""
-    limit = shape in ("limit", "limit-interpolate")
+    limit = shape in LIMIT_SHAPES
     return max(int(refine), semi_sharp_levels(mesh) if limit else 0)
 
 
@@ -340,6 +355,7 @@ def build_network(
     refine: int = 0,
     max_memory: int | None = None,
     max_patches: int | None = None,
+    tolerance: float | None = DEFAULT_TOLERANCE,
 ) -> PatchNetwork:
     """The patch network of ``mesh``: targets by ``shape``, assembled by ``method``.
 
@@ -357,7 +373,10 @@ def build_network(
     OpenSubdiv's limit. The network's provenance records the choices (the steps actually taken) and
     how many vertices needed a fallback. A build whose :func:`estimate_build` is above
     ``max_memory`` bytes (default :func:`memory_budget`, half the RAM), or makes more than
-    ``max_patches``, is refused before it starts (:class:`BudgetError`)."""
+    ``max_patches``, is refused before it starts (:class:`BudgetError`). ``tolerance`` (limit
+    shapes; None: not measured): the largest distance from the exact Catmull–Clark limit allowed,
+    relative to the bounding-box diagonal (:func:`_within_tolerance`); the provenance records the
+    distance reached."""
     check_choice("method", method, METHODS)
     check_choice("shape", shape, tuple(SHAPES))
     check_choice("tangents", tangents, TANGENTS)
@@ -365,6 +384,8 @@ def build_network(
     check_choice("normals", normals, NORMALS)
     if isinstance(refine, bool) or not isinstance(refine, (int, np.integer)) or refine < 0:
         raise InputError(f"refine: expected a number of Catmull–Clark steps ≥ 0, got {refine!r}")
+    if tolerance is not None:
+        check_tolerance(tolerance)
     if shape == "limit":  # the cage's limit: a polygon cage's first step by the Catmull–Clark rules
         mesh = catmull_clark_cage(mesh)
     estimate = estimate_build(mesh, method, shape, refine)
@@ -378,19 +399,45 @@ def build_network(
     refine = estimate.steps
     repairs = mesh.repairs
     if refine:
-        from .subdivision import refine as subdivide
-
         mesh = subdivide(mesh, refine)
     if method == "corner" and shape == "legacy" and not refine:
         corner = build_corner_network(mesh, tangents=tangents, twist=twist, normals=normals)
         return _with_uv(corner, mesh, 1)
+    network = _network(mesh, method, shape, tangents, refine, repairs)
+    if tolerance is None or shape not in LIMIT_SHAPES:
+        return network
+    return _within_tolerance(
+        network, mesh, method, shape, tolerance, refine, repairs, max_memory, max_patches
+    )
+
+
+def _network(
+    mesh: QuadMesh,
+    method: str,
+    shape: str,
+    tangents: TangentRule,
+    refine: int,
+    repairs: tuple[str, ...],
+    through: np.ndarray | None = None,
+) -> PatchNetwork:
+    """The network of ``mesh`` (already refined ``refine`` steps): targets, the fold guard for
+    ``interpolate``, assembly, the network with its UVs. ``through``: world points the first
+    vertices' targets take exactly instead of the rule's (the limit of a refined interpolating
+    cage passes through the original vertices, to the solve's residual: these make it exact)."""
     assembly = ASSEMBLIES[method]
     frame = Frame.of_points(mesh.vertices)
     local = mesh.with_vertices(frame.to_local(mesh.vertices))
     targets = shape_targets(local, shape, tangents=tangents)
-    surface = (
-        mesh if shape != "limit" else mesh.with_vertices(frame.to_world(targets.positions))
-    )  # the points passed through
+    if through is not None:
+        positions = targets.positions.copy()
+        positions[: len(through)] = frame.to_local(through)
+        targets = targets.with_changes(positions=positions)
+    surface = mesh
+    if shape == "limit":  # the points passed through
+        points = frame.to_world(targets.positions)
+        if through is not None:
+            points[: len(through)] = through
+        surface = mesh.with_vertices(points)
     provenance = _provenance(mesh, method, shape, tangents, targets, refine, repairs)
     if shape == "interpolate":  # the guard's best assembly is the network's: built once
         assembled, targets = _guarded(
@@ -429,3 +476,77 @@ def build_split4_network(
 ) -> PatchNetwork:
     """``build_network(mesh, "split4", shape)``: exact G1, 2×2 polynomial bicubics per quad."""
     return build_network(mesh, "split4", shape, tangents=tangents)
+
+
+def check_tolerance(tolerance: float) -> float:
+    """``tolerance`` as a float in (0, 1), else :class:`InputError` naming it."""
+    if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float, np.floating)):
+        raise InputError(f"tolerance: expected a number, got {tolerance!r}")
+    if not 0.0 < float(tolerance) < 1.0:
+        raise InputError(
+            f"tolerance: expected a fraction of the bounding-box diagonal in (0, 1), got "
+            f"{tolerance!r}"
+        )
+    return float(tolerance)
+
+
+def _within_tolerance(
+    network: PatchNetwork,
+    mesh: QuadMesh,
+    method: str,
+    shape: str,
+    tolerance: float,
+    refine: int,
+    repairs: tuple[str, ...],
+    max_memory: int | None,
+    max_patches: int | None,
+) -> PatchNetwork:
+    """``network`` (of ``mesh``, refined ``refine`` steps), or the network of a finer cage, within
+    ``tolerance`` of the exact Catmull–Clark limit (:func:`~g1patch.fidelity.limit_distance`).
+
+    The cage is ``mesh`` for ``limit``, the solved interpolating cage for ``limit-interpolate``
+    (its limit passes through the vertices); while the distance is above the tolerance the cage
+    takes another Catmull–Clark step (the same limit surface, faces a quarter the size) and is
+    built again as its limit, up to :data:`MAX_TOLERANCE_STEPS` steps and as long as the build's
+    estimate stays within ``max_memory`` and ``max_patches``. The provenance records the distance
+    reached (``limit_distance``), the ``tolerance``, the steps it added (``tolerance_steps``) and,
+    where it stopped short, why (``tolerance_stop``)."""
+    assembly = ASSEMBLIES[method]
+    cage, through = mesh, None
+    if shape == "limit-interpolate":
+        cage, through = mesh.with_vertices(interpolating_cage(mesh).cage), mesh.vertices
+    distance = limit_distance(network, cage, assembly.patches_per_face)
+    steps, stop = 0, ""
+    while distance.relative > tolerance:
+        if steps == MAX_TOLERANCE_STEPS:
+            stop = f"{MAX_TOLERANCE_STEPS} steps added"
+            break
+        estimate = estimate_build(cage, method, "limit", steps + 1)
+        try:
+            check_budget(estimate, method, max_memory, max_patches)
+        except BudgetError:
+            stop = (
+                f"another step would make {estimate.patches:,} patches and need about "
+                f"{size_text(estimate.bytes)}"
+            )
+            break
+        steps += 1
+        finer = subdivide(cage, steps)
+        network = _network(finer, method, "limit", "arc", refine + steps, repairs, through)
+        distance = limit_distance(network, finer, assembly.patches_per_face)
+    logger.info(
+        "distance to the Catmull–Clark limit: %.3g of the diagonal after %d added steps",
+        distance.relative,
+        steps,
+    )
+    provenance = dict(network.provenance)
+    provenance.update(
+        shape=shape,
+        refine=str(refine + steps),
+        limit_distance=f"{distance.relative:.6g}",
+        tolerance=f"{tolerance:g}",
+        tolerance_steps=str(steps),
+    )
+    if stop:
+        provenance["tolerance_stop"] = stop
+    return replace(network, provenance=provenance)

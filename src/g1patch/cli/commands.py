@@ -78,6 +78,7 @@ def _build(args: argparse.Namespace) -> int:
             max_memory=args.max_memory,
             max_patches=MAX_PATCHES,
             max_input_size=args.max_input_size,
+            tolerance=args.tolerance,
         )
         progress(1, 2)
         # the file is written while the folds (or the whole check) are measured
@@ -108,7 +109,31 @@ def _build(args: argparse.Namespace) -> int:
         print(f"g1patch: warning: {args.output}: {hint}", file=sys.stderr)
     if report is not None:
         print(report.summary())
-    return EXIT_OK
+    return _limit_distance_line(surface.provenance, args.output)
+
+
+def _limit_distance_line(provenance: dict[str, str], output: Path) -> int:
+    """Print how far a limit shape is from the exact Catmull–Clark limit (when it was measured):
+    :data:`EXIT_CHECK_FAILED` and a warning when above the tolerance, else :data:`EXIT_OK`."""
+    if "limit_distance" not in provenance:
+        return EXIT_OK
+    distance, tolerance = float(provenance["limit_distance"]), float(provenance["tolerance"])
+    steps = int(provenance.get("tolerance_steps", "0"))
+    added = f"; {_count(steps, 'Catmull–Clark step', 'Catmull–Clark steps')} added" if steps else ""
+    print(
+        f"distance to the Catmull–Clark limit: {distance:.2e} of the diagonal "
+        f"(tolerance {tolerance:g}{added})"
+    )
+    if distance <= tolerance:
+        return EXIT_OK
+    why = provenance.get("tolerance_stop", "")
+    print(
+        f"g1patch: warning: {output}: {distance:.2e} is above the tolerance {tolerance:g}"
+        f"{f' ({why})' if why else ''}; a larger --tolerance"
+        f"{' or --max-memory' if why.startswith('another') else ''} lets it through",
+        file=sys.stderr,
+    )
+    return EXIT_CHECK_FAILED
 
 
 def _count(count: int, one: str, many: str) -> str:
@@ -156,6 +181,7 @@ def _fit(args: argparse.Namespace) -> int:
             layout=args.layout,
             method=args.method,
             max_input_size=args.max_input_size,
+            sharp_angle=args.sharp_angle,
         )
         progress(1, 2)
         if suffix == ".html":  # the viewer, with the distance to the scan
@@ -221,8 +247,18 @@ def _check(args: argparse.Namespace) -> int:
 
 
 def _fit_rows(provenance: dict[str, str]) -> list[tuple[str, str, float]]:
-    """The figures a fitted network carries (``g1patch fit``): (JSON key, label, value)."""
+    """The distances a network carries, (JSON key, label, value): to the exact Catmull–Clark limit
+    (a limit shape's build) and to the scan (``g1patch fit``)."""
     rows = []
+    if "limit_distance" in provenance:
+        rows.append(
+            (
+                "limit_distance",
+                "distance to limit (of diag)",
+                float(provenance["limit_distance"]),
+            )
+        )
+        rows.append(("tolerance", "tolerance (of diag)", float(provenance["tolerance"])))
     if "fit_distance" in provenance:
         rows.append(
             ("fit_distance", "distance to the scan (of diag)", float(provenance["fit_distance"]))

@@ -52,9 +52,24 @@ _EXAMPLES = {
 }
 
 
+def _sharp_angle(text: str) -> float | None:
+    """``--sharp-angle``: degrees in (0, 180), or ``off``."""
+    if text.strip().lower() == "off":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected degrees or 'off', got {text!r}") from None
+    if not (math.isfinite(value) and 0 < value < 180):
+        raise argparse.ArgumentTypeError(f"expected degrees between 0 and 180, got {text!r}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
+    from ..build import DEFAULT_TOLERANCE
     from ..construct import ASSEMBLIES
     from ..construct.corner import TWISTS
+    from ..fitting import FIT_SHARP_ANGLE
     from ..io.cad import CAD_METHODS, DEVIATION_RTOL
     from ..targets import SHAPES
     from ..targets.local import NORMALS, TANGENTS
@@ -110,6 +125,15 @@ def build_parser() -> argparse.ArgumentParser:
         default=0,
         metavar="N",
         help="Catmull–Clark steps before building (default: 0)",
+    )
+    build.add_argument(
+        "--tolerance",
+        type=float,
+        default=DEFAULT_TOLERANCE,
+        metavar="REL",
+        help="limit shapes: the largest distance from the exact Catmull–Clark limit, a fraction "
+        "of the bounding-box diagonal; the cage takes more Catmull–Clark steps until it holds "
+        f"(default: {DEFAULT_TOLERANCE:g}; exit 1 when the memory budget stops it first)",
     )
     build.add_argument(
         "--max-memory",
@@ -200,6 +224,15 @@ def build_parser() -> argparse.ArgumentParser:
         choices=methods,
         default="split4",
         help="the exact-G1 assembly (default: split4, polynomial: the CAD file is the surface)",
+    )
+    fit.add_argument(
+        "--sharp-angle",
+        type=_sharp_angle,
+        default=FIT_SHARP_ANGLE,
+        metavar="DEG",
+        help="scan edges whose triangles turn by more than DEG degrees are features: creases of "
+        "the surface, edges of the STEP solid (default: "
+        f"{FIT_SHARP_ANGLE:g}, a CAD part's edges and none of an organic scan's; 'off': none)",
     )
     input_size_argument(fit)
     fit.add_argument("--json", action="store_true", help="print the report as one JSON object")

@@ -23,11 +23,13 @@ from ..errors import InputError
 from ..mesh import QuadMesh
 from ..network import PatchNetwork
 from ..tessellate import tessellate
+from .features import layout_creases, sharp_segments
 from .layout import quad_layout
 from .solve import FitCage, fit_cage, vertex_normals
 
 __all__ = [
     "DEFAULT_TOLERANCE",
+    "FIT_SHARP_ANGLE",
     "MAX_ROUNDS",
     "START_FACES",
     "FitReport",
@@ -43,6 +45,10 @@ IntArray = NDArray[np.int64]
 
 #: the default tolerance: two-way distance, a fraction of the scan's bounding-box diagonal
 DEFAULT_TOLERANCE = 1e-3
+#: the default ``sharp_angle`` of the fit, degrees: a CAD part's 90° edges (and 60° or more) are
+#: kept; on the shared organic triangle meshes (Spot, the teapot) no layout edge runs along a scan
+#: edge this sharp (at 40° a few short chains on Spot would)
+FIT_SHARP_ANGLE = 60.0
 #: quads of the first layout when neither a layout nor a face count is given
 START_FACES = 1024
 #: layouts tried at most (the faces doubling each time) to meet the tolerance
@@ -95,7 +101,8 @@ class FitReport:
 
     ``to_surface``: scan points → surface; ``to_scan``: surface samples → scan triangles; each
     ``(max, p99, rms)``. ``faces``: cage quads; ``rounds``: layouts tried; ``rms``: the model's
-    RMS per solve of the last round; ``seconds``: wall time."""
+    RMS per solve of the last round; ``seconds``: wall time; ``creases``: cage edges kept sharp
+    (the scan's features, ``sharp_angle``)."""
 
     diagonal: float
     tolerance: float
@@ -106,6 +113,7 @@ class FitReport:
     rounds: int
     rms: tuple[float, ...]
     seconds: float
+    creases: int = 0
 
     @property
     def worst(self) -> float:
@@ -129,6 +137,7 @@ class FitReport:
             [
                 f"{'cage quads / patches':<32}{self.faces} / {self.patches} "
                 f"({self.rounds} layouts)",
+                f"{'crease edges (features)':<32}{self.creases}",
                 f"{'distance, of diagonal':<32}max / p99 / rms  (model units)",
                 row("scan → surface", self.to_surface),
                 row("surface → scan", self.to_scan),
@@ -152,6 +161,7 @@ class FitReport:
             "patches": self.patches,
             "rounds": self.rounds,
             "seconds": self.seconds,
+            "creases": self.creases,
         }
 
 
@@ -187,12 +197,16 @@ def fit_network(
     faces: int | None = None,
     layout: QuadMesh | None = None,
     method: str = "split4",
+    sharp_angle: float | None = FIT_SHARP_ANGLE,
 ) -> tuple[PatchNetwork, FitReport]:
     """The fitted exact-G1 network of ``scan`` and its :class:`FitReport` (module docstring).
 
     ``layout``: the user's quad mesh near the scan (its topology is the cage's; no remeshing);
     ``faces``: the layout's quad count (about), else from :data:`START_FACES` doubling up to
     :data:`MAX_ROUNDS` times while the two-way distance exceeds ``tolerance`` (of the diagonal).
+    ``sharp_angle`` (degrees): the scan's edges whose triangles turn by more than that are
+    features; the layout edges along them become infinitely sharp creases
+    (:mod:`~g1patch.fitting.features`), seams of the network and edges of its STEP solid.
     """
     tolerance = _check_tolerance(tolerance)
     started = time.perf_counter()
@@ -202,12 +216,19 @@ def fit_network(
     count = faces if faces is not None else min(START_FACES, max(64, len(scan.triangles) // 8))
     adaptive = layout is None and faces is None
     normals = vertex_normals(scan.points, scan.triangles)
+    features = (
+        np.zeros((0, 2, 3))
+        if sharp_angle is None
+        else sharp_segments(scan.points, scan.triangles, sharp_angle)
+    )
     rounds = 0
     while True:
         rounds += 1
         cage_layout = layout if layout is not None else _layout(scan, count)
+        cage_layout = layout_creases(cage_layout, features)
         fitted: FitCage = fit_cage(scan.points, normals, cage_layout)
-        network = build_network(fitted.cage, method, "limit")
+        # the scan, not the cage's limit, is what the fit is measured against (below)
+        network = build_network(fitted.cage, method, "limit", tolerance=None)
         to_surface, to_scan = measure(network, scan)
         worst = max(to_surface[0], to_scan[0]) / diagonal
         if not adaptive or worst <= tolerance or rounds >= MAX_ROUNDS:
@@ -224,6 +245,7 @@ def fit_network(
         rounds,
         fitted.rms,
         time.perf_counter() - started,
+        int(cage_layout.features.edge_sharpness.astype(bool).sum()),
     )
     return network, report
 

@@ -1,0 +1,136 @@
+"""Sharp features of a scan carried onto its quad layout (``g1patch fit --sharp-angle``).
+
+A scan edge is sharp where its two triangles' normals differ by more than the angle
+(:func:`g1patch.sharpen.sharp_angle_tags`, as ``build --sharp-angle`` does for a cage). Instant
+Meshes puts layout vertices and edges on such lines (its extrinsic field snaps to them), so a
+layout edge is tagged an infinitely sharp crease when it runs along them:
+:data:`EDGE_SAMPLES` points spread along it all lie within :data:`REACH` of its length from a
+sharp scan edge whose direction is within :data:`ALIGNMENT_DEG` of its own. A lone sharp scan
+edge (noise, a coarse tessellation of a curved region) tags nothing: a layout edge is several
+scan edges long, and all of its samples must be near aligned sharp edges. The tagged layout is
+then fitted by the crease rules (its limit has the crease curve there, tangent planes on either
+side) and its creases become seams of the network, i.e. edges of the STEP solid. A vertex with
+three or more tagged edges is a corner by OpenSubdiv's rules.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from ..mesh import INFINITE_SHARPNESS, QuadMesh, Tag
+from ..sharpen import sharp_angle_tags
+
+__all__ = [
+    "ALIGNMENT_DEG",
+    "BRIDGE_ALIGNMENT_DEG",
+    "BRIDGE_REACH",
+    "BRIDGE_ROUNDS",
+    "EDGE_SAMPLES",
+    "REACH",
+    "layout_creases",
+    "sharp_segments",
+]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: points along a layout edge that must all be near an aligned sharp scan edge
+EDGE_SAMPLES = 5
+#: how near, as a fraction of the layout edge's length
+REACH = 0.15
+#: how parallel the layout edge and the sharp scan edge must be, degrees
+ALIGNMENT_DEG = 25.0
+#: a chain's gap is bridged by an edge whose samples lie within this fraction of its length of
+#: sharp scan edges running within :data:`BRIDGE_ALIGNMENT_DEG` of it
+BRIDGE_REACH = 0.4
+BRIDGE_ALIGNMENT_DEG = 40.0
+#: edges a gap is bridged by at most, from each end
+BRIDGE_ROUNDS = 3
+
+
+def sharp_segments(points: FloatArray, triangles: IntArray, degrees: float) -> FloatArray:
+    """The sharp edges of a triangle mesh as segments ``(S, 2, 3)`` (none: shape ``(0, 2, 3)``)."""
+    sizes = np.full(len(triangles), 3, dtype=np.int64)
+    tags = sharp_angle_tags(points, np.asarray(triangles, np.int64).ravel(), sizes, degrees)
+    creases = [tag for tag in tags if tag.name == "crease"]
+    if not creases:
+        return np.zeros((0, 2, 3))
+    ends = np.asarray(creases[0].ints, dtype=np.int64).reshape(-1, 2)
+    return np.asarray(points, dtype=np.float64)[ends]
+
+
+def _segment_distance(points: FloatArray, segments: FloatArray) -> FloatArray:
+    """Distance from each point to the segment of the same row."""
+    a, ab = segments[:, 0], segments[:, 1] - segments[:, 0]
+    length = np.maximum((ab * ab).sum(1), np.finfo(float).tiny)
+    t = np.clip(((points - a) * ab).sum(1) / length, 0.0, 1.0)
+    return np.linalg.norm(points - (a + t[:, None] * ab), axis=1)
+
+
+def _worst_sample(ends: FloatArray, segments: FloatArray, alignment_deg: float) -> FloatArray:
+    """Per edge ``ends`` (E, 2, 3): the largest distance of its :data:`EDGE_SAMPLES` samples to
+    the nearest sharp segment running its way (within ``alignment_deg``), as a fraction of the
+    edge's length; ∞ where a sample has no such segment within :data:`BRIDGE_REACH`."""
+    direction = ends[:, 1] - ends[:, 0]
+    length = np.linalg.norm(direction, axis=1)
+    t = np.linspace(0.0, 1.0, EDGE_SAMPLES)
+    samples = (ends[:, None, 0] + t[None, :, None] * direction[:, None]).reshape(-1, 3)
+    owner = np.repeat(np.arange(len(ends)), EDGE_SAMPLES)
+    half = 0.5 * float(np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1).max())
+    reach = BRIDGE_REACH * length[owner]
+    found = cKDTree(segments.mean(axis=1)).query_ball_point(samples, reach + half)
+    counts = np.fromiter(map(len, found), dtype=np.int64, count=len(found))
+    candidate = np.fromiter((i for row in found for i in row), dtype=np.int64, count=counts.sum())
+    sample = np.repeat(np.arange(len(found)), counts)
+    along = segments[candidate, 1] - segments[candidate, 0]
+    edge = owner[sample]
+    cosine = np.abs((along * direction[edge]).sum(1)) / np.maximum(
+        np.linalg.norm(along, axis=1) * length[edge], np.finfo(float).tiny
+    )
+    distance = np.where(
+        cosine >= np.cos(np.radians(alignment_deg)),
+        _segment_distance(samples[sample], segments[candidate]),
+        np.inf,
+    )
+    nearest = np.full(len(samples), np.inf)
+    np.minimum.at(nearest, sample, distance)
+    worst = nearest.reshape(-1, EDGE_SAMPLES).max(axis=1)
+    return np.where(length > 0, worst / np.maximum(length, np.finfo(float).tiny), np.inf)
+
+
+def layout_creases(layout: QuadMesh, segments: FloatArray) -> QuadMesh:
+    """``layout`` with a ``crease`` tag (sharpness ∞) on every edge that runs along ``segments``
+    (module docstring), and the gaps of those chains bridged: where a chain ends at a vertex
+    (its one tagged edge there), the untagged edge there that follows the sharp line best within
+    :data:`BRIDGE_REACH` and :data:`BRIDGE_ALIGNMENT_DEG` is tagged too, up to
+    :data:`BRIDGE_ROUNDS` edges on from the end (a remesher's vertex a little off a feature line
+    otherwise breaks the crease, which the fit then rounds). As it is where no edge runs along
+    them."""
+    if not len(segments):
+        return layout
+    edges = layout.topology.edges
+    ends = layout.vertices[edges]
+    sharp = _worst_sample(ends, segments, ALIGNMENT_DEG) <= REACH
+    if not sharp.any():
+        return layout
+    loose = _worst_sample(ends, segments, BRIDGE_ALIGNMENT_DEG)
+    count = layout.n_vertices
+    for _ in range(BRIDGE_ROUNDS):
+        degree = np.bincount(edges[sharp].ravel(), minlength=count)
+        at_end = (degree[edges] == 1).any(axis=1) & ~sharp & (loose <= BRIDGE_REACH)
+        if not at_end.any():
+            break
+        candidates = np.flatnonzero(at_end)
+        vertex = np.where(
+            degree[edges[candidates, 0]] == 1, edges[candidates, 0], edges[candidates, 1]
+        )
+        order = np.lexsort((loose[candidates], vertex))  # per chain end, the best first
+        first = np.concatenate([[True], vertex[order][1:] != vertex[order][:-1]])
+        sharp[candidates[order[first]]] = True
+    pairs = edges[sharp]
+    tags = tuple(tag for tag in layout.tags if tag.name != "crease") + (
+        Tag("crease", tuple(pairs.ravel().tolist()), (INFINITE_SHARPNESS,)),
+    )
+    return QuadMesh.from_arrays(layout.vertices, layout.faces, tags=tags, source=layout.source)
