@@ -37,6 +37,7 @@ DEFAULT = (
     "bench_split4",
     "bench_shape",
     "bench_limit",
+    "bench_tolerance",
     "bench_interpolants",
     "bench_check",
     "bench_readers",
