@@ -212,3 +212,31 @@ def test_cli_prints_the_distance_and_fails_when_the_budget_stops_it(
     assert main(["check", str(output)]) == 0
     assert "distance to limit (of diag)" in capsys.readouterr().out
     assert main(["build", str(source), "-o", str(output), "--tolerance", "0", "-q"]) == 2
+
+
+@pytest.mark.parametrize("method", ["gregory", "split4"])
+def test_the_measure_never_exceeds_the_start(method: str) -> None:
+    """Every figure is a distance to a point on the network no farther than the one at the same
+    face parameter (the projection keeps the nearest point it visits), on a cage whose
+    parameterisation differs most from the limit's: a valence-12 vertex on a pyramid-like cage."""
+    n = 12
+    angles = 2 * np.pi * np.arange(2 * n) / (2 * n)
+    radius = np.where(np.arange(2 * n) % 2 == 0, 1.0, 1.6)
+    ring = np.stack([radius * np.cos(angles), radius * np.sin(angles), np.zeros(2 * n)], 1)
+    points = np.concatenate([[[0.0, 0.0, 0.8]], ring])
+    i = np.arange(n)
+    faces = np.stack([np.zeros(n, int), 1 + 2 * i, 2 + 2 * i, 1 + (2 * i + 2) % (2 * n)], 1)
+    cage = QuadMesh.from_arrays(points, faces)
+    network = build_network(cage, method, "limit", tolerance=None)
+    ours = limit_distance(network, cage, PER_FACE[method], levels=3)
+    first = _face_patches(cage.n_faces, cage.features.holes, PER_FACE[method], network)
+    fine, grid = refine_grids(cage, 3)
+    m = grid.shape[1]
+    t = np.linspace(0.0, 1.0, m)
+    uv = np.tile(np.stack(np.meshgrid(t, t, indexing="ij"), -1).reshape(-1, 2), (cage.n_faces, 1))
+    patch, local = _start(np.repeat(first, m * m), uv, PER_FACE[method])
+    start = network.patches.take(patch).evaluate(local[:, None, :])[:, 0]
+    gap = np.linalg.norm(start - limit_points(fine)[grid.reshape(-1)], axis=1)
+    per_face = gap.reshape(cage.n_faces, -1).max(axis=1)
+    assert (ours.per_face <= per_face * (1 + 1e-12)).all()
+    assert ours.max < per_face.max()  # and the feet are nearer than the start

@@ -105,8 +105,10 @@ def project_to_network(
     ``patch``: ``δ = (JᵀJ)⁻¹ Jᵀ (p − S)``, ``J = [S_u S_v]``, shortened to at most one patch (a
     near-singular J at a degenerate corner proposes far jumps); a step that leaves the unit
     square across a shared edge continues from the same place on that edge of the neighbour, one
-    that leaves across an open edge stops on it. Returns the distance at the last foot (an upper
-    bound of the true distance, equal to it where the foot is the nearest point)."""
+    that leaves across an open edge stops on it. Returns the smallest distance to a point the
+    iteration visited (an upper bound of the true distance, equal to it where the last foot is
+    the nearest point; a step that strays, e.g. round a pole of hundreds of slim patches, cannot
+    make the figure worse than the start's)."""
     out = np.empty(len(points))
     for start in range(0, len(points), _BLOCK):
         rows = slice(start, min(start + _BLOCK, len(points)))
@@ -119,12 +121,14 @@ def _project_block(
 ) -> FloatArray:
     patches = network.patches
     active = np.arange(len(points))
+    best = np.full(len(points), np.inf)  # every point visited is on the network: keep the nearest
     for _ in range(PROJECTION_STEPS):
         these = patches.take(patch[active])
         at = uv[active, None, :]
         value = these.evaluate(at)[:, 0]
         su, sv = these.evaluate(at, 1, 0)[:, 0], these.evaluate(at, 0, 1)[:, 0]
         r = points[active] - value
+        best[active] = np.minimum(best[active], np.linalg.norm(r, axis=1))
         a, b, c = (su * su).sum(1), (su * sv).sum(1), (sv * sv).sum(1)
         gu, gv = (su * r).sum(1), (sv * r).sum(1)
         det = a * c - b * b
@@ -136,7 +140,8 @@ def _project_block(
         active = active[longest > CONVERGED]
         if not active.size:
             break
-    return np.linalg.norm(points - patches.take(patch).evaluate(uv[:, None, :])[:, 0], axis=1)
+    last = np.linalg.norm(points - patches.take(patch).evaluate(uv[:, None, :])[:, 0], axis=1)
+    return np.minimum(best, last)
 
 
 def _walk(network: PatchNetwork, patch: IntArray, uv: FloatArray) -> tuple[IntArray, FloatArray]:
