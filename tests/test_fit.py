@@ -234,3 +234,22 @@ def test_the_viewer_shows_the_distance_to_the_scan(
     assert 0 < meta["distance"]["high"] <= 1e-3 and 'id="distance-mode"' in page
     plain = fitted.surface.view(resolution=3)
     assert '"distance":null' in plain
+
+
+def test_the_distance_picture(
+    fitted: g1patch.api.FitResult, scan: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``FitResult.render`` and ``g1patch render … --distance SCAN``: the surface coloured by its
+    distance to the scan, the largest in the title (the same figure as the report's surface →
+    scan maximum, within the picture's coarser sampling)."""
+    from g1patch.cli import main
+
+    picture = fitted.render(tmp_path / "distance.png", size=(300, 300))
+    assert picture.is_file()  # type: ignore[union-attr]
+    network = tmp_path / "fit.npz"
+    fitted.surface.export(network)
+    output = tmp_path / "cli.png"
+    assert main(["render", str(network), "-o", str(output), "--distance", str(scan), "-q"]) == 0
+    assert output.is_file() and f"wrote {output}" in capsys.readouterr().out
+    missing = tmp_path / "absent.stl"
+    assert main(["render", str(network), "-o", str(output), "--distance", str(missing)]) == 2

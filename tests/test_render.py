@@ -75,6 +75,16 @@ def assert_picture(path: Path, size: tuple[int, int]) -> np.ndarray:
     return image
 
 
+def cube_scan() -> tuple[np.ndarray, np.ndarray]:
+    """The triangles of the cube cage the corner cube is built on (a scan its surface bulges
+    from: 0 at the corners, most in the middle of the faces)."""
+    points = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    quads = np.array(
+        [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+    )
+    return points, np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+
+
 # --------------------------------------------------------------------------- pictures
 @pytest.mark.parametrize("mode", MODES)
 @pytest.mark.parametrize("size", [(321, 207), (400, 400)])
@@ -82,7 +92,16 @@ def test_every_mode_writes_a_png_of_exactly_the_requested_size(
     tmp_path: Path, corner_cube: PatchNetwork, mode: str, size: tuple[int, int]
 ) -> None:
     path = tmp_path / f"cube_{mode}.png"
-    render(path, corner_cube, mode=mode, size=size, resolution=17, title=f"corner cube, {mode}")
+    extra = {"scan": cube_scan()} if mode == "distance" else {}
+    render(
+        path,
+        corner_cube,
+        mode=mode,
+        size=size,
+        resolution=17,
+        title=f"corner cube, {mode}",
+        **extra,  # type: ignore[arg-type]
+    )
     assert_picture(path, size)
     assert [p.name for p in tmp_path.iterdir()] == [path.name], "a temporary file was left behind"
 
@@ -103,6 +122,27 @@ def test_deviation_pictures_colour_the_edges(
         rgb = read_png(path)[..., :3]
         saturated = (rgb.max(axis=-1) - rgb.min(axis=-1)) > 0.3
         assert saturated.sum() > 200, f"{name}: no coloured edge lines"
+
+
+def test_distance_pictures_colour_the_surface_by_its_distance_to_the_scan(
+    tmp_path: Path, smooth_torus: PatchNetwork
+) -> None:
+    """The distance mode: the colour map over the whole surface, the largest distance in the
+    title; without a scan, or with one in another mode, a clear error."""
+    mesh = tessellate(smooth_torus, 9)
+    shifted = (mesh.points + 0.05 * mesh.normals, mesh.triangles)  # a scan 0.05 off the surface
+    path = tmp_path / "distance.png"
+    render(path, smooth_torus, mode="distance", size=(400, 300), resolution=9, scan=shifted)
+    rgb = assert_picture(path, (400, 300))[..., :3]
+    saturated = (rgb.max(axis=-1) - rgb.min(axis=-1)) > 0.3
+    assert saturated.mean() > 0.1
+    with pytest.raises(InputError, match="scan=\\(points, triangles\\)"):
+        render(tmp_path / "no.png", smooth_torus, mode="distance")
+    with pytest.raises(InputError, match="only the distance mode"):
+        render(tmp_path / "no.png", smooth_torus, mode="zebra", scan=shifted)
+    with pytest.raises(InputError, match="scan: expected points"):
+        render(tmp_path / "no.png", smooth_torus, mode="distance", scan=(mesh.points, [[0, 1]]))
+    assert not (tmp_path / "no.png").exists()
 
 
 def test_deviation_accepts_a_report_and_a_fixed_scale(
@@ -132,10 +172,12 @@ def test_side_by_side_draws_every_network_in_one_png(
         mode=mode,
         size=(500, 260),
         resolution=9,
+        scan=cube_scan() if mode == "distance" else None,
     )
     image = assert_picture(path, (500, 260))
     grey = image[..., :3].mean(axis=-1)
-    half = image.shape[1] // 2 if mode != "deviation" else int(image.shape[1] * 0.4)
+    barred = mode in ("deviation", "distance")  # a colour bar at the right
+    half = int(image.shape[1] * 0.4) if barred else image.shape[1] // 2
     assert (grey[:, :half] < 0.98).mean() > 0.15 and (grey[:, half:] < 0.98).mean() > 0.15
 
 
@@ -149,7 +191,9 @@ def test_open_and_mixed_orientation_networks_render(tmp_path: Path, shared_data:
     for network, name in ((wave, "wave"), (teapot, "teapot")):
         for mode in MODES:
             path = tmp_path / f"{name}_{mode}.png"
-            render(path, network, mode=mode, size=(240, 180), resolution=9)
+            tessellated = tessellate(network, 5)
+            scan = (tessellated.points, tessellated.triangles) if mode == "distance" else None
+            render(path, network, mode=mode, size=(240, 180), resolution=9, scan=scan)
             assert_picture(path, (240, 180))
 
 

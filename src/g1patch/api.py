@@ -660,7 +660,8 @@ class Surface:
         **options: Any,
     ) -> Path | bytes:
         """A PNG of the surface: ``mode`` ``"shaded"``, ``"zebra"`` (reflection lines, they
-        break where it creases) or ``"deviation"`` (every patch edge coloured by its G1 angle);
+        break where it creases), ``"deviation"`` (every patch edge coloured by its G1 angle) or
+        ``"distance"`` (coloured by the distance to ``scan=(points, triangles)``);
         ``view`` = (elevation, azimuth) and the ``up`` axis default to ``"auto"``: chosen from the
         surface (:func:`g1patch.render.auto_camera`); ``options`` as for
         :func:`g1patch.render.render` (``size``, ``zoom``, ``title``…). Written to ``path``
@@ -798,6 +799,12 @@ class FitResult(NamedTuple):
     def view(self, path: PathLike | None = None, **options: Any) -> Path | str:
         """:meth:`Surface.view` with the distance-to-the-scan mode."""
         return self.surface.view(path, scan=(self.scan.points, self.scan.triangles), **options)
+
+    def render(self, path: PathLike | None = None, **options: Any) -> Path | bytes:
+        """:meth:`Surface.render` in the distance mode: the surface coloured by its distance to
+        the scan (of the scan's diagonal), with its colour bar."""
+        scan = (self.scan.points, self.scan.triangles)
+        return self.surface.render(path, "distance", scan=scan, **options)
 
 
 def fit(

@@ -380,6 +380,13 @@ def _render(args: argparse.Namespace) -> int:
     if args.output.suffix.lower() != ".png":
         raise FormatError(args.output, "pictures are written as .png")
     mode = "zebra" if args.zebra else "deviation" if args.deviation else "shaded"
+    extra: dict[str, Any] = {}
+    if args.distance is not None:
+        from ..fitting import scan_from_polygons
+        from ..io.meshfile import read_polygons
+
+        scan = scan_from_polygons(*read_polygons(args.distance, max_input_size=None))
+        mode, extra = "distance", {"scan": (scan.points, scan.triangles)}
     Surface(as_network(args.network)).render(
         args.output,
         mode,
@@ -387,6 +394,7 @@ def _render(args: argparse.Namespace) -> int:
         **camera_options(args),
         zoom=args.zoom,
         title=f"{args.network.name}: {mode}",
+        **extra,
     )
     print(f"wrote {args.output}")
     return EXIT_OK

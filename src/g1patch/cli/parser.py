@@ -31,7 +31,8 @@ _EXAMPLES = {
     "render": """examples:
   g1patch render surface.npz -o surface.png
   g1patch render surface.npz -o zebra.png --zebra
-  g1patch render surface.npz -o kinks.png --deviation --size 1200 900""",
+  g1patch render surface.npz -o kinks.png --deviation --size 1200 900
+  g1patch render part.npz -o off.png --distance scan.stl   # a fit's distance to its scan""",
     "view": """examples:
   g1patch view surface.npz -o surface.html              # open it in a browser: no network needed
   g1patch view surface.npz -o coarse.html --resolution 5
@@ -322,6 +323,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     mode.add_argument(
         "--deviation", action="store_true", help="colour every patch edge by its G1 angle"
+    )
+    mode.add_argument(
+        "--distance",
+        type=Path,
+        metavar="SCAN",
+        help="colour the surface by its distance to the triangles of SCAN (a mesh file: what "
+        "'g1patch fit' fitted), of the scan's diagonal",
     )
     render.add_argument(
         "--size",

@@ -107,11 +107,23 @@ def _edge_samples(edge_counts: Sequence[int], size: tuple[int, int]) -> int:
 
 @dataclass(frozen=True)
 class _AngleScale:
-    """How G1 angles become colours: a matplotlib norm and colour map, shared by all panels."""
+    """How G1 angles (or distances) become colours: a matplotlib norm and colour map, shared by
+    all panels; ``marks_g1``: the colour bar marks the bar for "exactly G1"."""
 
     norm: Any
     cmap: Any
     log: bool
+    marks_g1: bool = True
+
+
+def _distance_scale(high: float) -> _AngleScale:
+    """Distances 0 … ``high`` (of the diagonal) on the deviation mode's colour map, linear."""
+    from matplotlib import colormaps
+    from matplotlib.colors import ListedColormap, Normalize
+
+    base = colormaps[_DEVIATION_CMAP]
+    cmap = ListedColormap(base(np.linspace(*_CMAP_RANGE, 256)), name="g1patch_distance")
+    return _AngleScale(Normalize(0.0, max(high, 1e-15), clip=True), cmap, False, False)
 
 
 def _angle_scale(

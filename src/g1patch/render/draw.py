@@ -92,7 +92,7 @@ def _draw(
         colorbar = figure.colorbar(ScalarMappable(norm=scale.norm, cmap=scale.cmap), cax=bar)
         colorbar.set_label(colorbar_label, fontsize=max(6.0, title_size * 0.8))
         bar.tick_params(labelsize=max(6.0, title_size * 0.7))
-        if scale.norm.vmin < EXACT_G1_DEG < scale.norm.vmax:  # the project's bar for "exactly G1"
+        if scale.marks_g1 and scale.norm.vmin < EXACT_G1_DEG < scale.norm.vmax:  # "exactly G1"
             bar.axhline(EXACT_G1_DEG, color="white", linewidth=1.2)
             bar.text(
                 -0.25,

@@ -15,8 +15,8 @@ from .sampling import FILL, _Surface
 from .shading import _STRIPE_DARK, _SURFACE_COLOUR, _diffuse, _shaded_colours, _zebra_values
 from .stripes import DEFAULT_STRIPES, _phase
 
-Mode = Literal["shaded", "zebra", "deviation"]
-MODES: tuple[Mode, ...] = ("shaded", "zebra", "deviation")
+Mode = Literal["shaded", "zebra", "deviation", "distance"]
+MODES: tuple[Mode, ...] = ("shaded", "zebra", "deviation", "distance")
 
 
 @dataclass(frozen=True)
@@ -63,10 +63,12 @@ def _panel(
     scale: _AngleScale | None = None,
     zoom: float = 1.0,
     target: NDArray[np.float64] | None = None,
+    values: NDArray[np.float64] | None = None,
 ) -> _Panel:
     """Colour every point of ``surface`` for ``mode`` and sort the visible triangles back to front.
     ``sides``: the deviation mode's G1 angle and seam flag of every patch side
-    (:func:`_band_angles`).
+    (:func:`_band_angles`); ``values``: the distance mode's value at every point, coloured by
+    ``scale`` and lit.
 
     The picture shows the whole surface (its screen box filling :data:`FILL` of the panel's width
     or height, whichever binds) magnified ``zoom`` times about the
@@ -82,6 +84,11 @@ def _panel(
         light = 0.62 + 0.38 * diffuse
         value = _STRIPE_DARK + white * (light - _STRIPE_DARK)
         colours = np.repeat(value[:, None], 3, axis=1)[surface.triangles[keep]]
+    elif mode == "distance":
+        assert values is not None and scale is not None
+        diffuse, _ = _diffuse(facing, camera)
+        rgb = scale.cmap(scale.norm(values))[:, :3] * (0.45 + 0.55 * diffuse)[:, None]
+        colours = np.clip(rgb, 0.0, 1.0)[surface.triangles[keep]]
     else:
         assert sides is not None and scale is not None
         grey = _shaded_colours(facing, camera, _DEVIATION_SURFACE, 0.08)

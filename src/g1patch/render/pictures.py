@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..compare import mesh_distance
 from ..continuity import ContinuityReport, _box
 from ..errors import InputError, as_float_array, check_choice
 from ..network import PatchNetwork, display_frame, unit_frame
@@ -34,6 +35,7 @@ from .deviation import (
     _angle_scale,
     _band_angles,
     _deviation_caption,
+    _distance_scale,
     _edge_angles,
     _edge_samples,
     _EdgeAngles,
@@ -59,6 +61,7 @@ def render(
     angle_range: tuple[float, float] | None = None,
     zoom: float = 1.0,
     target: ArrayLike | None = None,
+    scan: tuple[ArrayLike, ArrayLike] | None = None,
 ) -> None:
     """Write a PNG of exactly ``size`` = (width, height) pixels showing ``network``.
 
@@ -67,7 +70,9 @@ def render(
     when None; ``angle_range`` = (low, high) in degrees fixes the colour scale; the title gets the
     largest angle; without a report only the edge angles are measured, see the module docstring;
     patches too small on the screen for their edge bands are filled with their worst edge's
-    colour). ``resolution``: samples per patch side, None to choose it from the pixels (one
+    colour) or ``"distance"`` (every sample coloured by its exact distance to the triangles of
+    ``scan`` = (points, triangles), of the scan's bounding-box diagonal: what ``g1patch fit``
+    was fitted to). ``resolution``: samples per patch side, None to choose it from the pixels (one
     sample about every :data:`SAMPLE_SPACING_PX` pixels along a patch). ``view`` = (elevation,
     azimuth) in degrees about the world axis ``up`` (``"z"``, ``"y"`` for most OBJ files, or
     ``"x"``); ``"auto"`` (the default of both) chooses them from the surface by the rule of
@@ -93,6 +98,7 @@ def render(
         angle_range=angle_range,
         zoom=zoom,
         target=target,
+        scan=scan,
     )
 
 
@@ -111,11 +117,12 @@ def render_side_by_side(
     angle_range: tuple[float, float] | None = None,
     zoom: float = 1.0,
     target: ArrayLike | None = None,
+    scan: tuple[ArrayLike, ArrayLike] | None = None,
 ) -> None:
     """Write one PNG with ``networks`` side by side, each under its title, seen from the same
-    camera; the triangle budget is shared. In ``deviation`` mode all panels share one colour
-    scale and one colour bar. Arguments as for :func:`render`; ``reports`` holds one report (or
-    None) per network."""
+    camera; the triangle budget is shared. In ``deviation`` and ``distance`` modes all panels
+    share one colour scale and one colour bar. Arguments as for :func:`render`; ``reports`` holds
+    one report (or None) per network."""
     out_path = _check_path(path)
     check_choice("mode", mode, MODES)
     size = _check_size(size)
@@ -142,7 +149,10 @@ def render_side_by_side(
     _check_titles(titles, len(networks), "network")
     for index, title in enumerate(titles):
         _check_title(f"titles[{index}]" if len(titles) > 1 else "title", title)
+    scan_points, scan_triangles = _check_scan(scan, mode)
     frame = display_frame(networks)  # a surface 1e-25 or 1e25 in size: drawn in its unit box
+    if frame is not None and scan_points is not None:
+        scan_points = frame.to_local(scan_points)
     if frame is not None:
         networks = [network.local_to(frame) for network in networks]
         target_point = None if target_point is None else frame.to_local(target_point)
@@ -183,8 +193,8 @@ def render_side_by_side(
         ]
         if any(r.seam_edges for r in full):
             legend.append((_SEAM_LABEL, _SEAM_COLOUR))
-    panels = []
-    for network, title, network_sides in zip(networks, shown_titles, sides, strict=True):
+    surfaces = []
+    for network in networks:
         footprint = _footprint(network, camera, size, count, zoom)
         r = resolution or _pixel_resolution(footprint)
         band, filled = None, None
@@ -196,24 +206,73 @@ def render_side_by_side(
                 else network.patches.take(np.flatnonzero(~filled))
             )
             band = _band_width(banded, footprint.pixels_per_unit) if len(banded) else (0.1, 0.1)
-        surface = _sample(network, r, band, filled)
-        panels.append(
-            _panel(
-                surface,
-                camera,
-                mode,
-                title,
-                stripes=stripes,
-                sides=network_sides,
-                scale=scale,
-                zoom=zoom,
-                target=target_point,
-            )
-        )
+        surfaces.append(_sample(network, r, band, filled))
+    values: list[NDArray[np.float64] | None] = [None] * count
     label = "G1 angle across the edge (degrees" + (
         ", log scale)" if scale is not None and scale.log else ")"
     )
+    if mode == "distance":
+        assert scan_points is not None and scan_triangles is not None
+        diagonal = float(np.linalg.norm(scan_points.max(axis=0) - scan_points.min(axis=0)))
+        distances = [
+            mesh_distance(surface.points, scan_points, scan_triangles) / diagonal
+            for surface in surfaces
+        ]
+        scale = _distance_scale(max(float(d.max(initial=0.0)) for d in distances))
+        shown_titles = [
+            "\n".join(filter(None, [t, f"distance to the scan: max {float(d.max()):.2e}"]))
+            for t, d in zip(titles, distances, strict=True)
+        ]
+        values = list(distances)
+        label = "distance to scan (of diag.)"
+    panels = [
+        _panel(
+            surface,
+            camera,
+            mode,
+            title,
+            stripes=stripes,
+            sides=network_sides,
+            scale=scale,
+            zoom=zoom,
+            target=target_point,
+            values=value,
+        )
+        for surface, title, network_sides, value in zip(
+            surfaces, shown_titles, sides, values, strict=True
+        )
+    ]
     _draw(out_path, panels, size, scale, label, legend)
+
+
+def _check_scan(
+    scan: tuple[ArrayLike, ArrayLike] | None, mode: str
+) -> tuple[NDArray[np.float64] | None, NDArray[np.int64] | None]:
+    """The distance mode's scan as (points (V, 3), triangles (T, 3)); None for other modes."""
+    if mode != "distance":
+        if scan is not None:
+            raise InputError(f"scan: only the distance mode draws one, not {mode!r}")
+        return None, None
+    if scan is None:
+        raise InputError("mode 'distance': give the scan as scan=(points, triangles)")
+    points = as_float_array("scan points", scan[0], (3,))
+    triangles = np.asarray(scan[1], dtype=np.int64)
+    if (
+        points.ndim != 2
+        or not len(points)
+        or triangles.ndim != 2
+        or triangles.shape[1] != 3
+        or not len(triangles)
+        or triangles.min() < 0
+        or triangles.max() >= len(points)
+    ):
+        raise InputError(
+            f"scan: expected points (V, 3) and triangles (T, 3) indexing them, got "
+            f"{points.shape} and {triangles.shape}"
+        )
+    if not np.ptp(points, axis=0).any():
+        raise InputError("scan: its points all coincide (no extent to measure against)")
+    return points, triangles
 
 
 def render_surfaces(
