@@ -433,6 +433,7 @@ def test_convert_returns_a_record_and_never_raises(meshes: Path, tmp_path: Path)
     options = BuildOptions(shape="limit")
     good = convert(Job(str(meshes / "cube.obj"), (str(tmp_path / "cube.npz"),), options))
     assert good["status"] == "built" and good["shape"] == "limit" and good["patches"] == 4 * 6
+    assert 0 < good["limit_distance"] <= good["tolerance"] == 1e-3  # the cube: 4.8e-4 (split4)
     assert (tmp_path / "cube.npz").is_file()
     assert_one_line_error(
         convert(Job(str(meshes / "broken.obj"), (str(tmp_path / "b.npz"),), options)), "broken.obj"

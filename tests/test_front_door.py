@@ -83,18 +83,20 @@ def test_every_door_has_the_same_default_method_split4() -> None:
 
 
 def test_every_door_has_the_same_default_tolerance() -> None:
-    """The limit shapes' distance bound (issue 30): the API, the build and the command line agree
-    on 1e-3 of the diagonal."""
+    """The limit shapes' distance bound (issue 30): the API, the build, the batch and the command
+    line agree on 1e-3 of the diagonal."""
     import inspect
 
+    from g1patch.batch.jobs import BuildOptions
     from g1patch.build import DEFAULT_TOLERANCE, build_network
     from g1patch.cli.parser import build_parser
 
     assert DEFAULT_TOLERANCE == 1e-3
     for function in (g1patch.smooth, build_network):
         assert inspect.signature(function).parameters["tolerance"].default == DEFAULT_TOLERANCE
-    arguments = build_parser().parse_args(["build", "cube.obj", "-o", "cube.npz"])
-    assert arguments.tolerance == DEFAULT_TOLERANCE
+    assert BuildOptions().tolerance == DEFAULT_TOLERANCE
+    for argv in (["build", "cube.obj", "-o", "cube.npz"], ["batch", "cube.obj", "--out", "o"]):
+        assert build_parser().parse_args(argv).tolerance == DEFAULT_TOLERANCE
 
 
 def test_every_fit_door_has_the_same_sharp_angle() -> None:

@@ -33,6 +33,8 @@ class BuildOptions:
     refine: int = 0
     sharp_angle: float | None = None
     strict: bool = False
+    #: limit shapes: the largest distance from the exact Catmull–Clark limit, of the diagonal
+    tolerance: float = 1e-3
     #: the input size cap (bytes; None: the readers' default): how a file is read, not what is
     #: made of it, so no part of an output's recipe
     max_input_size: int | None = None
@@ -47,6 +49,9 @@ class BuildOptions:
             raise InputError(
                 f"refine: expected a number of Catmull–Clark steps ≥ 0, got {self.refine!r}"
             )
+        from ..build import check_tolerance
+
+        check_tolerance(self.tolerance)
         if self.sharp_angle is not None and not (
             math.isfinite(self.sharp_angle) and 0 < self.sharp_angle < 180
         ):
@@ -149,6 +154,7 @@ def blank_record(job: Job, status: str = CANCELLED) -> dict[str, Any]:
         "repairs": [],
         "seams": None,
         "fallback_vertices": None,
+        "limit_distance": None,
         "times": {},
         "outputs": [],
         "cad": {},

@@ -87,7 +87,11 @@ def convert(job: Job) -> dict[str, Any]:
         mesh, record["sha256"] = _read(job)
         times["read"] = lap()
         surface = g1patch.smooth(
-            mesh, shape=options.shape, method=options.method, refine=options.refine
+            mesh,
+            shape=options.shape,
+            method=options.method,
+            refine=options.refine,
+            tolerance=options.tolerance,
         )
         times["build"] = lap()
         record.update(
@@ -96,6 +100,8 @@ def convert(job: Job) -> dict[str, Any]:
             seams=surface.network.n_seams,
             fallback_vertices=int(surface.provenance.get("fallback_vertices", "0")),
         )
+        if "limit_distance" in surface.provenance:  # a limit shape: how far from the limit
+            record["limit_distance"] = float(surface.provenance["limit_distance"])
         if surface.repairs:
             record["note"] = surface.mesh.repair_note  # type: ignore[union-attr]
         report = surface.check()

@@ -416,6 +416,7 @@ def _batch(args: argparse.Namespace) -> int:
         sharp_angle=args.sharp_angle,
         strict=args.strict,
         max_input_size=args.max_input_size,
+        tolerance=args.tolerance,
     )
     records = run_batch(
         args.inputs,

@@ -409,6 +409,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--sharp-angle", type=float, metavar="DEG", help="as for build (default: off)"
     )
     batch.add_argument(
+        "--tolerance",
+        type=float,
+        default=DEFAULT_TOLERANCE,
+        metavar="REL",
+        help=f"as for build (default: {DEFAULT_TOLERANCE:g})",
+    )
+    batch.add_argument(
         "--strict", action="store_true", help="as for build: refuse meshes that need repair"
     )
     input_size_argument(batch)
