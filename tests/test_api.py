@@ -103,8 +103,8 @@ def test_read_by_suffix(cube_obj: Path, cube: g1patch.Surface, tmp_path: Path) -
     bezier.export(tmp_path / "s.bpt")
     patches = g1patch.read(tmp_path / "s.bpt")
     assert isinstance(patches, g1patch.PatchNetwork) and patches.n_patches == 24
-    with pytest.raises(g1patch.FormatError, match=r"unsupported extension '\.stl'.*\.npz"):
-        g1patch.read(tmp_path / "mesh.stl")
+    with pytest.raises(g1patch.FormatError, match=r"unsupported extension '\.3mf'.*\.npz"):
+        g1patch.read(tmp_path / "mesh.3mf")
     with pytest.raises(g1patch.InputError, match="path: expected a file name.*int"):
         g1patch.read(3)  # type: ignore[arg-type]
 

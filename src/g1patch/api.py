@@ -58,7 +58,7 @@ logger = logging.getLogger(__name__)
 PathLike = str | os.PathLike[str]
 
 #: files :func:`read` and :func:`smooth` open as meshes
-MESH_SUFFIXES = (".obj", ".ply", ".off")
+MESH_SUFFIXES = (".obj", ".ply", ".off", ".stl")
 #: files :func:`read` opens as networks: g1patch's network file and Newell's Bézier patches
 NETWORK_SUFFIXES = (".npz", ".bpt")
 TRIANGLE_SUFFIXES = (".obj", ".ply", ".stl")
@@ -69,7 +69,7 @@ RHINO_SUFFIX = ".3dm"
 EXPORT_SUFFIXES = (".npz", *TRIANGLE_SUFFIXES, *CAD_SUFFIXES, RHINO_SUFFIX, ".bpt")
 
 _SOURCES = (
-    "a mesh file path (.obj, .ply, .off), a (vertices, faces) pair of arrays or lists, a "
+    "a mesh file path (.obj, .ply, .off, .stl), a (vertices, faces) pair of arrays or lists, a "
     "meshio.Mesh, "
     "an object with vertices and faces (trimesh), a pyvista.PolyData or a QuadMesh"
 )
@@ -127,13 +127,14 @@ def read(
     strict: bool | None = None,
     max_input_size: int | None = None,
 ) -> QuadMesh | PatchNetwork:
-    """Open a file by its suffix: a mesh (``.obj`` with OpenSubdiv tags, ``.ply``, ``.off``) as a
-    :class:`~g1patch.mesh.QuadMesh` (options as for :func:`g1patch.io.meshfile.read_mesh`), a
-    network file (``.npz``, written by ``g1patch build`` or :meth:`Surface.export`) or Newell's
-    Bézier patches (``.bpt``, their shared edges matched) as a
-    :class:`~g1patch.network.PatchNetwork`. A bad file raises :class:`FormatError` naming it.
-    ``max_input_size`` (bytes): refuse a larger mesh or ``.bpt`` file before reading it (default:
-    2 GB for a mesh, 1 GiB for a ``.bpt``); only regular files are read."""
+    """Open a file by its suffix: a mesh (``.obj`` with OpenSubdiv tags, ``.ply``, ``.off``,
+    ``.stl``) as a :class:`~g1patch.mesh.QuadMesh` (options as for
+    :func:`g1patch.io.meshfile.read_mesh`), a network file (``.npz``, written by ``g1patch
+    build`` or :meth:`Surface.export`) or Newell's Bézier patches (``.bpt``, their shared edges
+    matched) as a :class:`~g1patch.network.PatchNetwork`. A bad file raises
+    :class:`FormatError` naming it. ``max_input_size`` (bytes): refuse a larger mesh or ``.bpt``
+    file before reading it (default: 2 GB for a mesh, 1 GiB for a ``.bpt``); only regular files
+    are read."""
     target = _check_path("path", path)
     suffix = target.suffix.lower()
     if suffix in MESH_SUFFIXES:
@@ -287,7 +288,7 @@ def as_mesh(
 ) -> QuadMesh:
     """A validated :class:`~g1patch.mesh.QuadMesh` of anything :func:`smooth` accepts.
 
-    ``source``: a mesh file path (str or path-like: ``.obj``, ``.ply``, ``.off``); a
+    ``source``: a mesh file path (str or path-like: ``.obj``, ``.ply``, ``.off``, ``.stl``); a
     ``(vertices, faces)`` pair (arrays or lists; faces an (F, n) array or a list of index lists of
     any sizes; 2-D points get z = 0); a ``meshio.Mesh`` (its triangle, quad and polygon blocks);
     any object with ``vertices`` and ``faces`` (``trimesh.Trimesh``); an object with ``points``
@@ -819,11 +820,12 @@ def fit(
 ) -> FitResult:
     """An exact-G1 surface fitted to a dense triangle mesh (a scan; :mod:`g1patch.fitting`).
 
-    ``source``: a mesh file (OBJ, PLY, OFF) or anything :func:`as_mesh` takes, its triangles (or
-    polygons) the scan. A quad layout (Instant Meshes, or ``layout``: your own quad mesh near
-    the scan, anything :func:`as_mesh` takes) gives the cage's topology; its positions are solved
-    so that the Catmull–Clark limit passes nearest the scan's points; the limit is assembled
-    exactly G1 by ``method`` (``split4``: polynomial, so STEP holds the fitted surface itself).
+    ``source``: a mesh file (OBJ, PLY, OFF, STL) or anything :func:`as_mesh` takes, its
+    triangles (or polygons) the scan. A quad layout (Instant Meshes, or ``layout``: your own
+    quad mesh near the scan, anything :func:`as_mesh` takes) gives the cage's topology; its
+    positions are solved so that the Catmull–Clark limit passes nearest the scan's points; the
+    limit is assembled exactly G1 by ``method`` (``split4``: polynomial, so STEP holds the
+    fitted surface itself).
     ``tolerance``: two-way distance, of the bounding-box diagonal, the layout's face count
     doubling until it holds (at most four layouts) unless ``faces`` or ``layout`` fix it; the
     report says whether it was met. ``sharp_angle`` (degrees; None: off): scan edges whose

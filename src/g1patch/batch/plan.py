@@ -17,7 +17,7 @@ SKIP_NOTE = "up to date: same input and options"
 
 def collect_inputs(paths: Sequence[PathLike]) -> list[Path]:
     """The mesh files to convert, absolute, each once, in the order given: files as they are,
-    folders by the mesh files directly inside them (``.obj .ply .off``, hidden ones left out,
+    folders by the mesh files directly inside them (``.obj .ply .off .stl``, hidden ones left out,
     sorted). A missing path, a file of another kind or a folder without meshes raises
     :class:`InputError`."""
     found: dict[Path, None] = {}

@@ -46,7 +46,7 @@ _EXAMPLES = {
     "demo": """example:
   g1patch demo --out out""",
     "batch": """examples:
-  g1patch batch meshes/ --out out                        # every .obj .ply .off, local cluster
+  g1patch batch meshes/ --out out                        # every .obj .ply .off .stl, local cluster
   g1patch batch a.obj b.ply --out out --formats npz,step,obj --method split4
   g1patch batch meshes/ --out out --workers 2 -q         # again: skips what is up to date
   g1patch batch meshes/ --out out --scheduler tcp://127.0.0.1:8786   # an existing Dask cluster""",
@@ -100,7 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
         sub.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
         return sub
 
-    build = command("build", "build a patch network from a quad mesh (OBJ, PLY, OFF)")
+    build = command("build", "build a patch network from a quad mesh (OBJ, PLY, OFF, STL)")
     build.add_argument("mesh", type=Path, help="input quad mesh")
     build.add_argument(
         "-o", "--output", type=Path, required=True, help="network file to write (.npz)"
@@ -190,7 +190,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     fit = command(
         "fit",
-        "fit an exact-G1 surface to a dense triangle mesh (a scan: OBJ, PLY, OFF) within a "
+        "fit an exact-G1 surface to a dense triangle mesh (a scan: OBJ, PLY, OFF, STL) within a "
         "tolerance",
     )
     fit.add_argument("scan", type=Path, help="the triangle (or polygon) mesh to fit")
@@ -380,7 +380,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=Path,
         nargs="+",
         metavar="INPUT",
-        help="mesh files, or folders of them (.obj .ply .off)",
+        help="mesh files, or folders of them (.obj .ply .off .stl)",
     )
     batch.add_argument(
         "--out",

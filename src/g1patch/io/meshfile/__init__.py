@@ -68,6 +68,7 @@ from .ply_header import _ply_layout as _ply_layout
 from .source import BOM, read_input
 from .source import MAX_INPUT_BYTES as MAX_INPUT_BYTES
 from .source import check_input as check_input
+from .stl import _read_stl
 from .text import _numbers as _numbers
 from .write import WRITE_FORMATS, PathLike, write_quads, write_triangles
 
@@ -82,7 +83,7 @@ __all__ = [
     "MAX_INPUT_BYTES",
 ]
 
-READ_FORMATS = (".obj", ".ply", ".off")
+READ_FORMATS = (".obj", ".ply", ".off", ".stl")
 
 
 def read_mesh(
@@ -123,7 +124,7 @@ def read_mesh(
 def _parse(path: Path, max_input_size: int | None) -> _Parsed:
     """The file's vertices, faces and tags as its reader parses them (by its extension)."""
     suffix = path.suffix.lower()
-    readers = {".obj": _read_obj, ".ply": _read_ply, ".off": _read_off}
+    readers = {".obj": _read_obj, ".ply": _read_ply, ".off": _read_off, ".stl": _read_stl}
     if suffix not in readers:
         raise FormatError(
             path,
