@@ -17,6 +17,7 @@ from g1patch.compare import load_reference, reference_path
 from g1patch.errors import InputError
 from g1patch.fidelity import _face_patches, _start, limit_distance, project_to_network
 from g1patch.mesh import QuadMesh
+from g1patch.network import PatchNetwork
 from g1patch.subdivision import catmull_clark_cage, limit_points, refine, refine_grids
 
 EPS = float(np.finfo(float).eps)
@@ -50,6 +51,21 @@ def cube_cage() -> QuadMesh:
     return QuadMesh.from_arrays(points, np.array(faces))
 
 
+def at_the_start(
+    network: PatchNetwork, cage: QuadMesh, method: str, levels: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The network at the start (patch, parameter) of every exact sample of ``levels``, and the
+    exact limit samples themselves, both (F (2^levels + 1)², 3) in the measure's order."""
+    first = _face_patches(cage.n_faces, cage.features.holes, PER_FACE[method], network)
+    fine, grid = refine_grids(cage, levels)
+    m = grid.shape[1]
+    t = np.linspace(0.0, 1.0, m)
+    uv = np.tile(np.stack(np.meshgrid(t, t, indexing="ij"), -1).reshape(-1, 2), (cage.n_faces, 1))
+    patch, local = _start(np.repeat(first, m * m), uv, PER_FACE[method])
+    values = network.patches.take(patch).evaluate(local[:, None, :])[:, 0]
+    return values, limit_points(fine)[grid.reshape(-1)]
+
+
 @pytest.mark.parametrize("method", ["gregory", "split4"])
 def test_the_bspline_network_of_a_regular_cage_is_at_distance_zero(method: str) -> None:
     """Every face regular: the network is the limit's bicubic B-spline, so every exact sample
@@ -65,14 +81,8 @@ def test_start_parameters_are_the_faces_own(method: str) -> None:
     each sample is the exact limit there: the split4 quarters run the face's directions."""
     cage = torus_cage()
     network = build_network(cage, method, "limit", tolerance=None)
-    first = _face_patches(cage.n_faces, cage.features.holes, PER_FACE[method], network)
-    fine, grid = refine_grids(cage, 2)
-    m = grid.shape[1]
-    t = np.linspace(0.0, 1.0, m)
-    uv = np.tile(np.stack(np.meshgrid(t, t, indexing="ij"), -1).reshape(-1, 2), (cage.n_faces, 1))
-    patch, local = _start(np.repeat(first, m * m), uv, PER_FACE[method])
-    values = network.patches.take(patch).evaluate(local[:, None, :])[:, 0]
-    np.testing.assert_allclose(values, limit_points(fine)[grid.reshape(-1)], rtol=0, atol=1e-14)
+    values, exact = at_the_start(network, cage, method, 2)
+    np.testing.assert_allclose(values, exact, rtol=0, atol=1e-14)
 
 
 def test_projection_walks_across_patches_to_the_foot() -> None:
@@ -229,14 +239,8 @@ def test_the_measure_never_exceeds_the_start(method: str) -> None:
     cage = QuadMesh.from_arrays(points, faces)
     network = build_network(cage, method, "limit", tolerance=None)
     ours = limit_distance(network, cage, PER_FACE[method], levels=3)
-    first = _face_patches(cage.n_faces, cage.features.holes, PER_FACE[method], network)
-    fine, grid = refine_grids(cage, 3)
-    m = grid.shape[1]
-    t = np.linspace(0.0, 1.0, m)
-    uv = np.tile(np.stack(np.meshgrid(t, t, indexing="ij"), -1).reshape(-1, 2), (cage.n_faces, 1))
-    patch, local = _start(np.repeat(first, m * m), uv, PER_FACE[method])
-    start = network.patches.take(patch).evaluate(local[:, None, :])[:, 0]
-    gap = np.linalg.norm(start - limit_points(fine)[grid.reshape(-1)], axis=1)
+    start, exact = at_the_start(network, cage, method, 3)
+    gap = np.linalg.norm(start - exact, axis=1)
     per_face = gap.reshape(cage.n_faces, -1).max(axis=1)
     assert (ours.per_face <= per_face * (1 + 1e-12)).all()
     assert ours.max < per_face.max()  # and the feet are nearer than the start
