@@ -832,14 +832,11 @@ def fit(
     triangles turn by more than that are features, kept as creases (STEP edges)."""
     from .construct import METHODS
     from .errors import ConstructionError, check_choice, named_errors
-    from .fitting import fit_network, scan_from_polygons, scan_of
+    from .fitting import fit_network, scan_of
 
     check_choice("method", method, METHODS)
     if isinstance(source, (str, os.PathLike)):  # a file: its triangles as they are, not split
-        from .io.meshfile import read_polygons
-
-        path = _check_path("source", source)
-        scan = scan_from_polygons(*read_polygons(path, max_input_size=max_input_size), str(path))
+        scan = read_scan(_check_path("source", source), max_input_size)
     else:
         scan = scan_of(as_mesh(source))
     quads = None if layout is None else as_mesh(layout, max_input_size=max_input_size)
@@ -855,6 +852,15 @@ def fit(
             sharp_angle=sharp_angle,
         )
     return FitResult(Surface(network), report, scan)
+
+
+def read_scan(path: PathLike, max_input_size: int | None = None) -> Scan:
+    """A mesh file's polygons as they are (no splitting, no repair) fanned into triangles: what
+    :func:`fit` fits and ``render --distance`` measures against."""
+    from .fitting import scan_from_polygons
+    from .io.meshfile import read_polygons
+
+    return scan_from_polygons(*read_polygons(path, max_input_size=max_input_size), str(path))
 
 
 def check(surface: Any, **options: Any) -> ContinuityReport:

@@ -510,7 +510,7 @@ def _within_tolerance(
     built again as its limit, up to :data:`MAX_TOLERANCE_STEPS` steps and as long as the build's
     estimate stays within ``max_memory`` and ``max_patches``. The provenance records the distance
     reached (``limit_distance``), the ``tolerance``, the steps it added (``tolerance_steps``) and,
-    where it stopped short, why (``tolerance_stop``)."""
+    where it stopped short, why and what lets it through (``tolerance_stop``)."""
     assembly = ASSEMBLIES[method]
     cage, through = mesh, None
     if shape == "limit-interpolate":
@@ -519,7 +519,7 @@ def _within_tolerance(
     steps, stop = 0, ""
     while distance.relative > tolerance:
         if steps == MAX_TOLERANCE_STEPS:
-            stop = f"{MAX_TOLERANCE_STEPS} steps added"
+            stop = f"{MAX_TOLERANCE_STEPS} steps added; a larger --tolerance lets it through"
             break
         estimate = estimate_build(cage, method, "limit", steps + 1)
         try:
@@ -527,7 +527,7 @@ def _within_tolerance(
         except BudgetError:
             stop = (
                 f"another step would make {estimate.patches:,} patches and need about "
-                f"{size_text(estimate.bytes)}"
+                f"{size_text(estimate.bytes)}; a larger --max-memory or --tolerance lets it through"
             )
             break
         steps += 1

@@ -126,11 +126,9 @@ def _limit_distance_line(provenance: dict[str, str], output: Path) -> int:
     )
     if distance <= tolerance:
         return EXIT_OK
-    why = provenance.get("tolerance_stop", "")
+    why = provenance.get("tolerance_stop", "a larger --tolerance lets it through")
     print(
-        f"g1patch: warning: {output}: {distance:.2e} is above the tolerance {tolerance:g}"
-        f"{f' ({why})' if why else ''}; a larger --tolerance"
-        f"{' or --max-memory' if why.startswith('another') else ''} lets it through",
+        f"g1patch: warning: {output}: {distance:.2e} is above the tolerance {tolerance:g}: {why}",
         file=sys.stderr,
     )
     return EXIT_CHECK_FAILED
@@ -382,10 +380,9 @@ def _render(args: argparse.Namespace) -> int:
     mode = "zebra" if args.zebra else "deviation" if args.deviation else "shaded"
     extra: dict[str, Any] = {}
     if args.distance is not None:
-        from ..fitting import scan_from_polygons
-        from ..io.meshfile import read_polygons
+        from ..api import read_scan
 
-        scan = scan_from_polygons(*read_polygons(args.distance, max_input_size=None))
+        scan = read_scan(args.distance)
         mode, extra = "distance", {"scan": (scan.points, scan.triangles)}
     Surface(as_network(args.network)).render(
         args.output,

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..build import build_network
+from ..build import build_network, check_tolerance
 from ..compare import mesh_distance
 from ..errors import InputError
 from ..mesh import QuadMesh
@@ -182,14 +182,6 @@ def measure(network: PatchNetwork, scan: Scan) -> tuple[tuple[float, ...], tuple
     return _figures(to_surface), _figures(to_scan)
 
 
-def _check_tolerance(tolerance: float) -> float:
-    if not (isinstance(tolerance, (int, float)) and 0 < tolerance < 1):
-        raise InputError(
-            f"tolerance: expected a fraction of the diagonal between 0 and 1, got {tolerance!r}"
-        )
-    return float(tolerance)
-
-
 def fit_network(
     scan: Scan,
     *,
@@ -208,7 +200,7 @@ def fit_network(
     features; the layout edges along them become infinitely sharp creases
     (:mod:`~g1patch.fitting.features`), seams of the network and edges of its STEP solid.
     """
-    tolerance = _check_tolerance(tolerance)
+    tolerance = check_tolerance(tolerance)
     started = time.perf_counter()
     diagonal = scan.diagonal
     if not diagonal > 0:

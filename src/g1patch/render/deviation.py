@@ -116,24 +116,28 @@ class _AngleScale:
     marks_g1: bool = True
 
 
-def _distance_scale(high: float) -> _AngleScale:
-    """Distances 0 … ``high`` (of the diagonal) on the deviation mode's colour map, linear."""
+def _colour_map() -> Any:
+    """The deviation and distance modes' colour map: plasma without its palest yellow."""
     from matplotlib import colormaps
-    from matplotlib.colors import ListedColormap, Normalize
+    from matplotlib.colors import ListedColormap
 
     base = colormaps[_DEVIATION_CMAP]
-    cmap = ListedColormap(base(np.linspace(*_CMAP_RANGE, 256)), name="g1patch_distance")
-    return _AngleScale(Normalize(0.0, max(high, 1e-15), clip=True), cmap, False, False)
+    return ListedColormap(base(np.linspace(*_CMAP_RANGE, 256)), name="g1patch_deviation")
+
+
+def _distance_scale(high: float) -> _AngleScale:
+    """Distances 0 … ``high`` (of the diagonal) on the deviation mode's colour map, linear."""
+    from matplotlib.colors import Normalize
+
+    return _AngleScale(Normalize(0.0, max(high, 1e-15), clip=True), _colour_map(), False, False)
 
 
 def _angle_scale(
     angles: Sequence[NDArray[np.float64]], angle_range: tuple[float, float] | None
 ) -> _AngleScale:
-    from matplotlib import colormaps
-    from matplotlib.colors import ListedColormap, LogNorm, Normalize
+    from matplotlib.colors import LogNorm, Normalize
 
-    base = colormaps[_DEVIATION_CMAP]
-    cmap = ListedColormap(base(np.linspace(*_CMAP_RANGE, 256)), name="g1patch_deviation")
+    cmap = _colour_map()
     values = np.concatenate(
         [np.asarray(a, dtype=np.float64).reshape(-1) for a in angles] + [np.zeros(0)]
     )
