@@ -11,7 +11,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from g1patch.api import read
-from g1patch.build import DEFAULT_TOLERANCE, build_network
+from g1patch.build import DEFAULT_TOLERANCE, MAX_TOLERANCE_STEPS, build_network
 from g1patch.cli import main
 from g1patch.compare import load_reference, reference_path
 from g1patch.errors import InputError
@@ -165,6 +165,27 @@ def test_the_build_refines_until_the_tolerance_holds(shared_data: Path, method: 
     report = check(network)
     assert max(report.max_edge_angle_deg, report.max_corner_angle_deg) <= 1e-9
     assert report.folds == 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", ["gregory", "split4"])
+@pytest.mark.parametrize("name", ["catmark_xord_interior", "catmark_xord_boundary"])
+def test_a_tight_tolerance_holds_on_the_shared_cages(
+    shared_data: Path, name: str, method: str
+) -> None:
+    """``--tolerance 1e-4`` on OpenSubdiv's extraordinary-vertex cages: the distance roughly halves
+    a step (it is largest at the extraordinary vertices), so it takes 4–6 steps; the build gets
+    there within its step limit and memory budget, and its figure is the measure's on the
+    refined cage."""
+    cage = read(shared_data / f"{name}.obj")
+    network = build_network(cage, method, "limit", tolerance=1e-4)
+    assert "tolerance_stop" not in network.provenance
+    reached = float(network.provenance["limit_distance"])
+    assert reached <= 1e-4
+    steps = int(network.provenance["tolerance_steps"])
+    assert 1 <= steps <= MAX_TOLERANCE_STEPS
+    finer = refine(catmull_clark_cage(cage), steps)
+    assert limit_distance(network, finer, PER_FACE[method]).relative == pytest.approx(reached)
 
 
 def test_limit_interpolate_stays_through_the_vertices_when_refined() -> None:

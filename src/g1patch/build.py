@@ -52,6 +52,7 @@ __all__ = [
     "memory_budget",
     "DEFAULT_TOLERANCE",
     "LIMIT_SHAPES",
+    "MAX_TOLERANCE_STEPS",
 ]
 
 #: whatever an assembly returns (its patches, or its patches and more)
@@ -65,8 +66,9 @@ LIMIT_SHAPES = ("limit", "limit-interpolate")
 #: the bounding-box diagonal (``--tolerance``)
 DEFAULT_TOLERANCE = 1e-3
 #: Catmull–Clark steps the tolerance may add at most (each one quarters the faces' size and roughly
-#: halves the distance, which is largest at extraordinary vertices)
-MAX_TOLERANCE_STEPS = 3
+#: halves the distance, which is largest at extraordinary vertices: ``catmark_xord_boundary`` needs
+#: 6 for 1e-4 of the diagonal, 4,096× its patches); the memory budget usually stops a big cage first
+MAX_TOLERANCE_STEPS = 6
 
 
 #: how far the fold guard moves the targets of folded faces' vertices, in turn
