@@ -160,18 +160,18 @@ def test_pinched_neighbourhoods_are_filled_not_refined_whole() -> None:
     pinched, the vertices of one face or of a row are not. A boundary vertex's ring is not cyclic:
     its first and last faces kept are two runs."""
     from g1patch import shapes
-    from g1patch.targets.limit import _pinched_vertices
+    from g1patch.mesh.neighbourhood import pinched_vertices
 
     topology = shapes.grid(3, 3).topology
     faces = topology.faces
     diagonal = np.zeros(9, dtype=bool)
     diagonal[[0, 4]] = True  # faces (0, 0) and (1, 1) share one vertex
     shared = np.intersect1d(faces[0], faces[4])
-    assert np.array_equal(np.flatnonzero(_pinched_vertices(topology, diagonal)), shared)
+    assert np.array_equal(np.flatnonzero(pinched_vertices(topology, diagonal)), shared)
     row = np.zeros(9, dtype=bool)
     row[[0, 1, 2]] = True
-    assert not _pinched_vertices(topology, row).any()
-    assert not _pinched_vertices(topology, np.ones(9, dtype=bool)).any()
+    assert not pinched_vertices(topology, row).any()
+    assert not pinched_vertices(topology, np.ones(9, dtype=bool)).any()
 
 
 def test_spot_refined_twice_refines_only_the_neighbourhood(

@@ -37,10 +37,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import subdivision
-from ..errors import MeshError
 from ..gregory import INTERIOR_INDEX
 from ..kernels import jit_kernel, use_kernels
-from ..mesh import QuadMesh, QuadTopology, Sectors, Tag, sectors
+from ..mesh import QuadMesh, QuadTopology, Sectors, sectors
+from ..mesh.neighbourhood import neighbourhood
 from ..subdivision import (
     boundary_mode,
     corner_vertices,
@@ -68,8 +68,6 @@ SlotTables = tuple[NDArray[np.integer], NDArray[np.integer]]
 FIT_LEVELS = 3
 #: vertex rings of faces around those whose limit samples are needed, refined with them
 _SAMPLE_MARGIN = 3
-#: times the sample neighbourhood takes in the faces round the vertices where it pinches
-_PINCH_FILLS = 3
 #: weight of the parametric residual against the normal one in the fits of the edge tangents
 #: and of the interior points: the limit surface's parameterisation is singular at
 #: extraordinary vertices (speed ~ (2λ)^m), so matching it point for point would bend the
@@ -149,85 +147,15 @@ def _fitted_edges(topology: QuadTopology, free: BoolArray, slots: SlotTables) ->
     return h[~topology.is_boundary_edge & (free[slot_out[h]] | free[slot_in[h]])]
 
 
-def _subset_tags(mesh: QuadMesh, inside: IntArray) -> tuple[Tag, ...]:
-    """The tags of ``mesh`` that still apply to its faces ``inside``: the boundary rule, the crease
-    method, creases on edges of those faces (one sharpness each), corners on their vertices (holes
-    do not change the rules around them, so they are dropped)."""
-    topology = mesh.topology
-    features = mesh.features
-    used = np.zeros(topology.n_vertices, dtype=bool)
-    used[topology.faces[inside]] = True
-    h = (4 * inside[:, None] + np.arange(4)).ravel()
-    present = np.zeros(topology.n_edges, dtype=bool)
-    present[topology.halfedge_edge[h]] = True
-    tags = [tag for tag in mesh.tags if tag.name in ("interpolateboundary", "creasemethod")]
-    creased = np.flatnonzero(present & (features.edge_sharpness > 0))
-    if creased.size:
-        tags.append(
-            Tag(
-                "crease",
-                tuple(topology.edges[creased].ravel().tolist()),
-                tuple(features.edge_sharpness[creased].tolist()),
-            )
-        )
-    cornered = np.flatnonzero(used & (features.vertex_sharpness > 0))
-    if cornered.size:
-        tags.append(
-            Tag(
-                "corner",
-                tuple(cornered.tolist()),
-                tuple(features.vertex_sharpness[cornered].tolist()),
-            )
-        )
-    return tuple(tags)
-
-
-def _pinched_vertices(topology: QuadTopology, keep: BoolArray) -> BoolArray:
-    """Vertices whose ``keep`` faces form more than one fan: more than one run of kept faces
-    round their ring (cyclic inside, from the first face at a boundary)."""
-    ring_vertex = np.repeat(np.arange(topology.n_vertices), topology.face_count)
-    position = np.arange(ring_vertex.size) - topology.ring_offsets[ring_vertex]
-    kept = keep[topology.ring_halfedges >> 2]
-    previous = np.where(
-        position == 0, topology.ring_offsets[ring_vertex + 1] - 1, np.arange(ring_vertex.size) - 1
-    )
-    continued = kept[previous] & ~((position == 0) & topology.is_boundary_vertex[ring_vertex])
-    return np.bincount(ring_vertex[kept & ~continued], minlength=topology.n_vertices) > 1
-
-
 def _limit_samples(mesh: QuadMesh, faces: IntArray, levels: int) -> tuple[FloatArray, FloatArray]:
     """Exact limit points and normals on the ``(m + 1)²`` grids of ``faces`` (``m = 2^levels``),
     refining only their neighbourhood: the faces within :data:`_SAMPLE_MARGIN` vertex rings of them,
-    as a mesh of its own. A face's refined points read its 1-ring only, and the cut of the
-    neighbourhood is a boundary whose rules reach less than two rings inwards, so the samples equal
-    the whole mesh's. A vertex where the neighbourhood's faces form two fans or more (two parts of
-    it touching there) takes all its faces (:func:`_pinched_vertices`, up to :data:`_PINCH_FILLS`
-    times); where the neighbourhood is still not a manifold mesh of its own, the whole mesh is
-    refined (Spot refined twice: 6,272 faces and 38 pinched vertices, refined whole before)."""
-    topology = mesh.topology
-    keep = np.zeros(topology.n_faces, dtype=bool)
-    keep[faces] = True
-    for _ in range(_SAMPLE_MARGIN):
-        touched = np.zeros(topology.n_vertices, dtype=bool)
-        touched[topology.faces[keep]] = True
-        keep = np.any(touched[topology.faces], axis=1)
-    for _ in range(_PINCH_FILLS):
-        pinched = _pinched_vertices(topology, keep)
-        if not pinched.any():
-            break
-        keep |= pinched[topology.faces].any(axis=1)
-    rows, source = faces, mesh
-    if not keep.all():
-        inside = np.flatnonzero(keep)
-        tags = _subset_tags(mesh, inside)
-        try:
-            source = QuadMesh.from_arrays(
-                mesh.vertices, topology.faces[inside], tags=tags, strict=True
-            )
-            rows = np.searchsorted(inside, faces)
-        except MeshError:
-            source, rows = mesh, faces
-    fine, grid = refine_grids(source, levels)
+    as a mesh of its own (:func:`~g1patch.mesh.neighbourhood.neighbourhood`). A face's refined
+    points read its 1-ring only, and the cut of the neighbourhood is a boundary whose rules reach
+    less than two rings inwards, so the samples equal the whole mesh's."""
+    part = neighbourhood(mesh, faces, _SAMPLE_MARGIN)
+    fine, grid = refine_grids(part.mesh, levels)
+    rows = np.searchsorted(part.faces, faces)
     return limit_points(fine)[grid[rows]], limit_normals(fine)[grid[rows]]
 
 
