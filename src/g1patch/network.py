@@ -12,6 +12,10 @@ counter-clockwise, see :mod:`g1patch.patches`):
   the two patches share the boundary curve (G0) but not the tangent plane. Both sides agree;
   open and collapsed edges are never seams.
 
+* ``hanging``: edges of a feature-adaptive network where a coarse patch meets several finer ones
+  (:class:`HangingEdges`): each fine patch edge lies along a part of the coarse patch edge. Both
+  sides have no neighbour in the arrays above and are not open edges.
+
 On a consistently oriented network two neighbours run along their shared edge in opposite
 directions; where they run the same way (a patch set with mixed orientation, e.g. a ``.bpt``
 file) ``same_direction[p, k]`` is True and the check compares normals with a flipped sign.
@@ -34,6 +38,7 @@ from .mesh import QuadTopology
 from .patches import PatchSet
 
 __all__ = [
+    "HangingEdges",
     "Patches",
     "PatchNetwork",
     "DISPLAY_RANGE",
@@ -82,6 +87,64 @@ def edge_parameters(edge: NDArray[np.int64], t: NDArray[np.float64]) -> NDArray[
 
 
 @dataclass(frozen=True)
+class HangingEdges:
+    """Where a coarse patch edge is shared by several finer patch edges (a T-junction of a
+    feature-adaptive network): per link, ``sides[i] = (fine patch, fine edge, coarse patch,
+    coarse edge)`` and ``span[i] = (t0, t1)``, the fractions along the coarse edge (its own
+    counter-clockwise direction) at the fine edge's start and end; the point at fraction ``s`` of
+    the fine edge is the coarse edge's point at ``t0 + s (t1 − t0)`` (the two run opposite ways on
+    an oriented network: ``t0 > t1``)."""
+
+    sides: NDArray[np.int64]
+    span: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        sides = as_index_array("hanging sides", self.sides, (4,))
+        span = as_float_array("hanging span", self.span, (2,))
+        if len(span) != len(sides):
+            raise InputError(
+                f"hanging: {len(sides)} sides but {len(span)} spans; expected one of each per link"
+            )
+        if ((span < 0.0) | (span > 1.0)).any() or (span[:, 0] == span[:, 1]).any():
+            bad = int(
+                np.argmax(((span < 0.0) | (span > 1.0)).any(axis=1) | (span[:, 0] == span[:, 1]))
+            )
+            raise InputError(
+                f"hanging: link {bad} spans {span[bad].tolist()} of its coarse edge; expected two "
+                "different fractions in [0, 1]"
+            )
+        if ((sides[:, [1, 3]] < 0) | (sides[:, [1, 3]] > 3)).any():
+            bad = int(np.argmax(((sides[:, [1, 3]] < 0) | (sides[:, [1, 3]] > 3)).any(axis=1)))
+            raise InputError(
+                f"hanging: link {bad} names patch edge {sides[bad].tolist()}; edges are 0…3"
+            )
+        object.__setattr__(self, "sides", sides)
+        object.__setattr__(self, "span", span)
+
+    def __len__(self) -> int:
+        return len(self.sides)
+
+    def mask(self, n_patches: int) -> NDArray[np.bool_]:
+        """(P, 4) True on every patch edge that takes part in a link (fine or coarse side)."""
+        out = np.zeros((n_patches, 4), dtype=bool)
+        out[self.sides[:, 0], self.sides[:, 1]] = True
+        out[self.sides[:, 2], self.sides[:, 3]] = True
+        return out
+
+    def coarse_parameters(self, s: NDArray[np.float64]) -> NDArray[np.float64]:
+        """(H, len(s)) fractions along the coarse edges at fractions ``s`` of the fine ones."""
+        t0, t1 = self.span[:, :1], self.span[:, 1:]
+        return t0 + np.asarray(s, dtype=np.float64)[None, :] * (t1 - t0)
+
+    def kept(self, kept: NDArray[np.bool_], index: NDArray[np.int64]) -> HangingEdges:
+        """The links between patches where ``kept`` (P,) is True, renumbered by ``index``."""
+        both = kept[self.sides[:, 0]] & kept[self.sides[:, 2]]
+        sides = self.sides[both].copy()
+        sides[:, [0, 2]] = index[sides[:, [0, 2]]]
+        return HangingEdges(sides, self.span[both])
+
+
+@dataclass(frozen=True)
 class PatchNetwork:
     """Patches with their shared edges and corners (see the module docstring for the arrays)."""
 
@@ -104,6 +167,8 @@ class PatchNetwork:
     #: (P, 4, 2) texture coordinates at each patch's corners (u, v) = (0,0), (1,0), (1,1), (0,1),
     #: bilinear between (the mesh's ``vt``); None without
     uv: NDArray[np.float64] | None = None
+    #: T-junctions between coarse and finer patches (None: the network is conforming)
+    hanging: HangingEdges | None = None
 
     def __post_init__(self) -> None:
         count = len(self.patches)
@@ -129,6 +194,26 @@ class PatchNetwork:
             if uv.shape != (count, 4, 2):
                 raise InputError(f"uv: expected shape ({count}, 4, 2), got {uv.shape}")
             object.__setattr__(self, "uv", uv)
+        if self.hanging is not None:
+            self._check_hanging(self.hanging)
+
+    def _check_hanging(self, hanging: HangingEdges) -> None:
+        """Every link names patches of the network whose edges have no neighbour."""
+        sides = hanging.sides
+        if len(sides) and int(sides[:, [0, 2]].max()) >= self.n_patches:
+            bad = int(np.argmax(sides[:, [0, 2]].max(axis=1)))
+            raise InputError(
+                f"hanging: link {bad} names patch {int(sides[bad, [0, 2]].max())}; the network has "
+                f"{self.n_patches}"
+            )
+        for column in (0, 2):
+            linked = self.neighbor[sides[:, column], sides[:, column + 1]] >= 0
+            if linked.any():
+                bad = int(np.argmax(linked))
+                raise InputError(
+                    f"hanging: link {bad}: patch {sides[bad, column]} edge "
+                    f"{sides[bad, column + 1]} already has a neighbour"
+                )
 
     def _checked_seam(self) -> NDArray[np.bool_]:
         """``seam`` as a (P, 4) bool array: True only on shared edges, equal on both sides."""
@@ -185,6 +270,7 @@ class PatchNetwork:
             same_direction=self.same_direction[kept],
             seam=self.seam[kept] & (neighbor >= 0),
             uv=None if self.uv is None else self.uv[kept],
+            hanging=None if self.hanging is None else self.hanging.kept(kept, index),
         )
 
     @property
@@ -258,6 +344,8 @@ class PatchNetwork:
             parts.append(f"from {short_source(provenance['source'])}")
         if self.n_seams:
             parts.append(f"{self.n_seams} seams")
+        if self.hanging is not None and len(self.hanging):
+            parts.append(f"{len(self.hanging)} hanging edges")
         parts.extend(notes)
         if self.n_patches:
             parts.append(bbox_text(*self.patches.box()))
@@ -290,9 +378,11 @@ class PatchNetwork:
         return patches.astype(np.int64), edges.astype(np.int64)
 
     def open_edges(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-        """``(patch, edge)`` of every edge with no neighbour that is not collapsed."""
-        collapsed = self.edge_collapsed[self.edge_ids]
-        patches, edges = np.nonzero((self.neighbor < 0) & ~collapsed)
+        """``(patch, edge)`` of every edge with no neighbour that is not collapsed nor hanging."""
+        open_ = (self.neighbor < 0) & ~self.edge_collapsed[self.edge_ids]
+        if self.hanging is not None:
+            open_ &= ~self.hanging.mask(self.n_patches)
+        patches, edges = np.nonzero(open_)
         return patches.astype(np.int64), edges.astype(np.int64)
 
     def local_to(self, frame: Frame) -> PatchNetwork:

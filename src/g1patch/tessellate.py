@@ -11,6 +11,12 @@ numbered in the edge's canonical direction), so the triangle mesh has no cracks 
 a closed network every triangle edge has exactly two triangles. Samples on a collapsed edge all
 become the corner point, and the triangles that lose an area there are dropped.
 
+**Hanging edges** (a coarse patch edge against finer ones, :class:`~g1patch.network.HangingEdges`)
+stay watertight too: a fine edge sample at a coarse sample's parameter *is* that sample (the spans
+are dyadic, so the fine samples land on every coarse one exactly), and each coarse boundary
+triangle whose edge has fine samples inside it becomes a fan through them
+(:func:`_hanging_fans`).
+
 **Texture coordinates.** A network with :attr:`~g1patch.network.PatchNetwork.uv` gets them per
 sample, bilinear in each patch's corner UVs, as face-varying data: one UV vertex per distinct
 (point, UV) pair (:attr:`TriangleMesh.uv`, ``uv_points``, ``uv_triangles``), so a point on a seam
@@ -97,6 +103,105 @@ def _grid_indices(network: PatchNetwork, resolution: int) -> tuple[NDArray[np.in
     index[:, 0, 0], index[:, -1, 0] = network.corner_ids[:, 0], network.corner_ids[:, 1]
     index[:, -1, -1], index[:, 0, -1] = network.corner_ids[:, 2], network.corner_ids[:, 3]
     return index, face_base + count * inner * inner
+
+
+def _edge_grid(
+    edge: NDArray[np.int64], m: NDArray[np.int64], r: int
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Grid position (i, j) of the counter-clockwise sample ``m`` of patch edge ``edge``: edge 0
+    at (m, 0), 1 at (r − 1, m), 2 at (r − 1 − m, r − 1), 3 at (0, r − 1 − m)."""
+    cases = [edge == 0, edge == 1, edge == 2]
+    i = np.select(cases, [m, r - 1 + 0 * m, r - 1 - m], 0 * m)
+    j = np.select(cases, [0 * m, m, r - 1 + 0 * m], r - 1 - m)
+    return i, j
+
+
+@dataclass(frozen=True)
+class _Fans:
+    """The hanging edges' part of a tessellation at ``r`` samples a side. ``alias`` (A, 2, 3):
+    (patch, i, j) of a fine sample and of the coarse sample at the same point. Fans: ``triangle``
+    (G,) the flat ids of the coarse triangles to replace (``which · N · cells + patch · cells +
+    cell``), ``apex`` (G,) the corner of each opposite its hanging edge, and ``member`` (X, 3) the
+    (patch, i, j) of the fine samples inside each, ``group`` (X,) its fan, sorted along the coarse
+    edge."""
+
+    alias: NDArray[np.int64]
+    triangle: NDArray[np.int64]
+    apex: NDArray[np.int64]
+    member: NDArray[np.int64]
+    group: NDArray[np.int64]
+
+
+def _hanging_fans(network: PatchNetwork, r: int) -> _Fans | None:
+    """Where the fine samples of each hanging edge fall on its coarse edge: at coarse sample
+    ``n`` exactly (an alias) or inside segment ``n`` (a member of the fan replacing the coarse
+    triangle on it). Fine sample m sits at ``t0 (r − 1) + m (t1 − t0)`` coarse samples along."""
+    hanging = network.hanging
+    if hanging is None or not len(hanging):
+        return None
+    fine, fine_edge, coarse, coarse_edge = (column[:, None] for column in hanging.sides.T)
+    m = np.arange(r)[None, :]
+    position = hanging.span[:, :1] * (r - 1) + m * (hanging.span[:, 1:] - hanging.span[:, :1])
+    n = np.minimum(np.floor(position).astype(np.int64), r - 1)
+    on = position == n
+    fi, fj = _edge_grid(fine_edge, m + 0 * fine, r)
+    ci, cj = _edge_grid(coarse_edge, n, r)
+    fine_at = np.stack(np.broadcast_arrays(fine, fi, fj), axis=-1)  # (H, r, 3)
+    coarse_at = np.stack(np.broadcast_arrays(coarse, ci, cj), axis=-1)
+    alias = np.stack([fine_at[on], coarse_at[on]], axis=1)
+    inside = ~on
+    edge, segment = np.broadcast_to(coarse_edge, n.shape)[inside], n[inside]
+    # the coarse triangle on segment n of edge k (module docstring of the grid): its cell, which
+    # of the cell's two triangles, and the corner where the edge starts
+    cases = [edge == 0, edge == 1, edge == 2]
+    zero = 0 * segment
+    cell_i = np.select(cases, [segment, r - 2 + zero, r - 2 - segment], zero)
+    cell_j = np.select(cases, [zero, segment, r - 2 + zero], r - 2 - segment)
+    which = (edge >= 2).astype(np.int64)
+    start = np.array([0, 1, 1, 2])[edge]
+    cells = (r - 1) ** 2
+    patch = np.broadcast_to(coarse, n.shape)[inside]
+    triangle = which * network.n_patches * cells + patch * cells + cell_i * (r - 1) + cell_j
+    # one member per point (two fine edges meeting inside a segment both hold their corner)
+    keys = np.column_stack([triangle, position[inside]])
+    _, first = np.unique(keys, axis=0, return_index=True)  # sorted by triangle, then position
+    member = fine_at[inside][first]
+    triangles, group = np.unique(triangle[first], return_inverse=True)
+    apex = start[first][np.r_[0, np.flatnonzero(np.diff(group)) + 1]]
+    return _Fans(alias, triangles, (apex + 2) % 3, member, group.reshape(-1))
+
+
+def _fan_triangles(
+    fans: _Fans, triangles: NDArray[np.int64], member_ids: NDArray[np.int64]
+) -> NDArray[np.int64]:
+    """The fans replacing ``triangles[fans.triangle]`` (rows ``(A, B, O)`` up to rotation, A→B
+    the hanging edge): ``(A, X1, O), (X1, X2, O), …, (Xc, B, O)`` through the members' ids."""
+    base = triangles[fans.triangle]
+    rows = np.arange(len(base))
+    apex = base[rows, fans.apex]
+    start = base[rows, (fans.apex + 1) % 3]
+    end = base[rows, (fans.apex + 2) % 3]
+    first = np.r_[True, np.diff(fans.group) != 0]
+    last = np.r_[np.diff(fans.group) != 0, True]
+    previous = np.where(first, start[fans.group], np.roll(member_ids, 1))
+    inner = np.column_stack([previous, member_ids, apex[fans.group]])
+    closing = np.column_stack([member_ids[last], end, apex])
+    return np.concatenate([inner, closing])
+
+
+def _aliased(index: NDArray[np.int64], total: int, alias: NDArray[np.int64]) -> NDArray[np.int64]:
+    """``index`` with every fine sample of ``alias`` (A, 2, 3) renamed to its coarse sample (a
+    coarse sample may itself be the fine side of a coarser edge: followed to the end)."""
+    rename = np.arange(total)
+    fine, coarse = alias[:, 0], alias[:, 1]
+    rename[index[fine[:, 0], fine[:, 1], fine[:, 2]]] = index[
+        coarse[:, 0], coarse[:, 1], coarse[:, 2]
+    ]
+    while True:
+        further = rename[rename]
+        if np.array_equal(further, rename):
+            return rename[index]
+        rename = further
 
 
 def _uv_grid(
@@ -257,6 +362,9 @@ def tessellate(
     grid = np.linspace(0.0, 1.0, r)
     index, total = _grid_indices(network, r)
     count = network.n_patches
+    fans = _hanging_fans(network, r)
+    if fans is not None:
+        index = _aliased(index, total, fans.alias)
 
     points = np.zeros((total, 3))
     point_normals = np.zeros((total, 3))
@@ -281,13 +389,20 @@ def tessellate(
         first[..., 0], first[..., 1], first[..., 2] = p00, p10, p11
         second[..., 0], second[..., 1], second[..., 2] = p00, p11, p01
     sample_point = index.reshape(-1) if network.uv is not None else None
-    del index
     triangles = triangles.reshape(-1, 3)
     keep = (
         (triangles[:, 0] != triangles[:, 1])
         & (triangles[:, 1] != triangles[:, 2])
         & (triangles[:, 0] != triangles[:, 2])
     )
+    fan_points = fan_samples = None
+    if fans is not None:
+        member = fans.member
+        fan_points = _fan_triangles(
+            fans, triangles, index[member[:, 0], member[:, 1], member[:, 2]]
+        )
+        keep[fans.triangle] = False
+    del index
     uv_parts = None
     if network.uv is not None and sample_point is not None:
         samples = np.arange(count * r * r).reshape(count, r, r)
@@ -295,13 +410,23 @@ def tessellate(
         p11, p01 = samples[:, a + 1, b + 1], samples[:, a, b + 1]
         corners = np.stack(
             [np.stack([p00, p10, p11], axis=-1), np.stack([p00, p11, p01], axis=-1)]
-        ).reshape(-1, 3)[keep]
+        ).reshape(-1, 3)
+        if fans is not None:
+            member = fans.member
+            fan_samples = _fan_triangles(
+                fans, corners, (member[:, 0] * r + member[:, 1]) * r + member[:, 2]
+            )
+        corners = corners[keep]
+        if fan_samples is not None:
+            corners = np.concatenate([corners, fan_samples])
         uv_grid = _uv_grid(network.uv, network.edge_reversed, grid).reshape(-1, 2)
         uv_parts = _uv_vertices(uv_grid, sample_point, corners)
         del samples, corners, uv_grid, sample_point
     if not keep.all():
         triangles = triangles[keep]
     del keep
+    if fan_points is not None:
+        triangles = np.concatenate([triangles, fan_points])
 
     used = np.zeros(total, dtype=bool)
     used[triangles.reshape(-1)] = True

@@ -55,6 +55,7 @@ which patches fold and where (:func:`folded_patches`); :mod:`.sampling`, :mod:`.
 # does, set it in its module); the private names that render and the viewer import from here
 from .checker import check
 from .edges import _edge_measures as _edge_measures
+from .edges import _hanging_measures as _hanging_measures
 from .folds import folded_patches
 from .grid import DEGENERATE_RTOL as DEGENERATE_RTOL
 from .grid import EXACT_TURN_CANDIDATES as EXACT_TURN_CANDIDATES

@@ -18,7 +18,7 @@ from .corner_kernels import (
     _max_corner_angle_compiled,
 )
 from .edge_kernels import _edge_measures_compiled
-from .edges import _edge_measures, _max_corner_angle
+from .edges import _edge_measures, _hanging_measures, _max_corner_angle
 from .folds import _edge_fold_locations, _first_per_patch
 from .grid import DEGENERATE_RTOL, FOLD_SAMPLES, _GridMeasures, _patch_block
 from .jit import _kernel_form
@@ -144,6 +144,20 @@ def check(
             grid.add(local, block)
             if progress is not None:
                 progress(len(left_patch) + block.stop, total)
+    hanging = network.hanging
+    if hanging is not None and len(hanging):  # T-junctions: each fine edge against its coarse part
+        measured = _hanging_measures(local, hanging, samples, degenerate_level)
+        fine_patch, fine_edge, coarse_patch, coarse_edge = hanging.sides.T
+        left_patch, left_edge = np.r_[left_patch, fine_patch], np.r_[left_edge, fine_edge]
+        right_patch, right_edge = np.r_[right_patch, coarse_patch], np.r_[right_edge, coarse_edge]
+        same = np.r_[same, np.zeros(len(hanging), dtype=bool)]
+        seam = np.r_[seam, np.zeros(len(hanging), dtype=bool)]
+        edge_angle, edge_angle_min, edge_worst, edge_gap = (
+            np.r_[old, new]
+            for old, new in zip(
+                (edge_angle, edge_angle_min, edge_worst, edge_gap), measured, strict=True
+            )
+        )
     edge_gap /= diagonal
     figures = grid.fairness(diagonal)
     folded_edges = np.flatnonzero((edge_angle > 90.0) & ~seam)
@@ -176,6 +190,7 @@ def check(
     return ContinuityReport(
         patches=len(local),
         shared_edges=int(len(left_patch)),
+        hanging_edges=0 if hanging is None else len(hanging),
         open_edges=int(len(open_patch)),
         collapsed_edges=int(network.edge_collapsed.sum()),
         collapsed_patch_edges=collapsed_patch_edges,

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..network import Patches, PatchNetwork
+from ..network import HangingEdges, Patches, PatchNetwork, edge_parameters
 from ..patches import CORNER_PARAMETERS
 from .sampling import _edge_samples
 from .vectors import _angle3, _cross3, _norm3, _planar
@@ -41,11 +41,23 @@ def _edge_measures(
     point_right, normal_right = _edge_samples(patches, right_patch, right_edge, ~same, t)
     if same.any():
         normal_right[:, same] *= -1.0
+    return _side_figures(point_left, normal_left, point_right, normal_right, degenerate_level)
+
+
+def _side_figures(
+    point_left: NDArray[np.float64],
+    normal_left: NDArray[np.float64],
+    point_right: NDArray[np.float64],
+    normal_right: NDArray[np.float64],
+    degenerate_level: float,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
+    """Per edge, from both sides' points and normals at the same samples (planar (3, E, K)):
+    max and min G1 angle, where the max is, and max G0 gap (``point_left`` is overwritten)."""
     usable = (_norm3(normal_left) > degenerate_level) & (_norm3(normal_right) > degenerate_level)
     angles = np.where(usable, _angle3(normal_left, normal_right), 0.0)
     point_left -= point_right
     gaps = _norm3(point_left)
-    worst = angles.argmax(axis=1)
+    worst = angles.argmax(axis=1) if angles.size else np.zeros(angles.shape[0], dtype=np.int64)
     least = np.where(usable, angles, np.inf).min(axis=1, initial=np.inf)
     return (
         np.take_along_axis(angles, worst[:, None], axis=1)[:, 0],
@@ -98,3 +110,23 @@ def _max_corner_angle(
                     dot = np.abs(dot)
                 worst = max(worst, float(np.degrees(np.arctan2(cross, dot)).max()))
     return worst
+
+
+def _hanging_measures(
+    patches: Patches,
+    hanging: HangingEdges,
+    samples: int,
+    degenerate_level: float,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
+    """:func:`_edge_measures` along hanging edges: each fine edge at ``samples`` fractions against
+    the coarse edge at the same points (:meth:`HangingEdges.coarse_parameters`)."""
+    t = np.linspace(0.0, 1.0, samples)
+    fine_patch, fine_edge, coarse_patch, coarse_edge = hanging.sides.T
+    point_fine, normal_fine = _edge_samples(
+        patches, fine_patch, fine_edge, np.zeros(len(hanging), dtype=bool), t
+    )
+    uv = edge_parameters(coarse_edge[:, None], hanging.coarse_parameters(t))  # (H, K, 2)
+    coarse = patches.take(coarse_patch)
+    point_coarse = _planar(coarse.evaluate(uv))  # each patch at its own parameters
+    normal_coarse = _cross3(_planar(coarse.evaluate(uv, 1, 0)), _planar(coarse.evaluate(uv, 0, 1)))
+    return _side_figures(point_fine, normal_fine, point_coarse, normal_coarse, degenerate_level)

@@ -62,6 +62,9 @@ class ContinuityReport:
     #: and the first of them (at most 10)
     degenerate_patches: int = 0
     degenerate_patch_ids: tuple[int, ...] = ()
+    #: of the shared edges, the hanging ones (a fine patch edge along part of a coarse one, last in
+    #: the per-edge arrays: fine side first)
+    hanging_edges: int = 0
 
     @property
     def worst_edge(self) -> dict[str, Any] | None:
@@ -135,6 +138,7 @@ class ContinuityReport:
         return {
             "patches": self.patches,
             "shared_edges": self.shared_edges,
+            "hanging_edges": self.hanging_edges,
             "open_edges": self.open_edges,
             "collapsed_edges": self.collapsed_edges,
             "collapsed_patch_edges": self.collapsed_patch_edges,
@@ -164,11 +168,15 @@ class ContinuityReport:
         more = ", …" if self.degenerate_patches > len(self.degenerate_patch_ids) else ""
         return [("degenerate patches", f"{self.degenerate_patches} ({first}{more})")]
 
+    @property
+    def _hanging_note(self) -> str:
+        return f" ({self.hanging_edges} hanging)" if self.hanging_edges else ""
+
     def rows(self) -> list[tuple[str, str]]:
         """(label, value) pairs of the figures, as :meth:`summary` prints them."""
         rows = [
             ("patches", f"{self.patches}"),
-            ("shared / open edges", f"{self.shared_edges} / {self.open_edges}"),
+            ("shared / open edges", f"{self.shared_edges} / {self.open_edges}{self._hanging_note}"),
             ("max G1 angle on edges", f"{self.max_edge_angle_deg:.3e}°"),
             ("mean G1 angle on edges", f"{self.mean_edge_angle_deg:.3e}°"),
             ("max G1 angle at corners", f"{self.max_corner_angle_deg:.3e}°"),

@@ -17,6 +17,7 @@ from ..continuity import (
     _blocks,
     _diagonal,
     _edge_measures,
+    _hanging_measures,
     _local,
 )
 from ..network import PatchNetwork
@@ -84,15 +85,23 @@ def _edge_angles(network: PatchNetwork, samples: int) -> _EdgeAngles:
     right_edge = network.neighbor_edge[left_patch, left_edge]
     same = network.same_direction[left_patch, left_edge]
     angle = np.zeros(len(left_patch))
+    seam = network.seam[left_patch, left_edge]
     level = DEGENERATE_RTOL * diagonal**2
     for block in _blocks(len(left_patch), 4096):
         left, right = (left_patch[block], left_edge[block]), (right_patch[block], right_edge[block])
         angle[block] = _edge_measures(local, *left, *right, same[block], samples, level)[0]
+    hanging = network.hanging
+    if hanging is not None and len(hanging):  # after the shared edges, as check orders them
+        fine_patch, fine_edge, coarse_patch, coarse_edge = hanging.sides.T
+        left_patch, left_edge = np.r_[left_patch, fine_patch], np.r_[left_edge, fine_edge]
+        right_patch, right_edge = np.r_[right_patch, coarse_patch], np.r_[right_edge, coarse_edge]
+        angle = np.r_[angle, _hanging_measures(local, hanging, samples, level)[0]]
+        seam = np.r_[seam, np.zeros(len(hanging), dtype=bool)]
     return _EdgeAngles(
         np.stack([left_patch, right_patch], axis=1),
         np.stack([left_edge, right_edge], axis=1),
         angle,
-        network.seam[left_patch, left_edge],
+        seam,
         samples,
     )
 
@@ -172,10 +181,12 @@ def _band_angles(
     sides (N, 4)."""
     angles = np.full((network.n_patches, 4), np.nan)
     seams = np.zeros((network.n_patches, 4), dtype=bool)
-    for column in (0, 1):
+    smooth = np.where(report.edge_seam, -np.inf, report.edge_angle_deg)
+    for column in (0, 1):  # a coarse side of hanging edges: its largest
         sides = report.edge_patches[:, column], report.edge_sides[:, column]
-        angles[sides] = np.where(report.edge_seam, np.nan, report.edge_angle_deg)
+        np.fmax.at(angles, sides, smooth)
         seams[sides] = report.edge_seam
+    angles[np.isinf(angles)] = np.nan
     return angles, seams
 
 

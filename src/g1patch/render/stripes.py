@@ -63,9 +63,10 @@ def stripe_jumps(
 ) -> NDArray[np.float64]:
     """Per shared edge, the largest jump of the zebra stripe phase across it, in stripe periods.
 
-    Edges in the order of :meth:`PatchNetwork.shared_edges` (the order of a ContinuityReport's
-    edge arrays). Both sides are sampled at ``samples`` parameters (ends included) with their
-    exact normals, as :func:`g1patch.continuity.check` does; the difference of the reflected
+    Edges in the order of :meth:`PatchNetwork.shared_edges` (the first rows of a
+    ContinuityReport's edge arrays; a feature-adaptive network's hanging links follow there and
+    are not measured here). Both sides are sampled at ``samples`` parameters (ends included) with
+    their exact normals, as :func:`g1patch.continuity.check` does; the difference of the reflected
     directions' angle about the stripe axis (wrapped to (−π, π]) times ``stripes`` / 2π is the
     jump. 0 on an exactly G1 edge (up to rounding); about ``stripes · 2 θ / 360°`` on a crease of
     θ degrees whose normals turn about the stripe axis. Degenerate normals are left out. The camera

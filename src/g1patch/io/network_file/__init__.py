@@ -15,9 +15,14 @@ the arrays ``frame_centre`` (3,) and ``frame_scale`` () (see :mod:`g1patch.frame
 exactly the numbers the construction made. Version 3 adds ``seam`` (P, 4) bool, the patch edges
 that are sharp on purpose (:attr:`PatchNetwork.seam`). Version 4 adds the optional
 ``uv`` (P, 4, 2) float, each patch's texture coordinates at its corners (:attr:`PatchNetwork.uv`,
-from the mesh's ``vt``; finite, checked like the coordinates). Version 1 files (no frame), version
-2 files (no seams) and version 3 files (no texture coordinates) are read as before: seam-free,
-without UVs.
+from the mesh's ``vt``; finite, checked like the coordinates). Version 5 adds the optional pair
+``hanging_sides`` (H, 4) int and ``hanging_span`` (H, 2) float, the T-junctions of a
+feature-adaptive network (:class:`~g1patch.network.HangingEdges`: fine patch and edge, coarse
+patch and edge, the coarse fractions at the fine edge's ends; H ≤ 4 P, both members or neither).
+The distance reached and the cage a network came from ride in the header's provenance
+(``limit_distance``, ``tolerance``, ``source``). Version 1 files (no frame), version 2 files (no
+seams), version 3 files (no texture coordinates) and version 4 files (no hanging edges) are read
+as before: seam-free, without UVs, conforming.
 
 Container: stored, not compressed
 ---------------------------------

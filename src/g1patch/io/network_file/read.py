@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from ...errors import FormatError, InputError
 from ...gregory import GregoryPatchSet
-from ...network import PatchNetwork
+from ...network import HangingEdges, PatchNetwork
 from ...patches import PatchSet
 from .schema import (
     _ARRAYS,
@@ -37,6 +37,8 @@ from .schema import (
     _STRING_ARRAYS,
     _SUFFIX_KINDS,
     FRAME_VERSION,
+    HANGING_ARRAYS,
+    HANGING_VERSION,
     MAX_BYTES,
     MAX_HEADER_BYTES,
     MAX_PATCHES,
@@ -390,6 +392,8 @@ class _Reader:
             ignored.add("seam")
         if version < UV_VERSION:  # no texture coordinates: an array of that name is not part of it
             ignored.add("uv")
+        if version < HANGING_VERSION:  # no hanging edges: arrays of those names are not part of it
+            ignored.update(HANGING_ARRAYS)
         required = (
             "patch_kind",
             *_KIND_ARRAYS[kind],
@@ -403,8 +407,12 @@ class _Reader:
             "frame_centre",
             "frame_scale",
             "uv",
+            *HANGING_ARRAYS,
         } - ignored
         missing = [name for name in required if name not in members]
+        hanging = [name for name in HANGING_ARRAYS if name in members and name not in ignored]
+        if len(hanging) == 1:
+            missing.append(next(n for n in HANGING_ARRAYS if n not in hanging))
         if missing:
             raise self.fail(f"network file lacks {', '.join(missing)}")
         unexpected = [
@@ -440,7 +448,12 @@ class _Reader:
                 f"{MAX_PATCHES}"
             )
         dims = {"P": count}
-        for name, dim in (("edge_collapsed", "E"), ("vertices", "V"), ("vertex_normals", "V")):
+        for name, dim in (
+            ("edge_collapsed", "E"),
+            ("vertices", "V"),
+            ("vertex_normals", "V"),
+            ("hanging_sides", "H"),
+        ):
             if name in wanted and len(wanted[name].shape) == len(_SHAPES[name]):
                 dims.setdefault(dim, wanted[name].shape[0])
         for member in wanted.values():
@@ -458,9 +471,8 @@ class _Reader:
                     f"member {member.info.filename!r}: expected shape {text} = {expected} for "
                     f"{count} patches, got {member.shape}"
                 )
-        for dim in ("E", "V"):
+        for dim, name in (("E", "edge_collapsed"), ("V", "vertices"), ("H", "hanging_sides")):
             if dims.get(dim, 0) > 4 * count:
-                name = "edge_collapsed" if dim == "E" else "vertices"
                 raise self.fail(
                     f"member '{name}.npy' has {dims[dim]} rows, more than 4 per patch ({4 * count})"
                 )
@@ -502,6 +514,11 @@ class _Reader:
                 vertex_normals=arrays.get("vertex_normals"),
                 seam=arrays.get("seam"),  # type: ignore[arg-type]  # None: no seams
                 uv=arrays.get("uv"),
+                hanging=(
+                    HangingEdges(arrays["hanging_sides"], arrays["hanging_span"])
+                    if "hanging_sides" in arrays
+                    else None
+                ),
                 provenance={str(k): str(v) for k, v in provenance.items()},
             )
         except (InputError, KeyError) as exc:
@@ -511,7 +528,7 @@ class _Reader:
         """``member``'s declared size against the most its role allows a network of ``patches``
         patches."""
         shape = _SHAPES[member.name]
-        rows = {"P": patches, "E": 4 * patches, "V": 4 * patches}
+        rows = {"P": patches, "E": 4 * patches, "V": 4 * patches, "H": 4 * patches}
         elements = math.prod(rows[d] if isinstance(d, str) else d for d in shape)
         cap = _NPY_HEADER_BYTES + (
             elements * 8 if member.name not in _STRING_ARRAYS else _MAX_NAME_BYTES

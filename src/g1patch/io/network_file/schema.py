@@ -6,9 +6,10 @@ from __future__ import annotations
 from ...gregory import GregoryPatchSet
 
 #: the version :func:`save_network` writes
-FORMAT_VERSION = 4
-#: the versions :func:`load_network` reads (1: no frame, 2: no seams, 3: no texture coordinates)
-READABLE_VERSIONS = (1, 2, 3, 4)
+FORMAT_VERSION = 5
+#: the versions :func:`load_network` reads (1: no frame, 2: no seams, 3: no texture coordinates,
+#: 4: no hanging edges)
+READABLE_VERSIONS = (1, 2, 3, 4, 5)
 _ARRAYS = (
     "corner_ids",
     "edge_ids",
@@ -24,6 +25,10 @@ FRAME_VERSION = 2
 SEAM_VERSION = 3
 #: the first version with texture coordinates (``uv``, optional)
 UV_VERSION = 4
+#: the first version with hanging edges (``hanging_sides`` and ``hanging_span``, optional)
+HANGING_VERSION = 5
+#: the members of the hanging edges (both or neither)
+HANGING_ARRAYS = ("hanging_sides", "hanging_span")
 
 #: largest magnitude of a coordinate in world units (see the module docstring)
 MAX_COORDINATE = 1e30
@@ -44,7 +49,7 @@ _READ_STEP = 1 << 26
 #: room for one ``.npy`` header (numpy reads at most 10 000 bytes of one) and its preamble
 _NPY_HEADER_BYTES = 10_000 + 16
 
-_INDEX_ARRAYS = ("corner_ids", "edge_ids", "neighbor", "neighbor_edge")
+_INDEX_ARRAYS = ("corner_ids", "edge_ids", "neighbor", "neighbor_edge", "hanging_sides")
 _BOOL_ARRAYS = ("edge_reversed", "same_direction", "edge_collapsed", "seam")
 _FLOAT_ARRAYS = (
     "points",
@@ -54,9 +59,10 @@ _FLOAT_ARRAYS = (
     "frame_centre",
     "frame_scale",
     "uv",
+    "hanging_span",
 )
 _STRING_ARRAYS = ("header", "patch_kind", "form")
-#: shape of every array member, by its dimensions: P patches, E edges, V vertices
+#: shape of every array member, by its dimensions: P patches, E edges, V vertices, H hanging links
 _SHAPES: dict[str, tuple[str | int, ...]] = {
     "corner_ids": ("P", 4),
     "edge_ids": ("P", 4),
@@ -71,6 +77,8 @@ _SHAPES: dict[str, tuple[str | int, ...]] = {
     "vertices": ("V", 3),
     "vertex_normals": ("V", 3),
     "uv": ("P", 4, 2),
+    "hanging_sides": ("H", 4),
+    "hanging_span": ("H", 2),
     "frame_centre": (3,),
     "frame_scale": (),
     "header": (),

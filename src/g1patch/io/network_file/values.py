@@ -57,6 +57,21 @@ class _Checker:
         for name in _FLOAT_ARRAYS:
             if name in arrays and not name.startswith("frame_"):
                 out[name], extent[name] = self.coordinates(name, arrays[name])
+        extent.pop("hanging_span", None)  # fractions of an edge, not coordinates
+        if "hanging_sides" in arrays:
+            links = np.shape(arrays["hanging_sides"])[:1]
+            for name, width in (("hanging_sides", 4), ("hanging_span", 2)):
+                if np.shape(arrays[name]) != (*links, width):
+                    raise self.fail(
+                        name, f"expected shape {(*links, width)}, got {np.shape(arrays[name])}"
+                    )
+            out["hanging_sides"] = self.indices(
+                "hanging_sides",
+                arrays["hanging_sides"],
+                0,
+                max(count, 4) - 1,
+                "patch indices and patch edges 0..3",
+            )
         edges = len(out["edge_collapsed"])
         vertices = [len(out[name]) for name in ("vertices", "vertex_normals") if name in out]
         if len(set(vertices)) > 1:

@@ -76,6 +76,9 @@ def _members(
     for name in ("vertices", "vertex_normals", "uv"):
         if getattr(network, name) is not None:
             arrays[name] = getattr(network, name)
+    if network.hanging is not None and len(network.hanging):
+        arrays["hanging_sides"] = network.hanging.sides
+        arrays["hanging_span"] = network.hanging.span
     arrays = _Checker(target, "cannot store this network: ").check(arrays)
     provenance = {str(k): str(v) for k, v in network.provenance.items()}
     header = {"format": "g1patch-network", "version": FORMAT_VERSION, "provenance": provenance}
