@@ -25,7 +25,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("render",),
     ("io",),
     ("fitting",),
-    ("build", "compare", "fidelity"),
+    ("build", "adaptive", "compare", "fidelity"),
     ("construct",),
     ("targets",),
     ("subdivision", "sharpen", "shapes"),

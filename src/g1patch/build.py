@@ -24,6 +24,7 @@ from typing import TypeVar
 
 import numpy as np
 
+from .adaptive import refine_adaptively
 from .construct import ASSEMBLIES, DEFAULT_METHOD, METHODS, NetworkParts
 from .construct.corner import TWISTS, TwistRule, build_corner_network
 from .continuity import folded_patches
@@ -420,25 +421,26 @@ def _network(
     tangents: TangentRule,
     refine: int,
     repairs: tuple[str, ...],
-    through: np.ndarray | None = None,
+    through: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> PatchNetwork:
     """The network of ``mesh`` (already refined ``refine`` steps): targets, the fold guard for
-    ``interpolate``, assembly, the network with its UVs. ``through``: world points the first
-    vertices' targets take exactly instead of the rule's (the limit of a refined interpolating
-    cage passes through the original vertices, to the solve's residual: these make it exact)."""
+    ``interpolate``, assembly, the network with its UVs. ``through``: (vertices, world points)
+    those vertices' targets take exactly instead of the rule's (the limit of a refined
+    interpolating cage passes through the original vertices, to the solve's residual: these make
+    it exact)."""
     assembly = ASSEMBLIES[method]
     frame = Frame.of_points(mesh.vertices)
     local = mesh.with_vertices(frame.to_local(mesh.vertices))
     targets = shape_targets(local, shape, tangents=tangents)
     if through is not None:
         positions = targets.positions.copy()
-        positions[: len(through)] = frame.to_local(through)
+        positions[through[0]] = frame.to_local(through[1])
         targets = targets.with_changes(positions=positions)
     surface = mesh
     if shape == "limit":  # the points passed through
         points = frame.to_world(targets.positions)
         if through is not None:
-            points[: len(through)] = through
+            points[through[0]] = through[1]
         surface = mesh.with_vertices(points)
     provenance = _provenance(mesh, method, shape, tangents, targets, refine, repairs)
     if shape == "interpolate":  # the guard's best assembly is the network's: built once
@@ -514,38 +516,84 @@ def _within_tolerance(
     reached (``limit_distance``), the ``tolerance``, the steps it added (``tolerance_steps``) and,
     where it stopped short, why and what lets it through (``tolerance_stop``)."""
     assembly = ASSEMBLIES[method]
-    cage, through = mesh, None
+    cage, original = mesh, None
     if shape == "limit-interpolate":
-        cage, through = mesh.with_vertices(interpolating_cage(mesh).cage), mesh.vertices
-    distance = limit_distance(network, cage, assembly.patches_per_face)
-    steps, stop = 0, ""
-    while distance.relative > tolerance:
-        if steps == MAX_TOLERANCE_STEPS:
-            stop = f"{MAX_TOLERANCE_STEPS} steps added; a larger --tolerance lets it through"
-            break
-        estimate = estimate_build(cage, method, "limit", steps + 1)
-        try:
-            check_budget(estimate, method, max_memory, max_patches)
-        except BudgetError:
-            stop = (
-                f"another step would make {estimate.patches:,} patches and need about "
-                f"{size_text(estimate.bytes)}; a larger --max-memory or --tolerance lets it through"
+        cage, original = mesh.with_vertices(interpolating_cage(mesh).cage), mesh.vertices
+
+    def through(ids: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The original vertices among a finer cage's (``ids``: their ids in ``cage``)."""
+        if original is None:
+            return None
+        kept = np.flatnonzero(ids < len(original))
+        return kept, original[ids[kept]]
+
+    if method == "gregory":  # refined only where it is off: hanging edges between levels
+
+        def allowed(patches: int) -> str:
+            per_patch = MESH_BYTES_PER_FACE + REFINE_BYTES_PER_FACE + assembly.peak_bytes_per_face
+            estimate = BuildEstimate(0, patches, patches, patches * per_patch)
+            try:
+                check_budget(estimate, method, max_memory, max_patches)
+            except BudgetError:
+                return (
+                    f"another step would make about {patches:,} patches and need about "
+                    f"{size_text(estimate.bytes)}; a larger --max-memory or --tolerance lets it "
+                    "through"
+                )
+            return ""
+
+        adaptive = refine_adaptively(
+            network,
+            cage,
+            lambda finer, ids: _network(
+                finer, method, "limit", "arc", refine, repairs, through(ids)
+            ),
+            tolerance * network.bounding_box_diagonal(),
+            MAX_TOLERANCE_STEPS,
+            allowed,
+        )
+        network, steps, stop = adaptive.network, adaptive.steps, adaptive.stop
+        relative = adaptive.distance / (network.bounding_box_diagonal() or 1.0)
+    else:
+        distance = limit_distance(network, cage, assembly.patches_per_face)
+        steps, stop = 0, ""
+        while distance.relative > tolerance:
+            if steps == MAX_TOLERANCE_STEPS:
+                stop = f"{MAX_TOLERANCE_STEPS} steps added; a larger --tolerance lets it through"
+                break
+            estimate = estimate_build(cage, method, "limit", steps + 1)
+            try:
+                check_budget(estimate, method, max_memory, max_patches)
+            except BudgetError:
+                stop = (
+                    f"another step would make {estimate.patches:,} patches and need about "
+                    f"{size_text(estimate.bytes)}; a larger --max-memory or --tolerance lets it "
+                    "through"
+                )
+                break
+            steps += 1
+            finer = subdivide(cage, steps)
+            network = _network(
+                finer,
+                method,
+                "limit",
+                "arc",
+                refine + steps,
+                repairs,
+                through(np.arange(finer.n_vertices)),
             )
-            break
-        steps += 1
-        finer = subdivide(cage, steps)
-        network = _network(finer, method, "limit", "arc", refine + steps, repairs, through)
-        distance = limit_distance(network, finer, assembly.patches_per_face)
+            distance = limit_distance(network, finer, assembly.patches_per_face)
+        relative = distance.relative
     logger.info(
         "distance to the Catmull–Clark limit: %.3g of the diagonal after %d added steps",
-        distance.relative,
+        relative,
         steps,
     )
     provenance = dict(network.provenance)
     provenance.update(
         shape=shape,
         refine=str(refine + steps),
-        limit_distance=f"{distance.relative:.6g}",
+        limit_distance=f"{relative:.6g}",
         tolerance=f"{tolerance:g}",
         tolerance_steps=str(steps),
     )
