@@ -18,13 +18,14 @@ from scipy.spatial import cKDTree
 
 from g1patch.adaptive import EXACT
 from g1patch.api import read
-from g1patch.build import DEFAULT_TOLERANCE, build_network
+from g1patch.build import DEFAULT_TOLERANCE, build_network, semi_sharp_levels
 from g1patch.compare import load_reference, reference_path
 from g1patch.continuity import check
 from g1patch.errors import FormatError, InputError
 from g1patch.fidelity import project_to_network
 from g1patch.io.network_file import load_network, save_network
 from g1patch.mesh import QuadMesh
+from g1patch.mesh.tags import Tag
 from g1patch.network import HangingEdges, PatchNetwork
 from g1patch.shapes import cube
 from g1patch.subdivision import limit_points, refine, refine_grids
@@ -252,3 +253,57 @@ def test_opensubdiv_agrees_on_the_adaptive_network(
     report = check(network)
     assert max(report.max_edge_angle_deg, report.max_corner_angle_deg) <= EXACT_G1_DEG
     assert report.folds == 0
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "catmark_torus_creases0",
+        "catmark_tent_creases1",
+        "catmark_cube_creases2",
+        "catmark_dart_edgecorner",
+    ],
+)
+def test_semi_sharp_creases_refine_locally(shared_data: Path, name: str) -> None:
+    """OpenSubdiv's crease shapes (sharpness up to 4.7: five levels globally, 32,768 patches on
+    the torus): refined around their semi-sharp features and where the network is off their
+    limit only, OpenSubdiv's points (same tags) lie within the default tolerance, every edge but
+    the infinitely sharp ones is exactly G1."""
+    path = shared_data / f"{name}.obj"
+    cage = read(path)
+    network = build_network(cage, "gregory", "limit")
+    everywhere = cage.n_faces * 4 ** semi_sharp_levels(cage)
+    assert network.n_patches <= everywhere
+    assert network.n_patches <= max(everywhere // 8, 20 * cage.n_faces)  # torus: 3,008 of 32,768
+    points = load_reference(reference_path(path)).points
+    diagonal = network.bounding_box_diagonal()
+    assert distance_to(network, points).max() / diagonal <= DEFAULT_TOLERANCE + 1e-5
+    report = check(network)
+    assert max(report.max_edge_angle_deg, report.max_corner_angle_deg) <= EXACT_G1_DEG
+    assert report.folds == 0
+
+
+def test_a_box_of_semi_sharp_edges_refines_at_its_edges() -> None:
+    """A coarse box whose twelve edges are semi-sharp (3.0): three levels globally (64 patches a
+    face, 6,144); locally the three levels around the edges only (the faces touching a semi-sharp
+    edge are refined until its sharpness is spent, whatever their distance: a partly resolved
+    crease is within the tolerance but ripples in the zebra), the limit to rounding and exactly
+    G1."""
+    c = refine(cube(), 2)
+    v = c.vertices / np.abs(c.vertices).max(axis=1, keepdims=True)
+    on_edge = (np.abs(np.abs(v) - 1.0) < 1e-12).sum(axis=1) >= 2
+    tags = [
+        Tag("crease", (int(a), int(b)), (3.0,))
+        for a, b in c.topology.edges
+        if on_edge[[a, b]].all()
+    ]
+    cage = QuadMesh.from_arrays(v, c.faces, tags=tags)
+    network = build_network(cage, "gregory", "limit")
+    assert semi_sharp_levels(cage) == 3
+    assert network.n_patches <= 0.6 * cage.n_faces * 4**3  # 3,264 of 6,144
+    diagonal = network.bounding_box_diagonal()
+    ours = distance_to(network, exact_limit(cage, 4)).max() / diagonal
+    assert ours <= 1e-4  # 2.2e-5: the face centres' coarse patches, off by their corners' valence
+    report = check(network)
+    assert max(report.max_edge_angle_deg, report.max_corner_angle_deg) <= EXACT_G1_DEG
+    assert report.folds == 0 and report.hanging_edges > 0

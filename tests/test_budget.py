@@ -26,11 +26,16 @@ def _tent() -> QuadMesh:
 @pytest.mark.parametrize("method", ["gregory", "split4", "corner"])
 @pytest.mark.parametrize(("shape", "refine"), [("interpolate", 1), ("limit", 0)])
 def test_the_estimate_counts_what_the_build_makes(method: str, shape: str, refine: int) -> None:
+    """Without a tolerance (a Gregory limit build with one refines locally: fewer patches)."""
     mesh = _tent()
     estimate = estimate_build(mesh, method, shape, refine)
-    network = build_network(mesh, method, shape, refine=refine)
+    network = build_network(mesh, method, shape, refine=refine, tolerance=None)
     assert estimate.patches == network.n_patches
     assert estimate.steps == (refine if shape == "interpolate" else 2)
+    if method == "gregory" and shape == "limit":
+        local = build_network(mesh, method, shape)
+        assert local.n_patches < estimate.patches
+        assert estimate_build(mesh, method, shape, semi_sharp_first=False).steps == 0
 
 
 @pytest.mark.parametrize("method", ["gregory", "split4", "corner"])

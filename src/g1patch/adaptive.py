@@ -37,12 +37,12 @@ from numpy.typing import NDArray
 from .errors import G1PatchError
 from .fidelity import limit_distance
 from .gregory import GregoryPatchSet
-from .mesh import QuadMesh, QuadTopology
+from .mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology
 from .mesh.neighbourhood import grow, neighbourhood
 from .network import PARAMETER_CORNERS, HangingEdges, PatchNetwork
 from .subdivision import refine_grids
 
-__all__ = ["EXACT", "SUPPORT_RINGS", "Adaptive", "refine_adaptively"]
+__all__ = ["EXACT", "SUPPORT_RINGS", "Adaptive", "refine_adaptively", "semi_sharp_faces"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -119,6 +119,21 @@ def _children(fine: QuadTopology, grid: IntArray) -> tuple[IntArray, IntArray]:
     keys = grid[:, :-1, :-1] * nv + grid[:, 1:, :-1]
     half = order[np.searchsorted(directed[order], keys)]
     return half >> 2, half & 3
+
+
+def semi_sharp_faces(mesh: QuadMesh) -> BoolArray:
+    """Faces with a vertex on a semi-sharp edge or at a semi-sharp vertex (sharpness strictly
+    between 0 and infinite): their limit follows the crease rules for ⌈s⌉ more levels, so they
+    are refined whatever their distance (OpenSubdiv's feature-adaptive rule; a partly resolved
+    crease is within a tolerance but ripples in reflections)."""
+    features = mesh.features
+
+    def semi(values: FloatArray) -> BoolArray:
+        return (values > 0.0) & (values < INFINITE_SHARPNESS)
+
+    vertices = semi(features.vertex_sharpness).copy()
+    vertices[mesh.topology.edges[semi(features.edge_sharpness)].reshape(-1)] = True
+    return np.asarray(vertices[mesh.faces].any(axis=1))
 
 
 def _face_distance(network: PatchNetwork, mesh: QuadMesh) -> FloatArray:
@@ -200,8 +215,9 @@ def refine_adaptively(
     allowed: Callable[[int], str],
 ) -> Adaptive:
     """The network of ``cage`` (``network``, one Gregory patch per face, built by ``build``)
-    refined where it is more than ``tolerance`` (absolute) from the exact limit, at most
-    ``max_steps`` levels deep (module docstring). ``allowed(patches)`` says why a network of that
+    refined where it is more than ``tolerance`` (absolute) from the exact limit or touches a
+    semi-sharp feature (:func:`semi_sharp_faces`), at most ``max_steps`` levels deep (module
+    docstring). ``allowed(patches)`` says why a network of that
     many patches may not be built ("" when it may)."""
     diagonal = network.bounding_box_diagonal()
     exact = EXACT * diagonal
@@ -220,7 +236,7 @@ def refine_adaptively(
     next_id = cage.n_vertices
     stop = ""
     while True:
-        bad = level.active & (level.distance > tolerance)
+        bad = level.active & ((level.distance > tolerance) | semi_sharp_faces(level.mesh))
         if not bad.any():
             break
         if len(regions) == max_steps:

@@ -112,11 +112,19 @@ class BuildEstimate:
     bytes: int
 
 
-def refine_steps(mesh: QuadMesh, shape: str, refine: int) -> int:
+def refine_steps(mesh: QuadMesh, shape: str, refine: int, semi_sharp_first: bool = True) -> int:
     """The Catmull–Clark steps a build takes: ``refine``, and for the limit shapes at least
-    :func:`semi_sharp_levels`."""
-    limit = shape in LIMIT_SHAPES
+    :func:`semi_sharp_levels` (unless ``semi_sharp_first`` is False: a Gregory limit build with a
+    tolerance refines around semi-sharp features only, :func:`_local_refinement`)."""
+    limit = shape in LIMIT_SHAPES and semi_sharp_first
     return max(int(refine), semi_sharp_levels(mesh) if limit else 0)
+
+
+def _local_refinement(method: str, shape: str, tolerance: float | None) -> bool:
+    """Whether the build refines where its network is off the limit only (Gregory limit networks
+    measured against a tolerance: :mod:`g1patch.adaptive`), semi-sharp features included, rather
+    than the whole cage."""
+    return method == "gregory" and shape == "limit" and tolerance is not None
 
 
 #: faces from which the estimate asks whether the kernels run (below, the per-face figures of
@@ -124,12 +132,14 @@ def refine_steps(mesh: QuadMesh, shape: str, refine: int) -> int:
 _BUDGET_FACES = 10_000
 
 
-def estimate_build(mesh: QuadMesh, method: str, shape: str, refine: int = 0) -> BuildEstimate:
+def estimate_build(
+    mesh: QuadMesh, method: str, shape: str, refine: int = 0, semi_sharp_first: bool = True
+) -> BuildEstimate:
     """The size of :func:`build_network`'s result and its peak memory, from counts alone (the
     assembly's peak per face on the path that will run: the kernels', or NumPy's where numba has
-    no writable cache)."""
+    no writable cache); ``semi_sharp_first`` as :func:`refine_steps`."""
     assembly = ASSEMBLIES[method]
-    steps = refine_steps(mesh, shape, refine)
+    steps = refine_steps(mesh, shape, refine, semi_sharp_first)
     faces = mesh.n_faces * 4**steps
     refined = faces * REFINE_BYTES_PER_FACE if steps else 0
     held = faces * MESH_BYTES_PER_FACE if steps else 0
@@ -373,8 +383,10 @@ def build_network(
     (:func:`build_corner_network`, world coordinates), with its ``twist`` and ``normals`` rules.
     ``refine``: Catmull–Clark steps applied to the mesh first (:func:`g1patch.subdivision.refine`);
     the limit shapes refine at least :func:`semi_sharp_levels` steps, so semi-sharp creases follow
-    OpenSubdiv's limit. The network's provenance records the choices (the steps actually taken) and
-    how many vertices needed a fallback. A build whose :func:`estimate_build` is above
+    OpenSubdiv's limit (a Gregory ``limit`` build with a tolerance refines only where its network
+    is off that limit, around semi-sharp creases too: :mod:`g1patch.adaptive`). The network's
+    provenance records the choices (the steps actually taken) and how many vertices needed a
+    fallback. A build whose :func:`estimate_build` is above
     ``max_memory`` bytes (default :func:`memory_budget`, half the RAM), or makes more than
     ``max_patches``, is refused before it starts (:class:`BudgetError`). ``tolerance`` (limit
     shapes; None: not measured): the largest distance from the exact Catmull–Clark limit allowed,
@@ -391,7 +403,8 @@ def build_network(
         check_tolerance(tolerance)
     if shape == "limit":  # the cage's limit: a polygon cage's first step by the Catmull–Clark rules
         mesh = catmull_clark_cage(mesh)
-    estimate = estimate_build(mesh, method, shape, refine)
+    local = _local_refinement(method, shape, tolerance)
+    estimate = estimate_build(mesh, method, shape, refine, semi_sharp_first=not local)
     check_budget(estimate, method, max_memory, max_patches)
     if estimate.steps > refine:
         logger.info(
@@ -511,10 +524,12 @@ def _within_tolerance(
     The cage is ``mesh`` for ``limit``, the solved interpolating cage for ``limit-interpolate``
     (its limit passes through the vertices); while the distance is above the tolerance the cage
     takes another Catmull–Clark step (the same limit surface, faces a quarter the size) and is
-    built again as its limit, up to :data:`MAX_TOLERANCE_STEPS` steps and as long as the build's
-    estimate stays within ``max_memory`` and ``max_patches``. The provenance records the distance
-    reached (``limit_distance``), the ``tolerance``, the steps it added (``tolerance_steps``) and,
-    where it stopped short, why and what lets it through (``tolerance_stop``)."""
+    built again as its limit — Gregory networks only where they are off
+    (:func:`~g1patch.adaptive.refine_adaptively`), split4 ones whole — up to
+    :data:`MAX_TOLERANCE_STEPS` steps and as long as the build's estimate stays within
+    ``max_memory`` and ``max_patches``. The provenance records the distance reached
+    (``limit_distance``), the ``tolerance``, the steps it added (``tolerance_steps``) and, where it
+    stopped short, why and what lets it through (``tolerance_stop``)."""
     assembly = ASSEMBLIES[method]
     cage, original = mesh, None
     if shape == "limit-interpolate":
@@ -549,7 +564,7 @@ def _within_tolerance(
                 finer, method, "limit", "arc", refine, repairs, through(ids)
             ),
             tolerance * network.bounding_box_diagonal(),
-            MAX_TOLERANCE_STEPS,
+            max(MAX_TOLERANCE_STEPS, semi_sharp_levels(cage)),
             allowed,
         )
         network, steps, stop = adaptive.network, adaptive.steps, adaptive.stop
