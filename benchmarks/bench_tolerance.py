@@ -4,10 +4,11 @@
 ``shapes.genus2()`` refined, a cage of valences 3–5 that needs no shared data), for t in
 ``--tolerances`` and both exact methods. Columns: the steps the tolerance loop added, the
 patches, the distance reached (``g1patch.fidelity.limit_distance``: exact limit samples projected
-on the network, of the diagonal; ``*`` where the loop stopped short: three steps at most, or the
-memory budget), the wall time of the build (measure included) and its tracemalloc peak. The
-refinement is global, so each step is 4× the patches; the distance halves per step around
-extraordinary vertices.
+on the network, of the diagonal; ``*`` where the loop stopped short: six steps at most, or the
+memory budget), the hanging edges, the wall time of the build (measure included) and its
+tracemalloc peak. Gregory networks refine only where they are off the limit or touch a
+semi-sharp crease (hanging edges between levels); split4 refines globally, 4× the patches a
+step. The distance halves per step around extraordinary vertices.
 
 Run:  .venv/bin/python benchmarks/bench_tolerance.py [--tolerances T ...] [--meshes NAME ...]
       [--quick]
@@ -38,6 +39,8 @@ OPTIONS: dict[str, harness.Option] = {
             "catmark_xord_interior",
             "catmark_xord_boundary",
             "catmark_dart_edgecorner",
+            "catmark_torus_creases0",
+            "catmark_tent_creases1",
             "spot_quadrangulated",
         ],
         "shared meshes",
@@ -66,7 +69,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     build_network(shapes.genus2(), "split4", "limit")  # warm-up: numba loads its kernels
     build_network(shapes.genus2(), "gregory", "limit")
     header = f"{'cage':<26}{'method':<9}{'tolerance':>10}{'steps':>6}{'patches':>10}"
-    print(header + f"{'distance':>12}{'build s':>9}{'peak MB':>9}")
+    print(header + f"{'hanging':>9}{'distance':>12}{'build s':>9}{'peak MB':>9}")
     for name, mesh in cages(args.meshes):
         for method in METHODS:
             for tolerance in args.tolerances:
@@ -77,13 +80,15 @@ def main(argv: Sequence[str] | None = None) -> None:
                 distance = float(provenance["limit_distance"])
                 short = "*" if "tolerance_stop" in provenance else " "
                 steps = int(provenance["tolerance_steps"])
+                hanging = len(network.hanging) if network.hanging is not None else 0
                 print(
                     f"{name:<26}{method:<9}{tolerance:>10.0e}{steps:>6}{network.n_patches:>10,}"
-                    f"{distance:>11.2e}{short}{seconds:>9.2f}{peak / 1e6:>9.0f}"
+                    f"{hanging:>9,}{distance:>11.2e}{short}{seconds:>9.2f}{peak / 1e6:>9.0f}"
                 )
                 label = f"{name} {method} tolerance {tolerance:g}"
                 record(f"{label} steps", steps, "")
                 record(f"{label} patches", network.n_patches, "")
+                record(f"{label} hanging edges", hanging, "")
                 record(f"{label} distance", distance, "of diagonal", short.strip() and "stopped")
                 record(f"{label} build", seconds, "s")
                 record(f"{label} peak", peak / 1e6, "MB", "tracemalloc")

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from ocp_marks import requires_ocp
 from scipy.spatial import cKDTree
 
 from g1patch.adaptive import EXACT
@@ -307,3 +308,33 @@ def test_a_box_of_semi_sharp_edges_refines_at_its_edges() -> None:
     report = check(network)
     assert max(report.max_edge_angle_deg, report.max_corner_angle_deg) <= EXACT_G1_DEG
     assert report.folds == 0 and report.hanging_edges > 0
+
+
+def test_cad_export_of_a_locally_refined_network_says_it_is_fitted(
+    adaptive_cube: PatchNetwork, tmp_path: Path
+) -> None:
+    """split4 cannot re-assemble a network with hanging edges: asked for, it is refused before
+    anything is written (naming the hanging edges and what to do instead)."""
+    from g1patch.io.cad import export_cad
+
+    target = tmp_path / "adaptive.step"
+    with pytest.raises(InputError, match=r"refined locally \(\d+ hanging edges\).*--method split4"):
+        export_cad(target, adaptive_cube, method="split4")
+    assert not target.exists()
+
+
+@requires_ocp
+@pytest.mark.slow
+def test_cad_export_of_a_locally_refined_network_is_a_sewn_solid(
+    tmp_path: Path,
+) -> None:
+    """OpenCASCADE sews the T-junctions: one closed, valid solid, each face within the fit's
+    tolerance of its patch, and the note says why it was fitted."""
+    from g1patch.io.cad import export_cad
+
+    network = build_network(refine(cube(), 2), "gregory", "limit", tolerance=3e-5)
+    assert network.hanging is not None and len(network.hanging)
+    result = export_cad(tmp_path / "adaptive.step", network)
+    assert result.solid and result.valid and result.faces == network.n_patches
+    assert "hanging edges" in result.method_note
+    assert result.deviation <= 1e-5

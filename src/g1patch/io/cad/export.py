@@ -209,6 +209,12 @@ def cad_surfaces(
     diagonal = network.bounding_box_diagonal()
     _check_diagonal(target, diagonal)
     deviation, method_note, refine = 0.0, "", 0
+    hanging = network.hanging
+    if method == "auto" and hanging is not None and len(hanging):
+        method_note = (
+            f"refined locally ({len(hanging)} hanging edges), which split4 cannot re-assemble: "
+            "fitted (build with --method split4 for an exact polynomial file)"
+        )
     if chosen == "split4":
         converted = _split4_within(network, max_deviation, diagonal, method == "auto", lap)
         if isinstance(converted, str):

@@ -62,6 +62,14 @@ def _cad_method(target: Path, network: PatchNetwork, method: CadMethod) -> str:
                 f"{type(network.patches).__name__} (use method 'fit')"
             )
         return "fit"
+    if network.hanging is not None and len(network.hanging):
+        if method == "split4":
+            raise InputError(
+                f"{target}: method 'split4' re-assembles conforming Gregory networks; this one is "
+                f"refined locally ({len(network.hanging)} hanging edges): use method 'fit', or "
+                "build with --method split4 for an exact polynomial CAD file"
+            )
+        return "fit"
     return "split4"
 
 
