@@ -20,7 +20,10 @@
   of the curve rule ``(2P_0 + P_1)/3``), exactly; elsewhere the four interior points of the
   bicubic with those boundary curves that fit the exact limit samples inside the face in the
   same weighted sense, with a larger share ρ (:data:`_PARAMETRIC_INTERIOR`) (a 12 × 12 solve per
-  face). The Gregory assembly then moves them as far as G1 requires.
+  face). Next to a vertex of valence n the normal in that weight is the exact one only by a share
+  ``(4/n)²``, the rest the blend of the face's corner normals: the exact normal ripples sideways
+  with the n sectors, and weighted by it the points slid sideways by more than a narrow sector
+  (:func:`_exact_normal_share`). The Gregory assembly then moves them as far as G1 requires.
 
 Every manifold quad mesh gets valid targets: a fitted fan that does not turn counter-clockwise
 falls back to the limit star, and where the two limit tangents of a vertex are parallel (a
@@ -249,12 +252,40 @@ def _boundary_nets(
     return net
 
 
+def _exact_normal_share(valence: IntArray) -> FloatArray:
+    """The share ``min(1, (4/n)²)`` of the exact limit normal in :func:`_fit_interior`'s weight of
+    a face whose corners have at most valence ``n`` (the rest: the blend of its corner normals).
+
+    Next to a vertex of valence n the Catmull–Clark limit ripples with its n sectors (ridges along
+    the edges): inside a face the exact normal tilts sideways by an angle that grows like n (0.07
+    at valence 16, 0.25 at 64, 0.45 at 128, 0.82 at 360 on a pole), while the sector narrows like
+    2π/n. Weighted by that normal the fit slid the interior points sideways along the ripple by
+    an angle that did not shrink with the sector: at valence 360 the points next to the valence-4
+    corners of a pole face lay outside its 1° sector (at 1.67 and −0.67 of it; 0.22 and 0.78 with
+    a smooth normal, as at valence 16) and every assembly following them folded. With this share
+    the tilt the exact normal brings falls like 1/n, as the sector does, so the fit keeps its
+    shape in sector units at every valence; faces up to valence 4 (and a cage's boundary) are
+    fitted as before."""
+    return np.minimum(1.0, (4.0 / np.maximum(valence, 1)) ** 2)
+
+
 def _fit_interior(
-    net: FloatArray, samples: FloatArray, sample_normals: FloatArray, m: int
+    net: FloatArray,
+    samples: FloatArray,
+    sample_normals: FloatArray,
+    corner_normals: FloatArray,
+    share: FloatArray,
+    m: int,
 ) -> FloatArray:
     """Interior points (F, 4, 3) at corners 0..3 (b11, b21, b22, b12) minimising
     ``Σ rᵀ (n nᵀ + ρ I) r``, ``r = p(i/m, j/m) − S_ij``, over the interior samples with the boundary
-    of ``net`` fixed: a 12 × 12 solve per face."""
+    of ``net`` fixed: a 12 × 12 solve per face.
+
+    ``n`` at a sample is the exact limit normal (``sample_normals``) by ``share`` (F,) and the
+    bilinear blend of the face's unit ``corner_normals`` (F, 4, 3) by the rest, normalised
+    (:func:`_exact_normal_share`: the exact normal ripples sideways at high valence, the blend
+    does not; where the corners are more than 120° apart and blend to less than ½, the exact
+    normal alone)."""
     g = np.arange(1, m) / m
     w = _bernstein(g)
     basis = (w[:, None, :, None] * w[None, :, None, :]).reshape(
@@ -264,7 +295,15 @@ def _fit_interior(
     count = len(net)
     known = np.einsum("kij,fijd->fkd", basis, net)
     residual = known - samples[:, 1:m, 1:m].reshape(count, -1, 3)
-    n = sample_normals[:, 1:m, 1:m].reshape(count, -1, 3)
+    exact = sample_normals[:, 1:m, 1:m].reshape(count, -1, 3)
+    # corner k of the face sits at grid (0, 0), (m, 0), (m, m), (0, m) (:data:`_EDGE_GRID`)
+    u, v = np.meshgrid(g, g, indexing="ij")
+    bilinear = np.stack([(1 - u) * (1 - v), u * (1 - v), u * v, (1 - u) * v], axis=-1)
+    blend = np.einsum("kc,fcd->fkd", bilinear.reshape(-1, 4), corner_normals)
+    length = np.linalg.norm(blend, axis=-1, keepdims=True)
+    blend = np.where(length > 0.5, blend / np.where(length > 0.5, length, 1.0), exact)
+    n = blend + share[:, None, None] * (exact - blend)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
     weight = n[..., :, None] * n[..., None, :] + _PARAMETRIC_INTERIOR * np.eye(3)  # (F, K, 3, 3)
     gram = np.einsum("kc,kg,fkde->fcdge", inner, inner, weight).reshape(count, 12, 12)
     rhs = -np.einsum("kc,fkde,fke->fcd", inner, weight, residual).reshape(count, 12)
@@ -429,7 +468,12 @@ def limit_targets(
     if irregular.size:
         net = _boundary_nets(mesh, x, t, irregular, slots)
         interior[irregular] = _fit_interior(
-            net, samples[row[irregular]], sample_normals[row[irregular]], m
+            net,
+            samples[row[irregular]],
+            sample_normals[row[irregular]],
+            corner_normals[irregular],
+            _exact_normal_share(topology.valence[topology.faces[irregular]].max(axis=1)),
+            m,
         )[:, :, None]
     return Targets(
         topology,

@@ -31,8 +31,10 @@ Even-valence twist cycles are singular: at valence 4 they need equal λ from opp
 edges, so μ is carried along grid lines (:func:`.chains._chain_shears`); at even valence ≥ 6 they
 need ``Σ_j (−1)^j P2_j = Σ_j (−1)^j m_j t_j / (6 λ_v)``, met by moving whole midpoints
 (:func:`.systems._even_vertex_shifts`). Every twist is the minimum-norm change of its target
-(below) that solves its vertex system (a pseudo-inverse per system size). Work is done in centred,
-unit-scaled coordinates and mapped back.
+(below) that solves its vertex system (a pseudo-inverse per system size; a mesh vertex's ring
+relative to the vertex: near k ≈ n/2 the cycle's eigenvalues 1 + ω^k are small and the
+pseudo-inverse amplifies its right-hand side's rounding ~n/π, which is then of the ring's size,
+not of the model's). Work is done in centred, unit-scaled coordinates and mapped back.
 
 Shape: the assembly moves the targets only as far as G1 requires (DESIGN §1). Each face's targets
 are one bicubic (corners, slot tangents, :attr:`~g1patch.targets.Targets.corner_interior`,

@@ -315,7 +315,8 @@ def _vertex_kernel(
     """Vertices ``lo:hi``: the twist targets at V of their ring's sub-patches (``P1 + P1' − V`` plus
     the net's offset in the slot) moved onto ``F_{j−1} + F_j = R_j``,
     ``R_j = 2 P1_j + (2 λ_j (P2_j − P1_j) − m_j (P1_j − v))/3`` (rows j ≥ 1 at a boundary vertex),
-    by the min-norm operator at ``operators[table[open, n]:]`` (none where ``table`` is −1)."""
+    by the min-norm operator at ``operators[table[open, n]:]`` (none where ``table`` is −1); both
+    sides relative to V, as the reference solves them."""
     width = 1
     for v in range(lo, hi):
         width = max(width, ring_offsets[v + 1] - ring_offsets[v])
@@ -332,12 +333,13 @@ def _vertex_kernel(
             slope = mu[e] if near == 0 else -mu[e]
             lam = 2.0 * ends[e, near // 4]  # λ_j of this ring slot
             slot = place[h & 3, 1, 1]
-            for d in range(3):
+            for d in range(3):  # relative to V (see the reference)
                 o1, o2 = curve[e, near, d], curve[e, 1 + near // 2, d]
-                stacked[j, d] = o1 + curve[ep, far, d] - pos[v, d] + control[h, slot + d]
+                arm = o1 - pos[v, d]
+                stacked[j, d] = arm + (curve[ep, far, d] - pos[v, d]) + control[h, slot + d]
                 if j >= is_open:
                     stacked[n + j - is_open, d] = (
-                        2.0 * o1 + (2.0 * lam * (o2 - o1) - slope * (o1 - pos[v, d])) / 3.0
+                        2.0 * arm + (2.0 * lam * (o2 - o1) - slope * arm) / 3.0
                     )
         offset = table[is_open, n]
         columns = 2 * n - is_open
@@ -346,12 +348,12 @@ def _vertex_kernel(
             slot = place[h & 3, 1, 1]
             for d in range(3):
                 if offset < 0:
-                    control[h, slot + d] = stacked[j, d]
+                    control[h, slot + d] = pos[v, d] + stacked[j, d]
                     continue
                 total = 0.0
                 for i in range(columns):
                     total += operators[offset + j * columns + i] * stacked[i, d]
-                control[h, slot + d] = total
+                control[h, slot + d] = pos[v, d] + total
 
 
 def _centre_kernel(

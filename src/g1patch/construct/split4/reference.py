@@ -249,19 +249,23 @@ def _reference_patches(given: SplitInputs) -> tuple[FloatArray, FloatArray, Floa
     corner_points = pos[topology.faces.reshape(-1)]
     centre_points = np.repeat(centres, 4, axis=0)
     twist = np.empty((4 * n_faces, 4, 3))  # targets, replaced in place by the solved twists
-    twist[:, 0] = o1 + d1[prev] - corner_points + own[:, _TWIST_VERTEX]
+    # at V relative to V until its ring is solved (below)
+    twist[:, 0] = (o1 - corner_points) + (d1[prev] - corner_points) + own[:, _TWIST_VERTEX]
     twist[:, 1] = o2 + seam - m_h + own[:, _TWIST_MID]
     twist[:, 2] = d2[prev] + seam[prev] - m_h[prev] + own[:, _TWIST_PREV]
     twist[:, 3] = b_flat + b_flat[prev] - centre_points + own[:, _TWIST_CENTRE]
     del centre_points, own
 
-    # -- original vertices: F_{j−1} + F_j = R_j over the interior ring edges
-    origin = topology.faces.reshape(-1)
+    # -- original vertices: F_{j−1} + F_j = R_j over the interior ring edges, solved relative to
+    # V (both sides less 2 V): the pseudo-inverse amplifies its right-hand side's rounding by up to
+    # ~n/π (eigenvalues 1 + ω^k of the cycle), so that rounding is of the ring's size, not of the
+    # model's, and the G1 error no longer grows with the distance from the origin times n
     lam = 2.0 * np.where(
         canonical, ends[edge_of, 0], ends[edge_of, 1]
     )  # λ_j of the slot of h at its origin
-    rhs = 2.0 * o1 + (2.0 * lam[:, None] * (o2 - o1) - slope[:, None] * (o1 - pos[origin])) / 3.0
-    del corner_points
+    arm = o1 - corner_points
+    rhs = 2.0 * arm + (2.0 * lam[:, None] * (o2 - o1) - slope[:, None] * arm) / 3.0
+    del arm
     boundary = topology.is_boundary_vertex
     base = int(topology.face_count.max()) + 1
     keys = np.unique(boundary.astype(np.int64) * base + topology.face_count)
@@ -272,6 +276,8 @@ def _reference_patches(given: SplitInputs) -> tuple[FloatArray, FloatArray, Floa
         if equations.size:
             rows = ring if not is_open else ring[:, 1:]
             twist[ring, 0] = _min_norm(equations, rhs[rows], twist[ring, 0])
+    twist[:, 0] += corner_points
+    del corner_points
 
     # -- midpoints: G_LX + G_RX = A_X, G_LY + G_RY = A_Y, G_LX + G_LY = 2 e_L, G_RX + G_RY = 2 e_R
     inner = np.flatnonzero(interior)
