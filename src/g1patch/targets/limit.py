@@ -20,10 +20,10 @@
   of the curve rule ``(2P_0 + P_1)/3``), exactly; elsewhere the four interior points of the
   bicubic with those boundary curves that fit the exact limit samples inside the face in the
   same weighted sense, with a larger share ρ (:data:`_PARAMETRIC_INTERIOR`) (a 12 × 12 solve per
-  face). Next to a vertex of valence n the normal in that weight is the exact one only by a share
-  ``(4/n)²``, the rest the blend of the face's corner normals: the exact normal ripples sideways
-  with the n sectors, and weighted by it the points slid sideways by more than a narrow sector
-  (:func:`_exact_normal_share`). The Gregory assembly then moves them as far as G1 requires.
+  face). Next to a vertex of valence n > 8 the normal in that weight is the exact one only by a
+  share ``(8/n)²``, the rest the blend of the face's corner normals: the exact normal ripples
+  sideways with the n sectors, and weighted by it the points slid sideways by more than a narrow
+  sector (:func:`_exact_normal_share`). The Gregory assembly then moves them as far as G1 requires.
 
 Every manifold quad mesh gets valid targets: a fitted fan that does not turn counter-clockwise
 falls back to the limit star, and where the two limit tangents of a vertex are parallel (a
@@ -252,8 +252,13 @@ def _boundary_nets(
     return net
 
 
+#: up to this valence the interior fit weighs by the exact limit normal alone (its sideways tilt
+#: inside a face is a few hundredths there: every common cage is fitted as before)
+_SMOOTH_VALENCE = 8.0
+
+
 def _exact_normal_share(valence: IntArray) -> FloatArray:
-    """The share ``min(1, (4/n)²)`` of the exact limit normal in :func:`_fit_interior`'s weight of
+    """The share ``min(1, (8/n)²)`` of the exact limit normal in :func:`_fit_interior`'s weight of
     a face whose corners have at most valence ``n`` (the rest: the blend of its corner normals).
 
     Next to a vertex of valence n the Catmull–Clark limit ripples with its n sectors (ridges along
@@ -264,9 +269,9 @@ def _exact_normal_share(valence: IntArray) -> FloatArray:
     corners of a pole face lay outside its 1° sector (at 1.67 and −0.67 of it; 0.22 and 0.78 with
     a smooth normal, as at valence 16) and every assembly following them folded. With this share
     the tilt the exact normal brings falls like 1/n, as the sector does, so the fit keeps its
-    shape in sector units at every valence; faces up to valence 4 (and a cage's boundary) are
+    shape in sector units at every valence; faces up to valence 8 (:data:`_SMOOTH_VALENCE`) are
     fitted as before."""
-    return np.minimum(1.0, (4.0 / np.maximum(valence, 1)) ** 2)
+    return np.minimum(1.0, (_SMOOTH_VALENCE / np.maximum(valence, 1)) ** 2)
 
 
 def _fit_interior(
@@ -303,7 +308,8 @@ def _fit_interior(
     length = np.linalg.norm(blend, axis=-1, keepdims=True)
     blend = np.where(length > 0.5, blend / np.where(length > 0.5, length, 1.0), exact)
     n = blend + share[:, None, None] * (exact - blend)
-    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    size = np.linalg.norm(n, axis=-1, keepdims=True)
+    n = np.where(size > 0.5, n / np.maximum(size, 0.5), exact)  # opposed normals: the exact one
     weight = n[..., :, None] * n[..., None, :] + _PARAMETRIC_INTERIOR * np.eye(3)  # (F, K, 3, 3)
     gram = np.einsum("kc,kg,fkde->fcdge", inner, inner, weight).reshape(count, 12, 12)
     rhs = -np.einsum("kc,fkde,fke->fcd", inner, weight, residual).reshape(count, 12)
