@@ -8,8 +8,8 @@ turning once around the normal.
   more than ``ε = min(2°, ¼ · 360°/n, ½ · ω_A)`` and less than ``180° − ε``, and go once around
   (interior) or less than once (boundary); where they do not, the smallest blend towards the
   fitted star that passes, else evenly spread directions (:func:`spread_fan`). ``ω_A``
-  (:func:`mesh_gaps`) is the mesh's own narrowest face corner at A, ``min(θ, 180° − θ)``: a
-  thin wedge the mesh has (the kites round a 360-valent pole turn 2° and 178° at their spoke
+  (:func:`mesh_gaps`) is the mesh's own narrowest face corner at A, ``min(θ, 180° − θ)``, in
+  space or in A's tangent plane, whichever is narrower: a thin wedge the mesh has (the kites round a 360-valent pole turn 2° and 178° at their spoke
   vertices) is no reason to replace a fan. The rule is told in full in
   :mod:`g1patch.targets.interpolate`.
 """
@@ -137,10 +137,18 @@ def _fan_gaps(
     return gaps, gap_vertex, first
 
 
-def mesh_gaps(mesh: QuadMesh) -> FloatArray:
+def mesh_gaps(mesh: QuadMesh, normals: FloatArray | None = None) -> FloatArray:
     """Per vertex A the narrowest corner its faces have there, ``ω_A = min_j min(θ_j, π − θ_j)``
     (radians), ``θ_j = atan2(|d_j × d_{j+1}|, d_j · d_{j+1})`` between the chords ``d_j = B_j − A``
-    of the face's two edges at A: the wedge the mesh itself allows a fan (:func:`gap_floors`)."""
+    of the face's two edges at A: the wedge the mesh itself allows a fan (:func:`gap_floors`).
+
+    With the vertex ``normals`` (V, 3) the corner is also measured as the fan turns, between the
+    chords projected onto A's tangent plane, and the smaller of the two is taken. On a curved
+    surface chords of unequal length dip below the plane by unequal angles: next to a 360-valent
+    pole of a sphere the kite's corner at a spoke vertex turns 0.87° in the plane (it narrows
+    like 360°/n, as the pole's sector does) but its chords are 7.5° apart in space, so the 3D
+    corner alone kept ε at 2°, the fan was blended towards a regular star and its edge curves
+    left their sectors."""
     topology = mesh.topology
     offsets = topology.neighbor_offsets
     counts = topology.face_count
@@ -152,7 +160,14 @@ def mesh_gaps(mesh: QuadMesh) -> FloatArray:
     a = x[topology.neighbors[offsets[gap_vertex] + local]] - x[gap_vertex]
     b = x[topology.neighbors[offsets[gap_vertex] + (local + 1) % size]] - x[gap_vertex]
     theta = np.arctan2(np.linalg.norm(cross(a, b), axis=1), dot(a, b))
-    return np.minimum.reduceat(np.minimum(theta, np.pi - theta), starts)
+    gap = np.minimum(theta, np.pi - theta)
+    if normals is not None:
+        n = normals[gap_vertex]
+        a -= dot(a, n)[:, None] * n
+        b -= dot(b, n)[:, None] * n
+        theta = np.arctan2(np.linalg.norm(cross(a, b), axis=1), dot(a, b))
+        gap = np.minimum(gap, np.minimum(theta, np.pi - theta))
+    return np.minimum.reduceat(gap, starts)
 
 
 def gap_floors(topology: QuadTopology, own: FloatArray | None = None) -> FloatArray:

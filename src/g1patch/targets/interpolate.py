@@ -23,8 +23,10 @@ Two rules, both returning :class:`~g1patch.targets.Targets` on the mesh's own po
     * fan safeguard: in A's tangent plane consecutive slots must turn counter-clockwise by more
       than ``ε = min(2°, ¼ · 360°/n, ½ · ω_A)`` and less than ``180° − ε``, and go once around
       (interior) or less than once (boundary); ``ω_A`` is the narrowest corner the mesh's own
-      faces have at A, ``min(θ, 180° − θ)`` (:func:`~g1patch.targets.fans.mesh_gaps`): the thin
-      kites round a 360-valent pole turn 2° and 178° at their spoke vertices, and are kept.
+      faces have at A, ``min(θ, 180° − θ)``, between its chords or between their projections onto
+      A's plane, whichever is narrower (:func:`~g1patch.targets.fans.mesh_gaps`): the thin
+      kites round a 360-valent pole turn 2° and 178° at their spoke vertices, and are kept; so do
+      those round a sphere's pole, 0.87° in the plane at valence 360 but 7.5° apart in space.
       Where they do not, ``t = (1 − μ) t_raw + μ t_star`` with the smallest
       ``μ ∈ {1/8, …, 1}`` that passes, t_star the regular star fitted to the raw fan; if
       even the star fails, evenly spread directions with the raw lengths. A corner with one face
@@ -103,7 +105,7 @@ def interpolate_targets(mesh: QuadMesh, *, tangents: TangentRule = "arc") -> Tar
     raw, chord, parallel = _projected_tangents(mesh, normals)
     raw = _along_smooth_lines(mesh, normals, raw, out=raw)
     raw = _smooth_boundary_tangents(mesh, normals, raw)
-    slots, guarded = safeguarded_fans(topology, normals, raw, chord, mesh_gaps(mesh))
+    slots, guarded = safeguarded_fans(topology, normals, raw, chord, mesh_gaps(mesh, normals))
     slots = in_vertex_planes(slots, normals, topology.neighbor_offsets, out=slots)
     fallback = guarded | frames.repaired | parallel
     seams = seam_edges(mesh, INTERPOLATE_SHARPNESS)
