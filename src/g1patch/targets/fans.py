@@ -9,8 +9,9 @@ turning once around the normal.
   (interior) or less than once (boundary); where they do not, the smallest blend towards the
   fitted star that passes, else evenly spread directions (:func:`spread_fan`). ``ω_A``
   (:func:`mesh_gaps`) is the mesh's own narrowest face corner at A, ``min(θ, 180° − θ)``, in
-  space or in A's tangent plane, whichever is narrower: a thin wedge the mesh has (the kites round a 360-valent pole turn 2° and 178° at their spoke
-  vertices) is no reason to replace a fan. The rule is told in full in
+  space or in A's tangent plane, whichever is narrower: a thin wedge the mesh has (the kites
+  round a 360-valent pole turn 0.87° in the plane at their spoke vertices) is no reason to replace
+  a fan. The rule is told in full in
   :mod:`g1patch.targets.interpolate`.
 """
 
