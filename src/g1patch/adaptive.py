@@ -66,8 +66,8 @@ _CELL = PARAMETER_CORNERS
 class _Level:
     """One level of the refinement: its cage (a neighbourhood refined ``depth`` steps), its
     network (one patch per face, holes without), each face's root face and corner parameters
-    there, each vertex's id across levels, which faces are this level's (``active``) and which
-    have the whole cage's points (``valid``), and each face's distance from the limit."""
+    there, each vertex's id across levels, which faces are this level's (``active``: the
+    refined region's, whose 1-rings are whole) and each active face's distance from the limit."""
 
     mesh: QuadMesh
     network: PatchNetwork
@@ -75,7 +75,6 @@ class _Level:
     corners: FloatArray
     ids: IntArray
     active: BoolArray
-    valid: BoolArray
     distance: FloatArray
 
     @property
@@ -136,9 +135,10 @@ def semi_sharp_faces(mesh: QuadMesh) -> BoolArray:
     return np.asarray(vertices[mesh.faces].any(axis=1))
 
 
-def _face_distance(network: PatchNetwork, mesh: QuadMesh) -> FloatArray:
-    """Each face's largest distance from the limit (0 on holes)."""
-    return np.nan_to_num(limit_distance(network, mesh, 1).per_face, nan=0.0)
+def _face_distance(network: PatchNetwork, mesh: QuadMesh, active: BoolArray) -> FloatArray:
+    """Each ``active`` face's largest distance from the limit (0 on holes and elsewhere: the
+    faces of the support rings have no whole 1-ring, their patches are not the cage's)."""
+    return np.nan_to_num(limit_distance(network, mesh, 1, only=active).per_face, nan=0.0)
 
 
 def _refined(
@@ -173,16 +173,8 @@ def _refined(
         return out
 
     network = build(fine, ids)
-    return _Level(
-        fine,
-        network,
-        root,
-        corners,
-        ids,
-        children_of(region),
-        children_of(grow(level.mesh.topology, region, 2) & level.valid),
-        _face_distance(network, fine),
-    )
+    active = children_of(region)
+    return _Level(fine, network, root, corners, ids, active, _face_distance(network, fine, active))
 
 
 def _region(level: _Level, bad: BoolArray, exact: float) -> BoolArray:
@@ -228,8 +220,7 @@ def refine_adaptively(
         np.broadcast_to(PARAMETER_CORNERS, (cage.n_faces, 4, 2)).copy(),
         np.arange(cage.n_vertices),
         np.ones(cage.n_faces, dtype=bool),
-        np.ones(cage.n_faces, dtype=bool),
-        _face_distance(network, cage),
+        _face_distance(network, cage, np.ones(cage.n_faces, dtype=bool)),
     )
     levels: list[_Level] = [level]
     regions: list[BoolArray] = []

@@ -176,11 +176,15 @@ def _walk(network: PatchNetwork, patch: IntArray, uv: FloatArray) -> tuple[IntAr
 
 
 def limit_distance(
-    network: PatchNetwork, cage: QuadMesh, patches_per_face: int, levels: int | None = None
+    network: PatchNetwork,
+    cage: QuadMesh,
+    patches_per_face: int,
+    levels: int | None = None,
+    only: NDArray[np.bool_] | None = None,
 ) -> LimitDistance:
     """The distance from the exact Catmull–Clark limit of ``cage`` (world coordinates, the quad
     mesh the network's patches were built on, ``patches_per_face`` each, hole faces without) to
-    the network (module docstring)."""
+    the network (module docstring); with ``only`` (F,), on those faces alone (NaN elsewhere)."""
     levels = limit_sample_levels(cage.n_faces) if levels is None else int(levels)
     holes = cage.features.holes
     first = _face_patches(cage.n_faces, holes, patches_per_face, network)
@@ -189,7 +193,7 @@ def limit_distance(
     m = grid.shape[1]
     t = np.linspace(0.0, 1.0, m)
     face_uv = np.stack(np.meshgrid(t, t, indexing="ij"), axis=-1).reshape(-1, 2)
-    faces = np.flatnonzero(first >= 0)
+    faces = np.flatnonzero((first >= 0) if only is None else (first >= 0) & only)
     face = np.repeat(faces, m * m)
     uv = np.tile(face_uv, (len(faces), 1))
     patch, local = _start(first[face], uv, patches_per_face)
