@@ -269,3 +269,17 @@ def test_the_measure_never_exceeds_the_start(method: str) -> None:
     per_face = gap.reshape(cage.n_faces, -1).max(axis=1)
     assert (ours.per_face <= per_face * (1 + 1e-12)).all()
     assert ours.max < per_face.max()  # and the feet are nearer than the start
+
+
+def test_the_distance_on_some_faces_is_theirs_of_the_whole() -> None:
+    """``only`` measures the chosen faces alone: NaN elsewhere, their figures unchanged (the
+    adaptive refinement measures a level's own faces this way)."""
+    cage = refine(cube_cage(), 1)
+    network = build_network(cage, "gregory", "limit", tolerance=None)
+    whole = limit_distance(network, cage, 1, levels=2)
+    only = np.zeros(cage.n_faces, dtype=bool)
+    only[::3] = True
+    part = limit_distance(network, cage, 1, levels=2, only=only)
+    assert np.isnan(part.per_face[~only]).all()
+    np.testing.assert_array_equal(part.per_face[only], whole.per_face[only])
+    assert part.samples == only.sum() * 5 * 5
