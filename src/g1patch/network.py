@@ -105,16 +105,16 @@ class HangingEdges:
             raise InputError(
                 f"hanging: {len(sides)} sides but {len(span)} spans; expected one of each per link"
             )
-        if ((span < 0.0) | (span > 1.0)).any() or (span[:, 0] == span[:, 1]).any():
-            bad = int(
-                np.argmax(((span < 0.0) | (span > 1.0)).any(axis=1) | (span[:, 0] == span[:, 1]))
-            )
+        wrong_span = ((span < 0.0) | (span > 1.0)).any(axis=1) | (span[:, 0] == span[:, 1])
+        if wrong_span.any():
+            bad = int(np.argmax(wrong_span))
             raise InputError(
                 f"hanging: link {bad} spans {span[bad].tolist()} of its coarse edge; expected two "
                 "different fractions in [0, 1]"
             )
-        if ((sides[:, [1, 3]] < 0) | (sides[:, [1, 3]] > 3)).any():
-            bad = int(np.argmax(((sides[:, [1, 3]] < 0) | (sides[:, [1, 3]] > 3)).any(axis=1)))
+        wrong_edge = ((sides[:, [1, 3]] < 0) | (sides[:, [1, 3]] > 3)).any(axis=1)
+        if wrong_edge.any():
+            bad = int(np.argmax(wrong_edge))
             raise InputError(
                 f"hanging: link {bad} names patch edge {sides[bad].tolist()}; edges are 0…3"
             )
