@@ -495,6 +495,30 @@ def build_split4_network(
     return build_network(mesh, "split4", shape, tangents=tangents)
 
 
+def estimate_patches(method: str, patches: int) -> BuildEstimate:
+    """The estimate of a build that makes ``patches`` one-patch faces of ``method`` out of a
+    refined cage (a locally refined network, whose count is not ``faces · 4^steps``): per patch
+    the refined mesh, its refinement and the assembly's peak, as :func:`estimate_build` counts
+    them."""
+    per_patch = MESH_BYTES_PER_FACE + REFINE_BYTES_PER_FACE + ASSEMBLIES[method].peak_bytes_per_face
+    return BuildEstimate(0, patches, patches, patches * per_patch)
+
+
+def _over_budget(
+    estimate: BuildEstimate, method: str, max_memory: int | None, max_patches: int | None
+) -> str:
+    """Why the tolerance loop stops before a step of this ``estimate`` (it would exceed the
+    budget, :func:`check_budget`) and what lets it through; empty when it is within."""
+    try:
+        check_budget(estimate, method, max_memory, max_patches)
+    except BudgetError:
+        return (
+            f"another step would make about {estimate.patches:,} patches and need about "
+            f"{size_text(estimate.bytes)}; a larger --max-memory or --tolerance lets it through"
+        )
+    return ""
+
+
 def check_tolerance(tolerance: float) -> float:
     """``tolerance`` as a float in (0, 1), else :class:`InputError` naming it."""
     if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float, np.floating)):
@@ -545,17 +569,7 @@ def _within_tolerance(
     if method == "gregory":  # refined only where it is off: hanging edges between levels
 
         def allowed(patches: int) -> str:
-            per_patch = MESH_BYTES_PER_FACE + REFINE_BYTES_PER_FACE + assembly.peak_bytes_per_face
-            estimate = BuildEstimate(0, patches, patches, patches * per_patch)
-            try:
-                check_budget(estimate, method, max_memory, max_patches)
-            except BudgetError:
-                return (
-                    f"another step would make about {patches:,} patches and need about "
-                    f"{size_text(estimate.bytes)}; a larger --max-memory or --tolerance lets it "
-                    "through"
-                )
-            return ""
+            return _over_budget(estimate_patches(method, patches), method, max_memory, max_patches)
 
         adaptive = refine_adaptively(
             network,
@@ -576,15 +590,10 @@ def _within_tolerance(
             if steps == MAX_TOLERANCE_STEPS:
                 stop = f"{MAX_TOLERANCE_STEPS} steps added; a larger --tolerance lets it through"
                 break
-            estimate = estimate_build(cage, method, "limit", steps + 1)
-            try:
-                check_budget(estimate, method, max_memory, max_patches)
-            except BudgetError:
-                stop = (
-                    f"another step would make {estimate.patches:,} patches and need about "
-                    f"{size_text(estimate.bytes)}; a larger --max-memory or --tolerance lets it "
-                    "through"
-                )
+            stop = _over_budget(
+                estimate_build(cage, method, "limit", steps + 1), method, max_memory, max_patches
+            )
+            if stop:
                 break
             steps += 1
             finer = subdivide(cage, steps)
