@@ -274,8 +274,8 @@ def _combine(
     levels: list[_Level], regions: list[BoolArray], cage: QuadMesh, diagonal: float
 ) -> tuple[PatchNetwork, float]:
     """One network of every level's kept patches (its active faces outside its refined region),
-    in the cage network's frame, with the hanging edges between levels; and the largest distance
-    of a kept face."""
+    in the cage network's frame, with the hanging edges between levels, the UVs and groups of
+    each patch's root face; and the largest distance of a kept face."""
     base = levels[0].network
     frame = getattr(base.patches, "frame", None)
     points, corner_ids, edge_ids, reversed_, neighbor, neighbor_edge, seam = (
@@ -345,7 +345,8 @@ def _combine(
     uv = None
     if cage.uv is not None:
         uv = _bilinear(cage.uv[root_all][:, None], corners_all)
-    return replace(network, hanging=hanging, uv=uv), distance
+    groups = None if cage.groups is None else cage.groups.take(root_all)
+    return replace(network, hanging=hanging, uv=uv, groups=groups), distance
 
 
 def hanging_edges(

@@ -311,6 +311,7 @@ def as_mesh(
             source.source,
             source.repairs,
             uv=source.uv,
+            groups=source.groups,
         )
     if isinstance(source, (str, os.PathLike)):
         path = Path(source)

@@ -418,7 +418,7 @@ def build_network(
         mesh = subdivide(mesh, refine)
     if method == "corner" and shape == "legacy" and not refine:
         corner = build_corner_network(mesh, tangents=tangents, twist=twist, normals=normals)
-        return _with_uv(corner, mesh, 1)
+        return _with_faces(corner, mesh, 1)
     network = _network(mesh, method, shape, tangents, refine, repairs)
     if tolerance is None or shape not in LIMIT_SHAPES:
         return network
@@ -437,8 +437,8 @@ def _network(
     through: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> PatchNetwork:
     """The network of ``mesh`` (already refined ``refine`` steps): targets, the fold guard for
-    ``interpolate``, assembly, the network with its UVs. ``through``: (vertices, world points)
-    those vertices' targets take exactly instead of the rule's (the limit of a refined
+    ``interpolate``, assembly, the network with its UVs and groups. ``through``: (vertices, world
+    points) those vertices' targets take exactly instead of the rule's (the limit of a refined
     interpolating cage passes through the original vertices, to the solve's residual: these make
     it exact)."""
     assembly = ASSEMBLIES[method]
@@ -467,18 +467,22 @@ def _network(
     # the network needs none of the rest: freed before its arrays are made (DESIGN §6)
     del assembled, targets, local
     network = assembly.network(kept, NetworkParts(mesh, surface, frame, provenance))
-    return _with_uv(network, mesh, assembly.patches_per_face)
+    return _with_faces(network, mesh, assembly.patches_per_face)
 
 
-def _with_uv(network: PatchNetwork, mesh: QuadMesh, patches_per_face: int) -> PatchNetwork:
-    """``network`` with its patches' UVs (:func:`~g1patch.network.patch_uvs`) from the mesh's
-    face-varying ones, the hole faces' left out where they have no patches; as it is without."""
-    if mesh.uv is None:
+def _with_faces(network: PatchNetwork, mesh: QuadMesh, patches_per_face: int) -> PatchNetwork:
+    """``network`` with what its patches take from their faces: the UVs
+    (:func:`~g1patch.network.patch_uvs`, from the mesh's face-varying ones) and the groups (each
+    of a face's patches in its group), the hole faces' left out where they have no patches; as it
+    is without either."""
+    if mesh.uv is None and mesh.groups is None:
         return network
     faces = np.arange(mesh.n_faces)
     if network.n_patches != mesh.n_faces * patches_per_face:  # hole faces without patches
         faces = np.flatnonzero(~mesh.features.holes)
-    return replace(network, uv=patch_uvs(mesh.uv[faces], patches_per_face))
+    uv = None if mesh.uv is None else patch_uvs(mesh.uv[faces], patches_per_face)
+    groups = None if mesh.groups is None else mesh.groups.take(faces).repeat(patches_per_face)
+    return replace(network, uv=uv, groups=groups)
 
 
 def build_gregory_network(

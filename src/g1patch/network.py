@@ -12,6 +12,9 @@ counter-clockwise, see :mod:`g1patch.patches`):
   the two patches share the boundary curve (G0) but not the tangent plane. Both sides agree;
   open and collapsed edges are never seams.
 
+* ``groups``: each patch's named group (:class:`~g1patch.mesh.groups.FaceGroups`: the group of
+  the cage face it was made from, the mesh file's material or group), None without.
+
 * ``hanging``: edges of a feature-adaptive network where a coarse patch meets several finer ones
   (:class:`HangingEdges`): each fine patch edge lies along a part of the coarse patch edge. Both
   sides have no neighbour in the arrays above and are not open edges.
@@ -35,6 +38,7 @@ from .errors import G1PatchError, InputError, NonManifoldError, as_float_array, 
 from .frame import Frame
 from .gregory import GregoryPatchSet
 from .mesh import QuadTopology
+from .mesh.groups import FaceGroups
 from .patches import PatchSet
 
 __all__ = [
@@ -169,6 +173,8 @@ class PatchNetwork:
     uv: NDArray[np.float64] | None = None
     #: T-junctions between coarse and finer patches (None: the network is conforming)
     hanging: HangingEdges | None = None
+    #: each patch's named group, that of its cage face (None without); see the module docstring
+    groups: FaceGroups | None = None
 
     def __post_init__(self) -> None:
         count = len(self.patches)
@@ -196,6 +202,8 @@ class PatchNetwork:
             object.__setattr__(self, "uv", uv)
         if self.hanging is not None:
             self._check_hanging(self.hanging)
+        if self.groups is not None and len(self.groups) != count:
+            raise InputError(f"groups: expected one per patch ({count}), got {len(self.groups)}")
 
     def _check_hanging(self, hanging: HangingEdges) -> None:
         """Every link names patches of the network whose edges have no neighbour."""
@@ -251,8 +259,8 @@ class PatchNetwork:
 
     def take_patches(self, keep: ArrayLike) -> PatchNetwork:
         """The network of the patches where ``keep`` (P,) is True: an edge shared with a patch
-        left out becomes open (no neighbour, no seam); corner and edge ids, points and UVs of the
-        kept patches stay as they are."""
+        left out becomes open (no neighbour, no seam); corner and edge ids, points, UVs and groups
+        of the kept patches stay as they are."""
         kept = _as_bool("keep", keep, (self.n_patches,))
         index = np.cumsum(kept) - 1
         neighbor = self.neighbor[kept]
@@ -270,6 +278,7 @@ class PatchNetwork:
             same_direction=self.same_direction[kept],
             seam=self.seam[kept] & (neighbor >= 0),
             uv=None if self.uv is None else self.uv[kept],
+            groups=None if self.groups is None else self.groups.take(kept),
             hanging=None if self.hanging is None else self.hanging.kept(kept, index),
         )
 

@@ -32,6 +32,7 @@ that bring it within its bound.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
@@ -328,6 +329,17 @@ def _cell_fits(
 
 
 def split4_of_gregory(
+    network: PatchNetwork, *, guided: bool = True, refine: int = 1
+) -> PatchNetwork:
+    """:func:`_split4_of_gregory`, each of its patches in the group of the Gregory patch it covers
+    (the 4 n² sub-patches of patch f are ``4 n² f`` on)."""
+    converted = _split4_of_gregory(network, guided=guided, refine=refine)
+    if network.groups is None:
+        return converted
+    return replace(converted, groups=network.groups.repeat(4 * int(refine) ** 2))
+
+
+def _split4_of_gregory(
     network: PatchNetwork, *, guided: bool = True, refine: int = 1
 ) -> PatchNetwork:
     """The split4 network (:func:`~g1patch.construct.split4.split4_network_from_targets`) of a

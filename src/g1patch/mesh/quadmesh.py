@@ -27,6 +27,7 @@ from ..errors import (
 )
 from .cage import PolygonCage
 from .features import Features, _read_only, features_from_tags
+from .groups import FaceGroups
 from .polygons import _quads_from_polygons, refine_corner_uvs, refine_polygons
 from .repair import repair_polygons
 from .tags import Tag, _refine_tags
@@ -72,7 +73,9 @@ class QuadMesh:
     some face was not a quad; the limit shapes take their first Catmull–Clark step from it
     (:func:`g1patch.subdivision.catmull_clark_cage`). New positions (:meth:`with_vertices`) drop it.
     ``uv``: texture coordinates per face corner (F, 4, 2), face-varying (a vertex may have other
-    UVs in other faces: a seam in UV space), the file's ``vt``; None without.
+    UVs in other faces: a seam in UV space), the file's ``vt``; None without. ``groups``: each
+    face's named group (:class:`~g1patch.mesh.groups.FaceGroups`, the file's materials or
+    groups); None without.
     """
 
     vertices: FloatArray
@@ -82,6 +85,7 @@ class QuadMesh:
     repairs: tuple[str, ...] = ()
     cage: PolygonCage | None = None
     uv: FloatArray | None = None
+    groups: FaceGroups | None = None
 
     def __post_init__(self) -> None:
         with named_errors(self.source):
@@ -96,6 +100,11 @@ class QuadMesh:
             if self.uv is not None:
                 uv = _checked_uv(self.uv, (self.topology.n_faces, 4, 2))
                 object.__setattr__(self, "uv", _read_only(uv.copy()))
+            if self.groups is not None and len(self.groups) != self.topology.n_faces:
+                raise InputError(
+                    f"groups: expected one per face ({self.topology.n_faces}), got "
+                    f"{len(self.groups)}"
+                )
         object.__setattr__(self, "vertices", _read_only(vertices.copy()))
         object.__setattr__(self, "tags", tuple(Tag(*tag) for tag in self.tags))
         object.__setattr__(self, "repairs", tuple(self.repairs))
@@ -111,6 +120,7 @@ class QuadMesh:
         tags: Sequence[Tag] = (),
         strict: bool | None = None,
         uv: ArrayLike | None = None,
+        groups: FaceGroups | None = None,
     ) -> QuadMesh:
         """Validate and build a quad mesh from positions and faces ((nf, 4) array or lists of
         indices).
@@ -124,7 +134,9 @@ class QuadMesh:
         :attr:`repairs`), unless ``strict`` (default: the one of :func:`strict_meshes`, else False),
         which raises the check's error. Non-finite coordinates, out-of-range indices, faces of < 3
         corners, zero area and non-orientable components raise either way. Errors name ``source`` (a
-        file name) when given.
+        file name) when given. ``uv`` (one per face corner) and ``groups`` (one per face) follow
+        the split and the repairs: a split face's quads keep its group, a merged face the group
+        of the first of its faces.
         """
         strict = _STRICT.get() if strict is None else strict
         tags = tuple(Tag(*tag) for tag in tags)
@@ -132,6 +144,8 @@ class QuadMesh:
         with named_errors(source):
             points, corners, sizes = _checked_polygons(vertices, faces, tags)
             corner_uv = None if uv is None else _checked_uv(uv, (corners.size, 2))
+            if groups is not None and len(groups) != sizes.size:
+                raise InputError(f"groups: expected one per face ({sizes.size}), got {len(groups)}")
             try:
                 quad_points, quads, quad_tags, cage, quad_uv = _quads_from_polygons(
                     points, corners, sizes, split, source, tags, corner_uv
@@ -150,6 +164,8 @@ class QuadMesh:
                         repairs += (UV_DROPPED,)
                     else:
                         corner_uv = corner_uv[repaired.corner_source]
+                if groups is not None and repaired.face_source is not None:
+                    groups = groups.take(repaired.face_source)
                 logger.info("%s: repaired: %s", source or "mesh", ", ".join(repairs))
                 quad_points, quads, quad_tags, cage, quad_uv = _quads_from_polygons(
                     repaired.points,
@@ -161,7 +177,9 @@ class QuadMesh:
                     corner_uv,
                 )
                 topology = QuadTopology.from_faces(quads, quad_points.shape[0])
-        return cls(quad_points, topology, quad_tags, source, repairs, cage, quad_uv)
+            if groups is not None and cage is not None:  # polygon f split into sizes[f] quads
+                groups = groups.repeat(cage.sizes)
+        return cls(quad_points, topology, quad_tags, source, repairs, cage, quad_uv, groups)
 
     def __repr__(self) -> str:
         """``<QuadMesh 8 vertices, 6 quads, 12 edges, closed, bbox (-1, -1, -1)…(1, 1, 1),
@@ -182,8 +200,8 @@ class QuadMesh:
         return picture("mesh", self, self.n_faces)
 
     def with_vertices(self, new_vertices: ArrayLike) -> QuadMesh:
-        """The same topology, tags, repair record and UVs with new positions (validated the same
-        way)."""
+        """The same topology, tags, repair record, UVs and groups with new positions (validated
+        the same way)."""
         return QuadMesh(
             np.asarray(new_vertices),
             self.topology,
@@ -191,6 +209,7 @@ class QuadMesh:
             self.source,
             self.repairs,
             uv=self.uv,
+            groups=self.groups,
         )
 
     @property
@@ -238,7 +257,7 @@ def subdivide(mesh: QuadMesh) -> QuadMesh:
 
     Old vertices keep their indices, edge midpoints follow (in edge order), then face centroids
     (:func:`refine_polygons`). Crease and hole tags are carried over, UVs bilinearly
-    (:func:`refine_corner_uvs`).
+    (:func:`refine_corner_uvs`), groups to the 4 children of each face.
     """
     corners = mesh.faces.ravel()
     sizes = np.full(mesh.n_faces, 4, dtype=np.int64)
@@ -252,6 +271,7 @@ def subdivide(mesh: QuadMesh) -> QuadMesh:
         mesh.source,
         mesh.repairs,
         uv=uv,
+        groups=None if mesh.groups is None else mesh.groups.repeat(4),
     )
 
 

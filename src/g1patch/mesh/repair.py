@@ -71,6 +71,9 @@ class Repaired(NamedTuple):
     corner_source: IntArray | None = None
     #: whether faces were merged (rule 4): face-varying data cannot follow a merge
     merged: bool = False
+    #: per repaired face, the input face it comes from (a merged face: the first of its two;
+    #: what per-face data such as groups follows)
+    face_source: IntArray | None = None
 
 
 class _Polygons(NamedTuple):
@@ -542,4 +545,5 @@ def repair_polygons(
         _phrases(notes),
         p.corner_source,
         bool(notes.get("dissolved").size),
+        p.source,
     )

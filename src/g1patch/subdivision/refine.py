@@ -264,6 +264,7 @@ def catmull_clark_cage(mesh: QuadMesh) -> QuadMesh:
         mesh.source,
         mesh.repairs,
         uv=mesh.uv,
+        groups=mesh.groups,
     )
 
 
@@ -272,7 +273,8 @@ def refine(mesh: QuadMesh, levels: int = 1, sharpness: ArrayLike | None = None) 
     :func:`~g1patch.mesh.subdivide` (old vertices, then one per edge, then one per face). Features
     from the mesh's tags, edge sharpness overridden by ``sharpness`` where given; the result's tags
     carry the child features (the other tags are kept), its UVs are the parent faces' bilinear
-    UVs at the children's corners (:func:`~g1patch.mesh.polygons.refine_corner_uvs` each step).
+    UVs at the children's corners (:func:`~g1patch.mesh.polygons.refine_corner_uvs` each step),
+    its groups those of the parent faces (face f's children are faces ``4^levels f`` on).
     ``levels = 0`` returns the mesh itself."""
     return refine_grids(mesh, levels, sharpness)[0]
 
@@ -315,15 +317,18 @@ def _refinement(
 
 
 def _refined_mesh(mesh: QuadMesh, level: _Level, levels: int) -> QuadMesh:
-    """The mesh of ``level``, ``levels`` steps below ``mesh``: its tags rebuilt, the UVs refined
-    (``mesh`` itself for 0 levels)."""
+    """The mesh of ``level``, ``levels`` steps below ``mesh``: its tags rebuilt, the UVs refined,
+    the groups repeated for the children (``mesh`` itself for 0 levels)."""
     if not levels:
         return mesh
     uv = mesh.uv
     if uv is not None:
         for _ in range(int(levels)):
             uv = refine_corner_uvs(uv.reshape(-1, 2), np.full(uv.shape[0], 4, dtype=np.int64))
-    return QuadMesh(level.x, level.topology, _level_tags(mesh.tags, level), mesh.source, uv=uv)
+    groups = None if mesh.groups is None else mesh.groups.repeat(4 ** int(levels))
+    return QuadMesh(
+        level.x, level.topology, _level_tags(mesh.tags, level), mesh.source, uv=uv, groups=groups
+    )
 
 
 def refine_grids(
