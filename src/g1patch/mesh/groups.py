@@ -30,7 +30,7 @@ class FaceGroups:
 
     ids: IntArray
     names: tuple[str, ...]
-    colours: FloatArray | None = None
+    colours: FloatArray = None  # type: ignore[assignment]  # None: all without a colour
 
     def __post_init__(self) -> None:
         ids = as_index_array("groups", self.ids)

@@ -5,7 +5,9 @@ PLY / STL.
   statements are skipped, unknown ones are errors) so that every error names its line and mixed
   polygon lists keep their order. Texture coordinates (``vt``, with faces ``v/vt`` or
   ``v/vt/vn``) are read by a pass of their own that runs only on files that have them
-  (:func:`~g1patch.io.meshfile.obj._obj_uvs`), as one UV per face corner.
+  (:func:`~g1patch.io.meshfile.obj._obj_uvs`), as one UV per face corner; so are the face groups
+  (``usemtl`` materials, else ``g``/``o`` names; colours from the ``mtllib`` files' ``Kd``:
+  :mod:`~g1patch.io.meshfile.obj_groups`).
 * PLY: files of the common layout (x, y, z and other scalars per vertex, scalars and one list of
   vertex indices per face) are read here, binary as NumPy records, ASCII as OBJ and OFF text is;
   any other by meshio (``meshio.ply``), after checking the header here: meshio silently returns
@@ -118,6 +120,7 @@ def read_mesh(
         tags=tags,
         strict=strict,
         uv=parsed.uv,
+        groups=parsed.groups,
     )
 
 

@@ -1,6 +1,7 @@
 """OBJ: ``v``, ``f`` and OpenSubdiv ``t`` tag lines, other statements skipped or refused; read
 by the compiled kernel, the vectorised fast path or, where they decline, line by line; ``vt`` by
-a pass of its own, only in files that have them (:func:`_obj_uvs`)."""
+a pass of its own, only in files that have them (:func:`_obj_uvs`), and so are the face groups
+(``usemtl``, ``g``, ``o``: :mod:`.obj_groups`)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from ...errors import FormatError
 from ...kernels import use_kernels
 from ...mesh import Tag
 from .compiled import _BYTE_CLASSES, KERNEL_BYTES, _compiled, _obj_kernel, _powers_of_five
+from .obj_groups import _mentions_groups, _obj_groups
 from .parsed import (
     _INT64_END,
     _convert,
@@ -27,8 +29,9 @@ from .parsed import (
 from .source import MAX_COUNT_DIGITS
 from .text import _gather_floats, _numbers, _scan
 
-#: OBJ statements that carry nothing a quad mesh needs (normals, texture, grouping, materials,
-#: free-form geometry); they are skipped. Any other keyword is an error.
+#: OBJ statements the face reader skips: those that carry nothing a quad mesh needs (normals,
+#: free-form geometry) and those read by passes of their own (``vt``, ``g``, ``o``, ``usemtl``,
+#: ``mtllib``). Any other keyword is an error.
 OBJ_SKIPPED = frozenset(
     "vt vn vp g o s usemtl mtllib l p lod bevel c_interp d_interp shadow_obj trace_obj maplib "
     "usemap "
@@ -47,6 +50,8 @@ def _read_obj(path: Path, data: bytes) -> _Parsed:
     """
     parsed = _obj_compiled(data) if use_kernels(len(data) >= KERNEL_BYTES) else _obj_fast(data)
     parsed = parsed if parsed is not None else _read_obj_lines(path, data)
+    if _mentions_groups(data):  # the one cost to files without groups
+        parsed = parsed._replace(groups=_obj_groups(path, data, len(parsed.faces)))
     if not _mentions_uvs(data):  # the one cost to files without texture coordinates
         return parsed
     return parsed._replace(uv=_obj_uvs(path, data, parsed))

@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 from ...errors import FormatError
 from ...mesh import Tag
+from ...mesh.groups import FaceGroups
 
 #: the first integer int64 cannot hold: no index or count in a file may reach it
 _INT64_END = 2**63
@@ -24,6 +25,8 @@ class _Parsed(NamedTuple):
     tags: tuple[Tag, ...] = ()
     #: texture coordinates per face corner (C, 2), in the faces' order (OBJ ``vt``); None without
     uv: NDArray[np.float64] | None = None
+    #: each face's group (OBJ ``usemtl``, ``g``, ``o``: :mod:`.obj_groups`); None without
+    groups: FaceGroups | None = None
 
 
 def _decode(path: Path, data: bytes) -> list[str]:

@@ -19,10 +19,14 @@ from the mesh's ``vt``; finite, checked like the coordinates). Version 5 adds th
 ``hanging_sides`` (H, 4) int and ``hanging_span`` (H, 2) float, the T-junctions of a
 feature-adaptive network (:class:`~g1patch.network.HangingEdges`: fine patch and edge, coarse
 patch and edge, the coarse fractions at the fine edge's ends; H ≤ 4 P, both members or neither).
+Version 6 adds the optional face groups (:class:`~g1patch.mesh.groups.FaceGroups`, all three
+members or none): ``group`` (P,) int, each patch's group in −1 … G − 1 (−1: none),
+``group_names`` a 0-d string, the JSON list of the G names (at most 4 per patch, each non-empty
+printable text), and ``group_colour`` (G, 3) float, RGB in [0, 1] or a row of NaN.
 The distance reached and the cage a network came from ride in the header's provenance
 (``limit_distance``, ``tolerance``, ``source``). Version 1 files (no frame), version 2 files (no
-seams), version 3 files (no texture coordinates) and version 4 files (no hanging edges) are read
-as before: seam-free, without UVs, conforming.
+seams), version 3 files (no texture coordinates), version 4 files (no hanging edges) and version 5
+files (no groups) are read as before: seam-free, without UVs, conforming, without groups.
 
 Container: stored, not compressed
 ---------------------------------

@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from ...errors import FormatError, InputError
 from ...gregory import GregoryPatchSet
+from ...mesh.groups import FaceGroups
 from ...network import HangingEdges, PatchNetwork
 from ...patches import PatchSet
 from .schema import (
@@ -37,9 +38,12 @@ from .schema import (
     _STRING_ARRAYS,
     _SUFFIX_KINDS,
     FRAME_VERSION,
+    GROUP_ARRAYS,
+    GROUP_VERSION,
     HANGING_ARRAYS,
     HANGING_VERSION,
     MAX_BYTES,
+    MAX_GROUP_NAMES_BYTES,
     MAX_HEADER_BYTES,
     MAX_PATCHES,
     PER_PATCH_BYTES,
@@ -394,6 +398,8 @@ class _Reader:
             ignored.add("uv")
         if version < HANGING_VERSION:  # no hanging edges: arrays of those names are not part of it
             ignored.update(HANGING_ARRAYS)
+        if version < GROUP_VERSION:  # no face groups: arrays of those names are not part of it
+            ignored.update(GROUP_ARRAYS)
         required = (
             "patch_kind",
             *_KIND_ARRAYS[kind],
@@ -408,11 +414,15 @@ class _Reader:
             "frame_scale",
             "uv",
             *HANGING_ARRAYS,
+            *GROUP_ARRAYS,
         } - ignored
         missing = [name for name in required if name not in members]
         hanging = [name for name in HANGING_ARRAYS if name in members and name not in ignored]
         if len(hanging) == 1:
             missing.append(next(n for n in HANGING_ARRAYS if n not in hanging))
+        groups = [name for name in GROUP_ARRAYS if name in members and name not in ignored]
+        if 0 < len(groups) < len(GROUP_ARRAYS):
+            missing.extend(n for n in GROUP_ARRAYS if n not in groups)
         if missing:
             raise self.fail(f"network file lacks {', '.join(missing)}")
         unexpected = [
@@ -453,6 +463,7 @@ class _Reader:
             ("vertices", "V"),
             ("vertex_normals", "V"),
             ("hanging_sides", "H"),
+            ("group_colour", "G"),
         ):
             if name in wanted and len(wanted[name].shape) == len(_SHAPES[name]):
                 dims.setdefault(dim, wanted[name].shape[0])
@@ -476,7 +487,8 @@ class _Reader:
                 raise self.fail(
                     f"member '{name}.npy' has {dims[dim]} rows, more than 4 per patch ({4 * count})"
                 )
-        total = sum(member.info.file_size for member in wanted.values())
+        # the names have a cap of their own (check_cap)
+        total = sum(m.info.file_size for m in wanted.values() if m.name != "group_names")
         budget = PER_PATCH_BYTES * count + _NPY_HEADER_BYTES * len(wanted)
         if total > budget:
             raise self.fail(
@@ -519,6 +531,15 @@ class _Reader:
                     if "hanging_sides" in arrays
                     else None
                 ),
+                groups=(
+                    FaceGroups(
+                        arrays["group"],
+                        _Checker(self.source, "").group_names(arrays["group_names"]),
+                        arrays["group_colour"],
+                    )
+                    if "group" in arrays
+                    else None
+                ),
                 provenance={str(k): str(v) for k, v in provenance.items()},
             )
         except (InputError, KeyError) as exc:
@@ -529,10 +550,10 @@ class _Reader:
         patches."""
         shape = _SHAPES[member.name]
         rows = {"P": patches, "E": 4 * patches, "V": 4 * patches, "H": 4 * patches}
+        rows["G"] = 4 * patches
         elements = math.prod(rows[d] if isinstance(d, str) else d for d in shape)
-        cap = _NPY_HEADER_BYTES + (
-            elements * 8 if member.name not in _STRING_ARRAYS else _MAX_NAME_BYTES
-        )
+        strings = MAX_GROUP_NAMES_BYTES if member.name == "group_names" else _MAX_NAME_BYTES
+        cap = _NPY_HEADER_BYTES + (elements * 8 if member.name not in _STRING_ARRAYS else strings)
         if member.info.file_size > cap:
             raise self.fail(
                 f"member {member.info.filename!r} declares {_size(member.info.file_size)} "

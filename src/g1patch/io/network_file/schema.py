@@ -6,10 +6,10 @@ from __future__ import annotations
 from ...gregory import GregoryPatchSet
 
 #: the version :func:`save_network` writes
-FORMAT_VERSION = 5
+FORMAT_VERSION = 6
 #: the versions :func:`load_network` reads (1: no frame, 2: no seams, 3: no texture coordinates,
-#: 4: no hanging edges)
-READABLE_VERSIONS = (1, 2, 3, 4, 5)
+#: 4: no hanging edges, 5: no face groups)
+READABLE_VERSIONS = (1, 2, 3, 4, 5, 6)
 _ARRAYS = (
     "corner_ids",
     "edge_ids",
@@ -29,6 +29,12 @@ UV_VERSION = 4
 HANGING_VERSION = 5
 #: the members of the hanging edges (both or neither)
 HANGING_ARRAYS = ("hanging_sides", "hanging_span")
+#: the first version with face groups (``group``, ``group_names``, ``group_colour``, optional)
+GROUP_VERSION = 6
+#: the members of the face groups (all or none)
+GROUP_ARRAYS = ("group", "group_names", "group_colour")
+#: largest ``group_names`` member (the JSON list of the names)
+MAX_GROUP_NAMES_BYTES = 2**24
 
 #: largest magnitude of a coordinate in world units (see the module docstring)
 MAX_COORDINATE = 1e30
@@ -49,7 +55,7 @@ _READ_STEP = 1 << 26
 #: room for one ``.npy`` header (numpy reads at most 10 000 bytes of one) and its preamble
 _NPY_HEADER_BYTES = 10_000 + 16
 
-_INDEX_ARRAYS = ("corner_ids", "edge_ids", "neighbor", "neighbor_edge", "hanging_sides")
+_INDEX_ARRAYS = ("corner_ids", "edge_ids", "neighbor", "neighbor_edge", "hanging_sides", "group")
 _BOOL_ARRAYS = ("edge_reversed", "same_direction", "edge_collapsed", "seam")
 _FLOAT_ARRAYS = (
     "points",
@@ -60,9 +66,11 @@ _FLOAT_ARRAYS = (
     "frame_scale",
     "uv",
     "hanging_span",
+    "group_colour",
 )
-_STRING_ARRAYS = ("header", "patch_kind", "form")
-#: shape of every array member, by its dimensions: P patches, E edges, V vertices, H hanging links
+_STRING_ARRAYS = ("header", "patch_kind", "form", "group_names")
+#: shape of every array member, by its dimensions: P patches, E edges, V vertices, H hanging links,
+#: G groups
 _SHAPES: dict[str, tuple[str | int, ...]] = {
     "corner_ids": ("P", 4),
     "edge_ids": ("P", 4),
@@ -79,6 +87,9 @@ _SHAPES: dict[str, tuple[str | int, ...]] = {
     "uv": ("P", 4, 2),
     "hanging_sides": ("H", 4),
     "hanging_span": ("H", 2),
+    "group": ("P",),
+    "group_colour": ("G", 3),
+    "group_names": (),
     "frame_centre": (3,),
     "frame_scale": (),
     "header": (),

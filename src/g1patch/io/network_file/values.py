@@ -3,6 +3,7 @@ consistent edges, finite coordinates within the format's limits."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
@@ -12,6 +13,7 @@ from numpy.typing import NDArray
 from ...errors import FormatError, InputError
 from ...frame import Frame
 from ...gregory import GregoryPatchSet
+from ...mesh.groups import FaceGroups
 from .schema import (
     _BOOL_ARRAYS,
     _CHUNK,
@@ -55,7 +57,7 @@ class _Checker:
                 out[name] = self.booleans(name, arrays[name])
         extent = {}
         for name in _FLOAT_ARRAYS:
-            if name in arrays and not name.startswith("frame_"):
+            if name in arrays and not name.startswith("frame_") and name != "group_colour":
                 out[name], extent[name] = self.coordinates(name, arrays[name])
         extent.pop("hanging_span", None)  # fractions of an edge, not coordinates
         if "hanging_sides" in arrays:
@@ -72,6 +74,8 @@ class _Checker:
                 max(count, 4) - 1,
                 "patch indices and patch edges 0..3",
             )
+        if "group" in arrays:
+            out["group"], out["group_colour"] = self.groups(arrays, count)
         edges = len(out["edge_collapsed"])
         vertices = [len(out[name]) for name in ("vertices", "vertex_normals") if name in out]
         if len(set(vertices)) > 1:
@@ -101,6 +105,44 @@ class _Checker:
         self.sharing(out["neighbor"], out["neighbor_edge"], out["edge_ids"])
         self.frame(out, extent, patch_name)
         return out
+
+    def group_names(self, value: Any) -> tuple[str, ...]:
+        """The names of ``group_names.npy``: a JSON list of strings."""
+        try:
+            names = json.loads(str(value))
+        except json.JSONDecodeError:
+            raise self.fail("group_names", "expected a JSON list of names, got no JSON") from None
+        if not isinstance(names, list) or not all(isinstance(name, str) for name in names):
+            raise self.fail("group_names", "expected a JSON list of names (strings)")
+        return tuple(names)
+
+    def groups(self, arrays: dict[str, Any], count: int) -> tuple[NDArray[np.int64], Any]:
+        """``group`` (P,) ids in −1 … G − 1 of the G names, ``group_colour`` (G, 3) RGB in [0, 1] or
+        a row of NaN (:class:`~g1patch.mesh.groups.FaceGroups`' rules), each named when wrong."""
+        names = self.group_names(arrays["group_names"])
+        if len(names) > 4 * count:
+            raise self.fail("group_names", f"has {len(names)} names, more than 4 per patch")
+        colour = np.asarray(arrays["group_colour"])
+        if colour.dtype.kind != "f" or colour.dtype.itemsize > 8:
+            raise self.fail(
+                "group_colour", f"expected floating-point numbers, got an array of {colour.dtype}"
+            )
+        for name, shape, got in (
+            ("group", (count,), np.shape(arrays["group"])),
+            ("group_colour", (len(names), 3), colour.shape),
+        ):
+            if got != shape:
+                raise self.fail(name, f"expected shape {shape} ({len(names)} names), got {got}")
+        ids = self.indices(
+            "group", arrays["group"], -1, len(names) - 1, f"ids of the {len(names)} names, or -1"
+        )
+        colour = colour.astype(np.float64, copy=False)
+        try:
+            FaceGroups(ids[:0], names, colour)
+        except InputError as exc:
+            member = "group_colour" if "colour" in str(exc) else "group_names"
+            raise self.fail(member, str(exc).removeprefix("groups: ")) from None
+        return ids, colour
 
     def booleans(self, name: str, value: Any) -> NDArray[np.bool_]:
         array = np.asarray(value)

@@ -24,6 +24,7 @@ from ..atomic import atomic_path
 from .schema import (
     _ARRAYS,
     FORMAT_VERSION,
+    MAX_GROUP_NAMES_BYTES,
 )
 from .values import _Checker
 
@@ -79,6 +80,17 @@ def _members(
     if network.hanging is not None and len(network.hanging):
         arrays["hanging_sides"] = network.hanging.sides
         arrays["hanging_span"] = network.hanging.span
+    if network.groups is not None:
+        names = json.dumps(list(network.groups.names), ensure_ascii=False)
+        if len(names.encode()) > MAX_GROUP_NAMES_BYTES:
+            raise FormatError(
+                path,
+                f"cannot store this network: its group names take {len(names.encode())} bytes, "
+                f"above the cap of {MAX_GROUP_NAMES_BYTES}",
+            )
+        arrays["group"] = network.groups.ids
+        arrays["group_names"] = np.array(names)
+        arrays["group_colour"] = network.groups.colours
     arrays = _Checker(target, "cannot store this network: ").check(arrays)
     provenance = {str(k): str(v) for k, v in network.provenance.items()}
     header = {"format": "g1patch-network", "version": FORMAT_VERSION, "provenance": provenance}
