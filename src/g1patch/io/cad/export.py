@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import InputError
+from ...mesh.groups import FaceGroups
 from ...network import PatchNetwork, network_from_patch_points
 from ...patches import PatchSet
 from ..atomic import atomic_path
@@ -176,6 +177,25 @@ class CadSurfaces(NamedTuple):
         """The world control net of every face, in face order."""
         return _face_nets(self.fit if self.quads is None else self.quads)
 
+    @property
+    def groups(self) -> FaceGroups | None:
+        """Each face's group (:attr:`PatchNetwork.groups`: of its patch, or of a split4 quad's
+        first sub-patch), None where the network has none."""
+        groups = self.network.groups
+        if groups is None or self.quads is None:
+            return groups
+        return groups.take(np.arange(0, len(groups), 4))
+
+    def labels(self) -> tuple[list[str], NDArray[np.float64]] | None:
+        """Each face's name, ``'NAME n'`` in a group and ``'face n'`` without, and colour (F, 3),
+        NaN without; None where the network has no groups (every face ``'face n'``)."""
+        groups = self.groups
+        if groups is None:
+            return None
+        names = [groups.label(n, "face") for n in range(len(groups))]
+        colours = np.where(groups.ids[:, None] >= 0, groups.colours[groups.ids], np.nan)
+        return names, colours
+
     def knots(self) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
         """The (u, v) knot vectors of every face, in face order."""
         if self.quads is None:
@@ -325,7 +345,10 @@ def export_cad(
         seam = network.seam[shared_patch, shared_edge]
         smooth = angles[~seam].max(axis=1) if angles.size else np.zeros(0)
         seam_angles = angles[seam] if angles.size else np.zeros(0)
-        with atomic_path(target) as temporary, _step_options(sewn_faces, pcurves=quads is None):
+        with (
+            atomic_path(target) as temporary,
+            _step_options(sewn_faces, pcurves=quads is None, groups=made.labels()),
+        ):
             _write(occ, shape, temporary, kind)
             if kind == "step":
                 nets = _face_nets(fit if quads is None else quads)

@@ -2,8 +2,10 @@
 
 OCP is imported only inside :func:`_occ`; without it the caller gets :class:`MissingDependencyError`
 naming the extra. Exceptions raised inside OCP become :class:`OpenCascadeError`
-(:func:`_occ_failures`). In STEP every face is named after its index (``'face 12'``) and, for
-faces that are whole surfaces, written without parameter-space curves (:func:`_step_options`).
+(:func:`_occ_failures`). In STEP every face is named after its index (``'face 12'``), or after its
+group and index (``'body 12'``), coloured by its group's colour through an XCAF document (AP214
+styled items) and, for faces that are whole surfaces, written without parameter-space curves
+(:func:`_step_options`).
 """
 
 from __future__ import annotations
@@ -60,12 +62,16 @@ _OCC_NAMES: dict[str, tuple[str, ...]] = {
     "IGESControl": ("IGESControl_Reader", "IGESControl_Writer"),
     "Interface": ("Interface_Static",),
     "Message": ("Message", "Message_Gravity"),
+    "Quantity": ("Quantity_Color", "Quantity_TypeOfColor"),
+    "STEPCAFControl": ("STEPCAFControl_Writer",),
     "STEPConstruct": ("STEPConstruct",),
     "STEPControl": ("STEPControl_AsIs", "STEPControl_Reader", "STEPControl_Writer"),
-    "TCollection": ("TCollection_HAsciiString",),
+    "TCollection": ("TCollection_ExtendedString", "TCollection_HAsciiString"),
+    "TDocStd": ("TDocStd_Document",),
     "TopAbs": ("TopAbs_FACE", "TopAbs_REVERSED", "TopAbs_SHELL"),
     "TopExp": ("TopExp_Explorer",),
     "TopoDS": ("TopoDS", "TopoDS_Compound"),
+    "XCAFDoc": ("XCAFDoc_ColorType", "XCAFDoc_DocumentTool"),
 }
 
 
@@ -241,14 +247,41 @@ def _format_of(path: Path, wanted: CadFormat | None) -> CadFormat:
     )
 
 
-def _name_step_faces(occ: SimpleNamespace, writer: Any, faces: Sequence[Any]) -> None:
-    """Name the ``ADVANCED_FACE`` of each of ``faces`` after its index (``'face 12'``): the patch,
-    or the quad of a split4 network, it was made from."""
+def _name_step_faces(
+    occ: SimpleNamespace, writer: Any, faces: Sequence[Any], names: Sequence[str]
+) -> None:
+    """Name the ``ADVANCED_FACE`` of each of ``faces`` by ``names`` (``'face 12'``, ``'body 12'``:
+    the patch, or the quad of a split4 network, it was made from)."""
     process = writer.WS().TransferWriter().FinderProcess()
-    for n, face in enumerate(faces):
+    for face, name in zip(faces, names, strict=True):
         entity = occ.STEPConstruct.FindEntity_s(process, face)
         if entity is not None and hasattr(entity, "SetName"):
-            entity.SetName(occ.TCollection_HAsciiString(f"face {n}"))
+            entity.SetName(occ.TCollection_HAsciiString(name))
+
+
+def _step_text(name: str) -> str:
+    """``name`` as a STEP string OCC writes verbatim: printable ASCII without quote or
+    backslash, anything else ``_``."""
+    return "".join(c if " " <= c <= "~" and c not in "'\\" else "_" for c in name)
+
+
+def _coloured_step_writer(
+    occ: SimpleNamespace, shape: Any, faces: Sequence[Any], colours: NDArray[np.float64]
+) -> Any:
+    """A ``STEPCAFControl_Writer`` and the XCAF document it writes: ``shape`` with each of
+    ``faces`` whose row of ``colours`` (F, 3) is not NaN given that surface colour (sRGB, the
+    numbers of the file's ``COLOUR_RGB``)."""
+    document = occ.TDocStd_Document(occ.TCollection_ExtendedString("XmlOcaf"))
+    shapes = occ.XCAFDoc_DocumentTool.ShapeTool_s(document.Main())
+    palette = occ.XCAFDoc_DocumentTool.ColorTool_s(document.Main())
+    label = shapes.AddShape(shape, False)
+    srgb = occ.Quantity_TypeOfColor.Quantity_TOC_sRGB
+    surface = occ.XCAFDoc_ColorType.XCAFDoc_ColorSurf
+    for n in np.flatnonzero(~np.isnan(colours).any(axis=1)).tolist():
+        sub = shapes.AddSubShape(label, faces[n])
+        if not sub.IsNull():
+            palette.SetColor(sub, occ.Quantity_Color(*colours[n].tolist(), srgb), surface)
+    return occ.STEPCAFControl_Writer(), document
 
 
 @contextmanager
@@ -263,10 +296,13 @@ def _static(occ: SimpleNamespace, name: str, value: int) -> Iterator[None]:
 
 
 class _StepOptions(NamedTuple):
-    """What export_cad asks of the STEP writer beyond the shape (:func:`_step_options`)."""
+    """What export_cad asks of the STEP writer beyond the shape (:func:`_step_options`): the
+    faces, their names and colours ((F, 3) sRGB, NaN rows uncoloured; None: none), pcurves."""
 
     faces: Sequence[Any]
     pcurves: bool
+    names: Sequence[str] = ()
+    colours: NDArray[np.float64] | None = None
 
 
 #: outside :func:`_step_options`: no faces named, edges with pcurves
@@ -275,10 +311,22 @@ _STEP_OPTIONS: ContextVar[_StepOptions] = ContextVar("_STEP_OPTIONS")
 
 
 @contextmanager
-def _step_options(faces: Sequence[Any], pcurves: bool) -> Iterator[None]:
-    """For the :func:`_write` calls inside: name ``faces`` after their index; with ``pcurves``
-    False, write the edges without parameter-space curves."""
-    token = _STEP_OPTIONS.set(_StepOptions(faces, pcurves))
+def _step_options(
+    faces: Sequence[Any],
+    pcurves: bool,
+    groups: tuple[Sequence[str], NDArray[np.float64]] | None = None,
+) -> Iterator[None]:
+    """For the :func:`_write` calls inside: name ``faces`` after their index (``'face N'``), or by
+    ``groups`` (names (F,) and colours (F, 3), NaN rows uncoloured; :func:`_step_text` makes the
+    names STEP text) and colour them; with ``pcurves`` False, write the edges without
+    parameter-space curves."""
+    if groups is None:
+        names: Sequence[str] = [f"face {n}" for n in range(len(faces))]
+        colours = None
+    else:
+        names = [_step_text(name) for name in groups[0]]
+        colours = groups[1] if not np.isnan(groups[1]).all() else None
+    token = _STEP_OPTIONS.set(_StepOptions(faces, pcurves, names, colours))
     try:
         yield
     finally:
@@ -286,20 +334,28 @@ def _step_options(faces: Sequence[Any], pcurves: bool) -> Iterator[None]:
 
 
 def _write(occ: SimpleNamespace, shape: Any, path: Path, kind: CadFormat) -> None:
-    """Write ``shape``. In STEP the faces of :func:`_step_options` are named after their index (IGES
-    faces carry no names here), and without its ``pcurves`` the edges carry no parameter-space
+    """Write ``shape``. In STEP the faces of :func:`_step_options` are named (IGES faces carry no
+    names here) and, where it gives colours, coloured (an XCAF document written by
+    ``STEPCAFControl_Writer``); without its ``pcurves`` the edges carry no parameter-space
     curves (``write.surfacecurve.mode`` 0): every face written here is a whole B-spline surface, its
     edges the iso-lines u, v ∈ {0, 1}, which a reader rebuilds exactly."""
     options = _STEP_OPTIONS.get(_PLAIN_STEP)
+    done = occ.IFSelect_ReturnStatus.IFSelect_RetDone
     with _quiet(occ):
         if kind == "step":
-            writer = occ.STEPControl_Writer()
             with _static(occ, "write.surfacecurve.mode", 1 if options.pcurves else 0):
-                status = writer.Transfer(shape, occ.STEPControl_AsIs)
-            if status == occ.IFSelect_ReturnStatus.IFSelect_RetDone:
-                _name_step_faces(occ, writer, options.faces)
-                status = writer.Write(str(path))
-            ok = status == occ.IFSelect_ReturnStatus.IFSelect_RetDone
+                if options.colours is None:
+                    writer = step = occ.STEPControl_Writer()
+                    ok = writer.Transfer(shape, occ.STEPControl_AsIs) == done
+                else:
+                    writer, document = _coloured_step_writer(
+                        occ, shape, options.faces, options.colours
+                    )
+                    ok = bool(writer.Transfer(document, occ.STEPControl_AsIs))
+                    step = writer.ChangeWriter()
+            if ok:
+                _name_step_faces(occ, step, options.faces, options.names)
+                ok = writer.Write(str(path)) == done
         else:
             writer = occ.IGESControl_Writer(
                 "MM", 1

@@ -1,8 +1,11 @@
 """Rhino's ``.3dm`` through OpenNURBS (``rhino3dm``, the extra ``rhino``): the same exact bicubic
 B-spline faces as the STEP file (:func:`~g1patch.io.cad.export.cad_surfaces`: one per patch, or
 one per quad of a split4 network, the same count), each an untrimmed NURBS surface named
-``'face N'`` as in STEP. OpenNURBS stores a degree-3 knot vector without its two outer knots
-(``cv + order − 2`` values), so ``[0, 0, 0, 0, ½, ½, 1, 1, 1, 1]`` is written
+``'face N'`` as in STEP. A network with face groups (:attr:`~g1patch.network.PatchNetwork.groups`)
+gets one layer per group, named after it and in its colour (black without one), and the faces of a
+group are named ``'NAME N'``, on its layer, coloured by the layer; faces without a group stay
+``'face N'`` on a layer ``'Default'``. OpenNURBS stores a degree-3 knot vector without its two
+outer knots (``cv + order − 2`` values), so ``[0, 0, 0, 0, ½, ½, 1, 1, 1, 1]`` is written
 ``[0, 0, 0, ½, ½, 1, 1, 1]``. rhino3dm is imported only here; without it
 :class:`MissingDependencyError` names the extra before anything is written.
 """
@@ -14,7 +17,10 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+import numpy as np
+
 from ...errors import MissingDependencyError
+from ...mesh.groups import FaceGroups
 from ...network import PatchNetwork
 from ...patches import PatchSet
 from ..atomic import atomic_path
@@ -88,6 +94,7 @@ def export_3dm(
     )
     model = rhino.File3dm()
     nets, knots = surfaces.nets(), surfaces.knots()
+    layer_of = _group_layers(rhino, model, surfaces.groups)
     for index, (net, (knots_u, knots_v)) in enumerate(zip(nets, knots, strict=True)):
         count_u, count_v = net.shape[:2]
         surface = rhino.NurbsSurface.Create(3, False, 4, 4, count_u, count_v)
@@ -103,6 +110,10 @@ def export_3dm(
             surface.KnotsV[k] = value
         attributes = rhino.ObjectAttributes()
         attributes.Name = f"face {index}"
+        if layer_of is not None:
+            attributes.Name = surfaces.groups.label(index, "face")  # type: ignore[union-attr]
+            attributes.LayerIndex = layer_of[index]
+            attributes.ColorSource = rhino.ObjectColorSource.ColorFromLayer
         model.Objects.AddSurface(surface, attributes)
     with atomic_path(target) as temporary:
         if not model.Write(str(temporary), ARCHIVE_VERSION):
@@ -118,3 +129,23 @@ def export_3dm(
         surfaces.deviation / diagonal,
         file_bytes,
     )
+
+
+def _group_layers(rhino: ModuleType, model: Any, groups: FaceGroups | None) -> list[int] | None:
+    """One layer per group of ``groups`` (per face), named after it and in its colour (sRGB bytes;
+    black without), and ``'Default'`` first where some face has no group: each face's layer
+    index. None without groups."""
+    if groups is None:
+        return None
+    layers = []
+    if (groups.ids < 0).any():
+        layers.append(("Default", (0, 0, 0, 255)))
+    for name, colour in zip(groups.names, groups.colours.tolist(), strict=True):
+        rgb = (0, 0, 0) if np.isnan(colour).any() else tuple(round(255 * c) for c in colour)
+        layers.append((name, (*rgb, 255)))
+    for name, colour in layers:
+        layer = rhino.Layer()
+        layer.Name, layer.Color = name, colour
+        model.Layers.Add(layer)
+    first = 1 if (groups.ids < 0).any() else 0
+    return np.where(groups.ids >= 0, groups.ids + first, 0).tolist()

@@ -14,7 +14,8 @@ from .bspline import BSplineFit, QuadFaces
 
 _ENTITY_END = re.compile(rb";[ \t\r]*\n(?=#\d)")
 _REFERENCE = re.compile(rb"#(\d+)")
-_NAMED_FACE = re.compile(rb"ADVANCED_FACE\('face (\d+)',\([^)]*\),#(\d+),")
+#: a face named ``'face N'`` or ``'GROUP N'`` (group names hold no quote: ``_step_text``)
+_NAMED_FACE = re.compile(rb"ADVANCED_FACE\('[^']*? (\d+)',\([^)]*\),#(\d+),")
 _POLE_GRID = re.compile(rb"B_SPLINE_SURFACE_WITH_KNOTS\('[^']*',\d+,\d+,\(\((.*?)\)\),")
 _BLANKS = re.compile(rb"\n[ \t\r\n\f\v]*")
 #: significant digits of the coordinates :func:`compact_step` writes (OCC's writer: 12)
@@ -54,10 +55,10 @@ def compact_step(
     entity, so a pole on a mesh edge is written once per face, once per edge curve and once per
     vertex: points with the same text (blanks removed) become the first of them. OCC writes 12
     significant digits, which leaves OCC's normals across Spot's small faces 7e-8° apart on reading
-    back: the poles of face ``'face N'`` (its ``B_SPLINE_SURFACE_WITH_KNOTS``) are written from
-    ``nets[N]`` (world poles, (nu, nv, 3)) with 15, where the file's value agrees with it within
-    ``tolerance`` (so a point is only ever made more precise). The same B-rep; a split4 network's
-    file is a third smaller.
+    back: the poles of face ``'face N'`` or ``'GROUP N'`` (its ``B_SPLINE_SURFACE_WITH_KNOTS``) are
+    written from ``nets[N]`` (world poles, (nu, nv, 3)) with 15, where the file's value agrees
+    with it within ``tolerance`` (so a point is only ever made more precise). The same B-rep; a
+    split4 network's file is a third smaller.
     """
     text = path.read_bytes()
     start = text.index(b"\nDATA;") + len(b"\nDATA;")
