@@ -34,6 +34,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .gregory import GregoryPatchSet
     from .io.cad import ExportResult, RhinoResult
     from .mesh import QuadMesh, Tag
+    from .mesh.groups import FaceGroups
     from .network import PatchNetwork
     from .patches import PatchSet
 
@@ -488,6 +489,12 @@ class Surface:
         return self.network.uv
 
     @property
+    def groups(self) -> FaceGroups | None:
+        """Each patch's named group, from the mesh's materials or groups
+        (:attr:`PatchNetwork.groups`); None without."""
+        return self.network.groups
+
+    @property
     def provenance(self) -> dict[str, str]:
         """How it was made: method, shape, refine, repairs, source…
         (:attr:`PatchNetwork.provenance`)."""
@@ -574,7 +581,8 @@ class Surface:
           ``result()`` waits for it (:func:`g1patch.io.network_file.save_network_in_background`);
         * ``.obj``, ``.ply``, ``.stl``: triangles of :meth:`tessellate` (options ``resolution``,
           ``force``: an explicit resolution above 20 M triangles needs it), with the surface's
-          texture coordinates where it has them (OBJ ``vt``, PLY ``s``, ``t``);
+          texture coordinates where it has them (OBJ ``vt``, PLY ``s``, ``t``) and, in OBJ, its
+          face groups (``g``/``usemtl`` per group);
         * ``.step``/``.stp``, ``.iges``/``.igs``: a B-rep, one B-spline face per patch (split4:
           per quad), exact for polynomial patches; a Gregory network by ``method`` (``auto``:
           its split4 re-assembly, exact G1 in CAD; ``fit``: fitted within ``fit_tolerance``, model
@@ -628,7 +636,12 @@ class Surface:
 
             mesh = tessellate(self.network, resolution, force=force)
             write_triangles(
-                target, mesh.points, mesh.triangles, uv=mesh.uv, uv_triangles=mesh.uv_triangles
+                target,
+                mesh.points,
+                mesh.triangles,
+                uv=mesh.uv,
+                uv_triangles=mesh.uv_triangles,
+                groups=mesh.groups,
             )
             return target
         if suffix == ".npz":

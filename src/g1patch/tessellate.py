@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .errors import InputError
+from .mesh.groups import FaceGroups
 from .network import PatchNetwork
 
 __all__ = [
@@ -69,7 +70,8 @@ _BLOCK_SAMPLES = 1 << 18
 class TriangleMesh:
     """Points (P, 3), unit normals (P, 3) and counter-clockwise triangles (T, 3); with texture
     coordinates, ``uv`` (K, 2), the point of each (``uv_points`` (K,)) and the triangles' UV
-    vertices ``uv_triangles`` (T, 3): ``points[uv_points[uv_triangles]] == points[triangles]``."""
+    vertices ``uv_triangles`` (T, 3): ``points[uv_points[uv_triangles]] == points[triangles]``;
+    with face groups, ``groups`` over the triangles (each its patch's group)."""
 
     points: NDArray[np.float64]
     normals: NDArray[np.float64]
@@ -77,6 +79,7 @@ class TriangleMesh:
     uv: NDArray[np.float64] | None = None
     uv_points: NDArray[np.int64] | None = None
     uv_triangles: NDArray[np.int64] | None = None
+    groups: FaceGroups | None = None
 
 
 def _grid_indices(network: PatchNetwork, resolution: int) -> tuple[NDArray[np.int64], int]:
@@ -395,6 +398,8 @@ def tessellate(
         & (triangles[:, 1] != triangles[:, 2])
         & (triangles[:, 0] != triangles[:, 2])
     )
+    # each triangle's patch (flat id which · N · cells + patch · cells + cell), for the groups
+    patch_of = (np.arange(len(triangles)) // cells) % count if network.groups is not None else None
     fan_points = fan_samples = None
     if fans is not None:
         member = fans.member
@@ -424,6 +429,13 @@ def tessellate(
         del samples, corners, uv_grid, sample_point
     if not keep.all():
         triangles = triangles[keep]
+    groups = None
+    if network.groups is not None and patch_of is not None:
+        patch_of = patch_of[keep]
+        if fans is not None:  # a fan's triangles: the coarse triangle's patch
+            coarse = (fans.triangle // cells) % count
+            patch_of = np.concatenate([patch_of, coarse[fans.group], coarse])
+        groups = network.groups.take(patch_of)
     del keep
     if fan_points is not None:
         triangles = np.concatenate([triangles, fan_points])
@@ -441,5 +453,5 @@ def tessellate(
     np.divide(point_normals, length, out=point_normals, where=length > 0)
     point_normals[~(length > 0)[:, 0]] = 0.0
     if uv_parts is None:
-        return TriangleMesh(points, point_normals, triangles)
-    return TriangleMesh(points, point_normals, triangles, *uv_parts)
+        return TriangleMesh(points, point_normals, triangles, groups=groups)
+    return TriangleMesh(points, point_normals, triangles, *uv_parts, groups=groups)

@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...errors import FormatError, InputError, as_float_array, as_index_array
+from ...mesh.groups import FaceGroups
 from ..atomic import atomic_path
 
 WRITE_FORMATS = (".obj", ".ply", ".stl")
@@ -57,11 +58,14 @@ def _write_obj(
     cells: NDArray[np.int64],
     uv: NDArray[np.float64] | None = None,
     uv_cells: NDArray[np.int64] | None = None,
+    groups: FaceGroups | None = None,
 ) -> None:
     """OBJ text as meshio writes it (``v x y z`` with the shortest round-trip digits, ``f`` with
     1-based indices), formatted a block of rows at a time by one C-level ``%`` per block: several
     times faster than meshio's line-by-line loop, and in bounded memory. With ``uv`` and
-    ``uv_cells``: ``vt u v`` lines too, and faces ``f a/x b/y c/z``."""
+    ``uv_cells``: ``vt u v`` lines too, and faces ``f a/x b/y c/z``. With ``groups`` (one per
+    cell): the cells sorted by group (stably), those without one first, each group's led by
+    ``g NAME`` and ``usemtl NAME`` (no ``mtllib``: the materials are names only)."""
     vertex_row = "v %r %r %r\n"
     with_uv = uv is not None and uv_cells is not None
     face_row = "f" + (" %d/%d" if with_uv else " %d") * cells.shape[1] + "\n"
@@ -74,11 +78,27 @@ def _write_obj(
             for start in range(0, len(uv), _OBJ_ROWS):
                 block = uv[start : start + _OBJ_ROWS]
                 handle.write(("vt %r %r\n" * len(block)) % tuple(block.ravel().tolist()))
-        for start in range(0, len(cells), _OBJ_ROWS):
-            rows = cells[start : start + _OBJ_ROWS] + 1
-            if uv_cells is not None and with_uv:
-                rows = np.stack([rows, uv_cells[start : start + _OBJ_ROWS] + 1], axis=-1)
-            handle.write((face_row * len(rows)) % tuple(rows.ravel().tolist()))
+        runs = [(0, len(cells), "")]
+        if groups is not None:
+            order = np.argsort(groups.ids, kind="stable")
+            cells = cells[order]
+            uv_cells = None if uv_cells is None else uv_cells[order]
+            ids = groups.ids[order]
+            starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
+            ends = np.r_[starts[1:], len(ids)]
+            names = [groups.names[i] if i >= 0 else "" for i in ids[starts].tolist()]
+            runs = [
+                (a, b, f"g {name}\nusemtl {name}\n" if name else "")
+                for a, b, name in zip(starts.tolist(), ends.tolist(), names, strict=True)
+            ]
+        for first, last, header in runs:
+            handle.write(header)
+            for start in range(first, last, _OBJ_ROWS):
+                stop = min(start + _OBJ_ROWS, last)
+                rows = cells[start:stop] + 1
+                if uv_cells is not None and with_uv:
+                    rows = np.stack([rows, uv_cells[start:stop] + 1], axis=-1)
+                handle.write((face_row * len(rows)) % tuple(rows.ravel().tolist()))
 
 
 _STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("points", "<f4", (3, 3)), ("attr", "<u2")])
@@ -129,6 +149,7 @@ def write_triangles(
     *,
     uv: ArrayLike | None = None,
     uv_triangles: ArrayLike | None = None,
+    groups: FaceGroups | None = None,
 ) -> None:
     """Write a triangle mesh, ``points`` (n, 3) and ``triangles`` (m, 3), as OBJ, PLY or STL (by
     extension).
@@ -137,13 +158,22 @@ def write_triangles(
     of every triangle corner. OBJ writes them as ``vt`` with faces ``f a/x b/y c/z`` (the points
     stay welded); PLY as vertex properties ``s``, ``t``, one vertex per distinct (point, UV) pair
     of the corners (split where UVs differ: at seams in UV space); STL has no place for them.
+    Face groups, ``groups`` (one per triangle): OBJ writes ``g``/``usemtl`` per group
+    (:func:`_write_obj`); PLY and STL have no place for them.
     """
     path = Path(path)
     suffix = _write_format(path)
     points = _checked_points("points", points)
     cells = _checked_cells("triangles", triangles, 3, points.shape[0])
-    if uv is None or uv_triangles is None or suffix == ".stl":
+    if groups is not None and len(groups) != len(cells):
+        raise InputError(f"groups: expected one per triangle ({len(cells)}), got {len(groups)}")
+    obj_groups = groups if suffix == ".obj" else None
+    if (uv is None or uv_triangles is None or suffix == ".stl") and obj_groups is None:
         _write(path, suffix, points, "triangle", cells)
+        return
+    if uv is None or uv_triangles is None:
+        with atomic_path(path) as temporary:
+            _write_obj(temporary, points, cells, groups=obj_groups)
         return
     uv = as_float_array("uv", uv, (2,))
     uv_cells = _checked_cells("uv_triangles", uv_triangles, 3, uv.shape[0])
@@ -154,7 +184,7 @@ def write_triangles(
         )
     if suffix == ".obj":
         with atomic_path(path) as temporary:
-            _write_obj(temporary, points, cells, uv, uv_cells)
+            _write_obj(temporary, points, cells, uv, uv_cells, obj_groups)
         return
     # PLY: one vertex per distinct (point, UV vertex) pair
     pairs = cells.reshape(-1) * np.int64(uv.shape[0]) + uv_cells.reshape(-1)
