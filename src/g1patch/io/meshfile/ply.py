@@ -3,6 +3,12 @@ by g1patch's own readers (binary: :mod:`.ply_binary`, ASCII: :mod:`.ply_ascii`),
 ``meshio.ply``, whose counts are checked against the header (meshio silently returns fewer faces
 from a truncated binary file).
 
+Texture coordinates become one UV per face corner, as OBJ ``vt`` do: per vertex (the first pair of
+:data:`~.ply_header.UV_PROPERTIES` a vertex has: ``s t``, ``u v``, ``texture_u texture_v``,
+``texture_s texture_t``), or per face from a float list ``texcoord`` after the vertex indices (2
+numbers a corner, taking precedence); a binary ``texcoord`` list is read where every face has as
+many corners.
+
 Nothing in the header is trusted: every element count is checked against the bytes that follow
 the header before anything is allocated (:func:`~.ply_header._check_room`), a list's corner count
 against the bytes left, and data beyond the header's counts is an error.
@@ -19,9 +25,9 @@ from numpy.typing import NDArray
 
 from ...errors import FormatError
 from .parsed import _faces_in_range, _finite_vertices, _Parsed, _polygon_list
-from .ply_ascii import _ply_text, _read_ply_lines
+from .ply_ascii import _finite_uvs, _ply_text, _read_ply_lines
 from .ply_binary import _ply_binary
-from .ply_header import _check_room, _ply_header, _ply_layout, _PlyHeader
+from .ply_header import UV_PROPERTIES, _check_room, _ply_header, _ply_layout, _PlyHeader
 
 
 def _read_ply(path: Path, data: bytes) -> _Parsed:
@@ -37,17 +43,21 @@ def _read_ply(path: Path, data: bytes) -> _Parsed:
     layout = _ply_layout(header)
     vertex_lines = face_lines = None
     if layout is not None and not header.ascii:
-        points, corners, sizes = _ply_binary(path, data, header, layout)
+        points, corners, sizes, uv = _ply_binary(path, data, header, layout)
     elif layout is not None:
         records = _ply_text(data, header, layout)
         if records is None:
             return _read_ply_lines(path, data, header, layout)
-        points, corners, sizes = records
+        points, corners, sizes, uv = records
     else:
-        points, corners, sizes, vertex_lines, face_lines = _ply_meshio(path, header)
+        points, corners, sizes, vertex_lines, face_lines, uv = _ply_meshio(path, header)
     _finite_vertices(path, points, vertex_lines)
     _faces_in_range(path, corners, sizes, points.shape[0], face_lines)
-    return _Parsed(points, _polygon_list(corners, sizes))
+    if uv is not None:
+        per_corner = layout is not None and layout.texcoord is not None
+        _finite_uvs(path, uv, None, "face" if per_corner else "vertex")
+        uv = uv if per_corner else uv[corners]
+    return _Parsed(points, _polygon_list(corners, sizes), uv=uv)
 
 
 def _ply_meshio(
@@ -58,9 +68,11 @@ def _ply_meshio(
     NDArray[np.int64],
     NDArray[np.int64] | None,
     NDArray[np.int64] | None,
+    NDArray[np.float64] | None,
 ]:
     """Points, corners, sizes and, for an ASCII file of vertices then faces, the vertices' and
-    faces' lines, read by ``meshio.ply``."""
+    faces' lines, read by ``meshio.ply``; and the per-vertex UVs (:data:`UV_PROPERTIES`), None
+    without."""
     n_vertices, n_faces = header.total("vertex"), header.total("face")
     try:
         with (
@@ -104,4 +116,9 @@ def _ply_meshio(
     in_order = header.ascii and [e.name for e in header.elements] == ["vertex", "face"]
     vertex_lines = header.lines + 1 + np.arange(points.shape[0]) if in_order else None
     face_lines = header.lines + 1 + points.shape[0] + np.arange(sizes.size) if in_order else None
-    return points, np.concatenate([b.ravel() for b in blocks]), sizes, vertex_lines, face_lines
+    pair = next((p for p in UV_PROPERTIES if set(p) <= set(mesh.point_data)), None)
+    uv = None
+    if pair is not None:
+        uv = np.stack([np.asarray(mesh.point_data[name], dtype=np.float64) for name in pair], 1)
+    corners = np.concatenate([b.ravel() for b in blocks])
+    return points, corners, sizes, vertex_lines, face_lines, uv

@@ -30,11 +30,15 @@ from .text import _numbers, _scan
 
 def _ply_text(
     data: bytes, header: _PlyHeader, layout: _PlyLayout
-) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]] | None:
-    """Points, corners and sizes of an ASCII PLY file of the common layout with x, y, z first and
-    every vertex property ``double``, faces of their list alone, one line per vertex then per face
-    with exactly its numbers, no blank line or comment among them and nothing after them: parsed
-    as the OBJ and OFF text is; None for any other file (:func:`_read_ply_lines` reads it)."""
+) -> (
+    tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64], NDArray[np.float64] | None]
+    | None
+):
+    """Points, corners, sizes and per-vertex UVs (None without) of an ASCII PLY file of the common
+    layout with x, y, z first and every vertex property ``double``, faces of their list alone,
+    one line per vertex then per face with exactly its numbers, no blank line or comment among
+    them and nothing after them: parsed as the OBJ and OFF text is; None for any other file
+    (:func:`_read_ply_lines` reads it)."""
     properties = layout.vertex.properties
     if (
         not header.ascii
@@ -61,6 +65,9 @@ def _ply_text(
     values = _numbers(lines.chunk(np.arange(n_vertices)), b"", width * n_vertices, np.float64)
     if values is None or not np.isfinite(points := values.reshape(-1, width)[:, :3]).all():
         return None
+    uv = None if layout.uv is None else values.reshape(-1, width)[:, list(layout.uv)]
+    if uv is not None and not np.isfinite(uv).all():
+        return None
     numbers = _numbers(
         lines.chunk(np.arange(n_vertices, n_vertices + n_faces)),
         b"",
@@ -73,31 +80,45 @@ def _ply_text(
     sizes, corners = numbers[offsets], np.delete(numbers, offsets)
     if (sizes < MIN_CORNERS).any() or corners.min() < 0 or corners.max() >= n_vertices:
         return None
-    return np.ascontiguousarray(points), corners, sizes
+    return np.ascontiguousarray(points), corners, sizes, uv
 
 
 def _read_ply_lines(path: Path, data: bytes, header: _PlyHeader, layout: _PlyLayout) -> _Parsed:
     """The line-by-line ASCII PLY reader of the common layout, the reference: as many lines as the
-    header announces, each vertex line with one number per property (x, y, z read, the others
-    counted), each face line with its scalars and a list of exactly as many indices as its count
-    (≥ 3) says; every error names its line."""
+    header announces, each vertex line with one number per property (x, y, z and the texture
+    coordinates read, the others counted), each face line with its scalars and a list of exactly
+    as many indices as its count (≥ 3) says, and where the header has one, a ``texcoord`` list of
+    2 finite numbers a corner; every error names its line."""
     rows = _content(path, data[header.start :], header.lines + 1)
     n_vertices, n_faces = layout.vertex.size, layout.face.size
     _rows_announced(path, rows, n_vertices, n_faces, header.lines)
-    points = _ply_points(path, rows[:n_vertices], layout)
+    points, vertex_uv = _ply_points(path, rows[:n_vertices], layout)
     face_rows = rows[n_vertices:]
     properties = layout.face.properties
-    before, after = layout.corners, len(properties) - layout.corners - 1
+    texcoord = len(properties) if layout.texcoord is None else layout.texcoord
+    before, middle = layout.corners, texcoord - layout.corners - 1
+    after = len(properties) - texcoord - (0 if layout.texcoord is None else 1)
     names = [p.name for p in properties]
-    shape = " ".join([*names[:before], "n i_1 ... i_n", *names[before + 1 :]])
+    shape = " ".join(
+        [*names[:before], "n i_1 ... i_n", *names[before + 1 : texcoord]]
+        + ([] if layout.texcoord is None else ["2n u_1 v_1 ... u_n v_n", *names[texcoord + 1 :]])
+    )
+    uv_count = 0 if layout.texcoord is None else 1
     sizes: list[int] = []
     tokens: list[str] = []
+    uv_tokens: list[str] = []
     for number, parts in face_rows:
         try:
             size = int(parts[before]) if len(parts) > before else -1
-        except ValueError:
+            pairs = int(parts[before + 1 + size + middle]) if uv_count and size > 0 else 0
+        except (ValueError, IndexError):
             size = -1
-        if size < MIN_CORNERS or len(parts) != before + 1 + size + after:
+        uv_size = 2 * size * uv_count
+        if (
+            size < MIN_CORNERS
+            or len(parts) != before + 1 + size + middle + uv_count + uv_size + after
+            or pairs != uv_size
+        ):
             raise FormatError(
                 path,
                 f"expected a face '{shape}' with n ≥ {MIN_CORNERS} and exactly n indices, got "
@@ -106,20 +127,45 @@ def _read_ply_lines(path: Path, data: bytes, header: _PlyHeader, layout: _PlyLay
             )
         sizes.append(size)
         tokens.extend(parts[before + 1 : before + 1 + size])
+        if uv_count:
+            start = before + 1 + size + middle + 1
+            uv_tokens.extend(parts[start : start + uv_size])
     face_sizes = np.array(sizes, dtype=np.int64)
     face_lines = np.array([number for number, _ in face_rows], dtype=np.int64)
-    corners = _convert(
-        path, tokens, np.int64, "integer vertex indices", np.repeat(face_lines, face_sizes)
-    )
+    corner_lines = np.repeat(face_lines, face_sizes)
+    corners = _convert(path, tokens, np.int64, "integer vertex indices", corner_lines)
     _faces_in_range(path, corners, face_sizes, n_vertices, face_lines)
-    return _Parsed(points, _polygon_list(corners, face_sizes))
+    uv: NDArray[np.float64] | None = None
+    if uv_count:
+        uv = _convert(
+            path, uv_tokens, np.float64, "texture coordinates", np.repeat(corner_lines, 2)
+        ).reshape(-1, 2)
+        _finite_uvs(path, uv, corner_lines, "face")
+    elif vertex_uv is not None:
+        uv = vertex_uv[corners]
+    return _Parsed(points, _polygon_list(corners, face_sizes), uv=uv)
+
+
+def _finite_uvs(
+    path: Path, uv: NDArray[np.float64], lines: NDArray[np.int64] | None, what: str
+) -> None:
+    """Refuse a texture coordinate that is not finite, naming its line (or its ``what`` item)."""
+    bad = np.flatnonzero(~np.isfinite(uv).all(axis=1))
+    if bad.size:
+        at = int(bad[0])
+        where = (None, f"{what} corner {at}") if lines is None else (int(lines[at]), what)
+        raise FormatError(
+            path,
+            f"{where[1]}: texture coordinates {uv[at].tolist()} are not finite numbers",
+            where[0],
+        )
 
 
 def _ply_points(
     path: Path, rows: list[tuple[int, list[str]]], layout: _PlyLayout
-) -> NDArray[np.float64]:
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
     """The x, y, z of the vertex lines ``rows``, each with one number per vertex property; a
-    ``float`` coordinate rounded to float32."""
+    ``float`` coordinate rounded to float32; and the texture coordinates (V, 2), None without."""
     properties = layout.vertex.properties
     names = [p.name for p in properties]
     for number, parts in rows:
@@ -144,4 +190,14 @@ def _ply_points(
             with np.errstate(over="ignore", invalid="ignore"):  # inf or NaN: named below
                 points[:, axis] = points[:, axis].astype(np.float32)
     _finite_vertices(path, points, lines)
-    return points
+    if layout.uv is None:
+        return points, None
+    uv = _convert(
+        path,
+        [[parts[k] for k in layout.uv] for _, parts in rows],
+        np.float64,
+        "texture coordinates",
+        lines,
+    ).reshape(-1, 2)
+    _finite_uvs(path, uv, lines, "vertex")
+    return points, uv

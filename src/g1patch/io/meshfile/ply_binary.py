@@ -30,7 +30,8 @@ _MAX_RUN = 1 << 22
 
 class _FaceRecord(NamedTuple):
     """The byte layout of one face: ``prefix`` bytes of scalars, the count, the indices,
-    ``suffix`` bytes of scalars."""
+    ``suffix`` bytes of scalars; with a texcoord list (``uv``: its count and value types),
+    ``middle`` bytes of scalars, its count and 2 values a corner come before the suffix."""
 
     prefix: int
     length: np.dtype
@@ -39,9 +40,13 @@ class _FaceRecord(NamedTuple):
     length_name: str
     item_name: str
     order: Literal["little", "big"]
+    uv: tuple[np.dtype, np.dtype] | None = None
+    middle: int = 0
 
     def size(self, corners: int) -> int:
-        return self.prefix + self.length.itemsize + corners * self.item.itemsize + self.suffix
+        uv = 0 if self.uv is None else self.uv[0].itemsize + 2 * corners * self.uv[1].itemsize
+        own = self.prefix + self.length.itemsize + corners * self.item.itemsize + self.suffix
+        return own + self.middle + uv
 
 
 def _face_record(layout: _PlyLayout, order: str) -> _FaceRecord:
@@ -49,48 +54,71 @@ def _face_record(layout: _PlyLayout, order: str) -> _FaceRecord:
     sizes = [np.dtype(PLY_TYPES[p.type]).itemsize for p in properties]
     corners = properties[layout.corners]
     assert corners.length is not None  # the layout's list
+    end, uv, middle = len(properties), None, 0
+    if layout.texcoord is not None:  # after the corners' list (the layout's rule)
+        texcoord = properties[layout.texcoord]
+        assert texcoord.length is not None
+        count_type = np.dtype(order + PLY_TYPES[texcoord.length])
+        uv = (count_type, np.dtype(order + PLY_TYPES[texcoord.type]))
+        middle, end = sum(sizes[layout.corners + 1 : layout.texcoord]), layout.texcoord
     return _FaceRecord(
         sum(sizes[: layout.corners]),
         np.dtype(order + PLY_TYPES[corners.length]),
         np.dtype(order + PLY_TYPES[corners.type]),
-        sum(sizes[layout.corners + 1 :]),
+        sum(sizes[layout.corners + 1 : end]) if uv is None else sum(sizes[end + 1 :]),
         corners.length,
         corners.type,
         "little" if order == "<" else "big",
+        uv,
+        middle,
     )
 
 
-def _ply_binary(
-    path: Path, data: bytes, header: _PlyHeader, layout: _PlyLayout
-) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
-    """Points, corners and sizes of a binary PLY file of the common layout whose element counts
-    :func:`~.ply._check_room` found room for: :func:`_ply_records`, else the walk."""
+#: points, corners, sizes and texture coordinates (per vertex (V, 2), or per face corner with a
+#: ``texcoord`` list (C, 2); None without)
+_Records = tuple[
+    NDArray[np.float64], NDArray[np.int64], NDArray[np.int64], NDArray[np.float64] | None
+]
+
+
+def _ply_binary(path: Path, data: bytes, header: _PlyHeader, layout: _PlyLayout) -> _Records:
+    """Points, corners, sizes and UVs of a binary PLY file of the common layout whose element
+    counts :func:`~.ply._check_room` found room for: :func:`_ply_records`, else the walk (which
+    does not read a ``texcoord`` list: a file with one whose faces differ in size is refused)."""
     records = _ply_records(data, header, layout)
     if records is not None:
         return records
     order = "<" if header.format == "binary_little_endian" else ">"
-    points, start = _vertices(data, header, layout, order)
     face = _face_record(layout, order)
+    if face.uv is not None:
+        raise FormatError(
+            path,
+            "a binary 'texcoord' face list is read only where every face has as many corners "
+            "and 2 texture coordinates a corner (use per-vertex s, t, or an ASCII file)",
+        )
+    points, uv, start = _vertices(data, header, layout, order)
     sizes, starts = _face_walk(path, data, start, layout.face.size, face)
-    return points, _gather(data, start, sizes, starts, face), sizes
+    return points, _gather(data, start, sizes, starts, face), sizes, uv
 
 
 def _vertices(
     data: bytes, header: _PlyHeader, layout: _PlyLayout, order: str
-) -> tuple[NDArray[np.float64], int]:
-    """The vertices' x, y, z as float64, and the byte after the last vertex."""
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | None, int]:
+    """The vertices' x, y, z as float64, their texture coordinates (V, 2) (None without) and the
+    byte after the last vertex."""
     vertex_type = np.dtype([(p.name, order + PLY_TYPES[p.type]) for p in layout.vertex.properties])
     vertices = np.frombuffer(data, vertex_type, layout.vertex.size, header.start)
     with np.errstate(invalid="ignore"):  # a signalling NaN: the finite-coordinate check names it
         points = np.stack([vertices[axis].astype(np.float64) for axis in "xyz"], axis=1)
-    return points, header.start + layout.vertex.size * vertex_type.itemsize
+        names = [] if layout.uv is None else [layout.vertex.properties[k].name for k in layout.uv]
+        uv = np.stack([vertices[n].astype(np.float64) for n in names], 1) if names else None
+    return points, uv, header.start + layout.vertex.size * vertex_type.itemsize
 
 
-def _ply_records(
-    data: bytes, header: _PlyHeader, layout: _PlyLayout
-) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]] | None:
-    """Points, corners and sizes of a binary PLY file of the common layout with every face of as
-    many corners and nothing after them, read as NumPy records; None for any other file."""
+def _ply_records(data: bytes, header: _PlyHeader, layout: _PlyLayout) -> _Records | None:
+    """Points, corners, sizes and UVs of a binary PLY file of the common layout with every face of
+    as many corners (and, with a ``texcoord`` list, 2 values a corner) and nothing after them,
+    read as NumPy records; None for any other file."""
     if header.ascii:
         return None
     order = "<" if header.format == "binary_little_endian" else ">"
@@ -109,16 +137,25 @@ def _ply_records(
     ]
     if face.prefix:
         fields.insert(0, ("p", np.dtype(f"V{face.prefix}")))
+    if face.middle:
+        fields.append(("m", np.dtype(f"V{face.middle}")))
+    if face.uv is not None:
+        fields += [("tn", face.uv[0]), ("t", face.uv[1], (2 * corners,))]
     if face.suffix:
         fields.append(("s", np.dtype(f"V{face.suffix}")))
     faces = np.frombuffer(data, np.dtype(fields), n_faces, faces_start)
     if (faces["n"] != corners).any():
         return None
-    points, _ = _vertices(data, header, layout, order)
+    if face.uv is not None and (faces["tn"] != 2 * corners).any():
+        return None
+    points, uv, _ = _vertices(data, header, layout, order)
+    if face.uv is not None:
+        uv = faces["t"].astype(np.float64).reshape(-1, 2)
     return (
         points,
         faces["i"].astype(np.int64).ravel(),
         np.full(n_faces, corners, dtype=np.int64),
+        uv,
     )
 
 

@@ -39,6 +39,10 @@ PLY_FORMATS = ("ascii", "binary_little_endian", "binary_big_endian")
 FACE_LISTS = ("vertex_indices", "vertex_index")
 #: the fewest corners a face may have: what the header check counts per face
 MIN_CORNERS = 3
+#: per-vertex texture coordinate properties, the first pair a vertex has wins
+UV_PROPERTIES = (("s", "t"), ("u", "v"), ("texture_u", "texture_v"), ("texture_s", "texture_t"))
+#: the per-face list of texture coordinates (u₁ v₁ … uₙ vₙ, one pair per corner)
+TEXCOORD = "texcoord"
 
 
 class _Property(NamedTuple):
@@ -172,11 +176,15 @@ def _check_room(path: Path, header: _PlyHeader, data: bytes) -> None:
 
 class _PlyLayout(NamedTuple):
     """A PLY file of the common layout: one vertex element of scalar properties with x, y, z, then
-    one face element of scalars and one list of vertex indices (:data:`FACE_LISTS`)."""
+    one face element of scalars and one list of vertex indices (:data:`FACE_LISTS`), and maybe a
+    float list :data:`TEXCOORD` after it. ``uv``: the vertex properties of the texture
+    coordinates (:data:`UV_PROPERTIES`), None without."""
 
     vertex: _Element
     face: _Element
     corners: int  # the position of the list among the face's properties
+    uv: tuple[int, int] | None = None
+    texcoord: int | None = None  # the position of the texcoord list
 
 
 def _ply_layout(header: _PlyHeader) -> _PlyLayout | None:
@@ -186,6 +194,9 @@ def _ply_layout(header: _PlyHeader) -> _PlyLayout | None:
     vertex, face = header.elements
     names = [p.name for p in vertex.properties]
     lists = [k for k, p in enumerate(face.properties) if p.length is not None]
+    texcoord = None
+    if len(lists) == 2 and face.properties[lists[1]].name == TEXCOORD:
+        texcoord = lists.pop()
     if (
         any(p.length is not None for p in vertex.properties)
         or len(set(names)) != len(names)
@@ -193,6 +204,9 @@ def _ply_layout(header: _PlyHeader) -> _PlyLayout | None:
         or len(lists) != 1
         or face.properties[lists[0]].name not in FACE_LISTS
         or PLY_TYPES[face.properties[lists[0]].type][0] == "f"
+        or (texcoord is not None and PLY_TYPES[face.properties[texcoord].type][0] != "f")
     ):
         return None
-    return _PlyLayout(vertex, face, lists[0])
+    pair = next((pair for pair in UV_PROPERTIES if set(pair) <= set(names)), None)
+    uv = None if pair is None else (names.index(pair[0]), names.index(pair[1]))
+    return _PlyLayout(vertex, face, lists[0], uv, texcoord)
