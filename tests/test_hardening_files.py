@@ -707,7 +707,7 @@ def test_round_trips_are_exact(name: str, tmp_path: Path) -> None:
     assert (tmp_path / "again.npz").read_bytes() == (tmp_path / "n.npz").read_bytes()
 
 
-@pytest.mark.parametrize("version", [1, 2, 3, 4])
+@pytest.mark.parametrize("version", [1, 2, 3, 4, 5])
 @pytest.mark.parametrize("compressed", [True, False])
 def test_files_of_every_version_still_load(
     version: int, compressed: bool, gregory_file: Path, tmp_path: Path

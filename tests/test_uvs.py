@@ -311,3 +311,75 @@ def test_a_merge_of_faces_drops_the_uvs_and_says_so() -> None:
     mesh = QuadMesh.from_arrays(points, faces, uv=np.zeros((12, 2)))
     assert mesh.uv is None and UV_DROPPED in mesh.repairs
     assert UV_DROPPED in mesh.repair_note
+
+
+# ------------------------------------------------------------------ PLY texture coordinates
+_STRIP = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0]], float)
+_STRIP_FACES = np.array([[0, 1, 2, 3], [1, 4, 5, 2]])
+_STRIP_ST = _STRIP[:, :2] * 0.5 + 0.125
+
+
+@pytest.mark.parametrize("binary", [False, True])
+@pytest.mark.parametrize("names", [("s", "t"), ("u", "v"), ("texture_u", "texture_v")])
+def test_ply_vertex_uvs_become_corner_uvs(tmp_path: Path, binary: bool, names: tuple) -> None:
+    path = tmp_path / "strip.ply"
+    data = {names[0]: _STRIP_ST[:, 0], names[1]: _STRIP_ST[:, 1]}
+    mesh = meshio.Mesh(_STRIP, [("quad", _STRIP_FACES.astype(np.int32))], point_data=data)
+    meshio.ply.write(str(path), mesh, binary=binary)
+    read = read_mesh(path)
+    assert read.uv is not None and np.array_equal(read.uv, _STRIP_ST[read.faces])
+
+
+def _texcoord_header(form: str, coordinate: str = "float") -> str:
+    return (
+        f"ply\nformat {form} 1.0\nelement vertex 6\nproperty {coordinate} x\n"
+        f"property {coordinate} y\nproperty {coordinate} z\nelement face 2\n"
+        "property list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header\n"
+    )
+
+
+def test_ply_texcoord_lists_ascii_and_binary(tmp_path: Path) -> None:
+    # face-varying: each face its own chart (a seam between them)
+    corner_uv = np.arange(16, dtype=np.float32).reshape(2, 8) / 16
+    text = tmp_path / "a.ply"
+    rows = [" ".join(map(str, p)) for p in _STRIP]
+    rows += [
+        f"4 {' '.join(map(str, q))} 8 {' '.join(map(repr, uv.tolist()))}"
+        for q, uv in zip(_STRIP_FACES, corner_uv, strict=True)
+    ]
+    text.write_text(_texcoord_header("ascii") + "\n".join(rows) + "\n")
+    record = np.dtype([("n", "u1"), ("i", "<i4", (4,)), ("tn", "u1"), ("t", "<f4", (8,))])
+    faces = np.zeros(2, record)
+    faces["n"], faces["i"], faces["tn"], faces["t"] = 4, _STRIP_FACES, 8, corner_uv
+    binary = tmp_path / "b.ply"
+    binary.write_bytes(
+        _texcoord_header("binary_little_endian", "double").encode()
+        + _STRIP.astype("<f8").tobytes()
+        + faces.tobytes()
+    )
+    for path in (text, binary):
+        mesh = read_mesh(path)
+        assert mesh.uv is not None
+        assert np.array_equal(mesh.uv.reshape(2, 8), corner_uv.astype(np.float64)), path
+
+
+def test_bad_ply_texture_coordinates_name_the_line(tmp_path: Path) -> None:
+    path = tmp_path / "bad.ply"
+    rows = [" ".join(map(str, p)) for p in _STRIP]
+    rows += ["4 0 1 2 3 8 0 0 1 0 1 1 0 nan", "4 1 4 5 2 6 0 0 1 0 1 1"]
+    path.write_text(_texcoord_header("ascii") + "\n".join(rows) + "\n")
+    with pytest.raises(FormatError, match=r"bad\.ply:18: expected a face"):
+        read_mesh(path)
+    rows[-1] = "4 1 4 5 2 8 0 0 1 0 1 1 0 1"
+    path.write_text(_texcoord_header("ascii") + "\n".join(rows) + "\n")
+    with pytest.raises(FormatError, match=r"bad\.ply:17: face: texture coordinates .* not finite"):
+        read_mesh(path)
+
+
+def test_the_in_memory_api_takes_corner_uvs() -> None:
+    """``QuadMesh.from_arrays(uv=...)`` (one UV per face corner, in the faces' order) is the way
+    in for UVs that come from no file; ``g1patch.smooth`` keeps them."""
+    uv = _STRIP_ST[_STRIP_FACES].reshape(-1, 2)
+    mesh = QuadMesh.from_arrays(_STRIP, _STRIP_FACES, uv=uv)
+    surface = g1patch.smooth(mesh, method="gregory")
+    assert surface.uv is not None and np.array_equal(surface.uv, _STRIP_ST[_STRIP_FACES])
