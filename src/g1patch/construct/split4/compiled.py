@@ -20,6 +20,7 @@ from ...kernels import in_chunks, jit_kernel
 from ...targets.local import slot_tables
 from .nets import _LOCAL, _MACRO_WEIGHTS, _NET_WEIGHTS
 from .reference import SplitInputs
+from .stars import STAR_LENGTH_LIMIT
 from .systems import _MIDPOINT, _cycle, _even_vertex_shifts, _operator
 
 FloatArray = NDArray[np.float64]
@@ -208,6 +209,7 @@ def _edge_kernel(
     place: IntArray,
     inner_operator: FloatArray,
     outer_operator: FloatArray,
+    limit: float,
     scale: float,
     centre: FloatArray,
     control: FloatArray,
@@ -217,7 +219,8 @@ def _edge_kernel(
     hi: int,
 ) -> None:
     """Edges ``lo:hi``: the star at M, ``t_L + t_R = μ t_X`` with ``t_X = 3 (P2 − M)``, each side
-    its seam slot's ``C − M + own`` minus half the gap; the seam points ``M + t/3`` on both sides of
+    its seam slot's ``C − M + own`` minus half the gap, the common cross part at most ``limit`` ×
+    the shorter seam wanted (the seam length safeguard); the seam points ``M + t/3`` on both sides of
     both sub-patches; the midpoint twists' targets (``P + e − M`` plus the net's offset) moved onto
     ``G_LX + G_RX = A_X``, ``G_LY + G_RY = A_Y``, ``G_LX + G_LY = 2 e_L``, ``G_RX + G_RY = 2 e_R``
     by the min-norm operator; M and ``unit(t_L × t_X)`` into ``extra``, ``extra_normals``."""
@@ -234,6 +237,21 @@ def _edge_kernel(
         nl = (hl & ~3) | ((hl + 1) & 3)
         nr = (hr & ~3) | ((hr + 1) & 3)
         knl, knr = nl & 3, nr & 3
+        # the seam length safeguard (reference: _reference_patches): the star's common cross part
+        # D = (own_L − own_R)/2 at most limit × the shorter seam wanted
+        keep = 1.0
+        if inside:
+            size = shorter_l = shorter_r = 0.0
+            for d in range(3):
+                a = control[hl, place[kl, 3, 1] + d]
+                b = control[hr, place[kr, 3, 1] + d]
+                shorter_l += a * a
+                shorter_r += b * b
+                size += 0.25 * (a - b) * (a - b)
+            shorter = np.sqrt(min(shorter_l, shorter_r))
+            size = np.sqrt(size)
+            if size > 0.0 and limit * shorter < size:
+                keep = limit * shorter / size
         for d in range(3):
             p1, p2, m, p4, p5 = (
                 curve[e, 0, d],
@@ -245,9 +263,14 @@ def _edge_kernel(
             seam_l = control[hl, place[kl, 3, 1] + d]
             seam_r = control[hr, place[kr, 3, 1] + d] if inside else 0.0
             t_x[d] = 3.0 * (p2 - m)
-            gap = seam_l + seam_r - mu[e] * t_x[d]
-            t_l[d] = seam_l - (0.5 if inside else 0.0) * gap
-            t_r = seam_r - 0.5 * gap if inside else 0.0
+            if inside:
+                along = 0.5 * mu[e] * t_x[d]
+                cross_part = keep * 0.5 * (seam_l - seam_r)
+                t_l[d] = along + cross_part
+                t_r = along - cross_part
+            else:
+                t_l[d] = seam_l
+                t_r = 0.0
             e_l[d] = m + t_l[d] / 3.0
             e_r[d] = m + t_r / 3.0
             extra[e, d] = m * scale + centre[d]
@@ -487,6 +510,7 @@ def _compiled_patches(given: SplitInputs) -> tuple[FloatArray, FloatArray, Float
             _PLACE,
             inner,
             outer,
+            STAR_LENGTH_LIMIT,
             scale,
             centre,
             control,

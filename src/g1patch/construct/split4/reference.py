@@ -27,7 +27,7 @@ from .nets import (
     _TWIST_VERTEX,
     _own_quantities,
 )
-from .stars import SplitStar
+from .stars import STAR_LENGTH_LIMIT, SplitStar
 from .systems import _MIDPOINT, _cycle, _even_vertex_shifts, _min_norm
 
 FloatArray = NDArray[np.float64]
@@ -236,6 +236,21 @@ def _reference_patches(given: SplitInputs) -> tuple[FloatArray, FloatArray, Floa
     star_gap = own_seam[h_l] + np.where(interior[:, None], own_seam[h_r], 0.0) - mu[:, None] * t_x
     t_l = own_seam[h_l] - np.where(interior, 0.5, 0.0)[:, None] * star_gap
     t_r = np.where(interior[:, None], own_seam[h_r] - 0.5 * star_gap, 0.0)
+    # seam length safeguard: the star makes both seams' cross parts D = (own_L − own_R)/2 equal,
+    # the mean of their lengths; between faces of very unequal width (a support loop beside a
+    # wide face) that is many times the narrow face's own seam, whose curve then overshoots its
+    # centre and folds. D is shortened to STAR_LENGTH_LIMIT × the shorter seam wanted
+    cross_part = 0.5 * (t_l - t_r)
+    shorter = np.minimum(
+        np.linalg.norm(own_seam[h_l], axis=1),
+        np.where(interior, np.linalg.norm(own_seam[h_r], axis=1), np.inf),
+    )
+    size = np.linalg.norm(cross_part, axis=1)
+    keep = np.minimum(1.0, STAR_LENGTH_LIMIT * shorter / np.where(size > 0, size, np.inf))
+    keep = np.where(interior, keep, 1.0)[:, None]
+    along = 0.5 * (t_l + t_r)
+    t_l = np.where(interior[:, None], along + keep * cross_part, t_l)
+    t_r = np.where(interior[:, None], along - keep * cross_part, 0.0)
     n_m = np.cross(t_l, t_x)  # ⊥ both tangents of the star at M
     e_l = m + t_l / 3.0
     e_r = m + t_r / 3.0
