@@ -118,3 +118,52 @@ def test_seams_stay_inside_thin_wedges(valence: int) -> None:
     radius = np.linalg.norm(control[..., :2], axis=-1)
     inside = (offset <= 2.0 * np.pi / valence + 1e-9) | (radius < 1e-12)
     assert inside.all()
+
+
+def lattice_box(xs: list[float], ys: list[float], zs: list[float]) -> QuadMesh:
+    """The closed quad surface of the box lattice over the coordinates (unequal spacings allowed),
+    faces turned outwards."""
+    axes = [np.asarray(a, dtype=float) for a in (xs, ys, zs)]
+    counts = [len(a) - 1 for a in axes]
+    index: dict[tuple[int, ...], int] = {}
+    vertices: list[tuple[float, ...]] = []
+    faces: list[list[int]] = []
+
+    def vertex(c: tuple[int, ...]) -> int:
+        if c not in index:
+            index[c] = len(vertices)
+            vertices.append(tuple(float(axes[d][c[d]]) for d in range(3)))
+        return index[c]
+
+    for fixed in range(3):
+        a_axis, b_axis = (d for d in range(3) if d != fixed)
+        for end in (0, counts[fixed]):
+            for a in range(counts[a_axis]):
+                for b in range(counts[b_axis]):
+                    corners = []
+                    for da, db in ((0, 0), (1, 0), (1, 1), (0, 1)):
+                        c = [0, 0, 0]
+                        c[fixed], c[a_axis], c[b_axis] = end, a + da, b + db
+                        corners.append(vertex(tuple(c)))
+                    p = np.array([vertices[i] for i in corners])
+                    outward = np.zeros(3)
+                    outward[fixed] = 1.0 if end else -1.0
+                    if np.cross(p[1] - p[0], p[2] - p[0]) @ outward < 0:
+                        corners.reverse()
+                    faces.append(corners)
+    return QuadMesh.from_arrays(np.array(vertices), np.array(faces))
+
+
+def support_box() -> QuadMesh:
+    """A hard-surface box with support loops 4 % from every edge (edges 1 : 23)."""
+    g = np.array([0.0, 0.04, 0.96, 1.0])
+    return lattice_box(list(2.0 * g), list(1.4 * g), list(g))
+
+
+def test_support_loops_do_not_fold_split4() -> None:
+    """Support loops 4 % from a box's edges (faces 1 : 23 side by side): the midpoint star makes
+    both seams' cross parts equal; without the length safeguard that was the mean of the two,
+    12 × the narrow face's own, and 120 of 216 sub-patches folded."""
+    network = build_split4_network(support_box())
+    report = check(network)
+    assert report.is_g1() and report.folds == 0

@@ -219,11 +219,12 @@ def _edge_kernel(
     hi: int,
 ) -> None:
     """Edges ``lo:hi``: the star at M, ``t_L + t_R = μ t_X`` with ``t_X = 3 (P2 − M)``, each side
-    its seam slot's ``C − M + own`` minus half the gap, the common cross part at most ``limit`` ×
-    the shorter seam wanted (the seam length safeguard); the seam points ``M + t/3`` on both sides of
-    both sub-patches; the midpoint twists' targets (``P + e − M`` plus the net's offset) moved onto
-    ``G_LX + G_RX = A_X``, ``G_LY + G_RY = A_Y``, ``G_LX + G_LY = 2 e_L``, ``G_RX + G_RY = 2 e_R``
-    by the min-norm operator; M and ``unit(t_L × t_X)`` into ``extra``, ``extra_normals``."""
+    its seam slot's ``C − M + own`` minus half the gap, the common cross part at most ``limit``
+    × the shorter seam wanted (the seam length safeguard); the seam points ``M + t/3`` on both
+    sides of both sub-patches; the midpoint twists' targets (``P + e − M`` plus the net's
+    offset) moved onto ``G_LX + G_RX = A_X``, ``G_LY + G_RY = A_Y``, ``G_LX + G_LY = 2 e_L``,
+    ``G_RX + G_RY = 2 e_R`` by the min-norm operator; M and ``unit(t_L × t_X)`` into
+    ``extra``, ``extra_normals``."""
     stacked = np.empty((8, 3))
     solved = np.empty(4)
     e_l = np.empty(3)
