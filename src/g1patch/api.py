@@ -587,8 +587,10 @@ class Surface:
           per quad), exact for polynomial patches; a Gregory network by ``method`` (``auto``:
           its split4 re-assembly, exact G1 in CAD; ``fit``: fitted within ``fit_tolerance``, model
           units, default 1e-6 × the bbox diagonal); ``max_deviation`` (the re-assembly's bound,
-          relative to the diagonal, default 1e-3); also ``progress``, ``g1_samples``
-          (:func:`g1patch.io.cad.export_cad`, needs ``pip install 'g1patch[cad]'``);
+          relative to the diagonal, default 1e-3); also ``progress``, ``g1_samples``, ``verify``
+          (STEP of a split4 network, written directly: OpenCASCADE reads it back to check it,
+          default up to 20,000 faces) (:func:`g1patch.io.cad.export_cad`, needs ``pip install
+          'g1patch[cad]'``);
         * ``.3dm``: Rhino's file, the same B-spline faces as STEP's (options ``method``,
           ``max_deviation``, ``fit_tolerance``; :func:`g1patch.io.cad.export_3dm`, needs ``pip
           install 'g1patch[rhino]'``); returns a :class:`~g1patch.io.cad.RhinoResult`;
@@ -612,7 +614,7 @@ class Surface:
             _check_options(
                 target,
                 options,
-                ("fit_tolerance", "progress", "g1_samples", "method", "max_deviation"),
+                ("fit_tolerance", "progress", "g1_samples", "method", "max_deviation", "verify"),
             )
             from .io.cad import export_cad
 

@@ -296,6 +296,7 @@ def _export(args: argparse.Namespace) -> int:
                 method=args.cad_method,
                 max_deviation=args.max_deviation,
                 progress=lambda stage, done, total: progress(done, total),
+                verify=args.verify,
             )
         corner_only = network.provenance.get("method") == "corner"
         assert isinstance(result, ExportResult)

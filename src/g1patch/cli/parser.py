@@ -307,6 +307,13 @@ def build_parser() -> argparse.ArgumentParser:
         "%(default)g)",
     )
     export.add_argument(
+        "--verify",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="STEP of a split4 network: have OpenCASCADE read the file back to check it and "
+        "measure its G1 angles (default: up to 20,000 faces; --no-verify: never)",
+    )
+    export.add_argument(
         "--json", action="store_true", help="CAD: print the figures as one JSON object"
     )
 

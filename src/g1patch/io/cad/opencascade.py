@@ -68,7 +68,7 @@ _OCC_NAMES: dict[str, tuple[str, ...]] = {
     "STEPControl": ("STEPControl_AsIs", "STEPControl_Reader", "STEPControl_Writer"),
     "TCollection": ("TCollection_ExtendedString", "TCollection_HAsciiString"),
     "TDocStd": ("TDocStd_Document",),
-    "TopAbs": ("TopAbs_FACE", "TopAbs_REVERSED", "TopAbs_SHELL"),
+    "TopAbs": ("TopAbs_FACE", "TopAbs_REVERSED", "TopAbs_SHELL", "TopAbs_SOLID"),
     "TopExp": ("TopExp_Explorer",),
     "TopoDS": ("TopoDS", "TopoDS_Compound"),
     "XCAFDoc": ("XCAFDoc_ColorType", "XCAFDoc_DocumentTool"),

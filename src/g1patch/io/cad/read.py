@@ -132,9 +132,15 @@ def file_g1_angles(
     exported by split4, its :func:`~g1patch.construct.polynomial.split4_of_gregory`): what a CAD
     user's system sees. Faces are matched to patches (or split4 quads) by their middle points
     (nearest, each face once); seams are included (``network.seam`` tells them apart)."""
+    return _model_g1_angles(read_cad_faces(path), network, samples, path)
+
+
+def _model_g1_angles(
+    model: CadModel, network: PatchNetwork, samples: int, path: PathLike | None = None
+) -> NDArray[np.float64]:
+    """:func:`file_g1_angles` of a model already read (``path`` names it in an error)."""
     from scipy.spatial import cKDTree
 
-    model = read_cad_faces(path)
     quads = split4_quad_faces(network) is not None
     middles = np.concatenate(
         [
@@ -159,7 +165,7 @@ def file_g1_angles(
     distance, order = cKDTree(middles).query(centres)
     if len(model.faces) != len(centres) or len(set(order.tolist())) != len(centres):
         raise FormatError(
-            path,
+            path or "the CAD model",
             f"its {len(model.faces)} faces do not match the network's {len(centres)} "
             f"{'quads' if quads else 'patches'} one to one",
         )
