@@ -486,20 +486,21 @@ def test_max_deviation_chooses_the_cells(
 @requires_ocp
 def test_cells_that_fold_are_not_taken(tmp_path: Path) -> None:
     """A coarse box cage with one long and one short edge per vertex: its re-assembly folds 2 and
-    11 sub-patches at 4 × 4 and 8 × 8 cells (measured), so the export keeps 2 × 2 (3.5e-3 of the
-    diagonal, none folded) and says it is above the bound because finer cells folded."""
+    4 sub-patches at 6 × 6 and 8 × 8 cells (measured; 2 and 11 at 4 × 4 and 8 × 8 before split4's
+    seam-length safeguard), so the export keeps 4 × 4 (1.1e-3 of the diagonal, none folded) and
+    says it is above the bound because finer cells folded."""
     from g1patch.continuity import folded_patches
     from g1patch.io.cad import export_step
 
     network = build_network(shapes.box_cage(), "gregory")
     result = export_step(tmp_path / "box.step", network, g1_samples=0)
-    assert result.refine == 2 and result.relative_deviation > 1e-3 and result.valid and result.solid
+    assert result.refine == 4 and result.relative_deviation > 1e-3 and result.valid and result.solid
     assert (
-        "above --max-deviation 0.001, at 2 × 2 cells per patch (finer cells folded)"
+        "above --max-deviation 0.001, at 4 × 4 cells per patch (finer cells folded)"
         in result.method_note
     )
-    assert not folded_patches(split4_of_gregory(network, refine=2).patches).any()
-    assert folded_patches(split4_of_gregory(network, refine=4).patches).any()
+    assert not folded_patches(split4_of_gregory(network, refine=4).patches).any()
+    assert folded_patches(split4_of_gregory(network, refine=6).patches).any()
 
 
 @requires_ocp

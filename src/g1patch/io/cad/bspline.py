@@ -297,6 +297,16 @@ class QuadFaces(NamedTuple):
     two_span: BSplineFit
 
 
+def _sandwich(m: NDArray[np.float64], nets: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``M N_f Mᵀ`` for every net ``N_f`` of ``nets`` (F, n, n, 3): two matrix products over all
+    faces at once (einsum's four-operand loop took 3× as long on 32 k quads)."""
+    faces, n, _, dims = nets.shape
+    k = m.shape[0]
+    rows = m @ nets.transpose(1, 2, 0, 3).reshape(n, -1)  # (k, n·F·3): a, then (j, f, d)
+    both = m @ rows.reshape(k, n, -1).transpose(1, 0, 2).reshape(n, -1)  # b, then (a, f, d)
+    return np.ascontiguousarray(both.reshape(k, k, faces, dims).transpose(2, 1, 0, 3))
+
+
 def split4_quad_faces(network: PatchNetwork) -> QuadFaces | None:
     """The quads of a split4 network (sub-patch ``4f + k`` at corner k of quad f, its seams to
     ``4f + k ± 1`` joined C1: :mod:`g1patch.construct.split4`), or None for any other network.
@@ -331,8 +341,8 @@ def split4_quad_faces(network: PatchNetwork) -> QuadFaces | None:
     )
     if not c1_gap <= _C1_RTOL * diagonal:
         return None
-    cubic = np.einsum("ai,fijd,bj->fabd", _EXTRACT, nets, _EXTRACT)
-    again = np.einsum("ai,fijd,bj->fabd", _HALVE, cubic, _HALVE)
+    cubic = _sandwich(_EXTRACT, nets)
+    again = _sandwich(_HALVE, cubic)
     single = np.abs(again - nets).max(axis=(1, 2, 3)) <= SINGLE_SPAN_RTOL * diagonal
     keep = np.array([0, 1, 2, 4, 5, 6])  # row and column 3 are midpoints: the double knot at ½
     two_span = np.ascontiguousarray(nets[~single][:, keep][:, :, keep])
