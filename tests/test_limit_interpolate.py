@@ -153,3 +153,41 @@ def test_shared_meshes(shared_data: Path, name: str, method: str) -> None:
 def test_generated_meshes(name: str, method: str) -> None:
     mesh = GENERATED[name]()
     assert check_network(mesh, method, own_reference(mesh)) <= FAIRNESS_BAR
+
+
+def support_box() -> QuadMesh:
+    """A hard-surface box with support loops 4 % from every edge (edges 1:25), 2 × 1.4 × 1: its
+    exact interpolating cage turns inside out (24 folds before relaxing)."""
+    grid = np.array([0.0, 0.04, 0.96, 1.0])
+    coordinates = (2.0 * grid, 1.4 * grid, grid)
+    lattice = shapes.voxel_surface(np.ones((3, 3, 3), dtype=bool))
+    index = lattice.vertices.astype(np.int64)
+    return lattice.with_vertices(
+        np.stack([c[index[:, k]] for k, c in enumerate(coordinates)], axis=1)
+    )
+
+
+def test_support_loops_relax_instead_of_folding() -> None:
+    """Where exact interpolation would turn the surface inside out, the vertices under the turn
+    are relaxed (reported, with their distance) and the surface has no more folds than the
+    mesh's own Catmull–Clark limit; the other vertices stay interpolated."""
+    mesh = support_box()
+    solution = interpolating_cage(mesh)
+    assert 0 < len(solution.relaxed) < mesh.n_vertices
+    assert 0.0 < solution.relaxed_distance < 0.2 and solution.residual <= 1e-12
+    limit = limit_points(mesh.with_vertices(solution.cage))
+    kept = np.setdiff1d(np.arange(mesh.n_vertices), solution.relaxed)
+    np.testing.assert_allclose(limit[kept], mesh.vertices[kept], atol=1e-12)
+    np.testing.assert_array_equal(solution.points[kept], mesh.vertices[kept])
+    for method in ("gregory", "split4"):
+        ours = continuity.check(build_network(mesh, method, "limit-interpolate"))
+        theirs = continuity.check(build_network(mesh, method, "limit"))
+        assert ours.folds <= theirs.folds
+        assert ours.max_edge_angle_deg <= 1e-9
+
+
+@pytest.mark.parametrize("mesh", [shapes.sphere_quads(2), shapes.torus(5, 4), shapes.genus2()])
+def test_fold_free_meshes_are_not_relaxed(mesh: QuadMesh) -> None:
+    solution = interpolating_cage(mesh)
+    assert len(solution.relaxed) == 0 and solution.relaxed_distance == 0.0
+    assert solution.points is mesh.vertices

@@ -561,7 +561,8 @@ def _within_tolerance(
     assembly = ASSEMBLIES[method]
     cage, original = mesh, None
     if shape == "limit-interpolate":
-        cage, original = mesh.with_vertices(interpolating_cage(mesh).cage), mesh.vertices
+        solution = interpolating_cage(mesh)
+        cage, original = mesh.with_vertices(solution.cage), solution.points
 
     def through(ids: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """The original vertices among a finer cage's (``ids``: their ids in ``cage``)."""

@@ -47,8 +47,8 @@ from scipy.sparse.linalg import LinearOperator, SuperLU, lsmr, onenormest, splu
 
 from ..errors import ConstructionError, MeshError
 from ..mesh import QuadMesh
-from ..subdivision import limit_points
-from ..subdivision.matrix import limit_matrix
+from ..subdivision import limit_normals, limit_points
+from ..subdivision.matrix import limit_matrix, refine_matrix
 from .limit import limit_targets
 from .value import TangentRule, Targets
 
@@ -57,6 +57,8 @@ __all__ = [
     "LSMR_TOLERANCE",
     "MAX_CONDITION",
     "MAX_RESIDUAL",
+    "FOLD_ANGLE_DEG",
+    "CLEAN_ANGLE_DEG",
     "CageSolution",
     "interpolating_cage",
     "limit_interpolate_targets",
@@ -89,13 +91,23 @@ class CageSolution:
       :func:`~g1patch.subdivision.limit_points`;
     * ``condition``: the 1-norm condition estimate of L (``inf`` where the LU found it singular);
     * ``solver``: ``lu`` (sparse LU) or ``lsmr`` (least-norm correction, L singular or ill
-      conditioned).
+      conditioned);
+    * ``points`` (V, 3): where the limit passes by the vertices: the mesh's vertices themselves
+      (the same array) except at ``relaxed``, there the cage's limit points;
+    * ``relaxed``: the vertices not interpolated (:func:`_relaxed`: exact interpolation would turn
+      the surface inside out there), empty on most meshes;
+    * ``relaxed_distance``: the largest distance from a relaxed vertex to its limit point,
+      relative to the bounding-box diagonal (0 where none is relaxed); the residual is measured
+      at the other vertices.
     """
 
     cage: FloatArray
     residual: float
     condition: float
     solver: Solver
+    points: FloatArray
+    relaxed: NDArray[np.int64]
+    relaxed_distance: float = 0.0
 
 
 def _condition(matrix: sp.csr_matrix, lu: SuperLU) -> float:
@@ -163,7 +175,117 @@ def interpolating_cage(mesh: QuadMesh) -> CageSolution:
             "it can be interpolated; "
             "use refine=1 (--refine 1) first, or shape 'interpolate'"
         )
-    return CageSolution(cage.vertices, residual, condition, solver)
+    exact = CageSolution(cage.vertices, residual, condition, solver, x, np.zeros(0, np.int64))
+    return _relaxed(mesh, exact, matrix)
+
+
+#: the solved cage's limit is *inside out* where one of its normals, at the vertices, edge
+#: midpoints and face centres of one Catmull–Clark step, is turned more than this from the normal
+#: of the mesh's own Catmull–Clark limit at the same point: the exact solve is then relaxed
+#: (:func:`_relaxed`). No mesh without folds comes near it (the shared meshes and the coarse
+#: cages that interpolate fold-free turn at most 95°); the cages whose interpolating cage folds
+#: turn 170–180°.
+FOLD_ANGLE_DEG = 120.0
+#: once relaxing, vertices are freed until no normal is turned more than this (a fold)
+CLEAN_ANGLE_DEG = 90.0
+#: rounds of freeing at most (each frees the vertices under the turned normals, or their ring)
+MAX_ROUNDS = 16
+
+
+def _turned(mesh: QuadMesh, cage: FloatArray, angle: float) -> NDArray[np.int64]:
+    """The vertices under the normals of ``cage``'s limit turned more than ``angle`` degrees from
+    those of ``mesh``'s limit (one step: vertex, edge and face points; those of the step's
+    largest weights: the vertex itself, the edge's two ends, the face's corners)."""
+    refine, fine = refine_matrix(mesh, 1)
+    ours = limit_normals(fine.with_vertices(refine @ cage))
+    theirs = limit_normals(fine.with_vertices(refine @ mesh.vertices))
+    cosine = np.einsum("ij,ij->i", ours, theirs)
+    defined = (np.einsum("ij,ij->i", ours, ours) > 0.25) & (
+        np.einsum("ij,ij->i", theirs, theirs) > 0.25
+    )
+    rows = np.flatnonzero(defined & (cosine < np.cos(np.radians(angle))))
+    if not len(rows):
+        return np.zeros(0, np.int64)
+    weights = sp.csr_matrix(refine[rows]).tocoo()
+    peak = np.zeros(len(rows))
+    np.maximum.at(peak, weights.row, np.abs(weights.data))
+    under = np.abs(weights.data) >= 0.5 * peak[weights.row]
+    return np.unique(weights.col[under]).astype(np.int64)
+
+
+def _fair_correction(
+    mesh: QuadMesh, matrix: sp.csr_matrix, rhs: FloatArray, fixed: NDArray[np.int64]
+) -> FloatArray | None:
+    """The correction D of least ``Σ_edges |D_i − D_j|² + Σ_v |D_v|²`` with ``(L D)_v = rhs_v`` at
+    the ``fixed`` vertices only (KKT system, sparse LU); None where that system is singular."""
+    n = mesh.n_vertices
+    edges = mesh.topology.edges
+    count = len(edges)
+    difference = sp.csr_matrix(
+        (
+            np.r_[np.ones(count), -np.ones(count)],
+            (np.r_[np.arange(count), np.arange(count)], np.r_[edges[:, 0], edges[:, 1]]),
+        ),
+        shape=(count, n),
+    )
+    energy = difference.T @ difference + sp.identity(n, format="csr")
+    rows = matrix[fixed]
+    system = sp.bmat([[energy, rows.T], [rows, None]], format="csc")
+    try:
+        solution = splu(system).solve(np.vstack([np.zeros((n, 3)), rhs[fixed]]))
+    except RuntimeError:  # SuperLU: the fixed rows of L are dependent (the cube's checkerboard)
+        return None
+    return np.asarray(solution[:n])
+
+
+def _relaxed(mesh: QuadMesh, exact: CageSolution, matrix: sp.csr_matrix) -> CageSolution:
+    """``exact``, unless its limit is inside out against the mesh's own limit
+    (:data:`FOLD_ANGLE_DEG`, :func:`_turned`). Then the interpolation is relaxed where it turns:
+    the vertices under the turned normals are freed, the cage is solved again with ``L C = V`` at
+    the others only and the freed degrees of freedom faired (:func:`_fair_correction`: the
+    correction ``C − V`` as even and small as the remaining constraints allow), and vertices are
+    freed (those under normals turned more than :data:`CLEAN_ANGLE_DEG`, else their ring) until
+    no normal is. Every vertex free is the mesh's own limit, fold-free wherever ``limit`` is. The
+    relaxed vertices and their distance to the surface are logged at WARNING."""
+    x = mesh.vertices
+    free = _turned(mesh, exact.cage, FOLD_ANGLE_DEG)
+    if not len(free):
+        return exact
+    rhs = x - matrix @ x
+    everything = np.arange(len(x))
+    edges = mesh.topology.edges
+    cage = x
+    for _ in range(MAX_ROUNDS):
+        fixed = np.setdiff1d(everything, free)
+        correction = _fair_correction(mesh, matrix, rhs, fixed) if len(fixed) else 0.0 * x
+        if correction is None:
+            _logger.warning("limit-interpolate: the relaxed solve is singular, the exact cage kept")
+            return exact
+        cage = x + correction
+        turned = _turned(mesh, cage, CLEAN_ANGLE_DEG)
+        if not len(turned):
+            break
+        new = np.setdiff1d(turned, free)
+        if not len(new):  # all already free: their ring too
+            new = np.setdiff1d(edges[np.isin(edges, turned).any(axis=1)].ravel(), free)
+        if not len(new):
+            break
+        free = np.union1d(free, new)
+    limit = matrix @ cage
+    fixed = np.setdiff1d(everything, free)
+    diagonal = mesh.bounding_box_diagonal
+    points = x.copy()
+    points[free] = limit[free]
+    distance = float(np.linalg.norm(limit[free] - x[free], axis=1).max() / diagonal)
+    residual = float(np.linalg.norm(limit[fixed] - x[fixed], axis=1).max(initial=0.0) / diagonal)
+    _logger.warning(
+        "limit-interpolate: exact interpolation turns the surface inside out; %d of %d vertices "
+        "relaxed (the surface passes them at up to %.3g of the diagonal), the rest interpolated",
+        len(free),
+        len(x),
+        distance,
+    )
+    return CageSolution(cage, residual, exact.condition, exact.solver, points, free, distance)
 
 
 def limit_interpolate_targets(mesh: QuadMesh, *, tangents: TangentRule = "arc") -> Targets:
@@ -179,4 +301,4 @@ def limit_interpolate_targets(mesh: QuadMesh, *, tangents: TangentRule = "arc") 
         solution.condition,
     )
     targets = limit_targets(mesh.with_vertices(solution.cage))
-    return targets.with_changes(positions=mesh.vertices, rule="limit-interpolate")
+    return targets.with_changes(positions=solution.points, rule="limit-interpolate")
