@@ -23,7 +23,7 @@ from ..errors import InputError
 from ..mesh import QuadMesh
 from ..network import PatchNetwork
 from ..tessellate import tessellate
-from .features import layout_creases, sharp_segments
+from .features import boundary_corners, layout_corners, layout_creases, sharp_segments
 from .layout import quad_layout
 from .solve import FitCage, fit_cage, vertex_normals
 
@@ -213,12 +213,15 @@ def fit_network(
         if sharp_angle is None
         else sharp_segments(scan.points, scan.triangles, sharp_angle)
     )
+    corners = boundary_corners(
+        scan.points, scan.triangles, FIT_SHARP_ANGLE if sharp_angle is None else sharp_angle
+    )
     rounds = 0
     while True:
         rounds += 1
         cage_layout = layout if layout is not None else _layout(scan, count)
-        cage_layout = layout_creases(cage_layout, features)
-        fitted: FitCage = fit_cage(scan.points, normals, cage_layout)
+        cage_layout = layout_corners(layout_creases(cage_layout, features), corners)
+        fitted: FitCage = fit_cage(scan.points, normals, cage_layout, scan.triangles)
         # the scan, not the cage's limit, is what the fit is measured against (below)
         network = build_network(fitted.cage, method, "limit", tolerance=None)
         to_surface, to_scan = measure(network, scan)

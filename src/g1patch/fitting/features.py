@@ -11,6 +11,11 @@ scan edges long, and all of its samples must be near aligned sharp edges. The ta
 then fitted by the crease rules (its limit has the crease curve there, tangent planes on either
 side) and its creases become seams of the network, i.e. edges of the STEP solid. A vertex with
 three or more tagged edges is a corner by OpenSubdiv's rules.
+
+An open scan's boundary turns sharply at its corners (a height field's square): the layout's
+boundary vertex nearest each such scan vertex is moved onto it and tagged a ``corner``
+(:func:`layout_corners`), so that the limit's boundary curve has the corner too instead of
+rounding it off.
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ from scipy.spatial import cKDTree
 
 from ..mesh import INFINITE_SHARPNESS, QuadMesh, Tag
 from ..sharpen import sharp_angle_tags
+from .solve import boundary_edges
 
 __all__ = [
     "ALIGNMENT_DEG",
@@ -29,6 +35,7 @@ __all__ = [
     "BRIDGE_ROUNDS",
     "EDGE_SAMPLES",
     "REACH",
+    "layout_corners",
     "layout_creases",
     "sharp_segments",
 ]
@@ -134,3 +141,35 @@ def layout_creases(layout: QuadMesh, segments: FloatArray) -> QuadMesh:
         Tag("crease", tuple(pairs.ravel().tolist()), (INFINITE_SHARPNESS,)),
     )
     return QuadMesh.from_arrays(layout.vertices, layout.faces, tags=tags, source=layout.source)
+
+
+def boundary_corners(points: FloatArray, triangles: IntArray, degrees: float) -> FloatArray:
+    """The scan's boundary vertices (C, 3) where its boundary polyline turns by more than
+    ``degrees``: ``angle(p − p_in, p_out − p)``, p_in and p_out its boundary neighbours."""
+    edges = boundary_edges(triangles)
+    if not len(edges):
+        return np.zeros((0, 3))
+    incoming = np.full(len(points), -1)
+    incoming[edges[:, 1]] = edges[:, 0]
+    outgoing = edges[:, 1]
+    vertex = edges[:, 0]
+    keep = incoming[vertex] >= 0
+    vertex, before, after = vertex[keep], incoming[vertex[keep]], outgoing[keep]
+    into, out = points[vertex] - points[before], points[after] - points[vertex]
+    cosine = (into * out).sum(1) / np.maximum(
+        np.linalg.norm(into, axis=1) * np.linalg.norm(out, axis=1), np.finfo(float).tiny
+    )
+    return np.asarray(points[np.unique(vertex[cosine < np.cos(np.radians(degrees))])])
+
+
+def layout_corners(layout: QuadMesh, corners: FloatArray) -> QuadMesh:
+    """``layout`` with its boundary vertex nearest each scan boundary corner (``corners`` (C,
+    3)) moved onto it and tagged ``corner`` (sharpness ∞)."""
+    boundary = np.unique(boundary_edges(layout.faces))
+    if not len(corners) or not len(boundary):
+        return layout
+    nearest = boundary[cKDTree(layout.vertices[boundary]).query(corners)[1]]
+    vertices = layout.vertices.copy()
+    vertices[nearest] = corners
+    tags = (*layout.tags, Tag("corner", tuple(np.unique(nearest).tolist()), (INFINITE_SHARPNESS,)))
+    return QuadMesh.from_arrays(vertices, layout.faces, tags=tags, source=layout.source)

@@ -17,6 +17,18 @@ minimises
 small fairness term keeps noise from being chased; the proximal term keeps vertices few points
 reach near the previous cage while the feet settle), solved by a sparse LU of the normal
 equations. The feet move with the surface, so project → solve is repeated ``iterations`` times.
+
+An open scan's boundary holds the surface's: the limit boundary curve (the grid points on the
+layout's boundary edges; by the Catmull–Clark boundary rules the cubic B-spline of the cage's
+boundary vertices) is tied to the scan's boundary polyline both ways,
+
+    ``+ α ‖(1 − t) G_a C + t G_b C − S‖² + β ‖G_B C − Q‖²``,
+
+S the scan's boundary vertices with their feet (segment a–b, parameter t) on the curve's grid
+polyline, Q the nearest points of the scan's boundary to the curve's grid points B;
+``α = N V_b / (V |S|)``, ``β = N V_b / (V |B|)`` (V_b boundary cage vertices): a boundary vertex
+is pulled by as many points' worth as an interior one. Without these rows nothing holds the
+boundary quads' outer vertices but fairness and damping, and the rim hangs off the scan's.
 """
 
 from __future__ import annotations
@@ -91,6 +103,94 @@ def vertex_normals(points: FloatArray, triangles: IntArray) -> FloatArray:
     return total / np.where(length > 0, length, 1.0)
 
 
+def _sides(faces: IntArray) -> tuple[IntArray, NDArray[np.bool_]]:
+    """The sides ``(F, k, 2)`` of polygons ``faces`` (F, k), side i from corner i to i + 1, and
+    which of them only one face has (boundary sides)."""
+    sides = np.stack([faces, np.roll(faces, -1, axis=1)], axis=-1)
+    key = sides.min(axis=-1).astype(np.int64) * (1 << 31) + sides.max(axis=-1)
+    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+    return sides, (counts[inverse] == 1).reshape(key.shape)
+
+
+def boundary_edges(faces: IntArray) -> IntArray:
+    """The edges (E, 2) of polygons ``faces`` (F, k) that only one face has, oriented as it has."""
+    sides, open_sides = _sides(faces)
+    return sides[open_sides]
+
+
+def closest_on_segments(
+    points: FloatArray, starts: FloatArray, ends: FloatArray
+) -> tuple[IntArray, FloatArray]:
+    """Per point the segment nearest it among the :data:`_NEIGHBOURS` of nearest midpoint and
+    the parameter ``t`` of its closest point ``(1 − t) a + t b``, ``t = clamp((p − a)·(b − a) /
+    |b − a|², 0, 1)``."""
+    k = min(_NEIGHBOURS, len(starts))
+    near = cKDTree(0.5 * (starts + ends)).query(points, k=k, workers=-1)[1].reshape(len(points), k)
+    a, edge = starts[near], ends[near] - starts[near]
+    length = np.maximum((edge * edge).sum(-1), np.finfo(np.float64).tiny)
+    t = np.clip(((points[:, None, :] - a) * edge).sum(-1) / length, 0.0, 1.0)
+    gap = np.linalg.norm(a + t[..., None] * edge - points[:, None, :], axis=-1)
+    best = np.argmin(gap, axis=1)
+    rows = np.arange(len(points))
+    return near[rows, best], t[rows, best]
+
+
+class _Boundary:
+    """The rows tying the limit's boundary curve to a scan's boundary polyline (module
+    docstring): the layout's boundary sides as grid segments, the scan's boundary edges."""
+
+    def __init__(
+        self, points: FloatArray, triangles: IntArray, layout: QuadMesh, grid: IntArray
+    ) -> None:
+        edges = boundary_edges(triangles)
+        sides, open_sides = _sides(layout.faces)
+        along = np.stack([grid[:, :, 0], grid[:, -1, :], grid[:, ::-1, -1], grid[:, 0, ::-1]], 1)
+        polylines = along[open_sides]  # (B, m + 1) grid points along each boundary side
+        self.segments = np.stack([polylines[:, :-1], polylines[:, 1:]], -1).reshape(-1, 2)
+        self.samples = np.unique(polylines)
+        self.scan_vertices = points[np.unique(edges)]
+        self.scan_starts, self.scan_ends = points[edges[:, 0]], points[edges[:, 1]]
+        self.active = bool(len(edges) and len(polylines))
+        self.cage_boundary = np.unique(sides[open_sides])
+
+    def snapped(self, cage: FloatArray) -> FloatArray:
+        """``cage`` with its boundary vertices moved to the nearest points of the scan's
+        boundary (the remesher's boundary vertices may lie inside the scan's rim)."""
+        if not self.active:
+            return cage
+        corners = cage[self.cage_boundary]
+        nearest, s = closest_on_segments(corners, self.scan_starts, self.scan_ends)
+        moved = cage.copy()
+        moved[self.cage_boundary] = self.scan_starts[nearest] + s[:, None] * (
+            self.scan_ends[nearest] - self.scan_starts[nearest]
+        )
+        return moved
+
+    def rows(
+        self, limit: sp.csr_matrix, surface: FloatArray, per_vertex: float
+    ) -> tuple[sp.csr_matrix, FloatArray]:
+        """The weighted rows ``(√w M, √w target)`` of both ways on the current ``surface``."""
+        segment, t = closest_on_segments(
+            self.scan_vertices, surface[self.segments[:, 0]], surface[self.segments[:, 1]]
+        )
+        count = len(segment)
+        feet = sp.csr_matrix(
+            (
+                np.stack([1.0 - t, t], 1).reshape(-1),
+                (np.repeat(np.arange(count), 2), self.segments[segment].reshape(-1)),
+            ),
+            shape=(count, limit.shape[0]),
+        )
+        nearest, s = closest_on_segments(surface[self.samples], self.scan_starts, self.scan_ends)
+        targets = self.scan_starts[nearest] + s[:, None] * (
+            self.scan_ends[nearest] - self.scan_starts[nearest]
+        )
+        alpha = np.sqrt(per_vertex * self.cage_boundary.size / count)
+        beta = np.sqrt(per_vertex * self.cage_boundary.size / len(self.samples))
+        model = sp.vstack([alpha * (feet @ limit), beta * limit[self.samples]]).tocsr()
+        return model, np.concatenate([alpha * self.scan_vertices, beta * targets])
+
+
 class _Triangles:
     """A triangle mesh prepared for foot queries: a k-d tree of its points, their normals and
     every point's fan of triangles (CSR: ``order[starts[v]:starts[v + 1]] // 3``)."""
@@ -154,6 +254,7 @@ def fit_cage(
     points: FloatArray,
     normals: FloatArray,
     layout: QuadMesh,
+    scan_triangles: IntArray | None = None,
     *,
     levels: int = FIT_LEVELS,
     iterations: int = FIT_ITERATIONS,
@@ -161,19 +262,24 @@ def fit_cage(
     damping: float = DAMPING,
 ) -> FitCage:
     """The cage of ``layout``'s topology whose limit surface passes nearest ``points`` (N, 3,
-    with unit ``normals``) (module docstring), starting from the layout's own positions."""
+    with unit ``normals``) (module docstring), starting from the layout's own positions; the
+    ``scan_triangles`` give the scan's boundary (none: the boundary rows are left out)."""
     limit, grid = limit_grid_matrix(layout, levels)
+    boundary = None if scan_triangles is None else _Boundary(points, scan_triangles, layout, grid)
     triangles = grid_triangles(grid)
     fair = _umbrella(layout)
     per_vertex = len(points) / max(layout.n_vertices, 1)
     damping = damping * per_vertex
     regular = fairness * per_vertex * (fair.T @ fair) + damping * sp.identity(layout.n_vertices)
-    cage = layout.vertices.copy()
+    cage = layout.vertices.copy() if boundary is None else boundary.snapped(layout.vertices)
     blocks = [slice(start, start + BLOCK_POINTS) for start in range(0, len(points), BLOCK_POINTS)]
     rms = []
     for _ in range(iterations):
         surface = _Triangles(limit @ cage, triangles)
         lhs, rhs, kept = regular, damping * cage, []
+        if boundary is not None and boundary.active:
+            rows, targets = boundary.rows(limit, limit @ cage, per_vertex)
+            lhs, rhs = lhs + rows.T @ rows, rhs + np.asarray(rows.T @ targets)
         for rows in blocks:  # the normal equations a block of points at a time
             triangle, barycentric = surface.feet(points[rows], normals[rows])
             count = len(triangle)
