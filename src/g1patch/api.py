@@ -855,9 +855,7 @@ def fit(
         scan = read_scan(_check_path("source", source), max_input_size)
     else:
         scan = scan_of(as_mesh(source))
-    quads = None if layout is None else as_mesh(layout, max_input_size=max_input_size)
-    if quads is not None and quads.cage is not None:
-        raise InputError(f"{quads.source or 'layout'}: a layout must be all quads")
+    quads = None if layout is None else _fit_layout(layout, max_input_size)
     with named_errors(scan.source, (ConstructionError,)):
         network, report = fit_network(
             scan,
@@ -868,6 +866,34 @@ def fit(
             sharp_angle=sharp_angle,
         )
     return FitResult(Surface(network), report, scan)
+
+
+def _fit_layout(layout: Any, max_input_size: int | None) -> QuadMesh:
+    """A given layout as the cage's quad mesh (:func:`as_mesh`, all quads). A layout file the
+    mesh checks refuse (a quad of zero area, a corner repeated) has its quads cleaned as the
+    remesher's are (:func:`g1patch.fitting.layout.clean_layout`: coincident vertices merged,
+    degenerate and over-shared quads dropped)."""
+    from .errors import MeshError
+    from .fitting.layout import clean_layout
+    from .io.meshfile import read_polygons
+    from .mesh import QuadMesh
+
+    try:
+        quads = as_mesh(layout, max_input_size=max_input_size)
+    except MeshError:
+        if not isinstance(layout, (str, os.PathLike)):
+            raise
+        path = _check_path("layout", layout)
+        points, corners, sizes = read_polygons(path, max_input_size=max_input_size)
+        if (sizes != 4).any():
+            raise InputError(f"{path}: a layout must be all quads") from None
+        vertices, faces = clean_layout(points, corners.reshape(-1, 4))
+        if not len(faces):
+            raise InputError(f"{path}: the layout has no quad of nonzero area") from None
+        quads = QuadMesh.from_arrays(vertices, faces, source=str(path))
+    if quads.cage is not None:
+        raise InputError(f"{quads.source or 'layout'}: a layout must be all quads")
+    return quads
 
 
 def read_scan(path: PathLike, max_input_size: int | None = None) -> Scan:

@@ -188,6 +188,8 @@ def _fit(args: argparse.Namespace) -> int:
             result.surface.export(args.output)
         progress(2, 2)
     report = result.report
+    if report.repairs:
+        print(f"g1patch: {args.scan}: {', '.join(report.repairs)}", file=sys.stderr)
     if args.json:
         print(json.dumps({**report.to_dict(), "output": str(args.output)}))
     else:

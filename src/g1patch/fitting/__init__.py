@@ -5,7 +5,11 @@ an exact-G1 assembly (split4 by default: polynomial, so the CAD file is the fitt
 :func:`fit_network` runs it and measures the result against the scan both ways
 (:class:`FitReport`): scan points to the surface and surface samples to the scan's triangles.
 Without a given layout or face count it starts from :data:`START_FACES` (or the scan's size) and
-doubles the faces while the tolerance is not met, up to :data:`MAX_ROUNDS` layouts.
+doubles the faces while the tolerance is not met, up to :data:`MAX_ROUNDS` layouts; a layout the
+cage cannot be built from (what :func:`~g1patch.fitting.layout.clean_layout` leaves still
+refused) is skipped for the next face count. The scan's coincident vertices are welded first
+(:func:`welded`): an unwelded scan's cracks make the remesher's layout ragged and, on some inputs,
+not reproducible.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ from numpy.typing import NDArray
 
 from ..build import build_network, check_tolerance
 from ..compare import mesh_distance
-from ..errors import InputError
+from ..errors import ConstructionError, InputError, MeshError
 from ..mesh import QuadMesh
 from ..network import PatchNetwork
 from ..tessellate import tessellate
@@ -38,6 +42,7 @@ __all__ = [
     "quad_layout",
     "scan_from_polygons",
     "scan_of",
+    "welded",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -60,11 +65,13 @@ MEASURE_SAMPLES = 5
 
 @dataclass(frozen=True)
 class Scan:
-    """A dense triangle mesh to fit: ``points`` (N, 3), ``triangles`` (T, 3), its name."""
+    """A dense triangle mesh to fit: ``points`` (N, 3), ``triangles`` (T, 3), its name and what
+    was repaired in it (:func:`welded`)."""
 
     points: FloatArray
     triangles: IntArray
     source: str | None = None
+    repairs: tuple[str, ...] = ()
 
     @property
     def diagonal(self) -> float:
@@ -82,6 +89,23 @@ def scan_from_polygons(
         [corners[first], corners[first + step + 1], corners[first + step + 2]], axis=1
     )
     return Scan(np.asarray(points, dtype=np.float64), triangles.astype(np.int64), source)
+
+
+def welded(scan: Scan) -> Scan:
+    """``scan`` with the vertices at one position merged into one (the first's index order
+    kept) and the triangles that then repeat a corner dropped; ``repairs`` says how many."""
+    _, first, inverse = np.unique(scan.points, axis=0, return_index=True, return_inverse=True)
+    duplicated = len(scan.points) - len(first)
+    if not duplicated:
+        return scan
+    keep = np.sort(first)
+    renumber = np.empty(len(first), dtype=np.int64)
+    renumber[np.argsort(first)] = np.arange(len(first))  # unique rows → first-occurrence order
+    triangles = renumber[inverse.reshape(-1)][scan.triangles]
+    ordered = np.sort(triangles, axis=1)
+    triangles = triangles[(ordered[:, 1:] != ordered[:, :-1]).all(axis=1)]
+    note = f"welded {duplicated} duplicated vertices"
+    return Scan(scan.points[keep], triangles, scan.source, (*scan.repairs, note))
 
 
 def scan_of(mesh: QuadMesh) -> Scan:
@@ -102,7 +126,7 @@ class FitReport:
     ``to_surface``: scan points → surface; ``to_scan``: surface samples → scan triangles; each
     ``(max, p99, rms)``. ``faces``: cage quads; ``rounds``: layouts tried; ``rms``: the model's
     RMS per solve of the last round; ``seconds``: wall time; ``creases``: cage edges kept sharp
-    (the scan's features, ``sharp_angle``)."""
+    (the scan's features, ``sharp_angle``); ``repairs``: what was repaired in the scan."""
 
     diagonal: float
     tolerance: float
@@ -114,6 +138,7 @@ class FitReport:
     rms: tuple[float, ...]
     seconds: float
     creases: int = 0
+    repairs: tuple[str, ...] = ()
 
     @property
     def worst(self) -> float:
@@ -162,6 +187,7 @@ class FitReport:
             "rounds": self.rounds,
             "seconds": self.seconds,
             "creases": self.creases,
+            "repairs": list(self.repairs),
         }
 
 
@@ -202,6 +228,7 @@ def fit_network(
     """
     tolerance = check_tolerance(tolerance)
     started = time.perf_counter()
+    scan = welded(scan)
     diagonal = scan.diagonal
     if not diagonal > 0:
         raise InputError(f"{scan.source or 'scan'}: the scan has no extent")
@@ -216,19 +243,31 @@ def fit_network(
     corners = boundary_corners(
         scan.points, scan.triangles, FIT_SHARP_ANGLE if sharp_angle is None else sharp_angle
     )
-    rounds = 0
+    rounds, last, failure = 0, None, ""
     while True:
         rounds += 1
-        cage_layout = layout if layout is not None else _layout(scan, count)
-        cage_layout = layout_corners(layout_creases(cage_layout, features), corners)
-        fitted: FitCage = fit_cage(scan.points, normals, cage_layout, scan.triangles)
-        # the scan, not the cage's limit, is what the fit is measured against (below)
-        network = build_network(fitted.cage, method, "limit", tolerance=None)
-        to_surface, to_scan = measure(network, scan)
-        worst = max(to_surface[0], to_scan[0]) / diagonal
-        if not adaptive or worst <= tolerance or rounds >= MAX_ROUNDS:
+        try:
+            cage_layout = layout if layout is not None else _layout(scan, count)
+        except (ConstructionError, MeshError) as error:  # unusable: the next face count
+            if not adaptive:
+                raise
+            failure = str(error)
+        else:
+            cage_layout = layout_corners(layout_creases(cage_layout, features), corners)
+            fitted: FitCage = fit_cage(scan.points, normals, cage_layout, scan.triangles)
+            # the scan, not the cage's limit, is what the fit is measured against (below)
+            network = build_network(fitted.cage, method, "limit", tolerance=None)
+            to_surface, to_scan = measure(network, scan)
+            worst = max(to_surface[0], to_scan[0]) / diagonal
+            last = (cage_layout, fitted, network, to_surface, to_scan, worst)
+            if not adaptive or worst <= tolerance:
+                break
+        if rounds >= MAX_ROUNDS:
             break
         count *= 2
+    if last is None:
+        raise ConstructionError(f"no usable quad layout in {rounds} tries (last: {failure})")
+    cage_layout, fitted, network, to_surface, to_scan, worst = last
     network.provenance.update({"fit_tolerance": f"{tolerance:g}", "fit_distance": f"{worst:.3e}"})
     report = FitReport(
         diagonal,
@@ -241,6 +280,7 @@ def fit_network(
         fitted.rms,
         time.perf_counter() - started,
         int(cage_layout.features.edge_sharpness.astype(bool).sum()),
+        scan.repairs,
     )
     return network, report
 

@@ -6,7 +6,9 @@ a clear :class:`~g1patch.errors.ConstructionError`, its progress chatter on stdo
 ours, and a hang ends at ``timeout``. It runs deterministically (``deterministic=True``: the
 same input gives the same layout, bit for bit). Its raw output is quad-dominant; it returns the
 pure-quad mesh of one regular split of that (about 4 quads per requested vertex), which is the
-cage the fit solves for.
+cage the fit solves for. On some inputs that output has coincident vertices and degenerate quads
+(a corner repeated, zero area); :func:`clean_layout` merges and drops them before the cage is
+built.
 """
 
 from __future__ import annotations
@@ -21,8 +23,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ConstructionError, InputError, MissingDependencyError
+from ..mesh.validate import DEGENERATE_AREA_TOLERANCE
 
-__all__ = ["LAYOUT_TIMEOUT", "quad_layout"]
+__all__ = ["LAYOUT_TIMEOUT", "clean_layout", "quad_layout"]
 
 #: seconds the remesher may take before it is stopped
 LAYOUT_TIMEOUT = 600.0
@@ -65,8 +68,8 @@ def quad_layout(
     ``triangles`` (T, 3)), by Instant Meshes in a child process: ``(vertices, quads)``.
 
     The remesher is asked for ``faces / 4`` vertices (its quad-dominant result is split once
-    into quads, four per face). Raises :class:`ConstructionError` when it fails, crashes, times
-    out or returns no quads."""
+    into quads, four per face), then cleaned (:func:`clean_layout`). Raises
+    :class:`ConstructionError` when it fails, crashes, times out or returns no usable quads."""
     if isinstance(faces, bool) or not isinstance(faces, (int, np.integer)) or faces < 16:
         raise InputError(f"faces: expected a number of quads ≥ 16, got {faces!r}")
     _check_remesher()
@@ -94,4 +97,30 @@ def quad_layout(
             vertices, quads = made["vertices"], made["quads"]
     if quads.ndim != 2 or quads.shape[1] != 4 or not len(quads):
         raise ConstructionError("the quad remesher (Instant Meshes) returned no quads")
+    vertices, quads = clean_layout(vertices, quads)
+    if not len(quads):
+        raise ConstructionError("the quad remesher (Instant Meshes) returned only degenerate quads")
     return vertices, quads
+
+
+def clean_layout(
+    vertices: NDArray[np.float64], quads: NDArray[np.int64]
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """The layout with coincident vertices merged and the quads dropped that a cage cannot have:
+    a corner repeated, zero area (``|d1 × d2| ≤ tol · max(|d1|², |d2|²)``, d1 and d2 the
+    diagonals, as :mod:`~g1patch.mesh.validate` refuses) or an edge shared by more than two
+    quads (every quad at such an edge). Unused vertices stay (the mesh drops them)."""
+    merged, inverse = np.unique(vertices, axis=0, return_inverse=True)
+    quads = inverse.reshape(-1)[quads]
+    ordered = np.sort(quads, axis=1)
+    repeated = (ordered[:, 1:] == ordered[:, :-1]).any(axis=1)
+    corners = merged[quads]
+    d1, d2 = corners[:, 2] - corners[:, 0], corners[:, 3] - corners[:, 1]
+    size = np.maximum((d1 * d1).sum(1), (d2 * d2).sum(1))
+    flat = np.linalg.norm(np.cross(d1, d2), axis=1) <= DEGENERATE_AREA_TOLERANCE * size
+    quads = quads[~(repeated | flat)]
+    sides = np.stack([quads, np.roll(quads, -1, axis=1)], axis=-1)
+    key = sides.min(axis=-1) * len(merged) + sides.max(axis=-1)
+    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+    crowded = (counts[inverse] > 2).reshape(key.shape).any(axis=1)
+    return merged, quads[~crowded]
