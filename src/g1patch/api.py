@@ -869,28 +869,23 @@ def fit(
 
 
 def _fit_layout(layout: Any, max_input_size: int | None) -> QuadMesh:
-    """A given layout as the cage's quad mesh (:func:`as_mesh`, all quads). A layout file the
-    mesh checks refuse (a quad of zero area, a corner repeated) has its quads cleaned as the
+    """A given layout as the cage's quad mesh, all quads: a file's quads cleaned as the
     remesher's are (:func:`g1patch.fitting.layout.clean_layout`: coincident vertices merged,
-    degenerate and over-shared quads dropped)."""
-    from .errors import MeshError
+    degenerate and over-shared quads dropped), anything else as :func:`as_mesh` takes it."""
     from .fitting.layout import clean_layout
     from .io.meshfile import read_polygons
     from .mesh import QuadMesh
 
-    try:
-        quads = as_mesh(layout, max_input_size=max_input_size)
-    except MeshError:
-        if not isinstance(layout, (str, os.PathLike)):
-            raise
+    if isinstance(layout, (str, os.PathLike)):
         path = _check_path("layout", layout)
         points, corners, sizes = read_polygons(path, max_input_size=max_input_size)
         if (sizes != 4).any():
-            raise InputError(f"{path}: a layout must be all quads") from None
+            raise InputError(f"{path}: a layout must be all quads")
         vertices, faces = clean_layout(points, corners.reshape(-1, 4))
         if not len(faces):
-            raise InputError(f"{path}: the layout has no quad of nonzero area") from None
-        quads = QuadMesh.from_arrays(vertices, faces, source=str(path))
+            raise InputError(f"{path}: the layout has no quad of nonzero area")
+        return QuadMesh.from_arrays(vertices, faces, source=str(path))
+    quads = as_mesh(layout, max_input_size=max_input_size)
     if quads.cage is not None:
         raise InputError(f"{quads.source or 'layout'}: a layout must be all quads")
     return quads

@@ -1,0 +1,154 @@
+"""``g1patch fit`` on open and unwelded scans: the surface's boundary is held to the scan's
+boundary (a hemisphere cap's rim, a height field's square with its corners), an unwelded scan is
+welded (and says so), a layout with degenerate quads is cleaned, an unusable layout is skipped.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import g1patch
+from g1patch.errors import ConstructionError
+from g1patch.fitting import Scan, fit_network, welded
+from g1patch.fitting import layout as layout_module
+from g1patch.fitting.layout import clean_layout
+from g1patch.fitting.solve import boundary_edges
+from g1patch.io.meshfile import write_quads, write_triangles
+from g1patch.tessellate import tessellate
+
+pytest.importorskip("pynanoinstantmeshes", reason="the fit's remesher: pip install 'g1patch[fit]'")
+
+
+def grid_triangles(rows: int, columns: int) -> np.ndarray:
+    """The triangles of a (rows × columns)-vertex grid, each cell cut along a diagonal."""
+    i, j = np.meshgrid(np.arange(rows - 1), np.arange(columns - 1), indexing="ij")
+    a = (i * columns + j).ravel()
+    b, c, d = a + columns, a + columns + 1, a + 1
+    return np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+
+
+def hemisphere(rings: int = 40, around: int = 128) -> tuple[np.ndarray, np.ndarray]:
+    """The unit sphere's cap z ≥ 0 (rim on z = 0), latitude rings × longitudes, the pole welded;
+    the longitude seam is left unwelded (``around + 1`` columns): duplicated vertices."""
+    theta = np.linspace(0.0, 0.5 * np.pi, rings + 1)[1:]  # from the pole down to the rim
+    phi = np.linspace(0.0, 2 * np.pi, around + 1)
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    ring = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], -1)
+    ring[:, -1] = ring[:, 0]  # the seam's copies exactly coincident
+    points = np.concatenate([[[0.0, 0.0, 1.0]], ring.reshape(-1, 3)])
+    band = grid_triangles(rings, around + 1) + 1
+    top = np.stack([np.zeros(around, int), 1 + np.arange(around), 2 + np.arange(around)], 1)
+    return points, np.concatenate([top, band])
+
+
+def height_field(cells: int = 40) -> tuple[np.ndarray, np.ndarray]:
+    """A smooth height field over the unit square (an open square with four corners)."""
+    x = np.linspace(0.0, 1.0, cells + 1)
+    u, v = np.meshgrid(x, x, indexing="ij")
+    z = 0.06 * np.sin(3 * np.pi * u) * np.cos(2 * np.pi * v) + 0.05 * np.exp(
+        -((u - 0.35) ** 2 + (v - 0.6) ** 2) / 0.02
+    )
+    return np.stack([u, v, z], -1).reshape(-1, 3), grid_triangles(cells + 1, cells + 1)
+
+
+def _checked(result: g1patch.api.FitResult) -> None:
+    """Within the tolerance both ways, exactly G1, no folds."""
+    checked = result.surface.check()
+    assert result.report.met, result.report.summary()
+    assert checked.is_g1(1e-9) and checked.folds == 0
+
+
+def test_a_hemisphere_cap_keeps_its_rim(tmp_path: Path) -> None:
+    """The fitted rim lies on the scan's (z = 0) and every surface sample within the tolerance
+    of the scan: the boundary rows hold it (without them it hung 0.023 below the rim)."""
+    path = tmp_path / "cap.obj"
+    write_triangles(path, *hemisphere())
+    result = g1patch.fit(path, tolerance=2e-3)
+    _checked(result)
+    samples = tessellate(result.surface.network, 5).points
+    assert samples[:, 2].min() >= -2e-3 * result.report.diagonal
+    assert result.report.repairs == ("welded 40 duplicated vertices",)
+
+
+def test_a_height_field_keeps_its_square_and_corners(tmp_path: Path) -> None:
+    """An open square: its four corners are corners of the fitted surface's boundary."""
+    path = tmp_path / "terrain.stl"
+    write_triangles(path, *height_field())
+    result = g1patch.fit(path, tolerance=2e-3)
+    _checked(result)
+    samples = tessellate(result.surface.network, 5).points
+    reach = 2e-3 * result.report.diagonal
+    assert samples[:, :2].min() >= -reach and samples[:, :2].max() <= 1 + reach
+    for corner in ((0, 0), (0, 1), (1, 0), (1, 1)):
+        assert np.linalg.norm(samples[:, :2] - corner, axis=1).min() <= reach
+
+
+def test_welding_merges_coincident_vertices() -> None:
+    """Vertices at one position become one; a triangle that then repeats a corner is dropped."""
+    points = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]])
+    triangles = np.array([[0, 1, 2], [3, 4, 2], [1, 3, 4]])
+    scan = welded(Scan(points, triangles, "t.obj"))
+    assert scan.repairs == ("welded 1 duplicated vertices",) and len(scan.points) == 4
+    assert scan.triangles.tolist() == [[0, 1, 2], [1, 3, 2]]
+    assert len(boundary_edges(scan.triangles)) == 4
+
+
+def test_a_layout_with_degenerate_quads_is_cleaned(tmp_path: Path) -> None:
+    """A --layout file with a coincident vertex (a zero-area quad) and a quad repeating a corner:
+    the vertices are merged, those quads dropped, and the fit runs (not exit 2)."""
+    scan = tmp_path / "terrain.obj"
+    write_triangles(scan, *height_field())
+    x = np.linspace(0.0, 1.0, 9)
+    u, v = np.meshgrid(x, x, indexing="ij")
+    vertices = np.stack([u, v, np.zeros_like(u)], -1).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(8), np.arange(8), indexing="ij")
+    a = (i * 9 + j).ravel()
+    quads = np.stack([a, a + 9, a + 10, a + 1], 1)
+    vertices = np.concatenate([vertices, vertices[[40]]])  # a copy of vertex 40: index 81
+    quads = np.concatenate([quads, [[40, 41, 40, 49], [40, 81, 49, 41]]])
+    merged, kept = clean_layout(vertices, quads)
+    assert len(merged) == 81 and len(kept) == 64
+    layout = tmp_path / "layout.obj"
+    write_quads(layout, vertices, quads)
+    out = tmp_path / "fit.npz"
+    run = [sys.executable, "-m", "g1patch.cli", "fit", str(scan), "-o", str(out), "-q"]
+    done = subprocess.run(
+        [*run, "--layout", str(layout), "--tolerance", "2e-3"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode in (0, 1) and out.exists(), done.stderr
+    assert g1patch.read(out).n_patches == 4 * 64
+
+
+def test_an_unusable_layout_is_skipped(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A remesher's layout that cannot be a cage: the next face count is tried; none usable:
+    one error naming the scan."""
+    points, triangles = height_field(24)
+    real = layout_module.quad_layout
+    calls: list[int] = []
+
+    def flaky(*args: object, **options: object) -> tuple[np.ndarray, np.ndarray]:
+        calls.append(1)
+        if len(calls) == 1:
+            raise ConstructionError("the quad remesher (Instant Meshes) returned no quads")
+        return real(*args, **options)  # type: ignore[arg-type]
+
+    monkeypatch.setattr("g1patch.fitting.quad_layout", flaky)
+    network, report = fit_network(Scan(points, triangles, "t.obj"), tolerance=2e-3)
+    assert len(calls) >= 2 and report.rounds >= 2 and network.n_patches == 4 * report.faces
+
+    def broken(*args: object, **options: object) -> tuple[np.ndarray, np.ndarray]:
+        raise ConstructionError("the quad remesher (Instant Meshes) returned no quads")
+
+    monkeypatch.setattr("g1patch.fitting.quad_layout", broken)
+    path = tmp_path / "t.obj"
+    write_triangles(path, points, triangles)
+    with pytest.raises(ConstructionError, match=r"t\.obj: no usable quad layout in 4 tries"):
+        g1patch.fit(path)
