@@ -297,6 +297,10 @@ class QuadFaces(NamedTuple):
     two_span: BSplineFit
 
 
+#: quads whose macro nets :func:`split4_quad_faces` tests at once (~0.6 GB of temporaries)
+_QUAD_CHUNK = 1 << 17
+
+
 def _sandwich(m: NDArray[np.float64], nets: NDArray[np.float64]) -> NDArray[np.float64]:
     """``M N_f Mᵀ`` for every net ``N_f`` of ``nets`` (F, n, n, 3): two matrix products over all
     faces at once (einsum's four-operand loop took 3× as long on 32 k quads)."""
@@ -330,23 +334,29 @@ def split4_quad_faces(network: PatchNetwork) -> QuadFaces | None:
     if not seams.all():
         return None
     bezier = patches.convert("bezier")
-    nets = macro_nets(bezier.control)
-    flat = nets.reshape(-1, 3)
+    control = bezier.control
+    flat = control.reshape(-1, 3)
     diagonal = float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0)))
     if not (np.isfinite(diagonal) and diagonal > 0):
         return None
-    c1_gap = max(
-        float(np.abs(nets[:, 3] - 0.5 * (nets[:, 2] + nets[:, 4])).max()),
-        float(np.abs(nets[:, :, 3] - 0.5 * (nets[:, :, 2] + nets[:, :, 4])).max()),
-    )
-    if not c1_gap <= _C1_RTOL * diagonal:
-        return None
-    cubic = _sandwich(_EXTRACT, nets)
-    again = _sandwich(_HALVE, cubic)
-    single = np.abs(again - nets).max(axis=(1, 2, 3)) <= SINGLE_SPAN_RTOL * diagonal
     keep = np.array([0, 1, 2, 4, 5, 6])  # row and column 3 are midpoints: the double knot at ½
-    two_span = np.ascontiguousarray(nets[~single][:, keep][:, :, keep])
-    one = np.ascontiguousarray(cubic[single])
+    singles, ones, twos = [], [], []
+    for start in range(0, len(control) // 4, _QUAD_CHUNK):  # bounded temporaries
+        nets = macro_nets(control[4 * start : 4 * (start + _QUAD_CHUNK)])
+        c1_gap = max(
+            float(np.abs(nets[:, 3] - 0.5 * (nets[:, 2] + nets[:, 4])).max()),
+            float(np.abs(nets[:, :, 3] - 0.5 * (nets[:, :, 2] + nets[:, :, 4])).max()),
+        )
+        if not c1_gap <= _C1_RTOL * diagonal:
+            return None
+        cubic = _sandwich(_EXTRACT, nets)
+        again = _sandwich(_HALVE, cubic)
+        single = np.abs(again - nets).max(axis=(1, 2, 3)) <= SINGLE_SPAN_RTOL * diagonal
+        singles.append(single)
+        ones.append(cubic[single])
+        twos.append(nets[~single][:, keep][:, :, keep])
+    single = np.concatenate(singles)
+    one, two_span = np.concatenate(ones), np.concatenate(twos)
     if bezier.frame is not None:
         one, two_span = (
             bezier.frame.to_world(one, out=one),
