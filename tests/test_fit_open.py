@@ -152,3 +152,36 @@ def test_an_unusable_layout_is_skipped(tmp_path: Path, monkeypatch: pytest.Monke
     write_triangles(path, points, triangles)
     with pytest.raises(ConstructionError, match=r"t\.obj: no usable quad layout in 4 tries"):
         g1patch.fit(path)
+
+
+def test_parts_are_laid_out_and_fitted_apart() -> None:
+    """Two spheres that cross (a teapot's spout in its body): one layout part per scan part, no
+    quad bridging them, each part fitted to its own points; the same layout twice, bit for bit."""
+    points, triangles = hemisphere(12, 32)
+    closed = np.concatenate([points, points * [1.0, 1.0, -1.0]])
+    closed[np.abs(closed[:, 2]) < 1e-12, 2] = 0.0  # the rims coincide
+    sphere = np.concatenate([triangles, triangles[:, ::-1] + len(points)])
+    scan = welded(Scan(closed, sphere))
+    two = np.concatenate([scan.points, scan.points + [1.2, 0.0, 0.0]])
+    both = np.concatenate([scan.triangles, scan.triangles + len(scan.points)])
+    assert np.bincount(layout_module.triangle_parts(both, len(two))).tolist() == [len(sphere)] * 2
+    vertices, quads = layout_module.quad_layout(two, both, 400)
+    again = layout_module.quad_layout(two, both, 400)
+    assert np.array_equal(vertices, again[0]) and np.array_equal(quads, again[1])
+    corners = vertices[quads]
+    on_first = np.abs(np.linalg.norm(corners, axis=-1) - 1.0) < 0.15
+    on_second = np.abs(np.linalg.norm(corners - [1.2, 0.0, 0.0], axis=-1) - 1.0) < 0.15
+    assert (on_first.all(axis=1) | on_second.all(axis=1)).all()  # no quad spans the two
+
+
+def test_the_face_count_follows_the_measured_error() -> None:
+    """The next count comes from the error's observed rate, within the growth bounds; the budget
+    is half the triangles (less the margin) and at most MAX_FACES."""
+    from g1patch.fitting import MAX_FACES, face_budget, next_faces
+
+    assert face_budget(5856) == int(0.95 * 2928)
+    assert face_budget(10**7) == int(0.95 * MAX_FACES)
+    assert next_faces([(1000, 2.4e-3)], 2e-3, 1000) == 1500  # e ∝ 1/faces: 1.5 ×
+    assert next_faces([(1000, 1e-1)], 2e-3, 1000) == 4000  # at most 4 ×
+    # e fell 4 × over 2 × the faces: rate 2, so √(4e-3 / 1.6e-3) ≈ 1.58 × more
+    assert next_faces([(1000, 1.6e-2), (2000, 4e-3)], 2e-3, 2000) == 3163

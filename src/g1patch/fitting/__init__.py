@@ -4,8 +4,10 @@ an exact-G1 assembly (split4 by default: polynomial, so the CAD file is the fitt
 
 :func:`fit_network` runs it and measures the result against the scan both ways
 (:class:`FitReport`): scan points to the surface and surface samples to the scan's triangles.
-Without a given layout or face count it starts from :data:`START_FACES` (or the scan's size) and
-doubles the faces while the tolerance is not met, up to :data:`MAX_ROUNDS` layouts; a layout the
+Without a given layout or face count it starts from :data:`START_FACES` (or the scan's size) and,
+while the tolerance is not met, asks for the face count the measured error calls for
+(:func:`next_faces`: the error's rate over the face count observed between layouts), up to
+:data:`MAX_ROUNDS` layouts and at most :func:`face_budget` quads; a layout the
 cage cannot be built from (what :func:`~g1patch.fitting.layout.clean_layout` leaves still
 refused) is skipped for the next face count. The scan's coincident vertices are welded first
 (:func:`welded`): an unwelded scan's cracks make the remesher's layout ragged and, on some inputs,
@@ -34,11 +36,14 @@ from .solve import FitCage, fit_cage, vertex_normals
 __all__ = [
     "DEFAULT_TOLERANCE",
     "FIT_SHARP_ANGLE",
+    "MAX_FACES",
     "MAX_ROUNDS",
     "START_FACES",
     "FitReport",
     "Scan",
+    "face_budget",
     "fit_network",
+    "next_faces",
     "quad_layout",
     "scan_from_polygons",
     "scan_of",
@@ -56,8 +61,23 @@ DEFAULT_TOLERANCE = 1e-3
 FIT_SHARP_ANGLE = 60.0
 #: quads of the first layout when neither a layout nor a face count is given
 START_FACES = 1024
-#: layouts tried at most (the faces doubling each time) to meet the tolerance
+#: layouts tried at most (the faces growing each time, :func:`next_faces`) to meet the tolerance
 MAX_ROUNDS = 4
+#: quads of an adaptive fit at most: a CAD file of more faces is not a reduction of the scan (nor
+#: are more quads than half its triangles, :func:`face_budget`)
+MAX_FACES = 20_000
+#: the share of :func:`face_budget` left for the remesher's excess over the count asked for
+BUDGET_MARGIN = 0.05
+#: the error's order in the face count assumed before two layouts measured it: max distance ∝
+#: faces^−1, i.e. ∝ h², h the quad size (a smooth surface fitted where its curvature dominates)
+ASSUMED_RATE = 1.0
+#: the observed rate is kept within these (a feature the layout misses barely improves; a noisy
+#: measurement can claim any rate)
+RATE_RANGE = (0.5, 2.0)
+#: the next count aims at this fraction of the tolerance (the maximum is a noisy figure)
+AIM = 0.8
+#: the next count grows by at least and at most these factors
+GROWTH_RANGE = (1.25, 4.0)
 #: samples per patch side of the surface when it is measured against the scan (split4: a
 #: sub-patch is a quarter face, so 9 a face side)
 MEASURE_SAMPLES = 5
@@ -243,7 +263,10 @@ def fit_network(
     corners = boundary_corners(
         scan.points, scan.triangles, FIT_SHARP_ANGLE if sharp_angle is None else sharp_angle
     )
-    rounds, last, failure = 0, None, ""
+    rounds, best, failure, tried = 0, None, "", []
+    budget = face_budget(len(scan.triangles))
+    if adaptive:
+        count = min(count, budget)
     while True:
         rounds += 1
         try:
@@ -252,6 +275,7 @@ def fit_network(
             if not adaptive:
                 raise
             failure = str(error)
+            tried.append((count, np.inf))
         else:
             cage_layout = layout_corners(layout_creases(cage_layout, features), corners)
             fitted: FitCage = fit_cage(scan.points, normals, cage_layout, scan.triangles)
@@ -259,15 +283,17 @@ def fit_network(
             network = build_network(fitted.cage, method, "limit", tolerance=None)
             to_surface, to_scan = measure(network, scan)
             worst = max(to_surface[0], to_scan[0]) / diagonal
-            last = (cage_layout, fitted, network, to_surface, to_scan, worst)
+            tried.append((cage_layout.n_faces, worst))
+            if best is None or worst < best[-1]:  # a finer layout is not always nearer
+                best = (cage_layout, fitted, network, to_surface, to_scan, worst)
             if not adaptive or worst <= tolerance:
                 break
-        if rounds >= MAX_ROUNDS:
+        if rounds >= MAX_ROUNDS or count >= budget:
             break
-        count *= 2
-    if last is None:
+        count = min(next_faces(tried, tolerance, count), budget)
+    if best is None:
         raise ConstructionError(f"no usable quad layout in {rounds} tries (last: {failure})")
-    cage_layout, fitted, network, to_surface, to_scan, worst = last
+    cage_layout, fitted, network, to_surface, to_scan, worst = best
     network.provenance.update({"fit_tolerance": f"{tolerance:g}", "fit_distance": f"{worst:.3e}"})
     report = FitReport(
         diagonal,
@@ -283,6 +309,31 @@ def fit_network(
         scan.repairs,
     )
     return network, report
+
+
+def face_budget(triangles: int) -> int:
+    """The most quads an adaptive fit of a scan of ``triangles`` asks for: :data:`MAX_FACES`, and
+    half the triangles (a quad is two triangles' worth of data), less :data:`BUDGET_MARGIN` (the
+    remesher's count is the request's within a few per cent)."""
+    return max(16, int((1.0 - BUDGET_MARGIN) * min(MAX_FACES, triangles // 2)))
+
+
+def next_faces(tried: list[tuple[int, float]], tolerance: float, count: int) -> int:
+    """The face count the measured errors call for: ``tried`` holds (faces, worst distance of
+    the diagonal) per layout so far (∞: unusable), ``count`` the last count asked for. The error
+    is modelled as ``e ∝ faces^−r``, r from the last two usable layouts (:data:`ASSUMED_RATE`
+    before there are two; kept in :data:`RATE_RANGE`), and the count that brings it to
+    :data:`AIM` × ``tolerance`` is asked for, growing by a factor in :data:`GROWTH_RANGE`."""
+    usable = [(faces, error) for faces, error in tried if np.isfinite(error) and error > 0]
+    if not usable:
+        return int(count * GROWTH_RANGE[0] ** 2)
+    rate = ASSUMED_RATE
+    if len(usable) >= 2 and usable[-1][0] != usable[-2][0]:
+        (f0, e0), (f1, e1) = usable[-2], usable[-1]
+        rate = float(np.clip(np.log(e0 / e1) / np.log(f1 / f0), *RATE_RANGE))
+    faces, error = usable[-1]
+    growth = (error / (AIM * tolerance)) ** (1.0 / rate)
+    return int(np.ceil(max(faces, count) * float(np.clip(growth, *GROWTH_RANGE))))
 
 
 def _layout(scan: Scan, faces: int) -> QuadMesh:

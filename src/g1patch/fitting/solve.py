@@ -51,6 +51,7 @@ __all__ = [
     "FIT_LEVELS",
     "FitCage",
     "fit_cage",
+    "fit_parts",
     "grid_triangles",
     "vertex_normals",
 ]
@@ -137,13 +138,20 @@ def closest_on_segments(
 
 class _Boundary:
     """The rows tying the limit's boundary curve to a scan's boundary polyline (module
-    docstring): the layout's boundary sides as grid segments, the scan's boundary edges."""
+    docstring): the boundary sides of the layout's ``faces`` (a mask) as grid segments, the
+    boundary edges of the scan's ``triangles``."""
 
     def __init__(
-        self, points: FloatArray, triangles: IntArray, layout: QuadMesh, grid: IntArray
+        self,
+        points: FloatArray,
+        triangles: IntArray,
+        layout: QuadMesh,
+        grid: IntArray,
+        faces: NDArray[np.bool_],
     ) -> None:
         edges = boundary_edges(triangles)
         sides, open_sides = _sides(layout.faces)
+        open_sides &= faces[:, None]
         along = np.stack([grid[:, :, 0], grid[:, -1, :], grid[:, ::-1, -1], grid[:, 0, ::-1]], 1)
         polylines = along[open_sides]  # (B, m + 1) grid points along each boundary side
         self.segments = np.stack([polylines[:, :-1], polylines[:, 1:]], -1).reshape(-1, 2)
@@ -192,8 +200,9 @@ class _Boundary:
 
 
 class _Triangles:
-    """A triangle mesh prepared for foot queries: a k-d tree of its points, their normals and
-    every point's fan of triangles (CSR: ``order[starts[v]:starts[v + 1]] // 3``)."""
+    """A triangle mesh prepared for foot queries: a k-d tree of the points its triangles use,
+    their normals and every point's fan of triangles (CSR: ``order[starts[v]:starts[v + 1]] //
+    3``)."""
 
     def __init__(self, points: FloatArray, triangles: IntArray) -> None:
         corners = triangles.reshape(-1)
@@ -201,7 +210,8 @@ class _Triangles:
         self.order = np.argsort(corners, kind="stable")
         self.starts = np.searchsorted(corners[self.order], np.arange(len(points) + 1))
         self.normals = vertex_normals(points, triangles)
-        self.tree = cKDTree(points)
+        self.used = np.unique(corners)
+        self.tree = cKDTree(points[self.used])
 
     def feet(self, points: FloatArray, normals: FloatArray) -> tuple[IntArray, FloatArray]:
         """Per point the triangle nearest it among those around a nearby mesh point, and the
@@ -209,7 +219,7 @@ class _Triangles:
         the :data:`_NEIGHBOURS` nearest whose normal faces the same way as the point's (dot > 0;
         the nearest where none does): across a thin part (a tail, an ear) the nearest mesh point
         may lie on the far side, and a foot there pulls that side over."""
-        near = self.tree.query(points, k=_NEIGHBOURS, workers=-1)[1]
+        near = self.used[self.tree.query(points, k=_NEIGHBOURS, workers=-1)[1]]
         facing = np.einsum("nkd,nd->nk", self.normals[near], normals) > 0
         pick = np.where(facing.any(axis=1), np.argmax(facing, axis=1), 0)
         nearest = near[np.arange(len(points)), pick]
@@ -232,10 +242,38 @@ class _Triangles:
             (ac * ac).sum(-1),
         )
         gap = np.linalg.norm(v[..., None] * ab + w[..., None] * ac - ap, axis=-1)
-        best = np.argmin(np.where(valid, gap, np.inf), axis=1)
+        usable = valid & np.isfinite(gap)  # a collinear triangle's weights are NaN: skipped
+        best = np.argmin(np.where(usable, gap, np.inf), axis=1)
         rows = np.arange(len(points))
-        v, w = v[rows, best], w[rows, best]
+        v, w = np.nan_to_num(v[rows, best]), np.nan_to_num(w[rows, best])
         return candidate[rows, best], np.stack([1.0 - v - w, v, w], axis=1)
+
+
+def fit_parts(
+    points: FloatArray, triangles: IntArray, layout: QuadMesh
+) -> tuple[IntArray, IntArray]:
+    """Which part of the fit each scan point and each layout face belongs to: a connected part
+    of the scan (:func:`~g1patch.fitting.layout.triangle_parts`) and the layout's connected
+    parts whose vertices are mostly nearest to it. A scan part no layout part claims joins the
+    part of the layout vertices nearest to its points. ``(point_part (N,), face_part (F,))``."""
+    from .layout import triangle_parts
+
+    scan_part = np.full(len(points), -1)
+    scan_part[triangles.reshape(-1)] = np.repeat(triangle_parts(triangles, len(points)), 3)
+    faces = layout.faces
+    layout_part = np.zeros(layout.n_vertices, dtype=np.int64)
+    layout_part[faces.reshape(-1)] = np.repeat(triangle_parts(faces, layout.n_vertices), 4)
+    used, scanned = np.unique(faces), np.unique(triangles)
+    nearest = scan_part[scanned[cKDTree(points[scanned]).query(layout.vertices[used])[1]]]
+    votes = sp.coo_matrix((np.ones(used.size), (layout_part[used], nearest)))
+    claim = np.asarray(votes.argmax(axis=1)).ravel()  # layout part → scan part
+    face_part = claim[layout_part[faces[:, 0]]]
+    point_part = scan_part.copy()
+    unclaimed = ~np.isin(scan_part, claim)
+    if unclaimed.any():
+        near = cKDTree(layout.vertices[used]).query(points[unclaimed])[1]
+        point_part[unclaimed] = claim[layout_part[used[near]]]
+    return point_part, face_part
 
 
 def _umbrella(mesh: QuadMesh) -> sp.csr_matrix:
@@ -265,35 +303,49 @@ def fit_cage(
     with unit ``normals``) (module docstring), starting from the layout's own positions; the
     ``scan_triangles`` give the scan's boundary (none: the boundary rows are left out)."""
     limit, grid = limit_grid_matrix(layout, levels)
-    boundary = None if scan_triangles is None else _Boundary(points, scan_triangles, layout, grid)
-    triangles = grid_triangles(grid)
+    if scan_triangles is None:
+        point_part, face_part = np.zeros(len(points), np.int64), np.zeros(layout.n_faces, np.int64)
+    else:
+        point_part, face_part = fit_parts(points, scan_triangles, layout)
+    parts = []  # per part: its points, its grid triangles, its boundary rows
+    for part in np.unique(face_part):
+        mine = np.flatnonzero(point_part == part)
+        boundary = None
+        if scan_triangles is not None:
+            own = scan_triangles[point_part[scan_triangles[:, 0]] == part]
+            boundary = _Boundary(points, own, layout, grid, face_part == part)
+        parts.append((mine, grid_triangles(grid[face_part == part]), boundary))
     fair = _umbrella(layout)
     per_vertex = len(points) / max(layout.n_vertices, 1)
     damping = damping * per_vertex
     regular = fairness * per_vertex * (fair.T @ fair) + damping * sp.identity(layout.n_vertices)
-    cage = layout.vertices.copy() if boundary is None else boundary.snapped(layout.vertices)
-    blocks = [slice(start, start + BLOCK_POINTS) for start in range(0, len(points), BLOCK_POINTS)]
+    cage = layout.vertices.copy()
+    for _, _, boundary in parts:
+        cage = cage if boundary is None else boundary.snapped(cage)
     rms = []
     for _ in range(iterations):
-        surface = _Triangles(limit @ cage, triangles)
         lhs, rhs, kept = regular, damping * cage, []
-        if boundary is not None and boundary.active:
-            rows, targets = boundary.rows(limit, limit @ cage, per_vertex)
-            lhs, rhs = lhs + rows.T @ rows, rhs + np.asarray(rows.T @ targets)
-        for rows in blocks:  # the normal equations a block of points at a time
-            triangle, barycentric = surface.feet(points[rows], normals[rows])
-            count = len(triangle)
-            feet = sp.csr_matrix(
-                (
-                    barycentric.reshape(-1),
-                    (np.repeat(np.arange(count), 3), triangles[triangle].reshape(-1)),
-                ),
-                shape=(count, limit.shape[0]),
-            )
-            model = (feet @ limit).tocsr()
-            lhs = lhs + model.T @ model
-            rhs = rhs + np.asarray(model.T @ points[rows])
-            kept.append((triangles[triangle], barycentric))
+        surface = limit @ cage
+        for mine, triangles, boundary in parts:
+            if boundary is not None and boundary.active:
+                rows, targets = boundary.rows(limit, surface, per_vertex)
+                lhs, rhs = lhs + rows.T @ rows, rhs + np.asarray(rows.T @ targets)
+            near = _Triangles(surface, triangles)
+            for start in range(0, len(mine), BLOCK_POINTS):  # a block of points at a time
+                rows = mine[start : start + BLOCK_POINTS]
+                triangle, barycentric = near.feet(points[rows], normals[rows])
+                count = len(triangle)
+                feet = sp.csr_matrix(
+                    (
+                        barycentric.reshape(-1),
+                        (np.repeat(np.arange(count), 3), triangles[triangle].reshape(-1)),
+                    ),
+                    shape=(count, limit.shape[0]),
+                )
+                model = (feet @ limit).tocsr()
+                lhs = lhs + model.T @ model
+                rhs = rhs + np.asarray(model.T @ points[rows])
+                kept.append((triangles[triangle], barycentric, rows))
         try:
             factor = splu(sp.csc_matrix(lhs))
         except RuntimeError as error:  # SuperLU: "Factor is exactly singular"
@@ -306,7 +358,7 @@ def fit_cage(
         moved = limit @ cage  # the model's feet on the new surface: their squared distances
         squared = sum(
             float(np.sum((np.einsum("nk,nkd->nd", weights, moved[corners]) - points[rows]) ** 2))
-            for (corners, weights), rows in zip(kept, blocks, strict=True)
+            for corners, weights, rows in kept
         )
         rms.append(float(np.sqrt(squared / len(points))))
     return FitCage(layout.with_vertices(cage), tuple(rms))
