@@ -16,6 +16,7 @@ from g1patch.build import build_network
 from g1patch.continuity import check
 from g1patch.mesh import QuadMesh, Tag
 from g1patch.subdivision import catmull_clark_cage, limit_points, refine
+from g1patch.subdivision.matrix import cage_step_matrix
 
 EPS = float(np.finfo(float).eps)
 
@@ -75,6 +76,11 @@ def assert_step_matches(mesh: QuadMesh, points: np.ndarray, faces: list[list[int
     # each point is a mean of at most ~3n terms, summed in another order: a few ULP of the scale
     np.testing.assert_allclose(stepped.vertices, expected, rtol=0, atol=16 * EPS * scale)
     np.testing.assert_array_equal(stepped.topology.faces, mesh.topology.faces)
+    # the same step as a matrix on the cage's points (what limit-interpolate solves through)
+    matrix = cage_step_matrix(mesh)
+    assert matrix is not None and matrix.shape == (len(expected), nv)
+    np.testing.assert_allclose(matrix @ points, expected, rtol=0, atol=16 * EPS * scale)
+    np.testing.assert_allclose(matrix.sum(axis=1), 1.0, rtol=0, atol=8 * EPS)
 
 
 def _octahedron() -> tuple[np.ndarray, list[list[int]]]:
@@ -124,6 +130,7 @@ def test_infinitely_sharp_creases_step_as_the_textbook() -> None:
 def test_quad_meshes_and_new_positions_have_no_cage() -> None:
     quads = QuadMesh.from_arrays(np.eye(4, 3), [[0, 1, 2, 3]])
     assert quads.cage is None and catmull_clark_cage(quads) is quads
+    assert cage_step_matrix(quads) is None
     points, faces = _octahedron()
     split = QuadMesh.from_arrays(points, faces)
     assert split.with_vertices(split.vertices).cage is None

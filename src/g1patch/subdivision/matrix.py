@@ -36,9 +36,9 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import InputError
 from ..mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology
 from .features import RULE_CORNER, RULE_CREASE, RULE_SMOOTH, _Level, _level_of, _limit_rules
-from .refine import _refined_mesh, _refinement, _step, _weights
+from .refine import _cage_level, _CageLevel, _refined_mesh, _refinement, _step, _weights
 
-__all__ = ["limit_grid_matrix", "limit_matrix", "refine_matrix", "step_matrix"]
+__all__ = ["cage_step_matrix", "limit_grid_matrix", "limit_matrix", "refine_matrix", "step_matrix"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -53,21 +53,22 @@ def _assemble(
     return sp.coo_matrix((w[keep], (r[keep], c[keep])), shape=shape).tocsr()
 
 
-def _step_matrix(level: _Level) -> sp.csr_matrix:
-    """S of one step of ``level`` (module docstring)."""
+def _step_matrix(level: _Level | _CageLevel) -> sp.csr_matrix:
+    """S of one step of ``level`` (module docstring), quads or polygons: a face point is the
+    centroid of its n corners, ``1/n`` each."""
     topology = level.topology
     nv, ne, nf = topology.n_vertices, topology.n_edges, topology.n_faces
-    faces = topology.faces
+    corners, sizes = topology.polygons()
+    corner_face = np.repeat(np.arange(nf), sizes)
+    centroid = sp.csr_matrix((1.0 / sizes[corner_face], (corner_face, corners)), shape=(nf, nv))
     a, b = topology.edges[:, 0], topology.edges[:, 1]
     weights = _weights(level)
 
-    face_rows = np.repeat(nv + ne + np.arange(nf), 4)
-    edge_rows = nv + np.arange(ne)
     s = weights.edge
-    left = faces[topology.face_of(topology.edge_halfedges[:, 0])]
-    right = faces[topology.face_of(np.maximum(topology.edge_halfedges[:, 1], 0))]
+    left = topology.face_of(topology.edge_halfedges[:, 0])
+    right = topology.face_of(np.maximum(topology.edge_halfedges[:, 1], 0))
     ends = 0.5 * s + 0.25 * (1.0 - s)
-    beside = np.repeat(0.0625 * (1.0 - s), 8)  # F_L's corners, then F_R's
+    beside = 0.25 * (1.0 - s)  # at the face points F_L and F_R
 
     parent, child = weights.parent_rule, weights.child_rule
     p = np.where((parent == RULE_SMOOTH) | (child == parent), 1.0, weights.vertex)
@@ -84,17 +85,21 @@ def _step_matrix(level: _Level) -> sp.csr_matrix:
     sharp = level.edge > 0
     at_a, at_b = weights.half_a > 0, weights.half_b > 0
 
+    edge_rows = nv + np.arange(ne)
     vertices = np.arange(nv)
-    rows = [face_rows, edge_rows, edge_rows, np.repeat(edge_rows, 8), vertices, origin]
-    rows += [np.repeat(origin, 4), a[sharp], b[sharp], a[at_a], b[at_b]]
-    columns = [faces.ravel(), a, b, np.stack([left, right], axis=1).ravel(), vertices]
-    columns += [topology.target(h), faces[topology.face_of(h)].ravel()]
-    columns += [b[sharp], a[sharp], b[at_a], a[at_b]]
-    values = [np.full(4 * nf, 0.25), ends, ends, beside]
-    values += [diagonal, ring, np.repeat(0.25 * ring, 4)]
+    rows = [edge_rows, edge_rows, vertices, origin, a[sharp], b[sharp], a[at_a], b[at_b]]
+    columns = [a, b, vertices, topology.target(h), b[sharp], a[sharp], b[at_a], a[at_b]]
+    values = [ends, ends, diagonal, ring]
     values += [parent_crease[a[sharp]] / 8.0, parent_crease[b[sharp]] / 8.0]
     values += [child_crease[a[at_a]] / 8.0, child_crease[b[at_b]] / 8.0]
-    return _assemble(rows, columns, values, (nv + ne + nf, nv))
+    direct = _assemble(rows, columns, values, (nv + ne, nv))
+    faces_of = _assemble(  # the face points each vertex and edge point reads
+        [origin, edge_rows, edge_rows],
+        [topology.face_of(h), left, right],
+        [ring, beside, beside],
+        (nv + ne, nf),
+    )
+    return sp.vstack([direct + faces_of @ centroid, centroid], format="csr")
 
 
 def step_matrix(mesh: QuadMesh) -> sp.csr_matrix:
@@ -171,6 +176,15 @@ def limit_matrix(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> sp.csr_m
                 "only: refine the mesh past its semi-sharp levels first (subdivision.refine)"
             )
     return _limit_stencil(level)
+
+
+def cage_step_matrix(mesh: QuadMesh) -> sp.csr_matrix | None:
+    """The (V + E + F) × V₀ matrix of the Catmull–Clark step of the polygon cage ``mesh`` was split
+    from (:attr:`~g1patch.mesh.QuadMesh.cage`, V₀ points): ``S @ mesh.cage.points`` is
+    :func:`~g1patch.subdivision.catmull_clark_cage`'s vertices to rounding, on ``mesh``'s own
+    numbering. None where ``mesh`` was read as quads."""
+    cage = mesh.cage
+    return None if cage is None else _step_matrix(_cage_level(cage))
 
 
 def limit_grid_matrix(mesh: QuadMesh, levels: int) -> tuple[sp.csr_matrix, IntArray]:

@@ -239,6 +239,18 @@ def catmull_clark_points(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> 
     return _step(_level_of(mesh, sharpness)).x
 
 
+def _cage_level(cage: PolygonCage) -> _CageLevel:
+    """The polygon cage as a level: its connectivity and effective features."""
+    topology = PolygonTopology.from_polygons(cage.corners, cage.sizes, cage.points.shape[0])
+    features = features_from_tags(topology, cage.tags)
+    mode: BoundaryMode = (
+        "edge-and-corner" if features.boundary == "edge-and-corner" else "edge-only"
+    )
+    edge, vertex = _effective(topology, features.edge_sharpness, features.vertex_sharpness, mode)
+    chaikin = features.crease_method == "chaikin"
+    return _CageLevel(cage.points, topology, edge, vertex, features.holes, mode, chaikin)
+
+
 def catmull_clark_cage(mesh: QuadMesh) -> QuadMesh:
     """The mesh whose Catmull–Clark limit is that of the polygon cage ``mesh`` was split from:
     one Catmull–Clark step of the cage (:mod:`g1patch.subdivision`: face points the centroids of
@@ -248,15 +260,7 @@ def catmull_clark_cage(mesh: QuadMesh) -> QuadMesh:
     cage: PolygonCage | None = mesh.cage
     if cage is None:
         return mesh
-    topology = PolygonTopology.from_polygons(cage.corners, cage.sizes, cage.points.shape[0])
-    features = features_from_tags(topology, cage.tags)
-    mode: BoundaryMode = (
-        "edge-and-corner" if features.boundary == "edge-and-corner" else "edge-only"
-    )
-    edge, vertex = _effective(topology, features.edge_sharpness, features.vertex_sharpness, mode)
-    chaikin = features.crease_method == "chaikin"
-    level = _CageLevel(cage.points, topology, edge, vertex, features.holes, mode, chaikin)
-    child = _step(level)
+    child = _step(_cage_level(cage))
     return QuadMesh(
         child.x,
         mesh.topology,
