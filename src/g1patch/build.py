@@ -444,12 +444,21 @@ def _network(
     assembly = ASSEMBLIES[method]
     frame = Frame.of_points(mesh.vertices)
     local = mesh.with_vertices(frame.to_local(mesh.vertices))
+    if mesh.cage is not None:  # the polygons too: limit-interpolate solves through their step
+        polygons = mesh.cage._replace(points=frame.to_local(mesh.cage.points))
+        local = replace(local, cage=polygons)
     targets = shape_targets(local, shape, tangents=tangents)
     if through is not None:
         positions = targets.positions.copy()
         positions[through[0]] = frame.to_local(through[1])
         targets = targets.with_changes(positions=positions)
     surface = mesh
+    if shape == "limit-interpolate" and mesh.cage is not None:
+        # the polygons' own vertices are passed through; the split's edge and face points are
+        # not asked to be, the surface passes them at its limit points
+        points = frame.to_world(targets.positions)
+        points[: len(mesh.cage.points)] = mesh.cage.points
+        surface = mesh.with_vertices(points)
     if shape == "limit":  # the points passed through
         points = frame.to_world(targets.positions)
         if through is not None:
@@ -562,7 +571,7 @@ def _within_tolerance(
     cage, original = mesh, None
     if shape == "limit-interpolate":
         solution = interpolating_cage(mesh)
-        cage, original = mesh.with_vertices(solution.cage), solution.points
+        cage, original = solution.mesh, solution.points
 
     def through(ids: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """The original vertices among a finer cage's (``ids``: their ids in ``cage``)."""

@@ -47,8 +47,9 @@ from scipy.sparse.linalg import LinearOperator, SuperLU, lsmr, onenormest, splu
 
 from ..errors import ConstructionError, MeshError
 from ..mesh import QuadMesh
-from ..subdivision import limit_normals, limit_points
-from ..subdivision.matrix import limit_matrix, refine_matrix
+from ..mesh.cage import PolygonTopology
+from ..subdivision import catmull_clark_cage, limit_normals, limit_points
+from ..subdivision.matrix import cage_step_matrix, limit_matrix, refine_matrix
 from .limit import limit_targets
 from .value import TangentRule, Targets
 
@@ -86,14 +87,19 @@ _logger = logging.getLogger(__name__)
 class CageSolution:
     """The solved cage of :func:`interpolating_cage`.
 
-    * ``cage`` (V, 3): the control points C, same topology and tags as the mesh;
-    * ``residual``: ``max_v |(L C − V)_v| / diag(V)``, measured with
-      :func:`~g1patch.subdivision.limit_points`;
-    * ``condition``: the 1-norm condition estimate of L (``inf`` where the LU found it singular);
-    * ``solver``: ``lu`` (sparse LU) or ``lsmr`` (least-norm correction, L singular or ill
+    * ``cage`` (V, 3): the control points C, on the mesh's quad topology;
+    * ``mesh``: the cage as a quad mesh (C with the cage's tags): the mesh itself with new
+      positions where it was read as quads; for a mesh split from polygons the Catmull–Clark step
+      of the solved polygon cage (:func:`~g1patch.subdivision.catmull_clark_cage`, its tags);
+    * ``residual``: ``max_v |(L C − V)_v| / diag(V)`` over the interpolated vertices, measured
+      with :func:`~g1patch.subdivision.limit_points`;
+    * ``condition``: the 1-norm condition estimate of the system (``inf`` where the LU found it
+      singular);
+    * ``solver``: ``lu`` (sparse LU) or ``lsmr`` (least-norm correction, singular or ill
       conditioned);
-    * ``points`` (V, 3): where the limit passes by the vertices: the mesh's vertices themselves
-      (the same array) except at ``relaxed``, there the cage's limit points;
+    * ``points`` (V, 3): where the limit passes by the mesh's vertices: the vertices themselves
+      (for a quad mesh the same array) except at ``relaxed`` and, for a mesh split from polygons,
+      at the split's edge and face points, there the cage's limit points;
     * ``relaxed``: the vertices not interpolated (:func:`_relaxed`: exact interpolation would turn
       the surface inside out there), empty on most meshes;
     * ``relaxed_distance``: the largest distance from a relaxed vertex to its limit point,
@@ -102,12 +108,77 @@ class CageSolution:
     """
 
     cage: FloatArray
+    mesh: QuadMesh
     residual: float
     condition: float
     solver: Solver
     points: FloatArray
     relaxed: NDArray[np.int64]
     relaxed_distance: float = 0.0
+
+
+@dataclass(frozen=True)
+class _System:
+    """What :func:`interpolating_cage` solves: unknown points U (n, 3) that give the quad cage
+    ``C = spread @ U`` on ``mesh``'s topology and tags, whose limit ``limit @ C`` must pass
+    through ``targets`` at the first n vertices: ``matrix @ U = targets``,
+    ``matrix = (limit @ spread)[:n]``.
+    For a quad mesh U is the cage itself (``spread`` the identity, n = V); for a mesh split from
+    polygons U is the polygon cage, ``spread`` its Catmull–Clark step (the same cage ``limit``
+    takes, :func:`~g1patch.subdivision.catmull_clark_cage`), and only the polygons' own vertices
+    are interpolated: the split's edge and face points follow from the step. ``edges`` join the
+    unknowns (for fairing); ``through`` maps U to the cage refined once (``fine``), where the
+    normals are compared (:func:`_turned`)."""
+
+    mesh: QuadMesh
+    spread: sp.csr_matrix
+    limit: sp.csr_matrix
+    matrix: sp.csr_matrix
+    targets: FloatArray
+    edges: NDArray[np.int64]
+    through: sp.csr_matrix
+    fine: QuadMesh
+    diagonal: float
+
+    def cage(self, unknowns: FloatArray) -> FloatArray:
+        return np.asarray(self.spread @ unknowns)
+
+
+def _system(mesh: QuadMesh) -> _System:
+    """The :class:`_System` of ``mesh``: on its own quads, or through its polygon cage's step."""
+    spread = cage_step_matrix(mesh)
+    polygons = mesh.cage
+    if spread is None or polygons is None:
+        limit = limit_matrix(mesh)
+        refine, fine = refine_matrix(mesh, 1)
+        identity = sp.identity(mesh.n_vertices, format="csr")
+        return _System(
+            mesh,
+            identity,
+            limit,
+            limit,
+            mesh.vertices,
+            mesh.topology.edges,
+            refine,
+            fine,
+            mesh.bounding_box_diagonal,
+        )
+    stepped = catmull_clark_cage(mesh)
+    limit = limit_matrix(stepped)
+    count = polygons.points.shape[0]
+    refine, fine = refine_matrix(stepped, 1)
+    edges = PolygonTopology.from_polygons(polygons.corners, polygons.sizes, count).edges
+    return _System(
+        stepped,
+        spread,
+        limit,
+        sp.csr_matrix(limit[:count] @ spread),
+        polygons.points,
+        edges,
+        sp.csr_matrix(refine @ spread),
+        fine,
+        mesh.bounding_box_diagonal,
+    )
 
 
 def _condition(matrix: sp.csr_matrix, lu: SuperLU) -> float:
@@ -146,22 +217,29 @@ def _solve(matrix: sp.csr_matrix, rhs: FloatArray) -> tuple[FloatArray, float, S
 
 def interpolating_cage(mesh: QuadMesh) -> CageSolution:
     """The cage C of ``mesh``'s topology and tags whose Catmull–Clark limit points are the mesh's
-    vertices V: ``L C = V`` (module docstring), solved as ``C = V + D``, ``L D = V − L V``.
+    vertices V: ``L C = V`` (module docstring), solved as ``C = V + D``, ``L D = V − L V``. For a
+    mesh split from polygons (:attr:`~g1patch.mesh.QuadMesh.cage`) the polygon cage P is solved
+    instead, ``(L S P)_v = V_v`` at the polygons' own vertices (S its Catmull–Clark step, as
+    ``limit`` takes it), and C = S P: the limit is that of a polygon cage, and the split's edge
+    and face points are not asked to lie on it.
 
     Raises :class:`ConstructionError` where no such cage exists to :data:`MAX_RESIDUAL` (L singular
     and V outside its range), or where the solved cage has a degenerate face.
     """
-    x = mesh.vertices
-    matrix = limit_matrix(mesh)
-    correction, condition, solver = _solve(matrix, x - limit_points(mesh))
-    diagonal = mesh.bounding_box_diagonal
+    system = _system(mesh)
+    x = system.targets
+    matrix = system.matrix
+    correction, condition, solver = _solve(matrix, x - matrix @ x)
+    unknowns = x + correction
+    diagonal = system.diagonal
     try:
-        cage = mesh.with_vertices(x + correction)
+        cage = system.mesh.with_vertices(system.cage(unknowns))
     except MeshError as error:
         raise ConstructionError(
             f"limit-interpolate: the interpolating cage is degenerate ({error})"
         ) from None
-    residual = float(np.linalg.norm(limit_points(cage) - x, axis=1).max() / diagonal)
+    limit = limit_points(cage)
+    residual = float(np.linalg.norm(limit[: len(x)] - x, axis=1).max() / diagonal)
     if not residual <= MAX_RESIDUAL:
         singular = ", numerically singular" if condition > _SINGULAR else ""
         raise ConstructionError(
@@ -175,8 +253,11 @@ def interpolating_cage(mesh: QuadMesh) -> CageSolution:
             "it can be interpolated; "
             "use refine=1 (--refine 1) first, or shape 'interpolate'"
         )
-    exact = CageSolution(cage.vertices, residual, condition, solver, x, np.zeros(0, np.int64))
-    return _relaxed(mesh, exact, matrix)
+    points = mesh.vertices if len(x) == mesh.n_vertices else np.vstack([x, limit[len(x) :]])
+    exact = CageSolution(
+        cage.vertices, cage, residual, condition, solver, points, np.zeros(0, np.int64)
+    )
+    return _relaxed(system, exact, unknowns)
 
 
 #: the solved cage's limit is *inside out* where one of its normals, at the vertices, edge
@@ -192,13 +273,15 @@ CLEAN_ANGLE_DEG = 90.0
 MAX_ROUNDS = 16
 
 
-def _turned(mesh: QuadMesh, cage: FloatArray, angle: float) -> NDArray[np.int64]:
-    """The vertices under the normals of ``cage``'s limit turned more than ``angle`` degrees from
-    those of ``mesh``'s limit (one step: vertex, edge and face points; those of the step's
-    largest weights: the vertex itself, the edge's two ends, the face's corners)."""
-    refine, fine = refine_matrix(mesh, 1)
-    ours = limit_normals(fine.with_vertices(refine @ cage))
-    theirs = limit_normals(fine.with_vertices(refine @ mesh.vertices))
+def _turned(system: _System, unknowns: FloatArray, angle: float) -> NDArray[np.int64]:
+    """The unknowns under the normals of the solved cage's limit turned more than ``angle``
+    degrees from those of the mesh's own limit (``limit``: the cage of the targets themselves),
+    at the vertices, edge points and face points of one more step; under a normal: the unknowns
+    of that point's largest weights (for a quad mesh the vertex itself, the edge's two ends, the
+    face's corners)."""
+    through, fine = system.through, system.fine
+    ours = limit_normals(fine.with_vertices(through @ unknowns))
+    theirs = limit_normals(fine.with_vertices(through @ system.targets))
     cosine = np.einsum("ij,ij->i", ours, theirs)
     defined = (np.einsum("ij,ij->i", ours, ours) > 0.25) & (
         np.einsum("ij,ij->i", theirs, theirs) > 0.25
@@ -206,7 +289,7 @@ def _turned(mesh: QuadMesh, cage: FloatArray, angle: float) -> NDArray[np.int64]
     rows = np.flatnonzero(defined & (cosine < np.cos(np.radians(angle))))
     if not len(rows):
         return np.zeros(0, np.int64)
-    weights = sp.csr_matrix(refine[rows]).tocoo()
+    weights = sp.csr_matrix(through[rows]).tocoo()
     peak = np.zeros(len(rows))
     np.maximum.at(peak, weights.row, np.abs(weights.data))
     under = np.abs(weights.data) >= 0.5 * peak[weights.row]
@@ -214,12 +297,13 @@ def _turned(mesh: QuadMesh, cage: FloatArray, angle: float) -> NDArray[np.int64]
 
 
 def _fair_correction(
-    mesh: QuadMesh, matrix: sp.csr_matrix, rhs: FloatArray, fixed: NDArray[np.int64]
+    system: _System, rhs: FloatArray, fixed: NDArray[np.int64]
 ) -> FloatArray | None:
-    """The correction D of least ``Σ_edges |D_i − D_j|² + Σ_v |D_v|²`` with ``(L D)_v = rhs_v`` at
-    the ``fixed`` vertices only (KKT system, sparse LU); None where that system is singular."""
-    n = mesh.n_vertices
-    edges = mesh.topology.edges
+    """The correction D of least ``Σ_edges |D_i − D_j|² + Σ_v |D_v|²`` (over the unknowns' edges)
+    with ``(M D)_v = rhs_v`` at the ``fixed`` vertices only (KKT system, sparse LU); None where
+    that system is singular."""
+    n = len(system.targets)
+    edges = system.edges
     count = len(edges)
     difference = sp.csr_matrix(
         (
@@ -229,40 +313,41 @@ def _fair_correction(
         shape=(count, n),
     )
     energy = difference.T @ difference + sp.identity(n, format="csr")
-    rows = matrix[fixed]
-    system = sp.bmat([[energy, rows.T], [rows, None]], format="csc")
+    rows = system.matrix[fixed]
+    kkt = sp.bmat([[energy, rows.T], [rows, None]], format="csc")
     try:
-        solution = splu(system).solve(np.vstack([np.zeros((n, 3)), rhs[fixed]]))
+        solution = splu(kkt).solve(np.vstack([np.zeros((n, 3)), rhs[fixed]]))
     except RuntimeError:  # SuperLU: the fixed rows of L are dependent (the cube's checkerboard)
         return None
     return np.asarray(solution[:n])
 
 
-def _relaxed(mesh: QuadMesh, exact: CageSolution, matrix: sp.csr_matrix) -> CageSolution:
-    """``exact``, unless its limit is inside out against the mesh's own limit
-    (:data:`FOLD_ANGLE_DEG`, :func:`_turned`). Then the interpolation is relaxed where it turns:
-    the vertices under the turned normals are freed, the cage is solved again with ``L C = V`` at
-    the others only and the freed degrees of freedom faired (:func:`_fair_correction`: the
-    correction ``C − V`` as even and small as the remaining constraints allow), and vertices are
-    freed (those under normals turned more than :data:`CLEAN_ANGLE_DEG`, else their ring) until
-    no normal is. Every vertex free is the mesh's own limit, fold-free wherever ``limit`` is. The
-    relaxed vertices and their distance to the surface are logged at WARNING."""
-    x = mesh.vertices
-    free = _turned(mesh, exact.cage, FOLD_ANGLE_DEG)
+def _relaxed(system: _System, exact: CageSolution, unknowns: FloatArray) -> CageSolution:
+    """``exact`` (its unknowns ``unknowns``), unless its limit is inside out against the mesh's
+    own limit (:data:`FOLD_ANGLE_DEG`, :func:`_turned`). Then the interpolation is relaxed where
+    it turns: the vertices under the turned normals are freed, the cage is solved again with
+    ``L C = V`` at the others only and the freed degrees of freedom faired
+    (:func:`_fair_correction`: the correction ``C − V`` as even and small as the remaining
+    constraints allow), and vertices are freed (those under normals turned more than
+    :data:`CLEAN_ANGLE_DEG`, else their ring) until no normal is. Every vertex free is the mesh's
+    own limit, fold-free wherever ``limit`` is. The relaxed vertices and their distance to the
+    surface are logged at WARNING."""
+    x = system.targets
+    free = _turned(system, unknowns, FOLD_ANGLE_DEG)
     if not len(free):
         return exact
+    matrix = system.matrix
     rhs = x - matrix @ x
     everything = np.arange(len(x))
-    edges = mesh.topology.edges
-    cage = x
+    edges = system.edges
     for _ in range(MAX_ROUNDS):
         fixed = np.setdiff1d(everything, free)
-        correction = _fair_correction(mesh, matrix, rhs, fixed) if len(fixed) else 0.0 * x
+        correction = _fair_correction(system, rhs, fixed) if len(fixed) else 0.0 * x
         if correction is None:
             _logger.warning("limit-interpolate: the relaxed solve is singular, the exact cage kept")
             return exact
-        cage = x + correction
-        turned = _turned(mesh, cage, CLEAN_ANGLE_DEG)
+        unknowns = x + correction
+        turned = _turned(system, unknowns, CLEAN_ANGLE_DEG)
         if not len(turned):
             break
         new = np.setdiff1d(turned, free)
@@ -271,11 +356,12 @@ def _relaxed(mesh: QuadMesh, exact: CageSolution, matrix: sp.csr_matrix) -> Cage
         if not len(new):
             break
         free = np.union1d(free, new)
-    limit = matrix @ cage
+    cage = system.cage(unknowns)
+    limit = system.limit @ cage
     fixed = np.setdiff1d(everything, free)
-    diagonal = mesh.bounding_box_diagonal
-    points = x.copy()
-    points[free] = limit[free]
+    diagonal = system.diagonal
+    points = limit.copy()
+    points[fixed] = x[fixed]
     distance = float(np.linalg.norm(limit[free] - x[free], axis=1).max() / diagonal)
     residual = float(np.linalg.norm(limit[fixed] - x[fixed], axis=1).max(initial=0.0) / diagonal)
     _logger.warning(
@@ -285,7 +371,16 @@ def _relaxed(mesh: QuadMesh, exact: CageSolution, matrix: sp.csr_matrix) -> Cage
         len(x),
         distance,
     )
-    return CageSolution(cage, residual, exact.condition, exact.solver, points, free, distance)
+    return CageSolution(
+        cage,
+        system.mesh.with_vertices(cage),
+        residual,
+        exact.condition,
+        exact.solver,
+        points,
+        free,
+        distance,
+    )
 
 
 def limit_interpolate_targets(mesh: QuadMesh, *, tangents: TangentRule = "arc") -> Targets:
@@ -300,5 +395,5 @@ def limit_interpolate_targets(mesh: QuadMesh, *, tangents: TangentRule = "arc") 
         solution.residual,
         solution.condition,
     )
-    targets = limit_targets(mesh.with_vertices(solution.cage))
+    targets = limit_targets(solution.mesh)
     return targets.with_changes(positions=solution.points, rule="limit-interpolate")
