@@ -129,7 +129,7 @@ def quad_brep(quads: QuadFaces, network: PatchNetwork) -> QuadBrep | None:
 
     size = np.where(quads.single, 4, 6)
     which = {4: np.flatnonzero(quads.single), 6: np.flatnonzero(~quads.single)}
-    nets = {4: quads.bezier.control.copy(), 6: quads.two_span.control.copy()}
+    nets = {4: quads.bezier.control, 6: quads.two_span.control}
     nets = {s: net for s, net in nets.items() if len(net)}
     inside_out = (_signed_volumes(nets, which, component, count) < 0) & closed
 
@@ -167,11 +167,12 @@ def quad_brep(quads: QuadFaces, network: PatchNetwork) -> QuadBrep | None:
     same_size = size[np.arange(flat.size) // 4] == length
     candidate = same_size & (owner[flat] != np.arange(flat.size))
     scale = max(float(np.abs(points).max()), 1.0) if len(points) else 1.0
-    gap = np.where(
-        valid,
-        np.abs(points[np.where(valid, mine, 0)] - points[np.where(valid, theirs, 0)]).max(axis=2),
-        0.0,
-    ).max(axis=1)
+    gap = np.zeros(flat.size)
+    for j in range(6):  # pole by pole: (4F, 3) temporaries, not (4F, 6, 3)
+        at = valid[:, j]
+        gap[at] = np.maximum(
+            gap[at], np.abs(points[mine[at, j]] - points[theirs[at, j]]).max(axis=1)
+        )
     take = candidate & (gap <= STEP_MATCH_RTOL * scale)
     alias = np.arange(len(points))
     alias[mine[take][valid[take]]] = theirs[take][valid[take]]
@@ -180,7 +181,9 @@ def quad_brep(quads: QuadFaces, network: PatchNetwork) -> QuadBrep | None:
         if np.array_equal(deeper, alias):
             break
         alias = deeper
-    used, alias = np.unique(alias, return_inverse=True)
+    root = alias == np.arange(len(points))  # every alias is a root now: number them densely
+    alias = (np.cumsum(root) - 1)[alias]
+    used = root
     grids = {s: alias[grid] for s, grid in grids.items()}
     edge_rows = np.where(edge_rows >= 0, alias[np.maximum(edge_rows, 0)], -1)
     return QuadBrep(
