@@ -48,7 +48,7 @@ from scipy.sparse.linalg import LinearOperator, SuperLU, lsmr, onenormest, splu
 from ..errors import ConstructionError, MeshError
 from ..mesh import QuadMesh
 from ..mesh.cage import PolygonTopology
-from ..subdivision import catmull_clark_cage, limit_normals, limit_points
+from ..subdivision import catmull_clark_cage, limit_normals, limit_points, limit_stars
 from ..subdivision.matrix import cage_step_matrix, limit_matrix, refine_matrix
 from .limit import limit_targets
 from .value import TangentRule, Targets
@@ -60,6 +60,7 @@ __all__ = [
     "MAX_RESIDUAL",
     "FOLD_ANGLE_DEG",
     "CLEAN_ANGLE_DEG",
+    "PINCH_RATIO",
     "CageSolution",
     "interpolating_cage",
     "limit_interpolate_targets",
@@ -101,7 +102,7 @@ class CageSolution:
       (for a quad mesh the same array) except at ``relaxed`` and, for a mesh split from polygons,
       at the split's edge and face points, there the cage's limit points;
     * ``relaxed``: the vertices not interpolated (:func:`_relaxed`: exact interpolation would turn
-      the surface inside out there), empty on most meshes;
+      the surface inside out or pinch it there), empty on most meshes;
     * ``relaxed_distance``: the largest distance from a relaxed vertex to its limit point,
       relative to the bounding-box diagonal (0 where none is relaxed); the residual is measured
       at the other vertices.
@@ -128,7 +129,7 @@ class _System:
     takes, :func:`~g1patch.subdivision.catmull_clark_cage`), and only the polygons' own vertices
     are interpolated: the split's edge and face points follow from the step. ``edges`` join the
     unknowns (for fairing); ``through`` maps U to the cage refined once (``fine``), where the
-    normals are compared (:func:`_turned`)."""
+    normals and tangents are compared (:func:`_turned`)."""
 
     mesh: QuadMesh
     spread: sp.csr_matrix
@@ -269,24 +270,42 @@ def interpolating_cage(mesh: QuadMesh) -> CageSolution:
 FOLD_ANGLE_DEG = 120.0
 #: once relaxing, vertices are freed until no normal is turned more than this (a fold)
 CLEAN_ANGLE_DEG = 90.0
+#: the solved cage's limit is *pinched* where the sine of the angle between its two limit tangents
+#: (:func:`~g1patch.subdivision.limit_stars`) is below this fraction of the mesh's own limit's at
+#: the same point: a near-cusp, parametrised almost along one direction, that the patches of a
+#: refined cage resolve as folds (issue 31). The cages that fold so pinch to 0.02 (a cow's muzzle
+#: cap, exact) and 0.07 (a thin muzzle's tip, relaxed) of it; the other zoo cages and the shared
+#: meshes stay at 0.16 or more (the shared meshes 0.62)
+PINCH_RATIO = 0.1
 #: rounds of freeing at most (each frees the vertices under the turned normals, or their ring)
 MAX_ROUNDS = 16
 
 
+def _sines(mesh: QuadMesh) -> FloatArray:
+    """Per vertex ``|a × b| / (|a| |b|)`` of the limit tangents (:func:`limit_stars`): 1 where
+    the limit is parametrised square, 0 where its two tangents are parallel (pinched)."""
+    a, b = limit_stars(mesh)
+    lengths = np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1)
+    return np.linalg.norm(np.cross(a, b), axis=1) / np.maximum(lengths, np.finfo(float).tiny)
+
+
 def _turned(system: _System, unknowns: FloatArray, angle: float) -> NDArray[np.int64]:
-    """The unknowns under the normals of the solved cage's limit turned more than ``angle``
-    degrees from those of the mesh's own limit (``limit``: the cage of the targets themselves),
-    at the vertices, edge points and face points of one more step; under a normal: the unknowns
-    of that point's largest weights (for a quad mesh the vertex itself, the edge's two ends, the
-    face's corners)."""
+    """The unknowns under the points of the solved cage's limit that are turned more than
+    ``angle`` degrees from the mesh's own limit (``limit``: the cage of the targets themselves),
+    or pinched against it (:data:`PINCH_RATIO`), at the vertices, edge points and face points of
+    one more step; under a point: the unknowns of that point's largest weights (for a quad mesh
+    the vertex itself, the edge's two ends, the face's corners)."""
     through, fine = system.through, system.fine
-    ours = limit_normals(fine.with_vertices(through @ unknowns))
-    theirs = limit_normals(fine.with_vertices(through @ system.targets))
+    ours_mesh = fine.with_vertices(through @ unknowns)
+    theirs_mesh = fine.with_vertices(through @ system.targets)
+    ours = limit_normals(ours_mesh)
+    theirs = limit_normals(theirs_mesh)
     cosine = np.einsum("ij,ij->i", ours, theirs)
     defined = (np.einsum("ij,ij->i", ours, ours) > 0.25) & (
         np.einsum("ij,ij->i", theirs, theirs) > 0.25
     )
-    rows = np.flatnonzero(defined & (cosine < np.cos(np.radians(angle))))
+    pinched = _sines(ours_mesh) < PINCH_RATIO * _sines(theirs_mesh)
+    rows = np.flatnonzero((defined & (cosine < np.cos(np.radians(angle)))) | pinched)
     if not len(rows):
         return np.zeros(0, np.int64)
     weights = sp.csr_matrix(through[rows]).tocoo()
@@ -323,15 +342,16 @@ def _fair_correction(
 
 
 def _relaxed(system: _System, exact: CageSolution, unknowns: FloatArray) -> CageSolution:
-    """``exact`` (its unknowns ``unknowns``), unless its limit is inside out against the mesh's
-    own limit (:data:`FOLD_ANGLE_DEG`, :func:`_turned`). Then the interpolation is relaxed where
-    it turns: the vertices under the turned normals are freed, the cage is solved again with
-    ``L C = V`` at the others only and the freed degrees of freedom faired
-    (:func:`_fair_correction`: the correction ``C − V`` as even and small as the remaining
+    """``exact`` (its unknowns ``unknowns``), unless its limit is inside out or pinched against
+    the mesh's own limit (:data:`FOLD_ANGLE_DEG`, :data:`PINCH_RATIO`, :func:`_turned`). Then the
+    interpolation is relaxed there: the vertices under the turned or pinched points are freed,
+    the cage is solved again with ``L C = V`` at the others only and the freed degrees of freedom
+    faired (:func:`_fair_correction`: the correction ``C − V`` as even and small as the remaining
     constraints allow), and vertices are freed (those under normals turned more than
-    :data:`CLEAN_ANGLE_DEG`, else their ring) until no normal is. Every vertex free is the mesh's
-    own limit, fold-free wherever ``limit`` is. The relaxed vertices and their distance to the
-    surface are logged at WARNING."""
+    :data:`CLEAN_ANGLE_DEG` or pinched points, else their ring) until none is. Fairing can pinch
+    what it frees (a thin muzzle's tip pushed out along it): the pinch is tested on every round.
+    Every vertex free is the mesh's own limit, fold-free wherever ``limit`` is. The relaxed
+    vertices and their distance to the surface are logged at WARNING."""
     x = system.targets
     free = _turned(system, unknowns, FOLD_ANGLE_DEG)
     if not len(free):
@@ -365,7 +385,8 @@ def _relaxed(system: _System, exact: CageSolution, unknowns: FloatArray) -> Cage
     distance = float(np.linalg.norm(limit[free] - x[free], axis=1).max() / diagonal)
     residual = float(np.linalg.norm(limit[fixed] - x[fixed], axis=1).max(initial=0.0) / diagonal)
     _logger.warning(
-        "limit-interpolate: exact interpolation turns the surface inside out; %d of %d vertices "
+        "limit-interpolate: exact interpolation turns the surface inside out or pinches it; %d "
+        "of %d vertices "
         "relaxed (the surface passes them at up to %.3g of the diagonal), the rest interpolated",
         len(free),
         len(x),
