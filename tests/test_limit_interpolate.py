@@ -18,6 +18,7 @@ from g1patch.subdivision import catmull_clark_cage, limit_matrix, limit_points, 
 from g1patch.targets import shape_targets
 from g1patch.targets.limit_interpolate import PINCH_RATIO, _sines, interpolating_cage
 
+CAGES = Path(__file__).parent / "data" / "cages"
 SHARED = (
     "catmark_cube",
     "catmark_torus",
@@ -271,3 +272,22 @@ def test_a_polygon_cage_is_solved_through_its_catmull_clark_step() -> None:
         theirs = continuity.check(build_network(mesh, method, "limit"))
         assert ours.folds <= theirs.folds
         assert ours.max_edge_angle_deg <= 1e-9 and ours.max_corner_angle_deg <= 1e-9
+
+
+def test_a_thin_ear_is_relaxed_where_its_limit_pinches() -> None:
+    """The fold zoo's cow: solved exactly, its limit is pinched at a valence-3 corner of a thin
+    slab ear (polygon vertex 146: the limit tangents 0.5° apart, 0.02 × the sine of ``limit``'s
+    at the same point), and its refined split4 network folded (10 patches, ``limit`` 0). The
+    pinch is relaxed: unpinched at the levels the build refines to, no more folds than
+    ``limit``."""
+    mesh = read_mesh(CAGES / "cow.obj")
+    assert mesh.cage is not None
+    solution = interpolating_cage(mesh)
+    assert 146 in solution.relaxed and solution.residual <= 1e-12
+    solved, own = solution.mesh, catmull_clark_cage(mesh)
+    for _ in range(2):
+        assert (_sines(solved) >= PINCH_RATIO * _sines(own)).all()
+        solved, own = refine(solved), refine(own)
+    ours = continuity.check(build_network(mesh, "split4", "limit-interpolate"))
+    theirs = continuity.check(build_network(mesh, "split4", "limit"))
+    assert ours.folds <= theirs.folds and ours.max_edge_angle_deg <= 1e-9
