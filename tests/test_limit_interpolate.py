@@ -274,6 +274,7 @@ def test_a_polygon_cage_is_solved_through_its_catmull_clark_step() -> None:
         assert ours.max_edge_angle_deg <= 1e-9 and ours.max_corner_angle_deg <= 1e-9
 
 
+@pytest.mark.slow
 def test_a_thin_ear_is_relaxed_where_its_limit_pinches() -> None:
     """The fold zoo's cow: solved exactly, its limit is pinched at a valence-3 corner of a thin
     slab ear (polygon vertex 146: the limit tangents 0.5° apart, 0.02 × the sine of ``limit``'s
