@@ -199,6 +199,47 @@ def test_a_cad_part_keeps_its_sharp_edges(tmp_path: Path) -> None:
     assert smooth.report.worst > 2 * report.worst  # rounded edges: far off the part
 
 
+def stepped_block(path: Path, cell: float = 0.025) -> Path:
+    """Three steps (x–z profile: 0.9 × 0.2, 0.6 × 0.4, 0.3 × 0.6 high, flush at x = 0.9)
+    extruded 0.5 along y, tessellated on a ``cell`` grid (7,104 triangles): convex and concave
+    90° edges, corners where three meet, two of them concave."""
+    steps = ((0, 36, 8), (12, 36, 16), (24, 36, 24))  # (x from, x to, z to) in cells
+    profile = {(i, k) for start, stop, top in steps for i in range(start, stop) for k in range(top)}
+    depth = round(0.5 / cell)
+    quads = []  # corners in cells, (x, z, y): the profile in x–z, extruded along the third
+    for i, k in profile:
+        quads.append([(i, k, 0), (i, k + 1, 0), (i + 1, k + 1, 0), (i + 1, k, 0)])
+        quads.append([(i, k, depth), (i + 1, k, depth), (i + 1, k + 1, depth), (i, k + 1, depth)])
+        walls = {
+            (1, 0): ((i + 1, k), (i + 1, k + 1)),
+            (-1, 0): ((i, k + 1), (i, k)),
+            (0, 1): ((i + 1, k + 1), (i, k + 1)),
+            (0, -1): ((i, k), (i + 1, k)),
+        }
+        for (di, dk), ((ax, az), (bx, bz)) in walls.items():
+            if (i + di, k + dk) not in profile:
+                for j in range(depth):
+                    quads.append([(ax, az, j), (bx, bz, j), (bx, bz, j + 1), (ax, az, j + 1)])
+    corners, inverse = np.unique(np.asarray(quads).reshape(-1, 3), axis=0, return_inverse=True)
+    faces = inverse.reshape(-1, 4)
+    triangles = np.concatenate([faces[:, [0, 2, 1]], faces[:, [0, 3, 2]]])  # (x, z, y): flipped
+    write_triangles(path, corners[:, [0, 2, 1]] * cell, triangles)
+    return path
+
+
+def test_feature_lines_and_corners_hold_a_cad_part_at_few_quads(tmp_path: Path) -> None:
+    """A stepped block at 300 quads: the layout vertices near its edges are snapped onto them and
+    the ones at its corners onto the corners, so the creases run the whole edges into the
+    corners: 6.5e-4 of the diagonal both ways at 280 quads (before: 1.9e-2, a row of the
+    remesher's vertices beside an edge too far off it to tag), exactly G1, without folds."""
+    scan = stepped_block(tmp_path / "stepped.stl")
+    result = g1patch.fit(scan, tolerance=2e-3, faces=300)
+    report = result.report
+    assert report.faces <= 330 and report.worst <= 1e-3, report.summary()
+    checked = result.surface.check()
+    assert checked.is_g1(1e-9) and checked.folds == 0
+
+
 @pytest.mark.slow
 def test_an_organic_scan_gets_no_creases(shared_data: Path) -> None:
     """The default sharp angle finds no feature on Spot's or the teapot's triangles (the

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from g1patch.fitting.features import layout_creases, sharp_segments
+from g1patch.fitting.features import layout_creases, sharp_segments, snap_to_features
 from g1patch.mesh import QuadMesh
 
 
@@ -64,3 +64,30 @@ def test_a_gap_in_the_chain_is_bridged() -> None:
     far = roof(lift=0.6)  # too far off: the chain keeps its gap
     kept = ridge_edges(layout_creases(far, sharp_segments(points, triangles, 60.0)))
     assert kept < ridge and len(kept) == 6
+
+
+def test_vertices_near_a_feature_are_snapped_onto_it() -> None:
+    """The whole ridge row lifted 0.2 of an edge off the ridge (the remesher's row beside the
+    L-bracket's concave edge: 0.16 off, no edge tagged, the fit rounded it): snapped onto the
+    ridge, every ridge edge is a crease, and the vertex at a given corner is tagged a corner;
+    rows farther off (the next ones, a whole edge) stay. A corner with no crease at its vertex
+    is no corner."""
+    points, triangles = ridge_scan()
+    segments = sharp_segments(points, triangles, 60.0)
+    layout = roof()
+    lifted = layout.vertices.copy()
+    lifted[4 * 9 : 5 * 9, 0] += 0.2 / 4.0
+    far = QuadMesh.from_arrays(lifted, layout.faces)
+    assert not ridge_edges(layout_creases(far, segments))
+    corner = np.array([[0.0, 0.5, 0.0]])  # ridge vertex 4 * 9 + 2, lifted
+    snapped = snap_to_features(far, segments, corner)
+    ridge = {tuple(sorted((4 * 9 + j, 4 * 9 + j + 1))) for j in range(8)}
+    tagged = layout_creases(snapped, segments, corner)
+    assert ridge_edges(tagged) == ridge
+    assert np.allclose(snapped.vertices[4 * 9 : 5 * 9, 0], 0.0)
+    assert np.allclose(snapped.vertices[:36], layout.vertices[:36])  # the other rows stay
+    assert np.flatnonzero(tagged.features.vertex_sharpness).tolist() == [4 * 9 + 2]
+    off = np.array([[0.25, 0.5, -0.25]])  # a corner the remesher's vertex there has no crease to
+    tagged = layout_creases(snap_to_features(far, segments, off), segments, off)
+    assert not tagged.features.vertex_sharpness.any()
+    assert snap_to_features(far, np.zeros((0, 2, 3)), corner) is far

@@ -29,7 +29,14 @@ from ..errors import ConstructionError, InputError, MeshError
 from ..mesh import QuadMesh
 from ..network import PatchNetwork
 from ..tessellate import tessellate
-from .features import boundary_corners, layout_corners, layout_creases, sharp_segments
+from .features import (
+    boundary_corners,
+    layout_corners,
+    layout_creases,
+    sharp_corners,
+    sharp_segments,
+    snap_to_features,
+)
 from .layout import quad_layout
 from .solve import FitCage, fit_cage, vertex_normals
 
@@ -260,6 +267,11 @@ def fit_network(
         if sharp_angle is None
         else sharp_segments(scan.points, scan.triangles, sharp_angle)
     )
+    feature_corners = (
+        np.zeros((0, 3))
+        if sharp_angle is None
+        else sharp_corners(scan.points, scan.triangles, sharp_angle)
+    )
     corners = boundary_corners(
         scan.points, scan.triangles, FIT_SHARP_ANGLE if sharp_angle is None else sharp_angle
     )
@@ -277,7 +289,9 @@ def fit_network(
             failure = str(error)
             tried.append((count, np.inf))
         else:
-            cage_layout = layout_corners(layout_creases(cage_layout, features), corners)
+            snapped = snap_to_features(cage_layout, features, feature_corners)
+            creased = layout_creases(snapped, features, feature_corners)
+            cage_layout = layout_corners(creased, corners)
             fitted: FitCage = fit_cage(scan.points, normals, cage_layout, scan.triangles)
             # the scan, not the cage's limit, is what the fit is measured against (below)
             network = build_network(fitted.cage, method, "limit", tolerance=None)
