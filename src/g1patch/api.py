@@ -589,7 +589,7 @@ class Surface:
           units, default 1e-6 × the bbox diagonal); ``max_deviation`` (the re-assembly's bound,
           relative to the diagonal, default 1e-3); also ``progress``, ``g1_samples``, ``verify``
           (STEP of a split4 network, written directly: OpenCASCADE reads it back to check it,
-          default up to 20,000 faces) (:func:`g1patch.io.cad.export_cad`, needs ``pip install
+          default up to 10,000 faces) (:func:`g1patch.io.cad.export_cad`, needs ``pip install
           'g1patch[cad]'``);
         * ``.3dm``: Rhino's file, the same B-spline faces as STEP's (options ``method``,
           ``max_deviation``, ``fit_tolerance``; :func:`g1patch.io.cad.export_3dm`, needs ``pip

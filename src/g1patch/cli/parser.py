@@ -311,7 +311,7 @@ def build_parser() -> argparse.ArgumentParser:
         action=argparse.BooleanOptionalAction,
         default=None,
         help="STEP of a split4 network: have OpenCASCADE read the file back to check it and "
-        "measure its G1 angles (default: up to 20,000 faces; --no-verify: never)",
+        "measure its G1 angles (default: up to 10,000 faces; --no-verify: never)",
     )
     export.add_argument(
         "--json", action="store_true", help="CAD: print the figures as one JSON object"
