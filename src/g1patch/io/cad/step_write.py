@@ -168,10 +168,10 @@ def quad_brep(quads: QuadFaces, network: PatchNetwork) -> QuadBrep | None:
     candidate = same_size & (owner[flat] != np.arange(flat.size))
     scale = max(float(np.abs(points).max()), 1.0) if len(points) else 1.0
     gap = np.zeros(flat.size)
-    for j in range(6):  # pole by pole: (4F, 3) temporaries, not (4F, 6, 3)
-        at = valid[:, j]
+    for pole in range(6):  # pole by pole: (4F, 3) temporaries, not (4F, 6, 3)
+        at = valid[:, pole]
         gap[at] = np.maximum(
-            gap[at], np.abs(points[mine[at, j]] - points[theirs[at, j]]).max(axis=1)
+            gap[at], np.abs(points[mine[at, pole]] - points[theirs[at, pole]]).max(axis=1)
         )
     take = candidate & (gap <= STEP_MATCH_RTOL * scale)
     alias = np.arange(len(points))
