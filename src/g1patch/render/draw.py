@@ -88,7 +88,7 @@ def _draw(
     if scale is not None:
         from matplotlib.cm import ScalarMappable
 
-        bar = figure.add_axes((1.0 - 0.78 * bar_width, 0.1, 0.14 * bar_width, 0.8 - title_band))
+        bar = figure.add_axes((1.0 - 0.95 * bar_width, 0.1, 0.14 * bar_width, 0.8 - title_band))
         colorbar = figure.colorbar(ScalarMappable(norm=scale.norm, cmap=scale.cmap), cax=bar)
         colorbar.set_label(colorbar_label, fontsize=max(6.0, title_size * 0.8))
         bar.tick_params(labelsize=max(6.0, title_size * 0.7))
