@@ -343,16 +343,18 @@ def _write(occ: SimpleNamespace, shape: Any, path: Path, kind: CadFormat) -> Non
     done = occ.IFSelect_ReturnStatus.IFSelect_RetDone
     with _quiet(occ):
         if kind == "step":
+            # the writer is made before the setting: the first writer of a process initialises
+            # the STEP settings to their defaults (so a file written first had its pcurves back)
+            if options.colours is None:
+                writer = step = occ.STEPControl_Writer()
+            else:
+                writer, document = _coloured_step_writer(occ, shape, options.faces, options.colours)
+                step = writer.ChangeWriter()
             with _static(occ, "write.surfacecurve.mode", 1 if options.pcurves else 0):
                 if options.colours is None:
-                    writer = step = occ.STEPControl_Writer()
                     ok = writer.Transfer(shape, occ.STEPControl_AsIs) == done
                 else:
-                    writer, document = _coloured_step_writer(
-                        occ, shape, options.faces, options.colours
-                    )
                     ok = bool(writer.Transfer(document, occ.STEPControl_AsIs))
-                    step = writer.ChangeWriter()
             if ok:
                 _name_step_faces(occ, step, options.faces, options.names)
                 ok = writer.Write(str(path)) == done
