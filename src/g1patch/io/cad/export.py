@@ -337,9 +337,7 @@ def export_cad(
         fit_tolerance=fit_tolerance,
         lap=lap,
     )
-    network, chosen, fit, quads = made.network, made.method, made.fit, made.quads
-    diagonal, deviation, exact = made.diagonal, made.deviation, made.exact
-    method_note, refine, fit_tolerance = made.method_note, made.refine, made.fit_tolerance
+    network, fit, quads, diagonal = made.network, made.fit, made.quads, made.diagonal
     sewing_tolerance = SEWING_RTOL * diagonal if diagonal > 0 else SEWING_RTOL
     for group in [fit] if quads is None else _quad_groups(quads):
         _check_fit(target, group, sewing_tolerance)
@@ -367,10 +365,6 @@ def export_cad(
             else np.zeros((0, 0))
         )
         lap("g1")
-        shared_patch, shared_edge = network.shared_edges()
-        seam = network.seam[shared_patch, shared_edge]
-        smooth = angles[~seam].max(axis=1) if angles.size else np.zeros(0)
-        seam_angles = angles[seam] if angles.size else np.zeros(0)
         with (
             atomic_path(target) as temporary,
             _step_options(sewn_faces, pcurves=quads is None, groups=made.labels()),
@@ -385,38 +379,86 @@ def export_cad(
                 )
             file_bytes = temporary.stat().st_size
         lap("write")
-    note = (
-        "measured on the surfaces OpenCASCADE holds (its poles and knots, each face checked "
-        "against its own evaluator)"
-        if smooth.size
-        else "not measured: g1_samples=0"
-        if not g1_samples
-        else "not measured: no shared edges but seams"
-    )
-    return ExportResult(
-        path=target,
-        format=kind,
+    return _result(
+        made,
+        target=target,
+        kind=kind,
         faces=len(faces),
         solid=solid,
         valid=valid,
         free_edges=free_edges,
-        exact=exact,
-        method=chosen,
-        method_note=method_note,
+        volume=volume,
+        file_bytes=file_bytes,
+        sewing_tolerance=sewing_tolerance,
+        angles=angles,
+        measured="measured on the surfaces OpenCASCADE holds (its poles and knots, each face "
+        "checked against its own evaluator)",
+        unmeasured="",
+        g1_samples=g1_samples,
+        seconds=seconds,
+    )
+
+
+def _result(
+    made: CadSurfaces,
+    *,
+    target: Path,
+    kind: CadFormat,
+    faces: int,
+    solid: bool,
+    valid: bool,
+    free_edges: int,
+    volume: float | None,
+    file_bytes: int,
+    sewing_tolerance: float,
+    angles: NDArray[np.float64],
+    measured: str,
+    unmeasured: str,
+    g1_samples: int,
+    seconds: dict[str, float],
+) -> ExportResult:
+    """The :class:`ExportResult` of the surfaces ``made`` written as ``faces`` faces: the G1
+    figures from ``angles`` ((E, K) along every shared edge of the network, seams apart), said
+    ``measured`` or, with none, why not (``unmeasured``, else from ``g1_samples``)."""
+    network, fit = made.network, made.fit
+    shared_patch, shared_edge = network.shared_edges()
+    seam = network.seam[shared_patch, shared_edge]
+    smooth = angles[~seam].max(axis=1) if angles.size else np.zeros(0)
+    seam_angles = angles[seam] if angles.size else np.zeros(0)
+    note = (
+        measured
+        if smooth.size
+        else unmeasured
+        or (
+            "not measured: g1_samples=0"
+            if not g1_samples
+            else "not measured: no shared edges but seams"
+        )
+    )
+    return ExportResult(
+        path=target,
+        format=kind,
+        faces=faces,
+        solid=solid,
+        valid=valid,
+        free_edges=free_edges,
+        exact=made.exact,
+        method=made.method,
+        method_note=made.method_note,
         spans=len(np.unique(fit.knots_u)) - 1,
-        refine=refine,
+        refine=made.refine,
         fit_deviation=fit.deviation,
-        fit_tolerance=0.0 if exact else fit_tolerance,
+        fit_tolerance=0.0 if made.exact else made.fit_tolerance,
         sewing_tolerance=sewing_tolerance,
         max_g1_angle_deg=float(smooth.max()) if smooth.size else 0.0,
         mean_g1_angle_deg=float(smooth.mean()) if smooth.size else 0.0,
         seam_edges=int(seam.sum())
-        // (2 if quads is not None else 1),  # a quad face's edge is two split4 halves
+        // (2 if made.quads is not None else 1),  # a quad face's edge is two split4 halves
         seam_angle_min_deg=float(seam_angles.min()) if seam_angles.size else None,
         seam_angle_max_deg=float(seam_angles.max()) if seam_angles.size else None,
         volume=volume,
-        deviation=deviation,
-        relative_deviation=deviation / diagonal,
+        deviation=made.deviation,
+        relative_deviation=made.deviation / made.diagonal,
         file_bytes=file_bytes,
         g1_measured=bool(smooth.size),
         g1_note=note,
@@ -437,8 +479,6 @@ def _direct_step(
     """:func:`export_cad`'s STEP file of a split4 network's quads, written directly
     (:func:`~g1patch.io.cad.step_write.write_quad_step`) and, if ``verify`` (None: up to
     :data:`VERIFY_FACES` faces), read back by OCC: its validity, volume and G1 angles."""
-    network, quads = made.network, made.quads
-    assert quads is not None
     labels = made.labels()
     names, colours = (None, None) if labels is None else labels
     with atomic_path(target) as temporary:
@@ -466,51 +506,31 @@ def _direct_step(
             volume = _read_volume(occ, model.shape) if solid else None
             lap("check")
             if g1_samples:
-                angles = _model_g1_angles(model, network, g1_samples)
+                angles = _model_g1_angles(model, made.network, g1_samples)
             lap("g1")
-    shared_patch, shared_edge = network.shared_edges()
-    seam = network.seam[shared_patch, shared_edge]
-    smooth = angles[~seam].max(axis=1) if angles.size else np.zeros(0)
-    seam_angles = angles[seam] if angles.size else np.zeros(0)
-    note = (
-        "measured on the file read back by OpenCASCADE"
-        if smooth.size
-        else "not measured: not read back (verify=False; the file's poles are the network's own)"
+    unmeasured = (
+        "not measured: not read back (verify=False; the file's poles are the network's own)"
         if verify is False
         else f"not measured: {faces:,} faces, more than the {VERIFY_FACES:,} read back (the "
         "file's poles are the network's own; verify=True reads it)"
         if not checked
-        else "not measured: g1_samples=0"
-        if not g1_samples
-        else "not measured: no shared edges but seams"
+        else ""
     )
-    fit = made.fit
-    return ExportResult(
-        path=target,
-        format="step",
+    return _result(
+        made,
+        target=target,
+        kind="step",
         faces=faces,
         solid=solid,
         valid=valid,
         free_edges=brep.free_edges,
-        exact=made.exact,
-        method=made.method,
-        method_note=made.method_note,
-        spans=len(np.unique(fit.knots_u)) - 1,
-        refine=made.refine,
-        fit_deviation=fit.deviation,
-        fit_tolerance=0.0 if made.exact else made.fit_tolerance,
-        sewing_tolerance=sewing_tolerance,
-        max_g1_angle_deg=float(smooth.max()) if smooth.size else 0.0,
-        mean_g1_angle_deg=float(smooth.mean()) if smooth.size else 0.0,
-        seam_edges=int(seam.sum()) // 2,
-        seam_angle_min_deg=float(seam_angles.min()) if seam_angles.size else None,
-        seam_angle_max_deg=float(seam_angles.max()) if seam_angles.size else None,
         volume=volume,
-        deviation=made.deviation,
-        relative_deviation=made.deviation / made.diagonal,
         file_bytes=file_bytes,
-        g1_measured=bool(smooth.size),
-        g1_note=note,
+        sewing_tolerance=sewing_tolerance,
+        angles=angles,
+        measured="measured on the file read back by OpenCASCADE",
+        unmeasured=unmeasured,
+        g1_samples=g1_samples,
         seconds=seconds,
     )
 

@@ -47,7 +47,8 @@ class QuadBrep(NamedTuple):
     """The B-rep of a split4 network's quads (:func:`quad_brep`). Per quad (in quad order) its
     ``net`` as point ids ``grids[size][row]`` (``size`` 4 or 6 poles a side, ``row`` its row in
     that group), its ``corners`` (vertex ids), ``sides`` (edge ids) and whether each side runs
-    along its edge's curve (``forward``); per edge its curve's point ids (``edge_rows``, padded
+    along its edge's curve (``forward``); per edge the quad side ``4 q + k`` whose row is its curve
+    (``owner``, the first that has it) and the curve's point ids (``edge_rows``, padded
     with −1 after ``edge_length``); ``points`` the distinct poles; per quad its ``component`` and
     per component whether it is ``closed``; per quad whether its face is ``reversed`` (a closed
     component turned inside out: the face's normal is the surface's negated, its loop runs the
@@ -60,6 +61,7 @@ class QuadBrep(NamedTuple):
     corners: IntArray
     sides: IntArray
     forward: NDArray[np.bool_]
+    owner: IntArray
     edge_rows: IntArray
     edge_length: IntArray
     component: IntArray
@@ -183,17 +185,17 @@ def quad_brep(quads: QuadFaces, network: PatchNetwork) -> QuadBrep | None:
         alias = deeper
     root = alias == np.arange(len(points))  # every alias is a root now: number them densely
     alias = (np.cumsum(root) - 1)[alias]
-    used = root
     grids = {s: alias[grid] for s, grid in grids.items()}
     edge_rows = np.where(edge_rows >= 0, alias[np.maximum(edge_rows, 0)], -1)
     return QuadBrep(
-        points[used],
+        points[root],
         size,
         row,
         grids,
         corners,
         sides,
         forward,
+        owner,
         edge_rows,
         edge_length,
         component,
@@ -282,9 +284,7 @@ def write_quad_step(
     corner_ids = np.unique(brep.corners)
     vertex_index = np.full(int(corner_ids.max()) + 1, -1, dtype=np.int64)
     vertex_index[corner_ids] = np.arange(corner_ids.size)
-    flat = brep.sides.ravel()
-    owner = np.empty(n_edges, dtype=np.int64)
-    owner[flat[::-1]] = np.arange(flat.size)[::-1]
+    owner = brep.owner
     start_corner = brep.corners.ravel()[owner]
     end_corner = np.roll(brep.corners, -1, axis=1).ravel()[owner]
     first_end = np.empty(corner_ids.size, dtype=np.int64)  # a point for each vertex: an edge end
