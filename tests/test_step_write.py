@@ -136,3 +136,19 @@ def test_large_files_are_not_read_back(tmp_path: Path, monkeypatch: pytest.Monke
     assert result.solid and result.volume is None and result.faces == 6
     assert cad.export_step(tmp_path / "forced.step", network, verify=True).g1_measured
     assert not cad.export_step(tmp_path / "off.step", network, verify=False).g1_measured
+
+
+@requires_ocp
+def test_the_command_line_skips_or_forces_the_read_back(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``export --no-verify`` writes the file and says its angles were not measured; ``--verify``
+    measures them."""
+    from g1patch.cli import main
+    from g1patch.io.network_file import save_network
+
+    save_network(tmp_path / "cube.npz", build_network(shapes.cube(), "split4", tolerance=None))
+    for flag, said in (("--no-verify", "not read back"), ("--verify", "max G1 angle")):
+        target = tmp_path / f"cube{flag}.step"
+        assert main(["export", str(tmp_path / "cube.npz"), "-o", str(target), flag, "-q"]) == 0
+        assert said in capsys.readouterr().out and target.stat().st_size > 0
