@@ -5,12 +5,15 @@ limit samples and the feature-adaptive build refine only there."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import MeshError
+from .cage import PolygonCage
+from .faces import _edge_keys
 from .quadmesh import QuadMesh
 from .tags import Tag
 from .topology import QuadTopology
@@ -29,6 +32,36 @@ class Neighbourhood(NamedTuple):
     mesh: QuadMesh
     faces: IntArray
     vertices: IntArray
+
+    def rings_kept(self, whole: QuadTopology) -> tuple[IntArray, IntArray, IntArray]:
+        """The part's vertices whose rings are ``whole``'s (every face round them in the part,
+        each neighbour once), as ``(vertices, whole_slots, part_slots)``: their ids in the part,
+        and each of their ring slots in ``whole`` and in the part, matched by the neighbour they
+        point to (a ring may start at another face in the part)."""
+        in_part = np.zeros(whole.n_faces, dtype=bool)
+        in_part[self.faces] = True
+        outside = np.zeros(whole.n_vertices, dtype=bool)
+        outside[whole.faces[~in_part]] = True
+        part = self.mesh.topology
+        sizes = np.diff(part.neighbor_offsets)
+        owner = np.repeat(np.arange(part.n_vertices), sizes)
+        keys = self.vertices[owner] * whole.n_vertices + self.vertices[part.neighbors]
+        order = np.argsort(keys, kind="stable")
+        repeated = np.zeros(part.n_vertices, dtype=bool)
+        repeated[owner[order[1:][np.diff(keys[order]) == 0]]] = True
+        whole_sizes = np.diff(whole.neighbor_offsets)[self.vertices]
+        vertices = np.flatnonzero(~outside[self.vertices] & ~repeated & (whole_sizes == sizes))
+        starts = whole.neighbor_offsets[self.vertices[vertices]]
+        counts = sizes[vertices]
+        whole_slots = np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(
+            counts.sum()
+        )
+        wanted = (
+            np.repeat(self.vertices[vertices], counts) * whole.n_vertices
+            + whole.neighbors[whole_slots]
+        )
+        part_slots = order[np.searchsorted(keys, wanted, sorter=order)]
+        return vertices, whole_slots, part_slots
 
 
 def grow(topology: QuadTopology, faces: ArrayLike, rings: int) -> BoolArray:
@@ -115,3 +148,79 @@ def neighbourhood(mesh: QuadMesh, faces: ArrayLike, rings: int) -> Neighbourhood
         return whole
     # from_arrays keeps the used vertices in their order
     return Neighbourhood(part, inside, np.unique(topology.faces[inside]))
+
+
+def cage_neighbourhood(mesh: QuadMesh, faces: ArrayLike, rings: int) -> Neighbourhood:
+    """:func:`neighbourhood` of a mesh split from polygons (:attr:`QuadMesh.cage`), in whole
+    polygons: every quad of a polygon it touches, and the part carries the part of the cage those
+    polygons are (:func:`_part_cage`), so it is split from them as the whole is (the split's
+    vertices keep their order: polygon vertices, edge points by sorted edge, face points). A mesh
+    without a cage, or whose quads are not its cage's split, gets :func:`neighbourhood`."""
+    cage = mesh.cage
+    topology = mesh.topology
+    if cage is None or cage.corners.size != topology.n_faces:
+        return neighbourhood(mesh, faces, rings)
+    polygon = np.repeat(np.arange(cage.sizes.size), cage.sizes)  # quad k: corner k's polygon
+    keep = grow(topology, faces, rings)
+    for _ in range(PINCH_FILLS + 1):
+        touched = np.zeros(cage.sizes.size, dtype=bool)
+        touched[polygon[keep]] = True
+        keep = touched[polygon]
+        pinched = pinched_vertices(topology, keep)
+        if not pinched.any():
+            break
+        keep |= pinched[topology.faces].any(axis=1)
+    whole = Neighbourhood(mesh, np.arange(topology.n_faces), np.arange(topology.n_vertices))
+    if keep.all() or pinched_vertices(topology, keep).any():
+        return whole
+    inside = np.flatnonzero(keep)
+    try:
+        part = QuadMesh.from_arrays(
+            mesh.vertices, topology.faces[inside], tags=subset_tags(mesh, inside), strict=True
+        )
+        part = replace(part, cage=_part_cage(cage, np.flatnonzero(touched)))
+    except MeshError:
+        return whole
+    return Neighbourhood(part, inside, np.unique(topology.faces[inside]))
+
+
+def _part_cage(cage: PolygonCage, polygons: IntArray) -> PolygonCage:
+    """The ``polygons`` of ``cage`` as a cage of their own: the points they use (in order), their
+    corners renumbered, and the tags that still apply (the boundary rule, the crease method,
+    creases on their edges, corners on their points; holes dropped, as by :func:`subset_tags`)."""
+    offsets = np.concatenate([[0], np.cumsum(cage.sizes)])
+    sizes = cage.sizes[polygons]
+    corners = cage.corners[
+        np.repeat(offsets[polygons], sizes)
+        + np.arange(sizes.sum())
+        - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    ]
+    n = len(cage.points)
+    used = np.zeros(n, dtype=bool)
+    used[corners] = True
+    new_index = np.cumsum(used) - 1
+    edges = np.unique(_edge_keys(corners, sizes, n))
+    tags = [tag for tag in cage.tags if tag.name in ("interpolateboundary", "creasemethod")]
+    for tag in cage.tags:
+        ints = np.asarray(tag.ints, dtype=np.int64)
+        if tag.name == "crease":
+            a, b = ints[0::2], ints[1::2]
+            sharpness = np.broadcast_to(np.asarray(tag.floats, dtype=np.float64), a.shape)
+            present = np.isin(np.minimum(a, b) * n + np.maximum(a, b), edges)
+            pairs = np.stack([new_index[a[present]], new_index[b[present]]], axis=1)
+            if present.any():
+                tags.append(
+                    Tag("crease", tuple(pairs.ravel().tolist()), tuple(sharpness[present].tolist()))
+                )
+        elif tag.name == "corner":
+            sharpness = np.broadcast_to(np.asarray(tag.floats, dtype=np.float64), ints.shape)
+            present = used[ints]
+            if present.any():
+                tags.append(
+                    Tag(
+                        "corner",
+                        tuple(new_index[ints[present]].tolist()),
+                        tuple(sharpness[present].tolist()),
+                    )
+                )
+    return PolygonCage(cage.points[used], new_index[corners], sizes, tuple(tags))
