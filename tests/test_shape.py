@@ -8,7 +8,6 @@ continuity report; fairness against OpenSubdiv's Catmull–Clark limit (../share
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Callable
 from pathlib import Path
 
@@ -239,25 +238,24 @@ def test_high_valence_and_folded_rings_build(method: str) -> None:
 
 
 def test_fold_guard_never_repeats_a_retreat(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Faces that stay folded whatever is retreated (the fold test stubbed to say so): once every
-    vertex is retreated fully, the guard's third step would retreat the same vertices by the same
-    weight again and rebuild the same patches; it stops instead."""
+    """Faces that stay folded whatever is retreated (the fold test stubbed to say so): the guard
+    retreats the folded faces' corners, then their 1-ring; once every vertex is retreated its third
+    step would retreat the same vertices again and rebuild the same patches; it stops instead."""
     import g1patch.build as build_module
 
-    retreats: list[tuple[float, bytes]] = []
+    retreats: list[bytes] = []
     original = build_module.retreat
 
-    def recorded(targets, vertices, weight):  # type: ignore[no-untyped-def]
-        retreats.append((weight, vertices.tobytes()))
-        return original(targets, vertices, weight)
+    def recorded(targets, fair, vertices):  # type: ignore[no-untyped-def]
+        retreats.append(vertices.tobytes())
+        return original(targets, fair, vertices)
 
     monkeypatch.setattr(build_module, "retreat", recorded)
     monkeypatch.setattr(
         build_module, "folded_patches", lambda patches, samples: np.ones(len(patches), dtype=bool)
     )
     build_network(perturbed(shapes.torus(3, 5), 0.05, 0), "gregory")
-    assert [weight for weight, _ in retreats] == [0.5, 1.0]
-    assert all(a != b for a, b in itertools.pairwise(retreats))
+    assert len(retreats) == 1  # every vertex is a folded face's corner: nothing more to retreat
 
 
 def test_fold_guard_keeps_its_best_attempt(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -272,7 +270,7 @@ def test_fold_guard_keeps_its_best_attempt(monkeypatch: pytest.MonkeyPatch) -> N
     monkeypatch.setattr(
         build_module,
         "retreat",
-        lambda targets, vertices, weight: targets.with_changes(tangents=3.0 * targets.tangents),
+        lambda targets, fair, vertices: targets.with_changes(tangents=3.0 * targets.tangents),
     )
     network = build_network(mesh, "gregory")
     frame = Frame.of_points(mesh.vertices)

@@ -8,11 +8,15 @@ frame, so what is stored is exactly G1 wherever the model sits (translated by 1e
 coordinates would round neighbouring control points apart by 1e-10 of a unit patch).
 
 **Fold guard.** Any valid targets assemble exactly G1, but a local shape rule can still make a
-patch turn back on itself on a very coarse or irregular cage. After assembling, the patches are
-tested for folds (:func:`~g1patch.continuity.folded_patches`); at the vertices of folded faces the
-targets retreat halfway, then fully, towards the previous release's rule
-(:func:`~g1patch.targets.interpolate.retreat`: regular star, bilinear twist), and are assembled
-again. Those vertices are counted in the provenance's ``fallback_vertices``.
+patch turn back on itself on a very coarse or irregular cage (a face whose corners turn by more
+than a right angle). After assembling, the patches are tested for folds
+(:func:`~g1patch.continuity.folded_patches`); the vertices of folded faces (then with their 1-ring,
+then their 2-ring) take the targets of the faired limit-interpolating surface
+(:func:`~g1patch.targets.interpolate.retreat`), solved on the part of the mesh round them
+(:func:`~g1patch.targets.limit_interpolate.limit_interpolate_near`), and are assembled again. That
+surface relaxes a vertex where passing through it would fold the surface; such vertices are said
+(one warning line, the provenance's ``relaxed_vertices`` and ``relaxed_distance``), and every
+retreated vertex is counted in the provenance's ``fallback_vertices``.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from .adaptive import refine_adaptively
 from .construct import ASSEMBLIES, DEFAULT_METHOD, METHODS, NetworkParts
 from .construct.corner import TWISTS, TwistRule, build_corner_network
 from .continuity import folded_patches
-from .errors import BudgetError, InputError, check_choice
+from .errors import BudgetError, ConstructionError, InputError, check_choice
 from .fidelity import limit_distance
 from .frame import Frame
 from .kernels import use_kernels
@@ -39,7 +43,7 @@ from .subdivision import catmull_clark_cage
 from .subdivision import refine as subdivide
 from .targets import SHAPES, Targets, shape_targets
 from .targets.interpolate import retreat
-from .targets.limit_interpolate import interpolating_cage
+from .targets.limit_interpolate import interpolating_cage, limit_interpolate_near
 from .targets.local import NORMALS, TANGENTS, NormalRule, TangentRule
 
 __all__ = [
@@ -72,8 +76,14 @@ DEFAULT_TOLERANCE = 1e-3
 MAX_TOLERANCE_STEPS = 6
 
 
-#: how far the fold guard moves the targets of folded faces' vertices, in turn
-GUARD_STEPS = (0.5, 1.0, 1.0)
+#: how far (of the diagonal) a vertex may move in the fold guard's faired targets and still count
+#: as passed through (the solved cage's residual is below 1e-10)
+RELAXED_DISTANCE = 1e-9
+#: the vertex rings round the folded faces' corners that the fold guard retreats, in turn
+GUARD_RINGS = (0, 1, 2)
+#: the vertex rings of faces round the retreated vertices' faces on which the guard solves the
+#: faired targets (the part's rim is a boundary: its own rules reach two rings in)
+FAIR_RINGS = 4
 #: grid per patch of the fold guard's test
 GUARD_SAMPLES = 9
 #: what puts a face at risk of folding (:func:`_faces_at_risk`)
@@ -303,29 +313,32 @@ def _risk_kernel(
 
 def _guarded(
     targets: Targets,
+    mesh: QuadMesh,
     assemble: Callable[[Targets], A],
     patches_per_face: int,
     patches_of: Callable[[A], Patches] = lambda a: a,  # type: ignore[assignment,return-value]
 ) -> tuple[A, Targets]:
-    """Assemble, and where faces fold retreat their vertices' targets (module docstring). Only the
-    faces at risk (:func:`_faces_at_risk`) of ``patches_of(assemble(targets))`` are tested (an
-    assembly may return more than the patches: the caller gets the best attempt's whole result); the
-    retreated set only grows, each step starts again from the rule's own targets, and from the
-    second step on it takes in the faces' 1-rings too (a face depends on its corners' targets only,
-    but a fully retreated corner next to an untouched one can fold the face between). The guard
-    returns the attempt with the fewest folded faces: a retreat can fold more than it mends (where
-    the 1-ring of a folded face is most of the mesh, as around the centre of a large polygon's
-    split), and the guard never makes a surface worse than the rule's own. Faces a step does not
-    test kept their corners' targets (every retreated corner is a fallback, so its faces are at
-    risk), hence their state."""
+    """Assemble, and where faces fold give their vertices the faired limit-interpolating targets
+    (module docstring). Only the faces at risk (:func:`_faces_at_risk`) of
+    ``patches_of(assemble(targets))`` are tested (an assembly may return more than the patches:
+    the caller gets the best attempt's whole result). The retreated set only grows: the corners of
+    the folded faces, then those and their 1-ring, then their 2-ring (a face depends on its
+    corners' targets only, but a retreated corner next to an untouched one can fold the face
+    between); each step starts again from the rule's own targets, with the faired targets solved
+    on the faces round the retreated vertices (:data:`FAIR_RINGS`). The guard returns the attempt
+    with the fewest folded faces, so it never makes a surface worse than the rule's own. Faces a
+    step does not test kept their corners' targets (every retreated corner is a fallback, so its
+    faces are at risk), hence their state."""
     topology = targets.topology
     assembled = assemble(targets)
     retreated = np.zeros(topology.n_vertices, dtype=bool)
-    applied = 0.0
+    covered = np.zeros(topology.n_vertices, dtype=bool)
+    fair = targets
     guarded = targets
     folded_faces = np.zeros(topology.n_faces, dtype=bool)
     best: tuple[int, A, Targets] | None = None
-    for step, weight in enumerate((*GUARD_STEPS, None)):
+    slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
+    for rings in (*GUARD_RINGS, None):
         tested = _faces_at_risk(guarded)
         rows = (patches_per_face * tested[:, None] + np.arange(patches_per_face)).ravel()
         folded = (
@@ -338,20 +351,23 @@ def _guarded(
         count = int(folded_faces.sum())
         if best is None or count < best[0]:
             best = (count, assembled, guarded)
-        if not count or weight is None:
+        if not count or rings is None:
             break
         corners = np.zeros(topology.n_vertices, dtype=bool)
         corners[topology.faces[folded_faces]] = True
-        if step:
-            slot_vertex = np.repeat(
-                np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets)
-            )
+        for _ in range(rings):
             corners[topology.neighbors[corners[slot_vertex]]] = True
-        if not (corners & ~retreated).any() and weight == applied:
+        if not (corners & ~retreated).any():
             break  # the same retreat again: the same patches
         retreated |= corners
-        applied = weight
-        guarded = retreat(targets, np.flatnonzero(retreated), weight)
+        if not covered[retreated].all():
+            around = np.flatnonzero(retreated[topology.faces].any(axis=1))
+            try:
+                fair, covered = limit_interpolate_near(mesh, targets, around, FAIR_RINGS)
+            except ConstructionError as error:
+                logger.info("fold guard: no faired targets near the folds (%s)", error)
+                break
+        guarded = retreat(targets, fair, np.flatnonzero(retreated & covered))
         assembled = assemble(guarded)
     assert best is not None
     return best[1], best[2]
@@ -466,10 +482,12 @@ def _network(
         surface = mesh.with_vertices(points)
     provenance = _provenance(mesh, method, shape, tangents, targets, refine, repairs)
     if shape == "interpolate":  # the guard's best assembly is the network's: built once
+        own = targets.positions
         assembled, targets = _guarded(
-            targets, assembly.assemble, assembly.patches_per_face, assembly.patches_of
+            targets, local, assembly.assemble, assembly.patches_per_face, assembly.patches_of
         )
         provenance["fallback_vertices"] = str(targets.n_fallback)
+        _report_moved(own, targets.positions, mesh, provenance)
     else:
         assembled = assembly.assemble(targets)
     kept, provenance = assembly.keep(assembled, targets, provenance)
@@ -477,6 +495,30 @@ def _network(
     del assembled, targets, local
     network = assembly.network(kept, NetworkParts(mesh, surface, frame, provenance))
     return _with_faces(network, mesh, assembly.patches_per_face)
+
+
+def _report_moved(
+    own: np.ndarray, guarded: np.ndarray, mesh: QuadMesh, provenance: dict[str, str]
+) -> None:
+    """Where the fold guard gave up interpolating some of the mesh's own vertices (the faired
+    surface relaxes them where passing through would fold it): their number and largest distance,
+    of the diagonal (``own`` and ``guarded`` are unit-scaled positions), in the provenance
+    (``relaxed_vertices``, ``relaxed_distance``) and one warning line."""
+    given = len(mesh.cage.points) if mesh.cage is not None else len(own)
+    moved = np.linalg.norm(guarded[:given] - own[:given], axis=1)
+    relaxed = np.flatnonzero(moved > RELAXED_DISTANCE)
+    if not relaxed.size:
+        return
+    provenance["relaxed_vertices"] = str(relaxed.size)
+    provenance["relaxed_distance"] = f"{moved.max():.3g}"
+    logger.warning(
+        "interpolate: passing through %d of %d vertices (first: %d) folds the surface; it passes "
+        "them at up to %.3g of the diagonal, on the faired limit-interpolating surface there",
+        relaxed.size,
+        given,
+        relaxed[0],
+        moved.max(),
+    )
 
 
 def _with_faces(network: PatchNetwork, mesh: QuadMesh, patches_per_face: int) -> PatchNetwork:

@@ -7,8 +7,8 @@
 * :func:`_round_coarse_faces`: faces whose corner normals turn far take interior points fitted to
   circle sections across the face, where a sphere models the face's corners.
 
-Parts of the ``interpolate`` rule (:mod:`g1patch.targets.interpolate`); ``legacy`` and the fold
-guard's retreat use the bilinear twist.
+Parts of the ``interpolate`` rule (:mod:`g1patch.targets.interpolate`); ``legacy`` uses the
+bilinear twist.
 """
 
 from __future__ import annotations

@@ -60,7 +60,7 @@ from .creases import INTERPOLATE_SHARPNESS, crease_tangents, seam_edges, sharp_v
 from .fans import fit_regular_star, mesh_gaps, safeguarded_fans, spread_fan, tangent_stars
 from .frames import vertex_frames
 from .interior import _interior_targets, _round_coarse_faces
-from .local import dot, fan_normals, in_vertex_planes, slot_vertices, unit_rows
+from .local import fan_normals, in_vertex_planes, slot_vertices
 from .tangents import _along_smooth_lines, _projected_tangents, _smooth_boundary_tangents
 from .value import TangentRule, Targets
 
@@ -147,13 +147,12 @@ def interpolate_targets(mesh: QuadMesh, *, tangents: TangentRule = "arc") -> Tar
     )
 
 
-def retreat(targets: Targets, vertices: IntArray, weight: float) -> Targets:
-    """``targets`` moved by ``weight`` ∈ [0, 1] towards the previous release's rule at ``vertices``:
-    their normals towards the fan normal, their slot tangents (re-projected) towards the regular
-    star fitted to that fan, and the interior targets of every face corner at them towards the
-    bilinear twist (no curvature term, no section fit). The build's fold guard uses it where a
-    patch turns back on itself; those vertices join ``fallback``. Creased vertices (more than one
-    sector) keep their targets."""
+def retreat(targets: Targets, fair: Targets, vertices: IntArray) -> Targets:
+    """``targets`` with ``fair``'s (the same topology) at ``vertices``: their positions, normals,
+    slot tangents and the interior targets of every face corner at them. The build's fold guard
+    uses it where a patch turns back on itself, with ``fair`` the faired limit-interpolating
+    targets there (:func:`~g1patch.targets.limit_interpolate.limit_interpolate_near`); those
+    vertices join ``fallback``. Creased vertices (more than one sector) keep their targets."""
     topology = targets.topology
     chosen = np.zeros(topology.n_vertices, dtype=bool)
     chosen[vertices] = True
@@ -162,25 +161,17 @@ def retreat(targets: Targets, vertices: IntArray, weight: float) -> Targets:
         topology.faces[(targets.corner_normals != targets.normals[topology.faces]).any(axis=2)]
     ] = True
     chosen &= ~sectored  # a creased vertex keeps its sectors' planes
-    fan = fan_normals(QuadMesh(targets.positions, topology))
-    normals = targets.normals.copy()
-    normals[chosen] = unit_rows((1.0 - weight) * normals[chosen] + weight * fan[chosen])
-    slot_vertex = slot_vertices(topology)
-    n = normals[slot_vertex]
-    projected = targets.tangents - dot(targets.tangents, n)[:, None] * n
-    star, _, valid = fit_regular_star(topology, normals, projected)
-    chosen &= valid
-    rows = chosen[slot_vertex]
-    tangents = targets.tangents.copy()
-    tangents[rows] = (1.0 - weight) * projected[rows] + weight * star[rows]
-    bilinear = _interior_targets(topology, targets.positions, tangents, normals, None)
+    positions = np.where(chosen[:, None], fair.positions, targets.positions)
+    normals = np.where(chosen[:, None], fair.normals, targets.normals)
+    rows = chosen[slot_vertices(topology)]
+    tangents = np.where(rows[:, None], fair.tangents, targets.tangents)
     corners = chosen[topology.faces]
-    interior = targets.interior.copy()
-    interior[corners] = (1.0 - weight) * interior[corners] + weight * bilinear[corners][:, None, :]
+    interior = np.where(corners[..., None, None], fair.interior, targets.interior)
     corner_normals = np.where(
         sectored[topology.faces][..., None], targets.corner_normals, normals[topology.faces]
     )
     return targets.with_changes(
+        positions=positions,
         normals=normals,
         tangents=tangents,
         interior=interior,

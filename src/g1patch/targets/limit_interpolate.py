@@ -48,6 +48,7 @@ from scipy.sparse.linalg import LinearOperator, SuperLU, lsmr, onenormest, splu
 from ..errors import ConstructionError, MeshError
 from ..mesh import QuadMesh
 from ..mesh.cage import PolygonTopology
+from ..mesh.neighbourhood import cage_neighbourhood
 from ..subdivision import catmull_clark_cage, limit_normals, limit_points, limit_stars
 from ..subdivision.matrix import cage_step_matrix, limit_matrix, refine_matrix
 from .limit import limit_targets
@@ -63,6 +64,7 @@ __all__ = [
     "PINCH_RATIO",
     "CageSolution",
     "interpolating_cage",
+    "limit_interpolate_near",
     "limit_interpolate_targets",
     "limit_matrix",
 ]
@@ -384,14 +386,6 @@ def _relaxed(system: _System, exact: CageSolution, unknowns: FloatArray) -> Cage
     points[fixed] = x[fixed]
     distance = float(np.linalg.norm(limit[free] - x[free], axis=1).max() / diagonal)
     residual = float(np.linalg.norm(limit[fixed] - x[fixed], axis=1).max(initial=0.0) / diagonal)
-    _logger.warning(
-        "limit-interpolate: exact interpolation turns the surface inside out or pinches it; %d "
-        "of %d vertices "
-        "relaxed (the surface passes them at up to %.3g of the diagonal), the rest interpolated",
-        len(free),
-        len(x),
-        distance,
-    )
     return CageSolution(
         cage,
         system.mesh.with_vertices(cage),
@@ -416,5 +410,47 @@ def limit_interpolate_targets(mesh: QuadMesh, *, tangents: TangentRule = "arc") 
         solution.residual,
         solution.condition,
     )
+    if len(solution.relaxed):
+        _logger.warning(
+            "limit-interpolate: exact interpolation turns the surface inside out or pinches it; "
+            "%d of %d vertices relaxed (the surface passes them at up to %.3g of the diagonal), "
+            "the rest interpolated",
+            len(solution.relaxed),
+            len(solution.points) if mesh.cage is None else len(mesh.cage.points),
+            solution.relaxed_distance,
+        )
     targets = limit_targets(solution.mesh)
     return targets.with_changes(positions=solution.points, rule="limit-interpolate")
+
+
+def limit_interpolate_near(
+    mesh: QuadMesh, base: Targets, faces: NDArray[np.int64], rings: int
+) -> tuple[Targets, NDArray[np.bool_]]:
+    """``base`` with the limit-interpolate targets of ``mesh`` at the vertices near ``faces``, and
+    those vertices, (V,) bool. The cage is solved on the faces within ``rings`` vertex rings of
+    ``faces`` alone (:func:`~g1patch.mesh.neighbourhood.neighbourhood`, whose rim is a boundary
+    there), so its cost follows the part, not the mesh; the targets are taken at the part's
+    vertices whose whole ring it holds (positions, normals, ring slots, and the interior targets
+    of their face corners). Raises :class:`ConstructionError` where the part's cage cannot be
+    solved (:func:`interpolating_cage`)."""
+    whole = mesh.topology
+    part = cage_neighbourhood(mesh, faces, rings)
+    solution = interpolating_cage(part.mesh)
+    fair = limit_targets(solution.mesh).with_changes(positions=solution.points)
+    kept, whole_slots, part_slots = part.rings_kept(whole)
+    vertices = part.vertices[kept]
+    covered = np.zeros(whole.n_vertices, dtype=bool)
+    covered[vertices] = True
+    positions = base.positions.copy()
+    positions[vertices] = fair.positions[kept]
+    normals = base.normals.copy()
+    normals[vertices] = fair.normals[kept]
+    tangents = base.tangents.copy()
+    tangents[whole_slots] = fair.tangents[part_slots]
+    interior = base.interior.copy()
+    corners = covered[whole.faces[part.faces]]
+    interior[part.faces[np.nonzero(corners)[0]], np.nonzero(corners)[1]] = fair.interior[corners]
+    targets = base.with_changes(
+        positions=positions, normals=normals, tangents=tangents, interior=interior
+    )
+    return targets, covered
