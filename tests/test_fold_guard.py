@@ -17,6 +17,7 @@ from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import QuadMesh
 from g1patch.mesh.neighbourhood import cage_neighbourhood
 from g1patch.mesh.polygons import refine_polygons
+from g1patch.targets.limit_interpolate import interpolating_cage
 
 CAGES = Path(__file__).parent / "data" / "cages"
 
@@ -103,12 +104,14 @@ def test_the_guard_solves_round_the_folds_only(
 def test_the_cow_folds_no_more_than_its_limit(cow: QuadMesh, method: str) -> None:
     """The fold zoo's cow folded 26 split4 / 13 Gregory patches with the default shape (the guard
     retreated towards the previous release's regular stars); with the faired targets it folds no
-    more than the Catmull–Clark limit of the same cage (0 / 2), exactly G1, and passes through all
-    but a few vertices, which it says (within 3 % of the diagonal)."""
+    more than the Catmull–Clark limit of the same cage (0 / 2), exactly G1, and passes through
+    every vertex but those the faired surface relaxes, and says so."""
     ours = build_network(cow, method)
     report = check(ours)
     limit = check(build_network(cow, method, "limit"))
     assert report.folds <= limit.folds
     assert max(report.max_edge_angle_deg, report.max_corner_angle_deg) <= 1e-9
-    assert 0 < int(ours.provenance["relaxed_vertices"]) <= 12
-    assert float(ours.provenance["relaxed_distance"]) <= 0.03
+    faired = interpolating_cage(cow)  # the vertices the faired surface itself does not pass
+    assert 0 < int(ours.provenance["relaxed_vertices"]) <= len(faired.relaxed)
+    # the provenance keeps three digits
+    assert float(ours.provenance["relaxed_distance"]) <= faired.relaxed_distance * (1 + 1e-3)

@@ -213,11 +213,11 @@ def test_an_edge_along_its_vertex_normal_falls_back(method: str) -> None:
 
 def test_the_fold_guard_retreats_a_three_segment_torus() -> None:
     """A 3 × 5 torus with 20 % noise: the local rules fold it (with 5 % they did until its mesh
-    lines ran straight through their vertices); the guard retreats its vertices towards the
-    previous rules, counts them (6, none before the guard), and leaves no fold."""
+    lines ran straight through their vertices); the guard gives its vertices the faired
+    limit-interpolating targets, counts them, and leaves no fold."""
     mesh = perturbed(shapes.torus(3, 5), 0.2, 0)
     network = build_network(mesh, "gregory")
-    assert int(network.provenance["fallback_vertices"]) >= 1
+    assert int(network.provenance["faired_vertices"]) >= 1
     _exact_and_unfolded(network)
 
 

@@ -8,15 +8,19 @@ frame, so what is stored is exactly G1 wherever the model sits (translated by 1e
 coordinates would round neighbouring control points apart by 1e-10 of a unit patch).
 
 **Fold guard.** Any valid targets assemble exactly G1, but a local shape rule can still make a
-patch turn back on itself on a very coarse or irregular cage (a face whose corners turn by more
-than a right angle). After assembling, the patches are tested for folds
-(:func:`~g1patch.continuity.folded_patches`); the vertices of folded faces (then with their 1-ring,
-then their 2-ring) take the targets of the faired limit-interpolating surface
-(:func:`~g1patch.targets.interpolate.retreat`), solved on the part of the mesh round them
-(:func:`~g1patch.targets.limit_interpolate.limit_interpolate_near`), and are assembled again. That
-surface relaxes a vertex where passing through it would fold the surface; such vertices are said
-(one warning line, the provenance's ``relaxed_vertices`` and ``relaxed_distance``), and every
-retreated vertex is counted in the provenance's ``fallback_vertices``.
+patch turn back on itself, or bend more than it must, on a very coarse or irregular cage (a face
+whose corners turn by more than a right angle). The faces at risk are compared with the faired
+limit-interpolating surface of the same cage, solved on the part of the mesh round them
+(:func:`~g1patch.targets.limit_interpolate.limit_interpolate_near`): where the rule's own surface
+folds, or bends more than 1.1 × as far (the yardstick of issue 31), the vertices of the faces
+that do take that surface's targets (:func:`~g1patch.targets.interpolate.retreat`), with their
+rings where the seams between the two fold or bend; where the faired surface folds too, they move
+towards the previous release's regular stars (:func:`~g1patch.targets.interpolate.retreat_to_star`).
+The faired surface relaxes a vertex where passing through it would fold or pinch the surface;
+such vertices are said (one warning line, the provenance's ``relaxed_vertices`` and
+``relaxed_distance``). The provenance counts the vertices given the faired targets
+(``faired_vertices``) and those moved towards stars (with the rule's own fallbacks,
+``fallback_vertices``).
 """
 
 from __future__ import annotations
@@ -24,25 +28,26 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import TypeVar
+from typing import Generic, TypeVar
 
 import numpy as np
 
 from .adaptive import refine_adaptively
 from .construct import ASSEMBLIES, DEFAULT_METHOD, METHODS, NetworkParts
 from .construct.corner import TWISTS, TwistRule, build_corner_network
-from .continuity import folded_patches
+from .continuity import FOLD_SAMPLES, folded_patches, folds_and_bend
 from .errors import BudgetError, ConstructionError, InputError, check_choice
 from .fidelity import limit_distance
 from .frame import Frame
 from .kernels import use_kernels
 from .memory import memory_budget
 from .mesh import INFINITE_SHARPNESS, QuadMesh
+from .mesh.neighbourhood import grow
 from .network import Patches, PatchNetwork, patch_uvs
 from .subdivision import catmull_clark_cage
 from .subdivision import refine as subdivide
 from .targets import SHAPES, Targets, shape_targets
-from .targets.interpolate import retreat
+from .targets.interpolate import retreat, retreat_to_star
 from .targets.limit_interpolate import interpolating_cage, limit_interpolate_near
 from .targets.local import NORMALS, TANGENTS, NormalRule, TangentRule
 
@@ -76,16 +81,26 @@ DEFAULT_TOLERANCE = 1e-3
 MAX_TOLERANCE_STEPS = 6
 
 
+#: a risky face whose largest normal turn exceeds this multiple of the faired surface's there is
+#: given the faired targets (the bar of issue 31: the interpolant's 99th-percentile bend within
+#: 1.1 × the limit-interpolating surface's)
+BEND_RATIO = 1.1
+#: grid per patch on which :func:`_face_turns` compares the bends
+TURN_SAMPLES = 5
 #: how far (of the diagonal) a vertex may move in the fold guard's faired targets and still count
 #: as passed through (the solved cage's residual is below 1e-10)
 RELAXED_DISTANCE = 1e-9
-#: the vertex rings round the folded faces' corners that the fold guard retreats, in turn
-GUARD_RINGS = (0, 1, 2)
+#: how far the fold guard moves the targets of faces that still fold towards regular stars, in
+#: turn (:func:`~g1patch.targets.interpolate.retreat_to_star`)
+STAR_WEIGHTS = (0.5, 1.0, 1.0)
+#: the most faces at risk the fold guard compares with the faired surface (beyond, the folded
+#: ones alone: its solve then follows the folds, not the mesh)
+GUARD_COMPARED_FACES = 20_000
+#: retreats the fold guard tries at most
+GUARD_STEPS = 3
 #: the vertex rings of faces round the retreated vertices' faces on which the guard solves the
 #: faired targets (the part's rim is a boundary: its own rules reach two rings in)
 FAIR_RINGS = 4
-#: grid per patch of the fold guard's test
-GUARD_SAMPLES = 9
 #: what puts a face at risk of folding (:func:`_faces_at_risk`)
 RISK_TURN = np.radians(15.0)
 RISK_TANGENT = np.radians(30.0)
@@ -311,6 +326,42 @@ def _risk_kernel(
                 risky[h >> 2] = True
 
 
+class _Attempts(Generic[A]):
+    """The fold guard's attempts, each measured as the check measures it
+    (:func:`~g1patch.continuity.folds_and_bend`) on the faces ``scored`` (those a retreat can
+    change): the best has the fewest folded faces, then the least 99th-percentile bend."""
+
+    def __init__(
+        self, scored: np.ndarray, patches_per_face: int, patches_of: Callable[[A], Patches]
+    ) -> None:
+        self.scored = scored
+        self.rows = (patches_per_face * scored[:, None] + np.arange(patches_per_face)).ravel()
+        self.patches_per_face = patches_per_face
+        self.patches_of = patches_of
+        self.best: tuple[int, float, A, Targets, np.ndarray] | None = None
+        #: the rule's own attempt (the first), and the best of the others
+        self.own: tuple[int, float, A, Targets, np.ndarray] | None = None
+        self.retreats: tuple[int, float, A, Targets, np.ndarray] | None = None
+
+    def measure(self, attempt: A) -> tuple[int, float, np.ndarray]:
+        """Folded faces (count, the faces) and the bend of ``attempt`` on the scored faces."""
+        folded, bend = folds_and_bend(self.patches_of(attempt).take(self.rows))
+        faces = np.unique(self.scored[np.flatnonzero(folded) // self.patches_per_face])
+        return faces.size, bend, faces
+
+    def add(self, attempt: A, targets: Targets) -> tuple[int, float, np.ndarray]:
+        """Measure ``attempt`` (assembled from ``targets``) and keep it if it is the best."""
+        count, bend, folded = self.measure(attempt)
+        measured = (count, bend, attempt, targets, folded)
+        if self.own is None:
+            self.own = measured
+        elif self.retreats is None or (count, bend) < self.retreats[:2]:
+            self.retreats = measured
+        if self.best is None or (count, bend) < self.best[:2]:
+            self.best = measured
+        return count, bend, folded
+
+
 def _guarded(
     targets: Targets,
     mesh: QuadMesh,
@@ -318,59 +369,155 @@ def _guarded(
     patches_per_face: int,
     patches_of: Callable[[A], Patches] = lambda a: a,  # type: ignore[assignment,return-value]
 ) -> tuple[A, Targets]:
-    """Assemble, and where faces fold give their vertices the faired limit-interpolating targets
-    (module docstring). Only the faces at risk (:func:`_faces_at_risk`) of
-    ``patches_of(assemble(targets))`` are tested (an assembly may return more than the patches:
-    the caller gets the best attempt's whole result). The retreated set only grows: the corners of
-    the folded faces, then those and their 1-ring, then their 2-ring (a face depends on its
-    corners' targets only, but a retreated corner next to an untouched one can fold the face
-    between); each step starts again from the rule's own targets, with the faired targets solved
-    on the faces round the retreated vertices (:data:`FAIR_RINGS`). The guard returns the attempt
-    with the fewest folded faces, so it never makes a surface worse than the rule's own. Faces a
-    step does not test kept their corners' targets (every retreated corner is a fallback, so its
-    faces are at risk), hence their state."""
+    """Assemble, and where faces fold or bend more than the faired limit-interpolating surface
+    does, give their vertices its targets (module docstring). Only the faces at risk
+    (:func:`_faces_at_risk`) are compared with that surface (the folded ones among them alone
+    where more than :data:`GUARD_COMPARED_FACES` are). Its targets are solved on the part of the
+    mesh round them (:func:`~g1patch.targets.limit_interpolate.limit_interpolate_near`); given
+    to all their corners they are the first alternative, and each compared face's largest normal
+    turn there (:func:`_face_turns`) is its yardstick. Where the rule's own surface folds nowhere
+    and bends within :data:`BEND_RATIO` × the alternative's, it is kept. Else each step retreats
+    (from the rule's own targets) the corners of the faces that fold or turn more than
+    :data:`BEND_RATIO` × their yardstick, these with their 1-ring from the second step on (a
+    retreated corner next to an untouched one can fold or bend the face between), until a step
+    adds nothing or after :data:`GUARD_STEPS`; the faces that still fold in the best of these
+    retreats then move towards regular stars (:func:`~g1patch.targets.interpolate.retreat_to_star`,
+    :data:`STAR_WEIGHTS`). The best
+    attempt (:class:`_Attempts`) is returned: never one that folds more than the rule's own. An
+    assembly may return more than the patches (``patches_of`` finds them): the caller gets the
+    chosen attempt's whole result."""
     topology = targets.topology
     assembled = assemble(targets)
-    retreated = np.zeros(topology.n_vertices, dtype=bool)
-    covered = np.zeros(topology.n_vertices, dtype=bool)
-    fair = targets
-    guarded = targets
-    folded_faces = np.zeros(topology.n_faces, dtype=bool)
-    best: tuple[int, A, Targets] | None = None
+    risky = _faces_at_risk(targets)
+    if not risky.size:
+        return assembled, targets
+    compared = risky
+    if risky.size > GUARD_COMPARED_FACES:  # the folded ones alone
+        rows = (patches_per_face * risky[:, None] + np.arange(patches_per_face)).ravel()
+        folded = folded_patches(patches_of(assembled).take(rows), FOLD_SAMPLES)
+        compared = np.unique(risky[np.flatnonzero(folded) // patches_per_face])
+        if not compared.size:
+            return assembled, targets
+    attempts = _Attempts(
+        np.flatnonzero(grow(topology, compared, GUARD_STEPS + 1)), patches_per_face, patches_of
+    )
+    count, bend, folded = attempts.add(assembled, targets)
     slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
-    for rings in (*GUARD_RINGS, None):
-        tested = _faces_at_risk(guarded)
-        rows = (patches_per_face * tested[:, None] + np.arange(patches_per_face)).ravel()
-        folded = (
-            rows[folded_patches(patches_of(assembled).take(rows), GUARD_SAMPLES)]
-            if rows.size
-            else rows
-        )
-        folded_faces[tested] = False
-        folded_faces[folded // patches_per_face] = True
-        count = int(folded_faces.sum())
-        if best is None or count < best[0]:
-            best = (count, assembled, guarded)
-        if not count or rings is None:
-            break
+    try:
+        fair, covered = limit_interpolate_near(mesh, targets, compared, FAIR_RINGS)
+    except (ConstructionError, InputError) as error:  # no faired surface (semi-sharp creases)
+        logger.info("fold guard: no faired targets near the risky faces (%s)", error)
+    else:
         corners = np.zeros(topology.n_vertices, dtype=bool)
-        corners[topology.faces[folded_faces]] = True
-        for _ in range(rings):
-            corners[topology.neighbors[corners[slot_vertex]]] = True
-        if not (corners & ~retreated).any():
-            break  # the same retreat again: the same patches
-        retreated |= corners
-        if not covered[retreated].all():
-            around = np.flatnonzero(retreated[topology.faces].any(axis=1))
-            try:
-                fair, covered = limit_interpolate_near(mesh, targets, around, FAIR_RINGS)
-            except ConstructionError as error:
-                logger.info("fold guard: no faired targets near the folds (%s)", error)
+        corners[topology.faces[compared]] = True
+        faired_targets = retreat(targets, fair, np.flatnonzero(corners & covered))
+        faired = _assembled(assemble, faired_targets)
+        if faired is None:  # the faired fans are not valid fans here (a ring winding twice)
+            return _stars(attempts, assemble, slot_vertex)
+        yardstick = BEND_RATIO * _face_turns(patches_of(faired), compared, patches_per_face)
+        if not count and bend <= BEND_RATIO * attempts.measure(faired)[1]:
+            return assembled, targets  # the rule's own is fair enough
+        del faired, faired_targets
+        # the mesh's own vertices keep their places where a face only bends too far: the faired
+        # surface may relax a vertex (move it off) only to mend a fold
+        given = np.zeros(topology.n_vertices, dtype=bool)
+        given[: len(mesh.cage.points) if mesh.cage is not None else topology.n_vertices] = True
+        retreated = np.zeros(topology.n_vertices, dtype=bool)
+        moving = np.zeros(topology.n_vertices, dtype=bool)
+        relaxed = given & (
+            np.linalg.norm(fair.positions - targets.positions, axis=1) > RELAXED_DISTANCE
+        )
+        for step in range(GUARD_STEPS):
+            worse = compared[
+                _face_turns(patches_of(assembled), compared, patches_per_face) > yardstick
+            ]
+            corners = np.zeros(topology.n_vertices, dtype=bool)
+            corners[topology.faces[worse]] = True
+            at_folds = np.zeros(topology.n_vertices, dtype=bool)
+            at_folds[topology.faces[folded]] = True
+            if step:
+                corners[topology.neighbors[corners[slot_vertex]]] = True
+                at_folds[topology.neighbors[at_folds[slot_vertex]]] = True
+            if not ((corners | at_folds) & ~retreated).any() and not (at_folds & ~moving).any():
+                break  # the same retreat again: the same patches
+            retreated |= (corners & ~relaxed) | at_folds
+            moving |= at_folds
+            if not covered[retreated].all():
+                around = np.flatnonzero(retreated[topology.faces].any(axis=1))
+                try:
+                    fair, covered = limit_interpolate_near(
+                        mesh, targets, np.union1d(around, compared), FAIR_RINGS
+                    )
+                except (ConstructionError, InputError) as error:
+                    logger.info("fold guard: no faired targets near the folds (%s)", error)
+                    break
+            relaxed = given & (
+                np.linalg.norm(fair.positions - targets.positions, axis=1) > RELAXED_DISTANCE
+            )
+            guarded = retreat(
+                targets, fair, np.flatnonzero(retreated & covered), anchored=given & ~moving
+            )
+            attempt = _assembled(assemble, guarded)
+            if attempt is None:
                 break
-        guarded = retreat(targets, fair, np.flatnonzero(retreated & covered))
-        assembled = assemble(guarded)
-    assert best is not None
-    return best[1], best[2]
+            assembled = attempt
+            _, _, folded = attempts.add(assembled, guarded)
+    return _stars(attempts, assemble, slot_vertex)
+
+
+def _assembled(assemble: Callable[[Targets], A], targets: Targets) -> A | None:
+    """``assemble(targets)``, or None where a retreat's targets are not a valid fan."""
+    try:
+        return assemble(targets)
+    except ConstructionError as error:
+        logger.info("fold guard: an attempt is not assembled (%s)", error)
+        return None
+
+
+def _stars(
+    attempts: _Attempts[A], assemble: Callable[[Targets], A], slot_vertex: np.ndarray
+) -> tuple[A, Targets]:
+    """The fold guard's last steps (:func:`_guarded`): from the rule's own attempt and from the
+    best retreat, the faces that still fold (where the faired surface folds too) move towards
+    regular stars, by :data:`STAR_WEIGHTS`, with their 1-ring from the second step on; the best
+    attempt of all."""
+    assert attempts.own is not None and attempts.best is not None
+    for base, folded in {id(a): a[3:] for a in (attempts.own, attempts.retreats) if a}.values():
+        topology = base.topology
+        retreated = np.zeros(topology.n_vertices, dtype=bool)
+        for step, weight in enumerate(STAR_WEIGHTS):
+            if not folded.size:
+                break
+            corners = np.zeros(topology.n_vertices, dtype=bool)
+            corners[topology.faces[folded]] = True
+            if step:
+                corners[topology.neighbors[corners[slot_vertex]]] = True
+            retreated |= corners
+            guarded = retreat_to_star(base, np.flatnonzero(retreated), weight)
+            attempt = _assembled(assemble, guarded)
+            if attempt is None:
+                break
+            _, _, folded = attempts.add(attempt, guarded)
+    return attempts.best[2], attempts.best[3]
+
+
+def _face_turns(
+    patches: Patches, faces: np.ndarray, patches_per_face: int, samples: int = TURN_SAMPLES
+) -> np.ndarray:
+    """The largest normal turn (radians) between neighbouring samples of a ``samples²`` grid on
+    each of ``faces``' patches, per face: how far the surface bends within the face."""
+    rows = (patches_per_face * faces[:, None] + np.arange(patches_per_face)).ravel()
+    part = patches.take(rows)
+    t = np.linspace(0.0, 1.0, samples)
+    normals = np.cross(part.evaluate_grid(t, t, 1, 0), part.evaluate_grid(t, t, 0, 1))
+    normals /= np.maximum(np.linalg.norm(normals, axis=-1, keepdims=True), np.finfo(float).tiny)
+
+    def turn(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.sum(a * b, axis=-1))
+
+    along_u = turn(normals[:, 1:], normals[:, :-1]).reshape(len(rows), -1).max(axis=1)
+    along_v = turn(normals[:, :, 1:], normals[:, :, :-1]).reshape(len(rows), -1).max(axis=1)
+    return np.maximum(along_u, along_v).reshape(len(faces), patches_per_face).max(axis=1)
 
 
 def build_network(
@@ -482,12 +629,16 @@ def _network(
         surface = mesh.with_vertices(points)
     provenance = _provenance(mesh, method, shape, tangents, targets, refine, repairs)
     if shape == "interpolate":  # the guard's best assembly is the network's: built once
-        own = targets.positions
+        own = targets
         assembled, targets = _guarded(
             targets, local, assembly.assemble, assembly.patches_per_face, assembly.patches_of
         )
         provenance["fallback_vertices"] = str(targets.n_fallback)
-        _report_moved(own, targets.positions, mesh, provenance)
+        faired = (targets.normals != own.normals).any(axis=1) & ~targets.fallback
+        if faired.any():
+            provenance["faired_vertices"] = str(int(faired.sum()))
+        _report_moved(own.positions, targets.positions, mesh, provenance)
+        del own
     else:
         assembled = assembly.assemble(targets)
     kept, provenance = assembly.keep(assembled, targets, provenance)

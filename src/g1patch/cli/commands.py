@@ -99,6 +99,12 @@ def _build(args: argparse.Namespace) -> int:
     fallback = int(surface.provenance.get("fallback_vertices", "0"))
     vertices = "1 vertex" if fallback == 1 else f"{fallback} vertices"
     note = f"; {vertices} needed a fallback (degenerate or folded fans)" if fallback else ""
+    faired = int(surface.provenance.get("faired_vertices", "0"))
+    if faired:
+        note += (
+            f"; {_count(faired, 'vertex', 'vertices')} shaped as the faired limit-interpolating "
+            "surface (the local rule folded or bent more there)"
+        )
     print(
         f"built {surface.n_patches} {args.method} patches from {args.mesh} -> {args.output}, "
         f"{_count(folds, 'folded patch', 'folded patches') if folds else 'no folds'}{note}"

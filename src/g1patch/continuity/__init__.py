@@ -56,7 +56,7 @@ which patches fold and where (:func:`folded_patches`); :mod:`.sampling`, :mod:`.
 from .checker import check
 from .edges import _edge_measures as _edge_measures
 from .edges import _hanging_measures as _hanging_measures
-from .folds import folded_patches
+from .folds import folded_patches, folds_and_bend
 from .grid import DEGENERATE_RTOL as DEGENERATE_RTOL
 from .grid import EXACT_TURN_CANDIDATES as EXACT_TURN_CANDIDATES
 from .grid import FOLD_SAMPLES as FOLD_SAMPLES
@@ -80,6 +80,7 @@ __all__ = [
     "check",
     "fairness",
     "folded_patches",
+    "folds_and_bend",
     "angle_between",
     "format_reports",
 ]

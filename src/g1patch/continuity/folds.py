@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..network import Patches, edge_parameters
-from .grid import DEGENERATE_RTOL, MAX_FOLD_LOCATIONS, _grid_measures
+from .grid import DEGENERATE_RTOL, FOLD_SAMPLES, MAX_FOLD_LOCATIONS, _grid_measures
 
 
 def folded_patches(
@@ -26,6 +26,16 @@ def folded_patches(
     return _grid_measures(patches, samples, degenerate_rtol, fairness=False, compiled=compiled)[
         0
     ].folded
+
+
+def folds_and_bend(
+    patches: Patches, samples: int = FOLD_SAMPLES, *, compiled: bool | None = None
+) -> tuple[NDArray[np.bool_], float]:
+    """Which patches fold, (N,) bool, and the 99th percentile of the normal turn between
+    neighbouring samples (degrees), on the ``samples²`` grid of :func:`check`: for a builder that
+    compares attempts as the check would measure them."""
+    grid, diagonal = _grid_measures(patches, samples, DEGENERATE_RTOL, compiled=compiled)
+    return grid.folded, grid.fairness(diagonal)["turn_p99_deg"]
 
 
 def _edge_fold_locations(

@@ -60,7 +60,7 @@ from .creases import INTERPOLATE_SHARPNESS, crease_tangents, seam_edges, sharp_v
 from .fans import fit_regular_star, mesh_gaps, safeguarded_fans, spread_fan, tangent_stars
 from .frames import vertex_frames
 from .interior import _interior_targets, _round_coarse_faces
-from .local import fan_normals, in_vertex_planes, slot_vertices
+from .local import dot, fan_normals, in_vertex_planes, slot_vertices, unit_rows
 from .tangents import _along_smooth_lines, _projected_tangents, _smooth_boundary_tangents
 from .value import TangentRule, Targets
 
@@ -68,6 +68,7 @@ __all__ = [
     "interpolate_targets",
     "legacy_targets",
     "retreat",
+    "retreat_to_star",
     # the fan's parts, importable from here as before (g1patch.targets.fans)
     "fit_regular_star",
     "safeguarded_fans",
@@ -147,12 +148,18 @@ def interpolate_targets(mesh: QuadMesh, *, tangents: TangentRule = "arc") -> Tar
     )
 
 
-def retreat(targets: Targets, fair: Targets, vertices: IntArray) -> Targets:
+def retreat(
+    targets: Targets,
+    fair: Targets,
+    vertices: IntArray,
+    anchored: NDArray[np.bool_] | None = None,
+) -> Targets:
     """``targets`` with ``fair``'s (the same topology) at ``vertices``: their positions, normals,
     slot tangents and the interior targets of every face corner at them. The build's fold guard
     uses it where a patch turns back on itself, with ``fair`` the faired limit-interpolating
-    targets there (:func:`~g1patch.targets.limit_interpolate.limit_interpolate_near`); those
-    vertices join ``fallback``. Creased vertices (more than one sector) keep their targets."""
+    targets there (:func:`~g1patch.targets.limit_interpolate.limit_interpolate_near`): a shape
+    rule's choice, not a fallback. ``anchored`` (V,) bool: vertices that keep their positions (take
+    the rest). Creased vertices (more than one sector) keep their targets."""
     topology = targets.topology
     chosen = np.zeros(topology.n_vertices, dtype=bool)
     chosen[vertices] = True
@@ -161,7 +168,8 @@ def retreat(targets: Targets, fair: Targets, vertices: IntArray) -> Targets:
         topology.faces[(targets.corner_normals != targets.normals[topology.faces]).any(axis=2)]
     ] = True
     chosen &= ~sectored  # a creased vertex keeps its sectors' planes
-    positions = np.where(chosen[:, None], fair.positions, targets.positions)
+    moved = chosen if anchored is None else chosen & ~anchored
+    positions = np.where(moved[:, None], fair.positions, targets.positions)
     normals = np.where(chosen[:, None], fair.normals, targets.normals)
     rows = chosen[slot_vertices(topology)]
     tangents = np.where(rows[:, None], fair.tangents, targets.tangents)
@@ -172,6 +180,48 @@ def retreat(targets: Targets, fair: Targets, vertices: IntArray) -> Targets:
     )
     return targets.with_changes(
         positions=positions,
+        normals=normals,
+        tangents=tangents,
+        interior=interior,
+        corner_normals=corner_normals,
+    )
+
+
+def retreat_to_star(targets: Targets, vertices: IntArray, weight: float) -> Targets:
+    """``targets`` moved by ``weight`` ∈ [0, 1] towards the previous release's rule at ``vertices``:
+    their normals towards the fan normal, their slot tangents (re-projected) towards the regular
+    star fitted to that fan, and the interior targets of every face corner at them towards the
+    bilinear twist (no curvature term, no section fit). The build's fold guard uses it where a
+    patch still turns back on itself with the faired targets (:func:`retreat`: a pole of many
+    thin triangles, whose faired fan folds too); those vertices join ``fallback``. Creased
+    vertices (more than one sector) keep their targets."""
+    topology = targets.topology
+    chosen = np.zeros(topology.n_vertices, dtype=bool)
+    chosen[vertices] = True
+    sectored = np.zeros(topology.n_vertices, dtype=bool)
+    sectored[
+        topology.faces[(targets.corner_normals != targets.normals[topology.faces]).any(axis=2)]
+    ] = True
+    chosen &= ~sectored  # a creased vertex keeps its sectors' planes
+    fan = fan_normals(QuadMesh(targets.positions, topology))
+    normals = targets.normals.copy()
+    normals[chosen] = unit_rows((1.0 - weight) * normals[chosen] + weight * fan[chosen])
+    slot_vertex = slot_vertices(topology)
+    n = normals[slot_vertex]
+    projected = targets.tangents - dot(targets.tangents, n)[:, None] * n
+    star, _, valid = fit_regular_star(topology, normals, projected)
+    chosen &= valid
+    rows = chosen[slot_vertex]
+    tangents = targets.tangents.copy()
+    tangents[rows] = (1.0 - weight) * projected[rows] + weight * star[rows]
+    bilinear = _interior_targets(topology, targets.positions, tangents, normals, None)
+    corners = chosen[topology.faces]
+    interior = targets.interior.copy()
+    interior[corners] = (1.0 - weight) * interior[corners] + weight * bilinear[corners][:, None, :]
+    corner_normals = np.where(
+        sectored[topology.faces][..., None], targets.corner_normals, normals[topology.faces]
+    )
+    return targets.with_changes(
         normals=normals,
         tangents=tangents,
         interior=interior,
