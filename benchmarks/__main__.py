@@ -39,6 +39,7 @@ DEFAULT = (
     "bench_limit",
     "bench_tolerance",
     "bench_interpolants",
+    "bench_cages",
     "bench_check",
     "bench_readers",
     "bench_files",
