@@ -637,9 +637,11 @@ def _network(
         faired = (targets.normals != own.normals).any(axis=1) & ~targets.fallback
         if faired.any():
             provenance["faired_vertices"] = str(int(faired.sum()))
-        _report_moved(own.positions, targets.positions, mesh, provenance)
+        _report_moved(own.positions, targets.positions, mesh, shape, provenance)
         del own
     else:
+        if shape == "limit-interpolate":
+            _report_moved(local.vertices, targets.positions, mesh, shape, provenance)
         assembled = assembly.assemble(targets)
     kept, provenance = assembly.keep(assembled, targets, provenance)
     # the network needs none of the rest: freed before its arrays are made (DESIGN §6)
@@ -649,22 +651,24 @@ def _network(
 
 
 def _report_moved(
-    own: np.ndarray, guarded: np.ndarray, mesh: QuadMesh, provenance: dict[str, str]
+    own: np.ndarray, passed: np.ndarray, mesh: QuadMesh, shape: str, provenance: dict[str, str]
 ) -> None:
-    """Where the fold guard gave up interpolating some of the mesh's own vertices (the faired
-    surface relaxes them where passing through would fold it): their number and largest distance,
-    of the diagonal (``own`` and ``guarded`` are unit-scaled positions), in the provenance
-    (``relaxed_vertices``, ``relaxed_distance``) and one warning line."""
+    """Where an interpolating shape gave up some of the mesh's own vertices (the faired surface
+    relaxes them where passing through would fold or pinch it): their number and largest distance
+    from the points passed, of the diagonal (``own`` and ``passed`` are unit-scaled positions), in
+    the provenance (``relaxed_vertices``, ``relaxed_distance``) and one warning line."""
     given = len(mesh.cage.points) if mesh.cage is not None else len(own)
-    moved = np.linalg.norm(guarded[:given] - own[:given], axis=1)
+    moved = np.linalg.norm(passed[:given] - own[:given], axis=1)
     relaxed = np.flatnonzero(moved > RELAXED_DISTANCE)
     if not relaxed.size:
         return
     provenance["relaxed_vertices"] = str(relaxed.size)
     provenance["relaxed_distance"] = f"{moved.max():.3g}"
     logger.warning(
-        "interpolate: passing through %d of %d vertices (first: %d) folds the surface; it passes "
-        "them at up to %.3g of the diagonal, on the faired limit-interpolating surface there",
+        "%s: passing through %d of %d vertices (first: %d) turns the surface inside out or "
+        "pinches it; it passes them at up to %.3g of the diagonal, on the faired "
+        "limit-interpolating surface there",
+        shape,
         relaxed.size,
         given,
         relaxed[0],

@@ -154,6 +154,7 @@ def blank_record(job: Job, status: str = CANCELLED) -> dict[str, Any]:
         "repairs": [],
         "seams": None,
         "fallback_vertices": None,
+        "relaxed_vertices": None,
         "limit_distance": None,
         "times": {},
         "outputs": [],

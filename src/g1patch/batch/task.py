@@ -99,6 +99,8 @@ def convert(job: Job) -> dict[str, Any]:
             repairs=list(surface.repairs),
             seams=surface.network.n_seams,
             fallback_vertices=int(surface.provenance.get("fallback_vertices", "0")),
+            # vertices the surface does not pass through (moved off to mend a fold)
+            relaxed_vertices=int(surface.provenance.get("relaxed_vertices", "0")),
         )
         if "limit_distance" in surface.provenance:  # a limit shape: how far from the limit
             record["limit_distance"] = float(surface.provenance["limit_distance"])

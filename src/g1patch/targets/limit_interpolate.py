@@ -410,15 +410,6 @@ def limit_interpolate_targets(mesh: QuadMesh, *, tangents: TangentRule = "arc") 
         solution.residual,
         solution.condition,
     )
-    if len(solution.relaxed):
-        _logger.warning(
-            "limit-interpolate: exact interpolation turns the surface inside out or pinches it; "
-            "%d of %d vertices relaxed (the surface passes them at up to %.3g of the diagonal), "
-            "the rest interpolated",
-            len(solution.relaxed),
-            len(solution.points) if mesh.cage is None else len(mesh.cage.points),
-            solution.relaxed_distance,
-        )
     targets = limit_targets(solution.mesh)
     return targets.with_changes(positions=solution.points, rule="limit-interpolate")
 
