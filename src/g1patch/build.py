@@ -329,27 +329,36 @@ def _risk_kernel(
 class _Attempts(Generic[A]):
     """The fold guard's attempts, each measured as the check measures it
     (:func:`~g1patch.continuity.folds_and_bend`) on the faces ``scored`` (those a retreat can
-    change): the best has the fewest folded faces, then the least 99th-percentile bend."""
+    change): the best has the fewest degenerate normals, then the fewest folded faces, then the
+    least 99th-percentile bend: never more of either than the rule's own."""
 
     def __init__(
-        self, scored: np.ndarray, patches_per_face: int, patches_of: Callable[[A], Patches]
+        self,
+        scored: np.ndarray,
+        patches_per_face: int,
+        patches_of: Callable[[A], Patches],
+        diagonal: float,
     ) -> None:
         self.scored = scored
+        self.diagonal = diagonal
         self.rows = (patches_per_face * scored[:, None] + np.arange(patches_per_face)).ravel()
         self.patches_per_face = patches_per_face
         self.patches_of = patches_of
-        self.best: tuple[int, float, A, Targets, np.ndarray] | None = None
+        self.best: tuple[tuple[int, int], float, A, Targets, np.ndarray] | None = None
         #: the rule's own attempt (the first), and the best of the others
-        self.own: tuple[int, float, A, Targets, np.ndarray] | None = None
-        self.retreats: tuple[int, float, A, Targets, np.ndarray] | None = None
+        self.own: tuple[tuple[int, int], float, A, Targets, np.ndarray] | None = None
+        self.retreats: tuple[tuple[int, int], float, A, Targets, np.ndarray] | None = None
 
-    def measure(self, attempt: A) -> tuple[int, float, np.ndarray]:
-        """Folded faces (count, the faces) and the bend of ``attempt`` on the scored faces."""
-        folded, bend = folds_and_bend(self.patches_of(attempt).take(self.rows))
+    def measure(self, attempt: A) -> tuple[tuple[int, int], float, np.ndarray]:
+        """The defects (degenerate normals, folded faces), the bend and the folded faces of
+        ``attempt`` on the scored faces."""
+        folded, degenerate, bend = folds_and_bend(
+            self.patches_of(attempt).take(self.rows), diagonal=self.diagonal
+        )
         faces = np.unique(self.scored[np.flatnonzero(folded) // self.patches_per_face])
-        return faces.size, bend, faces
+        return (degenerate, faces.size), bend, faces
 
-    def add(self, attempt: A, targets: Targets) -> tuple[int, float, np.ndarray]:
+    def add(self, attempt: A, targets: Targets) -> tuple[tuple[int, int], float, np.ndarray]:
         """Measure ``attempt`` (assembled from ``targets``) and keep it if it is the best."""
         count, bend, folded = self.measure(attempt)
         measured = (count, bend, attempt, targets, folded)
@@ -398,8 +407,12 @@ def _guarded(
         compared = np.unique(risky[np.flatnonzero(folded) // patches_per_face])
         if not compared.size:
             return assembled, targets
+    corner_points = patches_of(assembled).corners().reshape(-1, 3)
     attempts = _Attempts(
-        np.flatnonzero(grow(topology, compared, GUARD_STEPS + 1)), patches_per_face, patches_of
+        np.flatnonzero(grow(topology, compared, GUARD_STEPS + 1)),
+        patches_per_face,
+        patches_of,
+        float(np.linalg.norm(corner_points.max(axis=0) - corner_points.min(axis=0))) or 1.0,
     )
     count, bend, folded = attempts.add(assembled, targets)
     slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
@@ -415,7 +428,7 @@ def _guarded(
         if faired is None:  # the faired fans are not valid fans here (a ring winding twice)
             return _stars(attempts, assemble, slot_vertex)
         yardstick = BEND_RATIO * _face_turns(patches_of(faired), compared, patches_per_face)
-        if not count and bend <= BEND_RATIO * attempts.measure(faired)[1]:
+        if count == (0, 0) and bend <= BEND_RATIO * attempts.measure(faired)[1]:
             return assembled, targets  # the rule's own is fair enough
         del faired, faired_targets
         # the mesh's own vertices keep their places where a face only bends too far: the faired

@@ -29,13 +29,21 @@ def folded_patches(
 
 
 def folds_and_bend(
-    patches: Patches, samples: int = FOLD_SAMPLES, *, compiled: bool | None = None
-) -> tuple[NDArray[np.bool_], float]:
-    """Which patches fold, (N,) bool, and the 99th percentile of the normal turn between
-    neighbouring samples (degrees), on the ``samples²`` grid of :func:`check`: for a builder that
-    compares attempts as the check would measure them."""
-    grid, diagonal = _grid_measures(patches, samples, DEGENERATE_RTOL, compiled=compiled)
-    return grid.folded, grid.fairness(diagonal)["turn_p99_deg"]
+    patches: Patches,
+    samples: int = FOLD_SAMPLES,
+    *,
+    diagonal: float | None = None,
+    compiled: bool | None = None,
+) -> tuple[NDArray[np.bool_], int, float]:
+    """Which patches fold, (N,) bool, how many grid samples have a degenerate normal, and the 99th
+    percentile of the normal turn between neighbouring samples (degrees), on the ``samples²`` grid
+    of :func:`check`: for a builder that compares attempts as the check would measure them.
+    ``diagonal``: the whole network's bounding-box diagonal where ``patches`` are some of it (the
+    degenerate normals' level is relative to it)."""
+    grid, diagonal = _grid_measures(
+        patches, samples, DEGENERATE_RTOL, compiled=compiled, diagonal=diagonal
+    )
+    return grid.folded, grid.degenerate, grid.fairness(diagonal)["turn_p99_deg"]
 
 
 def _edge_fold_locations(

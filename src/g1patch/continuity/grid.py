@@ -74,12 +74,15 @@ def _grid_measures(
     fairness: bool = True,
     *,
     compiled: bool | None = None,
+    diagonal: float | None = None,
 ) -> tuple[_GridMeasures, float]:
     """The grid measures of every patch (``fairness`` False: folds and degenerate normals only),
-    in local coordinates, and the bounding-box diagonal."""
+    in local coordinates, and the bounding-box diagonal (``diagonal``: the one to measure by, e.g.
+    the whole network's when ``patches`` are some of it)."""
     _check_count("samples", samples, 2)
     local = _local(patches)
-    diagonal = _diagonal(_corner_points(local)) or 1.0
+    if diagonal is None:
+        diagonal = _diagonal(_corner_points(local)) or 1.0
     grid = _GridMeasures(len(local), samples, degenerate_rtol * diagonal**2, fairness)
     form = _kernel_form(local, compiled)
     if form is not None:
