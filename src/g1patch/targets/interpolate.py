@@ -148,6 +148,21 @@ def interpolate_targets(mesh: QuadMesh, *, tangents: TangentRule = "arc") -> Tar
     )
 
 
+def _chosen_uncreased(
+    targets: Targets, vertices: IntArray
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """``vertices`` as a (V,) mask without the creased ones (more than one sector: they keep
+    their sectors' planes), and the creased ones."""
+    topology = targets.topology
+    chosen = np.zeros(topology.n_vertices, dtype=bool)
+    chosen[vertices] = True
+    sectored = np.zeros(topology.n_vertices, dtype=bool)
+    sectored[
+        topology.faces[(targets.corner_normals != targets.normals[topology.faces]).any(axis=2)]
+    ] = True
+    return chosen & ~sectored, sectored
+
+
 def retreat(
     targets: Targets,
     fair: Targets,
@@ -161,13 +176,7 @@ def retreat(
     rule's choice, not a fallback. ``anchored`` (V,) bool: vertices that keep their positions (take
     the rest). Creased vertices (more than one sector) keep their targets."""
     topology = targets.topology
-    chosen = np.zeros(topology.n_vertices, dtype=bool)
-    chosen[vertices] = True
-    sectored = np.zeros(topology.n_vertices, dtype=bool)
-    sectored[
-        topology.faces[(targets.corner_normals != targets.normals[topology.faces]).any(axis=2)]
-    ] = True
-    chosen &= ~sectored  # a creased vertex keeps its sectors' planes
+    chosen, sectored = _chosen_uncreased(targets, vertices)
     moved = chosen if anchored is None else chosen & ~anchored
     positions = np.where(moved[:, None], fair.positions, targets.positions)
     normals = np.where(chosen[:, None], fair.normals, targets.normals)
@@ -196,13 +205,7 @@ def retreat_to_star(targets: Targets, vertices: IntArray, weight: float) -> Targ
     thin triangles, whose faired fan folds too); those vertices join ``fallback``. Creased
     vertices (more than one sector) keep their targets."""
     topology = targets.topology
-    chosen = np.zeros(topology.n_vertices, dtype=bool)
-    chosen[vertices] = True
-    sectored = np.zeros(topology.n_vertices, dtype=bool)
-    sectored[
-        topology.faces[(targets.corner_normals != targets.normals[topology.faces]).any(axis=2)]
-    ] = True
-    chosen &= ~sectored  # a creased vertex keeps its sectors' planes
+    chosen, sectored = _chosen_uncreased(targets, vertices)
     fan = fan_normals(QuadMesh(targets.positions, topology))
     normals = targets.normals.copy()
     normals[chosen] = unit_rows((1.0 - weight) * normals[chosen] + weight * fan[chosen])
