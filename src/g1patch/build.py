@@ -41,7 +41,7 @@ from .fidelity import limit_distance
 from .frame import Frame
 from .kernels import use_kernels
 from .memory import memory_budget
-from .mesh import INFINITE_SHARPNESS, QuadMesh
+from .mesh import INFINITE_SHARPNESS, QuadMesh, QuadTopology
 from .mesh.neighbourhood import grow
 from .network import Patches, PatchNetwork, patch_uvs
 from .subdivision import catmull_clark_cage
@@ -49,7 +49,7 @@ from .subdivision import refine as subdivide
 from .targets import SHAPES, Targets, shape_targets
 from .targets.interpolate import retreat, retreat_to_star
 from .targets.limit_interpolate import interpolating_cage, limit_interpolate_near
-from .targets.local import NORMALS, TANGENTS, NormalRule, TangentRule
+from .targets.local import NORMALS, TANGENTS, NormalRule, TangentRule, slot_vertices
 
 __all__ = [
     "METHODS",
@@ -415,18 +415,16 @@ def _guarded(
         float(np.linalg.norm(corner_points.max(axis=0) - corner_points.min(axis=0))) or 1.0,
     )
     count, bend, folded = attempts.add(assembled, targets)
-    slot_vertex = np.repeat(np.arange(topology.n_vertices), np.diff(topology.neighbor_offsets))
     try:
         fair, covered = limit_interpolate_near(mesh, targets, compared, FAIR_RINGS)
     except (ConstructionError, InputError) as error:  # no faired surface (semi-sharp creases)
         logger.info("fold guard: no faired targets near the risky faces (%s)", error)
     else:
-        corners = np.zeros(topology.n_vertices, dtype=bool)
-        corners[topology.faces[compared]] = True
+        corners = _corners(topology, compared)
         faired_targets = retreat(targets, fair, np.flatnonzero(corners & covered))
         faired = _assembled(assemble, faired_targets)
         if faired is None:  # the faired fans are not valid fans here (a ring winding twice)
-            return _stars(attempts, assemble, slot_vertex)
+            return _stars(attempts, assemble)
         yardstick = BEND_RATIO * _face_turns(patches_of(faired), compared, patches_per_face)
         if count == (0, 0) and bend <= BEND_RATIO * attempts.measure(faired)[1]:
             return assembled, targets  # the rule's own is fair enough
@@ -437,20 +435,16 @@ def _guarded(
         given[: len(mesh.cage.points) if mesh.cage is not None else topology.n_vertices] = True
         retreated = np.zeros(topology.n_vertices, dtype=bool)
         moving = np.zeros(topology.n_vertices, dtype=bool)
-        relaxed = given & (
-            np.linalg.norm(fair.positions - targets.positions, axis=1) > RELAXED_DISTANCE
-        )
         for step in range(GUARD_STEPS):
+            # the vertices the faired surface does not pass through
+            relaxed = given & (
+                np.linalg.norm(fair.positions - targets.positions, axis=1) > RELAXED_DISTANCE
+            )
             worse = compared[
                 _face_turns(patches_of(assembled), compared, patches_per_face) > yardstick
             ]
-            corners = np.zeros(topology.n_vertices, dtype=bool)
-            corners[topology.faces[worse]] = True
-            at_folds = np.zeros(topology.n_vertices, dtype=bool)
-            at_folds[topology.faces[folded]] = True
-            if step:
-                corners[topology.neighbors[corners[slot_vertex]]] = True
-                at_folds[topology.neighbors[at_folds[slot_vertex]]] = True
+            corners = _corners(topology, worse, min(step, 1))
+            at_folds = _corners(topology, folded, min(step, 1))
             if not ((corners | at_folds) & ~retreated).any() and not (at_folds & ~moving).any():
                 break  # the same retreat again: the same patches
             retreated |= (corners & ~relaxed) | at_folds
@@ -464,9 +458,6 @@ def _guarded(
                 except (ConstructionError, InputError) as error:
                     logger.info("fold guard: no faired targets near the folds (%s)", error)
                     break
-            relaxed = given & (
-                np.linalg.norm(fair.positions - targets.positions, axis=1) > RELAXED_DISTANCE
-            )
             guarded = retreat(
                 targets, fair, np.flatnonzero(retreated & covered), anchored=given & ~moving
             )
@@ -475,7 +466,17 @@ def _guarded(
                 break
             assembled = attempt
             _, _, folded = attempts.add(assembled, guarded)
-    return _stars(attempts, assemble, slot_vertex)
+    return _stars(attempts, assemble)
+
+
+def _corners(topology: QuadTopology, faces: np.ndarray, rings: int = 0) -> np.ndarray:
+    """The corners of ``faces`` with their ``rings`` vertex rings, a (V,) mask."""
+    chosen = np.zeros(topology.n_vertices, dtype=bool)
+    chosen[topology.faces[faces]] = True
+    slot_vertex = slot_vertices(topology)
+    for _ in range(rings):
+        chosen[topology.neighbors[chosen[slot_vertex]]] = True
+    return chosen
 
 
 def _assembled(assemble: Callable[[Targets], A], targets: Targets) -> A | None:
@@ -487,9 +488,7 @@ def _assembled(assemble: Callable[[Targets], A], targets: Targets) -> A | None:
         return None
 
 
-def _stars(
-    attempts: _Attempts[A], assemble: Callable[[Targets], A], slot_vertex: np.ndarray
-) -> tuple[A, Targets]:
+def _stars(attempts: _Attempts[A], assemble: Callable[[Targets], A]) -> tuple[A, Targets]:
     """The fold guard's last steps (:func:`_guarded`): from the rule's own attempt and from the
     best retreat, the faces that still fold (where the faired surface folds too) move towards
     regular stars, by :data:`STAR_WEIGHTS`, with their 1-ring from the second step on; the best
@@ -501,11 +500,7 @@ def _stars(
         for step, weight in enumerate(STAR_WEIGHTS):
             if not folded.size:
                 break
-            corners = np.zeros(topology.n_vertices, dtype=bool)
-            corners[topology.faces[folded]] = True
-            if step:
-                corners[topology.neighbors[corners[slot_vertex]]] = True
-            retreated |= corners
+            retreated |= _corners(topology, folded, min(step, 1))
             guarded = retreat_to_star(base, np.flatnonzero(retreated), weight)
             attempt = _assembled(assemble, guarded)
             if attempt is None:
