@@ -14,6 +14,7 @@ file. :meth:`QuadMesh.from_arrays` is the way in from any polygons. The modules,
 * :mod:`~g1patch.mesh.vertex_sectors`: the sectors of every vertex between seams;
 * :mod:`~g1patch.mesh.features`: :class:`Features`, the sharpness and holes the tags ask for;
 * :mod:`~g1patch.mesh.polygons`: the split of non-quad faces (:func:`refine_polygons`);
+* :mod:`~g1patch.mesh.conforming`: local refinement that stays a quad mesh (no T-junctions);
 * :mod:`~g1patch.mesh.repair`: repairs of meshes the checks would refuse;
 * :mod:`~g1patch.mesh.quadmesh`: :class:`QuadMesh`, :func:`strict_meshes`, :func:`subdivide`.
 
