@@ -29,6 +29,9 @@ polyline, Q the nearest points of the scan's boundary to the curve's grid points
 ``α = N V_b / (V |S|)``, ``β = N V_b / (V |B|)`` (V_b boundary cage vertices): a boundary vertex
 is pulled by as many points' worth as an interior one. Without these rows nothing holds the
 boundary quads' outer vertices but fairness and damping, and the rim hangs off the scan's.
+Only pairs nearer than :data:`BOUNDARY_GATE` layout edges are tied: a scan boundary the layout
+has no boundary for (a small hole the remesher closed, a handle's open end inside a teapot's
+body) is left alone, not pulled onto the nearest rim of the layout (spikes of half the model).
 """
 
 from __future__ import annotations
@@ -70,6 +73,10 @@ FAIRNESS = 1e-3
 DAMPING = 1e-2
 #: surface points a scan point's foot may start from (the nearest that faces its way)
 _NEIGHBOURS = 8
+#: the farthest a scan boundary point and the layout's boundary curve are tied, in median layout
+#: edges (the remesher's boundary vertices start snapped onto the scan's rim, so a true pair is
+#: far nearer than this)
+BOUNDARY_GATE = 1.0
 #: scan points whose feet and normal equations are made at a time (bounds the memory: ~2 kB a
 #: point in flight)
 BLOCK_POINTS = 65_536
@@ -160,6 +167,8 @@ class _Boundary:
         self.scan_starts, self.scan_ends = points[edges[:, 0]], points[edges[:, 1]]
         self.active = bool(len(edges) and len(polylines))
         self.cage_boundary = np.unique(sides[open_sides])
+        edge_lengths = np.linalg.norm(np.diff(layout.vertices[sides[faces]], axis=-2), axis=-1)
+        self.gate = BOUNDARY_GATE * float(np.median(edge_lengths)) if faces.any() else 0.0
 
     def snapped(self, cage: FloatArray) -> FloatArray:
         """``cage`` with its boundary vertices moved to the nearest points of the scan's
@@ -178,9 +187,11 @@ class _Boundary:
         self, limit: sp.csr_matrix, surface: FloatArray, per_vertex: float
     ) -> tuple[sp.csr_matrix, FloatArray]:
         """The weighted rows ``(√w M, √w target)`` of both ways on the current ``surface``."""
-        segment, t = closest_on_segments(
-            self.scan_vertices, surface[self.segments[:, 0]], surface[self.segments[:, 1]]
-        )
+        starts, ends = surface[self.segments[:, 0]], surface[self.segments[:, 1]]
+        segment, t = closest_on_segments(self.scan_vertices, starts, ends)
+        foot = starts[segment] + t[:, None] * (ends[segment] - starts[segment])
+        tied = np.linalg.norm(foot - self.scan_vertices, axis=1) <= self.gate
+        segment, t, scan_vertices = segment[tied], t[tied], self.scan_vertices[tied]
         count = len(segment)
         feet = sp.csr_matrix(
             (
@@ -193,10 +204,12 @@ class _Boundary:
         targets = self.scan_starts[nearest] + s[:, None] * (
             self.scan_ends[nearest] - self.scan_starts[nearest]
         )
-        alpha = np.sqrt(per_vertex * self.cage_boundary.size / count)
-        beta = np.sqrt(per_vertex * self.cage_boundary.size / len(self.samples))
-        model = sp.vstack([alpha * (feet @ limit), beta * limit[self.samples]]).tocsr()
-        return model, np.concatenate([alpha * self.scan_vertices, beta * targets])
+        near = np.linalg.norm(targets - surface[self.samples], axis=1) <= self.gate
+        samples, targets = self.samples[near], targets[near]
+        alpha = np.sqrt(per_vertex * self.cage_boundary.size / max(count, 1))
+        beta = np.sqrt(per_vertex * self.cage_boundary.size / max(len(samples), 1))
+        model = sp.vstack([alpha * (feet @ limit), beta * limit[samples]]).tocsr()
+        return model, np.concatenate([alpha * scan_vertices, beta * targets])
 
 
 class _Triangles:
