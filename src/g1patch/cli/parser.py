@@ -207,8 +207,10 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         default=1e-3,
         metavar="REL",
-        help="two-way distance to the scan, a fraction of its bounding-box diagonal; the layout "
-        "is made finer until it holds (default: 1e-3; exit 1 when not met)",
+        help="two-way distance to the scan, a fraction of its bounding-box diagonal (99.9%% "
+        "of the scan's points within it of the surface, all of the surface within it of the "
+        "scan); the layout is refined where it is off until it holds (default: 1e-3; exit 1 "
+        "when not met)",
     )
     fit.add_argument(
         "--faces", type=int, metavar="N", help="quads of the layout (default: from the tolerance)"

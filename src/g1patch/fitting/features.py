@@ -50,8 +50,10 @@ __all__ = [
     "CHAIN_EDGES",
     "CORNER_SNAP",
     "EDGE_SAMPLES",
+    "GAP_REACH",
     "LINE_SNAP",
     "REACH",
+    "crease_gaps",
     "layout_corners",
     "layout_creases",
     "sharp_corners",
@@ -84,6 +86,9 @@ LINE_SNAP = 0.3
 #: this many layout edges long (the median edge; a CAD part's lines are one network of tens, the
 #: steepest facets of Spot at 2,000 quads a chain of 3.3 and two single edges)
 CHAIN_EDGES = 6.0
+#: a feature line farther than this from every crease edge (of the median layout edge) is in a
+#: gap of the crease chain (:func:`crease_gaps`)
+GAP_REACH = 0.25
 
 
 def sharp_segments(points: FloatArray, triangles: IntArray, degrees: float) -> FloatArray:
@@ -262,6 +267,29 @@ def layout_creases(
         if corner.size:
             tags += (Tag("corner", tuple(corner.tolist()), (INFINITE_SHARPNESS,)),)
     return QuadMesh.from_arrays(layout.vertices, layout.faces, tags=tags, source=layout.source)
+
+
+def crease_gaps(layout: QuadMesh, segments: FloatArray) -> float:
+    """How much of the scan's feature lines (``segments`` (S, 2, 3); the chains that count, as
+    for :func:`snap_to_features`) no crease of ``layout`` follows: the length of the sharp
+    segments whose midpoints lie farther than :data:`GAP_REACH` of the median layout edge from
+    every crease edge, of the lines' whole length (0: every line is a crease chain; the fit
+    rounds a line across a gap, a kink of 10–20° in the surface there)."""
+    if not len(segments):
+        return 0.0
+    edges = layout.topology.edges
+    length = np.linalg.norm(layout.vertices[edges[:, 0]] - layout.vertices[edges[:, 1]], axis=1)
+    scale = float(np.median(length))
+    segments, _ = _lines(segments, np.zeros((0, 3)), CHAIN_EDGES * scale)
+    if not len(segments):
+        return 0.0
+    weight = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1)
+    creases = layout.vertices[edges[layout.features.edge_sharpness > 0]]
+    if not len(creases):
+        return 1.0
+    middle = segments.mean(axis=1)
+    gap = np.linalg.norm(_closest_on_segments(middle, creases) - middle, axis=1)
+    return float(weight[gap > GAP_REACH * scale].sum() / weight.sum())
 
 
 def boundary_corners(points: FloatArray, triangles: IntArray, degrees: float) -> FloatArray:

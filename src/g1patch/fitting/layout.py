@@ -24,12 +24,15 @@ from numpy.typing import NDArray
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import ConstructionError, InputError, MissingDependencyError
+from ..mesh import QuadMesh, Tag
+from ..mesh.conforming import local_split
 from ..mesh.validate import DEGENERATE_AREA_TOLERANCE
 
 __all__ = [
     "LAYOUT_TIMEOUT",
     "clean_layout",
     "quad_layout",
+    "refined_layout",
     "triangle_parts",
 ]
 
@@ -57,6 +60,7 @@ for label, count in enumerate(given["vertex_counts"]):
         local.reshape(-1, 3).astype(np.uint32),
         int(count),
         deterministic=True,
+        align_to_boundaries=True,
     )
     vertices.append(np.asarray(made, dtype=np.float64).reshape(-1, 3))
     quads.append(np.asarray(faces, dtype=np.int64).reshape(-1, 4) + offset)
@@ -126,12 +130,17 @@ def quad_layout(
 
 
 def triangle_parts(triangles: NDArray[np.int64], count: int) -> NDArray[np.int64]:
-    """The connected part (0, 1, …) of each triangle (T, 3) over ``count`` vertices: triangles
-    sharing a vertex are in one part."""
-    a, b = triangles[:, [0, 1]].reshape(-1), triangles[:, [1, 2]].reshape(-1)
-    graph = sp.coo_matrix((np.ones(a.size), (a, b)), shape=(count, count))
-    vertex = connected_components(graph, directed=False)[1]
-    return np.unique(vertex[triangles[:, 0]], return_inverse=True)[1].astype(np.int64)
+    """The connected part (0, 1, …) of each face (T, k) over ``count`` vertices: faces sharing
+    an edge are in one part. Faces touching at a vertex only are not: a teapot's handle welded
+    to its body at a few coincident points is two surfaces, and one layout over both folds."""
+    faces, corners = len(triangles), triangles.shape[1]
+    sides = np.stack([triangles, np.roll(triangles, -1, axis=1)], axis=-1).reshape(-1, 2)
+    key = sides.min(axis=1) * np.int64(count) + sides.max(axis=1)
+    order = np.argsort(key, kind="stable")
+    same = np.flatnonzero(key[order][1:] == key[order][:-1])
+    a, b = order[same] // corners, order[same + 1] // corners
+    graph = sp.coo_matrix((np.ones(a.size), (a, b)), shape=(faces, faces))
+    return connected_components(graph, directed=False)[1].astype(np.int64)
 
 
 def clean_layout(
@@ -155,3 +164,29 @@ def clean_layout(
     _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
     crowded = (counts[inverse] > 2).reshape(key.shape).any(axis=1)
     return merged, quads[~crowded]
+
+
+def refined_layout(layout: QuadMesh, marked: NDArray[np.bool_]) -> QuadMesh:
+    """``layout`` with the faces ``marked`` split into four and the faces round them closed
+    into quads (:func:`g1patch.mesh.conforming.local_split`), new vertices at edge midpoints and
+    face centres. Its creases follow the split (both halves of a split crease edge keep its
+    sharpness) and its vertex tags (corners) stay on their vertices."""
+    split = local_split(layout.topology, marked)
+    edges = layout.topology.edges
+    sharpness = layout.features.edge_sharpness
+    midpoint = layout.n_vertices + np.cumsum(split.split) - 1  # of the split edges
+    tags = [tag for tag in layout.tags if tag.name != "crease"]
+    for value in np.unique(sharpness[sharpness > 0]):
+        chosen = np.flatnonzero(sharpness == value)
+        whole, halved = chosen[~split.split[chosen]], chosen[split.split[chosen]]
+        pairs = np.concatenate(
+            [
+                edges[whole],
+                np.stack([edges[halved, 0], midpoint[halved]], axis=1),
+                np.stack([midpoint[halved], edges[halved, 1]], axis=1),
+            ]
+        )
+        tags.append(Tag("crease", tuple(pairs.ravel().tolist()), (float(value),)))
+    return QuadMesh.from_arrays(
+        split.weights @ layout.vertices, split.faces, tags=tags, source=layout.source
+    )
