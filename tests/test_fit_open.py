@@ -304,7 +304,7 @@ def test_a_bump_is_refined_where_it_is(tmp_path: Path) -> None:
     """A unit sphere scan (60,000 points, its convex hull) with a narrow bump (height 0.4, width
     0.1 rad) at a pole, `--tolerance 2e-3`: the first layout (1,027 quads) is off on one face at
     the bump, which is refined with two rings round it (1,116 quads) and then fits within the
-    tolerance without folds; a finer layout everywhere took 2,890 quads in three layouts."""
+    tolerance without folds; a finer layout everywhere took 1,406 quads."""
     from scipy.spatial import ConvexHull
 
     index = np.arange(60_000) + 0.5

@@ -101,7 +101,7 @@ LOCAL_SHARE = 0.25
 #: rings of faces about the off ones refined with them (a bump on a sphere scan, one face off:
 #: with one ring the fit folded 3 patches on the bump's flank, where the transition quads met
 #: it; with two, 1,027 → 1,116 quads within the tolerance, no fold, where a finer layout took
-#: 2,890 quads in three layouts)
+#: 1,406 quads in two layouts; after the one-ring attempt, 2,890 in three)
 REFINE_RINGS = 2
 #: scan points a face needs to be refined (about 4 per quad it becomes): finer than the scan's
 #: own sampling, the fit has too few points per cage vertex and the cage tangles (Spot's
