@@ -5,6 +5,7 @@ welded (and says so), a layout with degenerate quads is cleaned, an unusable lay
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -231,7 +232,8 @@ def test_a_scan_boundary_the_layout_lacks_is_left_alone() -> None:
 
 def test_the_tolerance_bounds_the_scan_s_bulk_and_all_of_the_surface() -> None:
     """Met means scan → surface at the 99.9th percentile and surface → scan at its maximum within
-    the tolerance: a stray scan point far off does not fail a fit, a surface spike does."""
+    the tolerance, no fold and the feature lines creases: a stray scan point far off does not
+    fail a fit; a surface spike, a fold or a rounded sharp edge does."""
     from g1patch.fitting import FitReport
 
     def report(to_surface: tuple[float, ...], to_scan: tuple[float, ...]) -> FitReport:
@@ -242,6 +244,12 @@ def test_the_tolerance_bounds_the_scan_s_bulk_and_all_of_the_surface() -> None:
     spike = report((9e-4, 8e-4, 1e-4), (5e-3, 5e-4, 1e-4))
     assert not spike.met and spike.worst == 5e-3
     assert "p99.9" in spike.summary() and "p99.9" in spike.to_dict()["scan_to_surface"]
+    folded = dataclasses.replace(stray, folds=3)  # within the distance, but folded: not met
+    assert (
+        not folded.met and folded.to_dict()["folds"] == 3 and "folded patches" in folded.summary()
+    )
+    gapped = dataclasses.replace(stray, feature_gaps=0.02)  # a sharp edge rounded in places
+    assert not gapped.met and "in gaps" in gapped.summary()
 
 
 NO_FEATURES = np.zeros((0, 2, 3))

@@ -30,7 +30,7 @@ from scipy.spatial import cKDTree
 
 from ..build import build_network, check_tolerance
 from ..compare import mesh_distance
-from ..continuity import folded_patches
+from ..continuity import FOLD_SAMPLES, folded_patches
 from ..errors import ConstructionError, InputError, MeshError
 from ..mesh import QuadMesh
 from ..network import PatchNetwork
@@ -185,7 +185,8 @@ class FitReport:
     RMS per solve of the last round; ``seconds``: wall time; ``creases``: cage edges kept sharp
     (the scan's features, ``sharp_angle``); ``repairs``: what was repaired in the scan;
     ``feature_gaps``: the share of the scan's feature lines no crease follows
-    (:func:`~g1patch.fitting.features.crease_gaps`), where the surface rounds a sharp edge."""
+    (:func:`~g1patch.fitting.features.crease_gaps`), where the surface rounds a sharp edge;
+    ``folds``: folded patches (as :func:`~g1patch.continuity.check` counts them)."""
 
     diagonal: float
     tolerance: float
@@ -199,6 +200,7 @@ class FitReport:
     creases: int = 0
     repairs: tuple[str, ...] = ()
     feature_gaps: float = 0.0
+    folds: int = 0
 
     @property
     def worst(self) -> float:
@@ -208,8 +210,11 @@ class FitReport:
 
     @property
     def met(self) -> bool:
-        """Within the tolerance, the feature lines creases (but :data:`FEATURE_GAPS` of them)."""
-        return self.worst <= self.tolerance and self.feature_gaps <= FEATURE_GAPS
+        """Within the tolerance, no fold, the feature lines creases (but :data:`FEATURE_GAPS`
+        of them)."""
+        return (
+            self.worst <= self.tolerance and self.folds == 0 and self.feature_gaps <= FEATURE_GAPS
+        )
 
     def summary(self) -> str:
         """The report as a table (distances also of the diagonal)."""
@@ -230,6 +235,7 @@ class FitReport:
                     if self.feature_gaps > FEATURE_GAPS
                     else ""
                 ),
+                f"{'folded patches':<32}{self.folds}",
                 f"{'distance, of diagonal':<32}max / p99.9 / rms  (model units)",
                 row("scan → surface", self.to_surface),
                 row("surface → scan", self.to_scan),
@@ -255,6 +261,7 @@ class FitReport:
             "seconds": self.seconds,
             "creases": self.creases,
             "feature_gaps": self.feature_gaps,
+            "folds": self.folds,
             "repairs": list(self.repairs),
         }
 
@@ -374,7 +381,8 @@ def fit_network(
             worst = _bounded(to_surface, to_scan) / diagonal
             tried.append((cage_layout.n_faces, worst))
             gaps = crease_gaps(cage_layout, features)
-            rank = (int(folded_patches(network.patches).sum()), gaps > FEATURE_GAPS, worst)
+            folds = int(folded_patches(network.patches, FOLD_SAMPLES).sum())  # as check counts
+            rank = (folds, gaps > FEATURE_GAPS, worst)
             if best is None or rank < best[0]:  # a finer layout is not always nearer
                 best = (rank, gaps, cage_layout, fitted, network, to_surface, to_scan)
             if not adaptive or rank == (0, False, worst) and worst <= tolerance:
@@ -392,7 +400,7 @@ def fit_network(
             count = min(next_faces(tried, tolerance, count), budget)
     if best is None:
         raise ConstructionError(f"no usable quad layout in {rounds} tries (last: {failure})")
-    (_, _, worst), gaps, cage_layout, fitted, network, to_surface, to_scan = best
+    (folds, _, worst), gaps, cage_layout, fitted, network, to_surface, to_scan = best
     network.provenance.update({"fit_tolerance": f"{tolerance:g}", "fit_distance": f"{worst:.3e}"})
     report = FitReport(
         diagonal,
@@ -407,6 +415,7 @@ def fit_network(
         int(cage_layout.features.edge_sharpness.astype(bool).sum()),
         scan.repairs,
         gaps,
+        folds,
     )
     return network, report
 
