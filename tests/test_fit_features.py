@@ -4,6 +4,8 @@ made by hand."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from g1patch.fitting.features import layout_creases, sharp_segments, snap_to_features
@@ -107,3 +109,29 @@ def test_the_gaps_left_in_the_feature_lines_are_measured() -> None:
     assert crease_gaps(gapped, segments) == 1.5 / 8
     assert crease_gaps(roof(), segments) == 1.0
     assert crease_gaps(roof(), np.zeros((0, 2, 3))) == 0.0
+
+
+def test_a_layout_file_keeps_its_own_creases(tmp_path: Path) -> None:
+    """``--layout`` with OpenSubdiv crease tags: the file's creases are the cage's even with the
+    scan's feature detection off, and merged vertices carry them (the ridge row written twice,
+    once per side, as a remesher's or a modeller's export may)."""
+    import g1patch
+    from g1patch.io.meshfile import write_triangles
+
+    points, triangles = ridge_scan()
+    write_triangles(tmp_path / "roof.obj", points, triangles)
+    layout = roof()
+    ridge = [4 * 9 + j for j in range(9)]
+    vertices = np.concatenate([layout.vertices, layout.vertices[ridge]])
+    faces = layout.faces.copy()
+    right = np.isin(faces, ridge) & (layout.vertices[faces][..., 0] > -1e-12).all(axis=-1)[:, None]
+    faces[right] = len(layout.vertices) + np.searchsorted(ridge, faces[right])  # a second copy
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
+    lines += ["f " + " ".join(str(i + 1) for i in face) for face in faces.tolist()]
+    pairs = [(ridge[j], ridge[j + 1]) for j in range(8)]
+    lines.append(f"t crease {2 * len(pairs)}/1/0 " + " ".join(f"{a} {b}" for a, b in pairs) + " 10")
+    (tmp_path / "layout.obj").write_text("\n".join(lines) + "\n")
+    result = g1patch.fit(tmp_path / "roof.obj", layout=tmp_path / "layout.obj", sharp_angle=None)
+    assert result.report.creases == 8
+    plain = g1patch.fit(tmp_path / "roof.obj", layout=layout, sharp_angle=None)
+    assert plain.report.creases == 0

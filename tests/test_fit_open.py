@@ -112,7 +112,7 @@ def test_a_layout_with_degenerate_quads_is_cleaned(tmp_path: Path) -> None:
     quads = np.stack([a, a + 9, a + 10, a + 1], 1)
     vertices = np.concatenate([vertices, vertices[[40]]])  # a copy of vertex 40: index 81
     quads = np.concatenate([quads, [[40, 41, 40, 49], [40, 81, 49, 41]]])
-    merged, kept = clean_layout(vertices, quads)
+    merged, kept, _ = clean_layout(vertices, quads)
     assert len(merged) == 81 and len(kept) == 64
     layout = tmp_path / "layout.obj"
     write_quads(layout, vertices, quads)

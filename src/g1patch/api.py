@@ -873,20 +873,21 @@ def fit(
 def _fit_layout(layout: Any, max_input_size: int | None) -> QuadMesh:
     """A given layout as the cage's quad mesh, all quads: a file's quads cleaned as the
     remesher's are (:func:`g1patch.fitting.layout.clean_layout`: coincident vertices merged,
-    degenerate and over-shared quads dropped), anything else as :func:`as_mesh` takes it."""
+    degenerate and over-shared quads dropped), its own tags (creases, corners) kept; anything
+    else as :func:`as_mesh` takes it."""
     from .fitting.layout import clean_layout
-    from .io.meshfile import read_polygons
+    from .io.meshfile import read_tagged_polygons
     from .mesh import QuadMesh
 
     if isinstance(layout, (str, os.PathLike)):
         path = _check_path("layout", layout)
-        points, corners, sizes = read_polygons(path, max_input_size=max_input_size)
+        points, corners, sizes, tags = read_tagged_polygons(path, max_input_size=max_input_size)
         if (sizes != 4).any():
             raise InputError(f"{path}: a layout must be all quads")
-        vertices, faces = clean_layout(points, corners.reshape(-1, 4))
+        vertices, faces, tags = clean_layout(points, corners.reshape(-1, 4), tags)
         if not len(faces):
             raise InputError(f"{path}: the layout has no quad of nonzero area")
-        return QuadMesh.from_arrays(vertices, faces, source=str(path))
+        return QuadMesh.from_arrays(vertices, faces, source=str(path), tags=tags)
     quads = as_mesh(layout, max_input_size=max_input_size)
     if quads.cage is not None:
         raise InputError(f"{quads.source or 'layout'}: a layout must be all quads")

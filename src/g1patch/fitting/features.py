@@ -227,7 +227,7 @@ def layout_creases(
     layout: QuadMesh, segments: FloatArray, corners: FloatArray | None = None
 ) -> QuadMesh:
     """``layout`` with a ``crease`` tag (sharpness ∞) on every edge that runs along ``segments``
-    (module docstring), and the gaps of those chains bridged: where a chain ends at a vertex
+    (module docstring; its own crease tags, a ``--layout`` file's, kept), and the gaps of those chains bridged: where a chain ends at a vertex
     (its one tagged edge there), the untagged edge there that follows the sharp line best within
     :data:`BRIDGE_REACH` and :data:`BRIDGE_ALIGNMENT_DEG` is tagged too, up to
     :data:`BRIDGE_ROUNDS` edges on from the end (a remesher's vertex a little off a feature line
@@ -256,9 +256,7 @@ def layout_creases(
         first = np.concatenate([[True], vertex[order][1:] != vertex[order][:-1]])
         sharp[candidates[order[first]]] = True
     pairs = edges[sharp]
-    tags = tuple(tag for tag in layout.tags if tag.name != "crease") + (
-        Tag("crease", tuple(pairs.ravel().tolist()), (INFINITE_SHARPNESS,)),
-    )
+    tags = (*layout.tags, Tag("crease", tuple(pairs.ravel().tolist()), (INFINITE_SHARPNESS,)))
     if corners is not None and len(corners):
         gap, nearest = cKDTree(corners).query(layout.vertices)
         scale = float(np.abs(layout.vertices).max())

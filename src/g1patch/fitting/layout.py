@@ -16,6 +16,7 @@ from __future__ import annotations
 import subprocess
 import sys
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +27,7 @@ from scipy.sparse.csgraph import connected_components
 from ..errors import ConstructionError, InputError, MissingDependencyError
 from ..mesh import QuadMesh, Tag
 from ..mesh.conforming import local_split
+from ..mesh.tags import FACE_TAGS, VERTEX_TAGS
 from ..mesh.validate import DEGENERATE_AREA_TOLERANCE
 
 __all__ = [
@@ -123,7 +125,7 @@ def quad_layout(
             vertices, quads = made["vertices"], made["quads"]
     if quads.ndim != 2 or quads.shape[1] != 4 or not len(quads):
         raise ConstructionError("the quad remesher (Instant Meshes) returned no quads")
-    vertices, quads = clean_layout(vertices, quads)
+    vertices, quads, _ = clean_layout(vertices, quads)
     if not len(quads):
         raise ConstructionError("the quad remesher (Instant Meshes) returned only degenerate quads")
     return vertices, quads
@@ -144,26 +146,54 @@ def triangle_parts(triangles: NDArray[np.int64], count: int) -> NDArray[np.int64
 
 
 def clean_layout(
-    vertices: NDArray[np.float64], quads: NDArray[np.int64]
-) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    vertices: NDArray[np.float64], quads: NDArray[np.int64], tags: Sequence[Tag] = ()
+) -> tuple[NDArray[np.float64], NDArray[np.int64], tuple[Tag, ...]]:
     """The layout with coincident vertices merged and the quads dropped that a cage cannot have:
     a corner repeated, zero area (``|d1 × d2| ≤ tol · max(|d1|², |d2|²)``, d1 and d2 the
     diagonals, as :mod:`~g1patch.mesh.validate` refuses) or an edge shared by more than two
-    quads (every quad at such an edge). Unused vertices stay (the mesh drops them)."""
+    quads (every quad at such an edge). Unused vertices stay (the mesh drops them). ``tags`` (a
+    layout file's own creases, corners, holes) follow: vertices merged, a crease on an edge
+    that merging collapsed and a hole on a dropped quad left out."""
     merged, inverse = np.unique(vertices, axis=0, return_inverse=True)
-    quads = inverse.reshape(-1)[quads]
+    inverse = inverse.reshape(-1)
+    quads = inverse[quads]
     ordered = np.sort(quads, axis=1)
     repeated = (ordered[:, 1:] == ordered[:, :-1]).any(axis=1)
     corners = merged[quads]
     d1, d2 = corners[:, 2] - corners[:, 0], corners[:, 3] - corners[:, 1]
     size = np.maximum((d1 * d1).sum(1), (d2 * d2).sum(1))
     flat = np.linalg.norm(np.cross(d1, d2), axis=1) <= DEGENERATE_AREA_TOLERANCE * size
-    quads = quads[~(repeated | flat)]
-    sides = np.stack([quads, np.roll(quads, -1, axis=1)], axis=-1)
+    kept = np.flatnonzero(~(repeated | flat))
+    sides = np.stack([quads[kept], np.roll(quads[kept], -1, axis=1)], axis=-1)
     key = sides.min(axis=-1) * len(merged) + sides.max(axis=-1)
-    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
-    crowded = (counts[inverse] > 2).reshape(key.shape).any(axis=1)
-    return merged, quads[~crowded]
+    _, shared, counts = np.unique(key, return_inverse=True, return_counts=True)
+    kept = kept[~(counts[shared] > 2).reshape(key.shape).any(axis=1)]
+    return merged, quads[kept], _carried_tags(tags, inverse, kept, len(quads))
+
+
+def _carried_tags(
+    tags: Sequence[Tag], vertex: NDArray[np.int64], kept: NDArray[np.int64], faces: int
+) -> tuple[Tag, ...]:
+    """``tags`` through :func:`clean_layout`: ``vertex[old]`` the merged vertex, ``kept`` the
+    old faces kept (of ``faces``)."""
+    face = np.full(faces, -1)
+    face[kept] = np.arange(kept.size)
+    carried = []
+    for tag in tags:
+        ints, floats = np.asarray(tag.ints, dtype=np.int64), tag.floats
+        if tag.name == "crease":
+            pairs = vertex[ints].reshape(-1, 2)
+            edge = pairs[:, 0] != pairs[:, 1]
+            ints = pairs[edge].ravel()
+            if len(floats) == len(pairs) > 1:  # a sharpness per edge
+                floats = tuple(np.asarray(floats)[edge].tolist())
+        elif tag.name in VERTEX_TAGS:
+            ints = vertex[ints]
+        elif tag.name in FACE_TAGS:
+            ints = face[ints][face[ints] >= 0]
+        if ints.size or not tag.ints:
+            carried.append(tag._replace(ints=tuple(ints.tolist()), floats=floats))
+    return tuple(carried)
 
 
 def refined_layout(layout: QuadMesh, marked: NDArray[np.bool_]) -> QuadMesh:

@@ -77,6 +77,7 @@ from .write import WRITE_FORMATS, PathLike, write_quads, write_triangles
 __all__ = [
     "read_mesh",
     "read_polygons",
+    "read_tagged_polygons",
     "write_triangles",
     "write_quads",
     "check_input",
@@ -153,6 +154,21 @@ def read_polygons(
     parsed = _parse(path, max_input_size)
     with named_errors(str(path)):
         return _checked_polygons(parsed.vertices, parsed.faces, ())
+
+
+def read_tagged_polygons(
+    path: PathLike, *, max_input_size: int | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64], tuple[Tag, ...]]:
+    """:func:`read_polygons` and the file's own tags (OBJ ``t`` lines: creases, corners, …),
+    checked against its polygons: what a ``--layout`` file is read as."""
+    from ...errors import named_errors
+    from ...mesh.validate import _checked_polygons
+
+    path = Path(path)
+    parsed = _parse(path, max_input_size)
+    with named_errors(str(path)):
+        points, corners, sizes = _checked_polygons(parsed.vertices, parsed.faces, parsed.tags)
+    return points, corners, sizes, tuple(parsed.tags)
 
 
 def _sharp_angle_tags(path: Path, parsed: _Parsed, degrees: float) -> tuple[Tag, ...]:
