@@ -93,22 +93,11 @@ def table_faces(folder: Path, faces: Sequence[int], spot: bool) -> None:
             row(f"Spot triangles, {count:,} quads", shared, faces=count)
 
 
-def bump_scan(folder: Path, points: int = 60_000) -> Path:
-    """A unit sphere (``points`` Fibonacci points, their convex hull) with a narrow bump at a
-    pole: height 0.4, width 0.1 rad (``r = 1 + 0.4 exp(−(θ / 0.1)²)``)."""
-    from scipy.spatial import ConvexHull
-
-    index = np.arange(points) + 0.5
-    polar, azimuth = np.arccos(1.0 - 2.0 * index / points), np.pi * (1.0 + 5**0.5) * index
-    unit = np.stack(
-        [np.cos(azimuth) * np.sin(polar), np.sin(azimuth) * np.sin(polar), np.cos(polar)], 1
-    )
-    triangles = ConvexHull(unit).simplices
-    normal = np.cross(*(unit[triangles[:, k]] - unit[triangles[:, 0]] for k in (1, 2)))
-    outward = (normal * unit[triangles].mean(axis=1)).sum(axis=1) > 0
-    triangles = np.where(outward[:, None], triangles, triangles[:, ::-1])
+def bump_scan(folder: Path) -> Path:
+    """A unit sphere scan with a narrow bump at a pole (``shapes.bump_sphere_scan``: 60,000
+    points, height 0.4, width 0.1 rad)."""
     path = folder / "bump.obj"
-    write_triangles(path, unit * (1.0 + 0.4 * np.exp(-((polar / 0.1) ** 2)))[:, None], triangles)
+    write_triangles(path, *shapes.bump_sphere_scan())
     return path
 
 

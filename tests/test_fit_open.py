@@ -313,18 +313,9 @@ def test_a_bump_is_refined_where_it_is(tmp_path: Path) -> None:
     0.1 rad) at a pole, `--tolerance 2e-3`: the first layout (1,027 quads) is off on one face at
     the bump, which is refined with two rings round it (1,116 quads) and then fits within the
     tolerance without folds; a finer layout everywhere took 1,406 quads."""
-    from scipy.spatial import ConvexHull
+    from g1patch import shapes
 
-    index = np.arange(60_000) + 0.5
-    polar, azimuth = np.arccos(1.0 - 2.0 * index / 60_000), np.pi * (1.0 + 5**0.5) * index
-    points = np.stack(
-        [np.cos(azimuth) * np.sin(polar), np.sin(azimuth) * np.sin(polar), np.cos(polar)], 1
-    )
-    triangles = ConvexHull(points).simplices
-    normal = np.cross(*(points[triangles[:, k]] - points[triangles[:, 0]] for k in (1, 2)))
-    outward = (normal * points[triangles].mean(axis=1)).sum(axis=1) > 0
-    triangles = np.where(outward[:, None], triangles, triangles[:, ::-1])
-    points = points * (1.0 + 0.4 * np.exp(-((polar / 0.1) ** 2)))[:, None]
+    points, triangles = shapes.bump_sphere_scan(60_000, 0.4, 0.1)
     write_triangles(tmp_path / "bump.obj", points, triangles)
     result = g1patch.fit(tmp_path / "bump.obj", tolerance=2e-3)
     assert result.report.met and result.report.rounds == 2 and result.report.faces <= 1_200

@@ -174,3 +174,18 @@ def test_subdivide_keeps_closed_shapes_outward() -> None:
 def test_invalid_arguments(call) -> None:
     with pytest.raises(InputError, match="expected an integer"):
         call()
+
+
+def test_bump_sphere_scan() -> None:
+    """A closed, outward triangle scan: every edge in two triangles, opposite ways; the volume
+    (divergence theorem) above the unit ball's; the bump's tip at 1 + height on the z axis."""
+    points, triangles = shapes.bump_sphere_scan(2_000, 0.4, 0.1)
+    assert triangles.shape == (2 * 2_000 - 4, 3)
+    directed = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    assert len(np.unique(directed, axis=0)) == len(directed)  # no edge twice the same way
+    a, b, c = (points[triangles[:, k]] for k in range(3))
+    volume = np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0
+    assert 4.0 / 3.0 * np.pi * 0.99 < volume < 4.0 / 3.0 * np.pi * 1.02
+    first = np.arccos(1.0 - 1.0 / 2_000)  # the point nearest the pole, 0.032 rad from it
+    tip = 1.0 + 0.4 * np.exp(-((first / 0.1) ** 2))
+    assert np.linalg.norm(points, axis=1).max() == pytest.approx(tip, rel=1e-12)

@@ -37,6 +37,7 @@ __all__ = [
     "thin_slab",
     "noisy_sphere",
     "flat_fan",
+    "bump_sphere_scan",
     "sphere_project",
     "ellipsoid_project",
     "torus_project",
@@ -525,3 +526,24 @@ def torus_project(
     core = R * _unit_rows(planar)
     normals = _unit_rows(p - core)
     return core + r * normals, normals
+
+
+def bump_sphere_scan(
+    points: int = 60_000, height: float = 0.4, width: float = 0.1
+) -> tuple[FloatArray, IntArray]:
+    """A triangle scan of the unit sphere with a narrow bump at the pole z = 1: ``points``
+    Fibonacci points, their convex hull (outward), moved to ``r = 1 + height exp(−(θ / width)²)``
+    (θ the polar angle, radians). ``(points (N, 3), triangles (T, 3))``: a scan whose detail is
+    local, for the fit's local refinement."""
+    from scipy.spatial import ConvexHull
+
+    index = np.arange(_check_count("points", points, 16)) + 0.5
+    polar, azimuth = np.arccos(1.0 - 2.0 * index / points), np.pi * (1.0 + 5**0.5) * index
+    unit = np.stack(
+        [np.cos(azimuth) * np.sin(polar), np.sin(azimuth) * np.sin(polar), np.cos(polar)], 1
+    )
+    triangles = ConvexHull(unit).simplices.astype(np.int64)
+    normal = np.cross(*(unit[triangles[:, k]] - unit[triangles[:, 0]] for k in (1, 2)))
+    outward = (normal * unit[triangles].mean(axis=1)).sum(axis=1) > 0
+    triangles = np.where(outward[:, None], triangles, triangles[:, ::-1])
+    return unit * (1.0 + height * np.exp(-((polar / width) ** 2)))[:, None], triangles

@@ -227,13 +227,14 @@ def layout_creases(
     layout: QuadMesh, segments: FloatArray, corners: FloatArray | None = None
 ) -> QuadMesh:
     """``layout`` with a ``crease`` tag (sharpness ∞) on every edge that runs along ``segments``
-    (module docstring; its own crease tags, a ``--layout`` file's, kept), and the gaps of those chains bridged: where a chain ends at a vertex
-    (its one tagged edge there), the untagged edge there that follows the sharp line best within
-    :data:`BRIDGE_REACH` and :data:`BRIDGE_ALIGNMENT_DEG` is tagged too, up to
-    :data:`BRIDGE_ROUNDS` edges on from the end (a remesher's vertex a little off a feature line
-    otherwise breaks the crease, which the fit then rounds). As it is where no edge runs along
-    them. A layout vertex at one of ``corners`` (C, 3; :func:`snap_to_features` moved it there)
-    with two or more creases is tagged a ``corner``."""
+    (module docstring; its own crease tags, a ``--layout`` file's, kept), and the gaps of those
+    chains bridged: where a chain ends at a vertex (its one tagged edge there), the untagged
+    edge there that follows the sharp line best within :data:`BRIDGE_REACH` and
+    :data:`BRIDGE_ALIGNMENT_DEG` is tagged too, up to :data:`BRIDGE_ROUNDS` edges on from the
+    end (a remesher's vertex a little off a feature line otherwise breaks the crease, which the
+    fit then rounds). As it is where no edge runs along them. A layout vertex at one of
+    ``corners`` (C, 3; :func:`snap_to_features` moved it there) with two or more creases is
+    tagged a ``corner``."""
     if not len(segments):
         return layout
     edges = layout.topology.edges
