@@ -6,13 +6,14 @@ an exact-G1 assembly (split4 by default: polynomial, so the CAD file is the fitt
 (:class:`FitReport`): scan points to the surface and surface samples to the scan's triangles.
 Without a given layout or face count it starts from :data:`START_FACES` (or the scan's size) and,
 while the tolerance is not met, refines the layout locally where it is off
-(:func:`_locally_refined`: the off faces and a ring about them split into four, the mesh closed
-into quads round them, :mod:`g1patch.mesh.conforming`) when few faces are off, else asks the
-remesher for the face count the measured error calls for (:func:`next_faces`: the error's rate
-over the face count observed between layouts), up to :data:`MAX_ROUNDS` layouts and at most
-:func:`face_budget` quads; the layout kept is the one with the fewest folds, then the nearest. A
-layout the cage cannot be built from (what :func:`~g1patch.fitting.layout.clean_layout` leaves
-still refused) is skipped for the next face count. The tolerance bounds the scan → surface
+(:func:`_locally_refined`: the off faces and two rings about them split into four, the mesh
+closed into quads round them, :mod:`g1patch.mesh.conforming`) when few faces are off and the fit
+has no fold, else asks the remesher for the face count the measured error calls for
+(:func:`next_faces`: the error's rate over the face count observed between layouts), up to
+:data:`MAX_ROUNDS` layouts and at most :func:`face_budget` quads; the layout kept is the one
+with the fewest folds, then the nearest. A layout the cage cannot be built from (what
+:func:`~g1patch.fitting.layout.clean_layout` leaves still refused) is skipped for the next face
+count. The tolerance bounds the scan → surface
 99.9th percentile and the surface → scan maximum (:class:`FitReport`). The scan's coincident
 vertices are welded first (:func:`welded`): an unwelded scan's cracks make the remesher's layout
 ragged and, on some inputs, not reproducible.
@@ -366,7 +367,7 @@ def fit_network(
                 raise
             failure = str(error)
             tried.append((count, np.inf))
-            off = None
+            off, folds = None, 0
         else:
             if refine is None:  # a refined layout keeps the features its parent was given
                 snapped = snap_to_features(cage_layout, features, feature_corners)
@@ -389,9 +390,9 @@ def fit_network(
                 break
         if rounds >= MAX_ROUNDS:
             break
-        refine = (
+        refine = (  # a folded fit is remade, not refined (its folds spread: Spot's horns)
             None
-            if off is None
+            if off is None or folds
             else _locally_refined(cage_layout, off, tolerance * diagonal, budget, scan, features)
         )
         if refine is None:
