@@ -13,10 +13,9 @@ has no fold, else asks the remesher for the face count the measured error calls 
 :data:`MAX_ROUNDS` layouts and at most :func:`face_budget` quads; the layout kept is the one
 with the fewest folds, then the nearest. A layout the cage cannot be built from (what
 :func:`~g1patch.fitting.layout.clean_layout` leaves still refused) is skipped for the next face
-count. The tolerance bounds the scan → surface
-99.9th percentile and the surface → scan maximum (:class:`FitReport`). The scan's coincident
-vertices are welded first (:func:`welded`): an unwelded scan's cracks make the remesher's layout
-ragged and, on some inputs, not reproducible.
+count. The tolerance bounds the scan → surface 99.9th percentile and the surface → scan maximum
+(:class:`FitReport`). The scan's coincident vertices are welded first (:func:`welded`): an
+unwelded scan's cracks make the remesher's layout ragged and, on some inputs, not reproducible.
 """
 
 from __future__ import annotations
@@ -34,6 +33,7 @@ from ..compare import mesh_distance
 from ..continuity import FOLD_SAMPLES, folded_patches
 from ..errors import ConstructionError, InputError, MeshError
 from ..mesh import QuadMesh
+from ..mesh.neighbourhood import grow
 from ..network import PatchNetwork
 from ..tessellate import tessellate
 from .features import (
@@ -481,20 +481,13 @@ def _locally_refined(
     marked: NDArray[np.bool_] = off & (per_face[:, 2] >= REFINE_POINTS)
     if not marked.any() or off.mean() > LOCAL_SHARE or _beside_features(layout, off, features):
         return None
-    for _ in range(REFINE_RINGS):
-        near = np.zeros(layout.n_vertices, dtype=bool)
-        near[layout.faces[marked].ravel()] = True
-        marked = np.any(near[layout.faces], axis=1)
-    refined = refined_layout(layout, marked)
+    refined = refined_layout(layout, grow(layout.topology, marked, REFINE_RINGS))
     if refined.n_faces > budget:
         return None
     vertices = refined.vertices.copy()
     new = np.arange(layout.n_vertices, refined.n_vertices)
-    a, b, c, d = (vertices[refined.faces[:, k]] for k in range(4))
-    face_normals = np.cross(c - a, d - b)
-    normals = np.zeros_like(vertices)
-    for k in range(4):
-        np.add.at(normals, refined.faces[:, k], face_normals)
+    quads = refined.faces
+    normals = vertex_normals(vertices, np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]]))
     triangle, weights = _Triangles(scan.points, scan.triangles).feet(vertices[new], normals[new])
     vertices[new] = np.einsum("nk,nkd->nd", weights, scan.points[scan.triangles[triangle]])
     try:
