@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from g1patch.fitting.features import layout_creases, sharp_segments, snap_to_features
 from g1patch.mesh import QuadMesh
@@ -135,3 +136,35 @@ def test_a_layout_file_keeps_its_own_creases(tmp_path: Path) -> None:
     assert result.report.creases == 8
     plain = g1patch.fit(tmp_path / "roof.obj", layout=layout, sharp_angle=None)
     assert plain.report.creases == 0
+
+
+def test_a_layout_file_with_a_bad_tag_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A ``--layout`` file whose crease names a vertex it does not have: exit 2, one line
+    naming the file, no output written."""
+    from g1patch.cli import main
+    from g1patch.io.meshfile import write_triangles
+
+    points, triangles = ridge_scan()
+    write_triangles(tmp_path / "roof.obj", points, triangles)
+    layout = roof()
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in layout.vertices.tolist()]
+    lines += ["f " + " ".join(str(i + 1) for i in face) for face in layout.faces.tolist()]
+    lines.append("t crease 2/1/0 0 999 10")
+    (tmp_path / "bad.obj").write_text("\n".join(lines) + "\n")
+    out = tmp_path / "out.npz"
+    code = main(
+        [
+            "fit",
+            str(tmp_path / "roof.obj"),
+            "-o",
+            str(out),
+            "--layout",
+            str(tmp_path / "bad.obj"),
+            "-q",
+        ]
+    )
+    assert code == 2 and not out.exists()
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and "bad.obj: tag 'crease' names vertex 999" in error[0]

@@ -320,3 +320,27 @@ def test_a_bump_is_refined_where_it_is(tmp_path: Path) -> None:
     result = g1patch.fit(tmp_path / "bump.obj", tolerance=2e-3)
     assert result.report.met and result.report.rounds == 2 and result.report.faces <= 1_200
     _checked(result)
+
+
+def test_a_folded_fit_is_remade_not_refined(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where a layout's fit folds, the next layout is the remesher's, finer, never a local
+    refinement of the folded one (its folds spread: a dense Spot scan's horns, 15 → 54 → 138);
+    the folds are in the report and the fit is not met."""
+    import g1patch.fitting as fitting
+
+    def always_one_fold(patches: object, *args: object) -> np.ndarray:
+        folded = np.zeros(len(patches), dtype=bool)  # type: ignore[arg-type]
+        folded[0] = True
+        return folded
+
+    refined: list[int] = []
+    monkeypatch.setattr(fitting, "folded_patches", always_one_fold)
+    monkeypatch.setattr(fitting, "_locally_refined", lambda *args: refined.append(1))
+    points, triangles = height_field(40)
+    network, report = fit_network(Scan(points, triangles), tolerance=2e-3)
+    assert not refined and report.rounds >= 2
+    assert (
+        report.folds == 1
+        and not report.met
+        and "folded patches                  1" in (report.summary())
+    )
