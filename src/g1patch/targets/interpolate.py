@@ -184,15 +184,24 @@ def retreat(
     tangents = np.where(rows[:, None], fair.tangents, targets.tangents)
     corners = chosen[topology.faces]
     interior = np.where(corners[..., None, None], fair.interior, targets.interior)
-    corner_normals = np.where(
-        sectored[topology.faces][..., None], targets.corner_normals, normals[topology.faces]
-    )
+    corner_normals = _corner_normals(targets, sectored, normals)
     return targets.with_changes(
         positions=positions,
         normals=normals,
         tangents=tangents,
         interior=interior,
         corner_normals=corner_normals,
+    )
+
+
+def _corner_normals(
+    targets: Targets, sectored: NDArray[np.bool_], normals: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Each face corner's normal after a retreat: its vertex's new normal, but a creased
+    (``sectored``) vertex's corners keep their own sector normals."""
+    topology = targets.topology
+    return np.where(
+        sectored[topology.faces][..., None], targets.corner_normals, normals[topology.faces]
     )
 
 
@@ -221,9 +230,7 @@ def retreat_to_star(targets: Targets, vertices: IntArray, weight: float) -> Targ
     corners = chosen[topology.faces]
     interior = targets.interior.copy()
     interior[corners] = (1.0 - weight) * interior[corners] + weight * bilinear[corners][:, None, :]
-    corner_normals = np.where(
-        sectored[topology.faces][..., None], targets.corner_normals, normals[topology.faces]
-    )
+    corner_normals = _corner_normals(targets, sectored, normals)
     return targets.with_changes(
         normals=normals,
         tangents=tangents,
