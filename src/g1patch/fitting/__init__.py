@@ -62,6 +62,7 @@ __all__ = [
     "quad_layout",
     "scan_from_polygons",
     "scan_of",
+    "used_only",
     "welded",
 ]
 
@@ -114,6 +115,16 @@ REFINE_POINTS = 16
 #: the fitted surfaces' largest turn between neighbouring samples 0.3°); at 2.6 % a washer's
 #: rim had two gaps a quad long where the fitted surface turned by 12°
 FEATURE_GAPS = 0.01
+#: a triangle of at least this share of a layout face's mean area is sampled inside
+#: (:meth:`Scan.facet_samples`), to one point per ``1/SAMPLES_PER_FACE`` of that area: where a
+#: face holds few scan vertices (a low-poly model, a CAD part's large flat facets). Smaller ones
+#: are not: a facet's points lie on its chord, a sag inside a curved surface (a 96 × 48 torus
+#: scan's triangle centroids are 2.6e-4 of the diagonal inside the torus; fitted to them too, its
+#: surface sat 1.7× farther from the torus on average)
+SPARSE_FACET = 0.25
+SAMPLES_PER_FACE = 16
+#: a triangle is cut into at most this many squared samples (a sliver of a huge scan triangle)
+MAX_FACET_SPLIT = 32
 #: scan points beyond the tolerance that make a face off (one alone is a stray point or noise,
 #: which the tolerance's 99.9th percentile lets be)
 STRAY_POINTS = 2
@@ -133,6 +144,39 @@ class Scan:
     def diagonal(self) -> float:
         return float(np.linalg.norm(self.points.max(axis=0) - self.points.min(axis=0)))
 
+    @property
+    def areas(self) -> FloatArray:
+        """Per triangle its area ``|(b − a) × (c − a)| / 2``."""
+        a, b, c = (self.points[self.triangles[:, k]] for k in range(3))
+        return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+
+    def facet_samples(self, area: float, least: float = 0.0) -> tuple[FloatArray, FloatArray]:
+        """Points inside the triangles of area at least ``least`` and ``area``, one per ``area``
+        or so, and their triangles' unit normals: a triangle of area A is cut into
+        ``m² = ⌊√(A / area)⌋²`` equal triangles (m per side, :data:`MAX_FACET_SPLIT` at most),
+        sampled at their centroids ``p = b₀ a + b₁ b + b₂ c``, ``(b₁, b₂) = ((i + 1/3)/m,
+        (j + 1/3)/m)`` for ``i + j ≤ m − 1`` and ``((i + 2/3)/m, (j + 2/3)/m)`` for
+        ``i + j ≤ m − 2``. A scan's vertices alone leave a large facet unsampled: a low-poly
+        model's surface bulges between them (a 12-triangle cube fitted to its 8 corners bowed
+        out 4 % of its diagonal)."""
+        areas = self.areas
+        split = np.minimum(np.floor(np.sqrt(areas / area)), MAX_FACET_SPLIT).astype(np.int64)
+        split[areas < least] = 0
+        corners = self.points[self.triangles]  # (T, 3, 3)
+        cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        points, normals = [np.zeros((0, 3))], [np.zeros((0, 3))]
+        for m in np.unique(split[split > 0]):  # a few sizes, each a batch of triangles
+            mine = np.flatnonzero(split == m)
+            i, j = np.meshgrid(np.arange(m), np.arange(m), indexing="ij")
+            up, down = i + j <= m - 1, i + j <= m - 2
+            second = np.concatenate([i[up] + 1 / 3, i[down] + 2 / 3]) / m
+            third = np.concatenate([j[up] + 1 / 3, j[down] + 2 / 3]) / m
+            weights = np.stack([1.0 - second - third, second, third], axis=1)  # (m², 3)
+            points.append(np.einsum("sk,tkd->tsd", weights, corners[mine]).reshape(-1, 3))
+            unit = cross[mine] / (2.0 * areas[mine, None])
+            normals.append(np.repeat(unit, len(weights), axis=0))
+        return np.concatenate(points), np.concatenate(normals)
+
 
 def scan_from_polygons(
     points: FloatArray, corners: IntArray, sizes: IntArray, source: str | None = None
@@ -145,6 +189,20 @@ def scan_from_polygons(
         [corners[first], corners[first + step + 1], corners[first + step + 2]], axis=1
     )
     return Scan(np.asarray(points, dtype=np.float64), triangles.astype(np.int64), source)
+
+
+def used_only(scan: Scan) -> Scan:
+    """``scan`` without the vertices no triangle uses (PLY and OBJ files carry them: 359 of the
+    1,872 vertices of a bone model, a quarter of an airplane's; fitted as points they pull the
+    surface off the triangles); ``repairs`` says how many."""
+    used = np.zeros(len(scan.points), dtype=bool)
+    used[scan.triangles.reshape(-1)] = True
+    unused = int((~used).sum())
+    if not unused:
+        return scan
+    renumber = np.cumsum(used) - 1
+    note = f"dropped {unused} vertices no triangle uses"
+    return Scan(scan.points[used], renumber[scan.triangles], scan.source, (*scan.repairs, note))
 
 
 def welded(scan: Scan) -> Scan:
@@ -281,15 +339,21 @@ def _bounded(to_surface: tuple[float, ...], to_scan: tuple[float, ...]) -> float
 
 
 def measure(
-    network: PatchNetwork, scan: Scan, faces: int | None = None, tolerance: float = np.inf
+    network: PatchNetwork,
+    scan: Scan,
+    faces: int | None = None,
+    tolerance: float = np.inf,
+    samples: FloatArray | None = None,
 ) -> tuple[tuple[float, ...], tuple[float, ...], FloatArray | None]:
     """Two-way distances between the surface (sampled :data:`MEASURE_SAMPLES` per patch side,
-    triangulated) and the scan: ``(to_surface, to_scan)`` figures (max, p99.9, rms), and with
-    the cage's face count ``faces`` (its patches face after face) per face (F, 3): the largest
-    distance of its surface samples to the scan, how many scan points whose nearest surface
-    sample is on it are farther than ``tolerance`` (model units), and how many there are."""
+    triangulated) and the scan (its vertices and the ``samples`` inside its facets): ``(to_surface,
+    to_scan)`` figures (max, p99.9, rms), and with the cage's face count ``faces`` (its patches
+    face after face) per face (F, 3): the largest distance of its surface samples to the scan, how
+    many scan points whose nearest surface sample is on it are farther than ``tolerance`` (model
+    units), and how many scan vertices there are."""
     mesh = tessellate(network, MEASURE_SAMPLES)
-    to_surface = mesh_distance(scan.points, mesh.points, mesh.triangles)
+    points = scan.points if samples is None else np.concatenate([scan.points, samples])
+    to_surface = mesh_distance(points, mesh.points, mesh.triangles)
     to_scan = mesh_distance(mesh.points, scan.points, scan.triangles)
     per_face = None
     if faces is not None:
@@ -301,9 +365,9 @@ def measure(
         )
         per_face = np.zeros((faces, 3))
         np.maximum.at(per_face[:, 0], face_of_sample[tree.query(mesh.points)[1]], to_scan)
-        nearest = face_of_sample[tree.query(scan.points)[1]]
+        nearest = face_of_sample[tree.query(points)[1]]
         per_face[:, 1] = np.bincount(nearest[to_surface > tolerance], minlength=faces)
-        per_face[:, 2] = np.bincount(nearest, minlength=faces)
+        per_face[:, 2] = np.bincount(nearest[: len(scan.points)], minlength=faces)
     return _figures(to_surface), _figures(to_scan), per_face
 
 
@@ -328,13 +392,14 @@ def fit_network(
     """
     tolerance = check_tolerance(tolerance)
     started = time.perf_counter()
-    scan = welded(scan)
+    scan = welded(used_only(scan))
     diagonal = scan.diagonal
     if not diagonal > 0:
         raise InputError(f"{scan.source or 'scan'}: the scan has no extent")
     count = faces if faces is not None else min(START_FACES, max(64, len(scan.triangles) // 8))
     adaptive = layout is None and faces is None
     normals = vertex_normals(scan.points, scan.triangles)
+    area = float(scan.areas.sum())
     features = (
         np.zeros((0, 2, 3))
         if sharp_angle is None
@@ -373,11 +438,20 @@ def fit_network(
                 snapped = snap_to_features(cage_layout, features, feature_corners)
                 creased = layout_creases(snapped, features, feature_corners)
                 cage_layout = layout_corners(creased, corners)
-            fitted: FitCage = fit_cage(scan.points, normals, cage_layout, scan.triangles)
+            face_area = area / cage_layout.n_faces
+            samples, sample_normals = scan.facet_samples(
+                face_area / SAMPLES_PER_FACE, SPARSE_FACET * face_area
+            )
+            fitted: FitCage = fit_cage(
+                np.concatenate([scan.points, samples]),
+                np.concatenate([normals, sample_normals]),
+                cage_layout,
+                scan.triangles,
+            )
             # the scan, not the cage's limit, is what the fit is measured against (below)
             network = build_network(fitted.cage, method, "limit", tolerance=None)
             to_surface, to_scan, off = measure(
-                network, scan, cage_layout.n_faces, tolerance * diagonal
+                network, scan, cage_layout.n_faces, tolerance * diagonal, samples
             )
             worst = _bounded(to_surface, to_scan) / diagonal
             tried.append((cage_layout.n_faces, worst))

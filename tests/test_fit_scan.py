@@ -1,0 +1,83 @@
+"""What the fit takes from a scan: only the vertices its triangles use, and points inside its
+large facets (:meth:`~g1patch.fitting.Scan.facet_samples`), so that a low-poly model is fitted to
+its surface and not to a handful of corners."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from g1patch.fitting import Scan, fit_network, used_only
+from g1patch.shapes import cube
+
+#: a triangle's corners: coordinates in a box of side 20, not all three collinear (checked)
+corner_sets = arrays(np.float64, (3, 3), elements=st.floats(-10.0, 10.0, allow_nan=False))
+
+
+def cube_triangles() -> Scan:
+    """The cube [-1, 1]³ as 12 triangles (each quad cut along its diagonal 0–2), 8 vertices."""
+    mesh = cube()
+    quads = mesh.faces
+    triangles = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    return Scan(np.asarray(mesh.vertices, dtype=np.float64), triangles, "cube.obj")
+
+
+def test_vertices_no_triangle_uses_are_dropped_and_said() -> None:
+    scan = cube_triangles()
+    stray = np.array([[50.0, 50.0, 50.0], [-7.0, 0.0, 0.0]])
+    padded = Scan(np.concatenate([stray[:1], scan.points, stray[1:]]), scan.triangles + 1, "c")
+    kept = used_only(padded)
+    np.testing.assert_array_equal(kept.points, scan.points)
+    np.testing.assert_array_equal(kept.triangles, scan.triangles)
+    assert kept.repairs == ("dropped 2 vertices no triangle uses",)
+    assert used_only(scan) is scan
+
+
+@settings(max_examples=60, deadline=None)
+@given(corners=corner_sets, per_side=st.integers(1, 6))
+def test_facet_samples_are_inside_evenly_spread_and_centred(
+    corners: np.ndarray, per_side: int
+) -> None:
+    """m² samples (m = ⌊√(A / area)⌋) strictly inside, at the centroids of m² equal triangles: so
+    their mean is the triangle's centroid, exactly up to rounding, and their normals its own."""
+    scan = Scan(corners, np.array([[0, 1, 2]]))
+    area = float(scan.areas[0])
+    cross = np.cross(corners[1] - corners[0], corners[2] - corners[0])
+    if area <= 1e-6 * float(np.sum((corners - corners.mean(axis=0)) ** 2)):
+        return  # (near) collinear: no usable normal to compare with
+    samples, normals = scan.facet_samples(area / per_side**2 * (1 - 1e-9))
+    assert len(samples) == per_side**2
+    scale = float(np.abs(corners).max()) + 1.0
+    np.testing.assert_allclose(samples.mean(axis=0), corners.mean(axis=0), atol=1e-13 * scale)
+    np.testing.assert_allclose(normals, np.tile(cross / np.linalg.norm(cross), (len(samples), 1)))
+    # barycentric coordinates of every sample: all at least 1/(3m) (centroids of the small ones)
+    edges = np.stack([corners[1] - corners[0], corners[2] - corners[0]], axis=1)
+    uv = np.linalg.lstsq(edges, (samples - corners[0]).T, rcond=None)[0].T
+    weights = np.column_stack([1.0 - uv.sum(axis=1), uv])
+    assert weights.min() >= 1.0 / (3 * per_side) - 1e-9
+
+
+def test_small_facets_are_not_sampled() -> None:
+    """A triangle smaller than ``area``, or than ``least``, keeps only its vertices (a dense scan
+    is its points)."""
+    scan = cube_triangles()
+    largest = float(scan.areas.max())
+    for area, least in ((largest * 1.01, 0.0), (largest / 100, largest * 1.01)):
+        samples, normals = scan.facet_samples(area, least)
+        assert samples.shape == (0, 3) and normals.shape == (0, 3)
+    assert len(scan.facet_samples(largest / 100, largest)[0]) == 12 * 10**2
+
+
+def test_a_low_poly_cube_is_fitted_flat() -> None:
+    """Twelve triangles: fitted to its eight corners alone the sides bowed out 4.1 % of the
+    diagonal; fitted to its facets too, within the tolerance, every crease kept."""
+    pytest.importorskip(
+        "pynanoinstantmeshes", reason="the fit's remesher: pip install 'g1patch[fit]'"
+    )
+    _, report = fit_network(cube_triangles(), tolerance=2e-3)
+    assert report.met, report.summary()
+    assert report.to_scan[0] / report.diagonal <= 2e-3
+    assert report.creases == 24
