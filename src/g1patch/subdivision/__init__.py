@@ -256,9 +256,11 @@ def limit_corner_normals(mesh: QuadMesh, sharpness: ArrayLike | None = None) -> 
     * crease vertex: ``a × b`` of the sector's own star, a the crease tangent ``(E_0 − E_k)/2``
       (``E_0`` the sector's first sharp slot counter-clockwise, ``E_k`` its last), b the sector's
       cross tangent: its tangent plane holds the crease curve's tangent on both sides;
-    * corner vertex: the normalised fan sum ``Σ t_i × t_{i+1}`` of the sector's slot chords
-      ``t_i = E_i − V``: ``(E_0 − V) × (E_1 − V)`` for one face, the exact plane of the two crease
-      tangents when a sector is one quad;
+    * corner vertex: the plane of the sector's two sharp chords ``(E_0 − V) × (E_k − V)`` (the
+      sharp curves' limit tangents, which both sectors of a crease share), on the side of the fan
+      sum ``Σ t_i × t_{i+1}`` of its slot chords ``t_i = E_i − V``; where the two chords are
+      nearly parallel, that fan sum made perpendicular to their line (:func:`~g1patch.subdivision.
+      stencils._corner_plane`);
 
     zero where that vanishes. Hole faces get theirs too. Where the mesh is semi-sharp, the normals
     at the affected vertices come from the decayed refinement (module docstring), whose sectors

@@ -36,6 +36,7 @@ from .value import halfedge_slots
 __all__ = [
     "INTERPOLATE_SHARPNESS",
     "crease_tangents",
+    "ridge_corners",
     "sector_fan_normals",
     "seam_edges",
     "sharp_vertices",
@@ -54,6 +55,11 @@ _PARALLEL = 0.02
 #: a two-seam corner whose sector plane (spanned by its crease tangents) has a cosine below this
 #: with some sector's own fan normal (more than ~37° off its faces) is taken as a crease
 _ACROSS = 0.8
+#: a limit corner whose two seam tangents span a plane with a cosine below this (25°) with a
+#: sector's fan normal is taken as a crease (:func:`ridge_corners`): a sector of three faces
+#: whose seam chords span a plane 34° off its faces had its inner slots squeezed into it nearly
+#: parallel to the seams, and the Gregory corner split failed
+_RIDGE = 0.9
 #: a far-end tangent this close to perpendicular to the chord (ĉ·g) is not mirrored
 _MIRROR_MIN = 0.1
 
@@ -90,6 +96,39 @@ def sector_fan_normals(mesh: QuadMesh, found: Sectors) -> FloatArray:
         [np.bincount(found.label, per_position[:, d], minlength=n_sectors) for d in range(3)],
         axis=1,
     )
+
+
+def ridge_corners(
+    topology: QuadTopology,
+    found: Sectors,
+    tangents: FloatArray,
+    fan: FloatArray,
+    corner_vertices: BoolArray,
+) -> tuple[FloatArray, FloatArray, BoolArray]:
+    """Interior corners with two seams whose seam tangents ``t_a``, ``t_b`` span no plane along
+    their sectors — nearly parallel (``|t̂_a × t̂_b| <`` :data:`_PARALLEL`) or across (the plane's
+    cosine with a sector's fan normal below :data:`_RIDGE`: a ridge's apex, where a plane
+    holding both stands on edge) — taken as crease vertices, as the interpolating rule does:
+    the seam slots become ``±|t| d`` along ``d ∥ t̂_a − t̂_b`` and each sector's normal its
+    ``fan`` normal (per sector, :func:`sector_fan_normals`) made perpendicular to d, so that
+    both sectors hold the shared seam tangents and their own faces. Returns the ``tangents``
+    (slots) changed there, the sectors' unit normals (zero elsewhere) and which vertices."""
+    two = corner_vertices & ~topology.is_boundary_vertex & (found.cuts == 2)
+    mine = np.flatnonzero(two[found.vertex] & (found.start >= 0))
+    t_a, t_b = tangents[found.start[mine]], tangents[found.end[mine]]
+    plane = cross(_unit(t_a), _unit(t_b))
+    m = _unit(fan[mine])
+    loose = (np.linalg.norm(plane, axis=1) < _PARALLEL) | (np.abs(_dot(_unit(plane), m)) < _RIDGE)
+    ridge = np.zeros(topology.n_vertices, dtype=bool)
+    ridge[found.vertex[mine[loose]]] = True
+    out, normals = tangents.copy(), np.zeros_like(fan)
+    chosen = ridge[found.vertex[mine]]
+    mine, t_a, t_b, m = mine[chosen], t_a[chosen], t_b[chosen], m[chosen]
+    d = _unit(_unit(t_a) - _unit(t_b))
+    out[found.start[mine]] = np.linalg.norm(t_a, axis=1)[:, None] * d
+    out[found.end[mine]] = -np.linalg.norm(t_b, axis=1)[:, None] * d
+    normals[mine] = _unit(m - _dot(m, d)[:, None] * d)
+    return out, normals, ridge
 
 
 def _circle_lengths(chord: FloatArray, direction: FloatArray) -> FloatArray:

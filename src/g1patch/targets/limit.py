@@ -25,6 +25,12 @@
   sideways with the n sectors, and weighted by it the points slid sideways by more than a narrow
   sector (:func:`_exact_normal_share`). The Gregory assembly then moves them as far as G1 requires.
 
+At a corner with two seams each sector's plane is the one its two sharp chords span (the
+subdivision layer's sector normals), unless that plane stands more than 25° off a sector's faces
+or the chords are nearly parallel (a crease through a tagged corner, a ridge's apex): there the
+corner is taken as a crease, as the interpolating rule does
+(:func:`~g1patch.targets.creases.ridge_corners`), since a plane on edge holds no valid fan.
+
 Every manifold quad mesh gets valid targets: a fitted fan that does not turn counter-clockwise
 falls back to the limit star, and where the two limit tangents of a vertex are parallel (a
 degenerate cage) the fan normal and the safeguard of
@@ -53,7 +59,7 @@ from ..subdivision import (
     limit_points,
     refine_grids,
 )
-from .creases import seam_edges, spread_sectors
+from .creases import ridge_corners, seam_edges, sector_fan_normals, spread_sectors
 from .fans import safeguarded_fans
 from .local import cross, dot, fan_normals, slot_tables, slot_vertices
 from .value import TangentRule, Targets, halfedge_slots, slot_sector_normals
@@ -418,6 +424,20 @@ def limit_targets(
         corner_normals = np.where(
             creased[topology.faces][..., None], limit_corner_normals(mesh), corner_normals
         )
+        star, ridge_normals, ridge = ridge_corners(
+            topology,
+            found,
+            star,
+            sector_fan_normals(mesh, found),
+            corner_vertices(mesh) | (found.cuts > 2),
+        )
+        if ridge.any():
+            at = np.flatnonzero(
+                ridge[np.repeat(np.arange(topology.n_vertices), topology.face_count)]
+            )
+            corner_normals.reshape(-1, 3)[topology.ring_halfedges[at]] = ridge_normals[
+                found.label[at]
+            ]
         plane = Targets(
             topology,
             x,
