@@ -80,12 +80,15 @@ AUTO_ELEVATION = (25.0, 45.0)
 #: front three-quarter: the camera is turned this many degrees from the front towards the model's
 #: left
 AUTO_TURN_DEG = 35.0
-#: a surface stands on the largest flat face of its convex hull (:func:`resting_axis`) when that
-#: face holds at least this fraction of the hull's area (Spot's hooves: 0.09, the teapot's
-#: bottom 0.11; a sphere's largest facet is far below)
+#: a convex hull facet faces down along an axis when its normal is within this many degrees of it
+#: (:func:`resting_axis`)
+AUTO_BASE_CONE_DEG = 10.0
+#: a surface stands on the hull facets facing down along an axis when they hold at least this
+#: fraction of the hull's area (Spot's hooves: 0.09, the teapot's bottom 0.11, the Stanford
+#: bunny's 0.09; a sphere's within the cone: 0.008)
 AUTO_BASE_FRACTION = 0.04
-#: ... and the face opposite it is smaller than this fraction of it (else it is a slab with two
-#: equal sides, the cube, a flat torus: no base to tell)
+#: ... and the facets facing up along it hold less than this fraction of that (else it is a slab
+#: with two equal sides, the cube, a flat torus: no base to tell)
 AUTO_BASE_OPPOSITE = 0.8
 #: samples the hull is taken of, at most (evenly spaced)
 _AUTO_HULL_POINTS = 20_000
@@ -150,12 +153,13 @@ def _area_samples(
 
 
 def resting_axis(points: NDArray[np.float64]) -> str | None:
-    """``"y"`` or ``"z"``, the axis a surface stands upright on, or None. Its convex hull's flat
-    faces (simplices of one plane together) that face down along ``−y`` or ``−z`` (within
-    :data:`AUTO_AXIS_TOLERANCE_DEG`): the larger of the two largest is the base when it holds at
-    least :data:`AUTO_BASE_FRACTION` of the hull's area and the face opposite it (up along that
-    axis) is smaller than :data:`AUTO_BASE_OPPOSITE` of it. x is never chosen, as by the slab
-    rule."""
+    """``"y"`` or ``"z"``, the axis a surface stands upright on, or None. Its convex hull's
+    facets that face down along ``−y`` or ``−z`` (within :data:`AUTO_BASE_CONE_DEG`) are its
+    base there: the larger base is the one stood on when it holds at least
+    :data:`AUTO_BASE_FRACTION` of the hull's area and the facets facing up along that axis hold
+    less than :data:`AUTO_BASE_OPPOSITE` of it. A scan's base is flat only roughly (the Stanford
+    bunny's: hull facets of many planes a few degrees apart), so the facets are gathered by their
+    direction, not by their plane. x is never chosen, as by the slab rule."""
     from scipy.spatial import ConvexHull, QhullError
 
     sample = points[:: max(1, len(points) // _AUTO_HULL_POINTS)]
@@ -167,17 +171,12 @@ def resting_axis(points: NDArray[np.float64]) -> str | None:
     area = 0.5 * np.linalg.norm(
         np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=-1
     )
-    size = float(np.ptp(sample, axis=0).max()) or 1.0
-    # one plane: the same unit normal and offset, to 1e-6 (qhull's merged facets share them)
-    plane = np.round(hull.equations / [1.0, 1.0, 1.0, size] * 1e6).astype(np.int64)
-    keys, which = np.unique(plane, axis=0, return_inverse=True)
-    face_area = np.bincount(which.ravel(), weights=area, minlength=len(keys))
-    normals = keys[:, :3] / 1e6
-    aligned = math.cos(math.radians(AUTO_AXIS_TOLERANCE_DEG))
+    normals = hull.equations[:, :3]
+    within = math.cos(math.radians(AUTO_BASE_CONE_DEG))
     best, chosen = 0.0, None
     for axis in (1, 2):
-        down = face_area[-normals[:, axis] >= aligned].max(initial=0.0)
-        up = face_area[normals[:, axis] >= aligned].max(initial=0.0)
+        down = float(area[-normals[:, axis] >= within].sum())
+        up = float(area[normals[:, axis] >= within].sum())
         if down > best and up < AUTO_BASE_OPPOSITE * down:
             best, chosen = down, "xyz"[axis]
     return chosen if best >= AUTO_BASE_FRACTION * area.sum() else None
@@ -198,8 +197,9 @@ def auto_camera(
     axis to keep (``"x"``, ``"y"``, ``"z"``), or ``"auto"`` to choose it. The view is in the
     convention of :func:`render`'s ``view`` about that axis.
 
-    The rule: **up** is the axis the surface stands on (:func:`resting_axis`: its convex hull's
-    larger flat face facing down along −y or −z — Spot's hooves in a y-up or a z-up file alike),
+    The rule: **up** is the axis the surface stands on (:func:`resting_axis`: the larger of its
+    convex hull's bases, the facets facing down along −y or −z — Spot's hooves, the Stanford
+    bunny's scanned base, in a y-up or a z-up file alike),
     where it stands on one; otherwise, on the weighted mean and covariance of the samples, whose
     principal axes have spreads (standard deviations) σ₀ ≤ σ₁ ≤ σ₂:
 
