@@ -338,6 +338,43 @@ def test_ply_ascii_with_mixed_faces_keeps_their_order(tmp_path: Path) -> None:
     np.testing.assert_array_equal(read_mesh(quads_only).faces, [[0, 1, 2, 3], [1, 4, 5, 2]])
 
 
+@pytest.mark.parametrize("form", ["ascii", "binary_little_endian", "binary_big_endian"])
+def test_ply_other_scalar_elements_around_the_mesh_are_skipped(tmp_path: Path, form: str) -> None:
+    """A range scan as MeshLab writes it starts with a ``camera`` element (floats and ints; meshio
+    refuses it): skipped, as is a scalar element after the faces; the mesh is the one between."""
+    mesh = shapes.genus2()
+    points = mesh.vertices.astype(np.float32)
+    header = (
+        f"ply\nformat {form} 1.0\nelement camera 1\nproperty float focal\n"
+        f"property int viewportx\nelement vertex {len(points)}\nproperty float x\n"
+        f"property float y\nproperty float z\nelement face {mesh.n_faces}\n"
+        "property list uchar int vertex_indices\nelement note 2\nproperty uchar level\n"
+        "end_header\n"
+    )
+    if form == "ascii":
+        body = "35.5 640\n"
+        body += "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in points.tolist())
+        body += "".join(f"4 {a} {b} {c} {d}\n" for a, b, c, d in mesh.faces.tolist())
+        data = (header + body + "7\n9\n").encode()
+    else:
+        order = "<" if form == "binary_little_endian" else ">"
+        camera = np.array([(35.5, 640)], dtype=[("f", order + "f4"), ("v", order + "i4")])
+        faces = np.zeros(mesh.n_faces, dtype=[("n", "u1"), ("i", order + "i4", 4)])
+        faces["n"], faces["i"] = 4, mesh.faces
+        data = (
+            header.encode()
+            + camera.tobytes()
+            + points.astype(order + "f4").tobytes()
+            + faces.tobytes()
+            + bytes([7, 9])
+        )
+    path = tmp_path / "framed.ply"
+    path.write_bytes(data)
+    again = read_mesh(path)
+    np.testing.assert_array_equal(again.faces, mesh.faces)
+    np.testing.assert_array_equal(again.vertices, points.astype(np.float64))
+
+
 # -- writing --------------------------------------------------------------------------------------
 
 

@@ -27,7 +27,15 @@ from ...errors import FormatError
 from .parsed import _faces_in_range, _finite_vertices, _Parsed, _polygon_list
 from .ply_ascii import _finite_uvs, _ply_text, _read_ply_lines
 from .ply_binary import _ply_binary
-from .ply_header import UV_PROPERTIES, _check_room, _ply_header, _ply_layout, _PlyHeader
+from .ply_header import (
+    PLY_TYPES,
+    UV_PROPERTIES,
+    _check_room,
+    _Element,
+    _ply_header,
+    _ply_layout,
+    _PlyHeader,
+)
 
 
 def _read_ply(path: Path, data: bytes) -> _Parsed:
@@ -40,6 +48,7 @@ def _read_ply(path: Path, data: bytes) -> _Parsed:
     if header.total("face") == 0:
         raise FormatError(path, "no faces: the header declares no 'element face'")
     _check_room(path, header, data)
+    header, data = _vertices_and_faces(header, data)
     layout = _ply_layout(header)
     vertex_lines = face_lines = None
     if layout is not None and not header.ascii:
@@ -58,6 +67,43 @@ def _read_ply(path: Path, data: bytes) -> _Parsed:
         _finite_uvs(path, uv, None, "face" if per_corner else "vertex")
         uv = uv if per_corner else uv[corners]
     return _Parsed(points, _polygon_list(corners, sizes), uv=uv)
+
+
+def _vertices_and_faces(header: _PlyHeader, data: bytes) -> tuple[_PlyHeader, bytes]:
+    """The file without its other elements of scalar properties before the vertices or after
+    the faces (a range scan's ``camera``, as MeshLab writes it), so that the common layout
+    reads it: binary, their records' bytes (fixed sizes); ASCII, their lines (one a record).
+    The header and data as they are where there are none, or others (lists, elements between
+    the vertices and the faces)."""
+    names = [element.name for element in header.elements]
+    if names == ["vertex", "face"] or names.count("vertex") != 1 or names.count("face") != 1:
+        return header, data
+    first, last = names.index("vertex"), names.index("face")
+    extra = (*header.elements[:first], *header.elements[last + 1 :])
+    if last != first + 1 or any(p.length is not None for e in extra for p in e.properties):
+        return header, data
+    before, after = header.elements[:first], header.elements[last + 1 :]
+    kept = header._replace(elements=header.elements[first : last + 1])
+    body = data[header.start :]
+    if header.ascii:
+        lines = body.splitlines(keepends=True)
+        while lines and not lines[-1].strip():
+            lines.pop()
+        skip, drop = sum(e.size for e in before), sum(e.size for e in after)
+        if skip + drop > len(lines):
+            return header, data
+        return kept, data[: header.start] + b"".join(lines[skip : len(lines) - drop])
+
+    def size(elements: tuple[_Element, ...]) -> int:
+        return sum(
+            e.size * sum(np.dtype(PLY_TYPES[p.type]).itemsize for p in e.properties)
+            for e in elements
+        )
+
+    skip, drop = size(before), size(after)
+    if skip + drop > len(body):
+        return header, data
+    return kept, data[: header.start] + body[skip : len(body) - drop]
 
 
 def _ply_meshio(
