@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from g1patch.fitting import Scan, fit_network, used_only
+from g1patch.fitting import Scan, fit_network, used_only, without_islands
 from g1patch.shapes import cube
 
 #: a triangle's corners: coordinates in a box of side 20, not all three collinear (checked)
@@ -34,6 +34,26 @@ def test_vertices_no_triangle_uses_are_dropped_and_said() -> None:
     np.testing.assert_array_equal(kept.triangles, scan.triangles)
     assert kept.repairs == ("dropped 2 vertices no triangle uses",)
     assert used_only(scan) is scan
+
+
+def test_specks_of_a_range_scan_are_dropped_and_said() -> None:
+    """Parts narrower than 5 % of the scan's diagonal go (a range scan's specks); parts as large as
+    the rest stay, and a scan of specks only is kept whole."""
+    cube = cube_triangles()
+    speck = Scan(cube.points * 0.01 + 0.5, cube.triangles)  # 0.02 across: 0.6 % of the diagonal
+    twin = Scan(cube.points + 3.0, cube.triangles)
+    joined = Scan(
+        np.concatenate([cube.points, speck.points, twin.points]),
+        np.concatenate([cube.triangles, speck.triangles + 8, twin.triangles + 16]),
+        "scan.ply",
+    )
+    kept = without_islands(joined)
+    np.testing.assert_array_equal(kept.points, np.concatenate([cube.points, twin.points]))
+    np.testing.assert_array_equal(
+        kept.triangles, np.concatenate([cube.triangles, cube.triangles + 8])
+    )
+    assert kept.repairs == ("dropped 1 island under 5% of the diagonal across (12 triangles)",)
+    assert without_islands(speck) is speck and without_islands(cube) is cube
 
 
 @settings(max_examples=60, deadline=None)
