@@ -11,11 +11,16 @@ closed into quads round them, :mod:`g1patch.mesh.conforming`) when few faces are
 has no fold, else asks the remesher for the face count the measured error calls for
 (:func:`next_faces`: the error's rate over the face count observed between layouts), up to
 :data:`MAX_ROUNDS` layouts and at most :func:`face_budget` quads; the layout kept is the one
-with the fewest folds, then the nearest. A layout the cage cannot be built from (what
-:func:`~g1patch.fitting.layout.clean_layout` leaves still refused) is skipped for the next face
-count. The tolerance bounds the scan → surface 99.9th percentile and the surface → scan maximum
-(:class:`FitReport`). The scan's coincident vertices are welded first (:func:`welded`): an
-unwelded scan's cracks make the remesher's layout ragged and, on some inputs, not reproducible.
+with the fewest folds, then the nearest. A fit that folds is first fitted again on its own
+layout, fairer round the folds (:func:`_stiffened`, :data:`FOLD_REFITS` times at most). A layout
+the cage cannot be built from (what :func:`~g1patch.fitting.layout.clean_layout` leaves still
+refused) is skipped for the next face count. The tolerance bounds the scan → surface 99.9th
+percentile and the surface → scan maximum (:class:`FitReport`). The scan is cleaned first:
+vertices no triangle uses dropped (:func:`used_only`), coincident ones welded (:func:`welded`: an
+unwelded scan's cracks make the remesher's layout ragged and, on some inputs, not
+reproducible), islands dropped (:func:`without_islands`); its points are its vertices and, where
+its triangles are large beside the layout's faces, samples inside them
+(:meth:`Scan.facet_samples`).
 """
 
 from __future__ import annotations
@@ -129,6 +134,10 @@ MAX_FACET_SPLIT = 32
 #: a connected part of a scan narrower than this (its bounding box's diagonal, of the scan's) is
 #: an island, dropped (:func:`without_islands`)
 ISLAND_SIZE = 0.05
+#: a fit that folds is fitted again, at most this many times, fairer where it folds
+FOLD_REFITS = 2
+#: by this factor on the fairness weight of the folded faces' vertices and a ring round them
+FOLD_STIFFNESS = 30.0
 #: scan points beyond the tolerance that make a face off (one alone is a stray point or noise,
 #: which the tolerance's 99.9th percentile lets be)
 STRAY_POINTS = 2
@@ -477,21 +486,29 @@ def fit_network(
             samples, sample_normals = scan.facet_samples(
                 face_area / SAMPLES_PER_FACE, SPARSE_FACET * face_area
             )
-            fitted: FitCage = fit_cage(
-                np.concatenate([scan.points, samples]),
-                np.concatenate([normals, sample_normals]),
-                cage_layout,
-                scan.triangles,
-            )
-            # the scan, not the cage's limit, is what the fit is measured against (below)
-            network = build_network(fitted.cage, method, "limit", tolerance=None)
+            points = np.concatenate([scan.points, samples])
+            point_normals = np.concatenate([normals, sample_normals])
+            stiffness: FloatArray | None = None
+            attempts: list[tuple[int, int, FitCage, PatchNetwork, NDArray[np.bool_]]] = []
+            for _ in range(FOLD_REFITS + 1):
+                attempt: FitCage = fit_cage(
+                    points, point_normals, cage_layout, scan.triangles, stiffness=stiffness
+                )
+                # the scan, not the cage's limit, is what the fit is measured against (below)
+                made = build_network(attempt.cage, method, "limit", tolerance=None)
+                bent = folded_patches(made.patches, FOLD_SAMPLES)  # as check counts
+                attempts.append((int(bent.sum()), len(attempts), attempt, made, bent))
+                if not bent.any():
+                    break
+                stiffness = _stiffened(cage_layout, made, bent, stiffness)
+            _, _, fitted, network, folded = min(attempts, key=lambda a: a[:2])
             to_surface, to_scan, off = measure(
                 network, scan, cage_layout.n_faces, tolerance * diagonal, samples
             )
             worst = _bounded(to_surface, to_scan) / diagonal
             tried.append((cage_layout.n_faces, worst))
             gaps = crease_gaps(cage_layout, features)
-            folds = int(folded_patches(network.patches, FOLD_SAMPLES).sum())  # as check counts
+            folds = int(folded.sum())
             rank = (folds, gaps > FEATURE_GAPS, worst)
             if best is None or rank < best[0]:  # a finer layout is not always nearer
                 best = (rank, gaps, cage_layout, fitted, network, to_surface, to_scan)
@@ -603,6 +620,19 @@ def _locally_refined(
         return refined.with_vertices(vertices)
     except MeshError:  # two new vertices on one scan point: keep them where the split made them
         return refined
+
+
+def _stiffened(
+    layout: QuadMesh, network: PatchNetwork, folded: NDArray[np.bool_], stiffness: FloatArray | None
+) -> FloatArray:
+    """Per cage vertex the fairness weight of the next fit: :data:`FOLD_STIFFNESS` times the last
+    at the vertices of the faces whose patches fold and a ring round them."""
+    faces = np.zeros(layout.n_faces, dtype=bool)
+    faces[np.flatnonzero(folded) * layout.n_faces // network.n_patches] = True
+    around = grow(layout.topology, faces, 1)
+    out = np.ones(layout.n_vertices) if stiffness is None else stiffness.copy()
+    out[np.unique(layout.faces[around])] *= FOLD_STIFFNESS
+    return out
 
 
 def _layout(scan: Scan, faces: int) -> QuadMesh:

@@ -10,12 +10,13 @@ scan point p gets its foot on those triangles (barycentric weights b over a tria
 points), so that its model is ``B G C`` (B: one row of three weights per point), and the cage
 minimises
 
-    ``‖B G C − P‖² + λ ‖K C‖² + μ ‖C − C_prev‖²``,   ``λ = fairness · N / V``,
+    ``‖B G C − P‖² + λ ‖W^½ K C‖² + μ ‖C − C_prev‖²``,   ``λ = fairness · N / V``,
     ``μ = damping · N / V``
 
 (N scan points, V cage vertices; K the umbrella Laplacian ``C_v − mean of its neighbours``: a
 small fairness term keeps noise from being chased; the proximal term keeps vertices few points
-reach near the previous cage while the feet settle), solved by a sparse LU of the normal
+reach near the previous cage while the feet settle; W a per-vertex stiffness, 1 but where a
+fit folded, :func:`~g1patch.fitting._stiffened`), solved by a sparse LU of the normal
 equations. The feet move with the surface, so project → solve is repeated ``iterations`` times.
 
 An open scan's boundary holds the surface's: the limit boundary curve (the grid points on the
@@ -311,10 +312,12 @@ def fit_cage(
     iterations: int = FIT_ITERATIONS,
     fairness: float = FAIRNESS,
     damping: float = DAMPING,
+    stiffness: FloatArray | None = None,
 ) -> FitCage:
     """The cage of ``layout``'s topology whose limit surface passes nearest ``points`` (N, 3,
     with unit ``normals``) (module docstring), starting from the layout's own positions; the
-    ``scan_triangles`` give the scan's boundary (none: the boundary rows are left out)."""
+    ``scan_triangles`` give the scan's boundary (none: the boundary rows are left out);
+    ``stiffness`` (V,) the fairness weight per cage vertex (W, all 1 when None)."""
     limit, grid = limit_grid_matrix(layout, levels)
     if scan_triangles is None:
         point_part, face_part = np.zeros(len(points), np.int64), np.zeros(layout.n_faces, np.int64)
@@ -331,7 +334,10 @@ def fit_cage(
     fair = _umbrella(layout)
     per_vertex = len(points) / max(layout.n_vertices, 1)
     damping = damping * per_vertex
-    regular = fairness * per_vertex * (fair.T @ fair) + damping * sp.identity(layout.n_vertices)
+    weights = sp.identity(layout.n_vertices) if stiffness is None else sp.diags(stiffness)
+    regular = fairness * per_vertex * (fair.T @ weights @ fair) + damping * sp.identity(
+        layout.n_vertices
+    )
     cage = layout.vertices.copy()
     for _, _, boundary in parts:
         cage = cage if boundary is None else boundary.snapped(cage)
