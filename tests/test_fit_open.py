@@ -232,8 +232,8 @@ def test_a_scan_boundary_the_layout_lacks_is_left_alone() -> None:
 
 def test_the_tolerance_bounds_the_scan_s_bulk_and_all_of_the_surface() -> None:
     """Met means scan → surface at the 99.9th percentile and surface → scan at its maximum within
-    the tolerance, no fold and the feature lines creases: a stray scan point far off does not
-    fail a fit; a surface spike, a fold or a rounded sharp edge does."""
+    the tolerance, no fold, the feature lines creases and exact G1: a stray scan point far off
+    does not fail a fit; a surface spike, a fold, a rounded sharp edge or a kink does."""
     from g1patch.fitting import FitReport
 
     def report(to_surface: tuple[float, ...], to_scan: tuple[float, ...]) -> FitReport:
@@ -250,6 +250,9 @@ def test_the_tolerance_bounds_the_scan_s_bulk_and_all_of_the_surface() -> None:
     )
     gapped = dataclasses.replace(stray, feature_gaps=0.02)  # a sharp edge rounded in places
     assert not gapped.met and "in gaps" in gapped.summary()
+    kinked = dataclasses.replace(stray, g1=2e-9)  # not exactly G1 (a corner once broke it): not met
+    assert not kinked.met and kinked.to_dict()["g1_deg"] == 2e-9
+    assert "NOT within 1e-09°" in kinked.summary() and "NOT" not in stray.summary().split("G1")[1]
 
 
 NO_FEATURES = np.zeros((0, 2, 3))

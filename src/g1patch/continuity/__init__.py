@@ -64,7 +64,7 @@ from .grid import MAX_FOLD_LOCATIONS as MAX_FOLD_LOCATIONS
 from .grid import TENSOR_TURN_ATOL as TENSOR_TURN_ATOL
 from .grid import fairness
 from .jit import KERNEL_PATCHES as KERNEL_PATCHES
-from .report import SEAM_G0_RTOL, ContinuityReport, format_reports
+from .report import EXACT_G1_DEG, SEAM_G0_RTOL, ContinuityReport, format_reports
 from .sampling import _blocks as _blocks
 from .sampling import _box as _box
 from .sampling import _diagonal as _diagonal
@@ -75,6 +75,7 @@ from .vectors import _planar as _planar
 from .vectors import angle_between
 
 __all__ = [
+    "EXACT_G1_DEG",
     "SEAM_G0_RTOL",
     "ContinuityReport",
     "check",

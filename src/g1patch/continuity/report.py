@@ -11,6 +11,9 @@ from numpy.typing import NDArray
 
 from ..errors import InputError
 
+#: the project's bar for "exactly G1", degrees (DESIGN §5): the defaults of :meth:`ContinuityReport.
+#: is_g1`, :meth:`~ContinuityReport.passes` and :meth:`~ContinuityReport.verdict`
+EXACT_G1_DEG = 1e-9
 SEAM_G0_RTOL = 1e-12
 """The largest G0 gap (relative to the bounding-box diagonal) a seam may have and pass: its two
 sides share one boundary curve, equal up to rounding."""
@@ -80,7 +83,7 @@ class ContinuityReport:
             "g0_gap": float(self.edge_gap[index]),
         }
 
-    def is_g1(self, max_angle_deg: float = 1e-9) -> bool:
+    def is_g1(self, max_angle_deg: float = EXACT_G1_DEG) -> bool:
         """True when every smooth edge and every corner sector's angle is within ``max_angle_deg``
         (folds and seams aside); ``max_angle_deg`` must be finite, from 0 to 180
         (:class:`~g1patch.errors.InputError`: NaN would pass every check)."""
@@ -98,7 +101,9 @@ class ContinuityReport:
         """True when every seam's G0 gap (relative to the bbox diagonal) is within ``max_gap``."""
         return self.seam_g0_max <= max_gap
 
-    def passes(self, max_angle_deg: float = 1e-9, max_seam_gap: float = SEAM_G0_RTOL) -> bool:
+    def passes(
+        self, max_angle_deg: float = EXACT_G1_DEG, max_seam_gap: float = SEAM_G0_RTOL
+    ) -> bool:
         """The check verdict: :meth:`is_g1`, no patch folds, no degenerate patch and
         :meth:`seams_closed`."""
         return (
@@ -235,7 +240,7 @@ class ContinuityReport:
         """A short human-readable table."""
         return format_reports([self])
 
-    def verdict(self, max_angle_deg: float = 1e-9) -> str:
+    def verdict(self, max_angle_deg: float = EXACT_G1_DEG) -> str:
         """One phrase: ``"exact G1 (max angle 3.1e-12°), no folds"``, or what fails."""
         angle = max(self.max_edge_angle_deg, self.max_corner_angle_deg)
         g1 = (
@@ -272,7 +277,8 @@ class ContinuityReport:
             for label, value in self.rows()
         )
         return (
-            f"<div><b>ContinuityReport</b>: {escape(self.verdict())} (the check {verdict} at 1e-9°)"
+            f"<div><b>ContinuityReport</b>: {escape(self.verdict())} "
+            f"(the check {verdict} at {EXACT_G1_DEG:g}°)"
             f"<table>{cells}</table></div>"
         )
 

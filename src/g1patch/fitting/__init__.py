@@ -35,7 +35,13 @@ from scipy.spatial import cKDTree
 
 from ..build import build_network, check_tolerance
 from ..compare import mesh_distance
-from ..continuity import FOLD_SAMPLES, folded_patches
+from ..continuity import (
+    EXACT_G1_DEG,
+    FOLD_SAMPLES,
+    ContinuityReport,
+    check,
+    folded_patches,
+)
 from ..errors import ConstructionError, InputError, MeshError
 from ..mesh import QuadMesh
 from ..mesh.neighbourhood import grow
@@ -289,7 +295,9 @@ class FitReport:
     (the scan's features, ``sharp_angle``); ``repairs``: what was repaired in the scan;
     ``feature_gaps``: the share of the scan's feature lines no crease follows
     (:func:`~g1patch.fitting.features.crease_gaps`), where the surface rounds a sharp edge;
-    ``folds``: folded patches (as :func:`~g1patch.continuity.check` counts them)."""
+    ``folds``: folded patches (as :func:`~g1patch.continuity.check` counts them); ``g1``: the
+    largest angle between the patches' normals across a smooth edge or at a corner, degrees (as
+    ``check`` measures it)."""
 
     diagonal: float
     tolerance: float
@@ -304,6 +312,7 @@ class FitReport:
     repairs: tuple[str, ...] = ()
     feature_gaps: float = 0.0
     folds: int = 0
+    g1: float = 0.0
 
     @property
     def worst(self) -> float:
@@ -314,9 +323,12 @@ class FitReport:
     @property
     def met(self) -> bool:
         """Within the tolerance, no fold, the feature lines creases (but :data:`FEATURE_GAPS`
-        of them)."""
+        of them), exactly G1 (:data:`~g1patch.continuity.EXACT_G1_DEG`)."""
         return (
-            self.worst <= self.tolerance and self.folds == 0 and self.feature_gaps <= FEATURE_GAPS
+            self.worst <= self.tolerance
+            and self.folds == 0
+            and self.feature_gaps <= FEATURE_GAPS
+            and self.g1 <= EXACT_G1_DEG
         )
 
     def summary(self) -> str:
@@ -339,6 +351,8 @@ class FitReport:
                     else ""
                 ),
                 f"{'folded patches':<32}{self.folds}",
+                f"{'G1: largest angle':<32}{self.g1:.1e}°"
+                + ("" if self.g1 <= EXACT_G1_DEG else f" (NOT within {EXACT_G1_DEG:g}°)"),
                 f"{'distance, of diagonal':<32}max / p99.9 / rms  (model units)",
                 row("scan → surface", self.to_surface),
                 row("surface → scan", self.to_scan),
@@ -365,6 +379,7 @@ class FitReport:
             "creases": self.creases,
             "feature_gaps": self.feature_gaps,
             "folds": self.folds,
+            "g1_deg": self.g1,
             "repairs": list(self.repairs),
         }
 
@@ -543,8 +558,14 @@ def fit_network(
         scan.repairs,
         gaps,
         folds,
+        _largest_angle(check(network)),
     )
     return network, report
+
+
+def _largest_angle(checked: ContinuityReport) -> float:
+    """The largest G1 angle ``check`` measured, across smooth edges and at corners (degrees)."""
+    return max(checked.max_edge_angle_deg, checked.max_corner_angle_deg)
 
 
 def face_budget(triangles: int) -> int:

@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 from ..continuity import (
     DEGENERATE_RTOL,
+    EXACT_G1_DEG,
     ContinuityReport,
     _blocks,
     _diagonal,
@@ -39,8 +40,6 @@ EDGE_SAMPLES_PER_PIXEL = 4
 MIN_EDGE_SAMPLES = 5
 #: check's samples per edge
 _CHECK_SAMPLES = 33
-#: the project's bar for "exactly G1", degrees (marked on the colour bar of the deviation mode)
-EXACT_G1_DEG = 1e-9
 _DEVIATION_SURFACE = np.array([0.86, 0.86, 0.86])
 _OPEN_EDGE_COLOUR = np.array([0.35, 0.35, 0.35])
 #: seams in the deviation mode: a green that plasma (blue, purple, orange, yellow) never reaches
