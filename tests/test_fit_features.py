@@ -9,7 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from g1patch.fitting.features import layout_creases, sharp_segments, snap_to_features
+from g1patch.fitting.features import (
+    boundary_corners,
+    layout_corners,
+    layout_creases,
+    sharp_segments,
+    snap_to_features,
+)
 from g1patch.mesh import QuadMesh
 
 
@@ -168,3 +174,50 @@ def test_a_layout_file_with_a_bad_tag_is_refused(
     assert code == 2 and not out.exists()
     error = capsys.readouterr().err.strip().splitlines()
     assert len(error) == 1 and "bad.obj: tag 'crease' names vertex 999" in error[0]
+
+
+def flat_square(cells: int = 32, zigzag: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """A triangulated unit square in z = 0 whose rim vertices (but its four corners) are pushed
+    in and out along the rim's normal by ``zigzag`` of a cell, alternately: a scanned rim."""
+    x = np.arange(cells + 1) / cells
+    gx, gy = np.meshgrid(x, x, indexing="ij")
+    points = np.stack([gx, gy, np.zeros_like(gx)], axis=-1)
+    sign = (-1.0) ** np.arange(cells + 1)
+    shift = zigzag / cells * sign[1:-1]
+    points[0, 1:-1, 0] += shift
+    points[-1, 1:-1, 0] += shift
+    points[1:-1, 0, 1] += shift
+    points[1:-1, -1, 1] += shift
+    index = np.arange(gx.size).reshape(gx.shape)
+    a, b, c, d = index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]
+    triangles = np.concatenate([np.stack([a, b, c], -1), np.stack([a, c, d], -1)]).reshape(-1, 3)
+    return points.reshape(-1, 3), triangles
+
+
+def test_a_rim_s_corners_are_its_turns_at_the_layout_s_scale() -> None:
+    """A square's four corners are corners at any scale; a rim zigzagging by 0.4 of a scan
+    edge (turns of about 77° from edge to edge, a scanned rim) has no others at a layout edge of
+    four scan edges, and the square's corners stay, each within a scan edge (and the zigzag)."""
+    corners = np.array([[0.0, 0.0], [0.0, 1.0], [1.0, 0.0], [1.0, 1.0]])
+    for zigzag in (0.0, 0.4):
+        points, triangles = flat_square(zigzag=zigzag)
+        for reach in (1 / 32, 4 / 32, 0.25):
+            found = boundary_corners(points, triangles, 60.0, reach)
+            if zigzag and reach < 2 / 32:
+                assert len(found) > 4  # at a scan edge's scale the zigzag turns
+                continue
+            gap = np.linalg.norm(found[:, None, :2] - corners, axis=-1)
+            assert len(found) == 4 and (gap.min(axis=0) <= 1.5 / 32).all(), (zigzag, reach)
+
+
+def test_a_corner_on_a_hole_the_layout_bridges_is_not_tied_to_it() -> None:
+    """A scan corner farther than a boundary edge of the layout from the layout's boundary (on a
+    hole the layout spans) moves and tags nothing; one on its rim is tied to its nearest vertex."""
+    layout = roof()
+    inside = np.array([[0.0, 1.0, 0.0]])  # the ridge's middle: two edges from the rim
+    assert layout_corners(layout, inside) is layout
+    on_rim = np.array([[-1.0, 0.02, -1.0]])
+    tied = layout_corners(layout, np.concatenate([inside, on_rim]))
+    assert np.flatnonzero(tied.features.vertex_sharpness).tolist() == [0]
+    assert np.allclose(tied.vertices[0], on_rim[0])
+    assert np.allclose(np.delete(tied.vertices, 0, axis=0), np.delete(layout.vertices, 0, axis=0))

@@ -49,6 +49,7 @@ from ..network import PatchNetwork
 from ..tessellate import tessellate
 from .features import (
     boundary_corners,
+    boundary_reach,
     crease_gaps,
     layout_corners,
     layout_creases,
@@ -469,9 +470,7 @@ def fit_network(
         if sharp_angle is None
         else sharp_corners(scan.points, scan.triangles, sharp_angle)
     )
-    corners = boundary_corners(
-        scan.points, scan.triangles, FIT_SHARP_ANGLE if sharp_angle is None else sharp_angle
-    )
+    corner_angle = FIT_SHARP_ANGLE if sharp_angle is None else sharp_angle
     rounds, best, failure, tried = 0, None, "", []
     budget = face_budget(len(scan.triangles))
     if adaptive:
@@ -496,6 +495,8 @@ def fit_network(
             if refine is None:  # a refined layout keeps the features its parent was given
                 snapped = snap_to_features(cage_layout, features, feature_corners)
                 creased = layout_creases(snapped, features, feature_corners)
+                reach = boundary_reach(creased)
+                corners = boundary_corners(scan.points, scan.triangles, corner_angle, reach)
                 cage_layout = layout_corners(creased, corners)
             face_area = area / cage_layout.n_faces
             samples, sample_normals = scan.facet_samples(

@@ -49,6 +49,7 @@ __all__ = [
     "BRIDGE_ROUNDS",
     "CHAIN_EDGES",
     "CORNER_SNAP",
+    "CORNER_STEPS",
     "EDGE_SAMPLES",
     "GAP_REACH",
     "LINE_SNAP",
@@ -78,6 +79,9 @@ BRIDGE_ALIGNMENT_DEG = 40.0
 BRIDGE_ROUNDS = 3
 #: a layout vertex this near a scan corner (of its mean edge length) is moved onto it
 CORNER_SNAP = 0.5
+#: scan boundary edges each way a boundary turn is measured over at most
+#: (:func:`boundary_corners`)
+CORNER_STEPS = 64
 #: a layout vertex this near a sharp scan edge (of its mean edge length) is moved onto it (the
 #: remesher's vertices on a feature line lie within 0.2 of it on the box and the L-bracket, the
 #: next ones 0.5 or more away)
@@ -291,32 +295,76 @@ def crease_gaps(layout: QuadMesh, segments: FloatArray) -> float:
     return float(weight[gap > GAP_REACH * scale].sum() / weight.sum())
 
 
-def boundary_corners(points: FloatArray, triangles: IntArray, degrees: float) -> FloatArray:
+def boundary_reach(layout: QuadMesh) -> float:
+    """The median length of ``layout``'s boundary edges (0 when it is closed)."""
+    edges = boundary_edges(layout.faces)
+    if not len(edges):
+        return 0.0
+    return float(np.median(np.linalg.norm(np.diff(layout.vertices[edges], axis=1), axis=-1)))
+
+
+def boundary_corners(
+    points: FloatArray, triangles: IntArray, degrees: float, reach: float
+) -> FloatArray:
     """The scan's boundary vertices (C, 3) where its boundary polyline turns by more than
-    ``degrees``: ``angle(p − p_in, p_out − p)``, p_in and p_out its boundary neighbours."""
+    ``degrees`` at the scale ``reach`` (a layout's boundary edge length): ``angle(p − p₋, p₊ − p)``,
+    p± the first boundary vertices at least ``reach`` along the boundary before and after (at
+    most :data:`CORNER_STEPS` edges, and under half the loop), and the largest turn among the
+    vertices that near. A scanned rim zigzags by a triangle's width, turns of 60–120° from one
+    edge to the next (the Stanford bunny's base holes: 13 such vertices, tied to its layout as
+    corners they folded it; a range scan's ragged rim: 252), which cancel over a layout edge,
+    while a corner's sides stay straight; a bend tighter than a layout edge is a corner to it."""
     edges = boundary_edges(triangles)
     if not len(edges):
         return np.zeros((0, 3))
-    incoming = np.full(len(points), -1)
-    incoming[edges[:, 1]] = edges[:, 0]
-    outgoing = edges[:, 1]
-    vertex = edges[:, 0]
-    keep = incoming[vertex] >= 0
-    vertex, before, after = vertex[keep], incoming[vertex[keep]], outgoing[keep]
-    into, out = points[vertex] - points[before], points[after] - points[vertex]
-    cosine = (into * out).sum(1) / np.maximum(
-        np.linalg.norm(into, axis=1) * np.linalg.norm(out, axis=1), np.finfo(float).tiny
-    )
-    return np.asarray(points[np.unique(vertex[cosine < np.cos(np.radians(degrees))])])
+    after = np.full(len(points), -1)
+    before = np.full(len(points), -1)
+    after[edges[:, 0]] = edges[:, 1]
+    before[edges[:, 1]] = edges[:, 0]
+    vertex = np.flatnonzero((after >= 0) & (before >= 0))
+    graph = sp.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), (len(points),) * 2)
+    loop = connected_components(graph, directed=False)[1]
+    steps = np.clip((np.bincount(loop[vertex])[loop[vertex]] - 2) // 2, 1, CORNER_STEPS)
+    ahead, behind = [vertex], [vertex]  # the vertices 0, 1, 2, … steps along, while short
+    for step in range(1, CORNER_STEPS + 1):
+        forward, backward = after[ahead[-1]], before[behind[-1]]
+        short_ahead = np.linalg.norm(points[ahead[-1]] - points[vertex], axis=1) < reach
+        short_behind = np.linalg.norm(points[behind[-1]] - points[vertex], axis=1) < reach
+        ahead.append(np.where((step <= steps) & short_ahead & (forward >= 0), forward, ahead[-1]))
+        behind.append(
+            np.where((step <= steps) & short_behind & (backward >= 0), backward, behind[-1])
+        )
+        if (ahead[-1] == ahead[-2]).all() and (behind[-1] == behind[-2]).all():
+            break
+    into = points[vertex] - points[behind[-1]]
+    out = points[ahead[-1]] - points[vertex]
+    lengths = np.linalg.norm(into, axis=1) * np.linalg.norm(out, axis=1)
+    cosine = np.ones(len(vertex))
+    np.divide((into * out).sum(1), lengths, out=cosine, where=lengths > 0)
+    turn = np.full(len(points), -np.inf)
+    turn[vertex] = np.arccos(np.clip(cosine, -1.0, 1.0))
+    peak = np.ones(len(vertex), dtype=bool)
+    for forward, backward in zip(ahead[1:], behind[1:], strict=True):
+        peak &= (forward == vertex) | (turn[vertex] >= turn[forward])  # ties: the first wins
+        peak &= (backward == vertex) | (turn[vertex] > turn[backward])
+    corner = peak & (turn[vertex] > np.radians(degrees))
+    return np.asarray(points[vertex[corner]])
 
 
 def layout_corners(layout: QuadMesh, corners: FloatArray) -> QuadMesh:
     """``layout`` with its boundary vertex nearest each scan boundary corner (``corners`` (C,
-    3)) moved onto it and tagged ``corner`` (sharpness ∞)."""
+    3)) moved onto it and tagged ``corner`` (sharpness ∞), where it is within the layout's median
+    boundary edge length of it: a corner farther off is on a scan boundary the layout does not
+    have (a hole it bridges), and the layout vertex nearest it is some other boundary's."""
     boundary = np.unique(boundary_edges(layout.faces))
     if not len(corners) or not len(boundary):
         return layout
-    nearest = boundary[cKDTree(layout.vertices[boundary]).query(corners)[1]]
+    reach = boundary_reach(layout)
+    distance, index = cKDTree(layout.vertices[boundary]).query(corners)
+    near = distance <= reach
+    if not near.any():
+        return layout
+    nearest, corners = boundary[index[near]], corners[near]
     vertices = layout.vertices.copy()
     vertices[nearest] = corners
     tags = (*layout.tags, Tag("corner", tuple(np.unique(nearest).tolist()), (INFINITE_SHARPNESS,)))
