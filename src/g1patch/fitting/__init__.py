@@ -14,11 +14,12 @@ has no fold, else asks the remesher for the face count the measured error calls 
 with the fewest folds, then the nearest. A fit that folds is first fitted again on its own
 layout, fairer round the folds (:func:`_stiffened`, :data:`FOLD_REFITS` times at most). A layout
 the cage cannot be built from (what :func:`~g1patch.fitting.layout.clean_layout` leaves still
-refused) is skipped for the next face count. The tolerance bounds the scan → surface 99.9th
-percentile and the surface → scan maximum (:class:`FitReport`). The scan is cleaned first:
-vertices no triangle uses dropped (:func:`used_only`), coincident ones welded (:func:`welded`: an
-unwelded scan's cracks make the remesher's layout ragged and, on some inputs, not
-reproducible), islands dropped (:func:`without_islands`); its points are its vertices and, where
+refused) is skipped for the next face count; the faces of a remesher's layout that span a hole of
+the scan are cut out (:func:`~g1patch.fitting.layout.bridging_faces`). The tolerance bounds the
+scan → surface 99.9th percentile and the surface → scan maximum (:class:`FitReport`). The scan
+is cleaned first: vertices no triangle uses dropped (:func:`used_only`), coincident ones welded
+(:func:`welded`: an unwelded scan's cracks make the remesher's layout ragged and, on some inputs,
+not reproducible), islands dropped (:func:`without_islands`); its points are its vertices and, where
 its triangles are large beside the layout's faces, samples inside them
 (:meth:`Scan.facet_samples`).
 """
@@ -57,7 +58,7 @@ from .features import (
     sharp_segments,
     snap_to_features,
 )
-from .layout import quad_layout, refined_layout
+from .layout import bridging_faces, quad_layout, refined_layout
 from .solve import FitCage, _Triangles, fit_cage, vertex_normals
 
 __all__ = [
@@ -141,8 +142,10 @@ MAX_FACET_SPLIT = 32
 #: a connected part of a scan narrower than this (its bounding box's diagonal, of the scan's) is
 #: an island, dropped (:func:`without_islands`)
 ISLAND_SIZE = 0.05
-#: a fit that folds is fitted again, at most this many times, fairer where it folds
-FOLD_REFITS = 2
+#: a fit that folds is fitted again, at most this many times, fairer where it folds (the
+#: Stanford bunny scan's 4,276-quad layout, its base holes cut open: 15, 13, 7 and 5 folded
+#: patches; a fourth try is cheaper than the finer layout the fold would otherwise call for)
+FOLD_REFITS = 3
 #: by this factor on the fairness weight of the folded faces' vertices and a ring round them
 FOLD_STIFFNESS = 30.0
 #: scan points beyond the tolerance that make a face off (one alone is a stray point or noise,
@@ -525,10 +528,14 @@ def fit_network(
             tried.append((cage_layout.n_faces, worst))
             gaps = crease_gaps(cage_layout, features)
             folds = int(folded.sum())
-            rank = (folds, gaps > FEATURE_GAPS, worst)
-            if best is None or rank < best[0]:  # a finer layout is not always nearer
+            within = worst <= tolerance
+            # no fold, then within the tolerance, then (within) the feature lines followed, then
+            # the nearest: a finer layout is not always nearer, and where none is within, gaps
+            # in stray feature lines (a decimated bunny's steep facets) do not outrank distance
+            rank = (folds, not within, within and gaps > FEATURE_GAPS, worst)
+            if best is None or rank < best[0]:
                 best = (rank, gaps, cage_layout, fitted, network, to_surface, to_scan)
-            if not adaptive or rank == (0, False, worst) and worst <= tolerance:
+            if not adaptive or rank == (0, False, False, worst):
                 break
         if rounds >= MAX_ROUNDS:
             break
@@ -543,7 +550,7 @@ def fit_network(
             count = min(next_faces(tried, tolerance, count), budget)
     if best is None:
         raise ConstructionError(f"no usable quad layout in {rounds} tries (last: {failure})")
-    (folds, _, worst), gaps, cage_layout, fitted, network, to_surface, to_scan = best
+    (folds, _, _, worst), gaps, cage_layout, fitted, network, to_surface, to_scan = best
     network.provenance.update({"fit_tolerance": f"{tolerance:g}", "fit_distance": f"{worst:.3e}"})
     report = FitReport(
         diagonal,
@@ -658,6 +665,13 @@ def _stiffened(
 
 
 def _layout(scan: Scan, faces: int) -> QuadMesh:
-    """The remesher's quads as a validated (and where needed repaired) quad mesh."""
+    """The remesher's quads as a validated (and where needed repaired) quad mesh, without the
+    faces that span the scan's holes (:func:`~g1patch.fitting.layout.bridging_faces`: the
+    surface keeps the holes, its rim tied to theirs)."""
     vertices, quads = quad_layout(scan.points, scan.triangles, int(faces))
-    return QuadMesh.from_arrays(vertices, quads, source=f"layout of {scan.source or 'the scan'}")
+    source = f"layout of {scan.source or 'the scan'}"
+    layout = QuadMesh.from_arrays(vertices, quads, source=source)
+    bridges = bridging_faces(layout, scan.points, scan.triangles)
+    if not bridges.any() or bridges.all():
+        return layout
+    return QuadMesh.from_arrays(layout.vertices, layout.faces[~bridges], source=source)
