@@ -20,7 +20,7 @@ from g1patch.errors import ConstructionError
 from g1patch.fitting import Scan, fit_network, welded
 from g1patch.fitting import layout as layout_module
 from g1patch.fitting.layout import bridging_faces, clean_layout
-from g1patch.fitting.solve import boundary_edges
+from g1patch.fitting.scan_topology import boundary_edges, triangle_parts
 from g1patch.io.meshfile import write_quads, write_triangles
 from g1patch.tessellate import tessellate
 
@@ -167,7 +167,7 @@ def test_parts_are_laid_out_and_fitted_apart() -> None:
     scan = welded(Scan(closed, sphere))
     two = np.concatenate([scan.points, scan.points + [1.2, 0.0, 0.0]])
     both = np.concatenate([scan.triangles, scan.triangles + len(scan.points)])
-    assert np.bincount(layout_module.triangle_parts(both, len(two))).tolist() == [len(sphere)] * 2
+    assert np.bincount(triangle_parts(both, len(two))).tolist() == [len(sphere)] * 2
     vertices, quads = layout_module.quad_layout(two, both, 400)
     again = layout_module.quad_layout(two, both, 400)
     assert np.array_equal(vertices, again[0]) and np.array_equal(quads, again[1])
@@ -195,7 +195,7 @@ def test_faces_touching_at_a_vertex_are_two_parts() -> None:
     is two surfaces to lay out (one layout over both folded where they meet)."""
     first = np.array([[0, 1, 2], [0, 2, 3]])
     second = np.array([[0, 4, 5], [0, 5, 6]])  # shares vertex 0 only
-    assert layout_module.triangle_parts(np.concatenate([first, second]), 7).tolist() == [
+    assert triangle_parts(np.concatenate([first, second]), 7).tolist() == [
         0,
         0,
         1,

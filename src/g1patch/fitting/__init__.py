@@ -59,6 +59,7 @@ from .features import (
     snap_to_features,
 )
 from .layout import bridging_faces, quad_layout, refined_layout
+from .scan_topology import triangle_parts
 from .solve import FitCage, _Triangles, fit_cage, vertex_normals
 
 __all__ = [
@@ -230,13 +231,11 @@ def used_only(scan: Scan) -> Scan:
 
 def without_islands(scan: Scan) -> Scan:
     """``scan`` without its islands: connected parts (triangles sharing edges,
-    :func:`~g1patch.fitting.layout.triangle_parts`) whose bounding box's diagonal is under
+    :func:`~g1patch.fitting.scan_topology.triangle_parts`) whose bounding box's diagonal is under
     :data:`ISLAND_SIZE` of the whole scan's, the specks a range scan leaves (pymeshlab's sample
     face scan: 20 of its 22 parts, 485 of 166,259 triangles, each 0.3–4.9 % of the diagonal
     across; laid out and fitted they folded). ``repairs`` says how many; a scan of islands
     only is kept whole."""
-    from .layout import triangle_parts
-
     part = triangle_parts(scan.triangles, len(scan.points))
     count = int(part.max()) + 1 if len(part) else 0
     if count < 2:

@@ -40,7 +40,7 @@ from scipy.spatial import cKDTree
 
 from ..mesh import INFINITE_SHARPNESS, QuadMesh, Tag
 from ..sharpen import sharp_angle_tags
-from .solve import boundary_edges
+from .scan_topology import boundary_edges, boundary_loops
 
 __all__ = [
     "ALIGNMENT_DEG",
@@ -322,8 +322,7 @@ def boundary_corners(
     after[edges[:, 0]] = edges[:, 1]
     before[edges[:, 1]] = edges[:, 0]
     vertex = np.flatnonzero((after >= 0) & (before >= 0))
-    graph = sp.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), (len(points),) * 2)
-    loop = connected_components(graph, directed=False)[1]
+    loop = boundary_loops(edges, len(points))
     steps = np.clip((np.bincount(loop[vertex])[loop[vertex]] - 2) // 2, 1, CORNER_STEPS)
     ahead, behind = [vertex], [vertex]  # the vertices 0, 1, 2, … steps along, while short
     for step in range(1, CORNER_STEPS + 1):

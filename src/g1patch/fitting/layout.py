@@ -20,9 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..errors import ConstructionError, InputError, MissingDependencyError
@@ -30,6 +28,7 @@ from ..mesh import QuadMesh, Tag
 from ..mesh.conforming import local_split
 from ..mesh.tags import FACE_TAGS, VERTEX_TAGS
 from ..mesh.validate import DEGENERATE_AREA_TOLERANCE
+from .scan_topology import boundary_edges, boundary_loops, triangle_parts
 
 __all__ = [
     "BRIDGE_GAP",
@@ -40,7 +39,6 @@ __all__ = [
     "clean_layout",
     "quad_layout",
     "refined_layout",
-    "triangle_parts",
 ]
 
 #: seconds the remesher may take before it is stopped
@@ -162,13 +160,11 @@ def bridging_faces(
     non-manifold edges were removed), where the fitted surface then lay 1.3e-2 of the diagonal
     from the scan at every layout up to 4,400 quads."""
     from ..compare import mesh_distance
-    from .solve import boundary_edges
 
     edges = boundary_edges(triangles)
     if not len(edges):
         return np.zeros(layout.n_faces, dtype=bool)
-    graph = sp.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), (len(points),) * 2)
-    loop = connected_components(graph, directed=False)[1]
+    loop = boundary_loops(edges, len(points))
     rim = np.unique(edges)
     low = np.full((loop.max() + 1, 3), np.inf)
     high = np.full((loop.max() + 1, 3), -np.inf)
@@ -224,20 +220,6 @@ def _buried_loops(
     ordered = distance[np.lexsort((distance, inverse))]  # loop after loop, each ascending
     median = ordered[np.cumsum(counts) - counts + counts // 2]  # the upper median
     return labels[median < 0.5 * extent[labels]]
-
-
-def triangle_parts(triangles: NDArray[np.int64], count: int) -> NDArray[np.int64]:
-    """The connected part (0, 1, …) of each face (T, k) over ``count`` vertices: faces sharing
-    an edge are in one part. Faces touching at a vertex only are not: a teapot's handle welded
-    to its body at a few coincident points is two surfaces, and one layout over both folds."""
-    faces, corners = len(triangles), triangles.shape[1]
-    sides = np.stack([triangles, np.roll(triangles, -1, axis=1)], axis=-1).reshape(-1, 2)
-    key = sides.min(axis=1) * np.int64(count) + sides.max(axis=1)
-    order = np.argsort(key, kind="stable")
-    same = np.flatnonzero(key[order][1:] == key[order][:-1])
-    a, b = order[same] // corners, order[same + 1] // corners
-    graph = sp.coo_matrix((np.ones(a.size), (a, b)), shape=(faces, faces))
-    return connected_components(graph, directed=False)[1].astype(np.int64)
 
 
 def clean_layout(

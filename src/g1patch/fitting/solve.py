@@ -49,6 +49,7 @@ from ..compare import _barycentric_closest
 from ..errors import ConstructionError
 from ..mesh import QuadMesh
 from ..subdivision import limit_grid_matrix
+from .scan_topology import boundary_edges, polygon_sides, triangle_parts
 
 __all__ = [
     "FIT_ITERATIONS",
@@ -120,21 +121,6 @@ def vertex_normals(points: FloatArray, triangles: IntArray) -> FloatArray:
     return total / np.where(length > 0, length, 1.0)
 
 
-def _sides(faces: IntArray) -> tuple[IntArray, NDArray[np.bool_]]:
-    """The sides ``(F, k, 2)`` of polygons ``faces`` (F, k), side i from corner i to i + 1, and
-    which of them only one face has (boundary sides)."""
-    sides = np.stack([faces, np.roll(faces, -1, axis=1)], axis=-1)
-    key = sides.min(axis=-1).astype(np.int64) * (1 << 31) + sides.max(axis=-1)
-    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
-    return sides, (counts[inverse] == 1).reshape(key.shape)
-
-
-def boundary_edges(faces: IntArray) -> IntArray:
-    """The edges (E, 2) of polygons ``faces`` (F, k) that only one face has, oriented as it has."""
-    sides, open_sides = _sides(faces)
-    return sides[open_sides]
-
-
 def closest_on_segments(
     points: FloatArray, starts: FloatArray, ends: FloatArray
 ) -> tuple[IntArray, FloatArray]:
@@ -166,7 +152,7 @@ class _Boundary:
         faces: NDArray[np.bool_],
     ) -> None:
         edges = boundary_edges(triangles)
-        sides, open_sides = _sides(layout.faces)
+        sides, open_sides = polygon_sides(layout.faces)
         open_sides &= faces[:, None]
         along = np.stack([grid[:, :, 0], grid[:, -1, :], grid[:, ::-1, -1], grid[:, 0, ::-1]], 1)
         polylines = along[open_sides]  # (B, m + 1) grid points along each boundary side
@@ -275,11 +261,9 @@ def fit_parts(
     points: FloatArray, triangles: IntArray, layout: QuadMesh
 ) -> tuple[IntArray, IntArray]:
     """Which part of the fit each scan point and each layout face belongs to: a connected part
-    of the scan (:func:`~g1patch.fitting.layout.triangle_parts`) and the layout's connected
+    of the scan (:func:`~g1patch.fitting.scan_topology.triangle_parts`) and the layout's connected
     parts whose vertices are mostly nearest to it. A scan part no layout part claims joins the
     part of the layout vertices nearest to its points. ``(point_part (N,), face_part (F,))``."""
-    from .layout import triangle_parts
-
     scan_part = np.full(len(points), -1)
     scan_part[triangles.reshape(-1)] = np.repeat(triangle_parts(triangles, len(points)), 3)
     faces = layout.faces
