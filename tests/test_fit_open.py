@@ -59,6 +59,28 @@ def height_field(cells: int = 40) -> tuple[np.ndarray, np.ndarray]:
     return np.stack([u, v, z], -1).reshape(-1, 3), grid_triangles(cells + 1, cells + 1)
 
 
+def square_with_hole(cells: int, half: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A flat unit square of ``cells`` × ``cells`` cells (two triangles each): its points, its
+    triangles, and those of it without a square hole ``|x − ½|, |y − ½| ≤ half`` (by centroid)."""
+    x = np.linspace(0.0, 1.0, cells + 1)
+    u, v = np.meshgrid(x, x, indexing="ij")
+    points = np.stack([u.ravel(), v.ravel(), np.zeros(u.size)], axis=1)
+    whole = grid_triangles(cells + 1, cells + 1)
+    centre = points[whole].mean(axis=1)[:, :2]
+    return points, whole, whole[np.abs(centre - 0.5).max(axis=1) > half]
+
+
+def square_layout() -> g1patch.mesh.QuadMesh:
+    """An 8 × 8 quad layout of the unit square in z = 0."""
+    corner = np.arange(8)[:, None] * 9 + np.arange(8)
+    return g1patch.mesh.QuadMesh.from_arrays(
+        np.stack(
+            [*np.meshgrid(np.linspace(0, 1, 9), np.linspace(0, 1, 9)), np.zeros((9, 9))], -1
+        ).reshape(-1, 3),
+        np.stack([corner, corner + 1, corner + 10, corner + 9], -1).reshape(-1, 4),
+    )
+
+
 def _checked(result: g1patch.api.FitResult) -> None:
     """Within the tolerance both ways, exactly G1, no folds."""
     checked = result.surface.check()
@@ -210,20 +232,8 @@ def test_a_scan_boundary_the_layout_lacks_is_left_alone() -> None:
     pulled 0.93 away, most of the side)."""
     from g1patch.fitting.solve import fit_cage, vertex_normals
 
-    cells = 40
-    x = np.linspace(0.0, 1.0, cells + 1)
-    u, v = np.meshgrid(x, x, indexing="ij")
-    points = np.stack([u.ravel(), v.ravel(), np.zeros(u.size)], axis=1)
-    whole = grid_triangles(cells + 1, cells + 1)
-    centre = points[whole].mean(axis=1)[:, :2]
-    holed = whole[np.abs(centre - 0.5).max(axis=1) > 0.05]  # a 0.1 × 0.1 hole
-    corner = np.arange(8)[:, None] * 9 + np.arange(8)
-    layout = g1patch.mesh.QuadMesh.from_arrays(
-        np.stack(
-            [*np.meshgrid(np.linspace(0, 1, 9), np.linspace(0, 1, 9)), np.zeros((9, 9))], -1
-        ).reshape(-1, 3),
-        np.stack([corner, corner + 1, corner + 10, corner + 9], -1).reshape(-1, 4),
-    )
+    points, whole, holed = square_with_hole(40, 0.05)  # a 0.1 × 0.1 hole
+    layout = square_layout()
 
     def rim(triangles: np.ndarray) -> np.ndarray:
         cage = fit_cage(points, vertex_normals(points, triangles), layout, triangles).cage
@@ -356,20 +366,8 @@ def test_the_faces_a_layout_spans_a_hole_with_are_found() -> None:
     of the whole square: the four faces whose centres lie a face's width inside the hole span it;
     the ring round them, centred on the hole's rim, does not, nor does any face over the scan
     without the hole."""
-    cells = 48
-    x = np.linspace(0.0, 1.0, cells + 1)
-    u, v = np.meshgrid(x, x, indexing="ij")
-    points = np.stack([u.ravel(), v.ravel(), np.zeros(u.size)], axis=1)
-    whole = grid_triangles(cells + 1, cells + 1)
-    centre = points[whole].mean(axis=1)[:, :2]
-    holed = whole[np.abs(centre - 0.5).max(axis=1) > 0.1875]
-    corner = np.arange(8)[:, None] * 9 + np.arange(8)
-    layout = g1patch.mesh.QuadMesh.from_arrays(
-        np.stack(
-            [*np.meshgrid(np.linspace(0, 1, 9), np.linspace(0, 1, 9)), np.zeros((9, 9))], -1
-        ).reshape(-1, 3),
-        np.stack([corner, corner + 1, corner + 10, corner + 9], -1).reshape(-1, 4),
-    )
+    points, whole, holed = square_with_hole(48, 0.1875)
+    layout = square_layout()
     middle = np.abs(layout.vertices[layout.faces].mean(axis=1)[:, :2] - 0.5).max(axis=1) < 0.1
     assert (bridging_faces(layout, points, holed) == middle).all() and middle.sum() == 4
     assert not bridging_faces(layout, points, whole).any()
