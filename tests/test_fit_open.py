@@ -364,13 +364,18 @@ def test_a_folded_fit_is_remade_not_refined(monkeypatch: pytest.MonkeyPatch) -> 
 def test_the_faces_a_layout_spans_a_hole_with_are_found() -> None:
     """A flat square scan with a square hole in its middle (0.3125–0.6875) under an 8 × 8 layout
     of the whole square: the four faces whose centres lie a face's width inside the hole span it;
-    the ring round them, centred on the hole's rim, does not, nor does any face over the scan
+    the ring round them, centred on the hole's rim, does not (nor when the layout is lifted off
+    the scan: the rim is under those faces, not beside them), nor does any face over the scan
     without the hole."""
     points, whole, holed = square_with_hole(48, 0.1875)
     layout = square_layout()
     middle = np.abs(layout.vertices[layout.faces].mean(axis=1)[:, :2] - 0.5).max(axis=1) < 0.1
     assert (bridging_faces(layout, points, holed) == middle).all() and middle.sum() == 4
     assert not bridging_faces(layout, points, whole).any()
+    # lifted 0.4 of an edge: the ring's centres now lie off the scan too, but with the rim under
+    # them (a face over a teapot's curled lip), not beside them: still only the four are cut
+    lifted = layout.with_vertices(layout.vertices + [0.0, 0.0, 0.05])
+    assert (bridging_faces(lifted, points, holed) == middle).all()
 
 
 @pytest.mark.slow
@@ -392,3 +397,28 @@ def test_a_hole_in_a_scan_stays_a_hole(monkeypatch: pytest.MonkeyPatch) -> None:
     network, report = fit_network(Scan(points, triangles[keep], "cap.obj"), tolerance=2e-3)
     assert report.met, report.summary()
     assert check(network).is_g1(1e-9)
+
+
+def test_a_layout_within_the_tolerance_outranks_one_that_is_not() -> None:
+    """Folds first; then within the tolerance beats not within, whatever the feature gaps; within
+    it, the feature lines followed beat gaps; then the nearest."""
+    from g1patch.fitting import FEATURE_GAPS, layout_rank
+
+    gappy = 2 * FEATURE_GAPS
+    assert layout_rank(0, 3e-3, 2e-3, gappy) < layout_rank(0, 1.5e-2, 2e-3, 0.0)
+    assert layout_rank(0, 1.9e-3, 2e-3, gappy) < layout_rank(0, 2.1e-3, 2e-3, 0.0)
+    assert layout_rank(0, 1.9e-3, 2e-3, 0.0) < layout_rank(0, 1e-3, 2e-3, gappy)
+    assert layout_rank(0, 9e-2, 2e-3, 0.0) < layout_rank(1, 1e-4, 2e-3, 0.0)
+
+
+def test_a_hole_another_part_closes_is_not_cut_open() -> None:
+    """The holed square of the test above over a second part 0.15 below it, a plate with a wider
+    hole (a teapot's handle end inside its body): the first hole's rim lies within half its width
+    of the other part, which closes it, so the layout's faces over it are not cut (alone, they
+    are)."""
+    points, _, holed = square_with_hole(48, 0.1875)
+    plate_points, _, plate = square_with_hole(24, 0.25)
+    both = np.concatenate([points, plate_points - [0.0, 0.0, 0.15]])
+    triangles = np.concatenate([holed, plate + len(points)])
+    assert bridging_faces(square_layout(), points, holed).sum() == 4
+    assert not bridging_faces(square_layout(), both, triangles).any()
