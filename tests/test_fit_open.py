@@ -273,17 +273,16 @@ NO_FEATURES = np.zeros((0, 2, 3))
 def test_a_layout_is_refined_where_it_is_off_and_nowhere_else() -> None:
     """The faces off the tolerance (a surface sample too far, or two scan points) with enough
     scan points are split, their ring closed into quads; the new vertices lie on the scan;
-    the old ones stay. Too many off faces, too few points, a feature line through an off face
-    or over the budget: no local step."""
-    from g1patch.fitting import LOCAL_SHARE, REFINE_POINTS, _locally_refined
+    the old ones stay. Too many off faces, too few points (a scan about as fine as the layout),
+    a feature line through an off face or over the budget: no local step. A low-poly scan's
+    large facets are points: refined."""
+    from g1patch.fitting import LOCAL_SHARE, REFINE_POINTS, _locally_refined, _refined_points
 
-    points, triangles = height_field(60)
+    points, triangles = height_field(120)
     scan = Scan(points, triangles)
-    cells = 20
-    x = np.linspace(0.0, 1.0, cells + 1)
-    u, v = np.meshgrid(x, x, indexing="ij")
+    cells = 20  # a layout on the scan: the same height field at 20 × 20 cells
     layout = g1patch.mesh.QuadMesh.from_arrays(
-        np.stack([u.ravel(), v.ravel(), np.zeros(u.size)], axis=1),
+        height_field(cells)[0],
         [
             [
                 i * (cells + 1) + j,
@@ -295,8 +294,7 @@ def test_a_layout_is_refined_where_it_is_off_and_nowhere_else() -> None:
             for j in range(cells)
         ],
     )
-    per_face = np.zeros((layout.n_faces, 3))
-    per_face[:, 2] = REFINE_POINTS
+    per_face = np.zeros((layout.n_faces, 2))
     per_face[[5 * cells + 5, 5 * cells + 6], 0] = 1.0  # two faces off: a far surface sample
     per_face[12 * cells + 12, 1] = 2  # one more: two scan points beyond
     refined = _locally_refined(layout, per_face, 0.5, 10**6, scan, NO_FEATURES)
@@ -315,11 +313,67 @@ def test_a_layout_is_refined_where_it_is_off_and_nowhere_else() -> None:
     too_many = per_face.copy()
     too_many[: int(LOCAL_SHARE * layout.n_faces) + 1, 0] = 1.0
     assert _locally_refined(layout, too_many, 0.5, 10**6, scan, NO_FEATURES) is None
-    starved = per_face.copy()
-    starved[:, 2] = REFINE_POINTS - 1
-    assert _locally_refined(layout, starved, 0.5, 10**6, scan, NO_FEATURES) is None
+    # 6 × 6 vertices a face (those on its sides go to one of two), facets too small to sample
+    assert _refined_points(layout, scan).min() >= REFINE_POINTS
+    starved = Scan(*height_field(60))  # 3 × 3 vertices a face, facets under a quarter face's
+    off = (per_face[:, 0] > 0.5) | (per_face[:, 1] >= 2)
+    assert _refined_points(layout, starved)[off].max() < REFINE_POINTS
+    assert _locally_refined(layout, per_face, 0.5, 10**6, starved, NO_FEATURES) is None
+    low_poly = Scan(*height_field(8))  # a facet 6.25 faces: (⌊√(6.25 · 4 · 16)⌋ = 20)² samples
+    assert _locally_refined(layout, per_face, 0.5, 10**6, low_poly, NO_FEATURES) is not None
     over_budget = layout.n_faces
     assert _locally_refined(layout, per_face, 0.5, over_budget, scan, NO_FEATURES) is None
+
+
+def test_a_refinement_that_made_the_fit_worse_is_not_refined_again(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Scripted distances: the first layout is off on one face and refined; the refined one is
+    farther (4e-3 against 3e-3), so the next round asks the remesher for a new layout instead of
+    refining it further; the nearest layout is kept. (Each was refined before this rule.)"""
+    import g1patch.fitting as fitting
+
+    points, triangles = height_field(60)
+    scan = Scan(points, triangles)
+    cells = 12
+    square = g1patch.mesh.QuadMesh.from_arrays(
+        height_field(cells)[0],
+        [
+            [i * (cells + 1) + j, (i + 1) * (cells + 1) + j, (i + 1) * (cells + 1) + j + 1]
+            + [i * (cells + 1) + j + 1]
+            for i in range(cells)
+            for j in range(cells)
+        ],
+    )
+    remeshed: list[int] = []
+    refined: list[int] = []
+    script = iter([3e-3, 4e-3, 5e-3, 6e-3])
+
+    def layout(_scan: Scan, faces: int) -> g1patch.mesh.QuadMesh:
+        remeshed.append(faces)
+        return square
+
+    def measure(network: object, scan: Scan, faces: int, *_: object) -> tuple[object, ...]:
+        worst = next(script) * scan.diagonal
+        per_face = np.zeros((faces, 2))
+        per_face[faces // 2, 0] = np.inf  # one face off
+        return (worst,) * 3, (worst,) * 3, per_face
+
+    real = fitting._locally_refined
+
+    def locally_refined(layout: g1patch.mesh.QuadMesh, *args: object) -> object:
+        refined.append(layout.n_faces)
+        return real(layout, *args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(fitting, "_layout", layout)
+    monkeypatch.setattr(fitting, "measure", measure)
+    monkeypatch.setattr(fitting, "_locally_refined", locally_refined)
+    monkeypatch.setattr(fitting, "REFINE_POINTS", 0)
+    _, report = fit_network(scan, tolerance=2e-3)
+    # refined once; the refined layout was farther: a new layout (at the face budget, so the
+    # last), itself farther than the first and so not refined either
+    assert refined == [cells**2] and len(remeshed) == 2 and report.rounds == 3
+    assert report.faces == cells**2 and report.worst == pytest.approx(3e-3)
 
 
 @pytest.mark.slow

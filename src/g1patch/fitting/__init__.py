@@ -2,26 +2,25 @@
 Catmull–Clark limit passes nearest the scan (:mod:`g1patch.fitting.solve`) → the limit targets and
 an exact-G1 assembly (split4 by default: polynomial, so the CAD file is the fitted surface).
 
-:func:`fit_network` runs it and measures the result against the scan both ways
-(:class:`FitReport`): scan points to the surface and surface samples to the scan's triangles.
-Without a given layout or face count it starts from :data:`START_FACES` (or the scan's size) and,
-while the tolerance is not met, refines the layout locally where it is off
-(:func:`_locally_refined`: the off faces and two rings about them split into four, the mesh
-closed into quads round them, :mod:`g1patch.mesh.conforming`) when few faces are off and the fit
-has no fold, else asks the remesher for the face count the measured error calls for
-(:func:`next_faces`: the error's rate over the face count observed between layouts), up to
-:data:`MAX_ROUNDS` layouts and at most :func:`face_budget` quads; the layout kept is the one
-with the fewest folds, then the nearest. A fit that folds is first fitted again on its own
-layout, fairer round the folds (:func:`_stiffened`, :data:`FOLD_REFITS` times at most). A layout
-the cage cannot be built from (what :func:`~g1patch.fitting.layout.clean_layout` leaves still
-refused) is skipped for the next face count; the faces of a remesher's layout that span a hole of
-the scan are cut out (:func:`~g1patch.fitting.layout.bridging_faces`). The tolerance bounds the
-scan → surface 99.9th percentile and the surface → scan maximum (:class:`FitReport`). The scan
-is cleaned first: vertices no triangle uses dropped (:func:`used_only`), coincident ones welded
-(:func:`welded`: an unwelded scan's cracks make the remesher's layout ragged and, on some inputs,
-not reproducible), islands dropped (:func:`without_islands`); its points are its vertices and, where
-its triangles are large beside the layout's faces, samples inside them
-(:meth:`Scan.facet_samples`).
+:func:`fit_network` runs it and measures the result against the scan both ways (:class:`FitReport`):
+scan points to the surface and surface samples to the scan's triangles. Without a given layout or
+face count it starts from :data:`START_FACES` (or the scan's size) and, while the tolerance is not
+met, refines the layout locally where it is off (:func:`_locally_refined`: the off faces and two
+rings about them split into four, the mesh closed into quads round them,
+:mod:`g1patch.mesh.conforming`) when few faces are off and the fit has no fold and is the nearest so
+far, else asks the remesher for the face count the measured error calls for (:func:`next_faces`: the
+error's rate over the face count observed between layouts), up to :data:`MAX_ROUNDS` layouts and at
+most :func:`face_budget` quads; the layout kept is the one with the fewest folds, then the nearest.
+A fit that folds is first fitted again on its own layout, fairer round the folds
+(:func:`_stiffened`, :data:`FOLD_REFITS` times at most). A layout the cage cannot be built from
+(what :func:`~g1patch.fitting.layout.clean_layout` leaves still refused) is skipped for the next
+face count; the faces of a remesher's layout that span a hole of the scan are cut out
+(:func:`~g1patch.fitting.layout.bridging_faces`). The tolerance bounds the scan → surface 99.9th
+percentile and the surface → scan maximum (:class:`FitReport`). The scan is cleaned first: vertices
+no triangle uses dropped (:func:`used_only`), coincident ones welded (:func:`welded`: an unwelded
+scan's cracks make the remesher's layout ragged and, on some inputs, not reproducible), islands
+dropped (:func:`without_islands`); its points are its vertices and, where its triangles are large
+beside the layout face nearest them, samples inside them (:meth:`Scan.facet_samples`).
 """
 
 from __future__ import annotations
@@ -121,9 +120,10 @@ LOCAL_SHARE = 0.25
 #: it; with two, 1,027 → 1,116 quads within the tolerance, no fold, where a finer layout took
 #: 1,406 quads in two layouts; after the one-ring attempt, 2,890 in three)
 REFINE_RINGS = 2
-#: scan points a face needs to be refined (about 4 per quad it becomes): finer than the scan's
-#: own sampling, the fit has too few points per cage vertex and the cage tangles (Spot's
-#: 5,856 triangles: folded slivers at its horns)
+#: scan points a face needs to be refined (about 4 per quad it becomes), its vertices and the
+#: samples its large facets would get (:func:`_refined_points`): finer than the scan's own
+#: sampling, the fit has too few points per cage vertex and the cage tangles (Spot's 5,856
+#: triangles: folded slivers at its horns)
 REFINE_POINTS = 16
 #: the share of the feature lines that may lie in gaps of the crease chains
 #: (:func:`~g1patch.fitting.features.crease_gaps`): the remesher never follows every line to the
@@ -131,7 +131,7 @@ REFINE_POINTS = 16
 #: the fitted surfaces' largest turn between neighbouring samples 0.3°); at 2.6 % a washer's
 #: rim had two gaps a quad long where the fitted surface turned by 12°
 FEATURE_GAPS = 0.01
-#: a triangle of at least this share of a layout face's mean area is sampled inside
+#: a triangle of at least this share of the area of the layout face nearest it is sampled inside
 #: (:meth:`Scan.facet_samples`), to one point per ``1/SAMPLES_PER_FACE`` of that area: where a
 #: face holds few scan vertices (a low-poly model, a CAD part's large flat facets). Smaller ones
 #: are not: a facet's points lie on its chord, a sag inside a curved surface (a 96 × 48 torus
@@ -170,23 +170,38 @@ class Scan:
         return float(np.linalg.norm(self.points.max(axis=0) - self.points.min(axis=0)))
 
     @property
+    def centroids(self) -> FloatArray:
+        """Per triangle its centroid ``(a + b + c) / 3``."""
+        return self.points[self.triangles].mean(axis=1)
+
+    @property
     def areas(self) -> FloatArray:
         """Per triangle its area ``|(b − a) × (c − a)| / 2``."""
         a, b, c = (self.points[self.triangles[:, k]] for k in range(3))
         return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
 
-    def facet_samples(self, area: float, least: float = 0.0) -> tuple[FloatArray, FloatArray]:
-        """Points inside the triangles of area at least ``least`` and ``area``, one per ``area``
-        or so, and their triangles' unit normals: a triangle of area A is cut into
-        ``m² = ⌊√(A / area)⌋²`` equal triangles (m per side, :data:`MAX_FACET_SPLIT` at most),
-        sampled at their centroids ``p = b₀ a + b₁ b + b₂ c``, ``(b₁, b₂) = ((i + 1/3)/m,
-        (j + 1/3)/m)`` for ``i + j ≤ m − 1`` and ``((i + 2/3)/m, (j + 2/3)/m)`` for
-        ``i + j ≤ m − 2``. A scan's vertices alone leave a large facet unsampled: a low-poly
-        model's surface bulges between them (a 12-triangle cube fitted to its 8 corners bowed
-        out 4 % of its diagonal)."""
+    def facet_splits(self, area: FloatArray | float, least: FloatArray | float = 0.0) -> IntArray:
+        """Per triangle the samples per side ``m = ⌊√(A / area)⌋`` (:data:`MAX_FACET_SPLIT` at
+        most) of :meth:`facet_samples`, 0 where its area ``A`` is under ``least``; ``area`` and
+        ``least`` are one figure or one per triangle."""
         areas = self.areas
         split = np.minimum(np.floor(np.sqrt(areas / area)), MAX_FACET_SPLIT).astype(np.int64)
         split[areas < least] = 0
+        return split
+
+    def facet_samples(
+        self, area: FloatArray | float, least: FloatArray | float = 0.0
+    ) -> tuple[FloatArray, FloatArray]:
+        """Points inside the triangles of area at least ``least`` and ``area``, one per ``area``
+        or so (one figure, or one per triangle), and their triangles' unit normals: a triangle
+        of area A is cut into ``m² = ⌊√(A / area)⌋²`` equal triangles (m per side,
+        :meth:`facet_splits`), sampled at their centroids ``p = b₀ a + b₁ b + b₂ c``,
+        ``(b₁, b₂) = ((i + 1/3)/m, (j + 1/3)/m)`` for ``i + j ≤ m − 1`` and ``((i + 2/3)/m,
+        (j + 2/3)/m)`` for ``i + j ≤ m − 2``. A scan's vertices alone leave a large facet
+        unsampled: a low-poly model's surface bulges between them (a 12-triangle cube fitted to
+        its 8 corners bowed out 4 % of its diagonal)."""
+        areas = self.areas
+        split = self.facet_splits(area, least)
         corners = self.points[self.triangles]  # (T, 3, 3)
         cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
         points, normals = [np.zeros((0, 3))], [np.zeros((0, 3))]
@@ -411,9 +426,9 @@ def measure(
     """Two-way distances between the surface (sampled :data:`MEASURE_SAMPLES` per patch side,
     triangulated) and the scan (its vertices and the ``samples`` inside its facets): ``(to_surface,
     to_scan)`` figures (max, p99.9, rms), and with the cage's face count ``faces`` (its patches
-    face after face) per face (F, 3): the largest distance of its surface samples to the scan, how
-    many scan points whose nearest surface sample is on it are farther than ``tolerance`` (model
-    units), and how many scan vertices there are."""
+    face after face) per face (F, 2): the largest distance of its surface samples to the scan, and
+    how many scan points whose nearest surface sample is on it are farther than ``tolerance``
+    (model units)."""
     mesh = tessellate(network, MEASURE_SAMPLES)
     points = scan.points if samples is None else np.concatenate([scan.points, samples])
     to_surface = mesh_distance(points, mesh.points, mesh.triangles)
@@ -426,11 +441,10 @@ def measure(
         face_of_sample = np.arange(len(samples)) // (
             MEASURE_SAMPLES**2 * network.n_patches // faces
         )
-        per_face = np.zeros((faces, 3))
+        per_face = np.zeros((faces, 2))
         np.maximum.at(per_face[:, 0], face_of_sample[tree.query(mesh.points)[1]], to_scan)
         nearest = face_of_sample[tree.query(points)[1]]
         per_face[:, 1] = np.bincount(nearest[to_surface > tolerance], minlength=faces)
-        per_face[:, 2] = np.bincount(nearest[: len(scan.points)], minlength=faces)
     return _figures(to_surface), _figures(to_scan), per_face
 
 
@@ -462,7 +476,6 @@ def fit_network(
     count = faces if faces is not None else min(START_FACES, max(64, len(scan.triangles) // 8))
     adaptive = layout is None and faces is None
     normals = vertex_normals(scan.points, scan.triangles)
-    area = float(scan.areas.sum())
     features = (
         np.zeros((0, 2, 3))
         if sharp_angle is None
@@ -501,7 +514,7 @@ def fit_network(
                 reach = boundary_reach(creased)
                 corners = boundary_corners(scan.points, scan.triangles, corner_angle, reach)
                 cage_layout = layout_corners(creased, corners)
-            face_area = area / cage_layout.n_faces
+            face_area = _face_areas(cage_layout)[_nearest_faces(cage_layout, scan.centroids)]
             samples, sample_normals = scan.facet_samples(
                 face_area / SAMPLES_PER_FACE, SPARSE_FACET * face_area
             )
@@ -535,10 +548,13 @@ def fit_network(
                 break
         if rounds >= MAX_ROUNDS:
             break
-        refine = (  # a folded fit is remade, not refined (its folds spread: Spot's horns)
-            None
-            if off is None or folds
-            else _locally_refined(cage_layout, off, tolerance * diagonal, budget, scan, features)
+        # a folded fit is remade, not refined (its folds spread: Spot's horns), nor is one that
+        # ranks below a layout before it (a refinement that made the fit worse)
+        kept = off is not None and not folds and best is not None and best[2] is cage_layout
+        refine = (
+            _locally_refined(cage_layout, off, tolerance * diagonal, budget, scan, features)
+            if kept and off is not None
+            else None
         )
         if refine is None:
             if count >= budget:
@@ -633,15 +649,15 @@ def _locally_refined(
 ) -> QuadMesh | None:
     """``layout`` refined round its faces off the ``tolerance`` (model units; ``per_face`` as
     :func:`measure` gives it: a surface sample farther, or :data:`STRAY_POINTS` scan points)
-    that hold :data:`REFINE_POINTS` scan points
-    (:func:`~g1patch.fitting.layout.refined_layout`), its new vertices moved onto the scan as
+    that would hold :data:`REFINE_POINTS` scan points refined (:func:`_refined_points`;
+    :func:`~g1patch.fitting.layout.refined_layout`), its new vertices moved onto the scan as
     the remesher's are; None where the off faces are more than :data:`LOCAL_SHARE` of all (a
     finer layout is the cheaper cure), none can be refined, one lies on a feature line
     (``features``: where a layout edge crosses the line instead of following it, the crease has a
     gap that splitting the edge keeps; a new layout may follow the line), or the refined layout
     would exceed ``budget`` quads."""
     off: NDArray[np.bool_] = (per_face[:, 0] > tolerance) | (per_face[:, 1] >= STRAY_POINTS)
-    marked: NDArray[np.bool_] = off & (per_face[:, 2] >= REFINE_POINTS)
+    marked: NDArray[np.bool_] = off & (_refined_points(layout, scan) >= REFINE_POINTS)
     if not marked.any() or off.mean() > LOCAL_SHARE or _beside_features(layout, off, features):
         return None
     refined = refined_layout(layout, grow(layout.topology, marked, REFINE_RINGS))
@@ -657,6 +673,30 @@ def _locally_refined(
         return refined.with_vertices(vertices)
     except MeshError:  # two new vertices on one scan point: keep them where the split made them
         return refined
+
+
+def _face_areas(layout: QuadMesh) -> FloatArray:
+    """Per layout face its area, half its diagonals' cross product ``|(c − a) × (d − b)| / 2``."""
+    a, b, c, d = (layout.vertices[layout.faces[:, k]] for k in range(4))
+    return 0.5 * np.linalg.norm(np.cross(c - a, d - b), axis=1)
+
+
+def _nearest_faces(layout: QuadMesh, points: FloatArray) -> IntArray:
+    """Per point the layout face whose centre is nearest."""
+    centres = layout.vertices[layout.faces].mean(axis=1)
+    return cKDTree(centres).query(points)[1].astype(np.int64)
+
+
+def _refined_points(layout: QuadMesh, scan: Scan) -> IntArray:
+    """Per layout face the scan points it would hold split into four: the scan's vertices
+    nearest it and the samples the fit would take inside the triangles nearest it at a quarter
+    of its area (:meth:`Scan.facet_samples`) — a low-poly scan's facets are points too."""
+    quarter = 0.25 * _face_areas(layout)
+    nearest = _nearest_faces(layout, scan.centroids)
+    split = scan.facet_splits(quarter[nearest] / SAMPLES_PER_FACE, SPARSE_FACET * quarter[nearest])
+    vertices = np.bincount(_nearest_faces(layout, scan.points), minlength=layout.n_faces)
+    samples = np.bincount(nearest, weights=split**2, minlength=layout.n_faces)
+    return vertices + samples.astype(np.int64)
 
 
 def _stiffened(
