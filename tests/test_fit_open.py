@@ -370,10 +370,39 @@ def test_a_refinement_that_made_the_fit_worse_is_not_refined_again(
     monkeypatch.setattr(fitting, "_locally_refined", locally_refined)
     monkeypatch.setattr(fitting, "REFINE_POINTS", 0)
     _, report = fit_network(scan, tolerance=2e-3)
-    # refined once; the refined layout was farther: a new layout (at the face budget, so the
-    # last), itself farther than the first and so not refined either
-    assert refined == [cells**2] and len(remeshed) == 2 and report.rounds == 3
+    # refined once; the refined layout was farther: new layouts (the last at the face budget),
+    # each farther than the first and so not refined either
+    assert refined == [cells**2] and len(remeshed) == 3 and report.rounds == 4
+    # the next count follows the remesher's layouts only (the refined one, farther at more
+    # faces, would have asked for 4 × at once)
+    assert remeshed[1] == fitting.next_faces([(cells**2, 3e-3)], 2e-3, remeshed[0])
     assert report.faces == cells**2 and report.worst == pytest.approx(3e-3)
+
+
+@pytest.mark.parametrize(("work", "rounds"), [(0, 4), (5, 5), (10**9, 8)])
+def test_layouts_are_tried_while_the_points_fitted_are_few(
+    monkeypatch: pytest.MonkeyPatch, work: int, rounds: int
+) -> None:
+    """Never within the tolerance: four layouts at least, then more while the scan points fitted
+    in all of them are under ``ROUND_POINTS`` (here ``work`` layouts' worth), eight at most."""
+    import g1patch.fitting as fitting
+
+    scan = Scan(*height_field(60))
+    cells = 12
+    square = g1patch.mesh.QuadMesh.from_arrays(
+        height_field(cells)[0],
+        [
+            [i * (cells + 1) + j, (i + 1) * (cells + 1) + j, (i + 1) * (cells + 1) + j + 1]
+            + [i * (cells + 1) + j + 1]
+            for i in range(cells)
+            for j in range(cells)
+        ],
+    )
+    monkeypatch.setattr(fitting, "_layout", lambda _scan, _faces: square)
+    monkeypatch.setattr(fitting, "next_faces", lambda _tried, _tolerance, count: count + 1)
+    monkeypatch.setattr(fitting, "ROUND_POINTS", work * len(scan.points))  # no facet samples
+    _, report = fit_network(scan, tolerance=1e-9)
+    assert report.rounds == rounds and fitting.MIN_ROUNDS == 4 and fitting.MAX_ROUNDS == 8
 
 
 @pytest.mark.slow
