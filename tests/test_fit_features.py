@@ -10,9 +10,11 @@ import numpy as np
 import pytest
 
 from g1patch.fitting.features import (
+    SNAP_KEEP_AREA,
     boundary_corners,
     layout_corners,
     layout_creases,
+    quad_areas,
     sharp_segments,
     snap_to_features,
 )
@@ -100,6 +102,27 @@ def test_vertices_near_a_feature_are_snapped_onto_it() -> None:
     tagged = layout_creases(snap_to_features(far, segments, off), segments, off)
     assert not tagged.features.vertex_sharpness.any()
     assert snap_to_features(far, np.zeros((0, 2, 3)), corner) is far
+
+
+def test_a_snap_that_would_crush_a_face_is_undone() -> None:
+    """A row of thin quads (0.2 high) along a straight feature line 0.1 from both its sides:
+    every one of its vertices is near enough to snap, which would leave those faces no area
+    (pyvista's ant: its layout refused). Their snaps are undone; a vertex of the next row, near
+    the line too, snaps and leaves its face most of its area."""
+    x = np.arange(8.0)
+    rows = np.array([0.0, 0.2, 1.2, 2.2])
+    gx, gy = np.meshgrid(x, rows, indexing="ij")
+    points = np.stack([gx, gy, np.zeros_like(gx)], -1).reshape(-1, 3)
+    index = np.arange(gx.size).reshape(gx.shape)
+    quads = np.stack([index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]], -1)
+    layout = QuadMesh.from_arrays(points, quads.reshape(-1, 4))
+    t = np.linspace(-2.0, 9.0, 111)  # short segments along y = 0.1, as a scan's sharp edges are
+    line = np.stack([t, np.full_like(t, 0.1), np.zeros_like(t)], -1)
+    segments = np.stack([line[:-1], line[1:]], axis=1)
+    snapped = snap_to_features(layout, segments, np.zeros((0, 3)))  # no zero-area error
+    areas = quad_areas(snapped.vertices, snapped.faces)
+    assert areas.min() >= SNAP_KEEP_AREA * quad_areas(layout.vertices, layout.faces).min()
+    assert np.array_equal(snapped.vertices[index[:, :2].ravel()], points[index[:, :2].ravel()])
 
 
 def test_the_gaps_left_in_the_feature_lines_are_measured() -> None:

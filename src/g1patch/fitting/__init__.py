@@ -53,6 +53,7 @@ from .features import (
     crease_gaps,
     layout_corners,
     layout_creases,
+    quad_areas,
     sharp_corners,
     sharp_segments,
     snap_to_features,
@@ -509,6 +510,12 @@ def fit_network(
                 cage_layout = refine
             else:
                 cage_layout = _layout(scan, count)
+            if refine is None:  # a refined layout keeps the features its parent was given
+                snapped = snap_to_features(cage_layout, features, feature_corners)
+                creased = layout_creases(snapped, features, feature_corners)
+                reach = boundary_reach(creased)
+                corners = boundary_corners(scan.points, scan.triangles, corner_angle, reach)
+                cage_layout = layout_corners(creased, corners)
         except (ConstructionError, MeshError) as error:  # unusable: the next face count
             if not adaptive:
                 raise
@@ -516,13 +523,8 @@ def fit_network(
             tried.append((count, np.inf))
             off, folds = None, 0
         else:
-            if refine is None:  # a refined layout keeps the features its parent was given
-                snapped = snap_to_features(cage_layout, features, feature_corners)
-                creased = layout_creases(snapped, features, feature_corners)
-                reach = boundary_reach(creased)
-                corners = boundary_corners(scan.points, scan.triangles, corner_angle, reach)
-                cage_layout = layout_corners(creased, corners)
-            face_area = _face_areas(cage_layout)[_nearest_faces(cage_layout, scan.centroids)]
+            nearest_face = _nearest_faces(cage_layout, scan.centroids)
+            face_area = quad_areas(cage_layout.vertices, cage_layout.faces)[nearest_face]
             samples, sample_normals = scan.facet_samples(
                 face_area / SAMPLES_PER_FACE, SPARSE_FACET * face_area
             )
@@ -685,12 +687,6 @@ def _locally_refined(
         return refined
 
 
-def _face_areas(layout: QuadMesh) -> FloatArray:
-    """Per layout face its area, half its diagonals' cross product ``|(c − a) × (d − b)| / 2``."""
-    a, b, c, d = (layout.vertices[layout.faces[:, k]] for k in range(4))
-    return 0.5 * np.linalg.norm(np.cross(c - a, d - b), axis=1)
-
-
 def _nearest_faces(layout: QuadMesh, points: FloatArray) -> IntArray:
     """Per point the layout face whose centre is nearest."""
     centres = layout.vertices[layout.faces].mean(axis=1)
@@ -701,7 +697,7 @@ def _refined_points(layout: QuadMesh, scan: Scan) -> IntArray:
     """Per layout face the scan points it would hold split into four: the scan's vertices
     nearest it and the samples the fit would take inside the triangles nearest it at a quarter
     of its area (:meth:`Scan.facet_samples`) — a low-poly scan's facets are points too."""
-    quarter = 0.25 * _face_areas(layout)
+    quarter = 0.25 * quad_areas(layout.vertices, layout.faces)
     nearest = _nearest_faces(layout, scan.centroids)
     split = scan.facet_splits(quarter[nearest] / SAMPLES_PER_FACE, SPARSE_FACET * quarter[nearest])
     vertices = np.bincount(_nearest_faces(layout, scan.points), minlength=layout.n_faces)

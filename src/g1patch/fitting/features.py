@@ -54,9 +54,11 @@ __all__ = [
     "GAP_REACH",
     "LINE_SNAP",
     "REACH",
+    "SNAP_KEEP_AREA",
     "crease_gaps",
     "layout_corners",
     "layout_creases",
+    "quad_areas",
     "sharp_corners",
     "sharp_segments",
     "snap_to_features",
@@ -86,6 +88,10 @@ CORNER_STEPS = 64
 #: remesher's vertices on a feature line lie within 0.2 of it on the box and the L-bracket, the
 #: next ones 0.5 or more away)
 LINE_SNAP = 0.3
+#: a snap is undone at the vertices of a face it leaves with less than this share of its area
+#: (the four vertices of a layout face of pyvista's ant, 912 triangles, all snapped onto one
+#: straight feature line: a face of no area, the layout refused)
+SNAP_KEEP_AREA = 0.1
 #: connected sharp scan edges are a feature line vertices are snapped onto when they are at least
 #: this many layout edges long (the median edge; a CAD part's lines are one network of tens, the
 #: steepest facets of Spot at 2,000 quads a chain of 3.3 and two single edges)
@@ -170,6 +176,7 @@ def snap_to_features(layout: QuadMesh, segments: FloatArray, corners: FloatArray
     feet = _closest_on_segments(vertices[used], segments)
     near = np.linalg.norm(feet - vertices[used], axis=1) <= LINE_SNAP * size[used]
     vertices[used[near]] = feet[near]
+    vertices = _uncrushed(layout.vertices, vertices, layout.faces)
     snapped = QuadMesh.from_arrays(vertices, layout.faces, tags=layout.tags, source=layout.source)
     if not len(corners):
         return snapped
@@ -185,7 +192,29 @@ def snap_to_features(layout: QuadMesh, segments: FloatArray, corners: FloatArray
             gap = np.linalg.norm(vertices[fit] - corner, axis=1)
             best = fit[np.lexsort((gap, -creases[fit]))[0]]
             vertices[best], taken[best] = corner, True
+    vertices = _uncrushed(snapped.vertices, vertices, layout.faces)
     return QuadMesh.from_arrays(vertices, layout.faces, tags=layout.tags, source=layout.source)
+
+
+def quad_areas(vertices: FloatArray, faces: IntArray) -> FloatArray:
+    """Per quad its area, half its diagonals' cross product ``|(c − a) × (d − b)| / 2``."""
+    a, b, c, d = (vertices[faces[:, k]] for k in range(4))
+    return 0.5 * np.linalg.norm(np.cross(c - a, d - b), axis=1)
+
+
+def _uncrushed(original: FloatArray, moved: FloatArray, faces: IntArray) -> FloatArray:
+    """``moved`` with the vertices of every face it leaves with less than
+    :data:`SNAP_KEEP_AREA` of its area in ``original`` put back where they were, until none is
+    (each round puts back one vertex at least, so it ends)."""
+    moved = moved.copy()
+    before = quad_areas(original, faces)
+    while True:
+        crushed = quad_areas(moved, faces) < SNAP_KEEP_AREA * before
+        back = np.unique(faces[crushed])
+        back = back[(moved[back] != original[back]).any(axis=1)]
+        if not back.size:
+            return moved
+        moved[back] = original[back]
 
 
 def _segment_distance(points: FloatArray, segments: FloatArray) -> FloatArray:
