@@ -1,15 +1,22 @@
 """The topology of a scan's (or a layout's) polygons, from their corner indices alone: which
 sides are open (:func:`boundary_edges`), which faces form one connected part
-(:func:`triangle_parts`), which open edges form one boundary loop (:func:`boundary_loops`)."""
+(:func:`triangle_parts`), which open edges form one boundary loop (:func:`boundary_loops`), which
+triangles to turn over so that neighbours agree (:func:`orientation_flips`)."""
 
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse.csgraph import breadth_first_order, connected_components
 
-__all__ = ["boundary_edges", "boundary_loops", "polygon_sides", "triangle_parts"]
+__all__ = [
+    "boundary_edges",
+    "boundary_loops",
+    "orientation_flips",
+    "polygon_sides",
+    "triangle_parts",
+]
 
 IntArray = NDArray[np.int64]
 
@@ -48,3 +55,46 @@ def triangle_parts(triangles: IntArray, count: int) -> IntArray:
     a, b = order[same] // corners, order[same + 1] // corners
     graph = sp.coo_matrix((np.ones(a.size), (a, b)), shape=(faces, faces))
     return connected_components(graph, directed=False)[1].astype(np.int64)
+
+
+def orientation_flips(triangles: IntArray, count: int) -> NDArray[np.bool_]:
+    """Per triangle (T, 3) over ``count`` vertices whether to reverse it so that every edge two
+    triangles share is run in opposite directions by them (a consistent orientation), in each
+    part (triangles sharing such edges) the fewer of the two ways. An edge of more than two
+    triangles joins nothing; where no orientation agrees everywhere (a Möbius strip) one along
+    a spanning tree of each part is taken. The tree is breadth-first from a root joined to a
+    triangle of every part; the parity to the root is summed by pointer doubling,
+    ``p(i) ← p(i) ⊕ p(a(i))``, ``a(i) ← a(a(i))``, log₂(depth) vectorised steps."""
+    faces = len(triangles)
+    sides = np.stack([triangles, np.roll(triangles, -1, axis=1)], axis=-1).reshape(-1, 2)
+    key = sides.min(axis=1) * np.int64(count) + sides.max(axis=1)
+    order = np.argsort(key, kind="stable")
+    sorted_key = key[order]
+    runs = np.flatnonzero(np.diff(np.concatenate([[-1], sorted_key, [-1]])))
+    length = np.diff(runs)
+    pair = runs[:-1][length == 2]  # sides of edges two triangles share
+    first, second = order[pair], order[pair + 1]
+    a, b = first // 3, second // 3
+    disagree = (sides[first, 0] == sides[second, 0]).astype(np.int64)  # run the same way
+    graph = sp.coo_matrix((np.ones(a.size), (a, b)), shape=(faces, faces)).tocsr()
+    part = connected_components(graph, directed=False)[1]
+    root = faces  # a root joined to the first triangle of every part
+    heads = np.unique(part, return_index=True)[1]
+    rows = np.concatenate([a, b, np.full(heads.size, root)])
+    cols = np.concatenate([b, a, heads])
+    parity = np.concatenate([disagree, disagree, np.zeros(heads.size, np.int64)])
+    tree = sp.coo_matrix((parity + 1, (rows, cols)), shape=(faces + 1,) * 2).tocsr()
+    tree.sum_duplicates()
+    _, predecessor = breadth_first_order(tree, root, directed=False, return_predecessors=True)
+    ancestor = np.append(predecessor[:faces], root).astype(np.int64)
+    ancestor[heads] = root
+    step = np.zeros(faces + 1, dtype=np.int64)
+    child = np.flatnonzero(ancestor[:faces] != root)
+    step[child] = (np.asarray(tree[ancestor[child], child]).ravel() - 1) % 2
+    while (ancestor != root).any():
+        step = step ^ step[ancestor]
+        ancestor = ancestor[ancestor]
+    flip = step[:faces].astype(bool)
+    flipped = np.bincount(part, weights=flip, minlength=heads.size)
+    sizes = np.bincount(part, minlength=heads.size)
+    return flip ^ (flipped > sizes / 2)[part]
