@@ -114,13 +114,23 @@ def test_a_height_field_keeps_its_square_and_corners(tmp_path: Path) -> None:
 
 
 def test_welding_merges_coincident_vertices() -> None:
-    """Vertices at one position become one; a triangle that then repeats a corner is dropped."""
+    """Vertices at one position become one; a triangle that then repeats a corner is dropped,
+    as is one that repeats a corner as given (its open edge ``b → b`` would be a hole's rim)."""
     points = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]])
     triangles = np.array([[0, 1, 2], [3, 4, 2], [1, 3, 4]])
     scan = welded(Scan(points, triangles, "t.obj"))
-    assert scan.repairs == ("welded 1 duplicated vertices",) and len(scan.points) == 4
-    assert scan.triangles.tolist() == [[0, 1, 2], [1, 3, 2]]
+    assert scan.repairs == (
+        "welded 1 duplicated vertices",
+        "dropped 1 triangles that repeat a corner",
+    )
+    assert len(scan.points) == 4 and scan.triangles.tolist() == [[0, 1, 2], [1, 3, 2]]
     assert len(boundary_edges(scan.triangles)) == 4
+    repeated = welded(Scan(points[[0, 1, 2, 4]], np.array([[0, 1, 2], [1, 3, 3]]), "t.obj"))
+    assert repeated.repairs == (
+        "dropped 1 triangles that repeat a corner",
+        "dropped 1 vertices no triangle uses",
+    )
+    assert repeated.triangles.tolist() == [[0, 1, 2]] and len(repeated.points) == 3
 
 
 def test_a_layout_with_degenerate_quads_is_cleaned(tmp_path: Path) -> None:

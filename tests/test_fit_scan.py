@@ -10,8 +10,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from g1patch.fitting import Scan, fit_network, oriented, used_only, without_islands
-from g1patch.fitting.scan_topology import orientation_flips
+from g1patch.fitting import (
+    Scan,
+    fit_network,
+    holes_filled,
+    oriented,
+    used_only,
+    without_islands,
+)
+from g1patch.fitting.scan_topology import boundary_edges, orientation_flips
 from g1patch.shapes import bump_sphere_scan, cube
 
 #: a triangle's corners: coordinates in a box of side 20, not all three collinear (checked)
@@ -188,3 +195,39 @@ def test_a_scan_wound_every_which_way_fits_after_its_repair() -> None:
     _, report = fit_network(scan, tolerance=2e-3)
     assert report.met and report.folds == 0 and report.creases == 0
     assert "turned 1998 triangles over" in " ".join(report.repairs)
+
+
+def test_holes_under_a_layout_edge_are_filled() -> None:
+    """A sphere scan without 10 triangles apart (one-triangle holes) and without a cap of
+    polar angle 0.35 rad: each small hole gets a centre vertex and a fan of 3 triangles wound as
+    its neighbours (no open edge left there, every edge of two triangles run both ways), the cap
+    (wider than ``across``) stays open; a scan with no hole is returned as it is."""
+    points, triangles = bump_sphere_scan(2000, height=0.0)
+    centre = points[triangles].mean(axis=1)
+    cap = centre[:, 2] > np.cos(0.35)
+    apart = np.flatnonzero(~cap)[:: len(triangles) // 10][:10]
+    kept = np.ones(len(triangles), dtype=bool)
+    kept[apart] = False
+    holed = Scan(points, triangles[kept & ~cap], "holed.obj")
+    rim = len(boundary_edges(holed.triangles)) - 3 * len(apart)
+    filled = holes_filled(holed, across=0.2)
+    assert filled.repairs == ("filled 10 holes under a layout edge (0.2) across with 30 triangles",)
+    assert len(filled.points) == len(points) + 10 and len(boundary_edges(filled.triangles)) == rim
+    assert not orientation_flips(filled.triangles, len(filled.points)).any()
+    np.testing.assert_allclose(  # each centre at its hole's corners' mean, near the sphere
+        np.linalg.norm(filled.points[len(points) :], axis=1), 1.0, atol=0.02
+    )
+    whole = Scan(points, triangles)
+    assert holes_filled(whole, across=0.2) is whole
+
+
+def test_a_scan_with_small_holes_fits_within_the_tolerance() -> None:
+    """The surface closes a hole under a layout edge; without the fill its surface lay the
+    hole's radius from the scan's triangles (a sphere scan with one-triangle holes: 5.7e-3 of
+    the diagonal, the tolerance 2e-3)."""
+    points, triangles = bump_sphere_scan(2000, height=0.0)
+    kept = np.ones(len(triangles), dtype=bool)
+    kept[:: len(triangles) // 10] = False
+    _, report = fit_network(Scan(points, triangles[kept], "holed.obj"), tolerance=2e-3)
+    assert report.met and report.folds == 0
+    assert any(note.startswith("filled ") for note in report.repairs)

@@ -20,7 +20,8 @@ cut out (:func:`~g1patch.fitting.layout.bridging_faces`). The tolerance bounds t
 vertices no triangle uses dropped (:func:`used_only`), coincident ones welded (:func:`welded`: an
 unwelded scan's cracks make the remesher's layout ragged and, on some inputs, not reproducible),
 triangles turned over to agree with their neighbours (:func:`oriented`), islands dropped
-(:func:`without_islands`); its points are its vertices and, where its triangles are large beside the
+(:func:`without_islands`), holes narrower than the first layout's edge filled
+(:func:`holes_filled`); its points are its vertices and, where its triangles are large beside the
 layout face nearest them, samples inside them (:meth:`Scan.facet_samples`).
 """
 
@@ -60,7 +61,7 @@ from .features import (
     snap_to_features,
 )
 from .layout import bridging_faces, quad_layout, refined_layout
-from .scan_topology import orientation_flips, triangle_parts
+from .scan_topology import boundary_edges, boundary_loops, orientation_flips, triangle_parts
 from .solve import FitCage, _Triangles, fit_cage, vertex_normals
 
 __all__ = [
@@ -74,9 +75,11 @@ __all__ = [
     "FitReport",
     "Scan",
     "face_budget",
-    "layout_rank",
     "fit_network",
+    "holes_filled",
+    "layout_rank",
     "next_faces",
+    "oriented",
     "quad_layout",
     "scan_from_polygons",
     "scan_of",
@@ -286,19 +289,24 @@ def without_islands(scan: Scan) -> Scan:
 
 def welded(scan: Scan) -> Scan:
     """``scan`` with the vertices at one position merged into one (the first's index order
-    kept) and the triangles that then repeat a corner dropped; ``repairs`` says how many."""
+    kept) and the triangles that then repeat a corner dropped (a triangle ``(a, b, b)`` has an
+    open edge ``b → b`` and a side run both ways); ``repairs`` says how many of each."""
     _, first, inverse = np.unique(scan.points, axis=0, return_index=True, return_inverse=True)
     duplicated = len(scan.points) - len(first)
-    if not duplicated:
-        return scan
     keep = np.sort(first)
     renumber = np.empty(len(first), dtype=np.int64)
     renumber[np.argsort(first)] = np.arange(len(first))  # unique rows → first-occurrence order
     triangles = renumber[inverse.reshape(-1)][scan.triangles]
     ordered = np.sort(triangles, axis=1)
-    triangles = triangles[(ordered[:, 1:] != ordered[:, :-1]).all(axis=1)]
-    note = f"welded {duplicated} duplicated vertices"
-    return Scan(scan.points[keep], triangles, scan.source, (*scan.repairs, note))
+    distinct = (ordered[:, 1:] != ordered[:, :-1]).all(axis=1)
+    repeats = int((~distinct).sum())
+    if not duplicated and not repeats:
+        return scan
+    notes = [f"welded {duplicated} duplicated vertices"] if duplicated else []
+    if repeats:
+        notes.append(f"dropped {repeats} triangles that repeat a corner")
+    kept = Scan(scan.points[keep], triangles[distinct], scan.source, (*scan.repairs, *notes))
+    return used_only(kept) if repeats else kept
 
 
 def oriented(scan: Scan) -> Scan:
@@ -312,6 +320,47 @@ def oriented(scan: Scan) -> Scan:
     triangles = np.where(flip[:, None], scan.triangles[:, ::-1], scan.triangles)
     note = f"turned {int(flip.sum())} triangles over to agree with their neighbours"
     return Scan(scan.points, triangles, scan.source, (*scan.repairs, note))
+
+
+def holes_filled(scan: Scan, across: float) -> Scan:
+    """``scan`` with its holes under ``across`` closed: a boundary loop (every vertex on it with
+    one open edge in and one out) shorter than ``π · across`` gets a vertex at its vertices'
+    mean and a fan of triangles ``(w, v, c)`` for its open edges ``v → w`` (wound as its
+    neighbours). The layout closes a hole under a layout edge anyway
+    (:func:`~g1patch.fitting.layout.bridging_faces` cuts only larger ones), and its surface
+    then lies up to the hole's radius from the scan's triangles (a sphere scan with 20
+    one-triangle holes: 5.7e-3 of the diagonal); over the fan it lies within the fan's sag.
+    ``repairs`` says how many."""
+    edges = boundary_edges(scan.triangles)
+    if not len(edges) or not across > 0:
+        return scan
+    count = len(scan.points)
+    loop = boundary_loops(edges, count)[edges[:, 0]]
+    loops = int(loop.max()) + 1
+    simple = (np.bincount(edges[:, 0], minlength=count) == 1) & (
+        np.bincount(edges[:, 1], minlength=count) == 1
+    )
+    pinched = np.bincount(loop, weights=~simple[edges[:, 0]], minlength=loops) > 0
+    length = np.linalg.norm(scan.points[edges[:, 1]] - scan.points[edges[:, 0]], axis=1)
+    perimeter = np.bincount(loop, weights=length, minlength=loops)
+    sides = np.bincount(loop, minlength=loops)
+    small = (sides >= 3) & ~pinched & (perimeter < np.pi * across)
+    if not small.any():
+        return scan
+    chosen = np.flatnonzero(small)
+    centre_of = np.full(loops, -1, dtype=np.int64)
+    centre_of[chosen] = count + np.arange(chosen.size)
+    sums = np.zeros((loops, 3))
+    np.add.at(sums, loop, scan.points[edges[:, 0]])
+    fill = small[loop]
+    fan = np.stack([edges[fill, 1], edges[fill, 0], centre_of[loop[fill]]], axis=1)
+    note = f"filled {chosen.size} holes under a layout edge ({across:.3g}) across"
+    return Scan(
+        np.concatenate([scan.points, sums[chosen] / sides[chosen, None]]),
+        np.concatenate([scan.triangles, fan]),
+        scan.source,
+        (*scan.repairs, f"{note} with {len(fan)} triangles"),
+    )
 
 
 def scan_of(mesh: QuadMesh) -> Scan:
@@ -436,7 +485,7 @@ def _figures(distances: FloatArray) -> tuple[float, float, float]:
 
 def _bounded(to_surface: tuple[float, ...], to_scan: tuple[float, ...]) -> float:
     """What the tolerance bounds (model units): scan → surface p99.9, surface → scan max."""
-    return max(to_surface[1], to_scan[0])
+    return float(np.max([to_surface[1], to_scan[0]]))  # NaN stays NaN: never "within"
 
 
 def measure(
@@ -497,6 +546,7 @@ def fit_network(
     if not diagonal > 0:
         raise InputError(f"{scan.source or 'scan'}: the scan has no extent")
     count = faces if faces is not None else min(START_FACES, max(64, len(scan.triangles) // 8))
+    scan = holes_filled(scan, _layout_edge(scan, layout, count))
     adaptive = layout is None and faces is None
     normals = vertex_normals(scan.points, scan.triangles)
     features = (
@@ -717,6 +767,15 @@ def _refined_points(layout: QuadMesh, scan: Scan) -> IntArray:
     vertices = np.bincount(_nearest_faces(layout, scan.points), minlength=layout.n_faces)
     samples = np.bincount(nearest, weights=split**2, minlength=layout.n_faces)
     return vertices + samples.astype(np.int64)
+
+
+def _layout_edge(scan: Scan, layout: QuadMesh | None, faces: int) -> float:
+    """The first layout's edge length: the median of a given ``layout``'s, else that of
+    ``faces`` squares covering the scan's area."""
+    if layout is not None:
+        edges = layout.topology.edges
+        return float(np.median(np.linalg.norm(np.diff(layout.vertices[edges], axis=1), axis=2)))
+    return float(np.sqrt(scan.areas.sum() / max(faces, 1)))
 
 
 def _stiffened(
