@@ -176,11 +176,15 @@ def test_a_scan_s_winding_is_made_consistent(seed: int, share: float) -> None:
 
 def test_an_edge_of_three_triangles_joins_nothing() -> None:
     """A fin (a third triangle on a sphere scan's edge, run the same way as one of the two): no
-    error, the sphere stays as it was, and the fin is a part of its own (never turned)."""
+    error, the sphere stays as it was, and the fin is a part of its own (never turned). A lone
+    triangle is a part of its own; of two that run their common edge the same way, the second
+    is turned (a tie: the later one)."""
     points, triangles = bump_sphere_scan(200, height=0.0)
     a, b = triangles[0, :2]
     fin = np.concatenate([triangles, [[a, b, len(points)]]])
     assert not orientation_flips(fin, len(points) + 1).any()
+    assert not orientation_flips(np.array([[0, 1, 2]]), 3).any()  # a lone triangle: no tree edge
+    assert orientation_flips(np.array([[0, 1, 2], [1, 2, 3]]), 4).tolist() == [False, True]
 
 
 def test_a_scan_wound_every_which_way_fits_after_its_repair() -> None:

@@ -84,13 +84,15 @@ def orientation_flips(triangles: IntArray, count: int) -> NDArray[np.bool_]:
     cols = np.concatenate([b, a, heads])
     parity = np.concatenate([disagree, disagree, np.zeros(heads.size, np.int64)])
     tree = sp.coo_matrix((parity + 1, (rows, cols)), shape=(faces + 1,) * 2).tocsr()
-    tree.sum_duplicates()
     _, predecessor = breadth_first_order(tree, root, directed=False, return_predecessors=True)
     ancestor = np.append(predecessor[:faces], root).astype(np.int64)
     ancestor[heads] = root
     step = np.zeros(faces + 1, dtype=np.int64)
     child = np.flatnonzero(ancestor[:faces] != root)
-    step[child] = (np.asarray(tree[ancestor[child], child]).ravel() - 1) % 2
+    links = rows * np.int64(faces + 1) + cols  # each tree edge's parity, looked up by key
+    ordered = np.argsort(links, kind="stable")
+    found = np.searchsorted(links[ordered], ancestor[child] * np.int64(faces + 1) + child)
+    step[child] = parity[ordered[found]]
     while (ancestor != root).any():
         step = step ^ step[ancestor]
         ancestor = ancestor[ancestor]
