@@ -284,7 +284,8 @@ def test_a_layout_is_refined_where_it_is_off_and_nowhere_else() -> None:
     """The faces off the tolerance (a surface sample too far, or two scan points) with enough
     scan points are split, their ring closed into quads; the new vertices lie on the scan;
     the old ones stay. Too many off faces, too few points (a scan about as fine as the layout),
-    a feature line through an off face or over the budget: no local step. A low-poly scan's
+    a feature line through an off face, over the budget, or a refinement of most of the layout
+    (more than twice its faces): no local step. A low-poly scan's
     large facets are points: refined."""
     from g1patch.fitting import LOCAL_SHARE, REFINE_POINTS, _locally_refined, _refined_points
 
@@ -333,6 +334,9 @@ def test_a_layout_is_refined_where_it_is_off_and_nowhere_else() -> None:
     assert _locally_refined(layout, per_face, 0.5, 10**6, low_poly, NO_FEATURES) is not None
     over_budget = layout.n_faces
     assert _locally_refined(layout, per_face, 0.5, over_budget, scan, NO_FEATURES) is None
+    spread = np.zeros_like(per_face)  # a fifth of the faces off, all over: no local step
+    spread[::5, 0] = 1.0
+    assert _locally_refined(layout, spread, 0.5, 10**6, scan, NO_FEATURES) is None
 
 
 def test_a_refinement_that_made_the_fit_worse_is_not_refined_again(

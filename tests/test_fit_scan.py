@@ -14,6 +14,7 @@ from g1patch.fitting import (
     Scan,
     fit_network,
     holes_filled,
+    manifold,
     oriented,
     used_only,
     without_islands,
@@ -235,3 +236,23 @@ def test_a_scan_with_small_holes_fits_within_the_tolerance() -> None:
     _, report = fit_network(Scan(points, triangles[kept], "holed.obj"), tolerance=2e-3)
     assert report.met and report.folds == 0
     assert any(note.startswith("filled ") for note in report.repairs)
+
+
+def test_an_edge_of_more_than_two_triangles_keeps_the_two_joined_best() -> None:
+    """A fin on a sphere scan's edge (a third triangle there, its other edges open): the fin
+    goes, with its apex (the two sphere triangles there are joined on both other edges, it on
+    none), and the sphere stays whole; a manifold scan is returned as it is."""
+    points, triangles = bump_sphere_scan(200, height=0.0)
+    a, b = triangles[0, :2]
+    fin = Scan(
+        np.concatenate([points, [[0.0, 0.0, 3.0]]]),
+        np.concatenate([triangles, [[a, b, len(points)]]]),
+    )
+    kept = manifold(fin)
+    assert kept.repairs == (
+        "dropped 1 triangles at edges of more than two",
+        "dropped 1 vertices no triangle uses",
+    )
+    np.testing.assert_array_equal(kept.triangles, triangles)
+    whole = Scan(points, triangles)
+    assert manifold(whole) is whole
