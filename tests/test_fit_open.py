@@ -59,6 +59,13 @@ def height_field(cells: int = 40) -> tuple[np.ndarray, np.ndarray]:
     return np.stack([u, v, z], -1).reshape(-1, 3), grid_triangles(cells + 1, cells + 1)
 
 
+def height_field_layout(cells: int) -> g1patch.mesh.QuadMesh:
+    """A quad layout on :func:`height_field`: its grid of ``cells`` × ``cells`` squares."""
+    corner = (np.arange(cells)[:, None] * (cells + 1) + np.arange(cells)).ravel()
+    quads = np.stack([corner, corner + cells + 1, corner + cells + 2, corner + 1], axis=1)
+    return g1patch.mesh.QuadMesh.from_arrays(height_field(cells)[0], quads)
+
+
 def square_with_hole(cells: int, half: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A flat unit square of ``cells`` × ``cells`` cells (two triangles each): its points, its
     triangles, and those of it without a square hole ``|x − ½|, |y − ½| ≤ half`` (by centroid)."""
@@ -292,19 +299,7 @@ def test_a_layout_is_refined_where_it_is_off_and_nowhere_else() -> None:
     points, triangles = height_field(120)
     scan = Scan(points, triangles)
     cells = 20  # a layout on the scan: the same height field at 20 × 20 cells
-    layout = g1patch.mesh.QuadMesh.from_arrays(
-        height_field(cells)[0],
-        [
-            [
-                i * (cells + 1) + j,
-                (i + 1) * (cells + 1) + j,
-                (i + 1) * (cells + 1) + j + 1,
-                i * (cells + 1) + j + 1,
-            ]
-            for i in range(cells)
-            for j in range(cells)
-        ],
-    )
+    layout = height_field_layout(cells)
     per_face = np.zeros((layout.n_faces, 2))
     per_face[[5 * cells + 5, 5 * cells + 6], 0] = 1.0  # two faces off: a far surface sample
     per_face[12 * cells + 12, 1] = 2  # one more: two scan points beyond
@@ -350,15 +345,7 @@ def test_a_refinement_that_made_the_fit_worse_is_not_refined_again(
     points, triangles = height_field(60)
     scan = Scan(points, triangles)
     cells = 12
-    square = g1patch.mesh.QuadMesh.from_arrays(
-        height_field(cells)[0],
-        [
-            [i * (cells + 1) + j, (i + 1) * (cells + 1) + j, (i + 1) * (cells + 1) + j + 1]
-            + [i * (cells + 1) + j + 1]
-            for i in range(cells)
-            for j in range(cells)
-        ],
-    )
+    square = height_field_layout(cells)
     remeshed: list[int] = []
     refined: list[int] = []
     script = iter([3e-3, 4e-3, 5e-3, 6e-3])
@@ -403,15 +390,7 @@ def test_layouts_are_tried_while_the_points_fitted_are_few(
 
     scan = Scan(*height_field(60))
     cells = 12
-    square = g1patch.mesh.QuadMesh.from_arrays(
-        height_field(cells)[0],
-        [
-            [i * (cells + 1) + j, (i + 1) * (cells + 1) + j, (i + 1) * (cells + 1) + j + 1]
-            + [i * (cells + 1) + j + 1]
-            for i in range(cells)
-            for j in range(cells)
-        ],
-    )
+    square = height_field_layout(cells)
     monkeypatch.setattr(fitting, "_layout", lambda _scan, _faces: square)
     monkeypatch.setattr(fitting, "next_faces", lambda _tried, _tolerance, count: count + 1)
     monkeypatch.setattr(fitting, "ROUND_POINTS", work * len(scan.points))  # no facet samples
