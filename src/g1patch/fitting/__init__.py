@@ -159,6 +159,9 @@ FEATURE_GAPS = 0.01
 #: scan's triangle centroids are 2.6e-4 of the diagonal inside the torus; fitted to them too, its
 #: surface sat 1.7× farther from the torus on average)
 SPARSE_FACET = 0.25
+#: ... and no layout face counts as smaller than this share of the mean (a face refined twice is
+#: a sixteenth of its parent)
+SMALLEST_FACE = 1.0 / 16.0
 SAMPLES_PER_FACE = 16
 #: a triangle is cut into at most this many squared samples (a sliver of a huge scan triangle)
 MAX_FACET_SPLIT = 32
@@ -621,8 +624,7 @@ def fit_network(
             tried.append((count, np.inf))
             off, folds = None, 0
         else:
-            nearest_face = _nearest_faces(cage_layout, scan.centroids)
-            face_area = quad_areas(cage_layout.vertices, cage_layout.faces)[nearest_face]
+            face_area = _sampled_areas(cage_layout, scan)
             samples, sample_normals = scan.facet_samples(
                 face_area / SAMPLES_PER_FACE, SPARSE_FACET * face_area
             )
@@ -791,13 +793,23 @@ def _nearest_faces(layout: QuadMesh, points: FloatArray) -> IntArray:
     return cKDTree(centres).query(points)[1].astype(np.int64)
 
 
+def _sampled_areas(layout: QuadMesh, scan: Scan, nearest: IntArray | None = None) -> FloatArray:
+    """Per scan triangle the area its facet samples are taken at: that of the layout face
+    nearest it (``nearest``, else found), at least :data:`SMALLEST_FACE` of the layout's mean
+    (a flattened sphere's layout had faces of almost no area, and a million samples)."""
+    areas = quad_areas(layout.vertices, layout.faces)
+    if nearest is None:
+        nearest = _nearest_faces(layout, scan.centroids)
+    return np.maximum(areas[nearest], SMALLEST_FACE * float(scan.areas.sum()) / layout.n_faces)
+
+
 def _refined_points(layout: QuadMesh, scan: Scan) -> IntArray:
     """Per layout face the scan points it would hold split into four: the scan's vertices
     nearest it and the samples the fit would take inside the triangles nearest it at a quarter
     of its area (:meth:`Scan.facet_samples`) — a low-poly scan's facets are points too."""
-    quarter = 0.25 * quad_areas(layout.vertices, layout.faces)
     nearest = _nearest_faces(layout, scan.centroids)
-    split = scan.facet_splits(quarter[nearest] / SAMPLES_PER_FACE, SPARSE_FACET * quarter[nearest])
+    quarter = 0.25 * _sampled_areas(layout, scan, nearest)
+    split = scan.facet_splits(quarter / SAMPLES_PER_FACE, SPARSE_FACET * quarter)
     vertices = np.bincount(_nearest_faces(layout, scan.points), minlength=layout.n_faces)
     samples = np.bincount(nearest, weights=split**2, minlength=layout.n_faces)
     return vertices + samples.astype(np.int64)
