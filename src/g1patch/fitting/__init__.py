@@ -62,7 +62,13 @@ from .features import (
     snap_to_features,
 )
 from .layout import bridging_faces, quad_layout, refined_layout
-from .scan_topology import boundary_edges, boundary_loops, orientation_flips, triangle_parts
+from .scan_topology import (
+    boundary_edges,
+    boundary_loops,
+    orientation_flips,
+    side_edges,
+    triangle_parts,
+)
 from .solve import FitCage, _Triangles, fit_cage, vertex_normals
 
 __all__ = [
@@ -327,17 +333,15 @@ def manifold(scan: Scan) -> Scan:
     the diagonal off, and the remesher's layout is made of a manifold scan); ``repairs`` says
     how many."""
     triangles = scan.triangles
-    sides = np.stack([triangles, np.roll(triangles, -1, axis=1)], axis=-1).reshape(-1, 2)
-    key = sides.min(axis=1) * np.int64(len(scan.points)) + sides.max(axis=1)
-    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
-    at = counts[inverse].reshape(-1, 3)  # per triangle side: the triangles at its edge
+    _, edge_of, counts = side_edges(triangles)
+    at = counts[edge_of]  # per triangle side (T, 3): the triangles at its edge
     if not (at > 2).any():
         return scan
     joined = (at == 2).sum(axis=1)
     side = np.flatnonzero(at.reshape(-1) > 2)
     owner = side // 3
-    order = np.lexsort((-scan.areas[owner], -joined[owner], inverse[side]))
-    edge = inverse[side][order]
+    order = np.lexsort((-scan.areas[owner], -joined[owner], edge_of.reshape(-1)[side]))
+    edge = edge_of.reshape(-1)[side][order]
     start = np.searchsorted(edge, edge)  # the first side of each edge's run
     rank = np.arange(len(order)) - start
     drop = np.zeros(len(triangles), dtype=bool)

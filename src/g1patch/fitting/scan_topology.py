@@ -15,19 +15,28 @@ __all__ = [
     "boundary_loops",
     "orientation_flips",
     "polygon_sides",
+    "side_edges",
     "triangle_parts",
 ]
 
 IntArray = NDArray[np.int64]
 
 
-def polygon_sides(faces: IntArray) -> tuple[IntArray, NDArray[np.bool_]]:
-    """The sides ``(F, k, 2)`` of polygons ``faces`` (F, k), side i from corner i to i + 1, and
-    which of them only one face has (boundary sides)."""
+def side_edges(faces: IntArray) -> tuple[IntArray, IntArray, IntArray]:
+    """The sides ``(F, k, 2)`` of polygons ``faces`` (F, k), side i from corner i to i + 1, the
+    edge each is (F, k; an edge is a pair of vertices either way round, numbered 0, 1, …), and
+    how many sides each edge has (per edge)."""
     sides = np.stack([faces, np.roll(faces, -1, axis=1)], axis=-1)
     key = sides.min(axis=-1).astype(np.int64) * (1 << 31) + sides.max(axis=-1)
     _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
-    return sides, (counts[inverse] == 1).reshape(key.shape)
+    return sides, inverse.reshape(key.shape).astype(np.int64), counts.astype(np.int64)
+
+
+def polygon_sides(faces: IntArray) -> tuple[IntArray, NDArray[np.bool_]]:
+    """The sides ``(F, k, 2)`` of polygons ``faces`` (F, k), side i from corner i to i + 1, and
+    which of them only one face has (boundary sides)."""
+    sides, edge, counts = side_edges(faces)
+    return sides, counts[edge] == 1
 
 
 def boundary_edges(faces: IntArray) -> IntArray:
