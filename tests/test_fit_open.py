@@ -229,6 +229,20 @@ def test_the_face_count_follows_the_measured_error() -> None:
     assert next_faces([(1000, 1.6e-2), (2000, 4e-3)], 2e-3, 2000) == 3163
 
 
+def test_half_the_budget_is_tried_before_all_of_it() -> None:
+    """Where the error calls for the whole budget and every layout so far was under half of it
+    (by more than the least growth), half is asked for first: refined locally where it is off,
+    it may still double within the budget. Past half, or where less is called for, as before."""
+    from g1patch.fitting import next_count, next_faces
+
+    budget = 2731  # fandisk's 5,750 triangles
+    assert next_faces([(734, 1.34e-2)], 2e-3, 718) >= budget
+    assert next_count([(734, 1.34e-2)], 2e-3, 718, budget) == budget // 2
+    assert next_count([(1100, 1.34e-2)], 2e-3, 1100, budget) == budget  # 1.25 × 1,100 > half
+    assert next_count([(734, 1.34e-2)], 2e-3, 1100, budget) == budget  # asked for 1,100 already
+    assert next_count([(734, 2.4e-3)], 2e-3, 718, budget) == 1101  # within the budget: as asked
+
+
 def test_faces_touching_at_a_vertex_are_two_parts() -> None:
     """Parts are edge-connected: a teapot's handle welded to its body at a few coincident points
     is two surfaces to lay out (one layout over both folded where they meet)."""
@@ -284,14 +298,11 @@ def test_the_tolerance_bounds_the_scan_s_bulk_and_all_of_the_surface() -> None:
     assert "NOT within 1e-09°" in kinked.summary() and "NOT" not in stray.summary().split("G1")[1]
 
 
-NO_FEATURES = np.zeros((0, 2, 3))
-
-
 def test_a_layout_is_refined_where_it_is_off_and_nowhere_else() -> None:
     """The faces off the tolerance (a surface sample too far, or two scan points) with enough
     scan points are split, their ring closed into quads; the new vertices lie on the scan;
     the old ones stay. Too many off faces, too few points (a scan about as fine as the layout),
-    a feature line through an off face, over the budget, or a refinement of most of the layout
+    over the budget, or a refinement of most of the layout
     (more than twice its faces): no local step. A low-poly scan's
     large facets are points: refined."""
     from g1patch.fitting import LOCAL_SHARE, REFINE_POINTS, _locally_refined, _refined_points
@@ -303,7 +314,7 @@ def test_a_layout_is_refined_where_it_is_off_and_nowhere_else() -> None:
     per_face = np.zeros((layout.n_faces, 2))
     per_face[[5 * cells + 5, 5 * cells + 6], 0] = 1.0  # two faces off: a far surface sample
     per_face[12 * cells + 12, 1] = 2  # one more: two scan points beyond
-    refined = _locally_refined(layout, per_face, 0.5, 10**6, scan, NO_FEATURES)
+    refined = _locally_refined(layout, per_face, 0.5, 10**6, scan)
     assert refined is not None and layout.n_faces < refined.n_faces < 2 * layout.n_faces
     new = refined.vertices[layout.n_vertices :]
     height = 0.06 * np.sin(3 * np.pi * new[:, 0]) * np.cos(2 * np.pi * new[:, 1]) + 0.05 * np.exp(
@@ -311,27 +322,22 @@ def test_a_layout_is_refined_where_it_is_off_and_nowhere_else() -> None:
     )
     assert np.abs(new[:, 2] - height).max() < 5e-3  # on the scan's facets (sagitta ~1e-3)
     assert np.array_equal(refined.vertices[: layout.n_vertices], layout.vertices)
-    # a feature line through an off face: a crease gap there is a new layout's to mend
-    y = np.linspace(0.0, 1.0, 61)  # short segments, as a scan's sharp edges are
-    x = np.full(60, 0.28)  # through the off faces' column (x from 0.25 to 0.3)
-    line = np.stack([np.stack([x, y[:-1], 0 * x], 1), np.stack([x, y[1:], 0 * x], 1)], 1)
-    assert _locally_refined(layout, per_face, 0.5, 10**6, scan, line) is None
     too_many = per_face.copy()
     too_many[: int(LOCAL_SHARE * layout.n_faces) + 1, 0] = 1.0
-    assert _locally_refined(layout, too_many, 0.5, 10**6, scan, NO_FEATURES) is None
+    assert _locally_refined(layout, too_many, 0.5, 10**6, scan) is None
     # 6 × 6 vertices a face (those on its sides go to one of two), facets too small to sample
     assert _refined_points(layout, scan).min() >= REFINE_POINTS
     starved = Scan(*height_field(60))  # 3 × 3 vertices a face, facets under a quarter face's
     off = (per_face[:, 0] > 0.5) | (per_face[:, 1] >= 2)
     assert _refined_points(layout, starved)[off].max() < REFINE_POINTS
-    assert _locally_refined(layout, per_face, 0.5, 10**6, starved, NO_FEATURES) is None
+    assert _locally_refined(layout, per_face, 0.5, 10**6, starved) is None
     low_poly = Scan(*height_field(8))  # a facet 6.25 faces: (⌊√(6.25 · 4 · 16)⌋ = 20)² samples
-    assert _locally_refined(layout, per_face, 0.5, 10**6, low_poly, NO_FEATURES) is not None
+    assert _locally_refined(layout, per_face, 0.5, 10**6, low_poly) is not None
     over_budget = layout.n_faces
-    assert _locally_refined(layout, per_face, 0.5, over_budget, scan, NO_FEATURES) is None
+    assert _locally_refined(layout, per_face, 0.5, over_budget, scan) is None
     spread = np.zeros_like(per_face)  # a fifth of the faces off, all over: no local step
     spread[::5, 0] = 1.0
-    assert _locally_refined(layout, spread, 0.5, 10**6, scan, NO_FEATURES) is None
+    assert _locally_refined(layout, spread, 0.5, 10**6, scan) is None
 
 
 def test_a_refinement_that_made_the_fit_worse_is_not_refined_again(
