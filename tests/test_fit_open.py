@@ -504,3 +504,43 @@ def test_a_hole_another_part_closes_is_not_cut_open() -> None:
     triangles = np.concatenate([holed, plate + len(points)])
     assert bridging_faces(square_layout(), points, holed).sum() == 4
     assert not bridging_faces(square_layout(), both, triangles).any()
+
+
+def test_a_fit_that_pinches_a_face_skips_its_layout(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A layout whose first fit pinches a face to nothing (a cycloidal gear's thin tooth: a
+    traceback, exit 2 on a valid mesh) is unusable: the next layout is tried. A refit that
+    pinches one ends the refits: the attempts before it stand."""
+    import g1patch.fitting as fitting
+    from g1patch.errors import DegenerateFaceError
+
+    scan = Scan(*height_field(60))
+    square = height_field_layout(12)
+    monkeypatch.setattr(fitting, "_layout", lambda _scan, _faces: square)
+    real = fitting.fit_cage
+    calls: list[int] = []
+
+    def fit_cage(*args: object, **kwargs: object) -> object:
+        calls.append(len(calls))
+        if len(calls) == 1:
+            raise DegenerateFaceError("layout: face 3 has zero area")
+        return real(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(fitting, "fit_cage", fit_cage)
+    _, report = fit_network(scan, tolerance=2e-3)
+    assert len(calls) >= 2 and report.faces == square.n_faces
+    # a refit pinches: the first, folded attempt is what the layout gave
+    calls.clear()
+    folded = np.zeros(4 * square.n_faces, dtype=bool)
+    folded[0] = True
+    monkeypatch.setattr(fitting, "folded_patches", lambda *_: folded)
+
+    def pinched_refit(*args: object, **kwargs: object) -> object:
+        calls.append(len(calls))
+        if len(calls) > 1:
+            raise DegenerateFaceError("layout: face 3 has zero area")
+        return real(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(fitting, "fit_cage", pinched_refit)
+    points, normals = scan.points, fitting.vertex_normals(scan.points, scan.triangles)
+    fitted, network, bent = fitting._fitted(points, normals, square, scan.triangles, "split4")
+    assert calls == [0, 1] and bent is folded and network.n_patches == 4 * square.n_faces

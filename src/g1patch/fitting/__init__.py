@@ -623,13 +623,6 @@ def fit_network(
                 reach = boundary_reach(creased)
                 corners = boundary_corners(scan.points, scan.triangles, corner_angle, reach)
                 cage_layout = layout_corners(creased, corners)
-        except (ConstructionError, MeshError) as error:  # unusable: the next face count
-            if not adaptive:
-                raise
-            failure = str(error)
-            tried.append((count, np.inf))
-            off, folds = None, 0
-        else:
             face_area = _sampled_areas(cage_layout, scan)
             samples, sample_normals = scan.facet_samples(
                 face_area / SAMPLES_PER_FACE, SPARSE_FACET * face_area
@@ -637,20 +630,16 @@ def fit_network(
             points = np.concatenate([scan.points, samples])
             fitted_points += len(points)
             point_normals = np.concatenate([normals, sample_normals])
-            stiffness: FloatArray | None = None
-            attempts: list[tuple[int, int, FitCage, PatchNetwork, NDArray[np.bool_]]] = []
-            for _ in range(FOLD_REFITS + 1):
-                attempt: FitCage = fit_cage(
-                    points, point_normals, cage_layout, scan.triangles, stiffness=stiffness
-                )
-                # the scan, not the cage's limit, is what the fit is measured against (below)
-                made = build_network(attempt.cage, method, "limit", tolerance=None)
-                bent = folded_patches(made.patches, FOLD_SAMPLES)  # as check counts
-                attempts.append((int(bent.sum()), len(attempts), attempt, made, bent))
-                if not bent.any():
-                    break
-                stiffness = _stiffened(cage_layout, made, bent, stiffness)
-            _, _, fitted, network, folded = min(attempts, key=lambda a: a[:2])
+            fitted, network, folded = _fitted(
+                points, point_normals, cage_layout, scan.triangles, method
+            )
+        except (ConstructionError, MeshError) as error:  # unusable: the next face count
+            if not adaptive:
+                raise
+            failure = str(error)
+            tried.append((count, np.inf))
+            off, folds = None, 0
+        else:
             to_surface, to_scan, off = measure(
                 network, scan, cage_layout.n_faces, tolerance * diagonal, samples
             )
@@ -699,6 +688,38 @@ def fit_network(
         _largest_angle(check(network)),
     )
     return network, report
+
+
+def _fitted(
+    points: FloatArray,
+    point_normals: FloatArray,
+    layout: QuadMesh,
+    triangles: IntArray,
+    method: str,
+) -> tuple[FitCage, PatchNetwork, NDArray[np.bool_]]:
+    """The cage fitted to the ``points`` on ``layout``, its network and folded patches: where it
+    folds, fitted again stiffer round the folds (:func:`_stiffened`, :data:`FOLD_REFITS` times at
+    most), the attempt with the fewest folds kept. A refit whose cage pinches a face to nothing
+    ends the refits; a first fit that does raises (the layout is unusable: a cycloidal gear's
+    2,842-quad layout, a thin tooth's face fitted to zero area)."""
+    stiffness: FloatArray | None = None
+    attempts: list[tuple[int, int, FitCage, PatchNetwork, NDArray[np.bool_]]] = []
+    for _ in range(FOLD_REFITS + 1):
+        try:
+            attempt = fit_cage(points, point_normals, layout, triangles, stiffness=stiffness)
+        except MeshError:
+            if not attempts:
+                raise
+            break
+        # the scan, not the cage's limit, is what the fit is measured against (by the caller)
+        made = build_network(attempt.cage, method, "limit", tolerance=None)
+        bent = folded_patches(made.patches, FOLD_SAMPLES)  # as check counts
+        attempts.append((int(bent.sum()), len(attempts), attempt, made, bent))
+        if not bent.any():
+            break
+        stiffness = _stiffened(layout, made, bent, stiffness)
+    _, _, fitted, network, folded = min(attempts, key=lambda a: a[:2])
+    return fitted, network, folded
 
 
 def _largest_angle(checked: ContinuityReport) -> float:
