@@ -244,3 +244,35 @@ def test_a_corner_on_a_hole_the_layout_bridges_is_not_tied_to_it() -> None:
     assert np.flatnonzero(tied.features.vertex_sharpness).tolist() == [0]
     assert np.allclose(tied.vertices[0], on_rim[0])
     assert np.allclose(np.delete(tied.vertices, 0, axis=0), np.delete(layout.vertices, 0, axis=0))
+
+
+def test_a_long_sharp_edge_is_matched_in_pieces() -> None:
+    """A CAD part's sharp edge may be one scan edge across a whole side (a sliver's): the ridge
+    as one segment tags the same layout edges as the ridge in 32, and snaps and counts gaps the
+    same. Its pieces are in order along it, no longer than PIECE of the median layout edge, and
+    keep its ends exactly (chains meet there)."""
+    from g1patch.fitting.features import PIECE, _pieces, crease_gaps
+
+    points, triangles = ridge_scan()
+    short = sharp_segments(points, triangles, 60.0)
+    whole = np.array([[short[0, 0], short[-1, 1]]])
+    assert np.allclose(whole, [[[0.0, 0.0, 0.0], [0.0, 2.0, 0.0]]])
+    layout = roof()
+    assert ridge_edges(layout_creases(layout, whole)) == ridge_edges(layout_creases(layout, short))
+    lifted = roof(lift=0.25)
+    assert np.array_equal(
+        snap_to_features(lifted, whole, np.zeros((0, 3))).vertices,
+        snap_to_features(lifted, short, np.zeros((0, 3))).vertices,
+    )
+    assert crease_gaps(layout_creases(layout, whole), whole) == 0.0
+    pieces = _pieces(np.concatenate([whole, short[:3]]), layout)
+    ends = layout.vertices[layout.topology.edges]
+    longest = PIECE * np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1))
+    n = int(np.ceil(2.0 / longest))  # the 2-long ridge in n pieces; the 1/16-long kept whole
+    assert len(pieces) == n + 3 and 0.0625 < longest
+    assert np.linalg.norm(pieces[:, 1] - pieces[:, 0], axis=1).max() <= longest
+    assert np.array_equal(pieces[0, 0], whole[0, 0]) and np.array_equal(
+        pieces[n - 1, 1], whole[0, 1]
+    )
+    assert np.array_equal(pieces[1:n, 0], pieces[: n - 1, 1])  # in order, end to start
+    assert np.array_equal(pieces[n:], short[:3])

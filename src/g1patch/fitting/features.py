@@ -53,6 +53,7 @@ __all__ = [
     "EDGE_SAMPLES",
     "GAP_REACH",
     "LINE_SNAP",
+    "PIECE",
     "REACH",
     "SNAP_KEEP_AREA",
     "crease_gaps",
@@ -99,6 +100,11 @@ CHAIN_EDGES = 6.0
 #: a feature line farther than this from every crease edge (of the median layout edge) is in a
 #: gap of the crease chain (:func:`crease_gaps`)
 GAP_REACH = 0.25
+#: sharp scan edges are cut into pieces no longer than this share of the median layout edge
+#: before they are matched to the layout (:func:`_pieces`): a CAD part's flat sides are long
+#: slivers, and one sharp edge across a whole side made every layout edge a candidate for every
+#: segment (a cycloidal gear's 43 k triangles: 24 GB, killed at a 12,721-quad layout)
+PIECE = 0.5
 
 
 def sharp_segments(points: FloatArray, triangles: IntArray, degrees: float) -> FloatArray:
@@ -120,6 +126,35 @@ def sharp_corners(points: FloatArray, triangles: IntArray, degrees: float) -> Fl
     if not found:
         return np.zeros((0, 3))
     return np.asarray(points, dtype=np.float64)[np.asarray(found[0].ints, dtype=np.int64)]
+
+
+def _pieces(segments: FloatArray, layout: QuadMesh) -> FloatArray:
+    """``segments`` (S, 2, 3) cut into equal pieces no longer than :data:`PIECE` of the
+    ``layout``'s median edge, in order along each (a segment's ends stay exactly its own, so
+    chains and corners still meet there)."""
+    if not len(segments):
+        return segments
+    edges = layout.topology.edges
+    longest = PIECE * float(
+        np.median(
+            np.linalg.norm(layout.vertices[edges[:, 0]] - layout.vertices[edges[:, 1]], axis=1)
+        )
+    )
+    length = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1)
+    count = np.ones(len(segments), dtype=np.int64)
+    if longest > 0:
+        count = np.maximum(np.ceil(length / longest), 1).astype(np.int64)
+    if (count == 1).all():
+        return segments
+    owner = np.repeat(np.arange(len(segments)), count)
+    step = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    start, direction = segments[owner, 0], segments[owner, 1] - segments[owner, 0]
+    first = start + (step / count[owner])[:, None] * direction
+    last = start + ((step + 1) / count[owner])[:, None] * direction
+    first[step == 0] = segments[owner[step == 0], 0]
+    final = step + 1 == count[owner]
+    last[final] = segments[owner[final], 1]
+    return np.stack([first, last], axis=1)
 
 
 def _closest_on_segments(points: FloatArray, segments: FloatArray) -> FloatArray:
@@ -164,6 +199,7 @@ def snap_to_features(layout: QuadMesh, segments: FloatArray, corners: FloatArray
     edges :data:`CHAIN_EDGES` layout edges long or longer, and the corners at their ends, count."""
     if not len(segments):
         return layout
+    segments = _pieces(segments, layout)
     vertices = layout.vertices.copy()
     edges = layout.topology.edges
     length = np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)
@@ -270,6 +306,7 @@ def layout_creases(
     tagged a ``corner``."""
     if not len(segments):
         return layout
+    segments = _pieces(segments, layout)
     edges = layout.topology.edges
     ends = layout.vertices[edges]
     sharp = _worst_sample(ends, segments, ALIGNMENT_DEG) <= REACH
@@ -309,6 +346,7 @@ def crease_gaps(layout: QuadMesh, segments: FloatArray) -> float:
     rounds a line across a gap, a kink of 10–20° in the surface there)."""
     if not len(segments):
         return 0.0
+    segments = _pieces(segments, layout)
     edges = layout.topology.edges
     length = np.linalg.norm(layout.vertices[edges[:, 0]] - layout.vertices[edges[:, 1]], axis=1)
     scale = float(np.median(length))
