@@ -121,6 +121,27 @@ def test_the_command_line_writes_reports_and_exits_1_when_not_within(
         assert "Traceback" not in refused.stderr and not out.exists()
 
 
+def test_a_cad_file_written_by_fit_says_what_opencascade_measured(
+    scan: Path, tmp_path: Path
+) -> None:
+    """``fit -o x.step`` prints the export's lines (faces, a closed solid, OCC's G1 angle on the
+    file's own surfaces), as ``export`` does; ``--json`` carries them under ``cad``."""
+    pytest.importorskip("OCP", reason="STEP export: pip install 'g1patch[cad]'")
+    out = tmp_path / "torus.step"
+    run = [sys.executable, "-m", "g1patch.cli", "fit", str(scan), "-o", str(out), "-q"]
+    text = subprocess.run([*run, "--faces", "64"], capture_output=True, text=True, timeout=600)
+    assert text.returncode in (0, 1), text.stderr
+    assert "a closed solid" in text.stdout and "measured on OpenCASCADE's surfaces" in text.stdout
+    report = json.loads(
+        subprocess.run(
+            [*run, "--faces", "64", "--json"], capture_output=True, text=True, timeout=600
+        ).stdout
+    )
+    cad = report["cad"]
+    assert cad["solid"] and cad["g1_measured"] and cad["max_g1_angle_deg"] <= 1e-7
+    assert cad["faces"] == report["faces"]  # one B-spline face per cage quad
+
+
 def test_a_missing_or_failing_remesher_is_one_clear_error(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

@@ -188,19 +188,29 @@ def _fit(args: argparse.Namespace) -> int:
             sharp_angle=args.sharp_angle,
         )
         progress(1, 2)
+        written = None
         if suffix == ".html":  # the viewer, with the distance to the scan
             result.view(args.output)
         else:
-            result.surface.export(args.output)
+            written = result.surface.export(args.output)
         progress(2, 2)
     report = result.report
     if report.repairs:
         print(f"g1patch: {args.scan}: {', '.join(report.repairs)}", file=sys.stderr)
+    from ..io.cad import ExportResult, RhinoResult
+
+    corner_only = args.method == "corner"
+    cad = written if isinstance(written, (ExportResult, RhinoResult)) else None
     if args.json:
-        print(json.dumps({**report.to_dict(), "output": str(args.output)}))
+        extra = {} if cad is None else {"cad": cad.to_dict()}
+        print(json.dumps({**report.to_dict(), "output": str(args.output), **extra}, default=str))
     else:
         print(f"fitted {args.scan} -> {args.output}")
         print(report.summary())
+        if isinstance(cad, ExportResult):  # what OpenCASCADE measured on the file written
+            print(_cad_export_text(cad, corner_only))
+        elif isinstance(cad, RhinoResult):
+            print(cad.summary())
     return EXIT_OK if report.met else EXIT_CHECK_FAILED
 
 
