@@ -482,8 +482,8 @@ def test_a_hole_in_a_scan_stays_a_hole(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_a_layout_within_the_tolerance_outranks_one_that_is_not() -> None:
-    """Folds first; then within the tolerance beats not within, whatever the feature gaps; within
-    it, the feature lines followed beat gaps; then the nearest."""
+    """Exactly G1 first, then folds; then within the tolerance beats not within, whatever the
+    feature gaps; within it, the feature lines followed beat gaps; then the nearest."""
     from g1patch.fitting import FEATURE_GAPS, layout_rank
 
     gappy = 2 * FEATURE_GAPS
@@ -491,6 +491,9 @@ def test_a_layout_within_the_tolerance_outranks_one_that_is_not() -> None:
     assert layout_rank(0, 1.9e-3, 2e-3, gappy) < layout_rank(0, 2.1e-3, 2e-3, 0.0)
     assert layout_rank(0, 1.9e-3, 2e-3, 0.0) < layout_rank(0, 1e-3, 2e-3, gappy)
     assert layout_rank(0, 9e-2, 2e-3, 0.0) < layout_rank(1, 1e-4, 2e-3, 0.0)
+    # not exactly G1 (a smooth edge kinked by 1.1°) ranks below everything exactly G1
+    assert layout_rank(5, 9e-2, 2e-3, gappy, 1e-11) < layout_rank(0, 1e-4, 2e-3, 0.0, 1.1)
+    assert layout_rank(0, 1e-4, 2e-3, 0.0, 1.1) < layout_rank(0, 2e-4, 2e-3, 0.0, 2.0)
 
 
 def test_a_hole_another_part_closes_is_not_cut_open() -> None:

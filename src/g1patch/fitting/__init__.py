@@ -648,10 +648,13 @@ def fit_network(
                 tried.append((cage_layout.n_faces, worst))
             gaps = crease_gaps(cage_layout, features)
             folds = int(folded.sum())
-            rank = layout_rank(folds, worst, tolerance, gaps)
+            rank = layout_rank(folds, worst, tolerance, gaps)  # as if exactly G1: check later
             if best is None or rank < best[0]:
-                best = (rank, gaps, cage_layout, fitted, network, to_surface, to_scan)
-            if not adaptive or rank == (0, False, False, worst):
+                angle = _largest_angle(check(network))  # only for a layout that may be kept
+                rank = layout_rank(folds, worst, tolerance, gaps, angle)
+                if best is None or rank < best[0]:
+                    best = (rank, gaps, cage_layout, fitted, network, to_surface, to_scan, angle)
+            if not adaptive or rank == (False, 0, False, False, worst):
                 break
         if rounds >= MAX_ROUNDS or (rounds >= MIN_ROUNDS and fitted_points >= ROUND_POINTS):
             break
@@ -669,7 +672,7 @@ def fit_network(
             count = next_count(tried, tolerance, count, budget)
     if best is None:
         raise ConstructionError(f"no usable quad layout in {rounds} tries (last: {failure})")
-    (folds, _, _, worst), gaps, cage_layout, fitted, network, to_surface, to_scan = best
+    (_, folds, _, _, worst), gaps, cage_layout, fitted, network, to_surface, to_scan, angle = best
     network.provenance.update({"fit_tolerance": f"{tolerance:g}", "fit_distance": f"{worst:.3e}"})
     report = FitReport(
         diagonal,
@@ -685,7 +688,7 @@ def fit_network(
         scan.repairs,
         gaps,
         folds,
-        _largest_angle(check(network)),
+        angle,
     )
     return network, report
 
@@ -728,15 +731,18 @@ def _largest_angle(checked: ContinuityReport) -> float:
 
 
 def layout_rank(
-    folds: int, worst: float, tolerance: float, gaps: float
-) -> tuple[int, bool, bool, float]:
-    """How a fitted layout ranks (the least is kept): fewer folds, then within the
+    folds: int, worst: float, tolerance: float, gaps: float, angle: float = 0.0
+) -> tuple[bool, int, bool, bool, float]:
+    """How a fitted layout ranks (the least is kept): exactly G1 (its largest G1 ``angle`` as
+    ``check`` measures it, degrees, within :data:`~g1patch.continuity.EXACT_G1_DEG`: a trimesh
+    CAD model's layout, its crease chains meeting three at a vertex, came out 1.1° off G1 along
+    one smooth edge, and was kept over an exactly G1 one), then fewer folds, then within the
     ``tolerance``, then (within it) the feature lines followed (``gaps`` ≤ :data:`FEATURE_GAPS`),
     then the ``worst`` distance. A finer layout is not always nearer, and where none is within,
     gaps in stray feature lines (a decimated bunny's chains of steep facets) do not outrank
     distance: its 1,034-quad layout at 1.5e-2 was kept over a 4,126-quad one at 3.2e-3."""
     within = worst <= tolerance
-    return (folds, not within, within and gaps > FEATURE_GAPS, worst)
+    return (angle > EXACT_G1_DEG, folds, not within, within and gaps > FEATURE_GAPS, worst)
 
 
 def face_budget(triangles: int) -> int:
