@@ -251,7 +251,7 @@ def test_a_long_sharp_edge_is_matched_in_pieces() -> None:
     as one segment tags the same layout edges as the ridge in 32, and snaps and counts gaps the
     same. Its pieces are in order along it, no longer than PIECE of the median layout edge, and
     keep its ends exactly (chains meet there)."""
-    from g1patch.fitting.features import PIECE, _pieces, crease_gaps
+    from g1patch.fitting.features import PIECE, _median_edge, _pieces, crease_gaps
 
     points, triangles = ridge_scan()
     short = sharp_segments(points, triangles, 60.0)
@@ -265,9 +265,11 @@ def test_a_long_sharp_edge_is_matched_in_pieces() -> None:
         snap_to_features(lifted, short, np.zeros((0, 3))).vertices,
     )
     assert crease_gaps(layout_creases(layout, whole), whole) == 0.0
-    pieces = _pieces(np.concatenate([whole, short[:3]]), layout)
     ends = layout.vertices[layout.topology.edges]
-    longest = PIECE * np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1))
+    median = float(np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)))
+    assert _median_edge(layout) == median
+    pieces = _pieces(np.concatenate([whole, short[:3]]), median)
+    longest = PIECE * median
     n = int(np.ceil(2.0 / longest))  # the 2-long ridge in n pieces; the 1/16-long kept whole
     assert len(pieces) == n + 3 and 0.0625 < longest
     assert np.linalg.norm(pieces[:, 1] - pieces[:, 0], axis=1).max() <= longest

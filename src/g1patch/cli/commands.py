@@ -203,7 +203,7 @@ def _fit(args: argparse.Namespace) -> int:
     cad = written if isinstance(written, (ExportResult, RhinoResult)) else None
     if args.json:
         extra = {} if cad is None else {"cad": cad.to_dict()}
-        print(json.dumps({**report.to_dict(), "output": str(args.output), **extra}, default=str))
+        print(json.dumps({**report.to_dict(), "output": str(args.output), **extra}))
     else:
         print(f"fitted {args.scan} -> {args.output}")
         print(report.summary())

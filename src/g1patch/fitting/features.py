@@ -128,18 +128,19 @@ def sharp_corners(points: FloatArray, triangles: IntArray, degrees: float) -> Fl
     return np.asarray(points, dtype=np.float64)[np.asarray(found[0].ints, dtype=np.int64)]
 
 
-def _pieces(segments: FloatArray, layout: QuadMesh) -> FloatArray:
-    """``segments`` (S, 2, 3) cut into equal pieces no longer than :data:`PIECE` of the
-    ``layout``'s median edge, in order along each (a segment's ends stay exactly its own, so
-    chains and corners still meet there)."""
+def _median_edge(layout: QuadMesh) -> float:
+    """The median length of ``layout``'s edges."""
+    ends = layout.vertices[layout.topology.edges]
+    return float(np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)))
+
+
+def _pieces(segments: FloatArray, median_edge: float) -> FloatArray:
+    """``segments`` (S, 2, 3) cut into equal pieces no longer than :data:`PIECE` of the layout's
+    ``median_edge``, in order along each (a segment's ends stay exactly its own, so chains and
+    corners still meet there)."""
     if not len(segments):
         return segments
-    edges = layout.topology.edges
-    longest = PIECE * float(
-        np.median(
-            np.linalg.norm(layout.vertices[edges[:, 0]] - layout.vertices[edges[:, 1]], axis=1)
-        )
-    )
+    longest = PIECE * median_edge
     length = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1)
     count = np.ones(len(segments), dtype=np.int64)
     if longest > 0:
@@ -199,14 +200,14 @@ def snap_to_features(layout: QuadMesh, segments: FloatArray, corners: FloatArray
     edges :data:`CHAIN_EDGES` layout edges long or longer, and the corners at their ends, count."""
     if not len(segments):
         return layout
-    segments = _pieces(segments, layout)
     vertices = layout.vertices.copy()
     edges = layout.topology.edges
     length = np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)
     degree = np.bincount(edges.ravel(), minlength=len(vertices))
     size = np.bincount(edges.ravel(), np.repeat(length, 2), len(vertices)) / np.maximum(degree, 1)
     used = np.flatnonzero(degree)
-    segments, corners = _lines(segments, corners, CHAIN_EDGES * float(np.median(length)))
+    median = float(np.median(length))
+    segments, corners = _lines(_pieces(segments, median), corners, CHAIN_EDGES * median)
     if not len(segments):
         return layout
     feet = _closest_on_segments(vertices[used], segments)
@@ -306,7 +307,7 @@ def layout_creases(
     tagged a ``corner``."""
     if not len(segments):
         return layout
-    segments = _pieces(segments, layout)
+    segments = _pieces(segments, _median_edge(layout))
     edges = layout.topology.edges
     ends = layout.vertices[edges]
     sharp = _worst_sample(ends, segments, ALIGNMENT_DEG) <= REACH
@@ -346,11 +347,9 @@ def crease_gaps(layout: QuadMesh, segments: FloatArray) -> float:
     rounds a line across a gap, a kink of 10–20° in the surface there)."""
     if not len(segments):
         return 0.0
-    segments = _pieces(segments, layout)
     edges = layout.topology.edges
-    length = np.linalg.norm(layout.vertices[edges[:, 0]] - layout.vertices[edges[:, 1]], axis=1)
-    scale = float(np.median(length))
-    segments, _ = _lines(segments, np.zeros((0, 3)), CHAIN_EDGES * scale)
+    scale = _median_edge(layout)
+    segments, _ = _lines(_pieces(segments, scale), np.zeros((0, 3)), CHAIN_EDGES * scale)
     if not len(segments):
         return 0.0
     weight = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1)
