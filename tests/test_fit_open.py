@@ -547,3 +547,24 @@ def test_a_fit_that_pinches_a_face_skips_its_layout(monkeypatch: pytest.MonkeyPa
     points, normals = scan.points, fitting.vertex_normals(scan.points, scan.triangles)
     fitted, network, bent = fitting._fitted(points, normals, square, scan.triangles, "split4")
     assert calls == [0, 1] and bent is folded and network.n_patches == 4 * square.n_faces
+
+
+def test_a_layout_that_is_not_exactly_g1_is_not_kept(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Scripted: the first layout is nearer but its network is 1.1° off G1 (as check measures
+    it); the second, farther, is exactly G1 and is kept, and the report's angle is its own."""
+    import g1patch.fitting as fitting
+
+    scan = Scan(*height_field(60))
+    square = height_field_layout(12)
+    distances = iter([3e-3, 5e-3, 6e-3, 7e-3])
+    angles = iter([1.1, 1e-12, 1e-12, 1e-12])
+
+    def measure(network: object, scan: Scan, faces: int, *_: object) -> tuple[object, ...]:
+        worst = next(distances) * scan.diagonal
+        return (worst,) * 3, (worst,) * 3, np.zeros((faces, 2))
+
+    monkeypatch.setattr(fitting, "_layout", lambda _scan, _faces: square)
+    monkeypatch.setattr(fitting, "measure", measure)
+    monkeypatch.setattr(fitting, "_largest_angle", lambda _checked: next(angles))
+    _, report = fit_network(scan, tolerance=2e-3)
+    assert report.worst == pytest.approx(5e-3) and report.g1 == 1e-12
