@@ -17,6 +17,8 @@ without crossing one. A vertex with one sector (no seam, or a single seam ending
   a corner mirrors the tangent at its far end about the chord (the symmetric arc through both
   ends, ``u = 2(ĉ·g) ĉ − g`` with g the far end's travel direction) or, when the far end is a
   corner too, runs along the chord (so the edges of a box with all edges sharp are straight).
+  Under the limit rule a corner sector whose two tangents span no plane along its faces takes
+  its fan normal instead (:func:`ridge_corners` with two seams, :func:`loose_corners` with more).
 
 The smooth slots of such a vertex are the chord projected onto their sector's plane, circle-aware
 length; a sector whose slots would not turn counter-clockwise inside it gets them spread evenly
@@ -36,6 +38,7 @@ from .value import halfedge_slots
 __all__ = [
     "INTERPOLATE_SHARPNESS",
     "crease_tangents",
+    "loose_corners",
     "ridge_corners",
     "sector_fan_normals",
     "seam_edges",
@@ -60,6 +63,11 @@ _ACROSS = 0.8
 #: whose seam chords span a plane 34° off its faces had its inner slots squeezed into it nearly
 #: parallel to the seams, and the Gregory corner split failed
 _RIDGE = 0.9
+#: the largest turn between consecutive slots of a creased sector (radians, a little under π)
+_HALF_TURN = 0.95 * np.pi
+#: two loose sectors' planes (:func:`loose_corners`) meeting at a sine of at least this (11°) share
+#: their seam's line; below it the line is ill-defined and the seam is moved into one plane
+_SHARED_LINE = 0.2
 #: a far-end tangent this close to perpendicular to the chord (ĉ·g) is not mirrored
 _MIRROR_MIN = 0.1
 
@@ -129,6 +137,59 @@ def ridge_corners(
     out[found.end[mine]] = -np.linalg.norm(t_b, axis=1)[:, None] * d
     normals[mine] = _unit(m - _dot(m, d)[:, None] * d)
     return out, normals, ridge
+
+
+def loose_corners(
+    topology: QuadTopology,
+    found: Sectors,
+    tangents: FloatArray,
+    fan: FloatArray,
+    corner_vertices: BoolArray,
+) -> tuple[FloatArray, FloatArray, BoolArray]:
+    """Interior corners with three or more seams where a sector's seam tangents span no plane
+    along its faces (nearly parallel or across, as in :func:`ridge_corners`: the straight bar of
+    a T where a third crease ends on it, whose chords span a plane standing on edge). Such a
+    *loose* sector takes its ``fan`` normal made perpendicular to ``d ∥ t̂_a − t̂_b`` and its seam
+    tangents are moved into that plane (length kept; a seam between two loose sectors onto the
+    line both planes share, ``∥ N_L × N_R``, where they meet at 11° or more); every other sector
+    there takes the plane its (moved) seam tangents span, oriented with its fan normal. Returns
+    the ``tangents`` (slots) changed there, the sectors' unit normals (zero elsewhere) and which
+    vertices."""
+    many = corner_vertices & ~topology.is_boundary_vertex & (found.cuts > 2)
+    mine = np.flatnonzero(many[found.vertex] & (found.start >= 0))
+    t_a, t_b = tangents[found.start[mine]], tangents[found.end[mine]]
+    plane = cross(_unit(t_a), _unit(t_b))
+    m = _unit(fan[mine])
+    loose = (np.linalg.norm(plane, axis=1) < _PARALLEL) | (np.abs(_dot(_unit(plane), m)) < _RIDGE)
+    hit = np.zeros(topology.n_vertices, dtype=bool)
+    hit[found.vertex[mine[loose]]] = True
+    out, normals = tangents.copy(), np.zeros_like(fan)
+    chosen = hit[found.vertex[mine]]
+    mine, loose, m = mine[chosen], loose[chosen], m[chosen]
+    if not mine.size:
+        return out, normals, hit
+    d = _unit(_unit(t_a[chosen]) - _unit(t_b[chosen]))
+    flat = _unit(m - _dot(m, d)[:, None] * d)
+    is_loose = np.zeros(found.vertex.size, dtype=bool)
+    is_loose[mine] = loose
+    normals[mine] = flat
+    after = np.full(len(tangents), -1, dtype=np.int64)  # the sector a seam slot starts
+    after[found.start[mine]] = mine
+    seam, left = found.end[mine], mine  # each seam slot once, with the sector it ends
+    right = after[seam]
+    t = tangents[seam]
+    one = np.where(is_loose[left], left, right)
+    into = t - _dot(t, normals[one])[:, None] * normals[one]
+    line = cross(normals[left], normals[right])
+    onto = _unit(line) * _dot(t, _unit(line))[:, None]
+    both = is_loose[left] & is_loose[right] & (np.linalg.norm(line, axis=1) >= _SHARED_LINE)
+    moved = np.where(both[:, None], onto, into)
+    moved = _unit(moved) * np.linalg.norm(t, axis=1)[:, None]
+    out[seam] = np.where((is_loose[left] | is_loose[right])[:, None], moved, t)
+    own = cross(out[found.start[mine]], out[found.end[mine]])
+    own *= np.sign(_dot(own, m))[:, None]
+    normals[mine] = np.where(loose[:, None], flat, _unit(own))
+    return out, normals, hit
 
 
 def _circle_lengths(chord: FloatArray, direction: FloatArray) -> FloatArray:
@@ -275,8 +336,9 @@ def spread_sectors(
     chord: FloatArray,
 ) -> BoolArray:
     """Check that each creased sector's slots turn counter-clockwise from its start to its end
-    about its normal; where they do not, put the inner slots at even angles in between (length:
-    the chord), in place. Returns the vertices that needed it."""
+    about its normal, each by less than :data:`_HALF_TURN` (a Gregory corner split needs a
+    slot's neighbours on either side of it); where they do not, put the inner slots at even
+    angles in between (length: the chord), in place. Returns the vertices that needed it."""
     ring_vertex = np.repeat(np.arange(topology.n_vertices), topology.face_count)
     positions = np.flatnonzero(creased[ring_vertex])
     if not positions.size:
@@ -307,7 +369,13 @@ def spread_sectors(
     end_angle = np.where(end_angle <= 0, 2 * np.pi, end_angle)
     inner = rank > 0
     previous = np.where(rank > 1, np.concatenate([[0.0], angle[:-1]]), 0.0)
-    ordered = ~inner | ((angle > previous) & (angle < end_angle))
+    last = inner & (np.r_[label[1:] != label[:-1], True])
+    ordered = ~inner | (
+        (angle > previous)
+        & (angle < end_angle)
+        & (angle - previous < _HALF_TURN)
+        & (~last | (end_angle - angle < _HALF_TURN))
+    )
     bad_sector = np.zeros(found.vertex.size, dtype=bool)
     bad_sector[label[~ordered]] = True
     fix = inner & bad_sector[label]

@@ -29,7 +29,10 @@ At a corner with two seams each sector's plane is the one its two sharp chords s
 subdivision layer's sector normals), unless that plane stands more than 25° off a sector's faces
 or the chords are nearly parallel (a crease through a tagged corner, a ridge's apex): there the
 corner is taken as a crease, as the interpolating rule does
-(:func:`~g1patch.targets.creases.ridge_corners`), since a plane on edge holds no valid fan.
+(:func:`~g1patch.targets.creases.ridge_corners`), since a plane on edge holds no valid fan. At a
+corner with three or more seams a sector whose chords span no such plane (the straight bar of a
+T) takes its faces' fan normal and its seams are moved into that plane, the other sectors
+spanning theirs (:func:`~g1patch.targets.creases.loose_corners`).
 
 Every manifold quad mesh gets valid targets: a fitted fan that does not turn counter-clockwise
 falls back to the limit star, and where the two limit tangents of a vertex are parallel (a
@@ -59,7 +62,7 @@ from ..subdivision import (
     limit_points,
     refine_grids,
 )
-from .creases import ridge_corners, seam_edges, sector_fan_normals, spread_sectors
+from .creases import loose_corners, ridge_corners, seam_edges, sector_fan_normals, spread_sectors
 from .fans import safeguarded_fans
 from .local import cross, dot, fan_normals, slot_tables, slot_vertices
 from .value import TangentRule, Targets, halfedge_slots, slot_sector_normals
@@ -424,13 +427,12 @@ def limit_targets(
         corner_normals = np.where(
             creased[topology.faces][..., None], limit_corner_normals(mesh), corner_normals
         )
-        star, ridge_normals, ridge = ridge_corners(
-            topology,
-            found,
-            star,
-            sector_fan_normals(mesh, found),
-            corner_vertices(mesh) | (found.cuts > 2),
-        )
+        fan = sector_fan_normals(mesh, found)
+        corners = corner_vertices(mesh) | (found.cuts > 2)
+        star, ridge_normals, ridge = ridge_corners(topology, found, star, fan, corners)
+        star, loose_normals, loose = loose_corners(topology, found, star, fan, corners)
+        ridge_normals += loose_normals
+        ridge |= loose
         if ridge.any():
             at = np.flatnonzero(
                 ridge[np.repeat(np.arange(topology.n_vertices), topology.face_count)]

@@ -158,35 +158,50 @@ STRAIGHT_CREASE_DEG = 150.0
 def _straight_creases(
     targets: Targets, topology: QuadTopology, seam_halfedges: NDArray[np.bool_]
 ) -> Targets:
-    """Where exactly two seams pass through a vertex nearly straight (:data:`STRAIGHT_CREASE_DEG`),
-    their tangents made opposite, ``±(t_1 − t_2)/2``, in every copy: a sector's regular star
-    through both then exists (its turn is π), and both sides still share them."""
-    slot_out, slot_in = halfedge_slots(targets.topology)
+    """Where the two seams that bound a sector of two or more faces run on nearly straight
+    (:data:`STRAIGHT_CREASE_DEG`), their tangents made opposite, ``±(t_1 − t_2)/2``, in every copy:
+    the sector's regular star through both then exists (its turn is π), and both sides still share
+    them. This is a straight crease through a vertex and the straight bar of a T where a third
+    crease ends on it; a seam that two such sectors would straighten towards different partners
+    (three seams nearly a straight line apart) keeps its tangent."""
+    cut = targets.topology
+    slot_out, slot_in = halfedge_slots(cut)
     h = np.flatnonzero(seam_halfedges)
-    slots = np.concatenate([slot_out[h], slot_in[h]])  # every seam slot of every copy
-    key = np.concatenate(
+    seam_key = np.full(len(targets.tangents), -1, dtype=np.int64)  # (original vertex, seam edge)
+    seam_key[np.concatenate([slot_out[h], slot_in[h]])] = np.concatenate(
         [topology.faces.reshape(-1)[h], topology.target(h)]
-    ) * topology.n_edges + np.tile(topology.halfedge_edge[h], 2)  # (original vertex, seam edge)
-    pairs, first, which = np.unique(key, return_index=True, return_inverse=True)
-    vertex = pairs // topology.n_edges
-    count = np.bincount(vertex, minlength=topology.n_vertices)
-    one = np.flatnonzero(
-        (count[vertex] == 2) & (np.r_[True, vertex[1:] != vertex[:-1]])
-    )  # first pair of a 2-seam vertex
-    t1, t2 = targets.tangents[slots[first[one]]], targets.tangents[slots[first[one + 1]]]
+    ) * topology.n_edges + np.tile(topology.halfedge_edge[h], 2)
+    offsets = cut.neighbor_offsets
+    first, last = offsets[:-1], offsets[1:] - 1
+    bounded = (
+        (cut.face_count >= 2)
+        & (seam_key[first] >= 0)
+        & (seam_key[last] >= 0)
+        & (seam_key[first] != seam_key[last])
+    )
+    first, last = first[bounded], last[bounded]
+    t1, t2 = targets.tangents[first], targets.tangents[last]
     lengths = np.linalg.norm(t1, axis=1) * np.linalg.norm(t2, axis=1)
     cosine = np.divide(  # a zero tangent (a collapsed edge) makes no straight crease
         np.einsum("nd,nd->n", t1, t2), lengths, out=np.ones_like(lengths), where=lengths > 0
     )
     straight = cosine <= np.cos(np.radians(STRAIGHT_CREASE_DEG))
-    if not straight.any():
+    ends = np.sort(np.stack([seam_key[first], seam_key[last]], axis=1)[straight], axis=1)
+    pairs, one = np.unique(ends, axis=0, return_index=True)  # both sectors of a 2-seam vertex
+    keys, count = np.unique(pairs, return_counts=True)
+    alone = np.isin(pairs, keys[count == 1]).all(axis=1)
+    if not alone.any():
         return targets
-    value = np.full((len(pairs), 3), np.nan)
-    value[one[straight]] = 0.5 * (t1 - t2)[straight]
-    value[one[straight] + 1] = -0.5 * (t1 - t2)[straight]
-    moved = ~np.isnan(value[which, 0])
+    which = np.flatnonzero(straight)[one[alone]]
+    half = 0.5 * (targets.tangents[first[which]] - targets.tangents[last[which]])
+    key_of = np.concatenate([seam_key[first[which]], seam_key[last[which]]])
+    value = np.concatenate([half, -half])
+    order = np.argsort(key_of)  # the keys are distinct: each seam in one pair
+    slots = np.flatnonzero(seam_key >= 0)
+    position = np.minimum(np.searchsorted(key_of[order], seam_key[slots]), len(order) - 1)
+    moved = key_of[order[position]] == seam_key[slots]
     tangents = targets.tangents.copy()
-    tangents[slots[moved]] = value[which[moved]]
+    tangents[slots[moved]] = value[order[position[moved]]]
     return targets.with_changes(tangents=tangents)
 
 
