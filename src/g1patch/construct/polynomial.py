@@ -53,7 +53,7 @@ from .split4 import (
     split4_patches,
     split4_star,
 )
-from .split4.seams import _straight_creases, seam_stars
+from .split4.seams import _paired_seams, seam_stars
 
 __all__ = [
     "GridRefinement",
@@ -392,7 +392,7 @@ def _split4_of_gregory(
             "split4: cutting the network along its seams leaves a seam uncut "
             "(a seam edge whose both ends have one sector)"
         )
-    targets = _straight_creases(targets, topology, seam_halfedges)
+    targets = _paired_seams(targets, topology, seam_halfedges)
     patches, extra, extra_normals, stars = split4_patches(
         targets,
         targets.positions,

@@ -17,8 +17,9 @@ without crossing one. A vertex with one sector (no seam, or a single seam ending
   a corner mirrors the tangent at its far end about the chord (the symmetric arc through both
   ends, ``u = 2(ĉ·g) ĉ − g`` with g the far end's travel direction) or, when the far end is a
   corner too, runs along the chord (so the edges of a box with all edges sharp are straight).
-  Under the limit rule a corner sector whose two tangents span no plane along its faces takes
-  its fan normal instead (:func:`ridge_corners` with two seams, :func:`loose_corners` with more).
+  A corner sector whose two tangents span no plane along its faces takes its fan normal
+  instead (:func:`ridge_corners` with two seams under the limit rule, :func:`loose_corners`
+  with more under both).
 
 The smooth slots of such a vertex are the chord projected onto their sector's plane, circle-aware
 length; a sector whose slots would not turn counter-clockwise inside it gets them spread evenly
@@ -279,6 +280,9 @@ def crease_tangents(
     n_sector[at_crease] = _unit(fan[at_crease] - _dot(fan[at_crease], dc)[:, None] * dc)
     at_corner = corner[found.vertex]
     n_sector[at_corner] = n_corner[at_corner]
+    # three or more seams, a sector spanning no plane along its faces (a T's bar): its fan's
+    out, loose_normals, loose = loose_corners(topology, found, out, fan, corner)
+    n_sector[loose[found.vertex]] = loose_normals[loose[found.vertex]]
 
     # smooth slots of creased vertices: the chord in the sector's plane, circle-aware
     inner_position = np.flatnonzero(

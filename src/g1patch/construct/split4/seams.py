@@ -3,11 +3,12 @@
 split4's G1 systems know no seams, so the targets are assembled on their mesh *cut open* along
 the seams (:func:`cut_along_seams`: one vertex per corner sector with the sector's normal, each
 seam two boundary edges), with stars that keep every seam tangent exactly (:func:`seam_stars`;
-a nearly straight crease first gets opposite tangents, :func:`_straight_creases`): both sides of a
-seam then compute the same boundary curve, bit for bit, and the sub-patches are connected on the
-uncut mesh with those edges marked as seams (:func:`split4_seam_patches`). A seam between two
-vertices that each have one sector (an isolated sharp edge between two darts) cannot be cut
-open; it is built smooth (the build says so).
+a nearly straight crease first gets opposite tangents, a hairpin equal lengths,
+:func:`_paired_seams`): both sides of a seam then compute the same boundary curve, bit for bit,
+and the sub-patches are connected on the uncut mesh with those edges marked as seams
+(:func:`split4_seam_patches`). A seam between two vertices that each have one sector (an
+isolated sharp edge between two darts) cannot be cut open; it is built smooth (the build says
+so).
 """
 
 from __future__ import annotations
@@ -116,7 +117,7 @@ def split4_seam_patches(targets: Targets) -> tuple[Split4Parts, BoolArray]:
             f"split4: vertex {vertex} has a sector between sharp edges without a defined normal "
             f"(a degenerate face corner there; {undefined.size} sectors affected)"
         )
-    cut_targets = _straight_creases(cut.targets, targets.topology, cut.seam_halfedges)
+    cut_targets = _paired_seams(cut.targets, targets.topology, cut.seam_halfedges)
     patches, extra, extra_normals, stars = split4_patches(
         cut_targets,
         cut_targets.positions,
@@ -146,24 +147,33 @@ def split4_seam_patches(targets: Targets) -> tuple[Split4Parts, BoolArray]:
     return (patches, extra, extra_normals, uncut), cut.seams
 
 
-#: a sector between two seams takes its star's second axis from both seam tangents when the
-#: sine of its turn is at least this (else, a straight crease or a dart's end, by least squares)
+#: two seams whose tangents are this close to parallel (the sine of their angle) bound a hairpin
+#: sector: their lengths are made equal (:func:`_paired_seams`)
 SIN_FLOOR = 0.2
+#: a sector between two different seams takes its star's second axis from both seam tangents
+#: when the sine of its turn is at least this (else, a straightened crease, by least squares)
+SIN_EXACT = 1e-6
 
 
 #: a vertex whose two seams' tangents are at least this far apart (degrees) is a straight crease
 STRAIGHT_CREASE_DEG = 150.0
 
 
-def _straight_creases(
+def _paired_seams(
     targets: Targets, topology: QuadTopology, seam_halfedges: NDArray[np.bool_]
 ) -> Targets:
-    """Where the two seams that bound a sector of two or more faces run on nearly straight
-    (:data:`STRAIGHT_CREASE_DEG`), their tangents made opposite, ``±(t_1 − t_2)/2``, in every copy:
-    the sector's regular star through both then exists (its turn is π), and both sides still share
-    them. This is a straight crease through a vertex and the straight bar of a T where a third
-    crease ends on it; a seam that two such sectors would straighten towards different partners
-    (three seams nearly a straight line apart) keeps its tangent."""
+    """The two seams that bound a sector of two or more faces made such that the sector's regular
+    star through both exists and stays short, in every copy (both sides still share them):
+
+    * nearly straight (:data:`STRAIGHT_CREASE_DEG`): opposite, ``±(t_1 − t_2)/2`` (its turn is
+      then π): a straight crease through a vertex, the straight bar of a T where a third crease
+      ends on it;
+    * nearly parallel (a hairpin, the sine of their angle below :data:`SIN_FLOOR`, the sector
+      turning by nearly 2π): of equal length, ``√(|t_1| |t_2|)``, which keeps the star's second
+      axis ``(t_2 − t_1 cos Φ) / sin Φ`` as long as t_1 where sin Φ is small.
+
+    A seam that two such sectors would pair with different partners (three seams nearly a
+    straight line apart) keeps its tangent."""
     cut = targets.topology
     slot_out, slot_in = halfedge_slots(cut)
     h = np.flatnonzero(seam_halfedges)
@@ -186,16 +196,27 @@ def _straight_creases(
         np.einsum("nd,nd->n", t1, t2), lengths, out=np.ones_like(lengths), where=lengths > 0
     )
     straight = cosine <= np.cos(np.radians(STRAIGHT_CREASE_DEG))
-    ends = np.sort(np.stack([seam_key[first], seam_key[last]], axis=1)[straight], axis=1)
+    hairpin = cosine >= np.sqrt(1.0 - SIN_FLOOR**2)
+    paired = straight | hairpin
+    ends = np.sort(np.stack([seam_key[first], seam_key[last]], axis=1)[paired], axis=1)
     pairs, one = np.unique(ends, axis=0, return_index=True)  # both sectors of a 2-seam vertex
     keys, count = np.unique(pairs, return_counts=True)
     alone = np.isin(pairs, keys[count == 1]).all(axis=1)
     if not alone.any():
         return targets
-    which = np.flatnonzero(straight)[one[alone]]
-    half = 0.5 * (targets.tangents[first[which]] - targets.tangents[last[which]])
+    which = np.flatnonzero(paired)[one[alone]]
+    t1, t2 = targets.tangents[first[which]], targets.tangents[last[which]]
+    mean = np.sqrt(lengths[which])[:, None]
+    half = 0.5 * (t1 - t2)
     key_of = np.concatenate([seam_key[first[which]], seam_key[last[which]]])
-    value = np.concatenate([half, -half])
+    value = np.where(
+        np.tile(straight[which], 2)[:, None],
+        np.concatenate([half, -half]),
+        np.concatenate(
+            [t1 / np.linalg.norm(t1, axis=1)[:, None], t2 / np.linalg.norm(t2, axis=1)[:, None]]
+        )
+        * np.tile(mean, (2, 1)),
+    )
     order = np.argsort(key_of)  # the keys are distinct: each seam in one pair
     slots = np.flatnonzero(seam_key >= 0)
     position = np.minimum(np.searchsorted(key_of[order], seam_key[slots]), len(order) - 1)
@@ -214,10 +235,11 @@ def seam_stars(
     Elsewhere :func:`~g1patch.construct.split4.split4_star` (``equal_sectors`` passed on). At a
     vertex copy with k ≥ 2 faces and a seam slot e (0 or k): the regular star ``t_j = t_e cos φ_j +
     b sin φ_j``, ``φ_j = |j − e| θ``, ``θ = Φ / k`` (Φ the fan's turn from slot 0 to slot k about
-    the sector normal), b by least squares over the other slots, or from the other end's seam
-    tangent, ``b = (t_k − t_0 cos Φ) / sin Φ``, where both ends are seams and ``|sin Φ| ≥``
-    :data:`SIN_FLOOR`; ``c_v = cos θ``, no length safeguard. A one-face sector keeps its tangents
-    (as split4 does).
+    the sector normal), b from the other end's seam tangent, ``b = (t_k − t_0 cos Φ) / sin Φ``,
+    where both ends are different seams and ``|sin Φ| ≥`` :data:`SIN_EXACT` (the two made ready
+    for it by :func:`_paired_seams`), else by least squares over the other slots (a dart's end,
+    a straightened crease: there ``t_k = t_0 cos Φ`` already); ``c_v = cos θ``, no length
+    safeguard. A one-face sector keeps its tangents (as split4 does).
     """
     topology = targets.topology
     base = split4_star(targets, equal_sectors=equal_sectors)
@@ -265,8 +287,9 @@ def seam_stars(
         np.bincount(owner, np.where(free, sn * sn, 0.0), minlength=copies.size), 1e-300
     )[:, None]
     both = seam_at[first] & seam_at[last]
+    different = (targets.tangents[first] != targets.tangents[last]).any(axis=1)
     sin_total = np.sin(total)
-    exact = both & (np.abs(sin_total) >= SIN_FLOOR)
+    exact = both & different & (np.abs(sin_total) >= SIN_EXACT)
     b[exact] = (
         targets.tangents[last[exact]] - np.cos(total[exact])[:, None] * anchor[exact]
     ) / sin_total[exact, None]
