@@ -212,3 +212,16 @@ def test_corner_points_and_world_diagonal_as_the_evaluation() -> None:
     assert network.patches.frame is not None  # the world map is exercised
     np.testing.assert_array_equal(_corner_points(local), local.evaluate(CORNER_PARAMETERS))
     assert _world_diagonal(network, _corner_points(local)) == network.bounding_box_diagonal()
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_tiny_skewed_pair_is_measured_in_its_own_precision(compiled: bool) -> None:
+    """Two split4 sub-patches of a sliver face (1/7000 of the model's diagonal, their tangents
+    2° apart) from a fitted layout of trimesh's octagonal_pocket.stl, saved in the network's
+    unit frame: exactly G1 (a long-double evaluation, recentred, gives 0), and measured so once
+    both sides' points are taken relative to one of them; derivatives summed from coordinates of
+    the model's size lost six digits (the check said 1.1e-8°, its kernels 4.1e-9°)."""
+    control = np.load(Path(__file__).parent / "data" / "patches" / "split4_sliver_pair.npy")
+    report = check(PatchSet(control), compiled=compiled)
+    assert report.shared_edges == 1
+    assert report.max_edge_angle_deg <= 1e-10

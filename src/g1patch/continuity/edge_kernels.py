@@ -33,8 +33,12 @@ def _edge_measures_compiled(
     samples: int,
     degenerate_level: float,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:
-    """:func:`_edge_measures` of all the given edges, both sides of each in one kernel pass."""
+    """:func:`_edge_measures` of all the given edges, both sides of each in one kernel pass (both
+    sides' points less the left patch's first, as the reference's :func:`.sampling.anchors`)."""
     left_patch, left_edge, right_patch, right_edge, same = sides
+    origin = np.ascontiguousarray(points[left_patch, 0])
+    entry = np.arange(points.shape[1])
+    position = (entry % 4 < 2) & (entry // 4 < 2) if form == "hermite" else entry >= 0
     t = np.linspace(0.0, 1.0, samples)
     uv = np.stack(
         [
@@ -74,6 +78,8 @@ def _edge_measures_compiled(
         )
         _compiled(_edge_kernel)(
             points,
+            origin,
+            position,
             left_patch,
             left_edge,
             right_patch,
@@ -98,6 +104,8 @@ def _edge_measures_compiled(
 
 def _edge_kernel(
     points: NDArray[np.float64],
+    origin: NDArray[np.float64],
+    position: NDArray[np.bool_],
     left_patch: NDArray[np.int64],
     left_edge: NDArray[np.int64],
     right_patch: NDArray[np.int64],
@@ -117,7 +125,8 @@ def _edge_kernel(
     worst: NDArray[np.int64],
     gap: NDArray[np.float64],
 ) -> None:
-    """Per edge: both sides' points and normals at the K samples, then the reference's max and min
+    """Per edge: both sides' points (less ``origin[e]`` at the ``position`` entries) and normals at
+    the K samples, then the reference's max and min
     angle, worst sample and max gap; ``atan2`` only at the candidates (:data:`_CANDIDATE_RTOL`).
 
     ``lanes`` edges at a time, ``order[groups[i]:groups[i + 1]]`` for group i, whose edges share
@@ -149,7 +158,11 @@ def _edge_kernel(
                     patch = left_patch[e] if side == 0 else right_patch[e]
                     for m in range(padded - 1):
                         for d in range(3):
-                            net[side, m, d * lanes + lane] = points[patch, m, d]
+                            net[side, m, d * lanes + lane] = (
+                                points[patch, m, d] - origin[e, d]
+                                if position[m]
+                                else points[patch, m, d]
+                            )
             top[:] = -1.0
             bottom[:] = np.inf
             gap2[:] = 0.0

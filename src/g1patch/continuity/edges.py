@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 
 from ..network import HangingEdges, Patches, PatchNetwork, edge_parameters
 from ..patches import CORNER_PARAMETERS
-from .sampling import _edge_samples
+from .sampling import _edge_samples, anchors, translated
 from .vectors import _angle3, _cross3, _norm3, _planar
 
 #: corner pairs per block of :func:`_max_corner_angle` (a block's arrays: about 100 bytes a pair)
@@ -35,10 +35,11 @@ def _edge_measures(
     normal is flipped, as its patch is oriented the other way.
     """
     t = np.linspace(0.0, 1.0, samples)
+    origin = anchors(patches, left_patch)
     point_left, normal_left = _edge_samples(
-        patches, left_patch, left_edge, np.zeros(len(same), dtype=bool), t
+        patches, left_patch, left_edge, np.zeros(len(same), dtype=bool), t, origin
     )
-    point_right, normal_right = _edge_samples(patches, right_patch, right_edge, ~same, t)
+    point_right, normal_right = _edge_samples(patches, right_patch, right_edge, ~same, t, origin)
     if same.any():
         normal_right[:, same] *= -1.0
     return _side_figures(point_left, normal_left, point_right, normal_right, degenerate_level)
@@ -122,11 +123,12 @@ def _hanging_measures(
     the coarse edge at the same points (:meth:`HangingEdges.coarse_parameters`)."""
     t = np.linspace(0.0, 1.0, samples)
     fine_patch, fine_edge, coarse_patch, coarse_edge = hanging.sides.T
+    origin = anchors(patches, fine_patch)
     point_fine, normal_fine = _edge_samples(
-        patches, fine_patch, fine_edge, np.zeros(len(hanging), dtype=bool), t
+        patches, fine_patch, fine_edge, np.zeros(len(hanging), dtype=bool), t, origin
     )
     uv = edge_parameters(coarse_edge[:, None], hanging.coarse_parameters(t))  # (H, K, 2)
-    coarse = patches.take(coarse_patch)
+    coarse = translated(patches.take(coarse_patch), origin)
     point_coarse = _planar(coarse.evaluate(uv))  # each patch at its own parameters
     normal_coarse = _cross3(_planar(coarse.evaluate(uv, 1, 0)), _planar(coarse.evaluate(uv, 0, 1)))
     return _side_figures(point_fine, normal_fine, point_coarse, normal_coarse, degenerate_level)
