@@ -81,21 +81,25 @@ def _corner_extent_kernel(
 
 def _corner_normals_compiled(points: NDArray[np.float64], form: str) -> NDArray[np.float64]:
     """``p_u × p_v`` at the four corners of every patch, ``(N, 4, 3)`` (the reference's
-    ``_cross3`` of ``evaluate(CORNER_PARAMETERS, 1, 0)`` and ``(0, 1)``)."""
+    ``_cross3`` of ``evaluate(CORNER_PARAMETERS, 1, 0)`` and ``(0, 1)``, each patch's points less
+    its first at the ``position`` entries, as there)."""
     table = np.stack(
         [_weights(form, CORNER_PARAMETERS[:, None], du, dv) for du, dv in ((1, 0), (0, 1))]
     )  # (2, 4, 1, M)
     weights, index, count = _sparse(table)  # (2, 4, M, 1)
+    entry = np.arange(points.shape[1])
+    position = (entry % 4 < 2) & (entry // 4 < 2) if form == "hermite" else entry >= 0
     normals = np.empty((len(points), 4, 3))
     if len(points):
         _compiled(_corner_normal_kernel)(
-            points, weights, index, count, _chunks(len(points)), normals
+            points, position, weights, index, count, _chunks(len(points)), normals
         )
     return normals
 
 
 def _corner_normal_kernel(
     points: NDArray[np.float64],
+    position: NDArray[np.bool_],
     weights: NDArray[np.float64],
     index: NDArray[np.int64],
     count: NDArray[np.int64],
@@ -113,7 +117,12 @@ def _corner_normal_kernel(
                         acc = 0.0
                         for r in range(count[q, corner]):
                             m = index[q, corner, r]
-                            acc = _fma(points[n, m, d], weights[q, corner, m, 0], acc)
+                            value = (
+                                points[n, m, d] - points[n, 0, d]
+                                if position[m]
+                                else points[n, m, d]
+                            )
+                            acc = _fma(value, weights[q, corner, m, 0], acc)
                         tangent[q, d] = acc
                 a, b = tangent[0], tangent[1]
                 normals[n, corner, 0] = a[1] * b[2] - a[2] * b[1]

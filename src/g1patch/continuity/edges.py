@@ -78,11 +78,13 @@ def _max_corner_angle(
     sectors with m corners are computed in (groups, rows, m) blocks of at most
     :data:`_CORNER_PAIR_BLOCK` pairs (a block of rows of one sector when m² is larger), so memory
     stays linear in the valence: a 10 000-valent vertex's 10⁸ pairs asked for 6 GB in one array.
-    Every pair's angle is the same operations on the same two normals as in one array.
+    Every pair's angle is the same operations on the same two normals as in one array. The
+    normals are taken with each patch's points less its first (:func:`.sampling.anchors`).
     """
+    own = translated(patches, anchors(patches, np.arange(len(patches))))  # own precision
     normals = _cross3(
-        _planar(patches.evaluate(CORNER_PARAMETERS, 1, 0)),
-        _planar(patches.evaluate(CORNER_PARAMETERS, 0, 1)),
+        _planar(own.evaluate(CORNER_PARAMETERS, 1, 0)),
+        _planar(own.evaluate(CORNER_PARAMETERS, 0, 1)),
     )
     normals = normals.reshape(3, -1)
     usable = _norm3(normals) > degenerate_level
