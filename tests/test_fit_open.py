@@ -511,8 +511,9 @@ def test_a_hole_another_part_closes_is_not_cut_open() -> None:
 
 def test_a_fit_that_pinches_a_face_skips_its_layout(monkeypatch: pytest.MonkeyPatch) -> None:
     """A layout whose first fit pinches a face to nothing (a cycloidal gear's thin tooth: a
-    traceback, exit 2 on a valid mesh) is unusable: the next layout is tried. A refit that
-    pinches one ends the refits: the attempts before it stand."""
+    traceback, exit 2 on a valid mesh) is unusable: the next layout is tried, and the report
+    says which was skipped and why. A refit that pinches one ends the refits: the attempts
+    before it stand."""
     import g1patch.fitting as fitting
     from g1patch.errors import DegenerateFaceError
 
@@ -531,6 +532,8 @@ def test_a_fit_that_pinches_a_face_skips_its_layout(monkeypatch: pytest.MonkeyPa
     monkeypatch.setattr(fitting, "fit_cage", fit_cage)
     _, report = fit_network(scan, tolerance=2e-3)
     assert len(calls) >= 2 and report.faces == square.n_faces
+    assert len(report.skipped) == 1 and "face 3 has zero area" in report.skipped[0]
+    assert "skipped layout" in report.summary() and report.to_dict()["skipped_layouts"]
     # a refit pinches: the first, folded attempt is what the layout gave
     calls.clear()
     folded = np.zeros(4 * square.n_faces, dtype=bool)

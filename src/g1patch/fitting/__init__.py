@@ -431,7 +431,7 @@ class FitReport:
     (:func:`~g1patch.fitting.features.crease_gaps`), where the surface rounds a sharp edge;
     ``folds``: folded patches (as :func:`~g1patch.continuity.check` counts them); ``g1``: the
     largest angle between the patches' normals across a smooth edge or at a corner, degrees (as
-    ``check`` measures it)."""
+    ``check`` measures it); ``skipped``: the layouts that could not be used, each with why."""
 
     diagonal: float
     tolerance: float
@@ -447,6 +447,7 @@ class FitReport:
     feature_gaps: float = 0.0
     folds: int = 0
     g1: float = 0.0
+    skipped: tuple[str, ...] = ()
 
     @property
     def worst(self) -> float:
@@ -494,6 +495,7 @@ class FitReport:
                 f"({self.worst:.2e})",
                 f"{'time':<32}{self.seconds:.1f} s",
             ]
+            + [f"{'skipped layout':<32}{reason}" for reason in self.skipped]
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -515,6 +517,7 @@ class FitReport:
             "folds": self.folds,
             "g1_deg": self.g1,
             "repairs": list(self.repairs),
+            "skipped_layouts": list(self.skipped),
         }
 
 
@@ -603,7 +606,8 @@ def fit_network(
         else sharp_corners(scan.points, scan.triangles, sharp_angle)
     )
     corner_angle = FIT_SHARP_ANGLE if sharp_angle is None else sharp_angle
-    rounds, best, failure, tried, fitted_points = 0, None, "", [], 0
+    rounds, best, tried, fitted_points = 0, None, [], 0
+    skipped: list[str] = []
     budget = face_budget(len(scan.triangles))
     if adaptive:
         count = min(count, budget)
@@ -636,7 +640,8 @@ def fit_network(
         except (ConstructionError, MeshError) as error:  # unusable: the next face count
             if not adaptive:
                 raise
-            failure = str(error)
+            which = "the refined layout" if refine is not None else f"{count:,} quads asked"
+            skipped.append(f"{which}: {error}")
             tried.append((count, np.inf))
             off, folds = None, 0
         else:
@@ -671,7 +676,7 @@ def fit_network(
                 break
             count = next_count(tried, tolerance, count, budget)
     if best is None:
-        raise ConstructionError(f"no usable quad layout in {rounds} tries (last: {failure})")
+        raise ConstructionError(f"no usable quad layout in {rounds} tries (last: {skipped[-1]})")
     (_, folds, _, _, worst), gaps, cage_layout, fitted, network, to_surface, to_scan, angle = best
     network.provenance.update({"fit_tolerance": f"{tolerance:g}", "fit_distance": f"{worst:.3e}"})
     report = FitReport(
@@ -689,6 +694,7 @@ def fit_network(
         gaps,
         folds,
         angle,
+        tuple(skipped),
     )
     return network, report
 
