@@ -107,6 +107,25 @@ def sector_fan_normals(mesh: QuadMesh, found: Sectors) -> FloatArray:
     )
 
 
+def _loose_sectors(
+    found: Sectors, tangents: FloatArray, fan: FloatArray, at: BoolArray
+) -> tuple[IntArray, FloatArray, FloatArray, FloatArray, BoolArray, BoolArray]:
+    """The sectors bounded by two slots at the vertices ``at`` (V,) that have a *loose* one —
+    whose bounding tangents ``t_a``, ``t_b`` span no plane along its faces: nearly parallel
+    (``|t̂_a × t̂_b| <`` :data:`_PARALLEL`) or across (the plane's cosine with the sector's unit
+    ``fan`` normal below :data:`_RIDGE`) — with their ``t_a``, ``t_b``, unit fan normals and
+    which are loose; and those vertices (V,)."""
+    mine = np.flatnonzero(at[found.vertex] & (found.start >= 0))
+    t_a, t_b = tangents[found.start[mine]], tangents[found.end[mine]]
+    plane = cross(_unit(t_a), _unit(t_b))
+    m = _unit(fan[mine])
+    loose = (np.linalg.norm(plane, axis=1) < _PARALLEL) | (np.abs(_dot(_unit(plane), m)) < _RIDGE)
+    hit = np.zeros(at.size, dtype=bool)
+    hit[found.vertex[mine[loose]]] = True
+    chosen = hit[found.vertex[mine]]
+    return mine[chosen], t_a[chosen], t_b[chosen], m[chosen], loose[chosen], hit
+
+
 def ridge_corners(
     topology: QuadTopology,
     found: Sectors,
@@ -123,16 +142,8 @@ def ridge_corners(
     both sectors hold the shared seam tangents and their own faces. Returns the ``tangents``
     (slots) changed there, the sectors' unit normals (zero elsewhere) and which vertices."""
     two = corner_vertices & ~topology.is_boundary_vertex & (found.cuts == 2)
-    mine = np.flatnonzero(two[found.vertex] & (found.start >= 0))
-    t_a, t_b = tangents[found.start[mine]], tangents[found.end[mine]]
-    plane = cross(_unit(t_a), _unit(t_b))
-    m = _unit(fan[mine])
-    loose = (np.linalg.norm(plane, axis=1) < _PARALLEL) | (np.abs(_dot(_unit(plane), m)) < _RIDGE)
-    ridge = np.zeros(topology.n_vertices, dtype=bool)
-    ridge[found.vertex[mine[loose]]] = True
+    mine, t_a, t_b, m, _, ridge = _loose_sectors(found, tangents, fan, two)
     out, normals = tangents.copy(), np.zeros_like(fan)
-    chosen = ridge[found.vertex[mine]]
-    mine, t_a, t_b, m = mine[chosen], t_a[chosen], t_b[chosen], m[chosen]
     d = _unit(_unit(t_a) - _unit(t_b))
     out[found.start[mine]] = np.linalg.norm(t_a, axis=1)[:, None] * d
     out[found.end[mine]] = -np.linalg.norm(t_b, axis=1)[:, None] * d
@@ -157,19 +168,11 @@ def loose_corners(
     the ``tangents`` (slots) changed there, the sectors' unit normals (zero elsewhere) and which
     vertices."""
     many = corner_vertices & ~topology.is_boundary_vertex & (found.cuts > 2)
-    mine = np.flatnonzero(many[found.vertex] & (found.start >= 0))
-    t_a, t_b = tangents[found.start[mine]], tangents[found.end[mine]]
-    plane = cross(_unit(t_a), _unit(t_b))
-    m = _unit(fan[mine])
-    loose = (np.linalg.norm(plane, axis=1) < _PARALLEL) | (np.abs(_dot(_unit(plane), m)) < _RIDGE)
-    hit = np.zeros(topology.n_vertices, dtype=bool)
-    hit[found.vertex[mine[loose]]] = True
+    mine, t_a, t_b, m, loose, hit = _loose_sectors(found, tangents, fan, many)
     out, normals = tangents.copy(), np.zeros_like(fan)
-    chosen = hit[found.vertex[mine]]
-    mine, loose, m = mine[chosen], loose[chosen], m[chosen]
     if not mine.size:
         return out, normals, hit
-    d = _unit(_unit(t_a[chosen]) - _unit(t_b[chosen]))
+    d = _unit(_unit(t_a) - _unit(t_b))
     flat = _unit(m - _dot(m, d)[:, None] * d)
     is_loose = np.zeros(found.vertex.size, dtype=bool)
     is_loose[mine] = loose
