@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from g1patch import shapes
 from g1patch.construct.corner import build_corner_network
 from g1patch.continuity import angle_between, check
+from g1patch.continuity.sampling import translated
 from g1patch.errors import InputError, NonManifoldError
 from g1patch.io.bpt import read_bpt
 from g1patch.network import PatchNetwork, network_from_patch_points
@@ -225,3 +226,23 @@ def test_a_tiny_skewed_pair_is_measured_in_its_own_precision(compiled: bool) -> 
     report = check(PatchSet(control), compiled=compiled)
     assert report.shared_edges == 1
     assert report.max_edge_angle_deg <= 1e-10
+
+
+@pytest.mark.parametrize("form", ["bezier", "bspline", "hermite"])
+def test_the_check_moves_a_patch_not_its_shape(form: str) -> None:
+    """What the check samples relative to a point (:func:`~g1patch.continuity.sampling.
+    translated`) is the same surface moved: points less the offset, derivatives unchanged, in
+    every form (a Hermite patch's derivative and twist entries stay where they are)."""
+    rng = np.random.default_rng(7)
+    patches = PatchSet(rng.normal(size=(3, 4, 4, 3)), "bezier").convert(form)
+    offset = rng.normal(size=(3, 3))
+    moved = translated(patches, offset)
+    uv = rng.uniform(size=(5, 2))
+    scale = np.abs(patches.control).max()
+    np.testing.assert_allclose(
+        moved.evaluate(uv), patches.evaluate(uv) - offset[:, None], atol=64 * EPS * scale
+    )
+    for du, dv in ((1, 0), (0, 1)):
+        np.testing.assert_allclose(
+            moved.evaluate(uv, du, dv), patches.evaluate(uv, du, dv), atol=64 * EPS * scale
+        )

@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 from ..network import PatchNetwork
 from ..patches import CORNER_PARAMETERS
 from .jit import _chunks, _compiled, _fma, _pair_angle, _serial, _sparse, _weights
+from .sampling import position_entries
 
 prange = range  # numba.prange once a kernel is compiled (:func:`.jit._bind`)
 
@@ -87,8 +88,7 @@ def _corner_normals_compiled(points: NDArray[np.float64], form: str) -> NDArray[
         [_weights(form, CORNER_PARAMETERS[:, None], du, dv) for du, dv in ((1, 0), (0, 1))]
     )  # (2, 4, 1, M)
     weights, index, count = _sparse(table)  # (2, 4, M, 1)
-    entry = np.arange(points.shape[1])
-    position = (entry % 4 < 2) & (entry // 4 < 2) if form == "hermite" else entry >= 0
+    position = position_entries(form, points.shape[1])
     normals = np.empty((len(points), 4, 3))
     if len(points):
         _compiled(_corner_normal_kernel)(

@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 
 from ..network import edge_parameters
 from .jit import _chunks, _compiled, _fma, _sparse, _weights
+from .sampling import position_entries
 
 prange = range  # numba.prange once a kernel is compiled (:func:`.jit._bind`)
 
@@ -37,8 +38,7 @@ def _edge_measures_compiled(
     sides' points less the left patch's first, as the reference's :func:`.sampling.anchors`)."""
     left_patch, left_edge, right_patch, right_edge, same = sides
     origin = np.ascontiguousarray(points[left_patch, 0])
-    entry = np.arange(points.shape[1])
-    position = (entry % 4 < 2) & (entry // 4 < 2) if form == "hermite" else entry >= 0
+    position = position_entries(form, points.shape[1])
     t = np.linspace(0.0, 1.0, samples)
     uv = np.stack(
         [

@@ -103,12 +103,14 @@ def _blocks(count: int, size: int) -> list[slice]:
     return [slice(start, min(start + size, count)) for start in range(0, count, size)]
 
 
-def position_entries(patches: Patches) -> NDArray[np.bool_]:
-    """Which of a patch's points (M,) are positions, which a translation moves: all but a
-    Hermite patch's derivative and twist entries (its control ``[:2, :2]`` are its corners)."""
-    if isinstance(patches, PatchSet) and patches.form == "hermite":
-        return (np.arange(16) % 4 < 2) & (np.arange(16) // 4 < 2)
-    return np.ones(20 if isinstance(patches, GregoryPatchSet) else 16, dtype=bool)
+def position_entries(form: str, count: int) -> NDArray[np.bool_]:
+    """Which of a patch's ``count`` points in ``form`` are positions, which a translation moves:
+    all but a Hermite patch's derivative and twist entries (its control ``[:2, :2]``, flat
+    entries 0, 1, 4, 5, are its corners)."""
+    entry = np.arange(count)
+    if form == "hermite":
+        return (entry % 4 < 2) & (entry // 4 < 2)
+    return np.ones(count, dtype=bool)
 
 
 def anchors(patches: Patches, patch_ids: NDArray[np.int64]) -> NDArray[np.float64]:
@@ -128,11 +130,8 @@ def translated(patches: Patches, offset: NDArray[np.float64]) -> Patches:
     if isinstance(patches, GregoryPatchSet):
         return GregoryPatchSet(patches.points - offset[:, None])
     assert isinstance(patches, PatchSet)
-    control = patches.control.copy()
-    if patches.form == "hermite":
-        control[:, :2, :2] -= offset[:, None, None]
-    else:
-        control -= offset[:, None, None]
+    moved = position_entries(patches.form, 16).reshape(4, 4)
+    control = patches.control - np.where(moved[..., None], offset[:, None, None], 0.0)
     return PatchSet(control, patches.form)
 
 
