@@ -20,6 +20,7 @@ from g1patch.io.meshfile import read_mesh
 from g1patch.mesh import INFINITE_SHARPNESS, QuadMesh, Tag
 from g1patch.shapes import cube, fan, filleted_box, slotted_block, torus
 from g1patch.sharpen import sharp_angle_tags
+from g1patch.targets import shape_targets
 from g1patch.targets.creases import sector_fan_normals, sectors
 from g1patch.targets.interpolate import interpolate_targets
 from g1patch.targets.limit import limit_targets
@@ -402,3 +403,21 @@ def test_a_crease_that_turns_back_leaves_its_wide_sector_g1(
     report = check(build_network(_hairpin_fan(valence, gap_deg, seed), "split4", shape))
     smooth = ~np.asarray(report.edge_seam, dtype=bool)
     assert np.asarray(report.edge_angle_deg)[smooth].max() <= G1
+
+
+def test_a_seam_without_a_tangent_pairs_with_none() -> None:
+    """A seam slot whose target tangent is zero (a collapsed edge) is neither straightened nor
+    given a hairpin partner's length: the seams stay finite (its unit direction was 0/0)."""
+    from g1patch.construct.split4.seams import _paired_seams, cut_along_seams
+
+    mesh = _hairpin_fan(3, 10.0, 0)
+    targets = shape_targets(mesh, "interpolate")
+    cut = cut_along_seams(targets)
+    tangents = cut.targets.tangents.copy()
+    offsets = cut.targets.topology.neighbor_offsets
+    centre = np.flatnonzero(cut.sector_vertex == 0)
+    tangents[np.concatenate([np.arange(offsets[v], offsets[v + 1]) for v in centre])] = 0.0
+    paired = _paired_seams(
+        cut.targets.with_changes(tangents=tangents), mesh.topology, cut.seam_halfedges
+    )
+    assert np.isfinite(paired.tangents).all()

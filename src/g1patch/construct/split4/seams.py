@@ -192,12 +192,12 @@ def _paired_seams(
     first, last = first[bounded], last[bounded]
     t1, t2 = targets.tangents[first], targets.tangents[last]
     lengths = np.linalg.norm(t1, axis=1) * np.linalg.norm(t2, axis=1)
-    cosine = np.divide(  # a zero tangent (a collapsed edge) makes no straight crease
+    cosine = np.divide(
         np.einsum("nd,nd->n", t1, t2), lengths, out=np.ones_like(lengths), where=lengths > 0
     )
     straight = cosine <= np.cos(np.radians(STRAIGHT_CREASE_DEG))
     hairpin = cosine >= np.sqrt(1.0 - SIN_FLOOR**2)
-    paired = straight | hairpin
+    paired = (straight | hairpin) & (lengths > 0)  # a zero tangent (a collapsed edge) pairs none
     ends = np.sort(np.stack([seam_key[first], seam_key[last]], axis=1)[paired], axis=1)
     pairs, one = np.unique(ends, axis=0, return_index=True)  # both sectors of a 2-seam vertex
     keys, count = np.unique(pairs, return_counts=True)
