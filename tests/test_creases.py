@@ -421,3 +421,28 @@ def test_a_seam_without_a_tangent_pairs_with_none() -> None:
         cut.targets.with_changes(tangents=tangents), mesh.topology, cut.seam_halfedges
     )
     assert np.isfinite(paired.tangents).all()
+
+
+def test_a_one_face_sector_keeps_the_plane_of_its_seams(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A cube with all edges sharp but one (OpenSubdiv's ``catmark_cube_creases2``): the faces
+    beside the smooth edge bend round it, so at their corners a one-face sector's seam tangents
+    span a plane 45° off its flat cage face. That plane is right (the face has no inner slot to
+    fit), so no corner is loose and the flat faces stay flat; taken as loose, the interpolating
+    surface's flat sides bulged (p99 normal turn 4.2° → 8.3°)."""
+    import g1patch.targets.creases as creases
+
+    mesh = cube()
+    smooth = 0  # edge 0 stays smooth, the other eleven are sharp
+    pairs = mesh.topology.edges[np.arange(mesh.topology.n_edges) != smooth].ravel().tolist()
+    mesh = QuadMesh(mesh.vertices, mesh.topology, (Tag("crease", tuple(pairs), (10.0,)),))
+    hits: list[np.ndarray] = []
+    real = creases.loose_corners
+
+    def spy(*args: object, **kwargs: object) -> object:
+        result = real(*args, **kwargs)  # type: ignore[arg-type]
+        hits.append(result[2])
+        return result
+
+    monkeypatch.setattr(creases, "loose_corners", spy)
+    shape_targets(mesh, "interpolate")
+    assert hits and not any(hit.any() for hit in hits)

@@ -126,8 +126,8 @@ def _edge_kernel(
     gap: NDArray[np.float64],
 ) -> None:
     """Per edge: both sides' points (less ``origin[e]`` at the ``position`` entries) and normals at
-    the K samples, then the reference's max and min
-    angle, worst sample and max gap; ``atan2`` only at the candidates (:data:`_CANDIDATE_RTOL`).
+    the K samples, then the reference's max and min angle, worst sample and max gap; ``atan2``
+    only at the candidates (:data:`_CANDIDATE_RTOL`).
 
     ``lanes`` edges at a time, ``order[groups[i]:groups[i + 1]]`` for group i, whose edges share
     their sides' edge numbers and directions, so their weights: the lanes are the last axis of

@@ -108,18 +108,19 @@ def sector_fan_normals(mesh: QuadMesh, found: Sectors) -> FloatArray:
 
 
 def _loose_sectors(
-    found: Sectors, tangents: FloatArray, fan: FloatArray, at: BoolArray
+    found: Sectors, tangents: FloatArray, fan: FloatArray, at: BoolArray, least_faces: int = 1
 ) -> tuple[IntArray, FloatArray, FloatArray, FloatArray, BoolArray, BoolArray]:
     """The sectors bounded by two slots at the vertices ``at`` (V,) that have a *loose* one —
-    whose bounding tangents ``t_a``, ``t_b`` span no plane along its faces: nearly parallel
-    (``|t̂_a × t̂_b| <`` :data:`_PARALLEL`) or across (the plane's cosine with the sector's unit
-    ``fan`` normal below :data:`_RIDGE`) — with their ``t_a``, ``t_b``, unit fan normals and
-    which are loose; and those vertices (V,)."""
+    of at least ``least_faces`` faces, whose bounding tangents ``t_a``, ``t_b`` span no plane
+    along its faces: nearly parallel (``|t̂_a × t̂_b| <`` :data:`_PARALLEL`) or across (the
+    plane's cosine with the sector's unit ``fan`` normal below :data:`_RIDGE`) — with their
+    ``t_a``, ``t_b``, unit fan normals and which are loose; and those vertices (V,)."""
     mine = np.flatnonzero(at[found.vertex] & (found.start >= 0))
     t_a, t_b = tangents[found.start[mine]], tangents[found.end[mine]]
     plane = cross(_unit(t_a), _unit(t_b))
     m = _unit(fan[mine])
     loose = (np.linalg.norm(plane, axis=1) < _PARALLEL) | (np.abs(_dot(_unit(plane), m)) < _RIDGE)
+    loose &= np.bincount(found.label, minlength=found.vertex.size)[mine] >= least_faces
     hit = np.zeros(at.size, dtype=bool)
     hit[found.vertex[mine[loose]]] = True
     chosen = hit[found.vertex[mine]]
@@ -158,9 +159,11 @@ def loose_corners(
     fan: FloatArray,
     corner_vertices: BoolArray,
 ) -> tuple[FloatArray, FloatArray, BoolArray]:
-    """Interior corners with three or more seams where a sector's seam tangents span no plane
-    along its faces (nearly parallel or across, as in :func:`ridge_corners`: the straight bar of
-    a T where a third crease ends on it, whose chords span a plane standing on edge). Such a
+    """Interior corners with three or more seams where a sector of two or more faces has seam
+    tangents that span no plane along its faces (nearly parallel or across, as in
+    :func:`ridge_corners`: the straight bar of a T where a third crease ends on it, whose chords
+    span a plane standing on edge; a one-face sector's plane is its two tangents', however its
+    face is bent, as on a cube with a rounded edge). Such a
     *loose* sector takes its ``fan`` normal made perpendicular to ``d ∥ t̂_a − t̂_b`` and its seam
     tangents are moved into that plane (length kept; a seam between two loose sectors onto the
     line both planes share, ``∥ N_L × N_R``, where they meet at 11° or more); every other sector
@@ -168,7 +171,7 @@ def loose_corners(
     the ``tangents`` (slots) changed there, the sectors' unit normals (zero elsewhere) and which
     vertices."""
     many = corner_vertices & ~topology.is_boundary_vertex & (found.cuts > 2)
-    mine, t_a, t_b, m, loose, hit = _loose_sectors(found, tangents, fan, many)
+    mine, t_a, t_b, m, loose, hit = _loose_sectors(found, tangents, fan, many, least_faces=2)
     out, normals = tangents.copy(), np.zeros_like(fan)
     if not mine.size:
         return out, normals, hit
