@@ -156,6 +156,28 @@ def test_mesh_distance_to_quads_near_a_sphere() -> None:
     )
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_nearest_triangles_meet_the_distance(seed: int) -> None:
+    """The triangle found is one at the exact distance: random soups of triangles and of quads
+    (their halves numbered as ``_triangles`` cuts them), and the mesh's own vertices, whose
+    nearest point is a corner (the bound from the nearest vertex is already exact there)."""
+    rng = np.random.default_rng(seed)
+    points = rng.normal(size=(40, 3)) * rng.choice([0.05, 1.0, 5.0], size=(40, 1))
+    queries = np.concatenate([rng.normal(size=(2000, 3)) * 2.0, points])
+    for corners in (3, 4):
+        faces = np.array([rng.choice(40, corners, replace=False) for _ in range(60)])
+        halves = faces if corners == 3 else np.concatenate([faces[:, :3], faces[:, [0, 2, 3]]])
+        distance, triangle = compare.nearest_triangles(queries, points, faces)
+        a, b, c = (points[halves[triangle, k]] for k in range(3))
+        met = np.linalg.norm(
+            compare.closest_points_on_triangles(queries, a, b, c) - queries, axis=1
+        )
+        np.testing.assert_allclose(met, distance, atol=1e-12)
+        np.testing.assert_allclose(
+            distance, brute_force_distance(queries, points[halves]), atol=1e-12
+        )
+
+
 def test_mesh_distance_rejects_bad_faces() -> None:
     points = np.eye(3)
     with pytest.raises(InputError, match="0..2"):

@@ -341,9 +341,26 @@ class _TriangleSearch:
         )
         return np.linalg.norm(v[:, None] * ab + w[:, None] * ac - ap, axis=-1)
 
-    def lower(self, points: FloatArray, best: FloatArray) -> None:
+    @staticmethod
+    def _keep(
+        best: FloatArray,
+        which: NDArray[np.int64],
+        query: NDArray[np.int64],
+        triangle: NDArray[np.int64],
+        distance: FloatArray,
+    ) -> None:
+        """Per query point the nearest of its candidate ``triangle``s at ``distance``, kept in
+        ``best`` and ``which`` where it is no farther than the bound there."""
+        order = np.lexsort((distance, query))
+        first = order[np.r_[True, query[order][1:] != query[order][:-1]]] if len(order) else order
+        query, triangle, distance = query[first], triangle[first], distance[first]
+        nearer = distance <= best[query]
+        best[query[nearer]] = distance[nearer]
+        which[query[nearer]] = triangle[nearer]
+
+    def lower(self, points: FloatArray, best: FloatArray, which: NDArray[np.int64]) -> None:
         """Lower ``best`` (finite upper bounds, in place) to the exact distance from each point to
-        these triangles where that is smaller.
+        these triangles where that is no larger, and set ``which`` to the triangle found there.
 
         A triangle whose centroid is r away is at least ``r − reach`` away, so only triangles with
         their centroid within ``best`` (first lowered to the distance to the triangle with the
@@ -353,9 +370,7 @@ class _TriangleSearch:
         """
         centroids, largest_reach = self.tree.data, float(self.reach.max())
         nearest = self.tree.query(points, workers=-1)[1]
-        np.minimum(
-            best, self.distance(points, nearest), out=best
-        )  # a tighter bound: the nearest centroid's triangle
+        self._keep(best, which, np.arange(len(points)), nearest, self.distance(points, nearest))
         start, block = 0, _FIRST_BLOCK
         while start < len(points):
             rows = slice(start, min(start + block, len(points)))
@@ -368,15 +383,25 @@ class _TriangleSearch:
             )
             query = np.repeat(np.arange(rows.start, rows.stop), counts)
             gap = np.linalg.norm(points[query] - centroids[triangle], axis=1) - self.reach[triangle]
-            keep = gap < best[query]
-            np.minimum.at(best, query[keep], self.distance(points[query[keep]], triangle[keep]))
+            keep = gap <= best[query]
+            query, triangle = query[keep], triangle[keep]
+            self._keep(best, which, query, triangle, self.distance(points[query], triangle))
             start = rows.stop
             block = int(np.clip(_PAIR_BUDGET * len(found) / max(len(triangle), 1), 1, _PAIR_BUDGET))
 
 
 def mesh_distance(samples: ArrayLike, points: ArrayLike, faces: ArrayLike) -> FloatArray:
     """Exact distance from each sample point (..., 3) to the triangulated mesh ``points``,
-    ``faces``.
+    ``faces`` (:func:`nearest_triangles`)."""
+    return nearest_triangles(samples, points, faces)[0]
+
+
+def nearest_triangles(
+    samples: ArrayLike, points: ArrayLike, faces: ArrayLike
+) -> tuple[FloatArray, NDArray[np.int64]]:
+    """Exact distance from each sample point (..., 3) to the triangulated mesh ``points``,
+    ``faces``, and the triangle where it is met (an index into ``faces``' triangles: the
+    triangles as given, quads as their two halves, first halves 0–1–2 first).
 
     ``faces`` (K, 3) triangles or (K, 4) quads (split along the diagonal 0–2). The distance to
     the nearest mesh vertex is an upper bound; a triangle whose centroid is r away is at least
@@ -387,7 +412,7 @@ def mesh_distance(samples: ArrayLike, points: ArrayLike, faces: ArrayLike) -> Fl
     similar reach (within a factor 2), so a few large triangles do not widen the search around
     small ones. The cost per sample grows with (distance / edge length)²: fast near the mesh,
     slower for surfaces far apart relative to its edges.
-    Returns distances of shape ``samples.shape[:-1]``.
+    Returns arrays of shape ``samples.shape[:-1]``.
     """
     queries = as_float_array("samples", samples, (3,))
     vertices = as_float_array("points", points, (3,))
@@ -407,12 +432,20 @@ def mesh_distance(samples: ArrayLike, points: ArrayLike, faces: ArrayLike) -> Fl
     size_class = np.floor(np.log2(largest / np.maximum(reach, largest * 2.0**-30))).astype(np.int64)
     flat = queries.reshape(-1, 3)
     used = np.unique(polygons)
-    best = cKDTree(vertices[used]).query(flat, workers=-1)[0]  # a mesh vertex: an upper bound
+    best, vertex = cKDTree(vertices[used]).query(flat, workers=-1)  # a mesh vertex: a bound
+    corners = polygons
+    if polygons.shape[1] == 4:  # the halves, as _triangles cuts them
+        corners = np.concatenate([polygons[:, [0, 1, 2]], polygons[:, [0, 2, 3]]])
+    incident = np.zeros(len(vertices), dtype=np.int64)
+    incident[corners.reshape(-1)] = np.repeat(np.arange(len(corners)), 3)
+    which = incident[used[vertex]]  # a triangle at that vertex: no farther than the bound
     for members in sorted(
         (np.flatnonzero(size_class == c) for c in np.unique(size_class)), key=len, reverse=True
     ):
-        _TriangleSearch.build(triangles[members], reach[members]).lower(flat, best)
-    return best.reshape(queries.shape[:-1])
+        found = np.full(len(flat), -1, dtype=np.int64)
+        _TriangleSearch.build(triangles[members], reach[members]).lower(flat, best, found)
+        which[found >= 0] = members[found[found >= 0]]
+    return best.reshape(queries.shape[:-1]), which.reshape(queries.shape[:-1])
 
 
 # -- fairness: the normal turn between neighbouring samples ----------------------------------------

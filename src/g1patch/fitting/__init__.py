@@ -1,6 +1,7 @@
 """The fit stage: a dense triangle mesh (a scan, a tessellation) → a quad layout → a cage whose
-Catmull–Clark limit passes nearest the scan (:mod:`g1patch.fitting.solve`) → the limit targets and
-an exact-G1 assembly (split4 by default: polynomial, so the CAD file is the fitted surface).
+Catmull–Clark limit passes nearest the scan, both ways (:mod:`g1patch.fitting.solve`) → the limit
+targets and an exact-G1 assembly (split4 by default: polynomial, so the CAD file is the fitted
+surface).
 
 :func:`fit_network` runs it and measures the result against the scan both ways (:class:`FitReport`):
 scan points to the surface and surface samples to the scan's triangles. Without a given layout or
