@@ -400,8 +400,14 @@ def nearest_triangles(
     samples: ArrayLike, points: ArrayLike, faces: ArrayLike
 ) -> tuple[FloatArray, NDArray[np.int64]]:
     """Exact distance from each sample point (..., 3) to the triangulated mesh ``points``,
-    ``faces``, and the triangle where it is met (an index into ``faces``' triangles: the
-    triangles as given, quads as their two halves, first halves 0–1–2 first).
+    ``faces``, and the triangle where it is met (:class:`NearestTriangles`, built for one
+    query)."""
+    return NearestTriangles(points, faces).query(samples)
+
+
+class NearestTriangles:
+    """A triangulated mesh ``points``, ``faces`` prepared for exact nearest-point queries
+    (build it once for many queries of the same mesh).
 
     ``faces`` (K, 3) triangles or (K, 4) quads (split along the diagonal 0–2). The distance to
     the nearest mesh vertex is an upper bound; a triangle whose centroid is r away is at least
@@ -412,40 +418,52 @@ def nearest_triangles(
     similar reach (within a factor 2), so a few large triangles do not widen the search around
     small ones. The cost per sample grows with (distance / edge length)²: fast near the mesh,
     slower for surfaces far apart relative to its edges.
-    Returns arrays of shape ``samples.shape[:-1]``.
     """
-    queries = as_float_array("samples", samples, (3,))
-    vertices = as_float_array("points", points, (3,))
-    polygons = as_index_array("faces", faces, (None,))
-    if polygons.ndim != 2 or polygons.shape[1] not in (3, 4) or not len(polygons):
-        raise InputError(
-            f"faces: expected a non-empty (K, 3) or (K, 4) index array, got shape {polygons.shape}"
-        )
-    if polygons.min() < 0 or polygons.max() >= len(vertices):
-        raise InputError(
-            f"faces: indices must lie in 0..{len(vertices) - 1}, found "
-            f"{polygons.min()}..{polygons.max()}"
-        )
-    triangles = _triangles(vertices, polygons)
-    reach = np.linalg.norm(triangles - triangles.mean(axis=1, keepdims=True), axis=-1).max(axis=1)
-    largest = max(float(reach.max()), np.finfo(float).tiny)
-    size_class = np.floor(np.log2(largest / np.maximum(reach, largest * 2.0**-30))).astype(np.int64)
-    flat = queries.reshape(-1, 3)
-    used = np.unique(polygons)
-    best, vertex = cKDTree(vertices[used]).query(flat, workers=-1)  # a mesh vertex: a bound
-    corners = polygons
-    if polygons.shape[1] == 4:  # the halves, as _triangles cuts them
-        corners = np.concatenate([polygons[:, [0, 1, 2]], polygons[:, [0, 2, 3]]])
-    incident = np.zeros(len(vertices), dtype=np.int64)
-    incident[corners.reshape(-1)] = np.repeat(np.arange(len(corners)), 3)
-    which = incident[used[vertex]]  # a triangle at that vertex: no farther than the bound
-    for members in sorted(
-        (np.flatnonzero(size_class == c) for c in np.unique(size_class)), key=len, reverse=True
-    ):
-        found = np.full(len(flat), -1, dtype=np.int64)
-        _TriangleSearch.build(triangles[members], reach[members]).lower(flat, best, found)
-        which[found >= 0] = members[found[found >= 0]]
-    return best.reshape(queries.shape[:-1]), which.reshape(queries.shape[:-1])
+
+    def __init__(self, points: ArrayLike, faces: ArrayLike) -> None:
+        vertices = as_float_array("points", points, (3,))
+        polygons = as_index_array("faces", faces, (None,))
+        if polygons.ndim != 2 or polygons.shape[1] not in (3, 4) or not len(polygons):
+            raise InputError(
+                "faces: expected a non-empty (K, 3) or (K, 4) index array, got shape "
+                f"{polygons.shape}"
+            )
+        if polygons.min() < 0 or polygons.max() >= len(vertices):
+            raise InputError(
+                f"faces: indices must lie in 0..{len(vertices) - 1}, found "
+                f"{polygons.min()}..{polygons.max()}"
+            )
+        triangles = _triangles(vertices, polygons)
+        reach = np.linalg.norm(triangles - triangles.mean(axis=1, keepdims=True), axis=-1)
+        reach = reach.max(axis=1)
+        largest = max(float(reach.max()), np.finfo(float).tiny)
+        size = np.floor(np.log2(largest / np.maximum(reach, largest * 2.0**-30))).astype(np.int64)
+        classes = (np.flatnonzero(size == c) for c in np.unique(size))
+        self.classes = [
+            (members, _TriangleSearch.build(triangles[members], reach[members]))
+            for members in sorted(classes, key=len, reverse=True)
+        ]
+        corners = polygons
+        if polygons.shape[1] == 4:  # the halves, as _triangles cuts them
+            corners = np.concatenate([polygons[:, [0, 1, 2]], polygons[:, [0, 2, 3]]])
+        self.used = np.unique(polygons)
+        self.vertices = cKDTree(vertices[self.used])
+        self.incident = np.zeros(len(vertices), dtype=np.int64)
+        self.incident[corners.reshape(-1)] = np.repeat(np.arange(len(corners)), 3)
+
+    def query(self, samples: ArrayLike) -> tuple[FloatArray, NDArray[np.int64]]:
+        """Per sample point (..., 3) its distance to the mesh and the triangle where it is met
+        (an index into the faces' triangles: the triangles as given, quads as their halves,
+        the 0–1–2 halves first); arrays of shape ``samples.shape[:-1]``."""
+        queries = as_float_array("samples", samples, (3,))
+        flat = queries.reshape(-1, 3)
+        best, vertex = self.vertices.query(flat, workers=-1)  # a mesh vertex: a bound
+        which = self.incident[self.used[vertex]]  # a triangle at that vertex: no farther
+        for members, search in self.classes:
+            found = np.full(len(flat), -1, dtype=np.int64)
+            search.lower(flat, best, found)
+            which[found >= 0] = members[found[found >= 0]]
+        return best.reshape(queries.shape[:-1]), which.reshape(queries.shape[:-1])
 
 
 # -- fairness: the normal turn between neighbouring samples ----------------------------------------

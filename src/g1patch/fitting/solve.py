@@ -24,7 +24,7 @@ The surface is also pulled to the scan the other way (a symmetric, two-way fit):
     ``+ γ min(N / M, 1) ‖G_M C − Q_M‖²``,   γ = :data:`TWO_WAY`,
 
 Q_M the nearest points on the scan's triangles of M grid points, half a face apart
-(:data:`SURFACE_STEP`; exact, :func:`~g1patch.compare.nearest_triangles`); left out are points
+(:data:`SURFACE_STEP`; exact, :class:`~g1patch.compare.NearestTriangles`); left out are points
 whose foot is farther than a layout edge (over a hole of the scan) or on a facet facing away,
 and points on crease edges, whose feet fall on either side of the scan's sharp edge (a stepped
 block's surface went 6.5e-4 → 1.1e-3 of the diagonal off with them). Fitted to its vertices
@@ -64,7 +64,7 @@ from numpy.typing import NDArray
 from scipy.sparse.linalg import splu
 from scipy.spatial import cKDTree
 
-from ..compare import _barycentric_closest, closest_points_on_triangles, nearest_triangles
+from ..compare import NearestTriangles, _barycentric_closest, closest_points_on_triangles
 from ..errors import ConstructionError
 from ..mesh import QuadMesh
 from ..subdivision import limit_grid_matrix
@@ -292,7 +292,8 @@ class _Triangles:
 
 
 def _surface_rows(
-    scan: _Triangles,
+    scan: NearestTriangles,
+    triangles: FloatArray,
     limit: sp.csr_matrix,
     surface: _Triangles,
     grid: IntArray,
@@ -300,12 +301,12 @@ def _surface_rows(
     gate: float,
 ) -> tuple[sp.csr_matrix, FloatArray]:
     """The weighted rows ``(√w G_g, √w q_g)`` pulling the ``surface``'s ``grid`` points ``g`` to
-    their feet ``q_g``, the nearest points of the ``scan``'s triangles
-    (:func:`~g1patch.compare.nearest_triangles`), ``w = weight``, where the foot's facet faces
-    the surface's way and is nearer than ``gate`` (not a grid point over a hole of the scan)."""
+    their feet ``q_g``, the nearest points of the ``scan``'s ``triangles`` (T, 3, 3),
+    ``w = weight``, where the foot's facet faces the surface's way and is nearer than ``gate``
+    (not a grid point over a hole of the scan)."""
     points = surface.points[grid]
-    distance, triangle = nearest_triangles(points, scan.points, scan.triangles)
-    a, b, c = (scan.points[scan.triangles[triangle, k]] for k in range(3))
+    distance, triangle = scan.query(points)
+    a, b, c = (triangles[triangle, k] for k in range(3))
     facing = np.einsum("nd,nd->n", np.cross(b - a, c - a), surface.normals[grid]) > 0
     use = facing & (distance <= gate)
     feet = closest_points_on_triangles(points[use], a[use], b[use], c[use])
@@ -383,7 +384,8 @@ def fit_cage(
         if scan_triangles is not None:
             own = scan_triangles[point_part[scan_triangles[:, 0]] == part]
             boundary = _Boundary(points, own, layout, grid, face_part == part)
-            facets = _Triangles(points, own) if len(own) and two_way > 0 else None
+            if len(own) and two_way > 0:
+                facets = (NearestTriangles(points, own), points[own])
         coarse = grid[face_part == part][:, ::SURFACE_STEP, ::SURFACE_STEP]
         pulled = np.setdiff1d(coarse, on_creases)
         each = two_way * min(len(mine) / max(len(pulled), 1), 1.0)  # no more than a scan point
@@ -413,7 +415,7 @@ def fit_cage(
                 lhs, rhs = lhs + rows.T @ rows, rhs + np.asarray(rows.T @ targets)
             near = _Triangles(surface, triangles)
             if facets is not None:
-                rows, targets = _surface_rows(facets, limit, near, pulled, each, gate)
+                rows, targets = _surface_rows(*facets, limit, near, pulled, each, gate)
                 lhs, rhs = lhs + rows.T @ rows, rhs + np.asarray(rows.T @ targets)
             for start in range(0, len(mine), BLOCK_POINTS):  # a block of points at a time
                 rows = mine[start : start + BLOCK_POINTS]
