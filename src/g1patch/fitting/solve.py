@@ -32,10 +32,11 @@ alone, a smooth surface bulges off the facets between them by their sag, which t
 bounds too (the surface → scan maximum): on a coarse scan (libigl's fertility, 9,000 triangles,
 an edge 1.5 % of the diagonal) the one-way fit of 4,232 quads was 2.1e-3 of the diagonal off
 the facets at its worst, the two-way one 1.8e-3. A grid point weighs no more than γ scan
-points: on a dense scan the facets are near any surface that passes near the vertices, and
-where the layout is too coarse for a feature (a narrow bump on a 60,000-point sphere scan) the
-pull back towards the flanks costs the bump's tip (2.2e-3 → 2.4e-3 off; with each grid point
-weighing 7 scan points, 4.9e-3). γ = 1 weighs both ways alike; ½ did better on eleven public
+points, and a scan of more than :data:`DENSE` points per grid point gets no such rows: its
+facets are near any surface that passes near its vertices, and where the layout is too coarse
+for a feature (a narrow bump on a 60,000-point sphere scan) the pull back towards the flanks
+costs the bump's tip (2.2e-3 → 2.4e-3 off; with each grid point weighing 7 scan points,
+4.9e-3). γ = 1 weighs both ways alike; ½ did better on eleven public
 scans (halftunnel, fandisk and Spot's triangles ended farther at 1, fertility nearer).
 
 An open scan's boundary holds the surface's: the limit boundary curve (the grid points on the
@@ -114,6 +115,12 @@ TWO_WAY = 0.5
 #: out as near as with all 16, and the Stanford bunny scan's 10,159-quad fit takes 11.6 s, 3.5 s
 #: of it in the rows, against 6.8 s one way)
 SURFACE_STEP = 2
+#: ... but not on a scan of more than this many points per grid point pulled: its facets are a
+#: few to a grid cell, their sag far below the fit's, and the rows only cost (a 1 M-triangle
+#: torus: 27 → 44 s, 527 → 669 MB) or pull a feature's flanks (a narrow bump on a 60,000-point
+#: sphere scan, 15 points a grid point: within at 1,633 quads in 4 layouts, at 1,116 in 2 one
+#: way); fertility, lion and the other coarse scans have 0.3–2
+DENSE = 8.0
 #: scan points whose feet and normal equations are made at a time (bounds the memory: ~2 kB a
 #: point in flight)
 BLOCK_POINTS = 65_536
@@ -384,10 +391,10 @@ def fit_cage(
         if scan_triangles is not None:
             own = scan_triangles[point_part[scan_triangles[:, 0]] == part]
             boundary = _Boundary(points, own, layout, grid, face_part == part)
-            if len(own) and two_way > 0:
-                facets = (NearestTriangles(points, own), points[own])
         coarse = grid[face_part == part][:, ::SURFACE_STEP, ::SURFACE_STEP]
         pulled = np.setdiff1d(coarse, on_creases)
+        if scan_triangles is not None and len(own) and 0 < len(mine) <= DENSE * len(pulled):
+            facets = (NearestTriangles(points, own), points[own]) if two_way > 0 else None
         each = two_way * min(len(mine) / max(len(pulled), 1), 1.0)  # no more than a scan point
         triangles = grid_triangles(grid[face_part == part])
         parts.append((mine, triangles, boundary, facets, pulled, each))
