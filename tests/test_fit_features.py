@@ -17,8 +17,10 @@ from g1patch.fitting.features import (
     quad_areas,
     sharp_segments,
     snap_to_features,
+    without_lonely_creases,
 )
-from g1patch.mesh import QuadMesh
+from g1patch.mesh import INFINITE_SHARPNESS, QuadMesh, Tag
+from g1patch.shapes import cube_sphere
 
 
 def roof(n: int = 8, lift: float = 0.0) -> QuadMesh:
@@ -278,3 +280,28 @@ def test_a_long_sharp_edge_is_matched_in_pieces() -> None:
     )
     assert np.array_equal(pieces[1:n, 0], pieces[: n - 1, 1])  # in order, end to start
     assert np.array_equal(pieces[n:], short[:3])
+
+
+def test_a_lonely_crease_edge_is_left_smooth_as_split4_builds_it() -> None:
+    """split4 builds an isolated crease edge between two darts smooth, so the fit's layout drops
+    its tag; a chain of two edges (its middle vertex cut in two sectors) keeps its tags."""
+    sphere = cube_sphere(3)
+    topology, points = sphere.topology, sphere.vertices
+    ordinary = np.flatnonzero(topology.valence == 4)
+    lonely = np.flatnonzero(~np.isin(topology.edges, np.flatnonzero(topology.valence != 4)).any(1))[
+        0
+    ]
+    middle = ordinary[
+        np.argmax(np.linalg.norm(points[ordinary] - points[topology.edges[lonely]].mean(0), axis=1))
+    ]
+    ring = np.flatnonzero((topology.edges == middle).any(axis=1))
+    others = topology.edges[ring][topology.edges[ring] != middle]
+    first = int(np.argmin((points[others] - points[middle]) @ (points[others[0]] - points[middle])))
+    chain = ring[[0, first]]
+    pairs = topology.edges[np.concatenate([[lonely], chain])]
+    tagged = QuadMesh(
+        points, topology, (Tag("crease", tuple(pairs.ravel().tolist()), (INFINITE_SHARPNESS,)),)
+    )
+    kept = without_lonely_creases(tagged)
+    assert ridge_edges(kept) == {tuple(sorted(edge)) for edge in topology.edges[chain].tolist()}
+    assert without_lonely_creases(kept) is kept

@@ -62,6 +62,7 @@ from .features import (
     sharp_corners,
     sharp_segments,
     snap_to_features,
+    without_lonely_creases,
 )
 from .layout import bridging_faces, quad_layout, refined_layout
 from .scan_topology import (
@@ -628,6 +629,8 @@ def fit_network(
                 reach = boundary_reach(creased)
                 corners = boundary_corners(scan.points, scan.triangles, corner_angle, reach)
                 cage_layout = layout_corners(creased, corners)
+                if method == "split4":  # as split4 builds it
+                    cage_layout = without_lonely_creases(cage_layout)
             face_area = _sampled_areas(cage_layout, scan)
             samples, sample_normals = scan.facet_samples(
                 face_area / SAMPLES_PER_FACE, SPARSE_FACET * face_area

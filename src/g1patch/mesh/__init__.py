@@ -33,13 +33,14 @@ from .quadmesh import REPAIRABLE, QuadMesh, strict_meshes, subdivide
 from .tags import INFINITE_SHARPNESS, Tag
 from .topology import QuadTopology
 from .validate import DEGENERATE_AREA_TOLERANCE, MAX_COORDINATE
-from .vertex_sectors import Sectors, sectors
+from .vertex_sectors import Sectors, lonely_seams, sectors
 
 __all__ = [
     "Tag",
     "Features",
     "Sectors",
     "features_from_tags",
+    "lonely_seams",
     "sectors",
     "INFINITE_SHARPNESS",
     "MAX_COORDINATE",

@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 from .connectivity import _Connectivity
 from .topology import QuadTopology
 
-__all__ = ["Sectors", "sectors"]
+__all__ = ["Sectors", "lonely_seams", "sectors"]
 
 IntArray = NDArray[np.int64]
 
@@ -75,3 +75,11 @@ def sectors(topology: QuadTopology | _Connectivity, seams: NDArray[np.bool_]) ->
     last = sector_offsets[1:][boundary] - 1
     end[last] = topology.neighbor_offsets[1:][boundary] - 1
     return Sectors(label, count, cuts, vertex, start, end)
+
+
+def lonely_seams(topology: QuadTopology, seams: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """The ``seams`` (per edge) that cut no ring: both ends have one sector (an isolated sharp
+    edge between two darts, which leaves every vertex's fan whole)."""
+    count = sectors(topology, seams).count
+    a, b = topology.edges[:, 0], topology.edges[:, 1]
+    return seams & (count[a] == 1) & (count[b] == 1)

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from ...errors import ConstructionError
 from ...mesh import QuadTopology
-from ...mesh.vertex_sectors import sectors
+from ...mesh.vertex_sectors import lonely_seams, sectors
 from ...targets import Targets, halfedge_slots
 from .assembly import Split4Parts, split4_patches
 from .stars import SplitStar, fan_walk, split4_star
@@ -63,13 +63,8 @@ def cut_along_seams(targets: Targets) -> SeamCut:
     (``corner_normals``); every slot keeps its tangent (a seam slot's in both copies), every face
     corner its interior targets."""
     topology = targets.topology
-    a, b = topology.edges[:, 0], topology.edges[:, 1]
-    seams = targets.seams.copy()
+    seams = targets.seams & ~lonely_seams(topology, targets.seams)
     split = sectors(topology, seams)
-    lonely = seams & (split.count[a] == 1) & (split.count[b] == 1)
-    if lonely.any():
-        seams &= ~lonely
-        split = sectors(topology, seams)
     corner_sector = np.empty(topology.n_halfedges, dtype=np.int64)
     corner_sector[topology.ring_halfedges] = split.label
     cut = QuadTopology.from_faces(corner_sector.reshape(-1, 4), split.vertex.size)
