@@ -227,6 +227,10 @@ def test_the_face_count_follows_the_measured_error() -> None:
     assert next_faces([(1000, 1e-1)], 2e-3, 1000) == 4000  # at most 4 ×
     # e fell 4 × over 2 × the faces: rate 2, so √(4e-3 / 1.6e-3) ≈ 1.58 × more
     assert next_faces([(1000, 1.6e-2), (2000, 4e-3)], 2e-3, 2000) == 3163
+    # a slow rate measured near the tolerance is believed (0.5: (3.2e-3 / 1.6e-3)² = 4 ×) …
+    assert next_faces([(1000, 4.5e-3), (2000, 3.2e-3)], 2e-3, 2000) == 8000
+    # … but not from a layout FAR off, which missed features: 0.66 becomes 1, 3 × (not 4 ×)
+    assert next_faces([(1000, 1.2e-2), (4000, 4.8e-3)], 2e-3, 4000) == 12000
 
 
 def test_half_the_budget_is_tried_before_all_of_it() -> None:
