@@ -253,7 +253,7 @@ def test_a_long_sharp_edge_is_matched_in_pieces() -> None:
     as one segment tags the same layout edges as the ridge in 32, and snaps and counts gaps the
     same. Its pieces are in order along it, no longer than PIECE of the median layout edge, and
     keep its ends exactly (chains meet there)."""
-    from g1patch.fitting.features import PIECE, _median_edge, _pieces, crease_gaps
+    from g1patch.fitting.features import PIECE, _pieces, crease_gaps, median_edge
 
     points, triangles = ridge_scan()
     short = sharp_segments(points, triangles, 60.0)
@@ -269,7 +269,7 @@ def test_a_long_sharp_edge_is_matched_in_pieces() -> None:
     assert crease_gaps(layout_creases(layout, whole), whole) == 0.0
     ends = layout.vertices[layout.topology.edges]
     median = float(np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)))
-    assert _median_edge(layout) == median
+    assert median_edge(layout) == median
     pieces = _pieces(np.concatenate([whole, short[:3]]), median)
     longest = PIECE * median
     n = int(np.ceil(2.0 / longest))  # the 2-long ridge in n pieces; the 1/16-long kept whole

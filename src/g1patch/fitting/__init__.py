@@ -58,6 +58,7 @@ from .features import (
     crease_gaps,
     layout_corners,
     layout_creases,
+    median_edge,
     quad_areas,
     sharp_corners,
     sharp_segments,
@@ -871,8 +872,7 @@ def _layout_edge(scan: Scan, layout: QuadMesh | None, faces: int) -> float:
     """The first layout's edge length: the median of a given ``layout``'s, else that of
     ``faces`` squares covering the scan's area."""
     if layout is not None:
-        edges = layout.topology.edges
-        return float(np.median(np.linalg.norm(np.diff(layout.vertices[edges], axis=1), axis=2)))
+        return median_edge(layout)
     return float(np.sqrt(scan.areas.sum() / max(faces, 1)))
 
 

@@ -59,6 +59,7 @@ __all__ = [
     "crease_gaps",
     "layout_corners",
     "layout_creases",
+    "median_edge",
     "quad_areas",
     "sharp_corners",
     "sharp_segments",
@@ -129,9 +130,9 @@ def sharp_corners(points: FloatArray, triangles: IntArray, degrees: float) -> Fl
     return np.asarray(points, dtype=np.float64)[np.asarray(found[0].ints, dtype=np.int64)]
 
 
-def _median_edge(layout: QuadMesh) -> float:
-    """The median length of ``layout``'s edges."""
-    ends = layout.vertices[layout.topology.edges]
+def median_edge(layout: QuadMesh, edges: IntArray | None = None) -> float:
+    """The median length of ``layout``'s ``edges`` (E, 2) (all its edges when None)."""
+    ends = layout.vertices[layout.topology.edges if edges is None else edges]
     return float(np.median(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)))
 
 
@@ -308,7 +309,7 @@ def layout_creases(
     tagged a ``corner``."""
     if not len(segments):
         return layout
-    segments = _pieces(segments, _median_edge(layout))
+    segments = _pieces(segments, median_edge(layout))
     edges = layout.topology.edges
     ends = layout.vertices[edges]
     sharp = _worst_sample(ends, segments, ALIGNMENT_DEG) <= REACH
@@ -377,7 +378,7 @@ def crease_gaps(layout: QuadMesh, segments: FloatArray) -> float:
     if not len(segments):
         return 0.0
     edges = layout.topology.edges
-    scale = _median_edge(layout)
+    scale = median_edge(layout)
     segments, _ = _lines(_pieces(segments, scale), np.zeros((0, 3)), CHAIN_EDGES * scale)
     if not len(segments):
         return 0.0
@@ -393,9 +394,7 @@ def crease_gaps(layout: QuadMesh, segments: FloatArray) -> float:
 def boundary_reach(layout: QuadMesh) -> float:
     """The median length of ``layout``'s boundary edges (0 when it is closed)."""
     edges = boundary_edges(layout.faces)
-    if not len(edges):
-        return 0.0
-    return float(np.median(np.linalg.norm(np.diff(layout.vertices[edges], axis=1), axis=-1)))
+    return median_edge(layout, edges) if len(edges) else 0.0
 
 
 def boundary_corners(

@@ -69,6 +69,7 @@ from ..compare import NearestTriangles, _barycentric_closest, closest_points_on_
 from ..errors import ConstructionError
 from ..mesh import QuadMesh
 from ..subdivision import limit_grid_matrix
+from .features import median_edge
 from .scan_topology import boundary_edges, polygon_sides, triangle_parts
 
 __all__ = [
@@ -203,8 +204,8 @@ class _Boundary:
         self.scan_starts, self.scan_ends = points[edges[:, 0]], points[edges[:, 1]]
         self.active = bool(len(edges) and len(polylines))
         self.cage_boundary = np.unique(sides[open_sides])
-        edge_lengths = np.linalg.norm(np.diff(layout.vertices[sides[faces]], axis=-2), axis=-1)
-        self.gate = BOUNDARY_GATE * float(np.median(edge_lengths)) if faces.any() else 0.0
+        part_sides = sides[faces].reshape(-1, 2)
+        self.gate = BOUNDARY_GATE * median_edge(layout, part_sides) if faces.any() else 0.0
 
     def snapped(self, cage: FloatArray) -> FloatArray:
         """``cage`` with its boundary vertices moved to the nearest points of the scan's
@@ -405,10 +406,7 @@ def fit_cage(
     regular = fairness * per_vertex * (fair.T @ weights @ fair) + damping * sp.identity(
         layout.n_vertices
     )
-    edges = layout.topology.edges
-    gate = BOUNDARY_GATE * float(
-        np.median(np.linalg.norm(np.diff(layout.vertices[edges], axis=1), axis=2))
-    )
+    gate = BOUNDARY_GATE * median_edge(layout)
     cage = layout.vertices.copy()
     for _, _, boundary, _, _, _ in parts:
         cage = cage if boundary is None else boundary.snapped(cage)
