@@ -300,3 +300,37 @@ def test_the_surface_is_pulled_to_the_facets_between_the_vertices() -> None:
     one_way, both_ways = two_way_maximum(0.0), two_way_maximum(0.5)
     assert one_way[1] < 0.1 * one_way[0]  # the bulge: the surface → scan distance
     assert both_ways[1] < both_ways[0] < 0.9 * one_way[0]
+
+
+def test_a_grid_point_is_pulled_only_to_a_facet_facing_its_way_and_near_it() -> None:
+    """The surface → scan rows (``_surface_rows``) of a flat grid 0.08 above a scan facet that
+    faces up, under a thin part's underside 0.02 above it that faces down (the part's other side):
+    the points under the underside, nearer to it, are not pulled there (nor anywhere); the
+    others go to their feet on the facet below, unless it is farther than the gate."""
+    import scipy.sparse as sp
+
+    from g1patch.compare import NearestTriangles
+    from g1patch.fitting.solve import _surface_rows, _Triangles
+
+    x, y = np.meshgrid(np.linspace(0.0, 1.0, 5), np.linspace(0.0, 1.0, 5), indexing="ij")
+    grid_points = np.stack([x.ravel(), y.ravel(), np.full(x.size, 0.08)], axis=1)
+    index = np.arange(25).reshape(5, 5)
+    a, b, c, d = index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]
+    grid_triangles = np.concatenate([np.stack([a, b, c], -1), np.stack([a, c, d], -1)])
+    surface = _Triangles(grid_points, grid_triangles.reshape(-1, 3))  # normals +z
+    below = [[-1.0, -1.0, 0.0], [3.0, -1.0, 0.0], [-1.0, 3.0, 0.0]]  # faces +z
+    underside = [[-0.1, -0.1, 0.1], [-0.1, 0.6, 0.1], [0.6, -0.1, 0.1]]  # faces −z
+    points = np.array(below + underside)
+    facets = points[np.array([[0, 1, 2], [3, 4, 5]])]
+    scan = NearestTriangles(points, np.array([[0, 1, 2], [3, 4, 5]]))
+    limit = sp.identity(25, format="csr")
+    everything = np.arange(25)
+    under = grid_points[:, 0] + grid_points[:, 1] <= 0.5 + 1e-12  # the underside's shadow
+    rows, targets = _surface_rows(scan, facets, limit, surface, everything, 1.0, 1.0)
+    assert (np.diff(rows.indptr) == 1).all()  # one grid point a row
+    pulled = rows.indices
+    np.testing.assert_array_equal(np.sort(pulled), everything[~under])
+    np.testing.assert_allclose(targets[:, 2], 0.0, atol=1e-15)
+    np.testing.assert_allclose(targets[:, :2], grid_points[pulled, :2], atol=1e-15)
+    rows, targets = _surface_rows(scan, facets, limit, surface, everything, 1.0, 0.05)
+    assert rows.shape[0] == 0  # the facet below is 0.08 away: beyond the gate
