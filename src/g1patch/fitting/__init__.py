@@ -191,6 +191,12 @@ ISLAND_SIZE = 0.05
 FOLD_REFITS = 3
 #: by this factor on the fairness weight of the folded faces' vertices and a ring round them
 FOLD_STIFFNESS = 30.0
+#: a layout refined from its fitted cage that came out this many times farther than its parent
+#: missed a feature the parent's cage does not resolve: the parent is refined again from its own
+#: vertices (a narrow bump on a sphere: 2.2e-3 → 4.3e-3 refined from the cage, within from the
+#: vertices); one less far is remade (a face scan's 3.5e-3 → 3.7e-3: refined from its vertices
+#: too, 6.8e-3, a round that its finer layout's refinement, within, then lacked)
+RETRY_FARTHER = 1.5
 #: scan points beyond the tolerance that make a face off (one alone is a stray point or noise,
 #: which the tolerance's 99.9th percentile lets be)
 STRAY_POINTS = 2
@@ -621,6 +627,8 @@ def fit_network(
     if adaptive:
         count = min(count, budget)
     refine: QuadMesh | None = None  # the next layout, when it is the last one refined locally
+    # the layout last refined from its fitted cage, its off faces and distance
+    parent: tuple[QuadMesh, FloatArray, float] | None = None
     while True:
         rounds += 1
         try:
@@ -677,11 +685,20 @@ def fit_network(
         # a folded fit is remade, not refined (its folds spread: Spot's horns), nor is one that
         # ranks below a layout before it (a refinement that made the fit worse)
         kept = off is not None and not folds and best is not None and best[2] is cage_layout
-        refine = (
-            _locally_refined(cage_layout, off, tolerance * diagonal, budget, scan)
-            if kept and off is not None
-            else None
-        )
+        refine = None
+        if kept and off is not None:  # refined from its fitted cage first …
+            refine = _locally_refined(
+                cage_layout, fitted.cage, off, tolerance * diagonal, budget, scan
+            )
+            parent = (cage_layout, off, worst) if refine is not None else None
+        elif parent is not None and (off is None or worst > RETRY_FARTHER * parent[2]):
+            # … and where that came out far worse, from its vertices
+            refine = _locally_refined(
+                parent[0], None, parent[1], tolerance * diagonal, budget, scan
+            )
+            parent = None
+        else:
+            parent = None
         if refine is None:
             if count >= budget:
                 break
@@ -806,6 +823,7 @@ def next_count(tried: list[tuple[int, float]], tolerance: float, count: int, bud
 
 def _locally_refined(
     layout: QuadMesh,
+    cage: QuadMesh | None,
     per_face: FloatArray,
     tolerance: float,
     budget: int,
@@ -814,20 +832,31 @@ def _locally_refined(
     """``layout`` refined round its faces off the ``tolerance`` (model units; ``per_face`` as
     :func:`measure` gives it: a surface sample farther, or :data:`STRAY_POINTS` scan points)
     that would hold :data:`REFINE_POINTS` scan points refined (:func:`_refined_points`;
-    :func:`~g1patch.fitting.layout.refined_layout`), its new vertices moved onto the scan as
-    the remesher's are; None where the off faces are more than :data:`LOCAL_SHARE` of all (a
-    finer layout is the cheaper cure), none can be refined, or the refined layout would exceed
-    ``budget`` quads or :data:`LOCAL_GROWTH` times the layout's. Faces on a feature line are
-    refined too (a CAD part's are off there: fandisk's 1,318 quads, 45 off, refined to 2,504
-    went from 4.9e-3 to 2.7e-3, where its next remeshed layouts, 2,724 and 2,810 quads, stayed
-    at 3.5e-3 and 3.9e-3); a split edge on a crease stays one."""
+    :func:`~g1patch.fitting.layout.refined_layout`): at the positions of the ``cage`` fitted on
+    it split the same way, so that the refit starts from the surface it refines, or (``cage``
+    None) at the layout's own, the new vertices moved onto the scan as the remesher's are. From
+    the cage, the Stanford bunny scan's 4,185-quad layout refined twice was within at 4,686
+    quads, where refined from its vertices it came out farther and the fit ended at 9,732; but
+    a narrow bump on a sphere, which the parent's cage does not resolve, is only within when
+    refined from the vertices (the fit's feet on the start surface miss its tip); so both are
+    tried (:func:`fit_network`). None where the off faces are more
+    than :data:`LOCAL_SHARE` of all (a finer layout is the cheaper cure), none can be refined,
+    or the refined layout would exceed ``budget`` quads or :data:`LOCAL_GROWTH` times the
+    layout's. Faces on a feature line are refined too (a CAD part's are off there: fandisk's
+    1,318 quads, 45 off, refined to 2,504 went from 4.9e-3 to 2.7e-3, where its next remeshed
+    layouts, 2,724 and 2,810 quads, stayed at 3.5e-3 and 3.9e-3); a split edge on a crease
+    stays one."""
     off: NDArray[np.bool_] = (per_face[:, 0] > tolerance) | (per_face[:, 1] >= STRAY_POINTS)
     marked: NDArray[np.bool_] = off & (_refined_points(layout, scan) >= REFINE_POINTS)
     if not marked.any() or off.mean() > LOCAL_SHARE:
         return None
-    refined = refined_layout(layout, grow(layout.topology, marked, REFINE_RINGS))
+    refined = refined_layout(
+        layout if cage is None else cage, grow(layout.topology, marked, REFINE_RINGS)
+    )
     if refined.n_faces > min(budget, LOCAL_GROWTH * layout.n_faces):
         return None
+    if cage is not None:
+        return refined
     vertices = refined.vertices.copy()
     new = np.arange(layout.n_vertices, refined.n_vertices)
     quads = refined.faces
