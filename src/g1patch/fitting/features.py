@@ -345,8 +345,9 @@ def without_lonely_creases(layout: QuadMesh) -> QuadMesh:
     """``layout`` without the crease tags of its lonely edges (:func:`~g1patch.mesh.lonely_seams`:
     an isolated crease edge between two darts). split4 cannot cut such an edge open and builds it
     smooth, so the fit must model it smooth too: a cage fitted to a crease the network then
-    rounds is off the scan by the rounding (a trimesh CAD export's 1,823-quad layout, two lonely
-    edges: the network 2.2e-3 of the diagonal from the cage's limit there, 3e-4 elsewhere)."""
+    rounds is off the scan by the rounding (on a cube-sphere cage a lonely crease edge built
+    smooth lies 6.4e-4 of the diagonal from the creased limit; 14 of 41 public scans' layouts
+    had such edges)."""
     topology = layout.topology
     seams = (layout.features.edge_sharpness > 0) & ~topology.is_boundary_edge
     lonely = lonely_seams(topology, seams)
